@@ -11,8 +11,14 @@ fn pelco_d_turbo_speeds_encode_to_their_bytes_and_decode_back() {
     assert_eq!(Standard::PAN_SPEED_TURBO_40, 0x40);
     // "Pan left at turbo speed" and C466M-E's "Left, Turbo Speed".
     for (speed, frame) in [
-        (Standard::PAN_SPEED_TURBO, [0xFF, 0x01, 0x00, 0x04, 0xFF, 0x00, 0x04]),
-        (Standard::PAN_SPEED_TURBO_40, [0xFF, 0x01, 0x00, 0x04, 0x40, 0x00, 0x45]),
+        (
+            Standard::PAN_SPEED_TURBO,
+            [0xFF, 0x01, 0x00, 0x04, 0xFF, 0x00, 0x04],
+        ),
+        (
+            Standard::PAN_SPEED_TURBO_40,
+            [0xFF, 0x01, 0x00, 0x04, 0x40, 0x00, 0x45],
+        ),
     ] {
         let pelco_d::Request::Standard(decoded) = pelco_d::Request::decode(&frame).unwrap().message
         else {

@@ -505,7 +505,7 @@ pub(super) fn emit_from_fields(ctx: &Ctx, d: Direction) -> TokenStream {
         let dm = direction_module(d);
         let ls = leaves(m);
         if ls.is_empty() {
-            return quote!(#name => rt::Ok(Self::#v(#dm::#v)));
+            return quote!(#name => Self::#v(#dm::#v));
         }
         let fields = ls.iter().map(|l| {
             let (n, f) = (l.name, ident(l.name));
@@ -584,7 +584,7 @@ pub(super) fn emit_from_fields(ctx: &Ctx, d: Direction) -> TokenStream {
             };
             quote!(#f: #value)
         });
-        quote!(#name => rt::Ok(Self::#v(#dm::#v { #(#fields),* })))
+        quote!(#name => Self::#v(#dm::#v { #(#fields),* }))
     });
     quote! {
         /// The message called `name` in the spec, from each field's raw wire value by its spec
@@ -594,10 +594,11 @@ pub(super) fn emit_from_fields(ctx: &Ctx, d: Direction) -> TokenStream {
             name: &str,
             #field_param: impl FnMut(&'static str) -> rt::Option<rt::FieldValue<'v>>,
         ) -> rt::Result<Self, rt::FieldError> {
-            match name {
+            let message = match name {
                 #(#arms,)*
-                _ => rt::Err(rt::FieldError::UnknownMessage),
-            }
+                _ => return rt::Err(rt::FieldError::UnknownMessage),
+            };
+            rt::Ok(message)
         }
     }
 }
@@ -752,7 +753,10 @@ fn special_consts(ctx: &Ctx, ls: &[Leaf]) -> TokenStream {
         .chain(ls.iter().map(|l| range_const(l.name)))
         .collect();
     let mut out = Vec::new();
-    for l in ls.iter().filter(|l| l.bits.is_none() && l.field.repeat.is_none()) {
+    for l in ls
+        .iter()
+        .filter(|l| l.bits.is_none() && l.field.repeat.is_none())
+    {
         for sp in &l.field.special {
             // The raw value as the spec writes it: hex, two digits a wire byte.
             let digits = l.field.width * 2;

@@ -239,19 +239,18 @@ pub mod bcd_meter {
             name: &str,
             mut field: impl FnMut(&'static str) -> rt::Option<rt::FieldValue<'v>>,
         ) -> rt::Result<Self, rt::FieldError> {
-            match name {
-                "read_energy" => rt::Ok(Self::ReadEnergy(request::ReadEnergy)),
+            let message = match name {
+                "read_energy" => Self::ReadEnergy(request::ReadEnergy),
                 "set_clock" => {
-                    rt::Ok(
-                        Self::SetClock(request::SetClock {
-                            hour: rt::get(&mut field, "hour")?,
-                            minute: rt::get(&mut field, "minute")?,
-                            year: rt::get(&mut field, "year")?,
-                        }),
-                    )
+                    Self::SetClock(request::SetClock {
+                        hour: rt::get(&mut field, "hour")?,
+                        minute: rt::get(&mut field, "minute")?,
+                        year: rt::get(&mut field, "year")?,
+                    })
                 }
-                _ => rt::Err(rt::FieldError::UnknownMessage),
-            }
+                _ => return rt::Err(rt::FieldError::UnknownMessage),
+            };
+            rt::Ok(message)
         }
     }
     impl rt::Message for Request {
@@ -463,20 +462,17 @@ pub mod bcd_meter {
             name: &str,
             mut field: impl FnMut(&'static str) -> rt::Option<rt::FieldValue<'v>>,
         ) -> rt::Result<Self, rt::FieldError> {
-            match name {
+            let message = match name {
                 "energy" => {
-                    rt::Ok(
-                        Self::Energy(response::Energy {
-                            energy: KilowattHours::from_raw(
-                                rt::get(&mut field, "energy")?,
-                            ),
-                            tariff: rt::get(&mut field, "tariff")?,
-                        }),
-                    )
+                    Self::Energy(response::Energy {
+                        energy: KilowattHours::from_raw(rt::get(&mut field, "energy")?),
+                        tariff: rt::get(&mut field, "tariff")?,
+                    })
                 }
-                "ack" => rt::Ok(Self::Ack(response::Ack)),
-                _ => rt::Err(rt::FieldError::UnknownMessage),
-            }
+                "ack" => Self::Ack(response::Ack),
+                _ => return rt::Err(rt::FieldError::UnknownMessage),
+            };
+            rt::Ok(message)
         }
     }
     impl rt::Message for Response {

@@ -235,18 +235,17 @@ pub mod cobs_link {
             name: &str,
             mut field: impl FnMut(&'static str) -> rt::Option<rt::FieldValue<'v>>,
         ) -> rt::Result<Self, rt::FieldError> {
-            match name {
-                "read_position" => rt::Ok(Self::ReadPosition(request::ReadPosition)),
+            let message = match name {
+                "read_position" => Self::ReadPosition(request::ReadPosition),
                 "set_speed" => {
-                    rt::Ok(
-                        Self::SetSpeed(request::SetSpeed {
-                            speed: rt::get(&mut field, "speed")?,
-                        }),
-                    )
+                    Self::SetSpeed(request::SetSpeed {
+                        speed: rt::get(&mut field, "speed")?,
+                    })
                 }
-                "read_log" => rt::Ok(Self::ReadLog(request::ReadLog)),
-                _ => rt::Err(rt::FieldError::UnknownMessage),
-            }
+                "read_log" => Self::ReadLog(request::ReadLog),
+                _ => return rt::Err(rt::FieldError::UnknownMessage),
+            };
+            rt::Ok(message)
         }
     }
     impl rt::Message for Request {
@@ -500,24 +499,21 @@ pub mod cobs_link {
             name: &str,
             mut field: impl FnMut(&'static str) -> rt::Option<rt::FieldValue<'v>>,
         ) -> rt::Result<Self, rt::FieldError> {
-            match name {
+            let message = match name {
                 "position" => {
-                    rt::Ok(
-                        Self::Position(response::Position {
-                            position: rt::get(&mut field, "position")?,
-                        }),
-                    )
+                    Self::Position(response::Position {
+                        position: rt::get(&mut field, "position")?,
+                    })
                 }
-                "ack" => rt::Ok(Self::Ack(response::Ack)),
+                "ack" => Self::Ack(response::Ack),
                 "log" => {
-                    rt::Ok(
-                        Self::Log(response::Log {
-                            entries: rt::list::<u8, 254>(&mut field, "entries", 0, 255)?,
-                        }),
-                    )
+                    Self::Log(response::Log {
+                        entries: rt::list::<u8, 254>(&mut field, "entries", 0, 255)?,
+                    })
                 }
-                _ => rt::Err(rt::FieldError::UnknownMessage),
-            }
+                _ => return rt::Err(rt::FieldError::UnknownMessage),
+            };
+            rt::Ok(message)
         }
     }
     impl rt::Message for Response {

@@ -205,17 +205,16 @@ pub mod codeless {
             name: &str,
             mut field: impl FnMut(&'static str) -> rt::Option<rt::FieldValue<'v>>,
         ) -> rt::Result<Self, rt::FieldError> {
-            match name {
-                "ping" => rt::Ok(Self::Ping(request::Ping)),
+            let message = match name {
+                "ping" => Self::Ping(request::Ping),
                 "read" => {
-                    rt::Ok(
-                        Self::Read(request::Read {
-                            register: rt::get(&mut field, "register")?,
-                        }),
-                    )
+                    Self::Read(request::Read {
+                        register: rt::get(&mut field, "register")?,
+                    })
                 }
-                _ => rt::Err(rt::FieldError::UnknownMessage),
-            }
+                _ => return rt::Err(rt::FieldError::UnknownMessage),
+            };
+            rt::Ok(message)
         }
     }
     impl rt::Message for Request {
@@ -418,24 +417,21 @@ pub mod codeless {
             name: &str,
             mut field: impl FnMut(&'static str) -> rt::Option<rt::FieldValue<'v>>,
         ) -> rt::Result<Self, rt::FieldError> {
-            match name {
+            let message = match name {
                 "status" => {
-                    rt::Ok(
-                        Self::Status(response::Status {
-                            error: Errors::from_raw(rt::get(&mut field, "error")?),
-                        }),
-                    )
+                    Self::Status(response::Status {
+                        error: Errors::from_raw(rt::get(&mut field, "error")?),
+                    })
                 }
                 "read_status" => {
-                    rt::Ok(
-                        Self::ReadStatus(response::ReadStatus {
-                            error: Errors::from_raw(rt::get(&mut field, "error")?),
-                            value: rt::get(&mut field, "value")?,
-                        }),
-                    )
+                    Self::ReadStatus(response::ReadStatus {
+                        error: Errors::from_raw(rt::get(&mut field, "error")?),
+                        value: rt::get(&mut field, "value")?,
+                    })
                 }
-                _ => rt::Err(rt::FieldError::UnknownMessage),
-            }
+                _ => return rt::Err(rt::FieldError::UnknownMessage),
+            };
+            rt::Ok(message)
         }
     }
     impl rt::Message for Response {

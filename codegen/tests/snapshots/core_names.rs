@@ -390,41 +390,34 @@ pub mod clash {
             name: &str,
             mut field: impl FnMut(&'static str) -> rt::Option<rt::FieldValue<'v>>,
         ) -> rt::Result<Self, rt::FieldError> {
-            match name {
+            let message = match name {
                 "option" => {
-                    rt::Ok(
-                        Self::Option(request::Option {
-                            some: Result::from_raw(rt::get(&mut field, "some")?),
-                            core: Option::from_raw(rt::get(&mut field, "core")?),
-                        }),
-                    )
+                    Self::Option(request::Option {
+                        some: Result::from_raw(rt::get(&mut field, "some")?),
+                        core: Option::from_raw(rt::get(&mut field, "core")?),
+                    })
                 }
                 "u8" => {
-                    rt::Ok(
-                        Self::U8(request::U8 {
-                            frame: Some::from_raw(
-                                (rt::get::<u8>(&mut field, "frame")?) as i16,
-                            ),
-                        }),
-                    )
+                    Self::U8(request::U8 {
+                        frame: Some::from_raw(
+                            (rt::get::<u8>(&mut field, "frame")?) as i16,
+                        ),
+                    })
                 }
                 "core" => {
-                    rt::Ok(
-                        Self::Core(request::Core {
-                            address: rt::get(&mut field, "address")?,
-                            out: rt::get(&mut field, "out")?,
-                        }),
-                    )
+                    Self::Core(request::Core {
+                        address: rt::get(&mut field, "address")?,
+                        out: rt::get(&mut field, "out")?,
+                    })
                 }
                 "rt" => {
-                    rt::Ok(
-                        Self::Rt(request::Rt {
-                            f: rt::get(&mut field, "f")?,
-                        }),
-                    )
+                    Self::Rt(request::Rt {
+                        f: rt::get(&mut field, "f")?,
+                    })
                 }
-                _ => rt::Err(rt::FieldError::UnknownMessage),
-            }
+                _ => return rt::Err(rt::FieldError::UnknownMessage),
+            };
+            rt::Ok(message)
         }
     }
     impl rt::Message for Request {
@@ -653,30 +646,27 @@ pub mod clash {
             name: &str,
             mut field: impl FnMut(&'static str) -> rt::Option<rt::FieldValue<'v>>,
         ) -> rt::Result<Self, rt::FieldError> {
-            match name {
-                "ok" => rt::Ok(Self::Ok(response::Ok)),
-                "err" => rt::Ok(Self::Err(response::Err)),
+            let message = match name {
+                "ok" => Self::Ok(response::Ok),
+                "err" => Self::Err(response::Err),
                 "result" => {
-                    rt::Ok(
-                        Self::Result(response::Result {
-                            g: Ok::from_raw(rt::get(&mut field, "g")?),
-                            usize: Option::from_raw(rt::get(&mut field, "usize")?),
-                        }),
-                    )
+                    Self::Result(response::Result {
+                        g: Ok::from_raw(rt::get(&mut field, "g")?),
+                        usize: Option::from_raw(rt::get(&mut field, "usize")?),
+                    })
                 }
                 "usize" => {
-                    rt::Ok(
-                        Self::Usize(response::Usize {
-                            asked: rt::text(&mut field, "asked")?,
-                            none: rt::field_int("none", field("none"), 0, 15)? as u8,
-                            some: Some::from_raw(
-                                rt::field_int("some", field("some"), -8, 7)? as i16,
-                            ),
-                        }),
-                    )
+                    Self::Usize(response::Usize {
+                        asked: rt::text(&mut field, "asked")?,
+                        none: rt::field_int("none", field("none"), 0, 15)? as u8,
+                        some: Some::from_raw(
+                            rt::field_int("some", field("some"), -8, 7)? as i16,
+                        ),
+                    })
                 }
-                _ => rt::Err(rt::FieldError::UnknownMessage),
-            }
+                _ => return rt::Err(rt::FieldError::UnknownMessage),
+            };
+            rt::Ok(message)
         }
     }
     impl rt::Message for Response {

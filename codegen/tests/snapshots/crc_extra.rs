@@ -260,30 +260,27 @@ pub mod crc_extra {
             name: &str,
             mut field: impl FnMut(&'static str) -> rt::Option<rt::FieldValue<'v>>,
         ) -> rt::Result<Self, rt::FieldError> {
-            match name {
+            let message = match name {
                 "ping" => {
-                    rt::Ok(
-                        Self::Ping(request::Ping {
-                            time_usec: rt::get(&mut field, "time_usec")?,
-                            seq: rt::get(&mut field, "seq")?,
-                            target_system: rt::get(&mut field, "target_system")?,
-                            target_component: rt::get(&mut field, "target_component")?,
-                        }),
-                    )
+                    Self::Ping(request::Ping {
+                        time_usec: rt::get(&mut field, "time_usec")?,
+                        seq: rt::get(&mut field, "seq")?,
+                        target_system: rt::get(&mut field, "target_system")?,
+                        target_component: rt::get(&mut field, "target_component")?,
+                    })
                 }
                 "request_data_stream" => {
-                    rt::Ok(
-                        Self::RequestDataStream(request::RequestDataStream {
-                            req_message_rate: rt::get(&mut field, "req_message_rate")?,
-                            target_system: rt::get(&mut field, "target_system")?,
-                            target_component: rt::get(&mut field, "target_component")?,
-                            req_stream_id: rt::get(&mut field, "req_stream_id")?,
-                            start_stop: rt::get(&mut field, "start_stop")?,
-                        }),
-                    )
+                    Self::RequestDataStream(request::RequestDataStream {
+                        req_message_rate: rt::get(&mut field, "req_message_rate")?,
+                        target_system: rt::get(&mut field, "target_system")?,
+                        target_component: rt::get(&mut field, "target_component")?,
+                        req_stream_id: rt::get(&mut field, "req_stream_id")?,
+                        start_stop: rt::get(&mut field, "start_stop")?,
+                    })
                 }
-                _ => rt::Err(rt::FieldError::UnknownMessage),
-            }
+                _ => return rt::Err(rt::FieldError::UnknownMessage),
+            };
+            rt::Ok(message)
         }
     }
     impl rt::Message for Request {
@@ -530,31 +527,28 @@ pub mod crc_extra {
             name: &str,
             mut field: impl FnMut(&'static str) -> rt::Option<rt::FieldValue<'v>>,
         ) -> rt::Result<Self, rt::FieldError> {
-            match name {
+            let message = match name {
                 "ping_reply" => {
-                    rt::Ok(
-                        Self::PingReply(response::PingReply {
-                            time_usec: rt::get(&mut field, "time_usec")?,
-                            seq: rt::get(&mut field, "seq")?,
-                            target_system: rt::get(&mut field, "target_system")?,
-                            target_component: rt::get(&mut field, "target_component")?,
-                        }),
-                    )
+                    Self::PingReply(response::PingReply {
+                        time_usec: rt::get(&mut field, "time_usec")?,
+                        seq: rt::get(&mut field, "seq")?,
+                        target_system: rt::get(&mut field, "target_system")?,
+                        target_component: rt::get(&mut field, "target_component")?,
+                    })
                 }
                 "heartbeat" => {
-                    rt::Ok(
-                        Self::Heartbeat(response::Heartbeat {
-                            custom_mode: rt::get(&mut field, "custom_mode")?,
-                            vehicle_type: rt::get(&mut field, "vehicle_type")?,
-                            autopilot: rt::get(&mut field, "autopilot")?,
-                            base_mode: rt::get(&mut field, "base_mode")?,
-                            system_status: rt::get(&mut field, "system_status")?,
-                            mavlink_version: rt::get(&mut field, "mavlink_version")?,
-                        }),
-                    )
+                    Self::Heartbeat(response::Heartbeat {
+                        custom_mode: rt::get(&mut field, "custom_mode")?,
+                        vehicle_type: rt::get(&mut field, "vehicle_type")?,
+                        autopilot: rt::get(&mut field, "autopilot")?,
+                        base_mode: rt::get(&mut field, "base_mode")?,
+                        system_status: rt::get(&mut field, "system_status")?,
+                        mavlink_version: rt::get(&mut field, "mavlink_version")?,
+                    })
                 }
-                _ => rt::Err(rt::FieldError::UnknownMessage),
-            }
+                _ => return rt::Err(rt::FieldError::UnknownMessage),
+            };
+            rt::Ok(message)
         }
     }
     impl rt::Message for Response {

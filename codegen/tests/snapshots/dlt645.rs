@@ -254,46 +254,43 @@ pub mod dlt645 {
             name: &str,
             mut field: impl FnMut(&'static str) -> rt::Option<rt::FieldValue<'v>>,
         ) -> rt::Result<Self, rt::FieldError> {
-            match name {
+            let message = match name {
                 "read_address" => {
-                    rt::Ok(
-                        Self::ReadAddress(request::ReadAddress {
-                            address_low: rt::field_int(
-                                "address_low",
-                                field("address_low"),
-                                0,
-                                16777215,
-                            )? as u32,
-                            address_high: rt::field_int(
-                                "address_high",
-                                field("address_high"),
-                                0,
-                                16777215,
-                            )? as u32,
-                        }),
-                    )
+                    Self::ReadAddress(request::ReadAddress {
+                        address_low: rt::field_int(
+                            "address_low",
+                            field("address_low"),
+                            0,
+                            16777215,
+                        )? as u32,
+                        address_high: rt::field_int(
+                            "address_high",
+                            field("address_high"),
+                            0,
+                            16777215,
+                        )? as u32,
+                    })
                 }
                 "read_data" => {
-                    rt::Ok(
-                        Self::ReadData(request::ReadData {
-                            address_low: rt::field_int(
-                                "address_low",
-                                field("address_low"),
-                                0,
-                                16777215,
-                            )? as u32,
-                            address_high: rt::field_int(
-                                "address_high",
-                                field("address_high"),
-                                0,
-                                16777215,
-                            )? as u32,
-                            data_id: rt::get(&mut field, "data_id")?,
-                        }),
-                    )
+                    Self::ReadData(request::ReadData {
+                        address_low: rt::field_int(
+                            "address_low",
+                            field("address_low"),
+                            0,
+                            16777215,
+                        )? as u32,
+                        address_high: rt::field_int(
+                            "address_high",
+                            field("address_high"),
+                            0,
+                            16777215,
+                        )? as u32,
+                        data_id: rt::get(&mut field, "data_id")?,
+                    })
                 }
-                _ => rt::Err(rt::FieldError::UnknownMessage),
-            }
+                _ => return rt::Err(rt::FieldError::UnknownMessage),
+            };
+            rt::Ok(message)
         }
     }
     impl rt::Message for Request {
@@ -679,89 +676,84 @@ pub mod dlt645 {
             name: &str,
             mut field: impl FnMut(&'static str) -> rt::Option<rt::FieldValue<'v>>,
         ) -> rt::Result<Self, rt::FieldError> {
-            match name {
+            let message = match name {
                 "address_reply" => {
-                    rt::Ok(
-                        Self::AddressReply(response::AddressReply {
-                            address_low: rt::field_int(
-                                "address_low",
-                                field("address_low"),
-                                0,
-                                16777215,
-                            )? as u32,
-                            address_high: rt::field_int(
-                                "address_high",
-                                field("address_high"),
-                                0,
-                                16777215,
-                            )? as u32,
-                            meter_low: rt::field_int(
-                                "meter_low",
-                                field("meter_low"),
-                                0,
-                                16777215,
-                            )? as u32,
-                            meter_high: rt::field_int(
-                                "meter_high",
-                                field("meter_high"),
-                                0,
-                                16777215,
-                            )? as u32,
-                        }),
-                    )
+                    Self::AddressReply(response::AddressReply {
+                        address_low: rt::field_int(
+                            "address_low",
+                            field("address_low"),
+                            0,
+                            16777215,
+                        )? as u32,
+                        address_high: rt::field_int(
+                            "address_high",
+                            field("address_high"),
+                            0,
+                            16777215,
+                        )? as u32,
+                        meter_low: rt::field_int(
+                            "meter_low",
+                            field("meter_low"),
+                            0,
+                            16777215,
+                        )? as u32,
+                        meter_high: rt::field_int(
+                            "meter_high",
+                            field("meter_high"),
+                            0,
+                            16777215,
+                        )? as u32,
+                    })
                 }
                 "data_reply" => {
-                    rt::Ok(
-                        Self::DataReply(response::DataReply {
-                            address_low: rt::field_int(
-                                "address_low",
-                                field("address_low"),
-                                0,
-                                16777215,
-                            )? as u32,
-                            address_high: rt::field_int(
-                                "address_high",
-                                field("address_high"),
-                                0,
-                                16777215,
-                            )? as u32,
-                            data_id: rt::get(&mut field, "data_id")?,
-                            value: rt::get(&mut field, "value")?,
-                        }),
-                    )
+                    Self::DataReply(response::DataReply {
+                        address_low: rt::field_int(
+                            "address_low",
+                            field("address_low"),
+                            0,
+                            16777215,
+                        )? as u32,
+                        address_high: rt::field_int(
+                            "address_high",
+                            field("address_high"),
+                            0,
+                            16777215,
+                        )? as u32,
+                        data_id: rt::get(&mut field, "data_id")?,
+                        value: rt::get(&mut field, "value")?,
+                    })
                 }
                 "meter_number_reply" => {
-                    rt::Ok(
-                        Self::MeterNumberReply(response::MeterNumberReply {
-                            address_low: rt::field_int(
-                                "address_low",
-                                field("address_low"),
-                                0,
-                                16777215,
-                            )? as u32,
-                            address_high: rt::field_int(
-                                "address_high",
-                                field("address_high"),
-                                0,
-                                16777215,
-                            )? as u32,
-                            number_low: rt::field_int(
-                                "number_low",
-                                field("number_low"),
-                                0,
-                                16777215,
-                            )? as u32,
-                            number_high: rt::field_int(
-                                "number_high",
-                                field("number_high"),
-                                0,
-                                16777215,
-                            )? as u32,
-                        }),
-                    )
+                    Self::MeterNumberReply(response::MeterNumberReply {
+                        address_low: rt::field_int(
+                            "address_low",
+                            field("address_low"),
+                            0,
+                            16777215,
+                        )? as u32,
+                        address_high: rt::field_int(
+                            "address_high",
+                            field("address_high"),
+                            0,
+                            16777215,
+                        )? as u32,
+                        number_low: rt::field_int(
+                            "number_low",
+                            field("number_low"),
+                            0,
+                            16777215,
+                        )? as u32,
+                        number_high: rt::field_int(
+                            "number_high",
+                            field("number_high"),
+                            0,
+                            16777215,
+                        )? as u32,
+                    })
                 }
-                _ => rt::Err(rt::FieldError::UnknownMessage),
-            }
+                _ => return rt::Err(rt::FieldError::UnknownMessage),
+            };
+            rt::Ok(message)
         }
     }
     impl rt::Message for Response {

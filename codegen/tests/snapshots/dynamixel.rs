@@ -364,45 +364,38 @@ pub mod dynamixel {
             name: &str,
             mut field: impl FnMut(&'static str) -> rt::Option<rt::FieldValue<'v>>,
         ) -> rt::Result<Self, rt::FieldError> {
-            match name {
-                "ping" => rt::Ok(Self::Ping(request::Ping)),
+            let message = match name {
+                "ping" => Self::Ping(request::Ping),
                 "read" => {
-                    rt::Ok(
-                        Self::Read(request::Read {
-                            address: rt::get(&mut field, "address")?,
-                            length: rt::get(&mut field, "length")?,
-                        }),
-                    )
+                    Self::Read(request::Read {
+                        address: rt::get(&mut field, "address")?,
+                        length: rt::get(&mut field, "length")?,
+                    })
                 }
                 "write" => {
-                    rt::Ok(
-                        Self::Write(request::Write {
-                            address: rt::get(&mut field, "address")?,
-                            data: rt::list::<u8, 252>(&mut field, "data", 0, 255)?,
-                        }),
-                    )
+                    Self::Write(request::Write {
+                        address: rt::get(&mut field, "address")?,
+                        data: rt::list::<u8, 252>(&mut field, "data", 0, 255)?,
+                    })
                 }
                 "reg_write" => {
-                    rt::Ok(
-                        Self::RegWrite(request::RegWrite {
-                            address: rt::get(&mut field, "address")?,
-                            data: rt::list::<u8, 252>(&mut field, "data", 0, 255)?,
-                        }),
-                    )
+                    Self::RegWrite(request::RegWrite {
+                        address: rt::get(&mut field, "address")?,
+                        data: rt::list::<u8, 252>(&mut field, "data", 0, 255)?,
+                    })
                 }
-                "action" => rt::Ok(Self::Action(request::Action)),
-                "reset" => rt::Ok(Self::Reset(request::Reset)),
+                "action" => Self::Action(request::Action),
+                "reset" => Self::Reset(request::Reset),
                 "sync_write" => {
-                    rt::Ok(
-                        Self::SyncWrite(request::SyncWrite {
-                            address: rt::get(&mut field, "address")?,
-                            data_length: rt::get(&mut field, "data_length")?,
-                            blocks: rt::list::<u8, 251>(&mut field, "blocks", 0, 255)?,
-                        }),
-                    )
+                    Self::SyncWrite(request::SyncWrite {
+                        address: rt::get(&mut field, "address")?,
+                        data_length: rt::get(&mut field, "data_length")?,
+                        blocks: rt::list::<u8, 251>(&mut field, "blocks", 0, 255)?,
+                    })
                 }
-                _ => rt::Err(rt::FieldError::UnknownMessage),
-            }
+                _ => return rt::Err(rt::FieldError::UnknownMessage),
+            };
+            rt::Ok(message)
         }
     }
     impl rt::Message for Request {
@@ -632,24 +625,21 @@ pub mod dynamixel {
             name: &str,
             mut field: impl FnMut(&'static str) -> rt::Option<rt::FieldValue<'v>>,
         ) -> rt::Result<Self, rt::FieldError> {
-            match name {
+            let message = match name {
                 "status" => {
-                    rt::Ok(
-                        Self::Status(response::Status {
-                            error: StatusError::from_raw(rt::get(&mut field, "error")?),
-                        }),
-                    )
+                    Self::Status(response::Status {
+                        error: StatusError::from_raw(rt::get(&mut field, "error")?),
+                    })
                 }
                 "read_status" => {
-                    rt::Ok(
-                        Self::ReadStatus(response::ReadStatus {
-                            error: StatusError::from_raw(rt::get(&mut field, "error")?),
-                            data: rt::list::<u8, 253>(&mut field, "data", 0, 255)?,
-                        }),
-                    )
+                    Self::ReadStatus(response::ReadStatus {
+                        error: StatusError::from_raw(rt::get(&mut field, "error")?),
+                        data: rt::list::<u8, 253>(&mut field, "data", 0, 255)?,
+                    })
                 }
-                _ => rt::Err(rt::FieldError::UnknownMessage),
-            }
+                _ => return rt::Err(rt::FieldError::UnknownMessage),
+            };
+            rt::Ok(message)
         }
     }
     impl rt::Message for Response {

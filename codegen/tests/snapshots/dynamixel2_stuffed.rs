@@ -295,18 +295,17 @@ pub mod dynamixel2_stuffed {
             name: &str,
             mut field: impl FnMut(&'static str) -> rt::Option<rt::FieldValue<'v>>,
         ) -> rt::Result<Self, rt::FieldError> {
-            match name {
-                "ping" => rt::Ok(Self::Ping(request::Ping)),
+            let message = match name {
+                "ping" => Self::Ping(request::Ping),
                 "write4" => {
-                    rt::Ok(
-                        Self::Write4(request::Write4 {
-                            address: rt::get(&mut field, "address")?,
-                            value: rt::get(&mut field, "value")?,
-                        }),
-                    )
+                    Self::Write4(request::Write4 {
+                        address: rt::get(&mut field, "address")?,
+                        value: rt::get(&mut field, "value")?,
+                    })
                 }
-                _ => rt::Err(rt::FieldError::UnknownMessage),
-            }
+                _ => return rt::Err(rt::FieldError::UnknownMessage),
+            };
+            rt::Ok(message)
         }
     }
     impl rt::Message for Request {
@@ -548,25 +547,22 @@ pub mod dynamixel2_stuffed {
             name: &str,
             mut field: impl FnMut(&'static str) -> rt::Option<rt::FieldValue<'v>>,
         ) -> rt::Result<Self, rt::FieldError> {
-            match name {
+            let message = match name {
                 "ping_status" => {
-                    rt::Ok(
-                        Self::PingStatus(response::PingStatus {
-                            error: StatusError::from_raw(rt::get(&mut field, "error")?),
-                            model_number: rt::get(&mut field, "model_number")?,
-                            firmware_version: rt::get(&mut field, "firmware_version")?,
-                        }),
-                    )
+                    Self::PingStatus(response::PingStatus {
+                        error: StatusError::from_raw(rt::get(&mut field, "error")?),
+                        model_number: rt::get(&mut field, "model_number")?,
+                        firmware_version: rt::get(&mut field, "firmware_version")?,
+                    })
                 }
                 "status" => {
-                    rt::Ok(
-                        Self::Status(response::Status {
-                            error: StatusError::from_raw(rt::get(&mut field, "error")?),
-                        }),
-                    )
+                    Self::Status(response::Status {
+                        error: StatusError::from_raw(rt::get(&mut field, "error")?),
+                    })
                 }
-                _ => rt::Err(rt::FieldError::UnknownMessage),
-            }
+                _ => return rt::Err(rt::FieldError::UnknownMessage),
+            };
+            rt::Ok(message)
         }
     }
     impl rt::Message for Response {

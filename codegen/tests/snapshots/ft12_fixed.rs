@@ -197,19 +197,18 @@ pub mod ft12_fixed {
             name: &str,
             _field: impl FnMut(&'static str) -> rt::Option<rt::FieldValue<'v>>,
         ) -> rt::Result<Self, rt::FieldError> {
-            match name {
-                "reset_remote_link" => {
-                    rt::Ok(Self::ResetRemoteLink(request::ResetRemoteLink))
-                }
+            let message = match name {
+                "reset_remote_link" => Self::ResetRemoteLink(request::ResetRemoteLink),
                 "request_status_of_link" => {
-                    rt::Ok(Self::RequestStatusOfLink(request::RequestStatusOfLink))
+                    Self::RequestStatusOfLink(request::RequestStatusOfLink)
                 }
-                "request_class_2" => rt::Ok(Self::RequestClass2(request::RequestClass2)),
+                "request_class_2" => Self::RequestClass2(request::RequestClass2),
                 "request_class_2_fcb" => {
-                    rt::Ok(Self::RequestClass2Fcb(request::RequestClass2Fcb))
+                    Self::RequestClass2Fcb(request::RequestClass2Fcb)
                 }
-                _ => rt::Err(rt::FieldError::UnknownMessage),
-            }
+                _ => return rt::Err(rt::FieldError::UnknownMessage),
+            };
+            rt::Ok(message)
         }
     }
     impl rt::Message for Request {
@@ -394,12 +393,13 @@ pub mod ft12_fixed {
             name: &str,
             _field: impl FnMut(&'static str) -> rt::Option<rt::FieldValue<'v>>,
         ) -> rt::Result<Self, rt::FieldError> {
-            match name {
-                "ack" => rt::Ok(Self::Ack(response::Ack)),
-                "nack" => rt::Ok(Self::Nack(response::Nack)),
-                "status_of_link" => rt::Ok(Self::StatusOfLink(response::StatusOfLink)),
-                _ => rt::Err(rt::FieldError::UnknownMessage),
-            }
+            let message = match name {
+                "ack" => Self::Ack(response::Ack),
+                "nack" => Self::Nack(response::Nack),
+                "status_of_link" => Self::StatusOfLink(response::StatusOfLink),
+                _ => return rt::Err(rt::FieldError::UnknownMessage),
+            };
+            rt::Ok(message)
         }
     }
     impl rt::Message for Response {

@@ -167,11 +167,12 @@ pub mod ft12_variable {
             name: &str,
             _field: impl FnMut(&'static str) -> rt::Option<rt::FieldValue<'v>>,
         ) -> rt::Result<Self, rt::FieldError> {
-            match name {
-                "reset" => rt::Ok(Self::Reset(request::Reset)),
-                "read_data" => rt::Ok(Self::ReadData(request::ReadData)),
-                _ => rt::Err(rt::FieldError::UnknownMessage),
-            }
+            let message = match name {
+                "reset" => Self::Reset(request::Reset),
+                "read_data" => Self::ReadData(request::ReadData),
+                _ => return rt::Err(rt::FieldError::UnknownMessage),
+            };
+            rt::Ok(message)
         }
     }
     impl rt::Message for Request {
@@ -413,23 +414,22 @@ pub mod ft12_variable {
             name: &str,
             mut field: impl FnMut(&'static str) -> rt::Option<rt::FieldValue<'v>>,
         ) -> rt::Result<Self, rt::FieldError> {
-            match name {
+            let message = match name {
                 "rsp_ud" => {
-                    rt::Ok(
-                        Self::RspUd(response::RspUd {
-                            identification: rt::get(&mut field, "identification")?,
-                            manufacturer: rt::get(&mut field, "manufacturer")?,
-                            version: rt::get(&mut field, "version")?,
-                            medium: rt::get(&mut field, "medium")?,
-                            access: rt::get(&mut field, "access")?,
-                            status: rt::get(&mut field, "status")?,
-                            signature: rt::get(&mut field, "signature")?,
-                            volume: rt::get(&mut field, "volume")?,
-                        }),
-                    )
+                    Self::RspUd(response::RspUd {
+                        identification: rt::get(&mut field, "identification")?,
+                        manufacturer: rt::get(&mut field, "manufacturer")?,
+                        version: rt::get(&mut field, "version")?,
+                        medium: rt::get(&mut field, "medium")?,
+                        access: rt::get(&mut field, "access")?,
+                        status: rt::get(&mut field, "status")?,
+                        signature: rt::get(&mut field, "signature")?,
+                        volume: rt::get(&mut field, "volume")?,
+                    })
                 }
-                _ => rt::Err(rt::FieldError::UnknownMessage),
-            }
+                _ => return rt::Err(rt::FieldError::UnknownMessage),
+            };
+            rt::Ok(message)
         }
     }
     impl rt::Message for Response {

@@ -242,18 +242,17 @@ pub mod hdlc_like {
             name: &str,
             mut field: impl FnMut(&'static str) -> rt::Option<rt::FieldValue<'v>>,
         ) -> rt::Result<Self, rt::FieldError> {
-            match name {
-                "read_status" => rt::Ok(Self::ReadStatus(request::ReadStatus)),
+            let message = match name {
+                "read_status" => Self::ReadStatus(request::ReadStatus),
                 "write_register" => {
-                    rt::Ok(
-                        Self::WriteRegister(request::WriteRegister {
-                            register: rt::get(&mut field, "register")?,
-                            value: rt::get(&mut field, "value")?,
-                        }),
-                    )
+                    Self::WriteRegister(request::WriteRegister {
+                        register: rt::get(&mut field, "register")?,
+                        value: rt::get(&mut field, "value")?,
+                    })
                 }
-                _ => rt::Err(rt::FieldError::UnknownMessage),
-            }
+                _ => return rt::Err(rt::FieldError::UnknownMessage),
+            };
+            rt::Ok(message)
         }
     }
     impl rt::Message for Request {
@@ -471,17 +470,16 @@ pub mod hdlc_like {
             name: &str,
             mut field: impl FnMut(&'static str) -> rt::Option<rt::FieldValue<'v>>,
         ) -> rt::Result<Self, rt::FieldError> {
-            match name {
+            let message = match name {
                 "status" => {
-                    rt::Ok(
-                        Self::Status(response::Status {
-                            state: rt::get(&mut field, "state")?,
-                        }),
-                    )
+                    Self::Status(response::Status {
+                        state: rt::get(&mut field, "state")?,
+                    })
                 }
-                "ack" => rt::Ok(Self::Ack(response::Ack)),
-                _ => rt::Err(rt::FieldError::UnknownMessage),
-            }
+                "ack" => Self::Ack(response::Ack),
+                _ => return rt::Err(rt::FieldError::UnknownMessage),
+            };
+            rt::Ok(message)
         }
     }
     impl rt::Message for Response {

@@ -360,33 +360,28 @@ pub mod lists_after {
             name: &str,
             mut field: impl FnMut(&'static str) -> rt::Option<rt::FieldValue<'v>>,
         ) -> rt::Result<Self, rt::FieldError> {
-            match name {
+            let message = match name {
                 "read_block" => {
-                    rt::Ok(
-                        Self::ReadBlock(request::ReadBlock {
-                            first: rt::get(&mut field, "first")?,
-                            quantity: rt::get(&mut field, "quantity")?,
-                        }),
-                    )
+                    Self::ReadBlock(request::ReadBlock {
+                        first: rt::get(&mut field, "first")?,
+                        quantity: rt::get(&mut field, "quantity")?,
+                    })
                 }
                 "write_block" => {
-                    rt::Ok(
-                        Self::WriteBlock(request::WriteBlock {
-                            values: rt::list::<u16, 8>(&mut field, "values", 0, 65535)?,
-                            flags: rt::get(&mut field, "flags")?,
-                        }),
-                    )
+                    Self::WriteBlock(request::WriteBlock {
+                        values: rt::list::<u16, 8>(&mut field, "values", 0, 65535)?,
+                        flags: rt::get(&mut field, "flags")?,
+                    })
                 }
                 "copy" => {
-                    rt::Ok(
-                        Self::Copy(request::Copy {
-                            sources: rt::list::<u8, 4>(&mut field, "sources", 0, 255)?,
-                            targets: rt::list::<u16, 4>(&mut field, "targets", 0, 65535)?,
-                        }),
-                    )
+                    Self::Copy(request::Copy {
+                        sources: rt::list::<u8, 4>(&mut field, "sources", 0, 255)?,
+                        targets: rt::list::<u16, 4>(&mut field, "targets", 0, 65535)?,
+                    })
                 }
-                _ => rt::Err(rt::FieldError::UnknownMessage),
-            }
+                _ => return rt::Err(rt::FieldError::UnknownMessage),
+            };
+            rt::Ok(message)
         }
     }
     impl rt::Message for Request {
@@ -622,24 +617,21 @@ pub mod lists_after {
             name: &str,
             mut field: impl FnMut(&'static str) -> rt::Option<rt::FieldValue<'v>>,
         ) -> rt::Result<Self, rt::FieldError> {
-            match name {
+            let message = match name {
                 "block_reply" => {
-                    rt::Ok(
-                        Self::BlockReply(response::BlockReply {
-                            values: rt::list::<u16, 8>(&mut field, "values", 0, 65535)?,
-                            status: rt::get(&mut field, "status")?,
-                        }),
-                    )
+                    Self::BlockReply(response::BlockReply {
+                        values: rt::list::<u16, 8>(&mut field, "values", 0, 65535)?,
+                        status: rt::get(&mut field, "status")?,
+                    })
                 }
                 "ack" => {
-                    rt::Ok(
-                        Self::Ack(response::Ack {
-                            status: rt::get(&mut field, "status")?,
-                        }),
-                    )
+                    Self::Ack(response::Ack {
+                        status: rt::get(&mut field, "status")?,
+                    })
                 }
-                _ => rt::Err(rt::FieldError::UnknownMessage),
-            }
+                _ => return rt::Err(rt::FieldError::UnknownMessage),
+            };
+            rt::Ok(message)
         }
     }
     impl rt::Message for Response {

@@ -382,29 +382,26 @@ pub mod lists_length {
             name: &str,
             mut field: impl FnMut(&'static str) -> rt::Option<rt::FieldValue<'v>>,
         ) -> rt::Result<Self, rt::FieldError> {
-            match name {
+            let message = match name {
                 "log" => {
-                    rt::Ok(
-                        Self::Log(request::Log {
-                            channels: rt::list::<u8, 6>(&mut field, "channels", 0, 255)?,
-                            samples: rt::list::<
-                                Millivolts,
-                                6,
-                            >(&mut field, "samples", -32768, 32767)?,
-                            seq: rt::get(&mut field, "seq")?,
-                        }),
-                    )
+                    Self::Log(request::Log {
+                        channels: rt::list::<u8, 6>(&mut field, "channels", 0, 255)?,
+                        samples: rt::list::<
+                            Millivolts,
+                            6,
+                        >(&mut field, "samples", -32768, 32767)?,
+                        seq: rt::get(&mut field, "seq")?,
+                    })
                 }
                 "set_outputs" => {
-                    rt::Ok(
-                        Self::SetOutputs(request::SetOutputs {
-                            outputs: rt::list_bits::<2>(&mut field, "outputs")?,
-                            mask: rt::get(&mut field, "mask")?,
-                        }),
-                    )
+                    Self::SetOutputs(request::SetOutputs {
+                        outputs: rt::list_bits::<2>(&mut field, "outputs")?,
+                        mask: rt::get(&mut field, "mask")?,
+                    })
                 }
-                _ => rt::Err(rt::FieldError::UnknownMessage),
-            }
+                _ => return rt::Err(rt::FieldError::UnknownMessage),
+            };
+            rt::Ok(message)
         }
     }
     impl rt::Message for Request {
@@ -581,16 +578,15 @@ pub mod lists_length {
             name: &str,
             mut field: impl FnMut(&'static str) -> rt::Option<rt::FieldValue<'v>>,
         ) -> rt::Result<Self, rt::FieldError> {
-            match name {
+            let message = match name {
                 "log_ack" => {
-                    rt::Ok(
-                        Self::LogAck(response::LogAck {
-                            seq: rt::get(&mut field, "seq")?,
-                        }),
-                    )
+                    Self::LogAck(response::LogAck {
+                        seq: rt::get(&mut field, "seq")?,
+                    })
                 }
-                _ => rt::Err(rt::FieldError::UnknownMessage),
-            }
+                _ => return rt::Err(rt::FieldError::UnknownMessage),
+            };
+            rt::Ok(message)
         }
     }
     impl rt::Message for Response {

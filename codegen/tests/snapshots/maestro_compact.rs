@@ -259,31 +259,28 @@ pub mod maestro_compact {
             name: &str,
             mut field: impl FnMut(&'static str) -> rt::Option<rt::FieldValue<'v>>,
         ) -> rt::Result<Self, rt::FieldError> {
-            match name {
+            let message = match name {
                 "set_target" => {
-                    rt::Ok(
-                        Self::SetTarget(request::SetTarget {
-                            channel: rt::get(&mut field, "channel")?,
-                            target_high: QuarterMicroseconds::from_raw(
-                                rt::field_int("target_high", field("target_high"), 0, 127)?
-                                    as u16,
-                            ),
-                            target_low: QuarterMicroseconds::from_raw(
-                                rt::field_int("target_low", field("target_low"), 0, 127)?
-                                    as u16,
-                            ),
-                        }),
-                    )
+                    Self::SetTarget(request::SetTarget {
+                        channel: rt::get(&mut field, "channel")?,
+                        target_high: QuarterMicroseconds::from_raw(
+                            rt::field_int("target_high", field("target_high"), 0, 127)?
+                                as u16,
+                        ),
+                        target_low: QuarterMicroseconds::from_raw(
+                            rt::field_int("target_low", field("target_low"), 0, 127)?
+                                as u16,
+                        ),
+                    })
                 }
                 "get_position" => {
-                    rt::Ok(
-                        Self::GetPosition(request::GetPosition {
-                            channel: rt::get(&mut field, "channel")?,
-                        }),
-                    )
+                    Self::GetPosition(request::GetPosition {
+                        channel: rt::get(&mut field, "channel")?,
+                    })
                 }
-                _ => rt::Err(rt::FieldError::UnknownMessage),
-            }
+                _ => return rt::Err(rt::FieldError::UnknownMessage),
+            };
+            rt::Ok(message)
         }
     }
     impl rt::Message for Request {
@@ -464,18 +461,17 @@ pub mod maestro_compact {
             name: &str,
             mut field: impl FnMut(&'static str) -> rt::Option<rt::FieldValue<'v>>,
         ) -> rt::Result<Self, rt::FieldError> {
-            match name {
+            let message = match name {
                 "position" => {
-                    rt::Ok(
-                        Self::Position(response::Position {
-                            position: QuarterMicroseconds::from_raw(
-                                rt::get(&mut field, "position")?,
-                            ),
-                        }),
-                    )
+                    Self::Position(response::Position {
+                        position: QuarterMicroseconds::from_raw(
+                            rt::get(&mut field, "position")?,
+                        ),
+                    })
                 }
-                _ => rt::Err(rt::FieldError::UnknownMessage),
-            }
+                _ => return rt::Err(rt::FieldError::UnknownMessage),
+            };
+            rt::Ok(message)
         }
     }
     impl rt::Message for Response {

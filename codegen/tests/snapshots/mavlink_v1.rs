@@ -282,36 +282,33 @@ pub mod mavlink_v1 {
             name: &str,
             mut field: impl FnMut(&'static str) -> rt::Option<rt::FieldValue<'v>>,
         ) -> rt::Result<Self, rt::FieldError> {
-            match name {
+            let message = match name {
                 "ping" => {
-                    rt::Ok(
-                        Self::Ping(request::Ping {
-                            sequence: rt::get(&mut field, "sequence")?,
-                            sysid: rt::get(&mut field, "sysid")?,
-                            compid: rt::get(&mut field, "compid")?,
-                            time_usec: rt::get(&mut field, "time_usec")?,
-                            seq: rt::get(&mut field, "seq")?,
-                            target_system: rt::get(&mut field, "target_system")?,
-                            target_component: rt::get(&mut field, "target_component")?,
-                        }),
-                    )
+                    Self::Ping(request::Ping {
+                        sequence: rt::get(&mut field, "sequence")?,
+                        sysid: rt::get(&mut field, "sysid")?,
+                        compid: rt::get(&mut field, "compid")?,
+                        time_usec: rt::get(&mut field, "time_usec")?,
+                        seq: rt::get(&mut field, "seq")?,
+                        target_system: rt::get(&mut field, "target_system")?,
+                        target_component: rt::get(&mut field, "target_component")?,
+                    })
                 }
                 "request_data_stream" => {
-                    rt::Ok(
-                        Self::RequestDataStream(request::RequestDataStream {
-                            sequence: rt::get(&mut field, "sequence")?,
-                            sysid: rt::get(&mut field, "sysid")?,
-                            compid: rt::get(&mut field, "compid")?,
-                            req_message_rate: rt::get(&mut field, "req_message_rate")?,
-                            target_system: rt::get(&mut field, "target_system")?,
-                            target_component: rt::get(&mut field, "target_component")?,
-                            req_stream_id: rt::get(&mut field, "req_stream_id")?,
-                            start_stop: rt::get(&mut field, "start_stop")?,
-                        }),
-                    )
+                    Self::RequestDataStream(request::RequestDataStream {
+                        sequence: rt::get(&mut field, "sequence")?,
+                        sysid: rt::get(&mut field, "sysid")?,
+                        compid: rt::get(&mut field, "compid")?,
+                        req_message_rate: rt::get(&mut field, "req_message_rate")?,
+                        target_system: rt::get(&mut field, "target_system")?,
+                        target_component: rt::get(&mut field, "target_component")?,
+                        req_stream_id: rt::get(&mut field, "req_stream_id")?,
+                        start_stop: rt::get(&mut field, "start_stop")?,
+                    })
                 }
-                _ => rt::Err(rt::FieldError::UnknownMessage),
-            }
+                _ => return rt::Err(rt::FieldError::UnknownMessage),
+            };
+            rt::Ok(message)
         }
     }
     impl rt::Message for Request {
@@ -753,84 +750,77 @@ pub mod mavlink_v1 {
             name: &str,
             mut field: impl FnMut(&'static str) -> rt::Option<rt::FieldValue<'v>>,
         ) -> rt::Result<Self, rt::FieldError> {
-            match name {
+            let message = match name {
                 "ping_reply" => {
-                    rt::Ok(
-                        Self::PingReply(response::PingReply {
-                            sequence: rt::get(&mut field, "sequence")?,
-                            sysid: rt::get(&mut field, "sysid")?,
-                            compid: rt::get(&mut field, "compid")?,
-                            time_usec: rt::get(&mut field, "time_usec")?,
-                            seq: rt::get(&mut field, "seq")?,
-                            target_system: rt::get(&mut field, "target_system")?,
-                            target_component: rt::get(&mut field, "target_component")?,
-                        }),
-                    )
+                    Self::PingReply(response::PingReply {
+                        sequence: rt::get(&mut field, "sequence")?,
+                        sysid: rt::get(&mut field, "sysid")?,
+                        compid: rt::get(&mut field, "compid")?,
+                        time_usec: rt::get(&mut field, "time_usec")?,
+                        seq: rt::get(&mut field, "seq")?,
+                        target_system: rt::get(&mut field, "target_system")?,
+                        target_component: rt::get(&mut field, "target_component")?,
+                    })
                 }
                 "heartbeat" => {
-                    rt::Ok(
-                        Self::Heartbeat(response::Heartbeat {
-                            sequence: rt::get(&mut field, "sequence")?,
-                            sysid: rt::get(&mut field, "sysid")?,
-                            compid: rt::get(&mut field, "compid")?,
-                            custom_mode: rt::get(&mut field, "custom_mode")?,
-                            vehicle_type: rt::get(&mut field, "vehicle_type")?,
-                            autopilot: rt::get(&mut field, "autopilot")?,
-                            base_mode: rt::get(&mut field, "base_mode")?,
-                            system_status: rt::get(&mut field, "system_status")?,
-                            mavlink_version: rt::get(&mut field, "mavlink_version")?,
-                        }),
-                    )
+                    Self::Heartbeat(response::Heartbeat {
+                        sequence: rt::get(&mut field, "sequence")?,
+                        sysid: rt::get(&mut field, "sysid")?,
+                        compid: rt::get(&mut field, "compid")?,
+                        custom_mode: rt::get(&mut field, "custom_mode")?,
+                        vehicle_type: rt::get(&mut field, "vehicle_type")?,
+                        autopilot: rt::get(&mut field, "autopilot")?,
+                        base_mode: rt::get(&mut field, "base_mode")?,
+                        system_status: rt::get(&mut field, "system_status")?,
+                        mavlink_version: rt::get(&mut field, "mavlink_version")?,
+                    })
                 }
                 "sys_status" => {
-                    rt::Ok(
-                        Self::SysStatus(response::SysStatus {
-                            sequence: rt::get(&mut field, "sequence")?,
-                            sysid: rt::get(&mut field, "sysid")?,
-                            compid: rt::get(&mut field, "compid")?,
-                            onboard_control_sensors_present: rt::get(
-                                &mut field,
-                                "onboard_control_sensors_present",
-                            )?,
-                            onboard_control_sensors_enabled: rt::get(
-                                &mut field,
-                                "onboard_control_sensors_enabled",
-                            )?,
-                            onboard_control_sensors_health: rt::get(
-                                &mut field,
-                                "onboard_control_sensors_health",
-                            )?,
-                            load: rt::get(&mut field, "load")?,
-                            voltage_battery: rt::get(&mut field, "voltage_battery")?,
-                            current_battery: rt::get(&mut field, "current_battery")?,
-                            drop_rate_comm: rt::get(&mut field, "drop_rate_comm")?,
-                            errors_comm: rt::get(&mut field, "errors_comm")?,
-                            errors_count1: rt::get(&mut field, "errors_count1")?,
-                            errors_count2: rt::get(&mut field, "errors_count2")?,
-                            errors_count3: rt::get(&mut field, "errors_count3")?,
-                            errors_count4: rt::get(&mut field, "errors_count4")?,
-                            battery_remaining: rt::get(&mut field, "battery_remaining")?,
-                        }),
-                    )
+                    Self::SysStatus(response::SysStatus {
+                        sequence: rt::get(&mut field, "sequence")?,
+                        sysid: rt::get(&mut field, "sysid")?,
+                        compid: rt::get(&mut field, "compid")?,
+                        onboard_control_sensors_present: rt::get(
+                            &mut field,
+                            "onboard_control_sensors_present",
+                        )?,
+                        onboard_control_sensors_enabled: rt::get(
+                            &mut field,
+                            "onboard_control_sensors_enabled",
+                        )?,
+                        onboard_control_sensors_health: rt::get(
+                            &mut field,
+                            "onboard_control_sensors_health",
+                        )?,
+                        load: rt::get(&mut field, "load")?,
+                        voltage_battery: rt::get(&mut field, "voltage_battery")?,
+                        current_battery: rt::get(&mut field, "current_battery")?,
+                        drop_rate_comm: rt::get(&mut field, "drop_rate_comm")?,
+                        errors_comm: rt::get(&mut field, "errors_comm")?,
+                        errors_count1: rt::get(&mut field, "errors_count1")?,
+                        errors_count2: rt::get(&mut field, "errors_count2")?,
+                        errors_count3: rt::get(&mut field, "errors_count3")?,
+                        errors_count4: rt::get(&mut field, "errors_count4")?,
+                        battery_remaining: rt::get(&mut field, "battery_remaining")?,
+                    })
                 }
                 "attitude" => {
-                    rt::Ok(
-                        Self::Attitude(response::Attitude {
-                            sequence: rt::get(&mut field, "sequence")?,
-                            sysid: rt::get(&mut field, "sysid")?,
-                            compid: rt::get(&mut field, "compid")?,
-                            time_boot_ms: rt::get(&mut field, "time_boot_ms")?,
-                            roll: rt::get(&mut field, "roll")?,
-                            pitch: rt::get(&mut field, "pitch")?,
-                            yaw: rt::get(&mut field, "yaw")?,
-                            rollspeed: rt::get(&mut field, "rollspeed")?,
-                            pitchspeed: rt::get(&mut field, "pitchspeed")?,
-                            yawspeed: rt::get(&mut field, "yawspeed")?,
-                        }),
-                    )
+                    Self::Attitude(response::Attitude {
+                        sequence: rt::get(&mut field, "sequence")?,
+                        sysid: rt::get(&mut field, "sysid")?,
+                        compid: rt::get(&mut field, "compid")?,
+                        time_boot_ms: rt::get(&mut field, "time_boot_ms")?,
+                        roll: rt::get(&mut field, "roll")?,
+                        pitch: rt::get(&mut field, "pitch")?,
+                        yaw: rt::get(&mut field, "yaw")?,
+                        rollspeed: rt::get(&mut field, "rollspeed")?,
+                        pitchspeed: rt::get(&mut field, "pitchspeed")?,
+                        yawspeed: rt::get(&mut field, "yawspeed")?,
+                    })
                 }
-                _ => rt::Err(rt::FieldError::UnknownMessage),
-            }
+                _ => return rt::Err(rt::FieldError::UnknownMessage),
+            };
+            rt::Ok(message)
         }
     }
     impl rt::Message for Response {

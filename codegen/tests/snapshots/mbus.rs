@@ -214,12 +214,13 @@ pub mod mbus {
             name: &str,
             _field: impl FnMut(&'static str) -> rt::Option<rt::FieldValue<'v>>,
         ) -> rt::Result<Self, rt::FieldError> {
-            match name {
-                "snd_nke" => rt::Ok(Self::SndNke(request::SndNke)),
-                "req_ud2" => rt::Ok(Self::ReqUd2(request::ReqUd2)),
-                "snd_ud_reset" => rt::Ok(Self::SndUdReset(request::SndUdReset)),
-                _ => rt::Err(rt::FieldError::UnknownMessage),
-            }
+            let message = match name {
+                "snd_nke" => Self::SndNke(request::SndNke),
+                "req_ud2" => Self::ReqUd2(request::ReqUd2),
+                "snd_ud_reset" => Self::SndUdReset(request::SndUdReset),
+                _ => return rt::Err(rt::FieldError::UnknownMessage),
+            };
+            rt::Ok(message)
         }
     }
     impl rt::Message for Request {
@@ -509,24 +510,23 @@ pub mod mbus {
             name: &str,
             mut field: impl FnMut(&'static str) -> rt::Option<rt::FieldValue<'v>>,
         ) -> rt::Result<Self, rt::FieldError> {
-            match name {
+            let message = match name {
                 "rsp_ud" => {
-                    rt::Ok(
-                        Self::RspUd(response::RspUd {
-                            identification: rt::get(&mut field, "identification")?,
-                            manufacturer: rt::get(&mut field, "manufacturer")?,
-                            version: rt::get(&mut field, "version")?,
-                            medium: rt::get(&mut field, "medium")?,
-                            access: rt::get(&mut field, "access")?,
-                            status: rt::get(&mut field, "status")?,
-                            signature: rt::get(&mut field, "signature")?,
-                            volume: rt::get(&mut field, "volume")?,
-                        }),
-                    )
+                    Self::RspUd(response::RspUd {
+                        identification: rt::get(&mut field, "identification")?,
+                        manufacturer: rt::get(&mut field, "manufacturer")?,
+                        version: rt::get(&mut field, "version")?,
+                        medium: rt::get(&mut field, "medium")?,
+                        access: rt::get(&mut field, "access")?,
+                        status: rt::get(&mut field, "status")?,
+                        signature: rt::get(&mut field, "signature")?,
+                        volume: rt::get(&mut field, "volume")?,
+                    })
                 }
-                "ack" => rt::Ok(Self::Ack(response::Ack)),
-                _ => rt::Err(rt::FieldError::UnknownMessage),
-            }
+                "ack" => Self::Ack(response::Ack),
+                _ => return rt::Err(rt::FieldError::UnknownMessage),
+            };
+            rt::Ok(message)
         }
     }
     impl rt::Message for Response {

@@ -159,11 +159,12 @@ pub mod mbus_short {
             name: &str,
             _field: impl FnMut(&'static str) -> rt::Option<rt::FieldValue<'v>>,
         ) -> rt::Result<Self, rt::FieldError> {
-            match name {
-                "snd_nke" => rt::Ok(Self::SndNke(request::SndNke)),
-                "req_ske" => rt::Ok(Self::ReqSke(request::ReqSke)),
-                _ => rt::Err(rt::FieldError::UnknownMessage),
-            }
+            let message = match name {
+                "snd_nke" => Self::SndNke(request::SndNke),
+                "req_ske" => Self::ReqSke(request::ReqSke),
+                _ => return rt::Err(rt::FieldError::UnknownMessage),
+            };
+            rt::Ok(message)
         }
     }
     impl rt::Message for Request {
@@ -358,11 +359,12 @@ pub mod mbus_short {
             name: &str,
             _field: impl FnMut(&'static str) -> rt::Option<rt::FieldValue<'v>>,
         ) -> rt::Result<Self, rt::FieldError> {
-            match name {
-                "status_of_link" => rt::Ok(Self::StatusOfLink(response::StatusOfLink)),
-                "ack" => rt::Ok(Self::Ack(response::Ack)),
-                _ => rt::Err(rt::FieldError::UnknownMessage),
-            }
+            let message = match name {
+                "status_of_link" => Self::StatusOfLink(response::StatusOfLink),
+                "ack" => Self::Ack(response::Ack),
+                _ => return rt::Err(rt::FieldError::UnknownMessage),
+            };
+            rt::Ok(message)
         }
     }
     impl rt::Message for Response {

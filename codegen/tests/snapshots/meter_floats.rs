@@ -220,18 +220,17 @@ pub mod meter_floats {
             name: &str,
             mut field: impl FnMut(&'static str) -> rt::Option<rt::FieldValue<'v>>,
         ) -> rt::Result<Self, rt::FieldError> {
-            match name {
-                "read_readings" => rt::Ok(Self::ReadReadings(request::ReadReadings)),
+            let message = match name {
+                "read_readings" => Self::ReadReadings(request::ReadReadings),
                 "set_limits" => {
-                    rt::Ok(
-                        Self::SetLimits(request::SetLimits {
-                            voltage_limit: rt::get(&mut field, "voltage_limit")?,
-                            serial: rt::get(&mut field, "serial")?,
-                        }),
-                    )
+                    Self::SetLimits(request::SetLimits {
+                        voltage_limit: rt::get(&mut field, "voltage_limit")?,
+                        serial: rt::get(&mut field, "serial")?,
+                    })
                 }
-                _ => rt::Err(rt::FieldError::UnknownMessage),
-            }
+                _ => return rt::Err(rt::FieldError::UnknownMessage),
+            };
+            rt::Ok(message)
         }
     }
     impl rt::Message for Request {
@@ -570,30 +569,27 @@ pub mod meter_floats {
             name: &str,
             mut field: impl FnMut(&'static str) -> rt::Option<rt::FieldValue<'v>>,
         ) -> rt::Result<Self, rt::FieldError> {
-            match name {
+            let message = match name {
                 "readings" => {
-                    rt::Ok(
-                        Self::Readings(response::Readings {
-                            voltage: rt::get(&mut field, "voltage")?,
-                            frequency: rt::get(&mut field, "frequency")?,
-                            energy: rt::get(&mut field, "energy")?,
-                            energy_swapped: rt::get(&mut field, "energy_swapped")?,
-                            pulses: rt::get(&mut field, "pulses")?,
-                            drift: rt::get(&mut field, "drift")?,
-                            counter: rt::get(&mut field, "counter")?,
-                            temperature: rt::get(&mut field, "temperature")?,
-                        }),
-                    )
+                    Self::Readings(response::Readings {
+                        voltage: rt::get(&mut field, "voltage")?,
+                        frequency: rt::get(&mut field, "frequency")?,
+                        energy: rt::get(&mut field, "energy")?,
+                        energy_swapped: rt::get(&mut field, "energy_swapped")?,
+                        pulses: rt::get(&mut field, "pulses")?,
+                        drift: rt::get(&mut field, "drift")?,
+                        counter: rt::get(&mut field, "counter")?,
+                        temperature: rt::get(&mut field, "temperature")?,
+                    })
                 }
                 "limits_set" => {
-                    rt::Ok(
-                        Self::LimitsSet(response::LimitsSet {
-                            serial: rt::get(&mut field, "serial")?,
-                        }),
-                    )
+                    Self::LimitsSet(response::LimitsSet {
+                        serial: rt::get(&mut field, "serial")?,
+                    })
                 }
-                _ => rt::Err(rt::FieldError::UnknownMessage),
-            }
+                _ => return rt::Err(rt::FieldError::UnknownMessage),
+            };
+            rt::Ok(message)
         }
     }
     impl rt::Message for Response {

@@ -413,30 +413,25 @@ pub mod mini {
             name: &str,
             mut field: impl FnMut(&'static str) -> rt::Option<rt::FieldValue<'v>>,
         ) -> rt::Result<Self, rt::FieldError> {
-            match name {
+            let message = match name {
                 "go_to" => {
-                    rt::Ok(
-                        Self::GoTo(request::GoTo {
-                            target: Capacitance::from_raw(rt::get(&mut field, "target")?),
-                        }),
-                    )
+                    Self::GoTo(request::GoTo {
+                        target: Capacitance::from_raw(rt::get(&mut field, "target")?),
+                    })
                 }
                 "set_mode" => {
-                    rt::Ok(
-                        Self::SetMode(request::SetMode {
-                            mode: Mode::from_raw(rt::get(&mut field, "mode")?),
-                        }),
-                    )
+                    Self::SetMode(request::SetMode {
+                        mode: Mode::from_raw(rt::get(&mut field, "mode")?),
+                    })
                 }
                 "get_status" => {
-                    rt::Ok(
-                        Self::GetStatus(request::GetStatus {
-                            channel: rt::get(&mut field, "channel")?,
-                        }),
-                    )
+                    Self::GetStatus(request::GetStatus {
+                        channel: rt::get(&mut field, "channel")?,
+                    })
                 }
-                _ => rt::Err(rt::FieldError::UnknownMessage),
-            }
+                _ => return rt::Err(rt::FieldError::UnknownMessage),
+            };
+            rt::Ok(message)
         }
     }
     impl rt::Message for Request {
@@ -679,35 +674,30 @@ pub mod mini {
             name: &str,
             mut field: impl FnMut(&'static str) -> rt::Option<rt::FieldValue<'v>>,
         ) -> rt::Result<Self, rt::FieldError> {
-            match name {
-                "started" => rt::Ok(Self::Started(response::Started)),
-                "nak" => rt::Ok(Self::Nak(response::Nak)),
-                "set_mode_ack" => rt::Ok(Self::SetModeAck(response::SetModeAck)),
+            let message = match name {
+                "started" => Self::Started(response::Started),
+                "nak" => Self::Nak(response::Nak),
+                "set_mode_ack" => Self::SetModeAck(response::SetModeAck),
                 "status" => {
-                    rt::Ok(
-                        Self::Status(response::Status {
-                            error_bits: StatusBits::from_raw(
-                                rt::get(&mut field, "error_bits")?,
-                            ),
-                            freshness: rt::field_int(
-                                "freshness",
-                                field("freshness"),
-                                0,
-                                15,
-                            )? as u8,
-                            position: Angle::from_raw(
-                                rt::field_int("position", field("position"), -2048, 2047)?
-                                    as i16,
-                            ),
-                            firmware: rt::text(&mut field, "firmware")?,
-                            temperature: Celsius::from_raw(
-                                rt::get(&mut field, "temperature")?,
-                            ),
-                        }),
-                    )
+                    Self::Status(response::Status {
+                        error_bits: StatusBits::from_raw(
+                            rt::get(&mut field, "error_bits")?,
+                        ),
+                        freshness: rt::field_int("freshness", field("freshness"), 0, 15)?
+                            as u8,
+                        position: Angle::from_raw(
+                            rt::field_int("position", field("position"), -2048, 2047)?
+                                as i16,
+                        ),
+                        firmware: rt::text(&mut field, "firmware")?,
+                        temperature: Celsius::from_raw(
+                            rt::get(&mut field, "temperature")?,
+                        ),
+                    })
                 }
-                _ => rt::Err(rt::FieldError::UnknownMessage),
-            }
+                _ => return rt::Err(rt::FieldError::UnknownMessage),
+            };
+            rt::Ok(message)
         }
     }
     impl rt::Message for Response {

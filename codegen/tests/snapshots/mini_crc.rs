@@ -238,22 +238,19 @@ pub mod mini_crc {
             name: &str,
             mut field: impl FnMut(&'static str) -> rt::Option<rt::FieldValue<'v>>,
         ) -> rt::Result<Self, rt::FieldError> {
-            match name {
-                "read_runtime_hours" => {
-                    rt::Ok(Self::ReadRuntimeHours(request::ReadRuntimeHours))
-                }
+            let message = match name {
+                "read_runtime_hours" => Self::ReadRuntimeHours(request::ReadRuntimeHours),
                 "read_runtime_min_sec" => {
-                    rt::Ok(Self::ReadRuntimeMinSec(request::ReadRuntimeMinSec))
+                    Self::ReadRuntimeMinSec(request::ReadRuntimeMinSec)
                 }
                 "set_counter" => {
-                    rt::Ok(
-                        Self::SetCounter(request::SetCounter {
-                            counter: rt::get(&mut field, "counter")?,
-                        }),
-                    )
+                    Self::SetCounter(request::SetCounter {
+                        counter: rt::get(&mut field, "counter")?,
+                    })
                 }
-                _ => rt::Err(rt::FieldError::UnknownMessage),
-            }
+                _ => return rt::Err(rt::FieldError::UnknownMessage),
+            };
+            rt::Ok(message)
         }
     }
     impl rt::Message for Request {
@@ -498,31 +495,26 @@ pub mod mini_crc {
             name: &str,
             mut field: impl FnMut(&'static str) -> rt::Option<rt::FieldValue<'v>>,
         ) -> rt::Result<Self, rt::FieldError> {
-            match name {
+            let message = match name {
                 "runtime_hours" => {
-                    rt::Ok(
-                        Self::RuntimeHours(response::RuntimeHours {
-                            hours: rt::get(&mut field, "hours")?,
-                        }),
-                    )
+                    Self::RuntimeHours(response::RuntimeHours {
+                        hours: rt::get(&mut field, "hours")?,
+                    })
                 }
                 "runtime_min_sec" => {
-                    rt::Ok(
-                        Self::RuntimeMinSec(response::RuntimeMinSec {
-                            minutes: rt::get(&mut field, "minutes")?,
-                            seconds: rt::get(&mut field, "seconds")?,
-                        }),
-                    )
+                    Self::RuntimeMinSec(response::RuntimeMinSec {
+                        minutes: rt::get(&mut field, "minutes")?,
+                        seconds: rt::get(&mut field, "seconds")?,
+                    })
                 }
                 "counter_echo" => {
-                    rt::Ok(
-                        Self::CounterEcho(response::CounterEcho {
-                            counter: rt::get(&mut field, "counter")?,
-                        }),
-                    )
+                    Self::CounterEcho(response::CounterEcho {
+                        counter: rt::get(&mut field, "counter")?,
+                    })
                 }
-                _ => rt::Err(rt::FieldError::UnknownMessage),
-            }
+                _ => return rt::Err(rt::FieldError::UnknownMessage),
+            };
+            rt::Ok(message)
         }
     }
     impl rt::Message for Response {

@@ -670,77 +670,62 @@ pub mod modbus {
             name: &str,
             mut field: impl FnMut(&'static str) -> rt::Option<rt::FieldValue<'v>>,
         ) -> rt::Result<Self, rt::FieldError> {
-            match name {
+            let message = match name {
                 "read_coils" => {
-                    rt::Ok(
-                        Self::ReadCoils(request::ReadCoils {
-                            starting_address: rt::get(&mut field, "starting_address")?,
-                            quantity: rt::get(&mut field, "quantity")?,
-                        }),
-                    )
+                    Self::ReadCoils(request::ReadCoils {
+                        starting_address: rt::get(&mut field, "starting_address")?,
+                        quantity: rt::get(&mut field, "quantity")?,
+                    })
                 }
                 "read_discrete_inputs" => {
-                    rt::Ok(
-                        Self::ReadDiscreteInputs(request::ReadDiscreteInputs {
-                            starting_address: rt::get(&mut field, "starting_address")?,
-                            quantity: rt::get(&mut field, "quantity")?,
-                        }),
-                    )
+                    Self::ReadDiscreteInputs(request::ReadDiscreteInputs {
+                        starting_address: rt::get(&mut field, "starting_address")?,
+                        quantity: rt::get(&mut field, "quantity")?,
+                    })
                 }
                 "read_holding_registers" => {
-                    rt::Ok(
-                        Self::ReadHoldingRegisters(request::ReadHoldingRegisters {
-                            starting_address: rt::get(&mut field, "starting_address")?,
-                            quantity: rt::get(&mut field, "quantity")?,
-                        }),
-                    )
+                    Self::ReadHoldingRegisters(request::ReadHoldingRegisters {
+                        starting_address: rt::get(&mut field, "starting_address")?,
+                        quantity: rt::get(&mut field, "quantity")?,
+                    })
                 }
                 "read_input_registers" => {
-                    rt::Ok(
-                        Self::ReadInputRegisters(request::ReadInputRegisters {
-                            starting_address: rt::get(&mut field, "starting_address")?,
-                            quantity: rt::get(&mut field, "quantity")?,
-                        }),
-                    )
+                    Self::ReadInputRegisters(request::ReadInputRegisters {
+                        starting_address: rt::get(&mut field, "starting_address")?,
+                        quantity: rt::get(&mut field, "quantity")?,
+                    })
                 }
                 "write_single_coil" => {
-                    rt::Ok(
-                        Self::WriteSingleCoil(request::WriteSingleCoil {
-                            output_address: rt::get(&mut field, "output_address")?,
-                            output_value: CoilState::from_raw(
-                                rt::get(&mut field, "output_value")?,
-                            ),
-                        }),
-                    )
+                    Self::WriteSingleCoil(request::WriteSingleCoil {
+                        output_address: rt::get(&mut field, "output_address")?,
+                        output_value: CoilState::from_raw(
+                            rt::get(&mut field, "output_value")?,
+                        ),
+                    })
                 }
                 "write_single_register" => {
-                    rt::Ok(
-                        Self::WriteSingleRegister(request::WriteSingleRegister {
-                            register_address: rt::get(&mut field, "register_address")?,
-                            register_value: rt::get(&mut field, "register_value")?,
-                        }),
-                    )
+                    Self::WriteSingleRegister(request::WriteSingleRegister {
+                        register_address: rt::get(&mut field, "register_address")?,
+                        register_value: rt::get(&mut field, "register_value")?,
+                    })
                 }
                 "write_multiple_coils" => {
-                    rt::Ok(
-                        Self::WriteMultipleCoils(request::WriteMultipleCoils {
-                            starting_address: rt::get(&mut field, "starting_address")?,
-                            quantity: rt::get(&mut field, "quantity")?,
-                            outputs: rt::list_bits::<246>(&mut field, "outputs")?,
-                        }),
-                    )
+                    Self::WriteMultipleCoils(request::WriteMultipleCoils {
+                        starting_address: rt::get(&mut field, "starting_address")?,
+                        quantity: rt::get(&mut field, "quantity")?,
+                        outputs: rt::list_bits::<246>(&mut field, "outputs")?,
+                    })
                 }
                 "write_multiple_registers" => {
-                    rt::Ok(
-                        Self::WriteMultipleRegisters(request::WriteMultipleRegisters {
-                            starting_address: rt::get(&mut field, "starting_address")?,
-                            quantity: rt::get(&mut field, "quantity")?,
-                            values: rt::list::<u16, 123>(&mut field, "values", 0, 65535)?,
-                        }),
-                    )
+                    Self::WriteMultipleRegisters(request::WriteMultipleRegisters {
+                        starting_address: rt::get(&mut field, "starting_address")?,
+                        quantity: rt::get(&mut field, "quantity")?,
+                        values: rt::list::<u16, 123>(&mut field, "values", 0, 65535)?,
+                    })
                 }
-                _ => rt::Err(rt::FieldError::UnknownMessage),
-            }
+                _ => return rt::Err(rt::FieldError::UnknownMessage),
+            };
+            rt::Ok(message)
         }
     }
     impl rt::Message for Request {
@@ -1395,149 +1380,118 @@ pub mod modbus {
             name: &str,
             mut field: impl FnMut(&'static str) -> rt::Option<rt::FieldValue<'v>>,
         ) -> rt::Result<Self, rt::FieldError> {
-            match name {
+            let message = match name {
                 "read_coils_reply" => {
-                    rt::Ok(
-                        Self::ReadCoilsReply(response::ReadCoilsReply {
-                            coils: rt::list_bits::<250>(&mut field, "coils")?,
-                        }),
-                    )
+                    Self::ReadCoilsReply(response::ReadCoilsReply {
+                        coils: rt::list_bits::<250>(&mut field, "coils")?,
+                    })
                 }
                 "read_coils_exception" => {
-                    rt::Ok(
-                        Self::ReadCoilsException(response::ReadCoilsException {
-                            exception_code: ExceptionCode::from_raw(
-                                rt::get(&mut field, "exception_code")?,
-                            ),
-                        }),
-                    )
+                    Self::ReadCoilsException(response::ReadCoilsException {
+                        exception_code: ExceptionCode::from_raw(
+                            rt::get(&mut field, "exception_code")?,
+                        ),
+                    })
                 }
                 "read_discrete_inputs_reply" => {
-                    rt::Ok(
-                        Self::ReadDiscreteInputsReply(response::ReadDiscreteInputsReply {
-                            inputs: rt::list_bits::<250>(&mut field, "inputs")?,
-                        }),
-                    )
+                    Self::ReadDiscreteInputsReply(response::ReadDiscreteInputsReply {
+                        inputs: rt::list_bits::<250>(&mut field, "inputs")?,
+                    })
                 }
                 "read_discrete_inputs_exception" => {
-                    rt::Ok(
-                        Self::ReadDiscreteInputsException(response::ReadDiscreteInputsException {
-                            exception_code: ExceptionCode::from_raw(
-                                rt::get(&mut field, "exception_code")?,
-                            ),
-                        }),
-                    )
+                    Self::ReadDiscreteInputsException(response::ReadDiscreteInputsException {
+                        exception_code: ExceptionCode::from_raw(
+                            rt::get(&mut field, "exception_code")?,
+                        ),
+                    })
                 }
                 "read_holding_registers_reply" => {
-                    rt::Ok(
-                        Self::ReadHoldingRegistersReply(response::ReadHoldingRegistersReply {
-                            registers: rt::list::<
-                                u16,
-                                125,
-                            >(&mut field, "registers", 0, 65535)?,
-                        }),
-                    )
+                    Self::ReadHoldingRegistersReply(response::ReadHoldingRegistersReply {
+                        registers: rt::list::<
+                            u16,
+                            125,
+                        >(&mut field, "registers", 0, 65535)?,
+                    })
                 }
                 "read_holding_registers_exception" => {
-                    rt::Ok(
-                        Self::ReadHoldingRegistersException(response::ReadHoldingRegistersException {
-                            exception_code: ExceptionCode::from_raw(
-                                rt::get(&mut field, "exception_code")?,
-                            ),
-                        }),
-                    )
+                    Self::ReadHoldingRegistersException(response::ReadHoldingRegistersException {
+                        exception_code: ExceptionCode::from_raw(
+                            rt::get(&mut field, "exception_code")?,
+                        ),
+                    })
                 }
                 "read_input_registers_reply" => {
-                    rt::Ok(
-                        Self::ReadInputRegistersReply(response::ReadInputRegistersReply {
-                            registers: rt::list::<
-                                u16,
-                                125,
-                            >(&mut field, "registers", 0, 65535)?,
-                        }),
-                    )
+                    Self::ReadInputRegistersReply(response::ReadInputRegistersReply {
+                        registers: rt::list::<
+                            u16,
+                            125,
+                        >(&mut field, "registers", 0, 65535)?,
+                    })
                 }
                 "read_input_registers_exception" => {
-                    rt::Ok(
-                        Self::ReadInputRegistersException(response::ReadInputRegistersException {
-                            exception_code: ExceptionCode::from_raw(
-                                rt::get(&mut field, "exception_code")?,
-                            ),
-                        }),
-                    )
+                    Self::ReadInputRegistersException(response::ReadInputRegistersException {
+                        exception_code: ExceptionCode::from_raw(
+                            rt::get(&mut field, "exception_code")?,
+                        ),
+                    })
                 }
                 "write_single_coil_reply" => {
-                    rt::Ok(
-                        Self::WriteSingleCoilReply(response::WriteSingleCoilReply {
-                            output_address: rt::get(&mut field, "output_address")?,
-                            output_value: CoilState::from_raw(
-                                rt::get(&mut field, "output_value")?,
-                            ),
-                        }),
-                    )
+                    Self::WriteSingleCoilReply(response::WriteSingleCoilReply {
+                        output_address: rt::get(&mut field, "output_address")?,
+                        output_value: CoilState::from_raw(
+                            rt::get(&mut field, "output_value")?,
+                        ),
+                    })
                 }
                 "write_single_coil_exception" => {
-                    rt::Ok(
-                        Self::WriteSingleCoilException(response::WriteSingleCoilException {
-                            exception_code: ExceptionCode::from_raw(
-                                rt::get(&mut field, "exception_code")?,
-                            ),
-                        }),
-                    )
+                    Self::WriteSingleCoilException(response::WriteSingleCoilException {
+                        exception_code: ExceptionCode::from_raw(
+                            rt::get(&mut field, "exception_code")?,
+                        ),
+                    })
                 }
                 "write_single_register_reply" => {
-                    rt::Ok(
-                        Self::WriteSingleRegisterReply(response::WriteSingleRegisterReply {
-                            register_address: rt::get(&mut field, "register_address")?,
-                            register_value: rt::get(&mut field, "register_value")?,
-                        }),
-                    )
+                    Self::WriteSingleRegisterReply(response::WriteSingleRegisterReply {
+                        register_address: rt::get(&mut field, "register_address")?,
+                        register_value: rt::get(&mut field, "register_value")?,
+                    })
                 }
                 "write_single_register_exception" => {
-                    rt::Ok(
-                        Self::WriteSingleRegisterException(response::WriteSingleRegisterException {
-                            exception_code: ExceptionCode::from_raw(
-                                rt::get(&mut field, "exception_code")?,
-                            ),
-                        }),
-                    )
+                    Self::WriteSingleRegisterException(response::WriteSingleRegisterException {
+                        exception_code: ExceptionCode::from_raw(
+                            rt::get(&mut field, "exception_code")?,
+                        ),
+                    })
                 }
                 "write_multiple_coils_reply" => {
-                    rt::Ok(
-                        Self::WriteMultipleCoilsReply(response::WriteMultipleCoilsReply {
-                            starting_address: rt::get(&mut field, "starting_address")?,
-                            quantity: rt::get(&mut field, "quantity")?,
-                        }),
-                    )
+                    Self::WriteMultipleCoilsReply(response::WriteMultipleCoilsReply {
+                        starting_address: rt::get(&mut field, "starting_address")?,
+                        quantity: rt::get(&mut field, "quantity")?,
+                    })
                 }
                 "write_multiple_coils_exception" => {
-                    rt::Ok(
-                        Self::WriteMultipleCoilsException(response::WriteMultipleCoilsException {
-                            exception_code: ExceptionCode::from_raw(
-                                rt::get(&mut field, "exception_code")?,
-                            ),
-                        }),
-                    )
+                    Self::WriteMultipleCoilsException(response::WriteMultipleCoilsException {
+                        exception_code: ExceptionCode::from_raw(
+                            rt::get(&mut field, "exception_code")?,
+                        ),
+                    })
                 }
                 "write_multiple_registers_reply" => {
-                    rt::Ok(
-                        Self::WriteMultipleRegistersReply(response::WriteMultipleRegistersReply {
-                            starting_address: rt::get(&mut field, "starting_address")?,
-                            quantity: rt::get(&mut field, "quantity")?,
-                        }),
-                    )
+                    Self::WriteMultipleRegistersReply(response::WriteMultipleRegistersReply {
+                        starting_address: rt::get(&mut field, "starting_address")?,
+                        quantity: rt::get(&mut field, "quantity")?,
+                    })
                 }
                 "write_multiple_registers_exception" => {
-                    rt::Ok(
-                        Self::WriteMultipleRegistersException(response::WriteMultipleRegistersException {
-                            exception_code: ExceptionCode::from_raw(
-                                rt::get(&mut field, "exception_code")?,
-                            ),
-                        }),
-                    )
+                    Self::WriteMultipleRegistersException(response::WriteMultipleRegistersException {
+                        exception_code: ExceptionCode::from_raw(
+                            rt::get(&mut field, "exception_code")?,
+                        ),
+                    })
                 }
-                _ => rt::Err(rt::FieldError::UnknownMessage),
-            }
+                _ => return rt::Err(rt::FieldError::UnknownMessage),
+            };
+            rt::Ok(message)
         }
     }
     impl rt::Message for Response {

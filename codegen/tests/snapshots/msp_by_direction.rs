@@ -207,12 +207,13 @@ pub mod msp_by_direction {
             name: &str,
             _field: impl FnMut(&'static str) -> rt::Option<rt::FieldValue<'v>>,
         ) -> rt::Result<Self, rt::FieldError> {
-            match name {
-                "api_version" => rt::Ok(Self::ApiVersion(request::ApiVersion)),
-                "rc" => rt::Ok(Self::Rc(request::Rc)),
-                "attitude" => rt::Ok(Self::Attitude(request::Attitude)),
-                _ => rt::Err(rt::FieldError::UnknownMessage),
-            }
+            let message = match name {
+                "api_version" => Self::ApiVersion(request::ApiVersion),
+                "rc" => Self::Rc(request::Rc),
+                "attitude" => Self::Attitude(request::Attitude),
+                _ => return rt::Err(rt::FieldError::UnknownMessage),
+            };
+            rt::Ok(message)
         }
     }
     impl rt::Message for Request {
@@ -463,37 +464,29 @@ pub mod msp_by_direction {
             name: &str,
             mut field: impl FnMut(&'static str) -> rt::Option<rt::FieldValue<'v>>,
         ) -> rt::Result<Self, rt::FieldError> {
-            match name {
+            let message = match name {
                 "api_version_reply" => {
-                    rt::Ok(
-                        Self::ApiVersionReply(response::ApiVersionReply {
-                            protocol_version: rt::get(&mut field, "protocol_version")?,
-                            api_major: rt::get(&mut field, "api_major")?,
-                            api_minor: rt::get(&mut field, "api_minor")?,
-                        }),
-                    )
+                    Self::ApiVersionReply(response::ApiVersionReply {
+                        protocol_version: rt::get(&mut field, "protocol_version")?,
+                        api_major: rt::get(&mut field, "api_major")?,
+                        api_minor: rt::get(&mut field, "api_minor")?,
+                    })
                 }
                 "rc_reply" => {
-                    rt::Ok(
-                        Self::RcReply(response::RcReply {
-                            channels: rt::list::<
-                                u16,
-                                18,
-                            >(&mut field, "channels", 0, 65535)?,
-                        }),
-                    )
+                    Self::RcReply(response::RcReply {
+                        channels: rt::list::<u16, 18>(&mut field, "channels", 0, 65535)?,
+                    })
                 }
                 "attitude_reply" => {
-                    rt::Ok(
-                        Self::AttitudeReply(response::AttitudeReply {
-                            roll: Decidegrees::from_raw(rt::get(&mut field, "roll")?),
-                            pitch: Decidegrees::from_raw(rt::get(&mut field, "pitch")?),
-                            yaw: rt::get(&mut field, "yaw")?,
-                        }),
-                    )
+                    Self::AttitudeReply(response::AttitudeReply {
+                        roll: Decidegrees::from_raw(rt::get(&mut field, "roll")?),
+                        pitch: Decidegrees::from_raw(rt::get(&mut field, "pitch")?),
+                        yaw: rt::get(&mut field, "yaw")?,
+                    })
                 }
-                _ => rt::Err(rt::FieldError::UnknownMessage),
-            }
+                _ => return rt::Err(rt::FieldError::UnknownMessage),
+            };
+            rt::Ok(message)
         }
     }
     impl rt::Message for Response {

@@ -203,11 +203,12 @@ pub mod msp_v1 {
             name: &str,
             _field: impl FnMut(&'static str) -> rt::Option<rt::FieldValue<'v>>,
         ) -> rt::Result<Self, rt::FieldError> {
-            match name {
-                "api_version" => rt::Ok(Self::ApiVersion(request::ApiVersion)),
-                "attitude" => rt::Ok(Self::Attitude(request::Attitude)),
-                _ => rt::Err(rt::FieldError::UnknownMessage),
-            }
+            let message = match name {
+                "api_version" => Self::ApiVersion(request::ApiVersion),
+                "attitude" => Self::Attitude(request::Attitude),
+                _ => return rt::Err(rt::FieldError::UnknownMessage),
+            };
+            rt::Ok(message)
         }
     }
     impl rt::Message for Request {
@@ -452,34 +453,29 @@ pub mod msp_v1 {
             name: &str,
             mut field: impl FnMut(&'static str) -> rt::Option<rt::FieldValue<'v>>,
         ) -> rt::Result<Self, rt::FieldError> {
-            match name {
+            let message = match name {
                 "api_version_reply" => {
-                    rt::Ok(
-                        Self::ApiVersionReply(response::ApiVersionReply {
-                            protocol_version: rt::get(&mut field, "protocol_version")?,
-                            api_major: rt::get(&mut field, "api_major")?,
-                            api_minor: rt::get(&mut field, "api_minor")?,
-                        }),
-                    )
+                    Self::ApiVersionReply(response::ApiVersionReply {
+                        protocol_version: rt::get(&mut field, "protocol_version")?,
+                        api_major: rt::get(&mut field, "api_major")?,
+                        api_minor: rt::get(&mut field, "api_minor")?,
+                    })
                 }
                 "attitude_reply" => {
-                    rt::Ok(
-                        Self::AttitudeReply(response::AttitudeReply {
-                            roll: Decidegrees::from_raw(rt::get(&mut field, "roll")?),
-                            pitch: Decidegrees::from_raw(rt::get(&mut field, "pitch")?),
-                            yaw: rt::get(&mut field, "yaw")?,
-                        }),
-                    )
+                    Self::AttitudeReply(response::AttitudeReply {
+                        roll: Decidegrees::from_raw(rt::get(&mut field, "roll")?),
+                        pitch: Decidegrees::from_raw(rt::get(&mut field, "pitch")?),
+                        yaw: rt::get(&mut field, "yaw")?,
+                    })
                 }
                 "error" => {
-                    rt::Ok(
-                        Self::Error(response::Error {
-                            cmd: rt::get(&mut field, "cmd")?,
-                        }),
-                    )
+                    Self::Error(response::Error {
+                        cmd: rt::get(&mut field, "cmd")?,
+                    })
                 }
-                _ => rt::Err(rt::FieldError::UnknownMessage),
-            }
+                _ => return rt::Err(rt::FieldError::UnknownMessage),
+            };
+            rt::Ok(message)
         }
     }
     impl rt::Message for Response {

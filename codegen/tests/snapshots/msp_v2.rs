@@ -206,33 +206,30 @@ pub mod msp_v2 {
             name: &str,
             mut field: impl FnMut(&'static str) -> rt::Option<rt::FieldValue<'v>>,
         ) -> rt::Result<Self, rt::FieldError> {
-            match name {
+            let message = match name {
                 "api_version" => {
-                    rt::Ok(
-                        Self::ApiVersion(request::ApiVersion {
-                            dont_reply: rt::field_int(
-                                "dont_reply",
-                                field("dont_reply"),
-                                0,
-                                1,
-                            )? != 0,
-                        }),
-                    )
+                    Self::ApiVersion(request::ApiVersion {
+                        dont_reply: rt::field_int(
+                            "dont_reply",
+                            field("dont_reply"),
+                            0,
+                            1,
+                        )? != 0,
+                    })
                 }
                 "fc_variant" => {
-                    rt::Ok(
-                        Self::FcVariant(request::FcVariant {
-                            dont_reply: rt::field_int(
-                                "dont_reply",
-                                field("dont_reply"),
-                                0,
-                                1,
-                            )? != 0,
-                        }),
-                    )
+                    Self::FcVariant(request::FcVariant {
+                        dont_reply: rt::field_int(
+                            "dont_reply",
+                            field("dont_reply"),
+                            0,
+                            1,
+                        )? != 0,
+                    })
                 }
-                _ => rt::Err(rt::FieldError::UnknownMessage),
-            }
+                _ => return rt::Err(rt::FieldError::UnknownMessage),
+            };
+            rt::Ok(message)
         }
     }
     impl rt::Message for Request {
@@ -464,37 +461,34 @@ pub mod msp_v2 {
             name: &str,
             mut field: impl FnMut(&'static str) -> rt::Option<rt::FieldValue<'v>>,
         ) -> rt::Result<Self, rt::FieldError> {
-            match name {
+            let message = match name {
                 "api_version_reply" => {
-                    rt::Ok(
-                        Self::ApiVersionReply(response::ApiVersionReply {
-                            dont_reply: rt::field_int(
-                                "dont_reply",
-                                field("dont_reply"),
-                                0,
-                                1,
-                            )? != 0,
-                            protocol_version: rt::get(&mut field, "protocol_version")?,
-                            api_major: rt::get(&mut field, "api_major")?,
-                            api_minor: rt::get(&mut field, "api_minor")?,
-                        }),
-                    )
+                    Self::ApiVersionReply(response::ApiVersionReply {
+                        dont_reply: rt::field_int(
+                            "dont_reply",
+                            field("dont_reply"),
+                            0,
+                            1,
+                        )? != 0,
+                        protocol_version: rt::get(&mut field, "protocol_version")?,
+                        api_major: rt::get(&mut field, "api_major")?,
+                        api_minor: rt::get(&mut field, "api_minor")?,
+                    })
                 }
                 "fc_variant_reply" => {
-                    rt::Ok(
-                        Self::FcVariantReply(response::FcVariantReply {
-                            dont_reply: rt::field_int(
-                                "dont_reply",
-                                field("dont_reply"),
-                                0,
-                                1,
-                            )? != 0,
-                            variant: rt::text(&mut field, "variant")?,
-                        }),
-                    )
+                    Self::FcVariantReply(response::FcVariantReply {
+                        dont_reply: rt::field_int(
+                            "dont_reply",
+                            field("dont_reply"),
+                            0,
+                            1,
+                        )? != 0,
+                        variant: rt::text(&mut field, "variant")?,
+                    })
                 }
-                _ => rt::Err(rt::FieldError::UnknownMessage),
-            }
+                _ => return rt::Err(rt::FieldError::UnknownMessage),
+            };
+            rt::Ok(message)
         }
     }
     impl rt::Message for Response {

@@ -325,11 +325,12 @@ pub mod optional_sensor {
             name: &str,
             _field: impl FnMut(&'static str) -> rt::Option<rt::FieldValue<'v>>,
         ) -> rt::Result<Self, rt::FieldError> {
-            match name {
-                "read" => rt::Ok(Self::Read(request::Read)),
-                "last_event" => rt::Ok(Self::LastEvent(request::LastEvent)),
-                _ => rt::Err(rt::FieldError::UnknownMessage),
-            }
+            let message = match name {
+                "read" => Self::Read(request::Read),
+                "last_event" => Self::LastEvent(request::LastEvent),
+                _ => return rt::Err(rt::FieldError::UnknownMessage),
+            };
+            rt::Ok(message)
         }
     }
     impl rt::Message for Request {
@@ -685,32 +686,27 @@ pub mod optional_sensor {
             name: &str,
             mut field: impl FnMut(&'static str) -> rt::Option<rt::FieldValue<'v>>,
         ) -> rt::Result<Self, rt::FieldError> {
-            match name {
+            let message = match name {
                 "reading" => {
-                    rt::Ok(
-                        Self::Reading(response::Reading {
-                            status: ReadingPresent::from_raw(
-                                rt::get(&mut field, "status")?,
-                            ),
-                            temperature: Decicelsius::from_raw(
-                                rt::get(&mut field, "temperature")?,
-                            ),
-                            humidity: rt::get_opt::<u16>(&mut field, "humidity")?
-                                .map(Permille::from_raw),
-                            pressure: rt::get_opt::<u32>(&mut field, "pressure")?,
-                        }),
-                    )
+                    Self::Reading(response::Reading {
+                        status: ReadingPresent::from_raw(rt::get(&mut field, "status")?),
+                        temperature: Decicelsius::from_raw(
+                            rt::get(&mut field, "temperature")?,
+                        ),
+                        humidity: rt::get_opt::<u16>(&mut field, "humidity")?
+                            .map(Permille::from_raw),
+                        pressure: rt::get_opt::<u32>(&mut field, "pressure")?,
+                    })
                 }
                 "event" => {
-                    rt::Ok(
-                        Self::Event(response::Event {
-                            kind: EventKind::from_raw(rt::get(&mut field, "kind")?),
-                            detail: rt::get_opt::<u16>(&mut field, "detail")?,
-                        }),
-                    )
+                    Self::Event(response::Event {
+                        kind: EventKind::from_raw(rt::get(&mut field, "kind")?),
+                        detail: rt::get_opt::<u16>(&mut field, "detail")?,
+                    })
                 }
-                _ => rt::Err(rt::FieldError::UnknownMessage),
-            }
+                _ => return rt::Err(rt::FieldError::UnknownMessage),
+            };
+            rt::Ok(message)
         }
     }
     impl rt::Message for Response {

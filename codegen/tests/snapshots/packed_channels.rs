@@ -296,39 +296,28 @@ pub mod packed_channels {
             name: &str,
             mut field: impl FnMut(&'static str) -> rt::Option<rt::FieldValue<'v>>,
         ) -> rt::Result<Self, rt::FieldError> {
-            match name {
+            let message = match name {
                 "channels" => {
-                    rt::Ok(
-                        Self::Channels(request::Channels {
-                            channels: rt::list::<
-                                u16,
-                                4,
-                            >(&mut field, "channels", 0, 65535)?,
-                            flags: rt::get(&mut field, "flags")?,
-                        }),
-                    )
+                    Self::Channels(request::Channels {
+                        channels: rt::list::<u16, 4>(&mut field, "channels", 0, 65535)?,
+                        flags: rt::get(&mut field, "flags")?,
+                    })
                 }
                 "levels" => {
-                    rt::Ok(
-                        Self::Levels(request::Levels {
-                            bank: rt::get(&mut field, "bank")?,
-                            levels: rt::list::<u8, 5>(&mut field, "levels", 0, 255)?,
-                        }),
-                    )
+                    Self::Levels(request::Levels {
+                        bank: rt::get(&mut field, "bank")?,
+                        levels: rt::list::<u8, 5>(&mut field, "levels", 0, 255)?,
+                    })
                 }
                 "calibrate" => {
-                    rt::Ok(
-                        Self::Calibrate(request::Calibrate {
-                            offsets: rt::list::<
-                                u16,
-                                3,
-                            >(&mut field, "offsets", 0, 65535)?,
-                            gains: rt::list::<u8, 2>(&mut field, "gains", 0, 255)?,
-                        }),
-                    )
+                    Self::Calibrate(request::Calibrate {
+                        offsets: rt::list::<u16, 3>(&mut field, "offsets", 0, 65535)?,
+                        gains: rt::list::<u8, 2>(&mut field, "gains", 0, 255)?,
+                    })
                 }
-                _ => rt::Err(rt::FieldError::UnknownMessage),
-            }
+                _ => return rt::Err(rt::FieldError::UnknownMessage),
+            };
+            rt::Ok(message)
         }
     }
     impl rt::Message for Request {
@@ -525,19 +514,18 @@ pub mod packed_channels {
             name: &str,
             mut field: impl FnMut(&'static str) -> rt::Option<rt::FieldValue<'v>>,
         ) -> rt::Result<Self, rt::FieldError> {
-            match name {
+            let message = match name {
                 "readings" => {
-                    rt::Ok(
-                        Self::Readings(response::Readings {
-                            readings: rt::list::<
-                                u32,
-                                3,
-                            >(&mut field, "readings", 0, 4294967295)?,
-                        }),
-                    )
+                    Self::Readings(response::Readings {
+                        readings: rt::list::<
+                            u32,
+                            3,
+                        >(&mut field, "readings", 0, 4294967295)?,
+                    })
                 }
-                _ => rt::Err(rt::FieldError::UnknownMessage),
-            }
+                _ => return rt::Err(rt::FieldError::UnknownMessage),
+            };
+            rt::Ok(message)
         }
     }
     impl rt::Message for Response {

@@ -332,96 +332,58 @@ pub mod pelco_d2 {
             name: &str,
             mut field: impl FnMut(&'static str) -> rt::Option<rt::FieldValue<'v>>,
         ) -> rt::Result<Self, rt::FieldError> {
-            match name {
+            let message = match name {
                 "ptz" => {
-                    rt::Ok(
-                        Self::Ptz(request::Ptz {
-                            sense: rt::field_int("sense", field("sense"), 0, 1)? != 0,
-                            auto_scan: rt::field_int(
-                                "auto_scan",
-                                field("auto_scan"),
-                                0,
-                                1,
-                            )? != 0,
-                            camera_on: rt::field_int(
-                                "camera_on",
-                                field("camera_on"),
-                                0,
-                                1,
-                            )? != 0,
-                            iris_close: rt::field_int(
-                                "iris_close",
-                                field("iris_close"),
-                                0,
-                                1,
-                            )? != 0,
-                            iris_open: rt::field_int(
-                                "iris_open",
-                                field("iris_open"),
-                                0,
-                                1,
-                            )? != 0,
-                            focus_near: rt::field_int(
-                                "focus_near",
-                                field("focus_near"),
-                                0,
-                                1,
-                            )? != 0,
-                            focus_far: rt::field_int(
-                                "focus_far",
-                                field("focus_far"),
-                                0,
-                                1,
-                            )? != 0,
-                            zoom_wide: rt::field_int(
-                                "zoom_wide",
-                                field("zoom_wide"),
-                                0,
-                                1,
-                            )? != 0,
-                            zoom_tele: rt::field_int(
-                                "zoom_tele",
-                                field("zoom_tele"),
-                                0,
-                                1,
-                            )? != 0,
-                            tilt_down: rt::field_int(
-                                "tilt_down",
-                                field("tilt_down"),
-                                0,
-                                1,
-                            )? != 0,
-                            tilt_up: rt::field_int("tilt_up", field("tilt_up"), 0, 1)?
-                                != 0,
-                            pan_left: rt::field_int("pan_left", field("pan_left"), 0, 1)?
-                                != 0,
-                            pan_right: rt::field_int(
-                                "pan_right",
-                                field("pan_right"),
-                                0,
-                                1,
-                            )? != 0,
-                            pan_speed: rt::get(&mut field, "pan_speed")?,
-                            tilt_speed: rt::get(&mut field, "tilt_speed")?,
-                        }),
-                    )
+                    Self::Ptz(request::Ptz {
+                        sense: rt::field_int("sense", field("sense"), 0, 1)? != 0,
+                        auto_scan: rt::field_int("auto_scan", field("auto_scan"), 0, 1)?
+                            != 0,
+                        camera_on: rt::field_int("camera_on", field("camera_on"), 0, 1)?
+                            != 0,
+                        iris_close: rt::field_int(
+                            "iris_close",
+                            field("iris_close"),
+                            0,
+                            1,
+                        )? != 0,
+                        iris_open: rt::field_int("iris_open", field("iris_open"), 0, 1)?
+                            != 0,
+                        focus_near: rt::field_int(
+                            "focus_near",
+                            field("focus_near"),
+                            0,
+                            1,
+                        )? != 0,
+                        focus_far: rt::field_int("focus_far", field("focus_far"), 0, 1)?
+                            != 0,
+                        zoom_wide: rt::field_int("zoom_wide", field("zoom_wide"), 0, 1)?
+                            != 0,
+                        zoom_tele: rt::field_int("zoom_tele", field("zoom_tele"), 0, 1)?
+                            != 0,
+                        tilt_down: rt::field_int("tilt_down", field("tilt_down"), 0, 1)?
+                            != 0,
+                        tilt_up: rt::field_int("tilt_up", field("tilt_up"), 0, 1)? != 0,
+                        pan_left: rt::field_int("pan_left", field("pan_left"), 0, 1)?
+                            != 0,
+                        pan_right: rt::field_int("pan_right", field("pan_right"), 0, 1)?
+                            != 0,
+                        pan_speed: rt::get(&mut field, "pan_speed")?,
+                        tilt_speed: rt::get(&mut field, "tilt_speed")?,
+                    })
                 }
                 "set_preset" => {
-                    rt::Ok(
-                        Self::SetPreset(request::SetPreset {
-                            preset: rt::get(&mut field, "preset")?,
-                        }),
-                    )
+                    Self::SetPreset(request::SetPreset {
+                        preset: rt::get(&mut field, "preset")?,
+                    })
                 }
                 "go_to_preset" => {
-                    rt::Ok(
-                        Self::GoToPreset(request::GoToPreset {
-                            preset: rt::get(&mut field, "preset")?,
-                        }),
-                    )
+                    Self::GoToPreset(request::GoToPreset {
+                        preset: rt::get(&mut field, "preset")?,
+                    })
                 }
-                _ => rt::Err(rt::FieldError::UnknownMessage),
-            }
+                _ => return rt::Err(rt::FieldError::UnknownMessage),
+            };
+            rt::Ok(message)
         }
     }
     impl rt::Message for Request {
@@ -600,16 +562,15 @@ pub mod pelco_d2 {
             name: &str,
             mut field: impl FnMut(&'static str) -> rt::Option<rt::FieldValue<'v>>,
         ) -> rt::Result<Self, rt::FieldError> {
-            match name {
+            let message = match name {
                 "general_response" => {
-                    rt::Ok(
-                        Self::GeneralResponse(response::GeneralResponse {
-                            alarms: Alarms::from_raw(rt::get(&mut field, "alarms")?),
-                        }),
-                    )
+                    Self::GeneralResponse(response::GeneralResponse {
+                        alarms: Alarms::from_raw(rt::get(&mut field, "alarms")?),
+                    })
                 }
-                _ => rt::Err(rt::FieldError::UnknownMessage),
-            }
+                _ => return rt::Err(rt::FieldError::UnknownMessage),
+            };
+            rt::Ok(message)
         }
     }
     impl rt::Message for Response {

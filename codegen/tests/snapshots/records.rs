@@ -609,37 +609,26 @@ pub mod records {
             name: &str,
             mut field: impl FnMut(&'static str) -> rt::Option<rt::FieldValue<'v>>,
         ) -> rt::Result<Self, rt::FieldError> {
-            match name {
+            let message = match name {
                 "sync_write" => {
-                    rt::Ok(
-                        Self::SyncWrite(request::SyncWrite {
-                            blocks: rt::records::<
-                                SyncWriteBlocks,
-                                8,
-                            >(&mut field, "blocks")?,
-                            flags: rt::get(&mut field, "flags")?,
-                        }),
-                    )
+                    Self::SyncWrite(request::SyncWrite {
+                        blocks: rt::records::<SyncWriteBlocks, 8>(&mut field, "blocks")?,
+                        flags: rt::get(&mut field, "flags")?,
+                    })
                 }
                 "write_pairs" => {
-                    rt::Ok(
-                        Self::WritePairs(request::WritePairs {
-                            pairs: rt::records::<
-                                WritePairsPairs,
-                                3,
-                            >(&mut field, "pairs")?,
-                        }),
-                    )
+                    Self::WritePairs(request::WritePairs {
+                        pairs: rt::records::<WritePairsPairs, 3>(&mut field, "pairs")?,
+                    })
                 }
                 "read_status" => {
-                    rt::Ok(
-                        Self::ReadStatus(request::ReadStatus {
-                            quantity: rt::get(&mut field, "quantity")?,
-                        }),
-                    )
+                    Self::ReadStatus(request::ReadStatus {
+                        quantity: rt::get(&mut field, "quantity")?,
+                    })
                 }
-                _ => rt::Err(rt::FieldError::UnknownMessage),
-            }
+                _ => return rt::Err(rt::FieldError::UnknownMessage),
+            };
+            rt::Ok(message)
         }
     }
     impl rt::Message for Request {
@@ -935,26 +924,23 @@ pub mod records {
             name: &str,
             mut field: impl FnMut(&'static str) -> rt::Option<rt::FieldValue<'v>>,
         ) -> rt::Result<Self, rt::FieldError> {
-            match name {
+            let message = match name {
                 "ack" => {
-                    rt::Ok(
-                        Self::Ack(response::Ack {
-                            status: rt::get(&mut field, "status")?,
-                        }),
-                    )
+                    Self::Ack(response::Ack {
+                        status: rt::get(&mut field, "status")?,
+                    })
                 }
                 "status_reply" => {
-                    rt::Ok(
-                        Self::StatusReply(response::StatusReply {
-                            readings: rt::records::<
-                                StatusReplyReadings,
-                                6,
-                            >(&mut field, "readings")?,
-                        }),
-                    )
+                    Self::StatusReply(response::StatusReply {
+                        readings: rt::records::<
+                            StatusReplyReadings,
+                            6,
+                        >(&mut field, "readings")?,
+                    })
                 }
-                _ => rt::Err(rt::FieldError::UnknownMessage),
-            }
+                _ => return rt::Err(rt::FieldError::UnknownMessage),
+            };
+            rt::Ok(message)
         }
     }
     impl rt::Message for Response {

@@ -504,32 +504,23 @@ pub mod records_sized {
             name: &str,
             mut field: impl FnMut(&'static str) -> rt::Option<rt::FieldValue<'v>>,
         ) -> rt::Result<Self, rt::FieldError> {
-            match name {
+            let message = match name {
                 "sync_write" => {
-                    rt::Ok(
-                        Self::SyncWrite(request::SyncWrite {
-                            start_address: rt::get(&mut field, "start_address")?,
-                            data_length: rt::get(&mut field, "data_length")?,
-                            blocks: rt::records::<
-                                SyncWriteBlocks,
-                                6,
-                            >(&mut field, "blocks")?,
-                        }),
-                    )
+                    Self::SyncWrite(request::SyncWrite {
+                        start_address: rt::get(&mut field, "start_address")?,
+                        data_length: rt::get(&mut field, "data_length")?,
+                        blocks: rt::records::<SyncWriteBlocks, 6>(&mut field, "blocks")?,
+                    })
                 }
                 "trim" => {
-                    rt::Ok(
-                        Self::Trim(request::Trim {
-                            width: rt::get(&mut field, "width")?,
-                            offsets: rt::records::<
-                                TrimOffsets,
-                                4,
-                            >(&mut field, "offsets")?,
-                        }),
-                    )
+                    Self::Trim(request::Trim {
+                        width: rt::get(&mut field, "width")?,
+                        offsets: rt::records::<TrimOffsets, 4>(&mut field, "offsets")?,
+                    })
                 }
-                _ => rt::Err(rt::FieldError::UnknownMessage),
-            }
+                _ => return rt::Err(rt::FieldError::UnknownMessage),
+            };
+            rt::Ok(message)
         }
     }
     impl rt::Message for Request {
@@ -702,16 +693,15 @@ pub mod records_sized {
             name: &str,
             mut field: impl FnMut(&'static str) -> rt::Option<rt::FieldValue<'v>>,
         ) -> rt::Result<Self, rt::FieldError> {
-            match name {
+            let message = match name {
                 "ack" => {
-                    rt::Ok(
-                        Self::Ack(response::Ack {
-                            error: rt::get(&mut field, "error")?,
-                        }),
-                    )
+                    Self::Ack(response::Ack {
+                        error: rt::get(&mut field, "error")?,
+                    })
                 }
-                _ => rt::Err(rt::FieldError::UnknownMessage),
-            }
+                _ => return rt::Err(rt::FieldError::UnknownMessage),
+            };
+            rt::Ok(message)
         }
     }
     impl rt::Message for Response {

@@ -1793,217 +1793,154 @@ pub mod sd {
             name: &str,
             mut field: impl FnMut(&'static str) -> rt::Option<rt::FieldValue<'v>>,
         ) -> rt::Result<Self, rt::FieldError> {
-            match name {
+            let message = match name {
                 "set_point" => {
-                    rt::Ok(
-                        Self::SetPoint(request::SetPoint {
-                            freshness: rt::field_int(
-                                "freshness",
-                                field("freshness"),
-                                0,
-                                15,
-                            )? as u8,
-                            position: Angle::from_raw(
-                                rt::field_int("position", field("position"), -2048, 2047)?
-                                    as i16,
-                            ),
-                        }),
-                    )
+                    Self::SetPoint(request::SetPoint {
+                        freshness: rt::field_int("freshness", field("freshness"), 0, 15)?
+                            as u8,
+                        position: Angle::from_raw(
+                            rt::field_int("position", field("position"), -2048, 2047)?
+                                as i16,
+                        ),
+                    })
                 }
                 "read_actual_position" => {
-                    rt::Ok(Self::ReadActualPosition(request::ReadActualPosition))
+                    Self::ReadActualPosition(request::ReadActualPosition)
                 }
                 "set_velocity" => {
-                    rt::Ok(
-                        Self::SetVelocity(request::SetVelocity {
-                            set_velocity: Velocity::from_raw(
-                                rt::get(&mut field, "set_velocity")?,
-                            ),
-                        }),
-                    )
+                    Self::SetVelocity(request::SetVelocity {
+                        set_velocity: Velocity::from_raw(
+                            rt::get(&mut field, "set_velocity")?,
+                        ),
+                    })
                 }
                 "read_actual_velocity" => {
-                    rt::Ok(Self::ReadActualVelocity(request::ReadActualVelocity))
+                    Self::ReadActualVelocity(request::ReadActualVelocity)
                 }
                 "set_servo_id" => {
-                    rt::Ok(
-                        Self::SetServoId(request::SetServoId {
-                            new_id: rt::get(&mut field, "new_id")?,
-                        }),
-                    )
+                    Self::SetServoId(request::SetServoId {
+                        new_id: rt::get(&mut field, "new_id")?,
+                    })
                 }
-                "read_servo_id" => rt::Ok(Self::ReadServoId(request::ReadServoId)),
+                "read_servo_id" => Self::ReadServoId(request::ReadServoId),
                 "read_current_consumption" => {
-                    rt::Ok(Self::ReadCurrentConsumption(request::ReadCurrentConsumption))
+                    Self::ReadCurrentConsumption(request::ReadCurrentConsumption)
                 }
-                "read_bus_voltages" => {
-                    rt::Ok(Self::ReadBusVoltages(request::ReadBusVoltages))
-                }
+                "read_bus_voltages" => Self::ReadBusVoltages(request::ReadBusVoltages),
                 "read_extended_current_consumption" => {
-                    rt::Ok(
-                        Self::ReadExtendedCurrentConsumption(
-                            request::ReadExtendedCurrentConsumption,
-                        ),
+                    Self::ReadExtendedCurrentConsumption(
+                        request::ReadExtendedCurrentConsumption,
                     )
                 }
-                "read_temperatures" => {
-                    rt::Ok(Self::ReadTemperatures(request::ReadTemperatures))
-                }
-                "read_humidity" => rt::Ok(Self::ReadHumidity(request::ReadHumidity)),
+                "read_temperatures" => Self::ReadTemperatures(request::ReadTemperatures),
+                "read_humidity" => Self::ReadHumidity(request::ReadHumidity),
                 "read_skipped_frames_counter" => {
-                    rt::Ok(
-                        Self::ReadSkippedFramesCounter(request::ReadSkippedFramesCounter),
-                    )
+                    Self::ReadSkippedFramesCounter(request::ReadSkippedFramesCounter)
                 }
                 "reset_dropped_frames_counter" => {
-                    rt::Ok(
-                        Self::ResetDroppedFramesCounter(
-                            request::ResetDroppedFramesCounter,
-                        ),
-                    )
+                    Self::ResetDroppedFramesCounter(request::ResetDroppedFramesCounter)
                 }
                 "read_actuator_status_word" => {
-                    rt::Ok(Self::ReadActuatorStatusWord(request::ReadActuatorStatusWord))
+                    Self::ReadActuatorStatusWord(request::ReadActuatorStatusWord)
                 }
                 "reset_actuator_status_word" => {
-                    rt::Ok(
-                        Self::ResetActuatorStatusWord(request::ResetActuatorStatusWord),
-                    )
+                    Self::ResetActuatorStatusWord(request::ResetActuatorStatusWord)
                 }
                 "reset_default_role_and_error_flags" => {
-                    rt::Ok(
-                        Self::ResetDefaultRoleAndErrorFlags(
-                            request::ResetDefaultRoleAndErrorFlags,
-                        ),
+                    Self::ResetDefaultRoleAndErrorFlags(
+                        request::ResetDefaultRoleAndErrorFlags,
                     )
                 }
                 "set_current_position_as_zero" => {
-                    rt::Ok(
-                        Self::SetCurrentPositionAsZero(request::SetCurrentPositionAsZero),
-                    )
+                    Self::SetCurrentPositionAsZero(request::SetCurrentPositionAsZero)
                 }
                 "read_current_zero_offset" => {
-                    rt::Ok(Self::ReadCurrentZeroOffset(request::ReadCurrentZeroOffset))
+                    Self::ReadCurrentZeroOffset(request::ReadCurrentZeroOffset)
                 }
-                "reset_zero_offset" => {
-                    rt::Ok(Self::ResetZeroOffset(request::ResetZeroOffset))
-                }
+                "reset_zero_offset" => Self::ResetZeroOffset(request::ResetZeroOffset),
                 "read_electronic_serial_number" => {
-                    rt::Ok(
-                        Self::ReadElectronicSerialNumber(request::ReadElectronicSerialNumber {
-                            byte_number: rt::get(&mut field, "byte_number")?,
-                        }),
-                    )
+                    Self::ReadElectronicSerialNumber(request::ReadElectronicSerialNumber {
+                        byte_number: rt::get(&mut field, "byte_number")?,
+                    })
                 }
                 "read_product_description" => {
-                    rt::Ok(
-                        Self::ReadProductDescription(request::ReadProductDescription {
-                            byte_number: rt::get(&mut field, "byte_number")?,
-                        }),
-                    )
+                    Self::ReadProductDescription(request::ReadProductDescription {
+                        byte_number: rt::get(&mut field, "byte_number")?,
+                    })
                 }
                 "read_software_revision" => {
-                    rt::Ok(
-                        Self::ReadSoftwareRevision(request::ReadSoftwareRevision {
-                            byte_number: rt::get(&mut field, "byte_number")?,
-                        }),
-                    )
+                    Self::ReadSoftwareRevision(request::ReadSoftwareRevision {
+                        byte_number: rt::get(&mut field, "byte_number")?,
+                    })
                 }
                 "read_hardware_revision" => {
-                    rt::Ok(
-                        Self::ReadHardwareRevision(request::ReadHardwareRevision {
-                            byte_number: rt::get(&mut field, "byte_number")?,
-                        }),
-                    )
+                    Self::ReadHardwareRevision(request::ReadHardwareRevision {
+                        byte_number: rt::get(&mut field, "byte_number")?,
+                    })
                 }
                 "read_total_runtime_hours" => {
-                    rt::Ok(Self::ReadTotalRuntimeHours(request::ReadTotalRuntimeHours))
+                    Self::ReadTotalRuntimeHours(request::ReadTotalRuntimeHours)
                 }
                 "read_total_runtime_min_sec" => {
-                    rt::Ok(Self::ReadTotalRuntimeMinSec(request::ReadTotalRuntimeMinSec))
+                    Self::ReadTotalRuntimeMinSec(request::ReadTotalRuntimeMinSec)
                 }
                 "read_load_runtime_0_24_hours" => {
-                    rt::Ok(
-                        Self::ReadLoadRuntime024Hours(request::ReadLoadRuntime024Hours),
-                    )
+                    Self::ReadLoadRuntime024Hours(request::ReadLoadRuntime024Hours)
                 }
                 "read_load_runtime_0_24_min_sec" => {
-                    rt::Ok(
-                        Self::ReadLoadRuntime024MinSec(request::ReadLoadRuntime024MinSec),
-                    )
+                    Self::ReadLoadRuntime024MinSec(request::ReadLoadRuntime024MinSec)
                 }
                 "reset_load_runtime_0_24" => {
-                    rt::Ok(Self::ResetLoadRuntime024(request::ResetLoadRuntime024))
+                    Self::ResetLoadRuntime024(request::ResetLoadRuntime024)
                 }
                 "read_load_runtime_25_49_hours" => {
-                    rt::Ok(
-                        Self::ReadLoadRuntime2549Hours(request::ReadLoadRuntime2549Hours),
-                    )
+                    Self::ReadLoadRuntime2549Hours(request::ReadLoadRuntime2549Hours)
                 }
                 "read_load_runtime_25_49_min_sec" => {
-                    rt::Ok(
-                        Self::ReadLoadRuntime2549MinSec(
-                            request::ReadLoadRuntime2549MinSec,
-                        ),
-                    )
+                    Self::ReadLoadRuntime2549MinSec(request::ReadLoadRuntime2549MinSec)
                 }
                 "reset_load_runtime_25_49" => {
-                    rt::Ok(Self::ResetLoadRuntime2549(request::ResetLoadRuntime2549))
+                    Self::ResetLoadRuntime2549(request::ResetLoadRuntime2549)
                 }
                 "read_load_runtime_50_74_hours" => {
-                    rt::Ok(
-                        Self::ReadLoadRuntime5074Hours(request::ReadLoadRuntime5074Hours),
-                    )
+                    Self::ReadLoadRuntime5074Hours(request::ReadLoadRuntime5074Hours)
                 }
                 "read_load_runtime_50_74_min_sec" => {
-                    rt::Ok(
-                        Self::ReadLoadRuntime5074MinSec(
-                            request::ReadLoadRuntime5074MinSec,
-                        ),
-                    )
+                    Self::ReadLoadRuntime5074MinSec(request::ReadLoadRuntime5074MinSec)
                 }
                 "reset_load_runtime_50_74" => {
-                    rt::Ok(Self::ResetLoadRuntime5074(request::ResetLoadRuntime5074))
+                    Self::ResetLoadRuntime5074(request::ResetLoadRuntime5074)
                 }
                 "read_load_runtime_75_99_hours" => {
-                    rt::Ok(
-                        Self::ReadLoadRuntime7599Hours(request::ReadLoadRuntime7599Hours),
-                    )
+                    Self::ReadLoadRuntime7599Hours(request::ReadLoadRuntime7599Hours)
                 }
                 "read_load_runtime_75_99_min_sec" => {
-                    rt::Ok(
-                        Self::ReadLoadRuntime7599MinSec(
-                            request::ReadLoadRuntime7599MinSec,
-                        ),
-                    )
+                    Self::ReadLoadRuntime7599MinSec(request::ReadLoadRuntime7599MinSec)
                 }
                 "reset_load_runtime_75_99" => {
-                    rt::Ok(Self::ResetLoadRuntime7599(request::ResetLoadRuntime7599))
+                    Self::ResetLoadRuntime7599(request::ResetLoadRuntime7599)
                 }
                 "read_load_runtime_100_hours" => {
-                    rt::Ok(
-                        Self::ReadLoadRuntime100Hours(request::ReadLoadRuntime100Hours),
-                    )
+                    Self::ReadLoadRuntime100Hours(request::ReadLoadRuntime100Hours)
                 }
                 "read_load_runtime_100_min_sec" => {
-                    rt::Ok(
-                        Self::ReadLoadRuntime100MinSec(request::ReadLoadRuntime100MinSec),
-                    )
+                    Self::ReadLoadRuntime100MinSec(request::ReadLoadRuntime100MinSec)
                 }
                 "reset_load_runtime_100" => {
-                    rt::Ok(Self::ResetLoadRuntime100(request::ResetLoadRuntime100))
+                    Self::ResetLoadRuntime100(request::ResetLoadRuntime100)
                 }
                 "read_stall_event_counter" => {
-                    rt::Ok(Self::ReadStallEventCounter(request::ReadStallEventCounter))
+                    Self::ReadStallEventCounter(request::ReadStallEventCounter)
                 }
                 "reset_stall_event_counter" => {
-                    rt::Ok(Self::ResetStallEventCounter(request::ResetStallEventCounter))
+                    Self::ResetStallEventCounter(request::ResetStallEventCounter)
                 }
                 "read_power_up_cycles" => {
-                    rt::Ok(Self::ReadPowerUpCycles(request::ReadPowerUpCycles))
+                    Self::ReadPowerUpCycles(request::ReadPowerUpCycles)
                 }
-                _ => rt::Err(rt::FieldError::UnknownMessage),
-            }
+                _ => return rt::Err(rt::FieldError::UnknownMessage),
+            };
+            rt::Ok(message)
         }
     }
     impl rt::Message for Request {
@@ -3515,379 +3452,294 @@ pub mod sd {
             name: &str,
             mut field: impl FnMut(&'static str) -> rt::Option<rt::FieldValue<'v>>,
         ) -> rt::Result<Self, rt::FieldError> {
-            match name {
+            let message = match name {
                 "set_point_reply" => {
-                    rt::Ok(
-                        Self::SetPointReply(response::SetPointReply {
-                            freshness: rt::field_int(
-                                "freshness",
-                                field("freshness"),
-                                0,
-                                15,
-                            )? as u8,
-                            position: Angle::from_raw(
-                                rt::field_int("position", field("position"), -2048, 2047)?
-                                    as i16,
-                            ),
-                        }),
-                    )
+                    Self::SetPointReply(response::SetPointReply {
+                        freshness: rt::field_int("freshness", field("freshness"), 0, 15)?
+                            as u8,
+                        position: Angle::from_raw(
+                            rt::field_int("position", field("position"), -2048, 2047)?
+                                as i16,
+                        ),
+                    })
                 }
                 "actual_position" => {
-                    rt::Ok(
-                        Self::ActualPosition(response::ActualPosition {
-                            position: Angle::from_raw(
-                                rt::field_int("position", field("position"), -2048, 2047)?
-                                    as i16,
-                            ),
-                        }),
-                    )
+                    Self::ActualPosition(response::ActualPosition {
+                        position: Angle::from_raw(
+                            rt::field_int("position", field("position"), -2048, 2047)?
+                                as i16,
+                        ),
+                    })
                 }
                 "set_velocity_reply" => {
-                    rt::Ok(
-                        Self::SetVelocityReply(response::SetVelocityReply {
-                            actual_velocity: Velocity::from_raw(
-                                rt::get(&mut field, "actual_velocity")?,
-                            ),
-                        }),
-                    )
+                    Self::SetVelocityReply(response::SetVelocityReply {
+                        actual_velocity: Velocity::from_raw(
+                            rt::get(&mut field, "actual_velocity")?,
+                        ),
+                    })
                 }
                 "actual_velocity" => {
-                    rt::Ok(
-                        Self::ActualVelocity(response::ActualVelocity {
-                            actual_velocity: Velocity::from_raw(
-                                rt::get(&mut field, "actual_velocity")?,
-                            ),
-                        }),
-                    )
+                    Self::ActualVelocity(response::ActualVelocity {
+                        actual_velocity: Velocity::from_raw(
+                            rt::get(&mut field, "actual_velocity")?,
+                        ),
+                    })
                 }
                 "set_servo_id_reply" => {
-                    rt::Ok(
-                        Self::SetServoIdReply(response::SetServoIdReply {
-                            new_id: rt::get(&mut field, "new_id")?,
-                        }),
-                    )
+                    Self::SetServoIdReply(response::SetServoIdReply {
+                        new_id: rt::get(&mut field, "new_id")?,
+                    })
                 }
                 "servo_id" => {
-                    rt::Ok(
-                        Self::ServoId(response::ServoId {
-                            id: rt::get(&mut field, "id")?,
-                        }),
-                    )
+                    Self::ServoId(response::ServoId {
+                        id: rt::get(&mut field, "id")?,
+                    })
                 }
                 "current_consumption" => {
-                    rt::Ok(
-                        Self::CurrentConsumption(response::CurrentConsumption {
-                            current: Current::from_raw(
-                                (rt::get::<u8>(&mut field, "current")?) as u16,
-                            ),
-                        }),
-                    )
+                    Self::CurrentConsumption(response::CurrentConsumption {
+                        current: Current::from_raw(
+                            (rt::get::<u8>(&mut field, "current")?) as u16,
+                        ),
+                    })
                 }
                 "bus_voltages" => {
-                    rt::Ok(
-                        Self::BusVoltages(response::BusVoltages {
-                            power_bus_1_voltage: Voltage::from_raw(
-                                rt::get(&mut field, "power_bus_1_voltage")?,
-                            ),
-                            power_bus_2_voltage: Voltage::from_raw(
-                                rt::get(&mut field, "power_bus_2_voltage")?,
-                            ),
-                        }),
-                    )
+                    Self::BusVoltages(response::BusVoltages {
+                        power_bus_1_voltage: Voltage::from_raw(
+                            rt::get(&mut field, "power_bus_1_voltage")?,
+                        ),
+                        power_bus_2_voltage: Voltage::from_raw(
+                            rt::get(&mut field, "power_bus_2_voltage")?,
+                        ),
+                    })
                 }
                 "extended_current_consumption" => {
-                    rt::Ok(
-                        Self::ExtendedCurrentConsumption(response::ExtendedCurrentConsumption {
-                            current: Current::from_raw(rt::get(&mut field, "current")?),
-                        }),
-                    )
+                    Self::ExtendedCurrentConsumption(response::ExtendedCurrentConsumption {
+                        current: Current::from_raw(rt::get(&mut field, "current")?),
+                    })
                 }
                 "temperatures" => {
-                    rt::Ok(
-                        Self::Temperatures(response::Temperatures {
-                            motor_temperature: Temperature::from_raw(
-                                rt::get(&mut field, "motor_temperature")?,
-                            ),
-                            pcb_temperature: Temperature::from_raw(
-                                rt::get(&mut field, "pcb_temperature")?,
-                            ),
-                        }),
-                    )
+                    Self::Temperatures(response::Temperatures {
+                        motor_temperature: Temperature::from_raw(
+                            rt::get(&mut field, "motor_temperature")?,
+                        ),
+                        pcb_temperature: Temperature::from_raw(
+                            rt::get(&mut field, "pcb_temperature")?,
+                        ),
+                    })
                 }
                 "humidity" => {
-                    rt::Ok(
-                        Self::Humidity(response::Humidity {
-                            humidity: rt::get(&mut field, "humidity")?,
-                        }),
-                    )
+                    Self::Humidity(response::Humidity {
+                        humidity: rt::get(&mut field, "humidity")?,
+                    })
                 }
                 "skipped_frames_counter" => {
-                    rt::Ok(
-                        Self::SkippedFramesCounter(response::SkippedFramesCounter {
-                            host_freshness_counter: rt::get(
-                                &mut field,
-                                "host_freshness_counter",
-                            )?,
-                            dropped_frames: rt::get(&mut field, "dropped_frames")?,
-                        }),
-                    )
+                    Self::SkippedFramesCounter(response::SkippedFramesCounter {
+                        host_freshness_counter: rt::get(
+                            &mut field,
+                            "host_freshness_counter",
+                        )?,
+                        dropped_frames: rt::get(&mut field, "dropped_frames")?,
+                    })
                 }
                 "dropped_frames_counter_reset" => {
-                    rt::Ok(
-                        Self::DroppedFramesCounterReset(response::DroppedFramesCounterReset {
-                            host_freshness_counter: rt::get(
-                                &mut field,
-                                "host_freshness_counter",
-                            )?,
-                        }),
-                    )
+                    Self::DroppedFramesCounterReset(response::DroppedFramesCounterReset {
+                        host_freshness_counter: rt::get(
+                            &mut field,
+                            "host_freshness_counter",
+                        )?,
+                    })
                 }
                 "actuator_status_word" => {
-                    rt::Ok(
-                        Self::ActuatorStatusWord(response::ActuatorStatusWord {
-                            status_bits: ActuatorStatusBits::from_raw(
-                                rt::get(&mut field, "status_bits")?,
-                            ),
-                            status_arg2: rt::get(&mut field, "status_arg2")?,
-                        }),
-                    )
+                    Self::ActuatorStatusWord(response::ActuatorStatusWord {
+                        status_bits: ActuatorStatusBits::from_raw(
+                            rt::get(&mut field, "status_bits")?,
+                        ),
+                        status_arg2: rt::get(&mut field, "status_arg2")?,
+                    })
                 }
                 "reset_default_role_and_error_flags_reply" => {
-                    rt::Ok(
-                        Self::ResetDefaultRoleAndErrorFlagsReply(
-                            response::ResetDefaultRoleAndErrorFlagsReply,
-                        ),
+                    Self::ResetDefaultRoleAndErrorFlagsReply(
+                        response::ResetDefaultRoleAndErrorFlagsReply,
                     )
                 }
                 "set_current_position_as_zero_reply" => {
-                    rt::Ok(
-                        Self::SetCurrentPositionAsZeroReply(response::SetCurrentPositionAsZeroReply {
-                            zero_offset: Angle::from_raw(
-                                rt::field_int(
-                                    "zero_offset",
-                                    field("zero_offset"),
-                                    -2048,
-                                    2047,
-                                )? as i16,
-                            ),
-                        }),
-                    )
+                    Self::SetCurrentPositionAsZeroReply(response::SetCurrentPositionAsZeroReply {
+                        zero_offset: Angle::from_raw(
+                            rt::field_int(
+                                "zero_offset",
+                                field("zero_offset"),
+                                -2048,
+                                2047,
+                            )? as i16,
+                        ),
+                    })
                 }
                 "current_zero_offset" => {
-                    rt::Ok(
-                        Self::CurrentZeroOffset(response::CurrentZeroOffset {
-                            zero_offset: Angle::from_raw(
-                                rt::field_int(
-                                    "zero_offset",
-                                    field("zero_offset"),
-                                    -2048,
-                                    2047,
-                                )? as i16,
-                            ),
-                        }),
-                    )
+                    Self::CurrentZeroOffset(response::CurrentZeroOffset {
+                        zero_offset: Angle::from_raw(
+                            rt::field_int(
+                                "zero_offset",
+                                field("zero_offset"),
+                                -2048,
+                                2047,
+                            )? as i16,
+                        ),
+                    })
                 }
                 "reset_zero_offset_reply" => {
-                    rt::Ok(Self::ResetZeroOffsetReply(response::ResetZeroOffsetReply))
+                    Self::ResetZeroOffsetReply(response::ResetZeroOffsetReply)
                 }
                 "electronic_serial_number_character" => {
-                    rt::Ok(
-                        Self::ElectronicSerialNumberCharacter(response::ElectronicSerialNumberCharacter {
-                            character: rt::get(&mut field, "character")?,
-                            string_length: rt::get(&mut field, "string_length")?,
-                        }),
-                    )
+                    Self::ElectronicSerialNumberCharacter(response::ElectronicSerialNumberCharacter {
+                        character: rt::get(&mut field, "character")?,
+                        string_length: rt::get(&mut field, "string_length")?,
+                    })
                 }
                 "product_description_character" => {
-                    rt::Ok(
-                        Self::ProductDescriptionCharacter(response::ProductDescriptionCharacter {
-                            character: rt::get(&mut field, "character")?,
-                            string_length: rt::get(&mut field, "string_length")?,
-                        }),
-                    )
+                    Self::ProductDescriptionCharacter(response::ProductDescriptionCharacter {
+                        character: rt::get(&mut field, "character")?,
+                        string_length: rt::get(&mut field, "string_length")?,
+                    })
                 }
                 "software_revision_character" => {
-                    rt::Ok(
-                        Self::SoftwareRevisionCharacter(response::SoftwareRevisionCharacter {
-                            character: rt::get(&mut field, "character")?,
-                            string_length: rt::get(&mut field, "string_length")?,
-                        }),
-                    )
+                    Self::SoftwareRevisionCharacter(response::SoftwareRevisionCharacter {
+                        character: rt::get(&mut field, "character")?,
+                        string_length: rt::get(&mut field, "string_length")?,
+                    })
                 }
                 "hardware_revision_character" => {
-                    rt::Ok(
-                        Self::HardwareRevisionCharacter(response::HardwareRevisionCharacter {
-                            character: rt::get(&mut field, "character")?,
-                            string_length: rt::get(&mut field, "string_length")?,
-                        }),
-                    )
+                    Self::HardwareRevisionCharacter(response::HardwareRevisionCharacter {
+                        character: rt::get(&mut field, "character")?,
+                        string_length: rt::get(&mut field, "string_length")?,
+                    })
                 }
                 "total_runtime_hours" => {
-                    rt::Ok(
-                        Self::TotalRuntimeHours(response::TotalRuntimeHours {
-                            runtime_hours: rt::get(&mut field, "runtime_hours")?,
-                        }),
-                    )
+                    Self::TotalRuntimeHours(response::TotalRuntimeHours {
+                        runtime_hours: rt::get(&mut field, "runtime_hours")?,
+                    })
                 }
                 "total_runtime_min_sec" => {
-                    rt::Ok(
-                        Self::TotalRuntimeMinSec(response::TotalRuntimeMinSec {
-                            runtime_minutes: rt::get(&mut field, "runtime_minutes")?,
-                            runtime_seconds: rt::get(&mut field, "runtime_seconds")?,
-                        }),
-                    )
+                    Self::TotalRuntimeMinSec(response::TotalRuntimeMinSec {
+                        runtime_minutes: rt::get(&mut field, "runtime_minutes")?,
+                        runtime_seconds: rt::get(&mut field, "runtime_seconds")?,
+                    })
                 }
                 "load_runtime_0_24_hours" => {
-                    rt::Ok(
-                        Self::LoadRuntime024Hours(response::LoadRuntime024Hours {
-                            runtime_hours: rt::get(&mut field, "runtime_hours")?,
-                        }),
-                    )
+                    Self::LoadRuntime024Hours(response::LoadRuntime024Hours {
+                        runtime_hours: rt::get(&mut field, "runtime_hours")?,
+                    })
                 }
                 "load_runtime_0_24_min_sec" => {
-                    rt::Ok(
-                        Self::LoadRuntime024MinSec(response::LoadRuntime024MinSec {
-                            runtime_minutes: rt::get(&mut field, "runtime_minutes")?,
-                            runtime_seconds: rt::get(&mut field, "runtime_seconds")?,
-                        }),
-                    )
+                    Self::LoadRuntime024MinSec(response::LoadRuntime024MinSec {
+                        runtime_minutes: rt::get(&mut field, "runtime_minutes")?,
+                        runtime_seconds: rt::get(&mut field, "runtime_seconds")?,
+                    })
                 }
                 "load_runtime_0_24_hours_before_reset" => {
-                    rt::Ok(
-                        Self::LoadRuntime024HoursBeforeReset(response::LoadRuntime024HoursBeforeReset {
-                            runtime_hours_before_reset: rt::get(
-                                &mut field,
-                                "runtime_hours_before_reset",
-                            )?,
-                        }),
-                    )
+                    Self::LoadRuntime024HoursBeforeReset(response::LoadRuntime024HoursBeforeReset {
+                        runtime_hours_before_reset: rt::get(
+                            &mut field,
+                            "runtime_hours_before_reset",
+                        )?,
+                    })
                 }
                 "load_runtime_25_49_hours" => {
-                    rt::Ok(
-                        Self::LoadRuntime2549Hours(response::LoadRuntime2549Hours {
-                            runtime_hours: rt::get(&mut field, "runtime_hours")?,
-                        }),
-                    )
+                    Self::LoadRuntime2549Hours(response::LoadRuntime2549Hours {
+                        runtime_hours: rt::get(&mut field, "runtime_hours")?,
+                    })
                 }
                 "load_runtime_25_49_min_sec" => {
-                    rt::Ok(
-                        Self::LoadRuntime2549MinSec(response::LoadRuntime2549MinSec {
-                            runtime_minutes: rt::get(&mut field, "runtime_minutes")?,
-                            runtime_seconds: rt::get(&mut field, "runtime_seconds")?,
-                        }),
-                    )
+                    Self::LoadRuntime2549MinSec(response::LoadRuntime2549MinSec {
+                        runtime_minutes: rt::get(&mut field, "runtime_minutes")?,
+                        runtime_seconds: rt::get(&mut field, "runtime_seconds")?,
+                    })
                 }
                 "load_runtime_25_49_hours_before_reset" => {
-                    rt::Ok(
-                        Self::LoadRuntime2549HoursBeforeReset(response::LoadRuntime2549HoursBeforeReset {
-                            runtime_hours_before_reset: rt::get(
-                                &mut field,
-                                "runtime_hours_before_reset",
-                            )?,
-                        }),
-                    )
+                    Self::LoadRuntime2549HoursBeforeReset(response::LoadRuntime2549HoursBeforeReset {
+                        runtime_hours_before_reset: rt::get(
+                            &mut field,
+                            "runtime_hours_before_reset",
+                        )?,
+                    })
                 }
                 "load_runtime_50_74_hours" => {
-                    rt::Ok(
-                        Self::LoadRuntime5074Hours(response::LoadRuntime5074Hours {
-                            runtime_hours: rt::get(&mut field, "runtime_hours")?,
-                        }),
-                    )
+                    Self::LoadRuntime5074Hours(response::LoadRuntime5074Hours {
+                        runtime_hours: rt::get(&mut field, "runtime_hours")?,
+                    })
                 }
                 "load_runtime_50_74_min_sec" => {
-                    rt::Ok(
-                        Self::LoadRuntime5074MinSec(response::LoadRuntime5074MinSec {
-                            runtime_minutes: rt::get(&mut field, "runtime_minutes")?,
-                            runtime_seconds: rt::get(&mut field, "runtime_seconds")?,
-                        }),
-                    )
+                    Self::LoadRuntime5074MinSec(response::LoadRuntime5074MinSec {
+                        runtime_minutes: rt::get(&mut field, "runtime_minutes")?,
+                        runtime_seconds: rt::get(&mut field, "runtime_seconds")?,
+                    })
                 }
                 "load_runtime_50_74_hours_before_reset" => {
-                    rt::Ok(
-                        Self::LoadRuntime5074HoursBeforeReset(response::LoadRuntime5074HoursBeforeReset {
-                            runtime_hours_before_reset: rt::get(
-                                &mut field,
-                                "runtime_hours_before_reset",
-                            )?,
-                        }),
-                    )
+                    Self::LoadRuntime5074HoursBeforeReset(response::LoadRuntime5074HoursBeforeReset {
+                        runtime_hours_before_reset: rt::get(
+                            &mut field,
+                            "runtime_hours_before_reset",
+                        )?,
+                    })
                 }
                 "load_runtime_75_99_hours" => {
-                    rt::Ok(
-                        Self::LoadRuntime7599Hours(response::LoadRuntime7599Hours {
-                            runtime_hours: rt::get(&mut field, "runtime_hours")?,
-                        }),
-                    )
+                    Self::LoadRuntime7599Hours(response::LoadRuntime7599Hours {
+                        runtime_hours: rt::get(&mut field, "runtime_hours")?,
+                    })
                 }
                 "load_runtime_75_99_min_sec" => {
-                    rt::Ok(
-                        Self::LoadRuntime7599MinSec(response::LoadRuntime7599MinSec {
-                            runtime_minutes: rt::get(&mut field, "runtime_minutes")?,
-                            runtime_seconds: rt::get(&mut field, "runtime_seconds")?,
-                        }),
-                    )
+                    Self::LoadRuntime7599MinSec(response::LoadRuntime7599MinSec {
+                        runtime_minutes: rt::get(&mut field, "runtime_minutes")?,
+                        runtime_seconds: rt::get(&mut field, "runtime_seconds")?,
+                    })
                 }
                 "load_runtime_75_99_hours_before_reset" => {
-                    rt::Ok(
-                        Self::LoadRuntime7599HoursBeforeReset(response::LoadRuntime7599HoursBeforeReset {
-                            runtime_hours_before_reset: rt::get(
-                                &mut field,
-                                "runtime_hours_before_reset",
-                            )?,
-                        }),
-                    )
+                    Self::LoadRuntime7599HoursBeforeReset(response::LoadRuntime7599HoursBeforeReset {
+                        runtime_hours_before_reset: rt::get(
+                            &mut field,
+                            "runtime_hours_before_reset",
+                        )?,
+                    })
                 }
                 "load_runtime_100_hours" => {
-                    rt::Ok(
-                        Self::LoadRuntime100Hours(response::LoadRuntime100Hours {
-                            runtime_hours: rt::get(&mut field, "runtime_hours")?,
-                        }),
-                    )
+                    Self::LoadRuntime100Hours(response::LoadRuntime100Hours {
+                        runtime_hours: rt::get(&mut field, "runtime_hours")?,
+                    })
                 }
                 "load_runtime_100_min_sec" => {
-                    rt::Ok(
-                        Self::LoadRuntime100MinSec(response::LoadRuntime100MinSec {
-                            runtime_minutes: rt::get(&mut field, "runtime_minutes")?,
-                            runtime_seconds: rt::get(&mut field, "runtime_seconds")?,
-                        }),
-                    )
+                    Self::LoadRuntime100MinSec(response::LoadRuntime100MinSec {
+                        runtime_minutes: rt::get(&mut field, "runtime_minutes")?,
+                        runtime_seconds: rt::get(&mut field, "runtime_seconds")?,
+                    })
                 }
                 "load_runtime_100_hours_before_reset" => {
-                    rt::Ok(
-                        Self::LoadRuntime100HoursBeforeReset(response::LoadRuntime100HoursBeforeReset {
-                            runtime_hours_before_reset: rt::get(
-                                &mut field,
-                                "runtime_hours_before_reset",
-                            )?,
-                        }),
-                    )
+                    Self::LoadRuntime100HoursBeforeReset(response::LoadRuntime100HoursBeforeReset {
+                        runtime_hours_before_reset: rt::get(
+                            &mut field,
+                            "runtime_hours_before_reset",
+                        )?,
+                    })
                 }
                 "stall_event_counter" => {
-                    rt::Ok(
-                        Self::StallEventCounter(response::StallEventCounter {
-                            stall_events: rt::get(&mut field, "stall_events")?,
-                        }),
-                    )
+                    Self::StallEventCounter(response::StallEventCounter {
+                        stall_events: rt::get(&mut field, "stall_events")?,
+                    })
                 }
                 "stall_event_counter_before_reset" => {
-                    rt::Ok(
-                        Self::StallEventCounterBeforeReset(response::StallEventCounterBeforeReset {
-                            stall_events_before_reset: rt::get(
-                                &mut field,
-                                "stall_events_before_reset",
-                            )?,
-                        }),
-                    )
+                    Self::StallEventCounterBeforeReset(response::StallEventCounterBeforeReset {
+                        stall_events_before_reset: rt::get(
+                            &mut field,
+                            "stall_events_before_reset",
+                        )?,
+                    })
                 }
                 "power_up_cycles" => {
-                    rt::Ok(
-                        Self::PowerUpCycles(response::PowerUpCycles {
-                            power_up_cycles: rt::get(&mut field, "power_up_cycles")?,
-                        }),
-                    )
+                    Self::PowerUpCycles(response::PowerUpCycles {
+                        power_up_cycles: rt::get(&mut field, "power_up_cycles")?,
+                    })
                 }
-                _ => rt::Err(rt::FieldError::UnknownMessage),
-            }
+                _ => return rt::Err(rt::FieldError::UnknownMessage),
+            };
+            rt::Ok(message)
         }
     }
     impl rt::Message for Response {

@@ -277,20 +277,17 @@ pub mod slip_sensor {
             name: &str,
             mut field: impl FnMut(&'static str) -> rt::Option<rt::FieldValue<'v>>,
         ) -> rt::Result<Self, rt::FieldError> {
-            match name {
-                "read_temperature" => {
-                    rt::Ok(Self::ReadTemperature(request::ReadTemperature))
-                }
+            let message = match name {
+                "read_temperature" => Self::ReadTemperature(request::ReadTemperature),
                 "set_threshold" => {
-                    rt::Ok(
-                        Self::SetThreshold(request::SetThreshold {
-                            threshold: rt::get(&mut field, "threshold")?,
-                        }),
-                    )
+                    Self::SetThreshold(request::SetThreshold {
+                        threshold: rt::get(&mut field, "threshold")?,
+                    })
                 }
-                "read_samples" => rt::Ok(Self::ReadSamples(request::ReadSamples)),
-                _ => rt::Err(rt::FieldError::UnknownMessage),
-            }
+                "read_samples" => Self::ReadSamples(request::ReadSamples),
+                _ => return rt::Err(rt::FieldError::UnknownMessage),
+            };
+            rt::Ok(message)
         }
     }
     impl rt::Message for Request {
@@ -542,26 +539,23 @@ pub mod slip_sensor {
             name: &str,
             mut field: impl FnMut(&'static str) -> rt::Option<rt::FieldValue<'v>>,
         ) -> rt::Result<Self, rt::FieldError> {
-            match name {
+            let message = match name {
                 "temperature" => {
-                    rt::Ok(
-                        Self::Temperature(response::Temperature {
-                            temperature: Centidegrees::from_raw(
-                                rt::get(&mut field, "temperature")?,
-                            ),
-                        }),
-                    )
+                    Self::Temperature(response::Temperature {
+                        temperature: Centidegrees::from_raw(
+                            rt::get(&mut field, "temperature")?,
+                        ),
+                    })
                 }
-                "ack" => rt::Ok(Self::Ack(response::Ack)),
+                "ack" => Self::Ack(response::Ack),
                 "samples" => {
-                    rt::Ok(
-                        Self::Samples(response::Samples {
-                            samples: rt::list::<u8, 8>(&mut field, "samples", 0, 255)?,
-                        }),
-                    )
+                    Self::Samples(response::Samples {
+                        samples: rt::list::<u8, 8>(&mut field, "samples", 0, 255)?,
+                    })
                 }
-                _ => rt::Err(rt::FieldError::UnknownMessage),
-            }
+                _ => return rt::Err(rt::FieldError::UnknownMessage),
+            };
+            rt::Ok(message)
         }
     }
     impl rt::Message for Response {

@@ -161,16 +161,15 @@ pub mod sync_after_code {
             name: &str,
             mut field: impl FnMut(&'static str) -> rt::Option<rt::FieldValue<'v>>,
         ) -> rt::Result<Self, rt::FieldError> {
-            match name {
+            let message = match name {
                 "read" => {
-                    rt::Ok(
-                        Self::Read(request::Read {
-                            register: rt::get(&mut field, "register")?,
-                        }),
-                    )
+                    Self::Read(request::Read {
+                        register: rt::get(&mut field, "register")?,
+                    })
                 }
-                _ => rt::Err(rt::FieldError::UnknownMessage),
-            }
+                _ => return rt::Err(rt::FieldError::UnknownMessage),
+            };
+            rt::Ok(message)
         }
     }
     impl rt::Message for Request {
@@ -347,16 +346,15 @@ pub mod sync_after_code {
             name: &str,
             mut field: impl FnMut(&'static str) -> rt::Option<rt::FieldValue<'v>>,
         ) -> rt::Result<Self, rt::FieldError> {
-            match name {
+            let message = match name {
                 "value" => {
-                    rt::Ok(
-                        Self::Value(response::Value {
-                            value: rt::get(&mut field, "value")?,
-                        }),
-                    )
+                    Self::Value(response::Value {
+                        value: rt::get(&mut field, "value")?,
+                    })
                 }
-                _ => rt::Err(rt::FieldError::UnknownMessage),
-            }
+                _ => return rt::Err(rt::FieldError::UnknownMessage),
+            };
+            rt::Ok(message)
         }
     }
     impl rt::Message for Response {

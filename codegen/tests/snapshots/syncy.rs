@@ -275,28 +275,25 @@ pub mod syncy {
             name: &str,
             mut field: impl FnMut(&'static str) -> rt::Option<rt::FieldValue<'v>>,
         ) -> rt::Result<Self, rt::FieldError> {
-            match name {
+            let message = match name {
                 "move_to" => {
-                    rt::Ok(
-                        Self::MoveTo(request::MoveTo {
-                            target: Millimetre::from_raw(
-                                rt::field_int("target", field("target"), -8388608, 8388607)?
-                                    as i32,
-                            ),
-                        }),
-                    )
+                    Self::MoveTo(request::MoveTo {
+                        target: Millimetre::from_raw(
+                            rt::field_int("target", field("target"), -8388608, 8388607)?
+                                as i32,
+                        ),
+                    })
                 }
-                "get_counter" => rt::Ok(Self::GetCounter(request::GetCounter)),
+                "get_counter" => Self::GetCounter(request::GetCounter),
                 "set_pair" => {
-                    rt::Ok(
-                        Self::SetPair(request::SetPair {
-                            quantity: rt::get(&mut field, "quantity")?,
-                            level: rt::get(&mut field, "level")?,
-                        }),
-                    )
+                    Self::SetPair(request::SetPair {
+                        quantity: rt::get(&mut field, "quantity")?,
+                        level: rt::get(&mut field, "level")?,
+                    })
                 }
-                _ => rt::Err(rt::FieldError::UnknownMessage),
-            }
+                _ => return rt::Err(rt::FieldError::UnknownMessage),
+            };
+            rt::Ok(message)
         }
     }
     impl rt::Message for Request {
@@ -546,40 +543,35 @@ pub mod syncy {
             name: &str,
             mut field: impl FnMut(&'static str) -> rt::Option<rt::FieldValue<'v>>,
         ) -> rt::Result<Self, rt::FieldError> {
-            match name {
-                "moving" => rt::Ok(Self::Moving(response::Moving)),
+            let message = match name {
+                "moving" => Self::Moving(response::Moving),
                 "counter" => {
-                    rt::Ok(
-                        Self::Counter(response::Counter {
-                            total: rt::field_int("total", field("total"), 0, 16777215)?
-                                as u32,
-                            tag: rt::field_int("tag", field("tag"), 0, 15)? as u8,
-                            offset: rt::field_int(
-                                "offset",
-                                field("offset"),
-                                -524288,
-                                524287,
-                            )? as i32,
-                        }),
-                    )
+                    Self::Counter(response::Counter {
+                        total: rt::field_int("total", field("total"), 0, 16777215)?
+                            as u32,
+                        tag: rt::field_int("tag", field("tag"), 0, 15)? as u8,
+                        offset: rt::field_int(
+                            "offset",
+                            field("offset"),
+                            -524288,
+                            524287,
+                        )? as i32,
+                    })
                 }
                 "set_pair_reply" => {
-                    rt::Ok(
-                        Self::SetPairReply(response::SetPairReply {
-                            quantity: rt::get(&mut field, "quantity")?,
-                            groups: rt::get(&mut field, "groups")?,
-                        }),
-                    )
+                    Self::SetPairReply(response::SetPairReply {
+                        quantity: rt::get(&mut field, "quantity")?,
+                        groups: rt::get(&mut field, "groups")?,
+                    })
                 }
                 "set_pair_error" => {
-                    rt::Ok(
-                        Self::SetPairError(response::SetPairError {
-                            reason: rt::get(&mut field, "reason")?,
-                        }),
-                    )
+                    Self::SetPairError(response::SetPairError {
+                        reason: rt::get(&mut field, "reason")?,
+                    })
                 }
-                _ => rt::Err(rt::FieldError::UnknownMessage),
-            }
+                _ => return rt::Err(rt::FieldError::UnknownMessage),
+            };
+            rt::Ok(message)
         }
     }
     impl rt::Message for Response {

@@ -219,18 +219,17 @@ pub mod telemetry_le {
             name: &str,
             mut field: impl FnMut(&'static str) -> rt::Option<rt::FieldValue<'v>>,
         ) -> rt::Result<Self, rt::FieldError> {
-            match name {
-                "get_state" => rt::Ok(Self::GetState(request::GetState)),
+            let message = match name {
+                "get_state" => Self::GetState(request::GetState),
                 "set_home" => {
-                    rt::Ok(
-                        Self::SetHome(request::SetHome {
-                            lat: rt::get(&mut field, "lat")?,
-                            lon: rt::get(&mut field, "lon")?,
-                        }),
-                    )
+                    Self::SetHome(request::SetHome {
+                        lat: rt::get(&mut field, "lat")?,
+                        lon: rt::get(&mut field, "lon")?,
+                    })
                 }
-                _ => rt::Err(rt::FieldError::UnknownMessage),
-            }
+                _ => return rt::Err(rt::FieldError::UnknownMessage),
+            };
+            rt::Ok(message)
         }
     }
     impl rt::Message for Request {
@@ -497,22 +496,21 @@ pub mod telemetry_le {
             name: &str,
             mut field: impl FnMut(&'static str) -> rt::Option<rt::FieldValue<'v>>,
         ) -> rt::Result<Self, rt::FieldError> {
-            match name {
+            let message = match name {
                 "state" => {
-                    rt::Ok(
-                        Self::State(response::State {
-                            time_us: rt::get(&mut field, "time_us")?,
-                            altitude: rt::get(&mut field, "altitude")?,
-                            lat: rt::get(&mut field, "lat")?,
-                            offset: rt::get(&mut field, "offset")?,
-                            pressure: rt::get(&mut field, "pressure")?,
-                            total: rt::get(&mut field, "total")?,
-                        }),
-                    )
+                    Self::State(response::State {
+                        time_us: rt::get(&mut field, "time_us")?,
+                        altitude: rt::get(&mut field, "altitude")?,
+                        lat: rt::get(&mut field, "lat")?,
+                        offset: rt::get(&mut field, "offset")?,
+                        pressure: rt::get(&mut field, "pressure")?,
+                        total: rt::get(&mut field, "total")?,
+                    })
                 }
-                "ack" => rt::Ok(Self::Ack(response::Ack)),
-                _ => rt::Err(rt::FieldError::UnknownMessage),
-            }
+                "ack" => Self::Ack(response::Ack),
+                _ => return rt::Err(rt::FieldError::UnknownMessage),
+            };
+            rt::Ok(message)
         }
     }
     impl rt::Message for Response {

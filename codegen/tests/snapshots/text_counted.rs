@@ -236,18 +236,17 @@ pub mod text_counted {
             name: &str,
             mut field: impl FnMut(&'static str) -> rt::Option<rt::FieldValue<'v>>,
         ) -> rt::Result<Self, rt::FieldError> {
-            match name {
+            let message = match name {
                 "set_name" => {
-                    rt::Ok(
-                        Self::SetName(request::SetName {
-                            name: rt::list_text::<16>(&mut field, "name")?,
-                            channel: rt::get(&mut field, "channel")?,
-                        }),
-                    )
+                    Self::SetName(request::SetName {
+                        name: rt::list_text::<16>(&mut field, "name")?,
+                        channel: rt::get(&mut field, "channel")?,
+                    })
                 }
-                "get_info" => rt::Ok(Self::GetInfo(request::GetInfo)),
-                _ => rt::Err(rt::FieldError::UnknownMessage),
-            }
+                "get_info" => Self::GetInfo(request::GetInfo),
+                _ => return rt::Err(rt::FieldError::UnknownMessage),
+            };
+            rt::Ok(message)
         }
     }
     impl rt::Message for Request {
@@ -508,25 +507,22 @@ pub mod text_counted {
             name: &str,
             mut field: impl FnMut(&'static str) -> rt::Option<rt::FieldValue<'v>>,
         ) -> rt::Result<Self, rt::FieldError> {
-            match name {
+            let message = match name {
                 "ack" => {
-                    rt::Ok(
-                        Self::Ack(response::Ack {
-                            status: rt::get(&mut field, "status")?,
-                        }),
-                    )
+                    Self::Ack(response::Ack {
+                        status: rt::get(&mut field, "status")?,
+                    })
                 }
                 "device_info" => {
-                    rt::Ok(
-                        Self::DeviceInfo(response::DeviceInfo {
-                            name: rt::list_text::<16>(&mut field, "name")?,
-                            serial: rt::get(&mut field, "serial")?,
-                            version: rt::get(&mut field, "version")?,
-                        }),
-                    )
+                    Self::DeviceInfo(response::DeviceInfo {
+                        name: rt::list_text::<16>(&mut field, "name")?,
+                        serial: rt::get(&mut field, "serial")?,
+                        version: rt::get(&mut field, "version")?,
+                    })
                 }
-                _ => rt::Err(rt::FieldError::UnknownMessage),
-            }
+                _ => return rt::Err(rt::FieldError::UnknownMessage),
+            };
+            rt::Ok(message)
         }
     }
     impl rt::Message for Response {

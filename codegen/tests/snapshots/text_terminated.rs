@@ -245,25 +245,22 @@ pub mod text_terminated {
             name: &str,
             mut field: impl FnMut(&'static str) -> rt::Option<rt::FieldValue<'v>>,
         ) -> rt::Result<Self, rt::FieldError> {
-            match name {
-                "ping" => rt::Ok(Self::Ping(request::Ping)),
+            let message = match name {
+                "ping" => Self::Ping(request::Ping),
                 "set_name" => {
-                    rt::Ok(
-                        Self::SetName(request::SetName {
-                            name: rt::list_text::<16>(&mut field, "name")?,
-                            channel: rt::get(&mut field, "channel")?,
-                        }),
-                    )
+                    Self::SetName(request::SetName {
+                        name: rt::list_text::<16>(&mut field, "name")?,
+                        channel: rt::get(&mut field, "channel")?,
+                    })
                 }
                 "read_parameter" => {
-                    rt::Ok(
-                        Self::ReadParameter(request::ReadParameter {
-                            index: rt::get(&mut field, "index")?,
-                        }),
-                    )
+                    Self::ReadParameter(request::ReadParameter {
+                        index: rt::get(&mut field, "index")?,
+                    })
                 }
-                _ => rt::Err(rt::FieldError::UnknownMessage),
-            }
+                _ => return rt::Err(rt::FieldError::UnknownMessage),
+            };
+            rt::Ok(message)
         }
     }
     impl rt::Message for Request {
@@ -640,38 +637,33 @@ pub mod text_terminated {
             name: &str,
             mut field: impl FnMut(&'static str) -> rt::Option<rt::FieldValue<'v>>,
         ) -> rt::Result<Self, rt::FieldError> {
-            match name {
+            let message = match name {
                 "device_info" => {
-                    rt::Ok(
-                        Self::DeviceInfo(response::DeviceInfo {
-                            name: rt::list_text::<24>(&mut field, "name")?,
-                            serial: rt::get(&mut field, "serial")?,
-                            hardware: rt::get(&mut field, "hardware")?,
-                            firmware: rt::get(&mut field, "firmware")?,
-                            parameters: rt::get(&mut field, "parameters")?,
-                            version: rt::get(&mut field, "version")?,
-                        }),
-                    )
+                    Self::DeviceInfo(response::DeviceInfo {
+                        name: rt::list_text::<24>(&mut field, "name")?,
+                        serial: rt::get(&mut field, "serial")?,
+                        hardware: rt::get(&mut field, "hardware")?,
+                        firmware: rt::get(&mut field, "firmware")?,
+                        parameters: rt::get(&mut field, "parameters")?,
+                        version: rt::get(&mut field, "version")?,
+                    })
                 }
                 "ack" => {
-                    rt::Ok(
-                        Self::Ack(response::Ack {
-                            status: rt::get(&mut field, "status")?,
-                        }),
-                    )
+                    Self::Ack(response::Ack {
+                        status: rt::get(&mut field, "status")?,
+                    })
                 }
                 "parameter" => {
-                    rt::Ok(
-                        Self::Parameter(response::Parameter {
-                            index: rt::get(&mut field, "index")?,
-                            label: rt::list_text::<16>(&mut field, "label")?,
-                            unit: rt::list_text::<8>(&mut field, "unit")?,
-                            value: rt::get(&mut field, "value")?,
-                        }),
-                    )
+                    Self::Parameter(response::Parameter {
+                        index: rt::get(&mut field, "index")?,
+                        label: rt::list_text::<16>(&mut field, "label")?,
+                        unit: rt::list_text::<8>(&mut field, "unit")?,
+                        value: rt::get(&mut field, "value")?,
+                    })
                 }
-                _ => rt::Err(rt::FieldError::UnknownMessage),
-            }
+                _ => return rt::Err(rt::FieldError::UnknownMessage),
+            };
+            rt::Ok(message)
         }
     }
     impl rt::Message for Response {

@@ -1196,230 +1196,172 @@ pub mod ub2 {
             name: &str,
             mut field: impl FnMut(&'static str) -> rt::Option<rt::FieldValue<'v>>,
         ) -> rt::Result<Self, rt::FieldError> {
-            match name {
-                "reference_run" => rt::Ok(Self::ReferenceRun(request::ReferenceRun)),
+            let message = match name {
+                "reference_run" => Self::ReferenceRun(request::ReferenceRun),
                 "reference_run_status" => {
-                    rt::Ok(Self::ReferenceRunStatus(request::ReferenceRunStatus))
+                    Self::ReferenceRunStatus(request::ReferenceRunStatus)
                 }
                 "go_to_capacitance" => {
-                    rt::Ok(
-                        Self::GoToCapacitance(request::GoToCapacitance {
-                            target: Capacitance::from_raw(rt::get(&mut field, "target")?),
-                        }),
-                    )
+                    Self::GoToCapacitance(request::GoToCapacitance {
+                        target: Capacitance::from_raw(rt::get(&mut field, "target")?),
+                    })
                 }
                 "go_to_capacitance_status" => {
-                    rt::Ok(Self::GoToCapacitanceStatus(request::GoToCapacitanceStatus))
+                    Self::GoToCapacitanceStatus(request::GoToCapacitanceStatus)
                 }
                 "go_to_full_step_position" => {
-                    rt::Ok(
-                        Self::GoToFullStepPosition(request::GoToFullStepPosition {
-                            target: rt::get(&mut field, "target")?,
-                        }),
-                    )
+                    Self::GoToFullStepPosition(request::GoToFullStepPosition {
+                        target: rt::get(&mut field, "target")?,
+                    })
                 }
                 "go_to_full_step_position_status" => {
-                    rt::Ok(
-                        Self::GoToFullStepPositionStatus(
-                            request::GoToFullStepPositionStatus,
-                        ),
-                    )
+                    Self::GoToFullStepPositionStatus(request::GoToFullStepPositionStatus)
                 }
                 "move_full_steps" => {
-                    rt::Ok(
-                        Self::MoveFullSteps(request::MoveFullSteps {
-                            steps: rt::get(&mut field, "steps")?,
-                        }),
-                    )
+                    Self::MoveFullSteps(request::MoveFullSteps {
+                        steps: rt::get(&mut field, "steps")?,
+                    })
                 }
                 "move_full_steps_status" => {
-                    rt::Ok(Self::MoveFullStepsStatus(request::MoveFullStepsStatus))
+                    Self::MoveFullStepsStatus(request::MoveFullStepsStatus)
                 }
-                "go_to_cmin" => rt::Ok(Self::GoToCmin(request::GoToCmin)),
-                "go_to_cmin_status" => {
-                    rt::Ok(Self::GoToCminStatus(request::GoToCminStatus))
-                }
-                "go_to_cmax" => rt::Ok(Self::GoToCmax(request::GoToCmax)),
-                "go_to_cmax_status" => {
-                    rt::Ok(Self::GoToCmaxStatus(request::GoToCmaxStatus))
-                }
+                "go_to_cmin" => Self::GoToCmin(request::GoToCmin),
+                "go_to_cmin_status" => Self::GoToCminStatus(request::GoToCminStatus),
+                "go_to_cmax" => Self::GoToCmax(request::GoToCmax),
+                "go_to_cmax_status" => Self::GoToCmaxStatus(request::GoToCmaxStatus),
                 "go_to_micro_step_position" => {
-                    rt::Ok(
-                        Self::GoToMicroStepPosition(request::GoToMicroStepPosition {
-                            target: rt::get(&mut field, "target")?,
-                        }),
-                    )
+                    Self::GoToMicroStepPosition(request::GoToMicroStepPosition {
+                        target: rt::get(&mut field, "target")?,
+                    })
                 }
                 "go_to_micro_step_position_status" => {
-                    rt::Ok(
-                        Self::GoToMicroStepPositionStatus(
-                            request::GoToMicroStepPositionStatus,
-                        ),
+                    Self::GoToMicroStepPositionStatus(
+                        request::GoToMicroStepPositionStatus,
                     )
                 }
                 "move_micro_steps" => {
-                    rt::Ok(
-                        Self::MoveMicroSteps(request::MoveMicroSteps {
-                            steps: rt::get(&mut field, "steps")?,
-                        }),
-                    )
+                    Self::MoveMicroSteps(request::MoveMicroSteps {
+                        steps: rt::get(&mut field, "steps")?,
+                    })
                 }
                 "move_micro_steps_status" => {
-                    rt::Ok(Self::MoveMicroStepsStatus(request::MoveMicroStepsStatus))
+                    Self::MoveMicroStepsStatus(request::MoveMicroStepsStatus)
                 }
                 "go_to_stored_position" => {
-                    rt::Ok(
-                        Self::GoToStoredPosition(request::GoToStoredPosition {
-                            index: rt::get(&mut field, "index")?,
-                        }),
-                    )
+                    Self::GoToStoredPosition(request::GoToStoredPosition {
+                        index: rt::get(&mut field, "index")?,
+                    })
                 }
                 "go_to_stored_position_status" => {
-                    rt::Ok(
-                        Self::GoToStoredPositionStatus(request::GoToStoredPositionStatus),
-                    )
+                    Self::GoToStoredPositionStatus(request::GoToStoredPositionStatus)
                 }
                 "set_acceleration_speed_index" => {
-                    rt::Ok(
-                        Self::SetAccelerationSpeedIndex(request::SetAccelerationSpeedIndex {
-                            acceleration_index: rt::get(
-                                &mut field,
-                                "acceleration_index",
-                            )?,
-                            speed_index: rt::get(&mut field, "speed_index")?,
-                        }),
-                    )
+                    Self::SetAccelerationSpeedIndex(request::SetAccelerationSpeedIndex {
+                        acceleration_index: rt::get(&mut field, "acceleration_index")?,
+                        speed_index: rt::get(&mut field, "speed_index")?,
+                    })
                 }
                 "set_current" => {
-                    rt::Ok(
-                        Self::SetCurrent(request::SetCurrent {
-                            idle_current: rt::get(&mut field, "idle_current")?,
-                            drive_current: rt::get(&mut field, "drive_current")?,
-                        }),
-                    )
+                    Self::SetCurrent(request::SetCurrent {
+                        idle_current: rt::get(&mut field, "idle_current")?,
+                        drive_current: rt::get(&mut field, "drive_current")?,
+                    })
                 }
                 "set_slave_address" => {
-                    rt::Ok(
-                        Self::SetSlaveAddress(request::SetSlaveAddress {
-                            address: rt::get(&mut field, "address")?,
-                        }),
-                    )
+                    Self::SetSlaveAddress(request::SetSlaveAddress {
+                        address: rt::get(&mut field, "address")?,
+                    })
                 }
                 "set_baud_rate" => {
-                    rt::Ok(
-                        Self::SetBaudRate(request::SetBaudRate {
-                            baud_rate: BaudRateIndex::from_raw(
-                                rt::get(&mut field, "baud_rate")?,
-                            ),
-                        }),
-                    )
+                    Self::SetBaudRate(request::SetBaudRate {
+                        baud_rate: BaudRateIndex::from_raw(
+                            rt::get(&mut field, "baud_rate")?,
+                        ),
+                    })
                 }
                 "set_lower_customer_limit" => {
-                    rt::Ok(
-                        Self::SetLowerCustomerLimit(request::SetLowerCustomerLimit {
-                            limit: Capacitance::from_raw(rt::get(&mut field, "limit")?),
-                        }),
-                    )
+                    Self::SetLowerCustomerLimit(request::SetLowerCustomerLimit {
+                        limit: Capacitance::from_raw(rt::get(&mut field, "limit")?),
+                    })
                 }
                 "set_upper_customer_limit" => {
-                    rt::Ok(
-                        Self::SetUpperCustomerLimit(request::SetUpperCustomerLimit {
-                            limit: Capacitance::from_raw(rt::get(&mut field, "limit")?),
-                        }),
-                    )
+                    Self::SetUpperCustomerLimit(request::SetUpperCustomerLimit {
+                        limit: Capacitance::from_raw(rt::get(&mut field, "limit")?),
+                    })
                 }
                 "store_indexed_position" => {
-                    rt::Ok(
-                        Self::StoreIndexedPosition(request::StoreIndexedPosition {
-                            index: rt::get(&mut field, "index")?,
-                            position: rt::get(&mut field, "position")?,
-                        }),
-                    )
+                    Self::StoreIndexedPosition(request::StoreIndexedPosition {
+                        index: rt::get(&mut field, "index")?,
+                        position: rt::get(&mut field, "position")?,
+                    })
                 }
                 "set_mode_of_operation" => {
-                    rt::Ok(
-                        Self::SetModeOfOperation(request::SetModeOfOperation {
-                            mode: ModeOfOperation::from_raw(rt::get(&mut field, "mode")?),
-                        }),
-                    )
+                    Self::SetModeOfOperation(request::SetModeOfOperation {
+                        mode: ModeOfOperation::from_raw(rt::get(&mut field, "mode")?),
+                    })
                 }
                 "get_actual_capacitance" => {
-                    rt::Ok(Self::GetActualCapacitance(request::GetActualCapacitance))
+                    Self::GetActualCapacitance(request::GetActualCapacitance)
                 }
                 "get_actual_full_step_position" => {
-                    rt::Ok(
-                        Self::GetActualFullStepPosition(
-                            request::GetActualFullStepPosition,
-                        ),
-                    )
+                    Self::GetActualFullStepPosition(request::GetActualFullStepPosition)
                 }
                 "get_minimum_capacitance" => {
-                    rt::Ok(Self::GetMinimumCapacitance(request::GetMinimumCapacitance))
+                    Self::GetMinimumCapacitance(request::GetMinimumCapacitance)
                 }
                 "get_maximum_capacitance" => {
-                    rt::Ok(Self::GetMaximumCapacitance(request::GetMaximumCapacitance))
+                    Self::GetMaximumCapacitance(request::GetMaximumCapacitance)
                 }
                 "get_acceleration_speed" => {
-                    rt::Ok(Self::GetAccelerationSpeed(request::GetAccelerationSpeed))
+                    Self::GetAccelerationSpeed(request::GetAccelerationSpeed)
                 }
-                "get_status" => rt::Ok(Self::GetStatus(request::GetStatus)),
+                "get_status" => Self::GetStatus(request::GetStatus),
                 "get_c_curve_indexed_full_step_capacitance" => {
-                    rt::Ok(
-                        Self::GetCCurveIndexedFullStepCapacitance(request::GetCCurveIndexedFullStepCapacitance {
-                            index: rt::get(&mut field, "index")?,
-                        }),
-                    )
+                    Self::GetCCurveIndexedFullStepCapacitance(request::GetCCurveIndexedFullStepCapacitance {
+                        index: rt::get(&mut field, "index")?,
+                    })
                 }
                 "get_controller_temperature" => {
-                    rt::Ok(
-                        Self::GetControllerTemperature(request::GetControllerTemperature),
-                    )
+                    Self::GetControllerTemperature(request::GetControllerTemperature)
                 }
                 "get_micro_step_position" => {
-                    rt::Ok(Self::GetMicroStepPosition(request::GetMicroStepPosition))
+                    Self::GetMicroStepPosition(request::GetMicroStepPosition)
                 }
                 "get_firmware_version" => {
-                    rt::Ok(Self::GetFirmwareVersion(request::GetFirmwareVersion))
+                    Self::GetFirmwareVersion(request::GetFirmwareVersion)
                 }
-                "get_serial_number" => {
-                    rt::Ok(Self::GetSerialNumber(request::GetSerialNumber))
-                }
-                "get_cmin_nom" => rt::Ok(Self::GetCminNom(request::GetCminNom)),
-                "get_cmax_nom" => rt::Ok(Self::GetCmaxNom(request::GetCmaxNom)),
+                "get_serial_number" => Self::GetSerialNumber(request::GetSerialNumber),
+                "get_cmin_nom" => Self::GetCminNom(request::GetCminNom),
+                "get_cmax_nom" => Self::GetCmaxNom(request::GetCmaxNom),
                 "get_lower_customer_limit" => {
-                    rt::Ok(Self::GetLowerCustomerLimit(request::GetLowerCustomerLimit))
+                    Self::GetLowerCustomerLimit(request::GetLowerCustomerLimit)
                 }
                 "get_upper_customer_limit" => {
-                    rt::Ok(Self::GetUpperCustomerLimit(request::GetUpperCustomerLimit))
+                    Self::GetUpperCustomerLimit(request::GetUpperCustomerLimit)
                 }
                 "get_lower_factory_limit" => {
-                    rt::Ok(Self::GetLowerFactoryLimit(request::GetLowerFactoryLimit))
+                    Self::GetLowerFactoryLimit(request::GetLowerFactoryLimit)
                 }
                 "get_upper_factory_limit" => {
-                    rt::Ok(Self::GetUpperFactoryLimit(request::GetUpperFactoryLimit))
+                    Self::GetUpperFactoryLimit(request::GetUpperFactoryLimit)
                 }
                 "get_preset_capacitance" => {
-                    rt::Ok(Self::GetPresetCapacitance(request::GetPresetCapacitance))
+                    Self::GetPresetCapacitance(request::GetPresetCapacitance)
                 }
                 "get_preset_full_step_position" => {
-                    rt::Ok(
-                        Self::GetPresetFullStepPosition(
-                            request::GetPresetFullStepPosition,
-                        ),
-                    )
+                    Self::GetPresetFullStepPosition(request::GetPresetFullStepPosition)
                 }
                 "get_stored_full_step_position" => {
-                    rt::Ok(
-                        Self::GetStoredFullStepPosition(request::GetStoredFullStepPosition {
-                            index: rt::get(&mut field, "index")?,
-                        }),
-                    )
+                    Self::GetStoredFullStepPosition(request::GetStoredFullStepPosition {
+                        index: rt::get(&mut field, "index")?,
+                    })
                 }
                 "get_mode_of_operation" => {
-                    rt::Ok(Self::GetModeOfOperation(request::GetModeOfOperation))
+                    Self::GetModeOfOperation(request::GetModeOfOperation)
                 }
-                _ => rt::Err(rt::FieldError::UnknownMessage),
-            }
+                _ => return rt::Err(rt::FieldError::UnknownMessage),
+            };
+            rt::Ok(message)
         }
     }
     impl rt::Message for Request {
@@ -2473,258 +2415,194 @@ pub mod ub2 {
             name: &str,
             mut field: impl FnMut(&'static str) -> rt::Option<rt::FieldValue<'v>>,
         ) -> rt::Result<Self, rt::FieldError> {
-            match name {
-                "movement_started" => {
-                    rt::Ok(Self::MovementStarted(response::MovementStarted))
-                }
+            let message = match name {
+                "movement_started" => Self::MovementStarted(response::MovementStarted),
                 "movement_completed" => {
-                    rt::Ok(Self::MovementCompleted(response::MovementCompleted))
+                    Self::MovementCompleted(response::MovementCompleted)
                 }
                 "movement_not_completed" => {
-                    rt::Ok(Self::MovementNotCompleted(response::MovementNotCompleted))
+                    Self::MovementNotCompleted(response::MovementNotCompleted)
                 }
                 "movement_not_triggered" => {
-                    rt::Ok(Self::MovementNotTriggered(response::MovementNotTriggered))
+                    Self::MovementNotTriggered(response::MovementNotTriggered)
                 }
                 "movement_completed_with_step_loss" => {
-                    rt::Ok(
-                        Self::MovementCompletedWithStepLoss(response::MovementCompletedWithStepLoss {
-                            lost_micro_steps: rt::get(&mut field, "lost_micro_steps")?,
-                        }),
-                    )
+                    Self::MovementCompletedWithStepLoss(response::MovementCompletedWithStepLoss {
+                        lost_micro_steps: rt::get(&mut field, "lost_micro_steps")?,
+                    })
                 }
                 "nak_unknown_command" => {
-                    rt::Ok(Self::NakUnknownCommand(response::NakUnknownCommand))
+                    Self::NakUnknownCommand(response::NakUnknownCommand)
                 }
                 "nak_incompatible_status" => {
-                    rt::Ok(Self::NakIncompatibleStatus(response::NakIncompatibleStatus))
+                    Self::NakIncompatibleStatus(response::NakIncompatibleStatus)
                 }
                 "nak_checksum_error" => {
-                    rt::Ok(Self::NakChecksumError(response::NakChecksumError))
+                    Self::NakChecksumError(response::NakChecksumError)
                 }
-                "nak_limit_reached" => {
-                    rt::Ok(Self::NakLimitReached(response::NakLimitReached))
-                }
+                "nak_limit_reached" => Self::NakLimitReached(response::NakLimitReached),
                 "nak_index_out_of_range" => {
-                    rt::Ok(Self::NakIndexOutOfRange(response::NakIndexOutOfRange))
+                    Self::NakIndexOutOfRange(response::NakIndexOutOfRange)
                 }
                 "set_acceleration_speed_index_ack" => {
-                    rt::Ok(
-                        Self::SetAccelerationSpeedIndexAck(
-                            response::SetAccelerationSpeedIndexAck,
-                        ),
+                    Self::SetAccelerationSpeedIndexAck(
+                        response::SetAccelerationSpeedIndexAck,
                     )
                 }
-                "set_current_ack" => rt::Ok(Self::SetCurrentAck(response::SetCurrentAck)),
+                "set_current_ack" => Self::SetCurrentAck(response::SetCurrentAck),
                 "set_slave_address_ack" => {
-                    rt::Ok(Self::SetSlaveAddressAck(response::SetSlaveAddressAck))
+                    Self::SetSlaveAddressAck(response::SetSlaveAddressAck)
                 }
-                "set_baud_rate_ack" => {
-                    rt::Ok(Self::SetBaudRateAck(response::SetBaudRateAck))
-                }
+                "set_baud_rate_ack" => Self::SetBaudRateAck(response::SetBaudRateAck),
                 "set_lower_customer_limit_ack" => {
-                    rt::Ok(
-                        Self::SetLowerCustomerLimitAck(
-                            response::SetLowerCustomerLimitAck,
-                        ),
-                    )
+                    Self::SetLowerCustomerLimitAck(response::SetLowerCustomerLimitAck)
                 }
                 "set_upper_customer_limit_ack" => {
-                    rt::Ok(
-                        Self::SetUpperCustomerLimitAck(
-                            response::SetUpperCustomerLimitAck,
-                        ),
-                    )
+                    Self::SetUpperCustomerLimitAck(response::SetUpperCustomerLimitAck)
                 }
                 "store_indexed_position_ack" => {
-                    rt::Ok(
-                        Self::StoreIndexedPositionAck(response::StoreIndexedPositionAck),
-                    )
+                    Self::StoreIndexedPositionAck(response::StoreIndexedPositionAck)
                 }
                 "set_mode_of_operation_ack" => {
-                    rt::Ok(Self::SetModeOfOperationAck(response::SetModeOfOperationAck))
+                    Self::SetModeOfOperationAck(response::SetModeOfOperationAck)
                 }
                 "actual_capacitance" => {
-                    rt::Ok(
-                        Self::ActualCapacitance(response::ActualCapacitance {
-                            capacitance: Capacitance::from_raw(
-                                rt::get(&mut field, "capacitance")?,
-                            ),
-                        }),
-                    )
+                    Self::ActualCapacitance(response::ActualCapacitance {
+                        capacitance: Capacitance::from_raw(
+                            rt::get(&mut field, "capacitance")?,
+                        ),
+                    })
                 }
                 "actual_full_step_position" => {
-                    rt::Ok(
-                        Self::ActualFullStepPosition(response::ActualFullStepPosition {
-                            full_steps: rt::get(&mut field, "full_steps")?,
-                        }),
-                    )
+                    Self::ActualFullStepPosition(response::ActualFullStepPosition {
+                        full_steps: rt::get(&mut field, "full_steps")?,
+                    })
                 }
                 "minimum_capacitance" => {
-                    rt::Ok(
-                        Self::MinimumCapacitance(response::MinimumCapacitance {
-                            capacitance: Capacitance::from_raw(
-                                rt::get(&mut field, "capacitance")?,
-                            ),
-                        }),
-                    )
+                    Self::MinimumCapacitance(response::MinimumCapacitance {
+                        capacitance: Capacitance::from_raw(
+                            rt::get(&mut field, "capacitance")?,
+                        ),
+                    })
                 }
                 "maximum_capacitance" => {
-                    rt::Ok(
-                        Self::MaximumCapacitance(response::MaximumCapacitance {
-                            capacitance: Capacitance::from_raw(
-                                rt::get(&mut field, "capacitance")?,
-                            ),
-                        }),
-                    )
+                    Self::MaximumCapacitance(response::MaximumCapacitance {
+                        capacitance: Capacitance::from_raw(
+                            rt::get(&mut field, "capacitance")?,
+                        ),
+                    })
                 }
                 "acceleration_speed" => {
-                    rt::Ok(
-                        Self::AccelerationSpeed(response::AccelerationSpeed {
-                            acceleration_index: rt::get(
-                                &mut field,
-                                "acceleration_index",
-                            )?,
-                            speed_index: rt::get(&mut field, "speed_index")?,
-                        }),
-                    )
+                    Self::AccelerationSpeed(response::AccelerationSpeed {
+                        acceleration_index: rt::get(&mut field, "acceleration_index")?,
+                        speed_index: rt::get(&mut field, "speed_index")?,
+                    })
                 }
                 "status" => {
-                    rt::Ok(
-                        Self::Status(response::Status {
-                            error_bits: StatusErrorBits::from_raw(
-                                rt::get(&mut field, "error_bits")?,
-                            ),
-                            reserved: rt::get(&mut field, "reserved")?,
-                        }),
-                    )
+                    Self::Status(response::Status {
+                        error_bits: StatusErrorBits::from_raw(
+                            rt::get(&mut field, "error_bits")?,
+                        ),
+                        reserved: rt::get(&mut field, "reserved")?,
+                    })
                 }
                 "c_curve_entry" => {
-                    rt::Ok(
-                        Self::CCurveEntry(response::CCurveEntry {
-                            index: rt::get(&mut field, "index")?,
-                            full_steps: rt::get(&mut field, "full_steps")?,
-                            capacitance: Capacitance::from_raw(
-                                rt::get(&mut field, "capacitance")?,
-                            ),
-                        }),
-                    )
+                    Self::CCurveEntry(response::CCurveEntry {
+                        index: rt::get(&mut field, "index")?,
+                        full_steps: rt::get(&mut field, "full_steps")?,
+                        capacitance: Capacitance::from_raw(
+                            rt::get(&mut field, "capacitance")?,
+                        ),
+                    })
                 }
                 "controller_temperature" => {
-                    rt::Ok(
-                        Self::ControllerTemperature(response::ControllerTemperature {
-                            temperature: rt::get(&mut field, "temperature")?,
-                        }),
-                    )
+                    Self::ControllerTemperature(response::ControllerTemperature {
+                        temperature: rt::get(&mut field, "temperature")?,
+                    })
                 }
                 "micro_step_position" => {
-                    rt::Ok(
-                        Self::MicroStepPosition(response::MicroStepPosition {
-                            micro_steps: rt::get(&mut field, "micro_steps")?,
-                        }),
-                    )
+                    Self::MicroStepPosition(response::MicroStepPosition {
+                        micro_steps: rt::get(&mut field, "micro_steps")?,
+                    })
                 }
                 "firmware_version" => {
-                    rt::Ok(
-                        Self::FirmwareVersion(response::FirmwareVersion {
-                            firmware_version: rt::text(&mut field, "firmware_version")?,
-                        }),
-                    )
+                    Self::FirmwareVersion(response::FirmwareVersion {
+                        firmware_version: rt::text(&mut field, "firmware_version")?,
+                    })
                 }
                 "serial_number" => {
-                    rt::Ok(
-                        Self::SerialNumber(response::SerialNumber {
-                            serial_number: rt::text(&mut field, "serial_number")?,
-                        }),
-                    )
+                    Self::SerialNumber(response::SerialNumber {
+                        serial_number: rt::text(&mut field, "serial_number")?,
+                    })
                 }
                 "cmin_nom" => {
-                    rt::Ok(
-                        Self::CminNom(response::CminNom {
-                            capacitance: Capacitance::from_raw(
-                                rt::get(&mut field, "capacitance")?,
-                            ),
-                        }),
-                    )
+                    Self::CminNom(response::CminNom {
+                        capacitance: Capacitance::from_raw(
+                            rt::get(&mut field, "capacitance")?,
+                        ),
+                    })
                 }
                 "cmax_nom" => {
-                    rt::Ok(
-                        Self::CmaxNom(response::CmaxNom {
-                            capacitance: Capacitance::from_raw(
-                                rt::get(&mut field, "capacitance")?,
-                            ),
-                        }),
-                    )
+                    Self::CmaxNom(response::CmaxNom {
+                        capacitance: Capacitance::from_raw(
+                            rt::get(&mut field, "capacitance")?,
+                        ),
+                    })
                 }
                 "lower_customer_limit" => {
-                    rt::Ok(
-                        Self::LowerCustomerLimit(response::LowerCustomerLimit {
-                            capacitance: Capacitance::from_raw(
-                                rt::get(&mut field, "capacitance")?,
-                            ),
-                        }),
-                    )
+                    Self::LowerCustomerLimit(response::LowerCustomerLimit {
+                        capacitance: Capacitance::from_raw(
+                            rt::get(&mut field, "capacitance")?,
+                        ),
+                    })
                 }
                 "upper_customer_limit" => {
-                    rt::Ok(
-                        Self::UpperCustomerLimit(response::UpperCustomerLimit {
-                            capacitance: Capacitance::from_raw(
-                                rt::get(&mut field, "capacitance")?,
-                            ),
-                        }),
-                    )
+                    Self::UpperCustomerLimit(response::UpperCustomerLimit {
+                        capacitance: Capacitance::from_raw(
+                            rt::get(&mut field, "capacitance")?,
+                        ),
+                    })
                 }
                 "lower_factory_limit" => {
-                    rt::Ok(
-                        Self::LowerFactoryLimit(response::LowerFactoryLimit {
-                            capacitance: Capacitance::from_raw(
-                                rt::get(&mut field, "capacitance")?,
-                            ),
-                        }),
-                    )
+                    Self::LowerFactoryLimit(response::LowerFactoryLimit {
+                        capacitance: Capacitance::from_raw(
+                            rt::get(&mut field, "capacitance")?,
+                        ),
+                    })
                 }
                 "upper_factory_limit" => {
-                    rt::Ok(
-                        Self::UpperFactoryLimit(response::UpperFactoryLimit {
-                            capacitance: Capacitance::from_raw(
-                                rt::get(&mut field, "capacitance")?,
-                            ),
-                        }),
-                    )
+                    Self::UpperFactoryLimit(response::UpperFactoryLimit {
+                        capacitance: Capacitance::from_raw(
+                            rt::get(&mut field, "capacitance")?,
+                        ),
+                    })
                 }
                 "preset_capacitance" => {
-                    rt::Ok(
-                        Self::PresetCapacitance(response::PresetCapacitance {
-                            capacitance: Capacitance::from_raw(
-                                rt::get(&mut field, "capacitance")?,
-                            ),
-                        }),
-                    )
+                    Self::PresetCapacitance(response::PresetCapacitance {
+                        capacitance: Capacitance::from_raw(
+                            rt::get(&mut field, "capacitance")?,
+                        ),
+                    })
                 }
                 "preset_full_step_position" => {
-                    rt::Ok(
-                        Self::PresetFullStepPosition(response::PresetFullStepPosition {
-                            full_steps: rt::get(&mut field, "full_steps")?,
-                        }),
-                    )
+                    Self::PresetFullStepPosition(response::PresetFullStepPosition {
+                        full_steps: rt::get(&mut field, "full_steps")?,
+                    })
                 }
                 "stored_full_step_position" => {
-                    rt::Ok(
-                        Self::StoredFullStepPosition(response::StoredFullStepPosition {
-                            index: rt::get(&mut field, "index")?,
-                            full_steps: rt::get(&mut field, "full_steps")?,
-                        }),
-                    )
+                    Self::StoredFullStepPosition(response::StoredFullStepPosition {
+                        index: rt::get(&mut field, "index")?,
+                        full_steps: rt::get(&mut field, "full_steps")?,
+                    })
                 }
                 "actual_mode_of_operation" => {
-                    rt::Ok(
-                        Self::ActualModeOfOperation(response::ActualModeOfOperation {
-                            mode: ModeOfOperation::from_raw(rt::get(&mut field, "mode")?),
-                        }),
-                    )
+                    Self::ActualModeOfOperation(response::ActualModeOfOperation {
+                        mode: ModeOfOperation::from_raw(rt::get(&mut field, "mode")?),
+                    })
                 }
-                _ => rt::Err(rt::FieldError::UnknownMessage),
-            }
+                _ => return rt::Err(rt::FieldError::UnknownMessage),
+            };
+            rt::Ok(message)
         }
     }
     impl rt::Message for Response {

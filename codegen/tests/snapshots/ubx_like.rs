@@ -305,22 +305,19 @@ pub mod ubx_like {
             name: &str,
             mut field: impl FnMut(&'static str) -> rt::Option<rt::FieldValue<'v>>,
         ) -> rt::Result<Self, rt::FieldError> {
-            match name {
-                "poll_rate" => rt::Ok(Self::PollRate(request::PollRate)),
+            let message = match name {
+                "poll_rate" => Self::PollRate(request::PollRate),
                 "set_rate" => {
-                    rt::Ok(
-                        Self::SetRate(request::SetRate {
-                            meas_rate: rt::get(&mut field, "meas_rate")?,
-                            nav_rate: rt::get(&mut field, "nav_rate")?,
-                            time_ref: TimeRef::from_raw(rt::get(&mut field, "time_ref")?),
-                        }),
-                    )
+                    Self::SetRate(request::SetRate {
+                        meas_rate: rt::get(&mut field, "meas_rate")?,
+                        nav_rate: rt::get(&mut field, "nav_rate")?,
+                        time_ref: TimeRef::from_raw(rt::get(&mut field, "time_ref")?),
+                    })
                 }
-                "poll_satellites" => {
-                    rt::Ok(Self::PollSatellites(request::PollSatellites))
-                }
-                _ => rt::Err(rt::FieldError::UnknownMessage),
-            }
+                "poll_satellites" => Self::PollSatellites(request::PollSatellites),
+                _ => return rt::Err(rt::FieldError::UnknownMessage),
+            };
+            rt::Ok(message)
         }
     }
     impl rt::Message for Request {
@@ -777,43 +774,36 @@ pub mod ubx_like {
             name: &str,
             mut field: impl FnMut(&'static str) -> rt::Option<rt::FieldValue<'v>>,
         ) -> rt::Result<Self, rt::FieldError> {
-            match name {
+            let message = match name {
                 "rate" => {
-                    rt::Ok(
-                        Self::Rate(response::Rate {
-                            meas_rate: rt::get(&mut field, "meas_rate")?,
-                            nav_rate: rt::get(&mut field, "nav_rate")?,
-                            time_ref: TimeRef::from_raw(rt::get(&mut field, "time_ref")?),
-                        }),
-                    )
+                    Self::Rate(response::Rate {
+                        meas_rate: rt::get(&mut field, "meas_rate")?,
+                        nav_rate: rt::get(&mut field, "nav_rate")?,
+                        time_ref: TimeRef::from_raw(rt::get(&mut field, "time_ref")?),
+                    })
                 }
                 "ack" => {
-                    rt::Ok(
-                        Self::Ack(response::Ack {
-                            class_id: rt::get(&mut field, "class_id")?,
-                            msg_id: rt::get(&mut field, "msg_id")?,
-                        }),
-                    )
+                    Self::Ack(response::Ack {
+                        class_id: rt::get(&mut field, "class_id")?,
+                        msg_id: rt::get(&mut field, "msg_id")?,
+                    })
                 }
                 "nak" => {
-                    rt::Ok(
-                        Self::Nak(response::Nak {
-                            class_id: rt::get(&mut field, "class_id")?,
-                            msg_id: rt::get(&mut field, "msg_id")?,
-                        }),
-                    )
+                    Self::Nak(response::Nak {
+                        class_id: rt::get(&mut field, "class_id")?,
+                        msg_id: rt::get(&mut field, "msg_id")?,
+                    })
                 }
                 "satellites" => {
-                    rt::Ok(
-                        Self::Satellites(response::Satellites {
-                            itow: rt::get(&mut field, "itow")?,
-                            reserved1: rt::get(&mut field, "reserved1")?,
-                            svs: rt::records::<SatellitesSvs, 80>(&mut field, "svs")?,
-                        }),
-                    )
+                    Self::Satellites(response::Satellites {
+                        itow: rt::get(&mut field, "itow")?,
+                        reserved1: rt::get(&mut field, "reserved1")?,
+                        svs: rt::records::<SatellitesSvs, 80>(&mut field, "svs")?,
+                    })
                 }
-                _ => rt::Err(rt::FieldError::UnknownMessage),
-            }
+                _ => return rt::Err(rt::FieldError::UnknownMessage),
+            };
+            rt::Ok(message)
         }
     }
     impl rt::Message for Response {

@@ -220,20 +220,17 @@ pub mod unaddressed {
             name: &str,
             mut field: impl FnMut(&'static str) -> rt::Option<rt::FieldValue<'v>>,
         ) -> rt::Result<Self, rt::FieldError> {
-            match name {
-                "read_temperature" => {
-                    rt::Ok(Self::ReadTemperature(request::ReadTemperature))
-                }
+            let message = match name {
+                "read_temperature" => Self::ReadTemperature(request::ReadTemperature),
                 "set_rate" => {
-                    rt::Ok(
-                        Self::SetRate(request::SetRate {
-                            rate: rt::get(&mut field, "rate")?,
-                        }),
-                    )
+                    Self::SetRate(request::SetRate {
+                        rate: rt::get(&mut field, "rate")?,
+                    })
                 }
-                "read_version" => rt::Ok(Self::ReadVersion(request::ReadVersion)),
-                _ => rt::Err(rt::FieldError::UnknownMessage),
-            }
+                "read_version" => Self::ReadVersion(request::ReadVersion),
+                _ => return rt::Err(rt::FieldError::UnknownMessage),
+            };
+            rt::Ok(message)
         }
     }
     impl rt::Message for Request {
@@ -453,26 +450,23 @@ pub mod unaddressed {
             name: &str,
             mut field: impl FnMut(&'static str) -> rt::Option<rt::FieldValue<'v>>,
         ) -> rt::Result<Self, rt::FieldError> {
-            match name {
+            let message = match name {
                 "temperature" => {
-                    rt::Ok(
-                        Self::Temperature(response::Temperature {
-                            temperature: Centidegrees::from_raw(
-                                rt::get(&mut field, "temperature")?,
-                            ),
-                        }),
-                    )
+                    Self::Temperature(response::Temperature {
+                        temperature: Centidegrees::from_raw(
+                            rt::get(&mut field, "temperature")?,
+                        ),
+                    })
                 }
-                "ack" => rt::Ok(Self::Ack(response::Ack)),
+                "ack" => Self::Ack(response::Ack),
                 "version" => {
-                    rt::Ok(
-                        Self::Version(response::Version {
-                            version: rt::text(&mut field, "version")?,
-                        }),
-                    )
+                    Self::Version(response::Version {
+                        version: rt::text(&mut field, "version")?,
+                    })
                 }
-                _ => rt::Err(rt::FieldError::UnknownMessage),
-            }
+                _ => return rt::Err(rt::FieldError::UnknownMessage),
+            };
+            rt::Ok(message)
         }
     }
     impl rt::Message for Response {

@@ -255,33 +255,28 @@ pub mod vario {
             name: &str,
             mut field: impl FnMut(&'static str) -> rt::Option<rt::FieldValue<'v>>,
         ) -> rt::Result<Self, rt::FieldError> {
-            match name {
+            let message = match name {
                 "read" => {
-                    rt::Ok(
-                        Self::Read(request::Read {
-                            first: rt::get(&mut field, "first")?,
-                            quantity: rt::get(&mut field, "quantity")?,
-                        }),
-                    )
+                    Self::Read(request::Read {
+                        first: rt::get(&mut field, "first")?,
+                        quantity: rt::get(&mut field, "quantity")?,
+                    })
                 }
                 "write" => {
-                    rt::Ok(
-                        Self::Write(request::Write {
-                            quantity: rt::get(&mut field, "quantity")?,
-                            values: rt::list::<u16, 16>(&mut field, "values", 0, 65535)?,
-                        }),
-                    )
+                    Self::Write(request::Write {
+                        quantity: rt::get(&mut field, "quantity")?,
+                        values: rt::list::<u16, 16>(&mut field, "values", 0, 65535)?,
+                    })
                 }
                 "stamp" => {
-                    rt::Ok(
-                        Self::Stamp(request::Stamp {
-                            ticks: rt::field_int("ticks", field("ticks"), 0, 16777215)?
-                                as u32,
-                        }),
-                    )
+                    Self::Stamp(request::Stamp {
+                        ticks: rt::field_int("ticks", field("ticks"), 0, 16777215)?
+                            as u32,
+                    })
                 }
-                _ => rt::Err(rt::FieldError::UnknownMessage),
-            }
+                _ => return rt::Err(rt::FieldError::UnknownMessage),
+            };
+            rt::Ok(message)
         }
     }
     impl rt::Message for Request {
@@ -517,30 +512,25 @@ pub mod vario {
             name: &str,
             mut field: impl FnMut(&'static str) -> rt::Option<rt::FieldValue<'v>>,
         ) -> rt::Result<Self, rt::FieldError> {
-            match name {
+            let message = match name {
                 "read_reply" => {
-                    rt::Ok(
-                        Self::ReadReply(response::ReadReply {
-                            values: rt::list::<u16, 16>(&mut field, "values", 0, 65535)?,
-                        }),
-                    )
+                    Self::ReadReply(response::ReadReply {
+                        values: rt::list::<u16, 16>(&mut field, "values", 0, 65535)?,
+                    })
                 }
                 "read_error" => {
-                    rt::Ok(
-                        Self::ReadError(response::ReadError {
-                            reason: rt::get(&mut field, "reason")?,
-                        }),
-                    )
+                    Self::ReadError(response::ReadError {
+                        reason: rt::get(&mut field, "reason")?,
+                    })
                 }
                 "write_reply" => {
-                    rt::Ok(
-                        Self::WriteReply(response::WriteReply {
-                            status: rt::get(&mut field, "status")?,
-                        }),
-                    )
+                    Self::WriteReply(response::WriteReply {
+                        status: rt::get(&mut field, "status")?,
+                    })
                 }
-                _ => rt::Err(rt::FieldError::UnknownMessage),
-            }
+                _ => return rt::Err(rt::FieldError::UnknownMessage),
+            };
+            rt::Ok(message)
         }
     }
     impl rt::Message for Response {

@@ -722,55 +722,44 @@ pub mod vesc {
             name: &str,
             mut field: impl FnMut(&'static str) -> rt::Option<rt::FieldValue<'v>>,
         ) -> rt::Result<Self, rt::FieldError> {
-            match name {
-                "fw_version" => rt::Ok(Self::FwVersion(request::FwVersion)),
+            let message = match name {
+                "fw_version" => Self::FwVersion(request::FwVersion),
                 "write_new_app_data" => {
-                    rt::Ok(
-                        Self::WriteNewAppData(request::WriteNewAppData {
-                            offset: rt::get(&mut field, "offset")?,
-                            data: rt::list::<u8, 512>(&mut field, "data", 0, 255)?,
-                        }),
-                    )
+                    Self::WriteNewAppData(request::WriteNewAppData {
+                        offset: rt::get(&mut field, "offset")?,
+                        data: rt::list::<u8, 512>(&mut field, "data", 0, 255)?,
+                    })
                 }
-                "get_values" => rt::Ok(Self::GetValues(request::GetValues)),
+                "get_values" => Self::GetValues(request::GetValues),
                 "set_duty" => {
-                    rt::Ok(
-                        Self::SetDuty(request::SetDuty {
-                            duty: Duty::from_raw(rt::get(&mut field, "duty")?),
-                        }),
-                    )
+                    Self::SetDuty(request::SetDuty {
+                        duty: Duty::from_raw(rt::get(&mut field, "duty")?),
+                    })
                 }
                 "set_current" => {
-                    rt::Ok(
-                        Self::SetCurrent(request::SetCurrent {
-                            current: Milliamps::from_raw(rt::get(&mut field, "current")?),
-                        }),
-                    )
+                    Self::SetCurrent(request::SetCurrent {
+                        current: Milliamps::from_raw(rt::get(&mut field, "current")?),
+                    })
                 }
                 "set_current_brake" => {
-                    rt::Ok(
-                        Self::SetCurrentBrake(request::SetCurrentBrake {
-                            current: Milliamps::from_raw(rt::get(&mut field, "current")?),
-                        }),
-                    )
+                    Self::SetCurrentBrake(request::SetCurrentBrake {
+                        current: Milliamps::from_raw(rt::get(&mut field, "current")?),
+                    })
                 }
                 "set_rpm" => {
-                    rt::Ok(
-                        Self::SetRpm(request::SetRpm {
-                            rpm: rt::get(&mut field, "rpm")?,
-                        }),
-                    )
+                    Self::SetRpm(request::SetRpm {
+                        rpm: rt::get(&mut field, "rpm")?,
+                    })
                 }
                 "set_pos" => {
-                    rt::Ok(
-                        Self::SetPos(request::SetPos {
-                            pos: MicroDegrees::from_raw(rt::get(&mut field, "pos")?),
-                        }),
-                    )
+                    Self::SetPos(request::SetPos {
+                        pos: MicroDegrees::from_raw(rt::get(&mut field, "pos")?),
+                    })
                 }
-                "alive" => rt::Ok(Self::Alive(request::Alive)),
-                _ => rt::Err(rt::FieldError::UnknownMessage),
-            }
+                "alive" => Self::Alive(request::Alive),
+                _ => return rt::Err(rt::FieldError::UnknownMessage),
+            };
+            rt::Ok(message)
         }
     }
     impl rt::Message for Request {
@@ -1197,79 +1186,70 @@ pub mod vesc {
             name: &str,
             mut field: impl FnMut(&'static str) -> rt::Option<rt::FieldValue<'v>>,
         ) -> rt::Result<Self, rt::FieldError> {
-            match name {
+            let message = match name {
                 "fw_version_reply" => {
-                    rt::Ok(
-                        Self::FwVersionReply(response::FwVersionReply {
-                            fw_major: rt::get(&mut field, "fw_major")?,
-                            fw_minor: rt::get(&mut field, "fw_minor")?,
-                            rest: rt::list::<u8, 60>(&mut field, "rest", 0, 255)?,
-                        }),
-                    )
+                    Self::FwVersionReply(response::FwVersionReply {
+                        fw_major: rt::get(&mut field, "fw_major")?,
+                        fw_minor: rt::get(&mut field, "fw_minor")?,
+                        rest: rt::list::<u8, 60>(&mut field, "rest", 0, 255)?,
+                    })
                 }
                 "write_new_app_data_reply" => {
-                    rt::Ok(
-                        Self::WriteNewAppDataReply(response::WriteNewAppDataReply {
-                            ok: rt::get(&mut field, "ok")?,
-                            offset: rt::get(&mut field, "offset")?,
-                        }),
-                    )
+                    Self::WriteNewAppDataReply(response::WriteNewAppDataReply {
+                        ok: rt::get(&mut field, "ok")?,
+                        offset: rt::get(&mut field, "offset")?,
+                    })
                 }
                 "get_values_reply" => {
-                    rt::Ok(
-                        Self::GetValuesReply(response::GetValuesReply {
-                            temp_mos1: DeciCelsius::from_raw(
-                                rt::get(&mut field, "temp_mos1")?,
-                            ),
-                            temp_mos2: DeciCelsius::from_raw(
-                                rt::get(&mut field, "temp_mos2")?,
-                            ),
-                            temp_mos3: DeciCelsius::from_raw(
-                                rt::get(&mut field, "temp_mos3")?,
-                            ),
-                            temp_mos4: DeciCelsius::from_raw(
-                                rt::get(&mut field, "temp_mos4")?,
-                            ),
-                            temp_mos5: DeciCelsius::from_raw(
-                                rt::get(&mut field, "temp_mos5")?,
-                            ),
-                            temp_mos6: DeciCelsius::from_raw(
-                                rt::get(&mut field, "temp_mos6")?,
-                            ),
-                            temp_pcb: DeciCelsius::from_raw(
-                                rt::get(&mut field, "temp_pcb")?,
-                            ),
-                            current_motor: CentiAmps::from_raw(
-                                rt::get(&mut field, "current_motor")?,
-                            ),
-                            current_in: CentiAmps::from_raw(
-                                rt::get(&mut field, "current_in")?,
-                            ),
-                            duty_now: PerMille::from_raw(
-                                rt::get(&mut field, "duty_now")?,
-                            ),
-                            rpm: rt::get(&mut field, "rpm")?,
-                            v_in: DeciVolts::from_raw(rt::get(&mut field, "v_in")?),
-                            amp_hours: AmpHours::from_raw(
-                                rt::get(&mut field, "amp_hours")?,
-                            ),
-                            amp_hours_charged: AmpHours::from_raw(
-                                rt::get(&mut field, "amp_hours_charged")?,
-                            ),
-                            watt_hours: WattHours::from_raw(
-                                rt::get(&mut field, "watt_hours")?,
-                            ),
-                            watt_hours_charged: WattHours::from_raw(
-                                rt::get(&mut field, "watt_hours_charged")?,
-                            ),
-                            tachometer: rt::get(&mut field, "tachometer")?,
-                            tachometer_abs: rt::get(&mut field, "tachometer_abs")?,
-                            mc_fault_code: rt::get(&mut field, "mc_fault_code")?,
-                        }),
-                    )
+                    Self::GetValuesReply(response::GetValuesReply {
+                        temp_mos1: DeciCelsius::from_raw(
+                            rt::get(&mut field, "temp_mos1")?,
+                        ),
+                        temp_mos2: DeciCelsius::from_raw(
+                            rt::get(&mut field, "temp_mos2")?,
+                        ),
+                        temp_mos3: DeciCelsius::from_raw(
+                            rt::get(&mut field, "temp_mos3")?,
+                        ),
+                        temp_mos4: DeciCelsius::from_raw(
+                            rt::get(&mut field, "temp_mos4")?,
+                        ),
+                        temp_mos5: DeciCelsius::from_raw(
+                            rt::get(&mut field, "temp_mos5")?,
+                        ),
+                        temp_mos6: DeciCelsius::from_raw(
+                            rt::get(&mut field, "temp_mos6")?,
+                        ),
+                        temp_pcb: DeciCelsius::from_raw(
+                            rt::get(&mut field, "temp_pcb")?,
+                        ),
+                        current_motor: CentiAmps::from_raw(
+                            rt::get(&mut field, "current_motor")?,
+                        ),
+                        current_in: CentiAmps::from_raw(
+                            rt::get(&mut field, "current_in")?,
+                        ),
+                        duty_now: PerMille::from_raw(rt::get(&mut field, "duty_now")?),
+                        rpm: rt::get(&mut field, "rpm")?,
+                        v_in: DeciVolts::from_raw(rt::get(&mut field, "v_in")?),
+                        amp_hours: AmpHours::from_raw(rt::get(&mut field, "amp_hours")?),
+                        amp_hours_charged: AmpHours::from_raw(
+                            rt::get(&mut field, "amp_hours_charged")?,
+                        ),
+                        watt_hours: WattHours::from_raw(
+                            rt::get(&mut field, "watt_hours")?,
+                        ),
+                        watt_hours_charged: WattHours::from_raw(
+                            rt::get(&mut field, "watt_hours_charged")?,
+                        ),
+                        tachometer: rt::get(&mut field, "tachometer")?,
+                        tachometer_abs: rt::get(&mut field, "tachometer_abs")?,
+                        mc_fault_code: rt::get(&mut field, "mc_fault_code")?,
+                    })
                 }
-                _ => rt::Err(rt::FieldError::UnknownMessage),
-            }
+                _ => return rt::Err(rt::FieldError::UnknownMessage),
+            };
+            rt::Ok(message)
         }
     }
     impl rt::Message for Response {

@@ -499,33 +499,27 @@ pub mod xbee_api2 {
             name: &str,
             mut field: impl FnMut(&'static str) -> rt::Option<rt::FieldValue<'v>>,
         ) -> rt::Result<Self, rt::FieldError> {
-            match name {
+            let message = match name {
                 "at_command" => {
-                    rt::Ok(
-                        Self::AtCommand(request::AtCommand {
-                            frame_id: rt::get(&mut field, "frame_id")?,
-                            command: rt::text(&mut field, "command")?,
-                            parameter: rt::list::<
-                                u8,
-                                20,
-                            >(&mut field, "parameter", 0, 255)?,
-                        }),
-                    )
+                    Self::AtCommand(request::AtCommand {
+                        frame_id: rt::get(&mut field, "frame_id")?,
+                        command: rt::text(&mut field, "command")?,
+                        parameter: rt::list::<u8, 20>(&mut field, "parameter", 0, 255)?,
+                    })
                 }
                 "transmit_request" => {
-                    rt::Ok(
-                        Self::TransmitRequest(request::TransmitRequest {
-                            frame_id: rt::get(&mut field, "frame_id")?,
-                            destination64: rt::get(&mut field, "destination64")?,
-                            destination16: rt::get(&mut field, "destination16")?,
-                            radius: rt::get(&mut field, "radius")?,
-                            options: rt::get(&mut field, "options")?,
-                            data: rt::list::<u8, 72>(&mut field, "data", 0, 255)?,
-                        }),
-                    )
+                    Self::TransmitRequest(request::TransmitRequest {
+                        frame_id: rt::get(&mut field, "frame_id")?,
+                        destination64: rt::get(&mut field, "destination64")?,
+                        destination16: rt::get(&mut field, "destination16")?,
+                        radius: rt::get(&mut field, "radius")?,
+                        options: rt::get(&mut field, "options")?,
+                        data: rt::list::<u8, 72>(&mut field, "data", 0, 255)?,
+                    })
                 }
-                _ => rt::Err(rt::FieldError::UnknownMessage),
-            }
+                _ => return rt::Err(rt::FieldError::UnknownMessage),
+            };
+            rt::Ok(message)
         }
     }
     impl rt::Message for Request {
@@ -878,49 +872,42 @@ pub mod xbee_api2 {
             name: &str,
             mut field: impl FnMut(&'static str) -> rt::Option<rt::FieldValue<'v>>,
         ) -> rt::Result<Self, rt::FieldError> {
-            match name {
+            let message = match name {
                 "at_response" => {
-                    rt::Ok(
-                        Self::AtResponse(response::AtResponse {
-                            frame_id: rt::get(&mut field, "frame_id")?,
-                            command: rt::text(&mut field, "command")?,
-                            status: AtStatus::from_raw(rt::get(&mut field, "status")?),
-                            data: rt::list::<u8, 20>(&mut field, "data", 0, 255)?,
-                        }),
-                    )
+                    Self::AtResponse(response::AtResponse {
+                        frame_id: rt::get(&mut field, "frame_id")?,
+                        command: rt::text(&mut field, "command")?,
+                        status: AtStatus::from_raw(rt::get(&mut field, "status")?),
+                        data: rt::list::<u8, 20>(&mut field, "data", 0, 255)?,
+                    })
                 }
                 "transmit_status" => {
-                    rt::Ok(
-                        Self::TransmitStatus(response::TransmitStatus {
-                            frame_id: rt::get(&mut field, "frame_id")?,
-                            destination16: rt::get(&mut field, "destination16")?,
-                            retries: rt::get(&mut field, "retries")?,
-                            delivery: DeliveryStatus::from_raw(
-                                rt::get(&mut field, "delivery")?,
-                            ),
-                            discovery: rt::get(&mut field, "discovery")?,
-                        }),
-                    )
+                    Self::TransmitStatus(response::TransmitStatus {
+                        frame_id: rt::get(&mut field, "frame_id")?,
+                        destination16: rt::get(&mut field, "destination16")?,
+                        retries: rt::get(&mut field, "retries")?,
+                        delivery: DeliveryStatus::from_raw(
+                            rt::get(&mut field, "delivery")?,
+                        ),
+                        discovery: rt::get(&mut field, "discovery")?,
+                    })
                 }
                 "modem_status" => {
-                    rt::Ok(
-                        Self::ModemStatus(response::ModemStatus {
-                            status: ModemStatus::from_raw(rt::get(&mut field, "status")?),
-                        }),
-                    )
+                    Self::ModemStatus(response::ModemStatus {
+                        status: ModemStatus::from_raw(rt::get(&mut field, "status")?),
+                    })
                 }
                 "receive_packet" => {
-                    rt::Ok(
-                        Self::ReceivePacket(response::ReceivePacket {
-                            source64: rt::get(&mut field, "source64")?,
-                            source16: rt::get(&mut field, "source16")?,
-                            options: rt::get(&mut field, "options")?,
-                            data: rt::list::<u8, 72>(&mut field, "data", 0, 255)?,
-                        }),
-                    )
+                    Self::ReceivePacket(response::ReceivePacket {
+                        source64: rt::get(&mut field, "source64")?,
+                        source16: rt::get(&mut field, "source16")?,
+                        options: rt::get(&mut field, "options")?,
+                        data: rt::list::<u8, 72>(&mut field, "data", 0, 255)?,
+                    })
                 }
-                _ => rt::Err(rt::FieldError::UnknownMessage),
-            }
+                _ => return rt::Err(rt::FieldError::UnknownMessage),
+            };
+            rt::Ok(message)
         }
     }
     impl rt::Message for Response {
