@@ -414,7 +414,7 @@ fn sd_string_length_75_is_refused() {
         assert_eq!(
             e,
             DecodeError::OutOfRange {
-                field: &sd::response::ELECTRONIC_SERIAL_NUMBER_CHARACTER_STRING_LENGTH,
+                field: &sd::response::ElectronicSerialNumberCharacter::STRING_LENGTH_DESC,
                 offset: 3,
                 found: 75,
                 min: 0,

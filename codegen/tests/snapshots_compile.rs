@@ -1369,7 +1369,7 @@ fn bcd_snapshot_agrees_with_the_interpreter() {
     assert_eq!(
         refused,
         DecodeError::NotBcd {
-            field: &bcd_meter::response::ENERGY_ENERGY,
+            field: &bcd_meter::response::Energy::ENERGY_DESC,
             offset: 3,
             found: 0x0012_345A
         }

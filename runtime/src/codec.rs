@@ -33,10 +33,10 @@ pub use crate::LongLength;
 pub use crate::ShortForm;
 pub use crate::Truncation;
 pub use crate::{
-    crc, field_int, field_text, round, sum8, Ascii, Broadcast, Bus, Command, CommandKind,
-    DecodeError, Decoded, Elements, EncodeError, FieldDesc, FieldError, FieldValue, Framing,
-    Message, MessageDesc, NumKind, Preamble, Protocol, Record, RecordList, Repeated, Reply, Source,
-    Transactions, Transform,
+    crc, desc, field, field_int, field_text, round, sum8, Ascii, Broadcast, Bus, Command,
+    CommandKind, DecodeError, Decoded, Elements, EncodeError, FieldDesc, FieldError, FieldValue,
+    Framing, Message, MessageDesc, NumKind, Preamble, Protocol, Record, RecordList, Repeated,
+    Reply, Source, Transactions, Transform,
 };
 pub use crate::{BitsView, ListView};
 

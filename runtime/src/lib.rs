@@ -588,7 +588,8 @@ impl MessageDesc {
 
 /// A field (a sub-field, a repeated field) as refusals name it: its message's name and its
 /// own. Each generated module has one for each field its decoders refuse, a `const` beside its
-/// message's [`MessageDesc`] (`request::READ_COILS_QUANTITY`).
+/// message's [`MessageDesc`], both constants of the message's struct
+/// (`request::ReadCoils::QUANTITY_DESC`).
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
 pub struct FieldDesc {
     /// The name of the message holding it, in the spec.
@@ -604,6 +605,23 @@ impl FieldDesc {
     }
 }
 
+/// [`MessageDesc::new`], short enough that a generated message's `DESC` stays one line:
+/// `rt::desc(Self::NAME, 0x03, 1, &[8])`.
+pub const fn desc(
+    name: &'static str,
+    code: u32,
+    code_len: u8,
+    lengths: &'static [usize],
+) -> MessageDesc {
+    MessageDesc::new(name, code, code_len, lengths)
+}
+
+/// [`FieldDesc::new`], short enough that a generated field descriptor stays one line:
+/// `rt::field(Self::NAME, "quantity")`.
+pub const fn field(message: &'static str, name: &'static str) -> FieldDesc {
+    FieldDesc::new(message, name)
+}
+
 impl fmt::Display for FieldDesc {
     /// `message.field`, as refusals name a field.
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
@@ -616,7 +634,7 @@ impl fmt::Display for FieldDesc {
 /// A refusal names the message it concerns by its [`MessageDesc`] (a `&'static` constant of
 /// the generated module, `request::ReadCoils::DESC`), not by its name and numbers: building one
 /// stores a reference, and the error stays small; a field by its [`FieldDesc`]
-/// (`request::READ_COILS_QUANTITY`). Match on the descriptor's fields
+/// (`request::ReadCoils::QUANTITY_DESC`). Match on the descriptor's fields
 /// (`DecodeError::WrongLength { message, .. } if message.name == "read_coils"`) or compare it
 /// with the constant (`message == &request::ReadCoils::DESC`).
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]

@@ -123,6 +123,12 @@ pub(super) struct Ctx<'a> {
     pub(super) field_descs: std::cell::RefCell<Vec<(Direction, String, String, Ident)>>,
     /// Each direction's message structs, emitted in its `request`/`response` module.
     pub(super) structs: std::cell::RefCell<Vec<(Direction, TokenStream)>>,
+    /// Each message's `impl` (`messages::message_impl`): its direction and name, the struct's
+    /// path, its constants and its methods; emitted by `emit_descs` with the field
+    /// descriptors the refusals named.
+    #[allow(clippy::type_complexity)]
+    pub(super) impls:
+        std::cell::RefCell<Vec<(Direction, String, TokenStream, TokenStream, TokenStream)>>,
     /// Set while the borrowed views are emitted (`view.rs`): decode then lends each list as
     /// `rt::ListView`/`rt::BitsView` instead of copying it, and its functions take the
     /// frame as `&'a [u8]`.
@@ -207,41 +213,40 @@ impl<'a> Ctx<'a> {
             flag_raw,
             field_descs: std::cell::RefCell::new(Vec::new()),
             structs: std::cell::RefCell::new(Vec::new()),
+            impls: std::cell::RefCell::new(Vec::new()),
             view: std::cell::Cell::new(false),
         }
     }
 
-    /// `&request::READ_COILS_QUANTITY`: the descriptor of field (or sub-field) `name` of `m`,
-    /// emitted beside `m`'s own in its direction's module (`emit_descs`). Its constant is the
-    /// message's and the field's names upper-cased, joined by `_`, or by `__` where that is
-    /// already another constant's name.
+    /// `&request::ReadCoils::QUANTITY_DESC`: the descriptor of field (or sub-field) `name` of
+    /// `m`, a constant of `m`'s struct beside its `DESC` (`emit_descs`). Its constant is the
+    /// field's name upper-cased with `_DESC` after it (a record's field `list.field`:
+    /// `LIST_FIELD_DESC`), `__DESC` where another of the struct's constants takes that name.
     pub(super) fn field_desc(&self, m: &Message, name: &str) -> TokenStream {
         let dir = direction_module(m.direction);
+        let v = variant(m);
         let mut descs = self.field_descs.borrow_mut();
         let found = descs
             .iter()
             .find(|(d, mn, f, _)| *d == m.direction && *mn == m.name && f == name);
         if let Some((.., c)) = found {
-            return quote!(&#dir::#c);
+            return quote!(&#dir::#v::#c);
         }
-        // A record's field is named `list.field`: its constant `LIST_FIELD`.
-        let upper = |s: &str| s.to_uppercase().replace('.', "_");
-        let mut c = format!("{}_{}", upper(&m.name), upper(name));
+        let upper = name.to_uppercase().replace('.', "_");
+        let mut c = format!("{upper}_DESC");
+        let consts = struct_consts(m);
         let taken = |c: &str| {
-            self.p
-                .messages(m.direction)
-                .iter()
-                .any(|x| upper(&x.name) == c)
+            consts.iter().any(|k| k == c)
                 || descs
                     .iter()
-                    .any(|(d, _, _, k)| *d == m.direction && *k == c)
+                    .any(|(d, mn, _, k)| *d == m.direction && *mn == m.name && *k == c)
         };
         if taken(&c) {
-            c = format!("{}__{}", upper(&m.name), upper(name));
+            c = format!("{upper}__DESC");
         }
         let c = ident(&c);
         descs.push((m.direction, m.name.clone(), name.to_owned(), c.clone()));
-        quote!(&#dir::#c)
+        quote!(&#dir::#v::#c)
     }
 
     pub(super) fn kind(&self, leaf: &Leaf) -> Kind {
@@ -447,9 +452,12 @@ pub(super) fn read_wire(f: &Field, payload_at: usize) -> TokenStream {
 }
 
 /// The pattern binding every field of `m` to its `v_<name>` local (so that no spec name can
-/// shadow the generated code's own variables), or `Self::Name` without fields.
+/// shadow the generated code's own variables), or `Self::Name(_)` without fields.
 pub(super) fn binding(m: &Message, ls: &[Leaf]) -> TokenStream {
     let v = variant(m);
+    if ls.is_empty() {
+        return quote!(Self::#v(_));
+    }
     let own = own_binding(m, ls);
     quote!(Self::#v(#own))
 }
@@ -490,8 +498,13 @@ pub(super) fn leaf_doc(p: &Protocol, l: &Leaf) -> String {
     s.trim().to_owned()
 }
 
-/// The raw value of a typed value bound to `v`, of the type the value holds.
-pub(super) fn raw_of(ctx: &Ctx, l: &Leaf, v: &Ident) -> Option<(IntType, TokenStream)> {
+/// The raw value of a typed value `v` (a local, or a field read `m.quantity`), of the type the
+/// value holds.
+pub(super) fn raw_of(
+    ctx: &Ctx,
+    l: &Leaf,
+    v: &impl quote::ToTokens,
+) -> Option<(IntType, TokenStream)> {
     match ctx.kind(l) {
         Kind::Int(t) => Some((t, quote!(#v))),
         Kind::Bool => Some((IntType::covering(0, 1), quote!(#v as u8))),

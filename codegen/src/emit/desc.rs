@@ -1,30 +1,29 @@
 use super::*;
 
-/// The `request` and `response` modules: each message's struct (its `rt::MessageDesc`, its
-/// name, code and the frame lengths of its code, is its constant `DESC`:
-/// `request::ReadCoils::DESC`, [`message_desc_const`]), and an `rt::FieldDesc` for each field
-/// a refusal names
-/// (`request::READ_COILS_QUANTITY`, [`Ctx::field_desc`]), which the refusals point at
-/// (`rt::fixed`, `rt::in_range`, `rt::Group::end`, ...) instead of spelling names at every
-/// call. Emitted last, once every refusal has named its fields.
+/// Each message's `impl` (`messages::message_impl`: `NAME`, `CODE`, the lengths, `DESC`, its
+/// `rt::MessageDesc`, [`message_desc_const`], byte ranges, special values, `visit`, `encode`)
+/// with an `rt::FieldDesc` for each field a refusal names (`request::ReadCoils::QUANTITY_DESC`,
+/// [`Ctx::field_desc`]), which the refusals point at (`rt::fixed`, `rt::in_range`,
+/// `rt::Group::end`, ...) instead of spelling names at every call; then the `request` and
+/// `response` modules with the message structs. Emitted last, once every refusal has named its
+/// fields.
 pub(super) fn emit_descs(ctx: &Ctx) -> TokenStream {
-    let p = ctx.p;
     let fields = ctx.field_descs.borrow();
-    let dir = |d: Direction| {
-        let mut consts = Vec::new();
-        for m in p.messages(d) {
-            for (_, _, f, c) in fields
-                .iter()
-                .filter(|(fd, mn, ..)| *fd == d && *mn == m.name)
-            {
-                let name = &m.name;
-                let doc = doc(&format!("`{name}.{f}`"));
-                consts.push(quote! {
-                    #doc
-                    pub const #c: FieldDesc = FieldDesc::new(#name, #f);
-                });
+    let impls = ctx.impls.borrow();
+    let impls = impls.iter().map(|(d, name, path, consts, fns)| {
+        let descs = fields
+            .iter()
+            .filter(|(fd, mn, ..)| fd == d && mn == name)
+            .map(|(_, _, f, c)| quote!(pub const #c: rt::FieldDesc = rt::field(Self::NAME, #f);));
+        quote! {
+            impl #path {
+                #consts
+                #(#descs)*
+                #fns
             }
         }
+    });
+    let dir = |d: Direction| {
         let structs: Vec<TokenStream> = ctx
             .structs
             .borrow()
@@ -32,24 +31,18 @@ pub(super) fn emit_descs(ctx: &Ctx) -> TokenStream {
             .filter(|(sd, _)| *sd == d)
             .map(|(_, t)| t.clone())
             .collect();
-        if consts.is_empty() {
-            return quote!(#(#structs)*);
-        }
-        quote! {
-            use ::busspec_runtime::FieldDesc;
-            #(#structs)*
-            #(#consts)*
-        }
+        quote!(#(#structs)*)
     };
     let (requests, responses) = (dir(Direction::Request), dir(Direction::Response));
     quote! {
-        /// Each request as a struct of its own (its `DESC` names it as refusals do: name,
-        /// code and the frame lengths of its code), and each field a refusal names
-        /// (`message.field`, `FieldDesc`).
+        #(#impls)*
+        /// Each request as a struct of its own; its constants (`DESC`, which names it as
+        /// refusals do: name, code and the frame lengths of its code; `QUANTITY_DESC`, each
+        /// field a refusal names) and methods are in the `impl` of each.
         pub mod request {
             #requests
         }
-        /// Each response as a struct of its own, and the fields its refusals name.
+        /// Each response as a struct of its own.
         pub mod response {
             #responses
         }
@@ -73,7 +66,7 @@ pub(super) fn message_desc_const(p: &Protocol, m: &Message) -> Option<TokenStrea
     let (code, code_len) = code_args(m);
     let lengths = dispatch_lengths(p, m).into_iter().map(usize_lit);
     Some(quote! {
-        pub const DESC: rt::MessageDesc = rt::MessageDesc::new(Self::NAME, #code, #code_len, &[#(#lengths),*]);
+        pub const DESC: rt::MessageDesc = rt::desc(Self::NAME, #code, #code_len, &[#(#lengths),*]);
     })
 }
 

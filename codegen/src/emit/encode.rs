@@ -200,6 +200,11 @@ pub(super) fn emit_encode_arm(
         quote!(rt::frame_mut::<#len>(buf, &[#(#first),*])?)
     };
     if i == known.len() && repeat.is_none() && lists.is_empty() && !m.has_optional() {
+        if checksum_in_arms(p) {
+            // The frame taken, then sealed: two short lines rather than one nested call.
+            let end = encode_end(p, quote!(out), false, head);
+            return quote!(#pattern => { #(#stmts)* let out = #take; #end });
+        }
         let (check, end) = (stmts, encode_end(p, take, false, head));
         return quote!(#pattern => { #(#check)* #end });
     }

@@ -26,7 +26,6 @@ pub(super) fn emit_messages(ctx: &Ctx, d: Direction) -> TokenStream {
     let mut len_arms = Vec::new();
     let mut constant_arms = Vec::new();
     let mut structs = Vec::new();
-    let mut impls = Vec::new();
     for (i, m) in msgs.iter().enumerate() {
         let v = variant(m);
         let ls = leaves(m);
@@ -86,53 +85,43 @@ pub(super) fn emit_messages(ctx: &Ctx, d: Direction) -> TokenStream {
             let frame = quote!(&[#(#bytes),*]);
             constant_arms.push(quote!(#any => rt::Some(#frame),));
             encode_arms.push(quote!(#any => return rt::put_frame(buf, #frame),));
-            impls.push(message_impl(ctx, m, &ls, quote!()));
+            message_impl(ctx, m, &ls, quote!());
             continue;
         }
         encode_arms.push(emit_encode_arm(ctx, m, &pattern, &ls, one_len.is_some()));
         if m.has_optional() {
             // The frame as long as the optional fields given make it.
             let c = optional_const(m);
-            let (names, given): (Vec<TokenStream>, Vec<TokenStream>) = m
-                .optionals()
-                .map(|(_, f, _)| {
-                    let (n, l) = (ident(&f.name), local(&f.name));
-                    (quote!(#n: #l), quote!(#l.is_some()))
-                })
-                .unzip();
-            len_arms
-                .push(quote!(Self::#v(#dm::#v { #(#names,)* .. }) => #c.frame_len(&[#(#given),*])));
+            let given = m.optionals().map(|(_, f, _)| {
+                let n = ident(&f.name);
+                quote!(m.#n.is_some())
+            });
+            len_arms.push(quote!(Self::#v(m) => #c.frame_len(&[#(#given),*])));
         } else if has_lists(m) {
             let c = lists_const(m);
-            let (names, sum): (Vec<TokenStream>, Vec<TokenStream>) = m
-                .repeats()
-                .enumerate()
-                .map(|(k, (_, f, _))| {
-                    let (n, l, k) = (ident(&f.name), local(&f.name), usize_lit(k));
-                    (quote!(#n: #l), quote!(#c.lists[#k].bytes_of(#l.len())))
-                })
-                .unzip();
-            len_arms.push(quote!(Self::#v(#dm::#v { #(#names,)* .. }) => #c.base #(+ #sum)*));
+            let sum = m.repeats().enumerate().map(|(k, (_, f, _))| {
+                let (n, k) = (ident(&f.name), usize_lit(k));
+                quote!(#c.lists[#k].bytes_of(m.#n.len()))
+            });
+            len_arms.push(quote!(Self::#v(m) => #c.base #(+ #sum)*));
         } else if let Some((f, _)) = m.repeat() {
-            let (n, l, c) = (ident(&f.name), local(&f.name), repeat_const(m));
+            let (n, c) = (ident(&f.name), repeat_const(m));
             let sized = sized_record(m, f).and_then(|(wf, fixed, _)| {
                 let wl = ls
                     .iter()
                     .find(|l| std::ptr::eq(l.field, wf) && l.bits.is_none())?;
-                Some((wl, raw_of(ctx, wl, &local(wl.name))?.1, fixed))
+                let wn = ident(wl.name);
+                Some((raw_of(ctx, wl, &quote!(m.#wn))?.1, fixed))
             });
             match sized {
-                Some((wl, raw, fixed)) => {
+                Some((raw, fixed)) => {
                     // Each record as wide as its width field says.
-                    let (wn, wv, fixed) = (ident(wl.name), local(wl.name), usize_lit(fixed));
-                    len_arms.push(quote!(Self::#v(#dm::#v { #n: #l, #wn: #wv, .. }) => {
-                        let #wv = *#wv;
-                        #c.base + #l.len() * (#fixed + (#raw) as usize)
-                    }));
+                    let fixed = usize_lit(fixed);
+                    len_arms.push(
+                        quote!(Self::#v(m) => #c.base + m.#n.len() * (#fixed + (#raw) as usize)),
+                    );
                 }
-                None => len_arms.push(
-                    quote!(Self::#v(#dm::#v { #n: #l, .. }) => #c.base + #c.bytes_of(#l.len())),
-                ),
+                None => len_arms.push(quote!(Self::#v(m) => #c.base + #c.bytes_of(m.#n.len()))),
             }
         }
         // Each field read where the struct holds it (`self.quantity`), an optional one where
@@ -179,7 +168,7 @@ pub(super) fn emit_messages(ctx: &Ctx, d: Direction) -> TokenStream {
                 }
             }
         };
-        impls.push(message_impl(ctx, m, &ls, visit));
+        message_impl(ctx, m, &ls, visit);
     }
     let (visit_param, visit_body) = if visit_arms.is_empty() {
         (quote!(_f), quote!())
@@ -293,13 +282,13 @@ pub(super) fn emit_messages(ctx: &Ctx, d: Direction) -> TokenStream {
             ///
             /// The preamble's wake-up bytes come first (`framing.preamble`); `buf` of
             /// `MAX_FRAME_LEN` bytes holds any frame with them.
-            pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::Result<usize, rt::EncodeError> {
+            pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
                 let n = PREAMBLE.put(buf)?;
                 let len = self.encode_frame(address, &mut buf[n..])?;
                 rt::Ok(n + len)
             }
             /// The frame after the preamble, into `buf`.
-            fn encode_frame(&self, address: u8, buf: &mut [u8]) -> rt::Result<usize, rt::EncodeError> {
+            fn encode_frame(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
                 rt::encode_address(address, &FRAME)?;
                 #take_once
                 let len = match *self { #(#encode_arms)* };
@@ -316,12 +305,12 @@ pub(super) fn emit_messages(ctx: &Ctx, d: Direction) -> TokenStream {
             ///
             /// The payload's trailing zero bytes are stripped (one byte kept), the length field
             /// and checksum rewritten (`framing.truncation`).
-            pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::Result<usize, rt::EncodeError> {
+            pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
                 let len = self.encode_laid_out(address, buf)?;
                 rt::Ok(TRUNCATION.travel(buf, len, &FRAME, #sum))
             }
             /// The frame laid out with its whole payload, into `buf`.
-            fn encode_laid_out(&self, address: u8, buf: &mut [u8]) -> rt::Result<usize, rt::EncodeError> {
+            fn encode_laid_out(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
                 rt::encode_address(address, &FRAME)?;
                 #take_once
                 let len = match *self { #(#encode_arms)* };
@@ -357,13 +346,13 @@ pub(super) fn emit_messages(ctx: &Ctx, d: Direction) -> TokenStream {
         quote! {
             ///
             #travels
-            pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::Result<usize, rt::EncodeError> {
+            pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
                 #constant_first
                 let len = self.encode_laid_out(address, buf)?;
                 rt::Ok(#lay.travel(buf, len))
             }
             /// The frame laid out in the long form's width, into `buf`.
-            fn encode_laid_out(&self, address: u8, buf: &mut [u8]) -> rt::Result<usize, rt::EncodeError> {
+            fn encode_laid_out(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
                 rt::encode_address(address, &FRAME)?;
                 #take_once
                 let len = match *self { #(#encode_arms)* };
@@ -373,7 +362,7 @@ pub(super) fn emit_messages(ctx: &Ctx, d: Direction) -> TokenStream {
         }
     } else if p.framing.escaping.is_none() {
         quote! {
-            pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::Result<usize, rt::EncodeError> {
+            pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
                 #constant_first
                 rt::encode_address(address, &FRAME)?;
                 #take_once
@@ -388,13 +377,13 @@ pub(super) fn emit_messages(ctx: &Ctx, d: Direction) -> TokenStream {
             ///
             /// The frame is written escaped (`framing.escaping`); `buf` of `MAX_FRAME_LEN`
             /// bytes holds any.
-            pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::Result<usize, rt::EncodeError> {
+            pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
                 let mut plain = [0u8; UNESCAPED_LEN];
                 let len = self.encode_unescaped(address, &mut plain)?;
                 rt::escape_frame(&ESCAPING, &plain[..len], buf, #sum)
             }
             /// The frame before escaping, into `buf`.
-            fn encode_unescaped(&self, address: u8, buf: &mut [u8]) -> rt::Result<usize, rt::EncodeError> {
+            fn encode_unescaped(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
                 rt::encode_address(address, &FRAME)?;
                 #take_once
                 let len = match *self { #(#encode_arms)* };
@@ -427,7 +416,6 @@ pub(super) fn emit_messages(ctx: &Ctx, d: Direction) -> TokenStream {
     quote! {
         #repeats
         #records
-        #(#impls)*
         #[doc = #what]
         #derives
         #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
@@ -487,7 +475,7 @@ pub(super) fn emit_messages(ctx: &Ctx, d: Direction) -> TokenStream {
                 #ty::visit(self, f)
             }
             #[inline]
-            fn encode(&self, address: u8, buf: &mut [u8]) -> rt::Result<usize, rt::EncodeError> {
+            fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
                 #ty::encode(self, address, buf)
             }
             #[inline]
@@ -517,7 +505,7 @@ pub(super) fn emit_from_fields(ctx: &Ctx, d: Direction) -> TokenStream {
         let dm = direction_module(d);
         let ls = leaves(m);
         if ls.is_empty() {
-            return quote!(#name => rt::Ok(Self::#v(#dm::#v)));
+            return quote!(#name => Self::#v(#dm::#v));
         }
         let fields = ls.iter().map(|l| {
             let (n, f) = (l.name, ident(l.name));
@@ -596,7 +584,7 @@ pub(super) fn emit_from_fields(ctx: &Ctx, d: Direction) -> TokenStream {
             };
             quote!(#f: #value)
         });
-        quote!(#name => rt::Ok(Self::#v(#dm::#v { #(#fields),* })))
+        quote!(#name => Self::#v(#dm::#v { #(#fields),* }))
     });
     quote! {
         /// The message called `name` in the spec, from each field's raw wire value by its spec
@@ -606,10 +594,11 @@ pub(super) fn emit_from_fields(ctx: &Ctx, d: Direction) -> TokenStream {
             name: &str,
             #field_param: impl FnMut(&'static str) -> rt::Option<rt::FieldValue<'v>>,
         ) -> rt::Result<Self, rt::FieldError> {
-            match name {
+            let message = match name {
                 #(#arms,)*
-                _ => rt::Err(rt::FieldError::UnknownMessage),
-            }
+                _ => return rt::Err(rt::FieldError::UnknownMessage),
+            };
+            rt::Ok(message)
         }
     }
 }
@@ -658,10 +647,13 @@ pub(super) fn own_binding(m: &Message, ls: &[Leaf]) -> TokenStream {
 }
 
 /// Message `m`'s constants and methods: `NAME`, `CODE`, its frame length (`LEN`, or `MIN_LEN`
-/// and `MAX_LEN`), `DESC` (what its refusals point at) where it is framed, the byte range of each field at a fixed offset (named as the field,
-/// upper-cased; `AT_` before a name the others take), `visit` where it has fields to visit,
-/// and `encode` (the frame for an address, as the enum's `encode` writes it).
-fn message_impl(ctx: &Ctx, m: &Message, ls: &[Leaf], visit: TokenStream) -> TokenStream {
+/// and `MAX_LEN`), `DESC` (what its refusals point at) where it is framed, the byte range of
+/// each field at a fixed offset (named as the field, upper-cased; `AT_` before a name the
+/// others take), a typed constant for each special value of a field (`PAN_SPEED_TURBO`),
+/// `visit` where it has fields to visit, and `encode` (the frame for an address, as the enum's
+/// `encode` writes it). Kept in `Ctx::impls` and emitted by `emit_descs` once every refusal
+/// has named its fields, whose descriptors (`QUANTITY_DESC`) join the constants.
+fn message_impl(ctx: &Ctx, m: &Message, ls: &[Leaf], visit: TokenStream) {
     let (v, dm) = (variant(m), direction_module(m.direction));
     let (ty, _) = direction_names(m.direction);
     let name = &m.name;
@@ -685,28 +677,114 @@ fn message_impl(ctx: &Ctx, m: &Message, ls: &[Leaf], visit: TokenStream) -> Toke
             return None;
         }
         let at = f.frame_at(&o);
-        let upper = l.name.to_ascii_uppercase();
-        let c = match upper.as_str() {
-            "NAME" | "CODE" | "LEN" | "MIN_LEN" | "MAX_LEN" | "DESC" => {
-                format_ident!("AT_{}", upper)
-            }
-            _ => ident(&upper),
-        };
+        let c = ident(&range_const(l.name));
         let (a, b) = (usize_lit(at), usize_lit(at + f.width));
         Some(quote!(pub const #c: rt::Range<usize> = #a..#b;))
     });
+    let specials = special_consts(ctx, ls);
     let desc = message_desc_const(ctx.p, m);
-    quote! {
-        impl #dm::#v {
-            pub const NAME: &'static str = #name;
-            pub const CODE: &'static [u8] = &[#(#code),*];
-            #lens
-            #desc
-            #(#ranges)*
-            #visit
-            pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
-                #ty::#v(*self).encode(address, buf)
+    let consts = quote! {
+        pub const NAME: &'static str = #name;
+        pub const CODE: &'static [u8] = &[#(#code),*];
+        #lens
+        #desc
+        #(#ranges)*
+        #specials
+    };
+    let fns = quote! {
+        #visit
+        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            #ty::#v(*self).encode(address, buf)
+        }
+    };
+    ctx.impls
+        .borrow_mut()
+        .push((m.direction, m.name.clone(), quote!(#dm::#v), consts, fns));
+}
+
+/// The constant of a field's byte range: its name upper-cased, `AT_` before a name the
+/// struct's other constants take.
+fn range_const(field: &str) -> String {
+    let upper = field.to_ascii_uppercase();
+    match upper.as_str() {
+        "NAME" | "CODE" | "LEN" | "MIN_LEN" | "MAX_LEN" | "DESC" => format!("AT_{upper}"),
+        _ => upper,
+    }
+}
+
+/// The names of `m`'s struct constants other than its field descriptors: `NAME`, `CODE`, the
+/// lengths, `DESC`, a byte range for (at most) each field and the special values' constants.
+pub(super) fn struct_consts(m: &Message) -> Vec<String> {
+    let mut names: Vec<String> = ["NAME", "CODE", "LEN", "MIN_LEN", "MAX_LEN", "DESC"]
+        .iter()
+        .map(|s| s.to_string())
+        .collect();
+    for l in leaves(m) {
+        names.push(range_const(l.name));
+    }
+    let ranges = names.clone();
+    for l in leaves(m) {
+        if l.bits.is_none() {
+            for sp in &l.field.special {
+                names.push(special_const(&ranges, l.name, &sp.name));
             }
         }
     }
+    names
+}
+
+/// The constant of special value `special` of `field`: `PAN_SPEED_TURBO`, or
+/// `FIELD__SPECIAL` where a byte range's constant or another of the struct's takes that name.
+fn special_const(taken: &[String], field: &str, special: &str) -> String {
+    let c = format!("{}_{}", field, special).to_ascii_uppercase();
+    if taken.contains(&c) {
+        format!("{}__{}", field, special).to_ascii_uppercase()
+    } else {
+        c
+    }
+}
+
+/// A typed constant for each special value of a whole field of `ls` whose type has a constant
+/// form (an integer, a unit, an enum, a flag set), with the special value's doc.
+fn special_consts(ctx: &Ctx, ls: &[Leaf]) -> TokenStream {
+    let ranges: Vec<String> = ["NAME", "CODE", "LEN", "MIN_LEN", "MAX_LEN", "DESC"]
+        .iter()
+        .map(|s| s.to_string())
+        .chain(ls.iter().map(|l| range_const(l.name)))
+        .collect();
+    let mut out = Vec::new();
+    for l in ls
+        .iter()
+        .filter(|l| l.bits.is_none() && l.field.repeat.is_none())
+    {
+        for sp in &l.field.special {
+            // The raw value as the spec writes it: hex, two digits a wire byte.
+            let digits = l.field.width * 2;
+            let raw = if sp.value < 0 {
+                let v = i64_lit(sp.value);
+                quote!(#v)
+            } else {
+                format!("0x{:0digits$X}", sp.value)
+                    .parse()
+                    .unwrap_or_else(|_| hex_lit(sp.value as u64))
+            };
+            let value = match ctx.kind(l) {
+                Kind::Int(t) if !t.float => raw,
+                Kind::Unit { ty, .. } | Kind::Enum { ty, .. } | Kind::Flags { ty, .. } => {
+                    quote!(#ty::from_raw(#raw))
+                }
+                _ => continue,
+            };
+            let c = ident(&special_const(&ranges, l.name, &sp.name));
+            let t = ctx.rust_type(l);
+            let text = if sp.doc.is_empty() {
+                format!("`{}`'s special value `{}`.", l.name, sp.name)
+            } else {
+                format!("`{}`'s special value `{}`: {}", l.name, sp.name, sp.doc)
+            };
+            let d = doc(&text);
+            out.push(quote!(#d pub const #c: #t = #value;));
+        }
+    }
+    quote!(#(#out)*)
 }

@@ -7,7 +7,8 @@
 //! - `types`: units, enums and flags;
 //! - `messages`: one struct per message in its direction's module (`request::ReadCoils`: its
 //!   fields, `NAME`, `CODE`, `LEN` or `MIN_LEN`/`MAX_LEN`, the byte range of each field at a
-//!   fixed offset, `visit`, `encode`), the `Request`/`Response` enums holding them (a variant
+//!   fixed offset, a typed constant per special value, `visit`, `encode`), the
+//!   `Request`/`Response` enums holding them (a variant
 //!   per message, `Request::ReadCoils(request::ReadCoils)`) and their per-message tables;
 //!   `encode` and `decode` the arms of one message; `lists` where repeated fields sit and how
 //!   they are split; `records` the struct of each repeated record;
@@ -16,9 +17,9 @@
 //! - `protocol`: pairing (`COMMANDS`, `follows_request`);
 //! - `view`: the borrowed views (`RequestView<'a>`/`ResponseView<'a>`: the decoders again,
 //!   each list lent as `rt::ListView`/`rt::BitsView`), where `view::no_view` finds none missing;
-//! - `desc`: the `request` and `response` modules: the message structs, and the descriptors
-//!   (`rt::MessageDesc` of each message, `rt::FieldDesc` of each field a refusal names), which
-//!   the refusals point at;
+//! - `desc`: each message struct's `impl` with its descriptors (`DESC`, the `rt::MessageDesc`
+//!   of the message; `QUANTITY_DESC`, the `rt::FieldDesc` of each field a refusal names), which
+//!   the refusals point at, and the `request` and `response` modules with the structs;
 //! - `ctx` and `tokens`: what the others share (the IR walked as leaves, typed literals, docs).
 //!
 //! Shape (kept lean so a firmware engineer can read it, about 30–40 lines per message):

@@ -127,7 +127,7 @@ pub(super) fn request_value(
     cmd: &Message,
     cls: &[Leaf],
     name: &str,
-    theirs: &mut Vec<TokenStream>,
+    theirs: &mut Vec<String>,
 ) -> Option<TokenStream> {
     let field = cmd.fields.iter().find(|f| f.name == name);
     if let Some(c) = field.and_then(Field::constant_value) {
@@ -144,18 +144,16 @@ pub(super) fn request_value(
             false,
         ),
     };
-    let (cn, their) = (ident(cl.name), format_ident!("r_{}", cl.name));
+    let cn = ident(cl.name);
+    let their = quote!(r.#cn);
     let b = if counted {
         let rc = repeat_const(cmd);
         quote!(#rc.count_value(#their.len()))
     } else {
         raw_of(ctx, cl, &their)?.1
     };
-    if !theirs
-        .iter()
-        .any(|t: &TokenStream| t.to_string() == quote!(#cn: #their).to_string())
-    {
-        theirs.push(quote!(#cn: #their));
+    if !theirs.iter().any(|t| t == cl.name) {
+        theirs.push(cl.name.to_owned());
     }
     Some(b)
 }
@@ -202,8 +200,18 @@ pub(super) fn emit_follows_request(ctx: &Ctx) -> Option<TokenStream> {
             let mut own = Vec::new();
             let mut theirs = Vec::new();
             let mut checks = Vec::new();
+            // An owned response's field is read where its struct holds it (`m.coils`), a view's
+            // from its variant's binding (`v_coils`).
+            let field = |name: &str| {
+                let (n, l) = (ident(name), local(name));
+                if ctx.view.get() {
+                    quote!(#l)
+                } else {
+                    quote!(m.#n)
+                }
+            };
             for (l, rel) in &follows {
-                let (n, mine) = (ident(l.name), local(l.name));
+                let (n, mine) = (ident(l.name), field(l.name));
                 let (Some((_, a)), Some(b)) = (
                     raw_of(ctx, l, &mine),
                     request_value(ctx, cmd, &cls, &rel.field, &mut theirs),
@@ -219,7 +227,7 @@ pub(super) fn emit_follows_request(ctx: &Ctx) -> Option<TokenStream> {
             }
             if let Some(list) = list {
                 let rc = repeat_const(m);
-                let (n, mine) = (ident(list.name), local(list.name));
+                let (n, mine) = (ident(list.name), field(list.name));
                 let mut bound = false;
                 for (f, rel, is_count) in &counted {
                     let Some(b) = request_value(ctx, cmd, &cls, &rel.field, &mut theirs) else {
@@ -244,14 +252,20 @@ pub(super) fn emit_follows_request(ctx: &Ctx) -> Option<TokenStream> {
                 }
             }
             let cv = variant(cmd);
-            // A view's variant holds its fields; an owned response's, its message's struct.
-            let mine_pat = if ctx.view.get() {
-                quote!(Self::#v { #(#own,)* .. })
+            // A view's variant holds its fields, bound by name; an owned response's, its
+            // message's struct (`m`); the request's struct is `r`.
+            let mine_pat = match (ctx.view.get(), own.is_empty()) {
+                (true, _) => quote!(&Self::#v { #(#own,)* .. }),
+                (false, false) => quote!(Self::#v(m)),
+                (false, true) => quote!(Self::#v(_)),
+            };
+            let theirs_pat = if theirs.is_empty() {
+                quote!(Request::#cv(_))
             } else {
-                quote!(Self::#v(response::#v { #(#own,)* .. }))
+                quote!(Request::#cv(r))
             };
             arms.push(quote! {
-                (&#mine_pat, &Request::#cv(request::#cv { #(#theirs,)* .. })) => {
+                (#mine_pat, #theirs_pat) => {
                     #(#checks)*
                 }
             });

@@ -181,9 +181,9 @@ fn a_record_named_like_another_type_is_refused_by_name() {
     assert!(super::emit_module(&p, "records.yaml", "records.yaml").is_ok());
 }
 
-/// A field's descriptor is the message's and the field's names upper-cased, the same constant
-/// each time the field is named; where that is a message's descriptor (message `read`, field
-/// `coils`, beside message `read_coils`), the two names are joined by `__`.
+/// A field's descriptor is a constant of its message's struct, the field's name upper-cased
+/// with `_DESC` after it, the same constant each time the field is named; where another of the
+/// struct's constants takes that name (the byte range of a field `quantity_desc`), `__DESC`.
 #[test]
 fn a_field_descriptor_never_takes_another_constants_name() {
     let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../spec/modbus.yaml");
@@ -191,19 +191,21 @@ fn a_field_descriptor_never_takes_another_constants_name() {
     let ctx = Ctx::new(&p);
     let read_coils = &p.commands[0];
     assert_eq!(read_coils.name, "read_coils");
-    let quantity = quote!(&request::READ_COILS_QUANTITY).to_string();
+    let quantity = quote!(&request::ReadCoils::QUANTITY_DESC).to_string();
     assert_eq!(ctx.field_desc(read_coils, "quantity").to_string(), quantity);
+    // A field called `quantity_desc` takes `QUANTITY_DESC` for its byte range.
     let mut read = read_coils.clone();
     read.name = "read".into();
+    read.fields[1].name = "quantity_desc".into();
     assert_eq!(
-        ctx.field_desc(&read, "coils").to_string(),
-        quote!(&request::READ__COILS).to_string()
+        ctx.field_desc(&read, "quantity").to_string(),
+        quote!(&request::Read::QUANTITY__DESC).to_string()
     );
     assert_eq!(ctx.field_desc(read_coils, "quantity").to_string(), quantity);
     let reply = &p.responses[0];
     assert_eq!(
         ctx.field_desc(reply, "coils").to_string(),
-        quote!(&response::READ_COILS_REPLY_COILS).to_string()
+        quote!(&response::ReadCoilsReply::COILS_DESC).to_string()
     );
     assert_eq!(ctx.field_descs.borrow().len(), 3);
 }

@@ -108,42 +108,6 @@ pub mod bcd_meter {
             rt::Some(Self(raw as u32))
         }
     }
-    impl request::ReadEnergy {
-        pub const NAME: &'static str = "read_energy";
-        pub const CODE: &'static [u8] = &[0x11];
-        pub const LEN: usize = 5;
-        pub const DESC: rt::MessageDesc = rt::MessageDesc::new(
-            Self::NAME,
-            0x11,
-            1,
-            &[5],
-        );
-        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
-            Request::ReadEnergy(*self).encode(address, buf)
-        }
-    }
-    impl request::SetClock {
-        pub const NAME: &'static str = "set_clock";
-        pub const CODE: &'static [u8] = &[0x08];
-        pub const LEN: usize = 9;
-        pub const DESC: rt::MessageDesc = rt::MessageDesc::new(
-            Self::NAME,
-            0x08,
-            1,
-            &[9],
-        );
-        pub const HOUR: rt::Range<usize> = 3..4;
-        pub const MINUTE: rt::Range<usize> = 4..5;
-        pub const YEAR: rt::Range<usize> = 5..7;
-        pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
-            f("hour", rt::Int(self.hour as i64));
-            f("minute", rt::Int(self.minute as i64));
-            f("year", rt::Int(self.year as i64));
-        }
-        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
-            Request::SetClock(*self).encode(address, buf)
-        }
-    }
     ///A request (command), host to device.
     #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
     #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
@@ -189,14 +153,10 @@ pub mod bcd_meter {
         /// Encodes the frame for `address` into `buf`; returns the frame length. Refuses what
         /// decode refuses: an address no frame may carry, the broadcast address for a command
         /// that does not accept it, a value outside its field's range.
-        pub fn encode(
-            &self,
-            address: u8,
-            buf: &mut [u8],
-        ) -> rt::Result<usize, rt::EncodeError> {
+        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             rt::encode_address(address, &FRAME)?;
             let len = match *self {
-                Self::ReadEnergy(request::ReadEnergy {}) => {
+                Self::ReadEnergy(_) => {
                     rt::frame_mut::<5>(buf, &[0x68, address, 0x11])?.len()
                 }
                 Self::SetClock(
@@ -244,23 +204,23 @@ pub mod bcd_meter {
                 0x08 => {
                     let frame = rt::fixed::<9>(frame, &request::SetClock::DESC)?;
                     let field_0: u8 = rt::bcd(
-                        &request::SET_CLOCK_HOUR,
+                        &request::SetClock::HOUR_DESC,
                         3,
                         frame[3] as u64,
                     )? as u8;
-                    rt::in_range(&request::SET_CLOCK_HOUR, 3, field_0, 0, 23)?;
+                    rt::in_range(&request::SetClock::HOUR_DESC, 3, field_0, 0, 23)?;
                     let field_1: u8 = rt::bcd(
-                        &request::SET_CLOCK_MINUTE,
+                        &request::SetClock::MINUTE_DESC,
                         4,
                         frame[4] as u64,
                     )? as u8;
-                    rt::in_range(&request::SET_CLOCK_MINUTE, 4, field_1, 0, 59)?;
+                    rt::in_range(&request::SetClock::MINUTE_DESC, 4, field_1, 0, 59)?;
                     let field_2: u16 = rt::bcd(
-                        &request::SET_CLOCK_YEAR,
+                        &request::SetClock::YEAR_DESC,
                         5,
                         u16::from_le_bytes([frame[5], frame[6]]) as u64,
                     )? as u16;
-                    rt::in_range(&request::SET_CLOCK_YEAR, 5, field_2, 0, 9999)?;
+                    rt::in_range(&request::SetClock::YEAR_DESC, 5, field_2, 0, 9999)?;
                     rt::Ok(
                         Self::SetClock(request::SetClock {
                             hour: field_0,
@@ -279,19 +239,18 @@ pub mod bcd_meter {
             name: &str,
             mut field: impl FnMut(&'static str) -> rt::Option<rt::FieldValue<'v>>,
         ) -> rt::Result<Self, rt::FieldError> {
-            match name {
-                "read_energy" => rt::Ok(Self::ReadEnergy(request::ReadEnergy)),
+            let message = match name {
+                "read_energy" => Self::ReadEnergy(request::ReadEnergy),
                 "set_clock" => {
-                    rt::Ok(
-                        Self::SetClock(request::SetClock {
-                            hour: rt::get(&mut field, "hour")?,
-                            minute: rt::get(&mut field, "minute")?,
-                            year: rt::get(&mut field, "year")?,
-                        }),
-                    )
+                    Self::SetClock(request::SetClock {
+                        hour: rt::get(&mut field, "hour")?,
+                        minute: rt::get(&mut field, "minute")?,
+                        year: rt::get(&mut field, "year")?,
+                    })
                 }
-                _ => rt::Err(rt::FieldError::UnknownMessage),
-            }
+                _ => return rt::Err(rt::FieldError::UnknownMessage),
+            };
+            rt::Ok(message)
         }
     }
     impl rt::Message for Request {
@@ -312,11 +271,7 @@ pub mod bcd_meter {
             Request::visit(self, f)
         }
         #[inline]
-        fn encode(
-            &self,
-            address: u8,
-            buf: &mut [u8],
-        ) -> rt::Result<usize, rt::EncodeError> {
+        fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             Request::encode(self, address, buf)
         }
         #[inline]
@@ -351,40 +306,6 @@ pub mod bcd_meter {
         /// The responses this command may get, bit `i` for row `i` of `Response::MESSAGES`.
         const fn replies(&self) -> u64 {
             Self::COMMANDS[self.index()].3
-        }
-    }
-    impl response::Energy {
-        pub const NAME: &'static str = "energy";
-        pub const CODE: &'static [u8] = &[0x91];
-        pub const LEN: usize = 10;
-        pub const DESC: rt::MessageDesc = rt::MessageDesc::new(
-            Self::NAME,
-            0x91,
-            1,
-            &[10],
-        );
-        pub const ENERGY: rt::Range<usize> = 3..7;
-        pub const TARIFF: rt::Range<usize> = 7..8;
-        pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
-            f("energy", rt::Int(self.energy.raw() as i64));
-            f("tariff", rt::Int(self.tariff as i64));
-        }
-        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
-            Response::Energy(*self).encode(address, buf)
-        }
-    }
-    impl response::Ack {
-        pub const NAME: &'static str = "ack";
-        pub const CODE: &'static [u8] = &[0x88];
-        pub const LEN: usize = 5;
-        pub const DESC: rt::MessageDesc = rt::MessageDesc::new(
-            Self::NAME,
-            0x88,
-            1,
-            &[5],
-        );
-        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
-            Response::Ack(*self).encode(address, buf)
         }
     }
     ///A response, device to host.
@@ -432,11 +353,7 @@ pub mod bcd_meter {
         /// Encodes the frame for `address` into `buf`; returns the frame length. Refuses what
         /// decode refuses: an address no frame may carry, the broadcast address for a command
         /// that does not accept it, a value outside its field's range.
-        pub fn encode(
-            &self,
-            address: u8,
-            buf: &mut [u8],
-        ) -> rt::Result<usize, rt::EncodeError> {
+        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             rt::encode_address(address, &FRAME)?;
             let len = match *self {
                 Self::Energy(
@@ -452,9 +369,7 @@ pub mod bcd_meter {
                     out[7] = rt::to_bcd(v_tariff as u64) as u8;
                     out.len()
                 }
-                Self::Ack(response::Ack {}) => {
-                    rt::frame_mut::<5>(buf, &[0x68, address, 0x88])?.len()
-                }
+                Self::Ack(_) => rt::frame_mut::<5>(buf, &[0x68, address, 0x88])?.len(),
             };
             rt::seal_end(buf, len, |b| u32::from(checksum(b)), &FRAME);
             rt::Ok(len)
@@ -508,18 +423,24 @@ pub mod bcd_meter {
                 0x91 => {
                     let frame = rt::fixed::<10>(frame, &response::Energy::DESC)?;
                     let field_0: u32 = rt::bcd(
-                        &response::ENERGY_ENERGY,
+                        &response::Energy::ENERGY_DESC,
                         3,
                         u32::from_le_bytes([frame[3], frame[4], frame[5], frame[6]])
                             as u64,
                     )? as u32;
-                    rt::in_range(&response::ENERGY_ENERGY, 3, field_0, 0, 99999999)?;
+                    rt::in_range(
+                        &response::Energy::ENERGY_DESC,
+                        3,
+                        field_0,
+                        0,
+                        99999999,
+                    )?;
                     let field_1: u8 = rt::bcd(
-                        &response::ENERGY_TARIFF,
+                        &response::Energy::TARIFF_DESC,
                         7,
                         frame[7] as u64,
                     )? as u8;
-                    rt::in_range(&response::ENERGY_TARIFF, 7, field_1, 1, 4)?;
+                    rt::in_range(&response::Energy::TARIFF_DESC, 7, field_1, 1, 4)?;
                     rt::Ok(
                         Self::Energy(response::Energy {
                             energy: KilowattHours::from_raw(field_0),
@@ -541,20 +462,17 @@ pub mod bcd_meter {
             name: &str,
             mut field: impl FnMut(&'static str) -> rt::Option<rt::FieldValue<'v>>,
         ) -> rt::Result<Self, rt::FieldError> {
-            match name {
+            let message = match name {
                 "energy" => {
-                    rt::Ok(
-                        Self::Energy(response::Energy {
-                            energy: KilowattHours::from_raw(
-                                rt::get(&mut field, "energy")?,
-                            ),
-                            tariff: rt::get(&mut field, "tariff")?,
-                        }),
-                    )
+                    Self::Energy(response::Energy {
+                        energy: KilowattHours::from_raw(rt::get(&mut field, "energy")?),
+                        tariff: rt::get(&mut field, "tariff")?,
+                    })
                 }
-                "ack" => rt::Ok(Self::Ack(response::Ack)),
-                _ => rt::Err(rt::FieldError::UnknownMessage),
-            }
+                "ack" => Self::Ack(response::Ack),
+                _ => return rt::Err(rt::FieldError::UnknownMessage),
+            };
+            rt::Ok(message)
         }
     }
     impl rt::Message for Response {
@@ -575,11 +493,7 @@ pub mod bcd_meter {
             Response::visit(self, f)
         }
         #[inline]
-        fn encode(
-            &self,
-            address: u8,
-            buf: &mut [u8],
-        ) -> rt::Result<usize, rt::EncodeError> {
+        fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             Response::encode(self, address, buf)
         }
         #[inline]
@@ -700,11 +614,65 @@ pub mod bcd_meter {
     pub type StreamDecoder = ::busspec_runtime::stream::StreamDecoder<BcdMeter>;
     /// What [`StreamDecoder`] finds in a stream.
     pub type Event = ::busspec_runtime::stream::Event<Request, Response>;
-    /// Each request as a struct of its own (its `DESC` names it as refusals do: name,
-    /// code and the frame lengths of its code), and each field a refusal names
-    /// (`message.field`, `FieldDesc`).
+    impl request::ReadEnergy {
+        pub const NAME: &'static str = "read_energy";
+        pub const CODE: &'static [u8] = &[0x11];
+        pub const LEN: usize = 5;
+        pub const DESC: rt::MessageDesc = rt::desc(Self::NAME, 0x11, 1, &[5]);
+        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            Request::ReadEnergy(*self).encode(address, buf)
+        }
+    }
+    impl request::SetClock {
+        pub const NAME: &'static str = "set_clock";
+        pub const CODE: &'static [u8] = &[0x08];
+        pub const LEN: usize = 9;
+        pub const DESC: rt::MessageDesc = rt::desc(Self::NAME, 0x08, 1, &[9]);
+        pub const HOUR: rt::Range<usize> = 3..4;
+        pub const MINUTE: rt::Range<usize> = 4..5;
+        pub const YEAR: rt::Range<usize> = 5..7;
+        pub const HOUR_DESC: rt::FieldDesc = rt::field(Self::NAME, "hour");
+        pub const MINUTE_DESC: rt::FieldDesc = rt::field(Self::NAME, "minute");
+        pub const YEAR_DESC: rt::FieldDesc = rt::field(Self::NAME, "year");
+        pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
+            f("hour", rt::Int(self.hour as i64));
+            f("minute", rt::Int(self.minute as i64));
+            f("year", rt::Int(self.year as i64));
+        }
+        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            Request::SetClock(*self).encode(address, buf)
+        }
+    }
+    impl response::Energy {
+        pub const NAME: &'static str = "energy";
+        pub const CODE: &'static [u8] = &[0x91];
+        pub const LEN: usize = 10;
+        pub const DESC: rt::MessageDesc = rt::desc(Self::NAME, 0x91, 1, &[10]);
+        pub const ENERGY: rt::Range<usize> = 3..7;
+        pub const TARIFF: rt::Range<usize> = 7..8;
+        pub const ENERGY_DESC: rt::FieldDesc = rt::field(Self::NAME, "energy");
+        pub const TARIFF_DESC: rt::FieldDesc = rt::field(Self::NAME, "tariff");
+        pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
+            f("energy", rt::Int(self.energy.raw() as i64));
+            f("tariff", rt::Int(self.tariff as i64));
+        }
+        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            Response::Energy(*self).encode(address, buf)
+        }
+    }
+    impl response::Ack {
+        pub const NAME: &'static str = "ack";
+        pub const CODE: &'static [u8] = &[0x88];
+        pub const LEN: usize = 5;
+        pub const DESC: rt::MessageDesc = rt::desc(Self::NAME, 0x88, 1, &[5]);
+        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            Response::Ack(*self).encode(address, buf)
+        }
+    }
+    /// Each request as a struct of its own; its constants (`DESC`, which names it as
+    /// refusals do: name, code and the frame lengths of its code; `QUANTITY_DESC`, each
+    /// field a refusal names) and methods are in the `impl` of each.
     pub mod request {
-        use ::busspec_runtime::FieldDesc;
         /// §3.1 Read the energy register (code `0x11`, 5 bytes).
         #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
         #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
@@ -723,16 +691,9 @@ pub mod bcd_meter {
             /// Valid raw range 0..=9999.
             pub year: u16,
         }
-        /// `set_clock.hour`
-        pub const SET_CLOCK_HOUR: FieldDesc = FieldDesc::new("set_clock", "hour");
-        /// `set_clock.minute`
-        pub const SET_CLOCK_MINUTE: FieldDesc = FieldDesc::new("set_clock", "minute");
-        /// `set_clock.year`
-        pub const SET_CLOCK_YEAR: FieldDesc = FieldDesc::new("set_clock", "year");
     }
-    /// Each response as a struct of its own, and the fields its refusals name.
+    /// Each response as a struct of its own.
     pub mod response {
-        use ::busspec_runtime::FieldDesc;
         /// §4.1 Energy register (code `0x91`, 10 bytes).
         #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
         #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
@@ -749,9 +710,5 @@ pub mod bcd_meter {
         #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
         #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]
         pub struct Ack;
-        /// `energy.energy`
-        pub const ENERGY_ENERGY: FieldDesc = FieldDesc::new("energy", "energy");
-        /// `energy.tariff`
-        pub const ENERGY_TARIFF: FieldDesc = FieldDesc::new("energy", "tariff");
     }
 }

@@ -99,52 +99,6 @@ pub mod cobs_link {
     pub fn checksum(bytes: &[u8]) -> u8 {
         CRC.checksum(bytes)
     }
-    impl request::ReadPosition {
-        pub const NAME: &'static str = "read_position";
-        pub const CODE: &'static [u8] = &[0x10];
-        pub const LEN: usize = 4;
-        pub const DESC: rt::MessageDesc = rt::MessageDesc::new(
-            Self::NAME,
-            0x10,
-            1,
-            &[4],
-        );
-        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
-            Request::ReadPosition(*self).encode(address, buf)
-        }
-    }
-    impl request::SetSpeed {
-        pub const NAME: &'static str = "set_speed";
-        pub const CODE: &'static [u8] = &[0x20];
-        pub const LEN: usize = 6;
-        pub const DESC: rt::MessageDesc = rt::MessageDesc::new(
-            Self::NAME,
-            0x20,
-            1,
-            &[6],
-        );
-        pub const SPEED: rt::Range<usize> = 2..4;
-        pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
-            f("speed", rt::Int(self.speed as i64));
-        }
-        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
-            Request::SetSpeed(*self).encode(address, buf)
-        }
-    }
-    impl request::ReadLog {
-        pub const NAME: &'static str = "read_log";
-        pub const CODE: &'static [u8] = &[0x30];
-        pub const LEN: usize = 4;
-        pub const DESC: rt::MessageDesc = rt::MessageDesc::new(
-            Self::NAME,
-            0x30,
-            1,
-            &[4],
-        );
-        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
-            Request::ReadLog(*self).encode(address, buf)
-        }
-    }
     ///A request (command), host to device.
     #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
     #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
@@ -196,34 +150,22 @@ pub mod cobs_link {
         ///
         /// The frame is written escaped (`framing.escaping`); `buf` of `MAX_FRAME_LEN`
         /// bytes holds any.
-        pub fn encode(
-            &self,
-            address: u8,
-            buf: &mut [u8],
-        ) -> rt::Result<usize, rt::EncodeError> {
+        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             let mut plain = [0u8; UNESCAPED_LEN];
             let len = self.encode_unescaped(address, &mut plain)?;
             rt::escape_frame(&ESCAPING, &plain[..len], buf, |b| u32::from(checksum(b)))
         }
         /// The frame before escaping, into `buf`.
-        fn encode_unescaped(
-            &self,
-            address: u8,
-            buf: &mut [u8],
-        ) -> rt::Result<usize, rt::EncodeError> {
+        fn encode_unescaped(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             rt::encode_address(address, &FRAME)?;
             let len = match *self {
-                Self::ReadPosition(request::ReadPosition {}) => {
-                    rt::frame_mut::<4>(buf, &[0x00, 0x10])?.len()
-                }
+                Self::ReadPosition(_) => rt::frame_mut::<4>(buf, &[0x00, 0x10])?.len(),
                 Self::SetSpeed(request::SetSpeed { speed: v_speed }) => {
                     let out = rt::frame_mut::<6>(buf, &[0x02, 0x20])?;
                     out[2..4].copy_from_slice(&v_speed.to_le_bytes());
                     out.len()
                 }
-                Self::ReadLog(request::ReadLog {}) => {
-                    rt::frame_mut::<4>(buf, &[0x00, 0x30])?.len()
-                }
+                Self::ReadLog(_) => rt::frame_mut::<4>(buf, &[0x00, 0x30])?.len(),
             };
             rt::seal_end(buf, len, |b| u32::from(checksum(b)), &FRAME);
             rt::Ok(len)
@@ -293,18 +235,17 @@ pub mod cobs_link {
             name: &str,
             mut field: impl FnMut(&'static str) -> rt::Option<rt::FieldValue<'v>>,
         ) -> rt::Result<Self, rt::FieldError> {
-            match name {
-                "read_position" => rt::Ok(Self::ReadPosition(request::ReadPosition)),
+            let message = match name {
+                "read_position" => Self::ReadPosition(request::ReadPosition),
                 "set_speed" => {
-                    rt::Ok(
-                        Self::SetSpeed(request::SetSpeed {
-                            speed: rt::get(&mut field, "speed")?,
-                        }),
-                    )
+                    Self::SetSpeed(request::SetSpeed {
+                        speed: rt::get(&mut field, "speed")?,
+                    })
                 }
-                "read_log" => rt::Ok(Self::ReadLog(request::ReadLog)),
-                _ => rt::Err(rt::FieldError::UnknownMessage),
-            }
+                "read_log" => Self::ReadLog(request::ReadLog),
+                _ => return rt::Err(rt::FieldError::UnknownMessage),
+            };
+            rt::Ok(message)
         }
     }
     impl rt::Message for Request {
@@ -325,11 +266,7 @@ pub mod cobs_link {
             Request::visit(self, f)
         }
         #[inline]
-        fn encode(
-            &self,
-            address: u8,
-            buf: &mut [u8],
-        ) -> rt::Result<usize, rt::EncodeError> {
+        fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             Request::encode(self, address, buf)
         }
         #[inline]
@@ -369,7 +306,7 @@ pub mod cobs_link {
     }
     /// Where `log.entries` sits in the frame and how its elements are counted.
     pub const REPEAT_LOG: rt::RepeatAt = rt::RepeatAt {
-        field: &response::LOG_ENTRIES,
+        field: &response::Log::ENTRIES_DESC,
         base: 4,
         at: 2,
         width: 1,
@@ -377,56 +314,6 @@ pub mod cobs_link {
         min: 0,
         max: 254,
     };
-    impl response::Position {
-        pub const NAME: &'static str = "position";
-        pub const CODE: &'static [u8] = &[0x90];
-        pub const LEN: usize = 8;
-        pub const DESC: rt::MessageDesc = rt::MessageDesc::new(
-            Self::NAME,
-            0x90,
-            1,
-            &[8],
-        );
-        pub const POSITION: rt::Range<usize> = 2..6;
-        pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
-            f("position", rt::Int(self.position as i64));
-        }
-        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
-            Response::Position(*self).encode(address, buf)
-        }
-    }
-    impl response::Ack {
-        pub const NAME: &'static str = "ack";
-        pub const CODE: &'static [u8] = &[0xA0];
-        pub const LEN: usize = 4;
-        pub const DESC: rt::MessageDesc = rt::MessageDesc::new(
-            Self::NAME,
-            0xA0,
-            1,
-            &[4],
-        );
-        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
-            Response::Ack(*self).encode(address, buf)
-        }
-    }
-    impl response::Log {
-        pub const NAME: &'static str = "log";
-        pub const CODE: &'static [u8] = &[0xB0];
-        pub const MIN_LEN: usize = 4;
-        pub const MAX_LEN: usize = 258;
-        pub const DESC: rt::MessageDesc = rt::MessageDesc::new(
-            Self::NAME,
-            0xB0,
-            1,
-            &[4],
-        );
-        pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
-            f("entries", rt::List(self.entries.elements()));
-        }
-        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
-            Response::Log(*self).encode(address, buf)
-        }
-    }
     ///A response, device to host.
     #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
     #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
@@ -463,9 +350,7 @@ pub mod cobs_link {
         /// The length of this message's frame, in bytes.
         pub const fn frame_len(&self) -> usize {
             match self {
-                Self::Log(response::Log { entries: v_entries, .. }) => {
-                    REPEAT_LOG.base + REPEAT_LOG.bytes_of(v_entries.len())
-                }
+                Self::Log(m) => REPEAT_LOG.base + REPEAT_LOG.bytes_of(m.entries.len()),
                 _ => Self::MESSAGES[self.index()].2,
             }
         }
@@ -484,21 +369,13 @@ pub mod cobs_link {
         ///
         /// The frame is written escaped (`framing.escaping`); `buf` of `MAX_FRAME_LEN`
         /// bytes holds any.
-        pub fn encode(
-            &self,
-            address: u8,
-            buf: &mut [u8],
-        ) -> rt::Result<usize, rt::EncodeError> {
+        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             let mut plain = [0u8; UNESCAPED_LEN];
             let len = self.encode_unescaped(address, &mut plain)?;
             rt::escape_frame(&ESCAPING, &plain[..len], buf, |b| u32::from(checksum(b)))
         }
         /// The frame before escaping, into `buf`.
-        fn encode_unescaped(
-            &self,
-            address: u8,
-            buf: &mut [u8],
-        ) -> rt::Result<usize, rt::EncodeError> {
+        fn encode_unescaped(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             rt::encode_address(address, &FRAME)?;
             let len = match *self {
                 Self::Position(response::Position { position: v_position }) => {
@@ -506,9 +383,7 @@ pub mod cobs_link {
                     out[2..6].copy_from_slice(&v_position.to_le_bytes());
                     out.len()
                 }
-                Self::Ack(response::Ack {}) => {
-                    rt::frame_mut::<4>(buf, &[0x00, 0xA0])?.len()
-                }
+                Self::Ack(_) => rt::frame_mut::<4>(buf, &[0x00, 0xA0])?.len(),
                 Self::Log(response::Log { entries: v_entries }) => {
                     let frame_len = REPEAT_LOG.encode_len(v_entries.len())?;
                     let out = rt::frame_mut_len(buf, frame_len, &[])?;
@@ -624,24 +499,21 @@ pub mod cobs_link {
             name: &str,
             mut field: impl FnMut(&'static str) -> rt::Option<rt::FieldValue<'v>>,
         ) -> rt::Result<Self, rt::FieldError> {
-            match name {
+            let message = match name {
                 "position" => {
-                    rt::Ok(
-                        Self::Position(response::Position {
-                            position: rt::get(&mut field, "position")?,
-                        }),
-                    )
+                    Self::Position(response::Position {
+                        position: rt::get(&mut field, "position")?,
+                    })
                 }
-                "ack" => rt::Ok(Self::Ack(response::Ack)),
+                "ack" => Self::Ack(response::Ack),
                 "log" => {
-                    rt::Ok(
-                        Self::Log(response::Log {
-                            entries: rt::list::<u8, 254>(&mut field, "entries", 0, 255)?,
-                        }),
-                    )
+                    Self::Log(response::Log {
+                        entries: rt::list::<u8, 254>(&mut field, "entries", 0, 255)?,
+                    })
                 }
-                _ => rt::Err(rt::FieldError::UnknownMessage),
-            }
+                _ => return rt::Err(rt::FieldError::UnknownMessage),
+            };
+            rt::Ok(message)
         }
     }
     impl rt::Message for Response {
@@ -662,11 +534,7 @@ pub mod cobs_link {
             Response::visit(self, f)
         }
         #[inline]
-        fn encode(
-            &self,
-            address: u8,
-            buf: &mut [u8],
-        ) -> rt::Result<usize, rt::EncodeError> {
+        fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             Response::encode(self, address, buf)
         }
         #[inline]
@@ -774,9 +642,76 @@ pub mod cobs_link {
     pub type StreamDecoder = ::busspec_runtime::stream::StreamDecoder<CobsLink>;
     /// What [`StreamDecoder`] finds in a stream.
     pub type Event = ::busspec_runtime::stream::Event<Request, Response>;
-    /// Each request as a struct of its own (its `DESC` names it as refusals do: name,
-    /// code and the frame lengths of its code), and each field a refusal names
-    /// (`message.field`, `FieldDesc`).
+    impl request::ReadPosition {
+        pub const NAME: &'static str = "read_position";
+        pub const CODE: &'static [u8] = &[0x10];
+        pub const LEN: usize = 4;
+        pub const DESC: rt::MessageDesc = rt::desc(Self::NAME, 0x10, 1, &[4]);
+        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            Request::ReadPosition(*self).encode(address, buf)
+        }
+    }
+    impl request::SetSpeed {
+        pub const NAME: &'static str = "set_speed";
+        pub const CODE: &'static [u8] = &[0x20];
+        pub const LEN: usize = 6;
+        pub const DESC: rt::MessageDesc = rt::desc(Self::NAME, 0x20, 1, &[6]);
+        pub const SPEED: rt::Range<usize> = 2..4;
+        pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
+            f("speed", rt::Int(self.speed as i64));
+        }
+        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            Request::SetSpeed(*self).encode(address, buf)
+        }
+    }
+    impl request::ReadLog {
+        pub const NAME: &'static str = "read_log";
+        pub const CODE: &'static [u8] = &[0x30];
+        pub const LEN: usize = 4;
+        pub const DESC: rt::MessageDesc = rt::desc(Self::NAME, 0x30, 1, &[4]);
+        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            Request::ReadLog(*self).encode(address, buf)
+        }
+    }
+    impl response::Position {
+        pub const NAME: &'static str = "position";
+        pub const CODE: &'static [u8] = &[0x90];
+        pub const LEN: usize = 8;
+        pub const DESC: rt::MessageDesc = rt::desc(Self::NAME, 0x90, 1, &[8]);
+        pub const POSITION: rt::Range<usize> = 2..6;
+        pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
+            f("position", rt::Int(self.position as i64));
+        }
+        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            Response::Position(*self).encode(address, buf)
+        }
+    }
+    impl response::Ack {
+        pub const NAME: &'static str = "ack";
+        pub const CODE: &'static [u8] = &[0xA0];
+        pub const LEN: usize = 4;
+        pub const DESC: rt::MessageDesc = rt::desc(Self::NAME, 0xA0, 1, &[4]);
+        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            Response::Ack(*self).encode(address, buf)
+        }
+    }
+    impl response::Log {
+        pub const NAME: &'static str = "log";
+        pub const CODE: &'static [u8] = &[0xB0];
+        pub const MIN_LEN: usize = 4;
+        pub const MAX_LEN: usize = 258;
+        pub const DESC: rt::MessageDesc = rt::desc(Self::NAME, 0xB0, 1, &[4]);
+        pub const ENTRIES_DESC: rt::FieldDesc = rt::field(Self::NAME, "entries");
+        pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
+            f("entries", rt::List(self.entries.elements()));
+        }
+        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            Response::Log(*self).encode(address, buf)
+        }
+    }
+    /// Each request as a struct of its own; its constants (`DESC`, which names it as
+    /// refusals do: name, code and the frame lengths of its code; `QUANTITY_DESC`, each
+    /// field a refusal names) and methods are in the `impl` of each.
     pub mod request {
         /// §3.1 Read position (code `0x10`, 4 bytes).
         #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
@@ -797,9 +732,8 @@ pub mod cobs_link {
         #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]
         pub struct ReadLog;
     }
-    /// Each response as a struct of its own, and the fields its refusals name.
+    /// Each response as a struct of its own.
     pub mod response {
-        use ::busspec_runtime::FieldDesc;
         /// §4.1 Position (code `0x90`, 8 bytes).
         #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
         #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
@@ -822,7 +756,5 @@ pub mod cobs_link {
         pub struct Log {
             pub entries: super::rt::Repeated<u8, 254>,
         }
-        /// `log.entries`
-        pub const LOG_ENTRIES: FieldDesc = FieldDesc::new("log", "entries");
     }
 }

@@ -100,38 +100,6 @@ pub mod codeless {
             Self(raw)
         }
     }
-    impl request::Ping {
-        pub const NAME: &'static str = "ping";
-        pub const CODE: &'static [u8] = &[0x01];
-        pub const LEN: usize = 6;
-        pub const DESC: rt::MessageDesc = rt::MessageDesc::new(
-            Self::NAME,
-            0x01,
-            1,
-            &[6],
-        );
-        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
-            Request::Ping(*self).encode(address, buf)
-        }
-    }
-    impl request::Read {
-        pub const NAME: &'static str = "read";
-        pub const CODE: &'static [u8] = &[0x02];
-        pub const LEN: usize = 7;
-        pub const DESC: rt::MessageDesc = rt::MessageDesc::new(
-            Self::NAME,
-            0x02,
-            1,
-            &[7],
-        );
-        pub const REGISTER: rt::Range<usize> = 5..6;
-        pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
-            f("register", rt::Int(self.register as i64));
-        }
-        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
-            Request::Read(*self).encode(address, buf)
-        }
-    }
     ///A request (command), host to device.
     #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
     #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
@@ -177,14 +145,10 @@ pub mod codeless {
         /// Encodes the frame for `address` into `buf`; returns the frame length. Refuses what
         /// decode refuses: an address no frame may carry, the broadcast address for a command
         /// that does not accept it, a value outside its field's range.
-        pub fn encode(
-            &self,
-            address: u8,
-            buf: &mut [u8],
-        ) -> rt::Result<usize, rt::EncodeError> {
+        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             rt::encode_address(address, &FRAME)?;
             let len = match *self {
-                Self::Ping(request::Ping {}) => {
+                Self::Ping(_) => {
                     rt::frame_mut::<6>(buf, &[0xFF, 0xFF, address, 0x02, 0x01])?.len()
                 }
                 Self::Read(request::Read { register: v_register }) => {
@@ -241,17 +205,16 @@ pub mod codeless {
             name: &str,
             mut field: impl FnMut(&'static str) -> rt::Option<rt::FieldValue<'v>>,
         ) -> rt::Result<Self, rt::FieldError> {
-            match name {
-                "ping" => rt::Ok(Self::Ping(request::Ping)),
+            let message = match name {
+                "ping" => Self::Ping(request::Ping),
                 "read" => {
-                    rt::Ok(
-                        Self::Read(request::Read {
-                            register: rt::get(&mut field, "register")?,
-                        }),
-                    )
+                    Self::Read(request::Read {
+                        register: rt::get(&mut field, "register")?,
+                    })
                 }
-                _ => rt::Err(rt::FieldError::UnknownMessage),
-            }
+                _ => return rt::Err(rt::FieldError::UnknownMessage),
+            };
+            rt::Ok(message)
         }
     }
     impl rt::Message for Request {
@@ -272,11 +235,7 @@ pub mod codeless {
             Request::visit(self, f)
         }
         #[inline]
-        fn encode(
-            &self,
-            address: u8,
-            buf: &mut [u8],
-        ) -> rt::Result<usize, rt::EncodeError> {
+        fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             Request::encode(self, address, buf)
         }
         #[inline]
@@ -311,44 +270,6 @@ pub mod codeless {
         /// The responses this command may get, bit `i` for row `i` of `Response::MESSAGES`.
         const fn replies(&self) -> u64 {
             Self::COMMANDS[self.index()].3
-        }
-    }
-    impl response::Status {
-        pub const NAME: &'static str = "status";
-        pub const CODE: &'static [u8] = &[];
-        pub const LEN: usize = 6;
-        pub const DESC: rt::MessageDesc = rt::MessageDesc::new(
-            Self::NAME,
-            0,
-            0,
-            &[6, 8],
-        );
-        pub const ERROR: rt::Range<usize> = 4..5;
-        pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
-            f("error", rt::Int(self.error.raw() as i64));
-        }
-        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
-            Response::Status(*self).encode(address, buf)
-        }
-    }
-    impl response::ReadStatus {
-        pub const NAME: &'static str = "read_status";
-        pub const CODE: &'static [u8] = &[];
-        pub const LEN: usize = 8;
-        pub const DESC: rt::MessageDesc = rt::MessageDesc::new(
-            Self::NAME,
-            0,
-            0,
-            &[6, 8],
-        );
-        pub const ERROR: rt::Range<usize> = 4..5;
-        pub const VALUE: rt::Range<usize> = 5..7;
-        pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
-            f("error", rt::Int(self.error.raw() as i64));
-            f("value", rt::Int(self.value as i64));
-        }
-        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
-            Response::ReadStatus(*self).encode(address, buf)
         }
     }
     ///A response, device to host.
@@ -396,11 +317,7 @@ pub mod codeless {
         /// Encodes the frame for `address` into `buf`; returns the frame length. Refuses what
         /// decode refuses: an address no frame may carry, the broadcast address for a command
         /// that does not accept it, a value outside its field's range.
-        pub fn encode(
-            &self,
-            address: u8,
-            buf: &mut [u8],
-        ) -> rt::Result<usize, rt::EncodeError> {
+        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             rt::encode_address(address, &FRAME)?;
             let len = match *self {
                 Self::Status(response::Status { error: v_error }) => {
@@ -500,24 +417,21 @@ pub mod codeless {
             name: &str,
             mut field: impl FnMut(&'static str) -> rt::Option<rt::FieldValue<'v>>,
         ) -> rt::Result<Self, rt::FieldError> {
-            match name {
+            let message = match name {
                 "status" => {
-                    rt::Ok(
-                        Self::Status(response::Status {
-                            error: Errors::from_raw(rt::get(&mut field, "error")?),
-                        }),
-                    )
+                    Self::Status(response::Status {
+                        error: Errors::from_raw(rt::get(&mut field, "error")?),
+                    })
                 }
                 "read_status" => {
-                    rt::Ok(
-                        Self::ReadStatus(response::ReadStatus {
-                            error: Errors::from_raw(rt::get(&mut field, "error")?),
-                            value: rt::get(&mut field, "value")?,
-                        }),
-                    )
+                    Self::ReadStatus(response::ReadStatus {
+                        error: Errors::from_raw(rt::get(&mut field, "error")?),
+                        value: rt::get(&mut field, "value")?,
+                    })
                 }
-                _ => rt::Err(rt::FieldError::UnknownMessage),
-            }
+                _ => return rt::Err(rt::FieldError::UnknownMessage),
+            };
+            rt::Ok(message)
         }
     }
     impl rt::Message for Response {
@@ -538,11 +452,7 @@ pub mod codeless {
             Response::visit(self, f)
         }
         #[inline]
-        fn encode(
-            &self,
-            address: u8,
-            buf: &mut [u8],
-        ) -> rt::Result<usize, rt::EncodeError> {
+        fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             Response::encode(self, address, buf)
         }
         #[inline]
@@ -677,9 +587,59 @@ pub mod codeless {
     pub type StreamDecoder = ::busspec_runtime::stream::StreamDecoder<Codeless>;
     /// What [`StreamDecoder`] finds in a stream.
     pub type Event = ::busspec_runtime::stream::Event<Request, Response>;
-    /// Each request as a struct of its own (its `DESC` names it as refusals do: name,
-    /// code and the frame lengths of its code), and each field a refusal names
-    /// (`message.field`, `FieldDesc`).
+    impl request::Ping {
+        pub const NAME: &'static str = "ping";
+        pub const CODE: &'static [u8] = &[0x01];
+        pub const LEN: usize = 6;
+        pub const DESC: rt::MessageDesc = rt::desc(Self::NAME, 0x01, 1, &[6]);
+        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            Request::Ping(*self).encode(address, buf)
+        }
+    }
+    impl request::Read {
+        pub const NAME: &'static str = "read";
+        pub const CODE: &'static [u8] = &[0x02];
+        pub const LEN: usize = 7;
+        pub const DESC: rt::MessageDesc = rt::desc(Self::NAME, 0x02, 1, &[7]);
+        pub const REGISTER: rt::Range<usize> = 5..6;
+        pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
+            f("register", rt::Int(self.register as i64));
+        }
+        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            Request::Read(*self).encode(address, buf)
+        }
+    }
+    impl response::Status {
+        pub const NAME: &'static str = "status";
+        pub const CODE: &'static [u8] = &[];
+        pub const LEN: usize = 6;
+        pub const DESC: rt::MessageDesc = rt::desc(Self::NAME, 0, 0, &[6, 8]);
+        pub const ERROR: rt::Range<usize> = 4..5;
+        pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
+            f("error", rt::Int(self.error.raw() as i64));
+        }
+        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            Response::Status(*self).encode(address, buf)
+        }
+    }
+    impl response::ReadStatus {
+        pub const NAME: &'static str = "read_status";
+        pub const CODE: &'static [u8] = &[];
+        pub const LEN: usize = 8;
+        pub const DESC: rt::MessageDesc = rt::desc(Self::NAME, 0, 0, &[6, 8]);
+        pub const ERROR: rt::Range<usize> = 4..5;
+        pub const VALUE: rt::Range<usize> = 5..7;
+        pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
+            f("error", rt::Int(self.error.raw() as i64));
+            f("value", rt::Int(self.value as i64));
+        }
+        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            Response::ReadStatus(*self).encode(address, buf)
+        }
+    }
+    /// Each request as a struct of its own; its constants (`DESC`, which names it as
+    /// refusals do: name, code and the frame lengths of its code; `QUANTITY_DESC`, each
+    /// field a refusal names) and methods are in the `impl` of each.
     pub mod request {
         /// §1 Ping (code `0x01`, 6 bytes).
         #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
@@ -695,7 +655,7 @@ pub mod codeless {
             pub register: u8,
         }
     }
-    /// Each response as a struct of its own, and the fields its refusals name.
+    /// Each response as a struct of its own.
     pub mod response {
         /// §3 Status (code `0x`, 6 bytes).
         #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]

@@ -236,82 +236,6 @@ pub mod clash {
             Self(raw)
         }
     }
-    impl request::Option {
-        pub const NAME: &'static str = "option";
-        pub const CODE: &'static [u8] = &[0x10];
-        pub const LEN: usize = 7;
-        pub const DESC: rt::MessageDesc = rt::MessageDesc::new(
-            Self::NAME,
-            0x10,
-            1,
-            &[7],
-        );
-        pub const SOME: rt::Range<usize> = 3..4;
-        pub const CORE: rt::Range<usize> = 4..6;
-        pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
-            f("some", rt::Int(self.some.raw() as i64));
-            f("core", rt::Int(self.core.raw() as i64));
-        }
-        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
-            Request::Option(*self).encode(address, buf)
-        }
-    }
-    impl request::U8 {
-        pub const NAME: &'static str = "u8";
-        pub const CODE: &'static [u8] = &[0x11];
-        pub const LEN: usize = 5;
-        pub const DESC: rt::MessageDesc = rt::MessageDesc::new(
-            Self::NAME,
-            0x11,
-            1,
-            &[5],
-        );
-        pub const FRAME: rt::Range<usize> = 3..4;
-        pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
-            f("frame", rt::Int(self.frame.raw() as i64));
-        }
-        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
-            Request::U8(*self).encode(address, buf)
-        }
-    }
-    impl request::Core {
-        pub const NAME: &'static str = "core";
-        pub const CODE: &'static [u8] = &[0x12];
-        pub const LEN: usize = 7;
-        pub const DESC: rt::MessageDesc = rt::MessageDesc::new(
-            Self::NAME,
-            0x12,
-            1,
-            &[7],
-        );
-        pub const ADDRESS: rt::Range<usize> = 3..4;
-        pub const OUT: rt::Range<usize> = 5..6;
-        pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
-            f("address", rt::Int(self.address as i64));
-            f("out", rt::Int(self.out as i64));
-        }
-        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
-            Request::Core(*self).encode(address, buf)
-        }
-    }
-    impl request::Rt {
-        pub const NAME: &'static str = "rt";
-        pub const CODE: &'static [u8] = &[0x13];
-        pub const LEN: usize = 6;
-        pub const DESC: rt::MessageDesc = rt::MessageDesc::new(
-            Self::NAME,
-            0x13,
-            1,
-            &[6],
-        );
-        pub const F: rt::Range<usize> = 3..4;
-        pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
-            f("f", rt::Int(self.f as i64));
-        }
-        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
-            Request::Rt(*self).encode(address, buf)
-        }
-    }
     ///A request (command), host to device.
     #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
     #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
@@ -365,11 +289,7 @@ pub mod clash {
         /// Encodes the frame for `address` into `buf`; returns the frame length. Refuses what
         /// decode refuses: an address no frame may carry, the broadcast address for a command
         /// that does not accept it, a value outside its field's range.
-        pub fn encode(
-            &self,
-            address: u8,
-            buf: &mut [u8],
-        ) -> rt::Result<usize, rt::EncodeError> {
+        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             rt::encode_address(address, &FRAME)?;
             let len = match *self {
                 Self::Option(request::Option { some: v_some, core: v_core }) => {
@@ -427,7 +347,7 @@ pub mod clash {
                     let frame = rt::fixed::<7>(frame, &request::Option::DESC)?;
                     rt::no_broadcast(frame[1], 0x00, &request::Option::DESC)?;
                     let field_1: u16 = u16::from_le_bytes([frame[4], frame[5]]);
-                    rt::in_range(&request::OPTION_CORE, 4, field_1, 0, 1000)?;
+                    rt::in_range(&request::Option::CORE_DESC, 4, field_1, 0, 1000)?;
                     rt::Ok(
                         Self::Option(request::Option {
                             some: Result::from_raw(frame[3]),
@@ -446,7 +366,7 @@ pub mod clash {
                 }
                 0x12 => {
                     let frame = rt::fixed::<7>(frame, &request::Core::DESC)?;
-                    rt::equal(&request::CORE_BUF, 4, frame[4], 0x0)?;
+                    rt::equal(&request::Core::BUF_DESC, 4, frame[4], 0x0)?;
                     rt::Ok(
                         Self::Core(request::Core {
                             address: frame[3],
@@ -457,7 +377,7 @@ pub mod clash {
                 0x13 => {
                     let frame = rt::fixed::<6>(frame, &request::Rt::DESC)?;
                     rt::no_broadcast(frame[1], 0x00, &request::Rt::DESC)?;
-                    rt::same(&request::RT_FIELD, 4, frame[4], "f", frame[3])?;
+                    rt::same(&request::Rt::FIELD_DESC, 4, frame[4], "f", frame[3])?;
                     rt::Ok(Self::Rt(request::Rt { f: frame[3] }))
                 }
                 _ => rt::Err(rt::unknown_code(frame, 2, 1, 1, false)),
@@ -470,41 +390,34 @@ pub mod clash {
             name: &str,
             mut field: impl FnMut(&'static str) -> rt::Option<rt::FieldValue<'v>>,
         ) -> rt::Result<Self, rt::FieldError> {
-            match name {
+            let message = match name {
                 "option" => {
-                    rt::Ok(
-                        Self::Option(request::Option {
-                            some: Result::from_raw(rt::get(&mut field, "some")?),
-                            core: Option::from_raw(rt::get(&mut field, "core")?),
-                        }),
-                    )
+                    Self::Option(request::Option {
+                        some: Result::from_raw(rt::get(&mut field, "some")?),
+                        core: Option::from_raw(rt::get(&mut field, "core")?),
+                    })
                 }
                 "u8" => {
-                    rt::Ok(
-                        Self::U8(request::U8 {
-                            frame: Some::from_raw(
-                                (rt::get::<u8>(&mut field, "frame")?) as i16,
-                            ),
-                        }),
-                    )
+                    Self::U8(request::U8 {
+                        frame: Some::from_raw(
+                            (rt::get::<u8>(&mut field, "frame")?) as i16,
+                        ),
+                    })
                 }
                 "core" => {
-                    rt::Ok(
-                        Self::Core(request::Core {
-                            address: rt::get(&mut field, "address")?,
-                            out: rt::get(&mut field, "out")?,
-                        }),
-                    )
+                    Self::Core(request::Core {
+                        address: rt::get(&mut field, "address")?,
+                        out: rt::get(&mut field, "out")?,
+                    })
                 }
                 "rt" => {
-                    rt::Ok(
-                        Self::Rt(request::Rt {
-                            f: rt::get(&mut field, "f")?,
-                        }),
-                    )
+                    Self::Rt(request::Rt {
+                        f: rt::get(&mut field, "f")?,
+                    })
                 }
-                _ => rt::Err(rt::FieldError::UnknownMessage),
-            }
+                _ => return rt::Err(rt::FieldError::UnknownMessage),
+            };
+            rt::Ok(message)
         }
     }
     impl rt::Message for Request {
@@ -525,11 +438,7 @@ pub mod clash {
             Request::visit(self, f)
         }
         #[inline]
-        fn encode(
-            &self,
-            address: u8,
-            buf: &mut [u8],
-        ) -> rt::Result<usize, rt::EncodeError> {
+        fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             Request::encode(self, address, buf)
         }
         #[inline]
@@ -566,74 +475,6 @@ pub mod clash {
         /// The responses this command may get, bit `i` for row `i` of `Response::MESSAGES`.
         const fn replies(&self) -> u64 {
             Self::COMMANDS[self.index()].3
-        }
-    }
-    impl response::Ok {
-        pub const NAME: &'static str = "ok";
-        pub const CODE: &'static [u8] = &[0x50];
-        pub const LEN: usize = 4;
-        pub const DESC: rt::MessageDesc = rt::MessageDesc::new(
-            Self::NAME,
-            0x50,
-            1,
-            &[4],
-        );
-        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
-            Response::Ok(*self).encode(address, buf)
-        }
-    }
-    impl response::Err {
-        pub const NAME: &'static str = "err";
-        pub const CODE: &'static [u8] = &[0x90];
-        pub const LEN: usize = 4;
-        pub const DESC: rt::MessageDesc = rt::MessageDesc::new(
-            Self::NAME,
-            0x90,
-            1,
-            &[4],
-        );
-        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
-            Response::Err(*self).encode(address, buf)
-        }
-    }
-    impl response::Result {
-        pub const NAME: &'static str = "result";
-        pub const CODE: &'static [u8] = &[0x51];
-        pub const LEN: usize = 7;
-        pub const DESC: rt::MessageDesc = rt::MessageDesc::new(
-            Self::NAME,
-            0x51,
-            1,
-            &[7],
-        );
-        pub const G: rt::Range<usize> = 3..4;
-        pub const USIZE: rt::Range<usize> = 4..6;
-        pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
-            f("g", rt::Int(self.g.raw() as i64));
-            f("usize", rt::Int(self.usize.raw() as i64));
-        }
-        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
-            Response::Result(*self).encode(address, buf)
-        }
-    }
-    impl response::Usize {
-        pub const NAME: &'static str = "usize";
-        pub const CODE: &'static [u8] = &[0x52];
-        pub const LEN: usize = 7;
-        pub const DESC: rt::MessageDesc = rt::MessageDesc::new(
-            Self::NAME,
-            0x52,
-            1,
-            &[7],
-        );
-        pub const ASKED: rt::Range<usize> = 3..5;
-        pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
-            f("asked", rt::Text(&self.asked[..]));
-            f("none", rt::Int(self.none as i64));
-            f("some", rt::Int(self.some.raw() as i64));
-        }
-        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
-            Response::Usize(*self).encode(address, buf)
         }
     }
     ///A response, device to host.
@@ -688,26 +529,16 @@ pub mod clash {
         /// Encodes the frame for `address` into `buf`; returns the frame length. Refuses what
         /// decode refuses: an address no frame may carry, the broadcast address for a command
         /// that does not accept it, a value outside its field's range.
-        pub fn encode(
-            &self,
-            address: u8,
-            buf: &mut [u8],
-        ) -> rt::Result<usize, rt::EncodeError> {
+        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             rt::encode_address(address, &FRAME)?;
             let len = match *self {
-                Self::Ok(response::Ok {}) => {
-                    rt::seal_sum8_head(
-                        rt::frame_mut::<4>(buf, &[0xAA, address, 0x50])?,
-                        3,
-                        address.wrapping_add(0xFA),
-                    )
+                Self::Ok(_) => {
+                    let out = rt::frame_mut::<4>(buf, &[0xAA, address, 0x50])?;
+                    rt::seal_sum8_head(out, 3, address.wrapping_add(0xFA))
                 }
-                Self::Err(response::Err {}) => {
-                    rt::seal_sum8_head(
-                        rt::frame_mut::<4>(buf, &[0xAA, address, 0x90])?,
-                        3,
-                        address.wrapping_add(0x3A),
-                    )
+                Self::Err(_) => {
+                    let out = rt::frame_mut::<4>(buf, &[0xAA, address, 0x90])?;
+                    rt::seal_sum8_head(out, 3, address.wrapping_add(0x3A))
                 }
                 Self::Result(response::Result { g: v_g, usize: v_usize }) => {
                     let out = rt::frame_mut::<7>(buf, &[0xAA, address, 0x51])?;
@@ -815,30 +646,27 @@ pub mod clash {
             name: &str,
             mut field: impl FnMut(&'static str) -> rt::Option<rt::FieldValue<'v>>,
         ) -> rt::Result<Self, rt::FieldError> {
-            match name {
-                "ok" => rt::Ok(Self::Ok(response::Ok)),
-                "err" => rt::Ok(Self::Err(response::Err)),
+            let message = match name {
+                "ok" => Self::Ok(response::Ok),
+                "err" => Self::Err(response::Err),
                 "result" => {
-                    rt::Ok(
-                        Self::Result(response::Result {
-                            g: Ok::from_raw(rt::get(&mut field, "g")?),
-                            usize: Option::from_raw(rt::get(&mut field, "usize")?),
-                        }),
-                    )
+                    Self::Result(response::Result {
+                        g: Ok::from_raw(rt::get(&mut field, "g")?),
+                        usize: Option::from_raw(rt::get(&mut field, "usize")?),
+                    })
                 }
                 "usize" => {
-                    rt::Ok(
-                        Self::Usize(response::Usize {
-                            asked: rt::text(&mut field, "asked")?,
-                            none: rt::field_int("none", field("none"), 0, 15)? as u8,
-                            some: Some::from_raw(
-                                rt::field_int("some", field("some"), -8, 7)? as i16,
-                            ),
-                        }),
-                    )
+                    Self::Usize(response::Usize {
+                        asked: rt::text(&mut field, "asked")?,
+                        none: rt::field_int("none", field("none"), 0, 15)? as u8,
+                        some: Some::from_raw(
+                            rt::field_int("some", field("some"), -8, 7)? as i16,
+                        ),
+                    })
                 }
-                _ => rt::Err(rt::FieldError::UnknownMessage),
-            }
+                _ => return rt::Err(rt::FieldError::UnknownMessage),
+            };
+            rt::Ok(message)
         }
     }
     impl rt::Message for Response {
@@ -859,11 +687,7 @@ pub mod clash {
             Response::visit(self, f)
         }
         #[inline]
-        fn encode(
-            &self,
-            address: u8,
-            buf: &mut [u8],
-        ) -> rt::Result<usize, rt::EncodeError> {
+        fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             Response::encode(self, address, buf)
         }
         #[inline]
@@ -984,11 +808,117 @@ pub mod clash {
     pub type StreamDecoder = ::busspec_runtime::stream::StreamDecoder<Clash>;
     /// What [`StreamDecoder`] finds in a stream.
     pub type Event = ::busspec_runtime::stream::Event<Request, Response>;
-    /// Each request as a struct of its own (its `DESC` names it as refusals do: name,
-    /// code and the frame lengths of its code), and each field a refusal names
-    /// (`message.field`, `FieldDesc`).
+    impl request::Option {
+        pub const NAME: &'static str = "option";
+        pub const CODE: &'static [u8] = &[0x10];
+        pub const LEN: usize = 7;
+        pub const DESC: rt::MessageDesc = rt::desc(Self::NAME, 0x10, 1, &[7]);
+        pub const SOME: rt::Range<usize> = 3..4;
+        pub const CORE: rt::Range<usize> = 4..6;
+        pub const CORE_DESC: rt::FieldDesc = rt::field(Self::NAME, "core");
+        pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
+            f("some", rt::Int(self.some.raw() as i64));
+            f("core", rt::Int(self.core.raw() as i64));
+        }
+        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            Request::Option(*self).encode(address, buf)
+        }
+    }
+    impl request::U8 {
+        pub const NAME: &'static str = "u8";
+        pub const CODE: &'static [u8] = &[0x11];
+        pub const LEN: usize = 5;
+        pub const DESC: rt::MessageDesc = rt::desc(Self::NAME, 0x11, 1, &[5]);
+        pub const FRAME: rt::Range<usize> = 3..4;
+        pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
+            f("frame", rt::Int(self.frame.raw() as i64));
+        }
+        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            Request::U8(*self).encode(address, buf)
+        }
+    }
+    impl request::Core {
+        pub const NAME: &'static str = "core";
+        pub const CODE: &'static [u8] = &[0x12];
+        pub const LEN: usize = 7;
+        pub const DESC: rt::MessageDesc = rt::desc(Self::NAME, 0x12, 1, &[7]);
+        pub const ADDRESS: rt::Range<usize> = 3..4;
+        pub const OUT: rt::Range<usize> = 5..6;
+        pub const BUF_DESC: rt::FieldDesc = rt::field(Self::NAME, "buf");
+        pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
+            f("address", rt::Int(self.address as i64));
+            f("out", rt::Int(self.out as i64));
+        }
+        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            Request::Core(*self).encode(address, buf)
+        }
+    }
+    impl request::Rt {
+        pub const NAME: &'static str = "rt";
+        pub const CODE: &'static [u8] = &[0x13];
+        pub const LEN: usize = 6;
+        pub const DESC: rt::MessageDesc = rt::desc(Self::NAME, 0x13, 1, &[6]);
+        pub const F: rt::Range<usize> = 3..4;
+        pub const FIELD_DESC: rt::FieldDesc = rt::field(Self::NAME, "field");
+        pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
+            f("f", rt::Int(self.f as i64));
+        }
+        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            Request::Rt(*self).encode(address, buf)
+        }
+    }
+    impl response::Ok {
+        pub const NAME: &'static str = "ok";
+        pub const CODE: &'static [u8] = &[0x50];
+        pub const LEN: usize = 4;
+        pub const DESC: rt::MessageDesc = rt::desc(Self::NAME, 0x50, 1, &[4]);
+        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            Response::Ok(*self).encode(address, buf)
+        }
+    }
+    impl response::Err {
+        pub const NAME: &'static str = "err";
+        pub const CODE: &'static [u8] = &[0x90];
+        pub const LEN: usize = 4;
+        pub const DESC: rt::MessageDesc = rt::desc(Self::NAME, 0x90, 1, &[4]);
+        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            Response::Err(*self).encode(address, buf)
+        }
+    }
+    impl response::Result {
+        pub const NAME: &'static str = "result";
+        pub const CODE: &'static [u8] = &[0x51];
+        pub const LEN: usize = 7;
+        pub const DESC: rt::MessageDesc = rt::desc(Self::NAME, 0x51, 1, &[7]);
+        pub const G: rt::Range<usize> = 3..4;
+        pub const USIZE: rt::Range<usize> = 4..6;
+        pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
+            f("g", rt::Int(self.g.raw() as i64));
+            f("usize", rt::Int(self.usize.raw() as i64));
+        }
+        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            Response::Result(*self).encode(address, buf)
+        }
+    }
+    impl response::Usize {
+        pub const NAME: &'static str = "usize";
+        pub const CODE: &'static [u8] = &[0x52];
+        pub const LEN: usize = 7;
+        pub const DESC: rt::MessageDesc = rt::desc(Self::NAME, 0x52, 1, &[7]);
+        pub const ASKED: rt::Range<usize> = 3..5;
+        pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
+            f("asked", rt::Text(&self.asked[..]));
+            f("none", rt::Int(self.none as i64));
+            f("some", rt::Int(self.some.raw() as i64));
+        }
+        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            Response::Usize(*self).encode(address, buf)
+        }
+    }
+    /// Each request as a struct of its own; its constants (`DESC`, which names it as
+    /// refusals do: name, code and the frame lengths of its code; `QUANTITY_DESC`, each
+    /// field a refusal names) and methods are in the `impl` of each.
     pub mod request {
-        use ::busspec_runtime::FieldDesc;
         /// §1 Option (code `0x10`, 7 bytes).
         #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
         #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
@@ -1025,14 +955,8 @@ pub mod clash {
         pub struct Rt {
             pub f: u8,
         }
-        /// `option.core`
-        pub const OPTION_CORE: FieldDesc = FieldDesc::new("option", "core");
-        /// `core.buf`
-        pub const CORE_BUF: FieldDesc = FieldDesc::new("core", "buf");
-        /// `rt.field`
-        pub const RT_FIELD: FieldDesc = FieldDesc::new("rt", "field");
     }
-    /// Each response as a struct of its own, and the fields its refusals name.
+    /// Each response as a struct of its own.
     pub mod response {
         /// §5 Ok (code `0x50`, 4 bytes).
         #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]

@@ -99,56 +99,6 @@ pub mod crc_extra {
             rt::None => CRC.checksum(bytes),
         }
     }
-    impl request::Ping {
-        pub const NAME: &'static str = "ping";
-        pub const CODE: &'static [u8] = &[0x04];
-        pub const LEN: usize = 19;
-        pub const DESC: rt::MessageDesc = rt::MessageDesc::new(
-            Self::NAME,
-            0x04,
-            1,
-            &[19],
-        );
-        pub const TIME_USEC: rt::Range<usize> = 3..11;
-        pub const SEQ: rt::Range<usize> = 11..15;
-        pub const TARGET_SYSTEM: rt::Range<usize> = 15..16;
-        pub const TARGET_COMPONENT: rt::Range<usize> = 16..17;
-        pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
-            f("time_usec", rt::Int(self.time_usec as i64));
-            f("seq", rt::Int(self.seq as i64));
-            f("target_system", rt::Int(self.target_system as i64));
-            f("target_component", rt::Int(self.target_component as i64));
-        }
-        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
-            Request::Ping(*self).encode(address, buf)
-        }
-    }
-    impl request::RequestDataStream {
-        pub const NAME: &'static str = "request_data_stream";
-        pub const CODE: &'static [u8] = &[0x42];
-        pub const LEN: usize = 11;
-        pub const DESC: rt::MessageDesc = rt::MessageDesc::new(
-            Self::NAME,
-            0x42,
-            1,
-            &[11],
-        );
-        pub const REQ_MESSAGE_RATE: rt::Range<usize> = 3..5;
-        pub const TARGET_SYSTEM: rt::Range<usize> = 5..6;
-        pub const TARGET_COMPONENT: rt::Range<usize> = 6..7;
-        pub const REQ_STREAM_ID: rt::Range<usize> = 7..8;
-        pub const START_STOP: rt::Range<usize> = 8..9;
-        pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
-            f("req_message_rate", rt::Int(self.req_message_rate as i64));
-            f("target_system", rt::Int(self.target_system as i64));
-            f("target_component", rt::Int(self.target_component as i64));
-            f("req_stream_id", rt::Int(self.req_stream_id as i64));
-            f("start_stop", rt::Int(self.start_stop as i64));
-        }
-        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
-            Request::RequestDataStream(*self).encode(address, buf)
-        }
-    }
     ///A request (command), host to device.
     #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
     #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
@@ -194,11 +144,7 @@ pub mod crc_extra {
         /// Encodes the frame for `address` into `buf`; returns the frame length. Refuses what
         /// decode refuses: an address no frame may carry, the broadcast address for a command
         /// that does not accept it, a value outside its field's range.
-        pub fn encode(
-            &self,
-            address: u8,
-            buf: &mut [u8],
-        ) -> rt::Result<usize, rt::EncodeError> {
+        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             rt::encode_address(address, &FRAME)?;
             let len = match *self {
                 Self::Ping(
@@ -288,7 +234,7 @@ pub mod crc_extra {
                         11,
                     >(frame, &request::RequestDataStream::DESC)?;
                     rt::in_range(
-                        &request::REQUEST_DATA_STREAM_START_STOP,
+                        &request::RequestDataStream::START_STOP_DESC,
                         8,
                         frame[8],
                         0,
@@ -314,30 +260,27 @@ pub mod crc_extra {
             name: &str,
             mut field: impl FnMut(&'static str) -> rt::Option<rt::FieldValue<'v>>,
         ) -> rt::Result<Self, rt::FieldError> {
-            match name {
+            let message = match name {
                 "ping" => {
-                    rt::Ok(
-                        Self::Ping(request::Ping {
-                            time_usec: rt::get(&mut field, "time_usec")?,
-                            seq: rt::get(&mut field, "seq")?,
-                            target_system: rt::get(&mut field, "target_system")?,
-                            target_component: rt::get(&mut field, "target_component")?,
-                        }),
-                    )
+                    Self::Ping(request::Ping {
+                        time_usec: rt::get(&mut field, "time_usec")?,
+                        seq: rt::get(&mut field, "seq")?,
+                        target_system: rt::get(&mut field, "target_system")?,
+                        target_component: rt::get(&mut field, "target_component")?,
+                    })
                 }
                 "request_data_stream" => {
-                    rt::Ok(
-                        Self::RequestDataStream(request::RequestDataStream {
-                            req_message_rate: rt::get(&mut field, "req_message_rate")?,
-                            target_system: rt::get(&mut field, "target_system")?,
-                            target_component: rt::get(&mut field, "target_component")?,
-                            req_stream_id: rt::get(&mut field, "req_stream_id")?,
-                            start_stop: rt::get(&mut field, "start_stop")?,
-                        }),
-                    )
+                    Self::RequestDataStream(request::RequestDataStream {
+                        req_message_rate: rt::get(&mut field, "req_message_rate")?,
+                        target_system: rt::get(&mut field, "target_system")?,
+                        target_component: rt::get(&mut field, "target_component")?,
+                        req_stream_id: rt::get(&mut field, "req_stream_id")?,
+                        start_stop: rt::get(&mut field, "start_stop")?,
+                    })
                 }
-                _ => rt::Err(rt::FieldError::UnknownMessage),
-            }
+                _ => return rt::Err(rt::FieldError::UnknownMessage),
+            };
+            rt::Ok(message)
         }
     }
     impl rt::Message for Request {
@@ -358,11 +301,7 @@ pub mod crc_extra {
             Request::visit(self, f)
         }
         #[inline]
-        fn encode(
-            &self,
-            address: u8,
-            buf: &mut [u8],
-        ) -> rt::Result<usize, rt::EncodeError> {
+        fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             Request::encode(self, address, buf)
         }
         #[inline]
@@ -400,58 +339,6 @@ pub mod crc_extra {
         /// The responses this command may get, bit `i` for row `i` of `Response::MESSAGES`.
         const fn replies(&self) -> u64 {
             Self::COMMANDS[self.index()].3
-        }
-    }
-    impl response::PingReply {
-        pub const NAME: &'static str = "ping_reply";
-        pub const CODE: &'static [u8] = &[0x04];
-        pub const LEN: usize = 19;
-        pub const DESC: rt::MessageDesc = rt::MessageDesc::new(
-            Self::NAME,
-            0x04,
-            1,
-            &[19],
-        );
-        pub const TIME_USEC: rt::Range<usize> = 3..11;
-        pub const SEQ: rt::Range<usize> = 11..15;
-        pub const TARGET_SYSTEM: rt::Range<usize> = 15..16;
-        pub const TARGET_COMPONENT: rt::Range<usize> = 16..17;
-        pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
-            f("time_usec", rt::Int(self.time_usec as i64));
-            f("seq", rt::Int(self.seq as i64));
-            f("target_system", rt::Int(self.target_system as i64));
-            f("target_component", rt::Int(self.target_component as i64));
-        }
-        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
-            Response::PingReply(*self).encode(address, buf)
-        }
-    }
-    impl response::Heartbeat {
-        pub const NAME: &'static str = "heartbeat";
-        pub const CODE: &'static [u8] = &[0x00];
-        pub const LEN: usize = 14;
-        pub const DESC: rt::MessageDesc = rt::MessageDesc::new(
-            Self::NAME,
-            0x00,
-            1,
-            &[14],
-        );
-        pub const CUSTOM_MODE: rt::Range<usize> = 3..7;
-        pub const VEHICLE_TYPE: rt::Range<usize> = 7..8;
-        pub const AUTOPILOT: rt::Range<usize> = 8..9;
-        pub const BASE_MODE: rt::Range<usize> = 9..10;
-        pub const SYSTEM_STATUS: rt::Range<usize> = 10..11;
-        pub const MAVLINK_VERSION: rt::Range<usize> = 11..12;
-        pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
-            f("custom_mode", rt::Int(self.custom_mode as i64));
-            f("vehicle_type", rt::Int(self.vehicle_type as i64));
-            f("autopilot", rt::Int(self.autopilot as i64));
-            f("base_mode", rt::Int(self.base_mode as i64));
-            f("system_status", rt::Int(self.system_status as i64));
-            f("mavlink_version", rt::Int(self.mavlink_version as i64));
-        }
-        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
-            Response::Heartbeat(*self).encode(address, buf)
         }
     }
     ///A response, device to host.
@@ -499,11 +386,7 @@ pub mod crc_extra {
         /// Encodes the frame for `address` into `buf`; returns the frame length. Refuses what
         /// decode refuses: an address no frame may carry, the broadcast address for a command
         /// that does not accept it, a value outside its field's range.
-        pub fn encode(
-            &self,
-            address: u8,
-            buf: &mut [u8],
-        ) -> rt::Result<usize, rt::EncodeError> {
+        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             rt::encode_address(address, &FRAME)?;
             let len = match *self {
                 Self::PingReply(
@@ -644,31 +527,28 @@ pub mod crc_extra {
             name: &str,
             mut field: impl FnMut(&'static str) -> rt::Option<rt::FieldValue<'v>>,
         ) -> rt::Result<Self, rt::FieldError> {
-            match name {
+            let message = match name {
                 "ping_reply" => {
-                    rt::Ok(
-                        Self::PingReply(response::PingReply {
-                            time_usec: rt::get(&mut field, "time_usec")?,
-                            seq: rt::get(&mut field, "seq")?,
-                            target_system: rt::get(&mut field, "target_system")?,
-                            target_component: rt::get(&mut field, "target_component")?,
-                        }),
-                    )
+                    Self::PingReply(response::PingReply {
+                        time_usec: rt::get(&mut field, "time_usec")?,
+                        seq: rt::get(&mut field, "seq")?,
+                        target_system: rt::get(&mut field, "target_system")?,
+                        target_component: rt::get(&mut field, "target_component")?,
+                    })
                 }
                 "heartbeat" => {
-                    rt::Ok(
-                        Self::Heartbeat(response::Heartbeat {
-                            custom_mode: rt::get(&mut field, "custom_mode")?,
-                            vehicle_type: rt::get(&mut field, "vehicle_type")?,
-                            autopilot: rt::get(&mut field, "autopilot")?,
-                            base_mode: rt::get(&mut field, "base_mode")?,
-                            system_status: rt::get(&mut field, "system_status")?,
-                            mavlink_version: rt::get(&mut field, "mavlink_version")?,
-                        }),
-                    )
+                    Self::Heartbeat(response::Heartbeat {
+                        custom_mode: rt::get(&mut field, "custom_mode")?,
+                        vehicle_type: rt::get(&mut field, "vehicle_type")?,
+                        autopilot: rt::get(&mut field, "autopilot")?,
+                        base_mode: rt::get(&mut field, "base_mode")?,
+                        system_status: rt::get(&mut field, "system_status")?,
+                        mavlink_version: rt::get(&mut field, "mavlink_version")?,
+                    })
                 }
-                _ => rt::Err(rt::FieldError::UnknownMessage),
-            }
+                _ => return rt::Err(rt::FieldError::UnknownMessage),
+            };
+            rt::Ok(message)
         }
     }
     impl rt::Message for Response {
@@ -689,11 +569,7 @@ pub mod crc_extra {
             Response::visit(self, f)
         }
         #[inline]
-        fn encode(
-            &self,
-            address: u8,
-            buf: &mut [u8],
-        ) -> rt::Result<usize, rt::EncodeError> {
+        fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             Response::encode(self, address, buf)
         }
         #[inline]
@@ -819,11 +695,93 @@ pub mod crc_extra {
     pub type StreamDecoder = ::busspec_runtime::stream::StreamDecoder<CrcExtra>;
     /// What [`StreamDecoder`] finds in a stream.
     pub type Event = ::busspec_runtime::stream::Event<Request, Response>;
-    /// Each request as a struct of its own (its `DESC` names it as refusals do: name,
-    /// code and the frame lengths of its code), and each field a refusal names
-    /// (`message.field`, `FieldDesc`).
+    impl request::Ping {
+        pub const NAME: &'static str = "ping";
+        pub const CODE: &'static [u8] = &[0x04];
+        pub const LEN: usize = 19;
+        pub const DESC: rt::MessageDesc = rt::desc(Self::NAME, 0x04, 1, &[19]);
+        pub const TIME_USEC: rt::Range<usize> = 3..11;
+        pub const SEQ: rt::Range<usize> = 11..15;
+        pub const TARGET_SYSTEM: rt::Range<usize> = 15..16;
+        pub const TARGET_COMPONENT: rt::Range<usize> = 16..17;
+        pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
+            f("time_usec", rt::Int(self.time_usec as i64));
+            f("seq", rt::Int(self.seq as i64));
+            f("target_system", rt::Int(self.target_system as i64));
+            f("target_component", rt::Int(self.target_component as i64));
+        }
+        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            Request::Ping(*self).encode(address, buf)
+        }
+    }
+    impl request::RequestDataStream {
+        pub const NAME: &'static str = "request_data_stream";
+        pub const CODE: &'static [u8] = &[0x42];
+        pub const LEN: usize = 11;
+        pub const DESC: rt::MessageDesc = rt::desc(Self::NAME, 0x42, 1, &[11]);
+        pub const REQ_MESSAGE_RATE: rt::Range<usize> = 3..5;
+        pub const TARGET_SYSTEM: rt::Range<usize> = 5..6;
+        pub const TARGET_COMPONENT: rt::Range<usize> = 6..7;
+        pub const REQ_STREAM_ID: rt::Range<usize> = 7..8;
+        pub const START_STOP: rt::Range<usize> = 8..9;
+        pub const START_STOP_DESC: rt::FieldDesc = rt::field(Self::NAME, "start_stop");
+        pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
+            f("req_message_rate", rt::Int(self.req_message_rate as i64));
+            f("target_system", rt::Int(self.target_system as i64));
+            f("target_component", rt::Int(self.target_component as i64));
+            f("req_stream_id", rt::Int(self.req_stream_id as i64));
+            f("start_stop", rt::Int(self.start_stop as i64));
+        }
+        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            Request::RequestDataStream(*self).encode(address, buf)
+        }
+    }
+    impl response::PingReply {
+        pub const NAME: &'static str = "ping_reply";
+        pub const CODE: &'static [u8] = &[0x04];
+        pub const LEN: usize = 19;
+        pub const DESC: rt::MessageDesc = rt::desc(Self::NAME, 0x04, 1, &[19]);
+        pub const TIME_USEC: rt::Range<usize> = 3..11;
+        pub const SEQ: rt::Range<usize> = 11..15;
+        pub const TARGET_SYSTEM: rt::Range<usize> = 15..16;
+        pub const TARGET_COMPONENT: rt::Range<usize> = 16..17;
+        pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
+            f("time_usec", rt::Int(self.time_usec as i64));
+            f("seq", rt::Int(self.seq as i64));
+            f("target_system", rt::Int(self.target_system as i64));
+            f("target_component", rt::Int(self.target_component as i64));
+        }
+        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            Response::PingReply(*self).encode(address, buf)
+        }
+    }
+    impl response::Heartbeat {
+        pub const NAME: &'static str = "heartbeat";
+        pub const CODE: &'static [u8] = &[0x00];
+        pub const LEN: usize = 14;
+        pub const DESC: rt::MessageDesc = rt::desc(Self::NAME, 0x00, 1, &[14]);
+        pub const CUSTOM_MODE: rt::Range<usize> = 3..7;
+        pub const VEHICLE_TYPE: rt::Range<usize> = 7..8;
+        pub const AUTOPILOT: rt::Range<usize> = 8..9;
+        pub const BASE_MODE: rt::Range<usize> = 9..10;
+        pub const SYSTEM_STATUS: rt::Range<usize> = 10..11;
+        pub const MAVLINK_VERSION: rt::Range<usize> = 11..12;
+        pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
+            f("custom_mode", rt::Int(self.custom_mode as i64));
+            f("vehicle_type", rt::Int(self.vehicle_type as i64));
+            f("autopilot", rt::Int(self.autopilot as i64));
+            f("base_mode", rt::Int(self.base_mode as i64));
+            f("system_status", rt::Int(self.system_status as i64));
+            f("mavlink_version", rt::Int(self.mavlink_version as i64));
+        }
+        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            Response::Heartbeat(*self).encode(address, buf)
+        }
+    }
+    /// Each request as a struct of its own; its constants (`DESC`, which names it as
+    /// refusals do: name, code and the frame lengths of its code; `QUANTITY_DESC`, each
+    /// field a refusal names) and methods are in the `impl` of each.
     pub mod request {
-        use ::busspec_runtime::FieldDesc;
         /// §3.1 PING (4) (code `0x04`, 19 bytes).
         #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
         #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
@@ -850,13 +808,8 @@ pub mod crc_extra {
             /// Valid raw range 0..=1.
             pub start_stop: u8,
         }
-        /// `request_data_stream.start_stop`
-        pub const REQUEST_DATA_STREAM_START_STOP: FieldDesc = FieldDesc::new(
-            "request_data_stream",
-            "start_stop",
-        );
     }
-    /// Each response as a struct of its own, and the fields its refusals name.
+    /// Each response as a struct of its own.
     pub mod response {
         /// §3.1 PING (4), answered (code `0x04`, 19 bytes).
         #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]

@@ -79,48 +79,6 @@ pub mod dlt645 {
     pub fn checksum(bytes: &[u8]) -> u8 {
         rt::sum8(bytes)
     }
-    impl request::ReadAddress {
-        pub const NAME: &'static str = "read_address";
-        pub const CODE: &'static [u8] = &[0x13];
-        pub const LEN: usize = 12;
-        pub const DESC: rt::MessageDesc = rt::MessageDesc::new(
-            Self::NAME,
-            0x13,
-            1,
-            &[12],
-        );
-        pub const ADDRESS_LOW: rt::Range<usize> = 1..4;
-        pub const ADDRESS_HIGH: rt::Range<usize> = 4..7;
-        pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
-            f("address_low", rt::Int(self.address_low as i64));
-            f("address_high", rt::Int(self.address_high as i64));
-        }
-        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
-            Request::ReadAddress(*self).encode(address, buf)
-        }
-    }
-    impl request::ReadData {
-        pub const NAME: &'static str = "read_data";
-        pub const CODE: &'static [u8] = &[0x11];
-        pub const LEN: usize = 16;
-        pub const DESC: rt::MessageDesc = rt::MessageDesc::new(
-            Self::NAME,
-            0x11,
-            1,
-            &[16],
-        );
-        pub const ADDRESS_LOW: rt::Range<usize> = 1..4;
-        pub const ADDRESS_HIGH: rt::Range<usize> = 4..7;
-        pub const DATA_ID: rt::Range<usize> = 10..14;
-        pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
-            f("address_low", rt::Int(self.address_low as i64));
-            f("address_high", rt::Int(self.address_high as i64));
-            f("data_id", rt::Int(self.data_id as i64));
-        }
-        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
-            Request::ReadData(*self).encode(address, buf)
-        }
-    }
     ///A request (command), host to device.
     #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
     #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
@@ -169,21 +127,13 @@ pub mod dlt645 {
         ///
         /// The preamble's wake-up bytes come first (`framing.preamble`); `buf` of
         /// `MAX_FRAME_LEN` bytes holds any frame with them.
-        pub fn encode(
-            &self,
-            address: u8,
-            buf: &mut [u8],
-        ) -> rt::Result<usize, rt::EncodeError> {
+        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             let n = PREAMBLE.put(buf)?;
             let len = self.encode_frame(address, &mut buf[n..])?;
             rt::Ok(n + len)
         }
         /// The frame after the preamble, into `buf`.
-        fn encode_frame(
-            &self,
-            address: u8,
-            buf: &mut [u8],
-        ) -> rt::Result<usize, rt::EncodeError> {
+        fn encode_frame(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             rt::encode_address(address, &FRAME)?;
             let len = match *self {
                 Self::ReadAddress(
@@ -304,46 +254,43 @@ pub mod dlt645 {
             name: &str,
             mut field: impl FnMut(&'static str) -> rt::Option<rt::FieldValue<'v>>,
         ) -> rt::Result<Self, rt::FieldError> {
-            match name {
+            let message = match name {
                 "read_address" => {
-                    rt::Ok(
-                        Self::ReadAddress(request::ReadAddress {
-                            address_low: rt::field_int(
-                                "address_low",
-                                field("address_low"),
-                                0,
-                                16777215,
-                            )? as u32,
-                            address_high: rt::field_int(
-                                "address_high",
-                                field("address_high"),
-                                0,
-                                16777215,
-                            )? as u32,
-                        }),
-                    )
+                    Self::ReadAddress(request::ReadAddress {
+                        address_low: rt::field_int(
+                            "address_low",
+                            field("address_low"),
+                            0,
+                            16777215,
+                        )? as u32,
+                        address_high: rt::field_int(
+                            "address_high",
+                            field("address_high"),
+                            0,
+                            16777215,
+                        )? as u32,
+                    })
                 }
                 "read_data" => {
-                    rt::Ok(
-                        Self::ReadData(request::ReadData {
-                            address_low: rt::field_int(
-                                "address_low",
-                                field("address_low"),
-                                0,
-                                16777215,
-                            )? as u32,
-                            address_high: rt::field_int(
-                                "address_high",
-                                field("address_high"),
-                                0,
-                                16777215,
-                            )? as u32,
-                            data_id: rt::get(&mut field, "data_id")?,
-                        }),
-                    )
+                    Self::ReadData(request::ReadData {
+                        address_low: rt::field_int(
+                            "address_low",
+                            field("address_low"),
+                            0,
+                            16777215,
+                        )? as u32,
+                        address_high: rt::field_int(
+                            "address_high",
+                            field("address_high"),
+                            0,
+                            16777215,
+                        )? as u32,
+                        data_id: rt::get(&mut field, "data_id")?,
+                    })
                 }
-                _ => rt::Err(rt::FieldError::UnknownMessage),
-            }
+                _ => return rt::Err(rt::FieldError::UnknownMessage),
+            };
+            rt::Ok(message)
         }
     }
     impl rt::Message for Request {
@@ -364,11 +311,7 @@ pub mod dlt645 {
             Request::visit(self, f)
         }
         #[inline]
-        fn encode(
-            &self,
-            address: u8,
-            buf: &mut [u8],
-        ) -> rt::Result<usize, rt::EncodeError> {
+        fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             Request::encode(self, address, buf)
         }
         #[inline]
@@ -403,78 +346,6 @@ pub mod dlt645 {
         /// The responses this command may get, bit `i` for row `i` of `Response::MESSAGES`.
         const fn replies(&self) -> u64 {
             Self::COMMANDS[self.index()].3
-        }
-    }
-    impl response::AddressReply {
-        pub const NAME: &'static str = "address_reply";
-        pub const CODE: &'static [u8] = &[0x93];
-        pub const LEN: usize = 18;
-        pub const DESC: rt::MessageDesc = rt::MessageDesc::new(
-            Self::NAME,
-            0x93,
-            1,
-            &[18],
-        );
-        pub const ADDRESS_LOW: rt::Range<usize> = 1..4;
-        pub const ADDRESS_HIGH: rt::Range<usize> = 4..7;
-        pub const METER_LOW: rt::Range<usize> = 10..13;
-        pub const METER_HIGH: rt::Range<usize> = 13..16;
-        pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
-            f("address_low", rt::Int(self.address_low as i64));
-            f("address_high", rt::Int(self.address_high as i64));
-            f("meter_low", rt::Int(self.meter_low as i64));
-            f("meter_high", rt::Int(self.meter_high as i64));
-        }
-        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
-            Response::AddressReply(*self).encode(address, buf)
-        }
-    }
-    impl response::DataReply {
-        pub const NAME: &'static str = "data_reply";
-        pub const CODE: &'static [u8] = &[0x91];
-        pub const LEN: usize = 20;
-        pub const DESC: rt::MessageDesc = rt::MessageDesc::new(
-            Self::NAME,
-            0x91,
-            1,
-            &[20, 22],
-        );
-        pub const ADDRESS_LOW: rt::Range<usize> = 1..4;
-        pub const ADDRESS_HIGH: rt::Range<usize> = 4..7;
-        pub const DATA_ID: rt::Range<usize> = 10..14;
-        pub const VALUE: rt::Range<usize> = 14..18;
-        pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
-            f("address_low", rt::Int(self.address_low as i64));
-            f("address_high", rt::Int(self.address_high as i64));
-            f("data_id", rt::Int(self.data_id as i64));
-            f("value", rt::Int(self.value as i64));
-        }
-        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
-            Response::DataReply(*self).encode(address, buf)
-        }
-    }
-    impl response::MeterNumberReply {
-        pub const NAME: &'static str = "meter_number_reply";
-        pub const CODE: &'static [u8] = &[0x91];
-        pub const LEN: usize = 22;
-        pub const DESC: rt::MessageDesc = rt::MessageDesc::new(
-            Self::NAME,
-            0x91,
-            1,
-            &[20, 22],
-        );
-        pub const ADDRESS_LOW: rt::Range<usize> = 1..4;
-        pub const ADDRESS_HIGH: rt::Range<usize> = 4..7;
-        pub const NUMBER_LOW: rt::Range<usize> = 14..17;
-        pub const NUMBER_HIGH: rt::Range<usize> = 17..20;
-        pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
-            f("address_low", rt::Int(self.address_low as i64));
-            f("address_high", rt::Int(self.address_high as i64));
-            f("number_low", rt::Int(self.number_low as i64));
-            f("number_high", rt::Int(self.number_high as i64));
-        }
-        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
-            Response::MeterNumberReply(*self).encode(address, buf)
         }
     }
     ///A response, device to host.
@@ -529,21 +400,13 @@ pub mod dlt645 {
         ///
         /// The preamble's wake-up bytes come first (`framing.preamble`); `buf` of
         /// `MAX_FRAME_LEN` bytes holds any frame with them.
-        pub fn encode(
-            &self,
-            address: u8,
-            buf: &mut [u8],
-        ) -> rt::Result<usize, rt::EncodeError> {
+        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             let n = PREAMBLE.put(buf)?;
             let len = self.encode_frame(address, &mut buf[n..])?;
             rt::Ok(n + len)
         }
         /// The frame after the preamble, into `buf`.
-        fn encode_frame(
-            &self,
-            address: u8,
-            buf: &mut [u8],
-        ) -> rt::Result<usize, rt::EncodeError> {
+        fn encode_frame(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             rt::encode_address(address, &FRAME)?;
             let len = match *self {
                 Self::AddressReply(
@@ -744,7 +607,7 @@ pub mod dlt645 {
                     let mut g = rt::Group::new(frame, 0x91, request.map(Request::name));
                     g.attempt(|frame: &[u8; 20]| {
                         let field_3: u32 = rt::bcd(
-                            &response::DATA_REPLY_VALUE,
+                            &response::DataReply::VALUE_DESC,
                             14,
                             u32::from_le_bytes([
                                 frame[14],
@@ -754,7 +617,7 @@ pub mod dlt645 {
                             ]) as u64,
                         )? as u32;
                         rt::in_range(
-                            &response::DATA_REPLY_VALUE,
+                            &response::DataReply::VALUE_DESC,
                             14,
                             field_3,
                             0,
@@ -776,7 +639,7 @@ pub mod dlt645 {
                     });
                     g.attempt(|frame: &[u8; 22]| {
                         rt::equal(
-                            &response::METER_NUMBER_REPLY_DATA_ID,
+                            &response::MeterNumberReply::DATA_ID_DESC,
                             10,
                             u32::from_le_bytes([
                                 frame[10],
@@ -813,89 +676,84 @@ pub mod dlt645 {
             name: &str,
             mut field: impl FnMut(&'static str) -> rt::Option<rt::FieldValue<'v>>,
         ) -> rt::Result<Self, rt::FieldError> {
-            match name {
+            let message = match name {
                 "address_reply" => {
-                    rt::Ok(
-                        Self::AddressReply(response::AddressReply {
-                            address_low: rt::field_int(
-                                "address_low",
-                                field("address_low"),
-                                0,
-                                16777215,
-                            )? as u32,
-                            address_high: rt::field_int(
-                                "address_high",
-                                field("address_high"),
-                                0,
-                                16777215,
-                            )? as u32,
-                            meter_low: rt::field_int(
-                                "meter_low",
-                                field("meter_low"),
-                                0,
-                                16777215,
-                            )? as u32,
-                            meter_high: rt::field_int(
-                                "meter_high",
-                                field("meter_high"),
-                                0,
-                                16777215,
-                            )? as u32,
-                        }),
-                    )
+                    Self::AddressReply(response::AddressReply {
+                        address_low: rt::field_int(
+                            "address_low",
+                            field("address_low"),
+                            0,
+                            16777215,
+                        )? as u32,
+                        address_high: rt::field_int(
+                            "address_high",
+                            field("address_high"),
+                            0,
+                            16777215,
+                        )? as u32,
+                        meter_low: rt::field_int(
+                            "meter_low",
+                            field("meter_low"),
+                            0,
+                            16777215,
+                        )? as u32,
+                        meter_high: rt::field_int(
+                            "meter_high",
+                            field("meter_high"),
+                            0,
+                            16777215,
+                        )? as u32,
+                    })
                 }
                 "data_reply" => {
-                    rt::Ok(
-                        Self::DataReply(response::DataReply {
-                            address_low: rt::field_int(
-                                "address_low",
-                                field("address_low"),
-                                0,
-                                16777215,
-                            )? as u32,
-                            address_high: rt::field_int(
-                                "address_high",
-                                field("address_high"),
-                                0,
-                                16777215,
-                            )? as u32,
-                            data_id: rt::get(&mut field, "data_id")?,
-                            value: rt::get(&mut field, "value")?,
-                        }),
-                    )
+                    Self::DataReply(response::DataReply {
+                        address_low: rt::field_int(
+                            "address_low",
+                            field("address_low"),
+                            0,
+                            16777215,
+                        )? as u32,
+                        address_high: rt::field_int(
+                            "address_high",
+                            field("address_high"),
+                            0,
+                            16777215,
+                        )? as u32,
+                        data_id: rt::get(&mut field, "data_id")?,
+                        value: rt::get(&mut field, "value")?,
+                    })
                 }
                 "meter_number_reply" => {
-                    rt::Ok(
-                        Self::MeterNumberReply(response::MeterNumberReply {
-                            address_low: rt::field_int(
-                                "address_low",
-                                field("address_low"),
-                                0,
-                                16777215,
-                            )? as u32,
-                            address_high: rt::field_int(
-                                "address_high",
-                                field("address_high"),
-                                0,
-                                16777215,
-                            )? as u32,
-                            number_low: rt::field_int(
-                                "number_low",
-                                field("number_low"),
-                                0,
-                                16777215,
-                            )? as u32,
-                            number_high: rt::field_int(
-                                "number_high",
-                                field("number_high"),
-                                0,
-                                16777215,
-                            )? as u32,
-                        }),
-                    )
+                    Self::MeterNumberReply(response::MeterNumberReply {
+                        address_low: rt::field_int(
+                            "address_low",
+                            field("address_low"),
+                            0,
+                            16777215,
+                        )? as u32,
+                        address_high: rt::field_int(
+                            "address_high",
+                            field("address_high"),
+                            0,
+                            16777215,
+                        )? as u32,
+                        number_low: rt::field_int(
+                            "number_low",
+                            field("number_low"),
+                            0,
+                            16777215,
+                        )? as u32,
+                        number_high: rt::field_int(
+                            "number_high",
+                            field("number_high"),
+                            0,
+                            16777215,
+                        )? as u32,
+                    })
                 }
-                _ => rt::Err(rt::FieldError::UnknownMessage),
-            }
+                _ => return rt::Err(rt::FieldError::UnknownMessage),
+            };
+            rt::Ok(message)
         }
     }
     impl rt::Message for Response {
@@ -916,11 +774,7 @@ pub mod dlt645 {
             Response::visit(self, f)
         }
         #[inline]
-        fn encode(
-            &self,
-            address: u8,
-            buf: &mut [u8],
-        ) -> rt::Result<usize, rt::EncodeError> {
+        fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             Response::encode(self, address, buf)
         }
         #[inline]
@@ -1044,9 +898,100 @@ pub mod dlt645 {
     pub type StreamDecoder = ::busspec_runtime::stream::StreamDecoder<Dlt645>;
     /// What [`StreamDecoder`] finds in a stream.
     pub type Event = ::busspec_runtime::stream::Event<Request, Response>;
-    /// Each request as a struct of its own (its `DESC` names it as refusals do: name,
-    /// code and the frame lengths of its code), and each field a refusal names
-    /// (`message.field`, `FieldDesc`).
+    impl request::ReadAddress {
+        pub const NAME: &'static str = "read_address";
+        pub const CODE: &'static [u8] = &[0x13];
+        pub const LEN: usize = 12;
+        pub const DESC: rt::MessageDesc = rt::desc(Self::NAME, 0x13, 1, &[12]);
+        pub const ADDRESS_LOW: rt::Range<usize> = 1..4;
+        pub const ADDRESS_HIGH: rt::Range<usize> = 4..7;
+        pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
+            f("address_low", rt::Int(self.address_low as i64));
+            f("address_high", rt::Int(self.address_high as i64));
+        }
+        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            Request::ReadAddress(*self).encode(address, buf)
+        }
+    }
+    impl request::ReadData {
+        pub const NAME: &'static str = "read_data";
+        pub const CODE: &'static [u8] = &[0x11];
+        pub const LEN: usize = 16;
+        pub const DESC: rt::MessageDesc = rt::desc(Self::NAME, 0x11, 1, &[16]);
+        pub const ADDRESS_LOW: rt::Range<usize> = 1..4;
+        pub const ADDRESS_HIGH: rt::Range<usize> = 4..7;
+        pub const DATA_ID: rt::Range<usize> = 10..14;
+        pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
+            f("address_low", rt::Int(self.address_low as i64));
+            f("address_high", rt::Int(self.address_high as i64));
+            f("data_id", rt::Int(self.data_id as i64));
+        }
+        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            Request::ReadData(*self).encode(address, buf)
+        }
+    }
+    impl response::AddressReply {
+        pub const NAME: &'static str = "address_reply";
+        pub const CODE: &'static [u8] = &[0x93];
+        pub const LEN: usize = 18;
+        pub const DESC: rt::MessageDesc = rt::desc(Self::NAME, 0x93, 1, &[18]);
+        pub const ADDRESS_LOW: rt::Range<usize> = 1..4;
+        pub const ADDRESS_HIGH: rt::Range<usize> = 4..7;
+        pub const METER_LOW: rt::Range<usize> = 10..13;
+        pub const METER_HIGH: rt::Range<usize> = 13..16;
+        pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
+            f("address_low", rt::Int(self.address_low as i64));
+            f("address_high", rt::Int(self.address_high as i64));
+            f("meter_low", rt::Int(self.meter_low as i64));
+            f("meter_high", rt::Int(self.meter_high as i64));
+        }
+        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            Response::AddressReply(*self).encode(address, buf)
+        }
+    }
+    impl response::DataReply {
+        pub const NAME: &'static str = "data_reply";
+        pub const CODE: &'static [u8] = &[0x91];
+        pub const LEN: usize = 20;
+        pub const DESC: rt::MessageDesc = rt::desc(Self::NAME, 0x91, 1, &[20, 22]);
+        pub const ADDRESS_LOW: rt::Range<usize> = 1..4;
+        pub const ADDRESS_HIGH: rt::Range<usize> = 4..7;
+        pub const DATA_ID: rt::Range<usize> = 10..14;
+        pub const VALUE: rt::Range<usize> = 14..18;
+        pub const VALUE_DESC: rt::FieldDesc = rt::field(Self::NAME, "value");
+        pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
+            f("address_low", rt::Int(self.address_low as i64));
+            f("address_high", rt::Int(self.address_high as i64));
+            f("data_id", rt::Int(self.data_id as i64));
+            f("value", rt::Int(self.value as i64));
+        }
+        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            Response::DataReply(*self).encode(address, buf)
+        }
+    }
+    impl response::MeterNumberReply {
+        pub const NAME: &'static str = "meter_number_reply";
+        pub const CODE: &'static [u8] = &[0x91];
+        pub const LEN: usize = 22;
+        pub const DESC: rt::MessageDesc = rt::desc(Self::NAME, 0x91, 1, &[20, 22]);
+        pub const ADDRESS_LOW: rt::Range<usize> = 1..4;
+        pub const ADDRESS_HIGH: rt::Range<usize> = 4..7;
+        pub const NUMBER_LOW: rt::Range<usize> = 14..17;
+        pub const NUMBER_HIGH: rt::Range<usize> = 17..20;
+        pub const DATA_ID_DESC: rt::FieldDesc = rt::field(Self::NAME, "data_id");
+        pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
+            f("address_low", rt::Int(self.address_low as i64));
+            f("address_high", rt::Int(self.address_high as i64));
+            f("number_low", rt::Int(self.number_low as i64));
+            f("number_high", rt::Int(self.number_high as i64));
+        }
+        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            Response::MeterNumberReply(*self).encode(address, buf)
+        }
+    }
+    /// Each request as a struct of its own; its constants (`DESC`, which names it as
+    /// refusals do: name, code and the frame lengths of its code; `QUANTITY_DESC`, each
+    /// field a refusal names) and methods are in the `impl` of each.
     pub mod request {
         /// §7.9 Read the communication address (control code 13H) (code `0x13`, 12 bytes).
         #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
@@ -1073,9 +1018,8 @@ pub mod dlt645 {
             pub data_id: u32,
         }
     }
-    /// Each response as a struct of its own, and the fields its refusals name.
+    /// Each response as a struct of its own.
     pub mod response {
-        use ::busspec_runtime::FieldDesc;
         /// §7.9 Address reply (control code 93H) (code `0x93`, 18 bytes).
         #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
         #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
@@ -1121,12 +1065,5 @@ pub mod dlt645 {
             /// Meter number, high three bytes (BCD digits)
             pub number_high: u32,
         }
-        /// `data_reply.value`
-        pub const DATA_REPLY_VALUE: FieldDesc = FieldDesc::new("data_reply", "value");
-        /// `meter_number_reply.data_id`
-        pub const METER_NUMBER_REPLY_DATA_ID: FieldDesc = FieldDesc::new(
-            "meter_number_reply",
-            "data_id",
-        );
     }
 }

@@ -115,7 +115,7 @@ pub mod dynamixel {
     }
     /// Where `write.data` sits in the frame and how its elements are counted.
     pub const REPEAT_WRITE: rt::RepeatAt = rt::RepeatAt {
-        field: &request::WRITE_DATA,
+        field: &request::Write::DATA_DESC,
         base: 7,
         at: 6,
         width: 1,
@@ -125,7 +125,7 @@ pub mod dynamixel {
     };
     /// Where `reg_write.data` sits in the frame and how its elements are counted.
     pub const REPEAT_REG_WRITE: rt::RepeatAt = rt::RepeatAt {
-        field: &request::REG_WRITE_DATA,
+        field: &request::RegWrite::DATA_DESC,
         base: 7,
         at: 6,
         width: 1,
@@ -135,7 +135,7 @@ pub mod dynamixel {
     };
     /// Where `sync_write.blocks` sits in the frame and how its elements are counted.
     pub const REPEAT_SYNC_WRITE: rt::RepeatAt = rt::RepeatAt {
-        field: &request::SYNC_WRITE_BLOCKS,
+        field: &request::SyncWrite::BLOCKS_DESC,
         base: 8,
         at: 7,
         width: 1,
@@ -143,130 +143,6 @@ pub mod dynamixel {
         min: 2,
         max: 251,
     };
-    impl request::Ping {
-        pub const NAME: &'static str = "ping";
-        pub const CODE: &'static [u8] = &[0x01];
-        pub const LEN: usize = 6;
-        pub const DESC: rt::MessageDesc = rt::MessageDesc::new(
-            Self::NAME,
-            0x01,
-            1,
-            &[6],
-        );
-        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
-            Request::Ping(*self).encode(address, buf)
-        }
-    }
-    impl request::Read {
-        pub const NAME: &'static str = "read";
-        pub const CODE: &'static [u8] = &[0x02];
-        pub const LEN: usize = 8;
-        pub const DESC: rt::MessageDesc = rt::MessageDesc::new(
-            Self::NAME,
-            0x02,
-            1,
-            &[8],
-        );
-        pub const ADDRESS: rt::Range<usize> = 5..6;
-        pub const LENGTH: rt::Range<usize> = 6..7;
-        pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
-            f("address", rt::Int(self.address as i64));
-            f("length", rt::Int(self.length as i64));
-        }
-        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
-            Request::Read(*self).encode(address, buf)
-        }
-    }
-    impl request::Write {
-        pub const NAME: &'static str = "write";
-        pub const CODE: &'static [u8] = &[0x03];
-        pub const MIN_LEN: usize = 8;
-        pub const MAX_LEN: usize = 259;
-        pub const DESC: rt::MessageDesc = rt::MessageDesc::new(
-            Self::NAME,
-            0x03,
-            1,
-            &[7],
-        );
-        pub const ADDRESS: rt::Range<usize> = 5..6;
-        pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
-            f("address", rt::Int(self.address as i64));
-            f("data", rt::List(self.data.elements()));
-        }
-        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
-            Request::Write(*self).encode(address, buf)
-        }
-    }
-    impl request::RegWrite {
-        pub const NAME: &'static str = "reg_write";
-        pub const CODE: &'static [u8] = &[0x04];
-        pub const MIN_LEN: usize = 8;
-        pub const MAX_LEN: usize = 259;
-        pub const DESC: rt::MessageDesc = rt::MessageDesc::new(
-            Self::NAME,
-            0x04,
-            1,
-            &[7],
-        );
-        pub const ADDRESS: rt::Range<usize> = 5..6;
-        pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
-            f("address", rt::Int(self.address as i64));
-            f("data", rt::List(self.data.elements()));
-        }
-        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
-            Request::RegWrite(*self).encode(address, buf)
-        }
-    }
-    impl request::Action {
-        pub const NAME: &'static str = "action";
-        pub const CODE: &'static [u8] = &[0x05];
-        pub const LEN: usize = 6;
-        pub const DESC: rt::MessageDesc = rt::MessageDesc::new(
-            Self::NAME,
-            0x05,
-            1,
-            &[6],
-        );
-        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
-            Request::Action(*self).encode(address, buf)
-        }
-    }
-    impl request::Reset {
-        pub const NAME: &'static str = "reset";
-        pub const CODE: &'static [u8] = &[0x06];
-        pub const LEN: usize = 6;
-        pub const DESC: rt::MessageDesc = rt::MessageDesc::new(
-            Self::NAME,
-            0x06,
-            1,
-            &[6],
-        );
-        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
-            Request::Reset(*self).encode(address, buf)
-        }
-    }
-    impl request::SyncWrite {
-        pub const NAME: &'static str = "sync_write";
-        pub const CODE: &'static [u8] = &[0x83];
-        pub const MIN_LEN: usize = 10;
-        pub const MAX_LEN: usize = 259;
-        pub const DESC: rt::MessageDesc = rt::MessageDesc::new(
-            Self::NAME,
-            0x83,
-            1,
-            &[8],
-        );
-        pub const ADDRESS: rt::Range<usize> = 5..6;
-        pub const DATA_LENGTH: rt::Range<usize> = 6..7;
-        pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
-            f("address", rt::Int(self.address as i64));
-            f("data_length", rt::Int(self.data_length as i64));
-            f("blocks", rt::List(self.blocks.elements()));
-        }
-        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
-            Request::SyncWrite(*self).encode(address, buf)
-        }
-    }
     ///A request (command), host to device.
     #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
     #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
@@ -315,14 +191,12 @@ pub mod dynamixel {
         /// The length of this message's frame, in bytes.
         pub const fn frame_len(&self) -> usize {
             match self {
-                Self::Write(request::Write { data: v_data, .. }) => {
-                    REPEAT_WRITE.base + REPEAT_WRITE.bytes_of(v_data.len())
+                Self::Write(m) => REPEAT_WRITE.base + REPEAT_WRITE.bytes_of(m.data.len()),
+                Self::RegWrite(m) => {
+                    REPEAT_REG_WRITE.base + REPEAT_REG_WRITE.bytes_of(m.data.len())
                 }
-                Self::RegWrite(request::RegWrite { data: v_data, .. }) => {
-                    REPEAT_REG_WRITE.base + REPEAT_REG_WRITE.bytes_of(v_data.len())
-                }
-                Self::SyncWrite(request::SyncWrite { blocks: v_blocks, .. }) => {
-                    REPEAT_SYNC_WRITE.base + REPEAT_SYNC_WRITE.bytes_of(v_blocks.len())
+                Self::SyncWrite(m) => {
+                    REPEAT_SYNC_WRITE.base + REPEAT_SYNC_WRITE.bytes_of(m.blocks.len())
                 }
                 _ => Self::MESSAGES[self.index()].2,
             }
@@ -341,14 +215,10 @@ pub mod dynamixel {
         /// Encodes the frame for `address` into `buf`; returns the frame length. Refuses what
         /// decode refuses: an address no frame may carry, the broadcast address for a command
         /// that does not accept it, a value outside its field's range.
-        pub fn encode(
-            &self,
-            address: u8,
-            buf: &mut [u8],
-        ) -> rt::Result<usize, rt::EncodeError> {
+        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             rt::encode_address(address, &FRAME)?;
             let len = match *self {
-                Self::Ping(request::Ping {}) => {
+                Self::Ping(_) => {
                     rt::encode_broadcast(address, 0xFE, &request::Ping::DESC)?;
                     rt::frame_mut::<6>(buf, &[0xFF, 0xFF, address, 0x02, 0x01])?.len()
                 }
@@ -382,10 +252,10 @@ pub mod dynamixel {
                     rt::write_elements(v_data.as_slice(), 1, true, &mut out[6..]);
                     out.len()
                 }
-                Self::Action(request::Action {}) => {
+                Self::Action(_) => {
                     rt::frame_mut::<6>(buf, &[0xFF, 0xFF, address, 0x02, 0x05])?.len()
                 }
-                Self::Reset(request::Reset {}) => {
+                Self::Reset(_) => {
                     rt::frame_mut::<6>(buf, &[0xFF, 0xFF, address, 0x02, 0x06])?.len()
                 }
                 Self::SyncWrite(
@@ -437,7 +307,7 @@ pub mod dynamixel {
                 0x02 => {
                     let frame = rt::fixed::<8>(frame, &request::Read::DESC)?;
                     rt::no_broadcast(frame[2], 0xFE, &request::Read::DESC)?;
-                    rt::in_range(&request::READ_LENGTH, 6, frame[6], 1, 253)?;
+                    rt::in_range(&request::Read::LENGTH_DESC, 6, frame[6], 1, 253)?;
                     rt::Ok(
                         Self::Read(request::Read {
                             address: frame[5],
@@ -494,45 +364,38 @@ pub mod dynamixel {
             name: &str,
             mut field: impl FnMut(&'static str) -> rt::Option<rt::FieldValue<'v>>,
         ) -> rt::Result<Self, rt::FieldError> {
-            match name {
-                "ping" => rt::Ok(Self::Ping(request::Ping)),
+            let message = match name {
+                "ping" => Self::Ping(request::Ping),
                 "read" => {
-                    rt::Ok(
-                        Self::Read(request::Read {
-                            address: rt::get(&mut field, "address")?,
-                            length: rt::get(&mut field, "length")?,
-                        }),
-                    )
+                    Self::Read(request::Read {
+                        address: rt::get(&mut field, "address")?,
+                        length: rt::get(&mut field, "length")?,
+                    })
                 }
                 "write" => {
-                    rt::Ok(
-                        Self::Write(request::Write {
-                            address: rt::get(&mut field, "address")?,
-                            data: rt::list::<u8, 252>(&mut field, "data", 0, 255)?,
-                        }),
-                    )
+                    Self::Write(request::Write {
+                        address: rt::get(&mut field, "address")?,
+                        data: rt::list::<u8, 252>(&mut field, "data", 0, 255)?,
+                    })
                 }
                 "reg_write" => {
-                    rt::Ok(
-                        Self::RegWrite(request::RegWrite {
-                            address: rt::get(&mut field, "address")?,
-                            data: rt::list::<u8, 252>(&mut field, "data", 0, 255)?,
-                        }),
-                    )
+                    Self::RegWrite(request::RegWrite {
+                        address: rt::get(&mut field, "address")?,
+                        data: rt::list::<u8, 252>(&mut field, "data", 0, 255)?,
+                    })
                 }
-                "action" => rt::Ok(Self::Action(request::Action)),
-                "reset" => rt::Ok(Self::Reset(request::Reset)),
+                "action" => Self::Action(request::Action),
+                "reset" => Self::Reset(request::Reset),
                 "sync_write" => {
-                    rt::Ok(
-                        Self::SyncWrite(request::SyncWrite {
-                            address: rt::get(&mut field, "address")?,
-                            data_length: rt::get(&mut field, "data_length")?,
-                            blocks: rt::list::<u8, 251>(&mut field, "blocks", 0, 255)?,
-                        }),
-                    )
+                    Self::SyncWrite(request::SyncWrite {
+                        address: rt::get(&mut field, "address")?,
+                        data_length: rt::get(&mut field, "data_length")?,
+                        blocks: rt::list::<u8, 251>(&mut field, "blocks", 0, 255)?,
+                    })
                 }
-                _ => rt::Err(rt::FieldError::UnknownMessage),
-            }
+                _ => return rt::Err(rt::FieldError::UnknownMessage),
+            };
+            rt::Ok(message)
         }
     }
     impl rt::Message for Request {
@@ -553,11 +416,7 @@ pub mod dynamixel {
             Request::visit(self, f)
         }
         #[inline]
-        fn encode(
-            &self,
-            address: u8,
-            buf: &mut [u8],
-        ) -> rt::Result<usize, rt::EncodeError> {
+        fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             Request::encode(self, address, buf)
         }
         #[inline]
@@ -601,7 +460,7 @@ pub mod dynamixel {
     }
     /// Where `read_status.data` sits in the frame and how its elements are counted.
     pub const REPEAT_READ_STATUS: rt::RepeatAt = rt::RepeatAt {
-        field: &response::READ_STATUS_DATA,
+        field: &response::ReadStatus::DATA_DESC,
         base: 6,
         at: 5,
         width: 1,
@@ -609,34 +468,6 @@ pub mod dynamixel {
         min: 1,
         max: 253,
     };
-    impl response::Status {
-        pub const NAME: &'static str = "status";
-        pub const CODE: &'static [u8] = &[];
-        pub const LEN: usize = 6;
-        pub const DESC: rt::MessageDesc = rt::MessageDesc::new(Self::NAME, 0, 0, &[6]);
-        pub const ERROR: rt::Range<usize> = 4..5;
-        pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
-            f("error", rt::Int(self.error.raw() as i64));
-        }
-        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
-            Response::Status(*self).encode(address, buf)
-        }
-    }
-    impl response::ReadStatus {
-        pub const NAME: &'static str = "read_status";
-        pub const CODE: &'static [u8] = &[];
-        pub const MIN_LEN: usize = 7;
-        pub const MAX_LEN: usize = 259;
-        pub const DESC: rt::MessageDesc = rt::MessageDesc::new(Self::NAME, 0, 0, &[6]);
-        pub const ERROR: rt::Range<usize> = 4..5;
-        pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
-            f("error", rt::Int(self.error.raw() as i64));
-            f("data", rt::List(self.data.elements()));
-        }
-        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
-            Response::ReadStatus(*self).encode(address, buf)
-        }
-    }
     ///A response, device to host.
     #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
     #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
@@ -670,8 +501,8 @@ pub mod dynamixel {
         /// The length of this message's frame, in bytes.
         pub const fn frame_len(&self) -> usize {
             match self {
-                Self::ReadStatus(response::ReadStatus { data: v_data, .. }) => {
-                    REPEAT_READ_STATUS.base + REPEAT_READ_STATUS.bytes_of(v_data.len())
+                Self::ReadStatus(m) => {
+                    REPEAT_READ_STATUS.base + REPEAT_READ_STATUS.bytes_of(m.data.len())
                 }
                 _ => Self::MESSAGES[self.index()].2,
             }
@@ -687,11 +518,7 @@ pub mod dynamixel {
         /// Encodes the frame for `address` into `buf`; returns the frame length. Refuses what
         /// decode refuses: an address no frame may carry, the broadcast address for a command
         /// that does not accept it, a value outside its field's range.
-        pub fn encode(
-            &self,
-            address: u8,
-            buf: &mut [u8],
-        ) -> rt::Result<usize, rt::EncodeError> {
+        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             rt::encode_address(address, &FRAME)?;
             let len = match *self {
                 Self::Status(response::Status { error: v_error }) => {
@@ -798,24 +625,21 @@ pub mod dynamixel {
             name: &str,
             mut field: impl FnMut(&'static str) -> rt::Option<rt::FieldValue<'v>>,
         ) -> rt::Result<Self, rt::FieldError> {
-            match name {
+            let message = match name {
                 "status" => {
-                    rt::Ok(
-                        Self::Status(response::Status {
-                            error: StatusError::from_raw(rt::get(&mut field, "error")?),
-                        }),
-                    )
+                    Self::Status(response::Status {
+                        error: StatusError::from_raw(rt::get(&mut field, "error")?),
+                    })
                 }
                 "read_status" => {
-                    rt::Ok(
-                        Self::ReadStatus(response::ReadStatus {
-                            error: StatusError::from_raw(rt::get(&mut field, "error")?),
-                            data: rt::list::<u8, 253>(&mut field, "data", 0, 255)?,
-                        }),
-                    )
+                    Self::ReadStatus(response::ReadStatus {
+                        error: StatusError::from_raw(rt::get(&mut field, "error")?),
+                        data: rt::list::<u8, 253>(&mut field, "data", 0, 255)?,
+                    })
                 }
-                _ => rt::Err(rt::FieldError::UnknownMessage),
-            }
+                _ => return rt::Err(rt::FieldError::UnknownMessage),
+            };
+            rt::Ok(message)
         }
     }
     impl rt::Message for Response {
@@ -836,11 +660,7 @@ pub mod dynamixel {
             Response::visit(self, f)
         }
         #[inline]
-        fn encode(
-            &self,
-            address: u8,
-            buf: &mut [u8],
-        ) -> rt::Result<usize, rt::EncodeError> {
+        fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             Response::encode(self, address, buf)
         }
         #[inline]
@@ -862,14 +682,11 @@ pub mod dynamixel {
         /// spec): [`busspec_runtime::DecodeError::InvalidValue`] names the first that differs.
         pub fn follows_request(&self, request: &Request) -> rt::DecodeResult<()> {
             match (self, request) {
-                (
-                    &Self::ReadStatus(response::ReadStatus { data: v_data, .. }),
-                    &Request::Read(request::Read { length: r_length, .. }),
-                ) => {
+                (Self::ReadStatus(m), Request::Read(r)) => {
                     REPEAT_READ_STATUS
                         .follows_request(
-                            v_data.len(),
-                            r_length as i64,
+                            m.data.len(),
+                            r.length as i64,
                             (1, 1),
                             "length",
                         )?;
@@ -927,7 +744,7 @@ pub mod dynamixel {
                 0x02 => {
                     let frame = rt::fixed::<8>(frame, &request::Read::DESC)?;
                     rt::no_broadcast(frame[2], 0xFE, &request::Read::DESC)?;
-                    rt::in_range(&request::READ_LENGTH, 6, frame[6], 1, 253)?;
+                    rt::in_range(&request::Read::LENGTH_DESC, 6, frame[6], 1, 253)?;
                     rt::Ok(Self::Read {
                         address: frame[5],
                         length: frame[6],
@@ -1119,14 +936,11 @@ pub mod dynamixel {
         /// spec): [`busspec_runtime::DecodeError::InvalidValue`] names the first that differs.
         pub fn follows_request(&self, request: &Request) -> rt::DecodeResult<()> {
             match (self, request) {
-                (
-                    &Self::ReadStatus { data: v_data, .. },
-                    &Request::Read(request::Read { length: r_length, .. }),
-                ) => {
+                (&Self::ReadStatus { data: v_data, .. }, Request::Read(r)) => {
                     REPEAT_READ_STATUS
                         .follows_request(
                             v_data.len(),
-                            r_length as i64,
+                            r.length as i64,
                             (1, 1),
                             "length",
                         )?;
@@ -1320,11 +1134,132 @@ pub mod dynamixel {
     pub type StreamDecoder = ::busspec_runtime::stream::StreamDecoder<Dynamixel>;
     /// What [`StreamDecoder`] finds in a stream.
     pub type Event = ::busspec_runtime::stream::Event<Request, Response>;
-    /// Each request as a struct of its own (its `DESC` names it as refusals do: name,
-    /// code and the frame lengths of its code), and each field a refusal names
-    /// (`message.field`, `FieldDesc`).
+    impl request::Ping {
+        pub const NAME: &'static str = "ping";
+        pub const CODE: &'static [u8] = &[0x01];
+        pub const LEN: usize = 6;
+        pub const DESC: rt::MessageDesc = rt::desc(Self::NAME, 0x01, 1, &[6]);
+        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            Request::Ping(*self).encode(address, buf)
+        }
+    }
+    impl request::Read {
+        pub const NAME: &'static str = "read";
+        pub const CODE: &'static [u8] = &[0x02];
+        pub const LEN: usize = 8;
+        pub const DESC: rt::MessageDesc = rt::desc(Self::NAME, 0x02, 1, &[8]);
+        pub const ADDRESS: rt::Range<usize> = 5..6;
+        pub const LENGTH: rt::Range<usize> = 6..7;
+        pub const LENGTH_DESC: rt::FieldDesc = rt::field(Self::NAME, "length");
+        pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
+            f("address", rt::Int(self.address as i64));
+            f("length", rt::Int(self.length as i64));
+        }
+        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            Request::Read(*self).encode(address, buf)
+        }
+    }
+    impl request::Write {
+        pub const NAME: &'static str = "write";
+        pub const CODE: &'static [u8] = &[0x03];
+        pub const MIN_LEN: usize = 8;
+        pub const MAX_LEN: usize = 259;
+        pub const DESC: rt::MessageDesc = rt::desc(Self::NAME, 0x03, 1, &[7]);
+        pub const ADDRESS: rt::Range<usize> = 5..6;
+        pub const DATA_DESC: rt::FieldDesc = rt::field(Self::NAME, "data");
+        pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
+            f("address", rt::Int(self.address as i64));
+            f("data", rt::List(self.data.elements()));
+        }
+        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            Request::Write(*self).encode(address, buf)
+        }
+    }
+    impl request::RegWrite {
+        pub const NAME: &'static str = "reg_write";
+        pub const CODE: &'static [u8] = &[0x04];
+        pub const MIN_LEN: usize = 8;
+        pub const MAX_LEN: usize = 259;
+        pub const DESC: rt::MessageDesc = rt::desc(Self::NAME, 0x04, 1, &[7]);
+        pub const ADDRESS: rt::Range<usize> = 5..6;
+        pub const DATA_DESC: rt::FieldDesc = rt::field(Self::NAME, "data");
+        pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
+            f("address", rt::Int(self.address as i64));
+            f("data", rt::List(self.data.elements()));
+        }
+        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            Request::RegWrite(*self).encode(address, buf)
+        }
+    }
+    impl request::Action {
+        pub const NAME: &'static str = "action";
+        pub const CODE: &'static [u8] = &[0x05];
+        pub const LEN: usize = 6;
+        pub const DESC: rt::MessageDesc = rt::desc(Self::NAME, 0x05, 1, &[6]);
+        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            Request::Action(*self).encode(address, buf)
+        }
+    }
+    impl request::Reset {
+        pub const NAME: &'static str = "reset";
+        pub const CODE: &'static [u8] = &[0x06];
+        pub const LEN: usize = 6;
+        pub const DESC: rt::MessageDesc = rt::desc(Self::NAME, 0x06, 1, &[6]);
+        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            Request::Reset(*self).encode(address, buf)
+        }
+    }
+    impl request::SyncWrite {
+        pub const NAME: &'static str = "sync_write";
+        pub const CODE: &'static [u8] = &[0x83];
+        pub const MIN_LEN: usize = 10;
+        pub const MAX_LEN: usize = 259;
+        pub const DESC: rt::MessageDesc = rt::desc(Self::NAME, 0x83, 1, &[8]);
+        pub const ADDRESS: rt::Range<usize> = 5..6;
+        pub const DATA_LENGTH: rt::Range<usize> = 6..7;
+        pub const BLOCKS_DESC: rt::FieldDesc = rt::field(Self::NAME, "blocks");
+        pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
+            f("address", rt::Int(self.address as i64));
+            f("data_length", rt::Int(self.data_length as i64));
+            f("blocks", rt::List(self.blocks.elements()));
+        }
+        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            Request::SyncWrite(*self).encode(address, buf)
+        }
+    }
+    impl response::Status {
+        pub const NAME: &'static str = "status";
+        pub const CODE: &'static [u8] = &[];
+        pub const LEN: usize = 6;
+        pub const DESC: rt::MessageDesc = rt::desc(Self::NAME, 0, 0, &[6]);
+        pub const ERROR: rt::Range<usize> = 4..5;
+        pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
+            f("error", rt::Int(self.error.raw() as i64));
+        }
+        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            Response::Status(*self).encode(address, buf)
+        }
+    }
+    impl response::ReadStatus {
+        pub const NAME: &'static str = "read_status";
+        pub const CODE: &'static [u8] = &[];
+        pub const MIN_LEN: usize = 7;
+        pub const MAX_LEN: usize = 259;
+        pub const DESC: rt::MessageDesc = rt::desc(Self::NAME, 0, 0, &[6]);
+        pub const ERROR: rt::Range<usize> = 4..5;
+        pub const DATA_DESC: rt::FieldDesc = rt::field(Self::NAME, "data");
+        pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
+            f("error", rt::Int(self.error.raw() as i64));
+            f("data", rt::List(self.data.elements()));
+        }
+        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            Response::ReadStatus(*self).encode(address, buf)
+        }
+    }
+    /// Each request as a struct of its own; its constants (`DESC`, which names it as
+    /// refusals do: name, code and the frame lengths of its code; `QUANTITY_DESC`, each
+    /// field a refusal names) and methods are in the `impl` of each.
     pub mod request {
-        use ::busspec_runtime::FieldDesc;
         /// §Ping Ping (0x01) (code `0x01`, 6 bytes). Asks for a status packet; nothing else happens.
         #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
         #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
@@ -1386,18 +1321,9 @@ pub mod dynamixel {
             /// ID of the 1st device, its data, ID of the 2nd device, ...
             pub blocks: super::rt::Repeated<u8, 251>,
         }
-        /// `read.length`
-        pub const READ_LENGTH: FieldDesc = FieldDesc::new("read", "length");
-        /// `write.data`
-        pub const WRITE_DATA: FieldDesc = FieldDesc::new("write", "data");
-        /// `reg_write.data`
-        pub const REG_WRITE_DATA: FieldDesc = FieldDesc::new("reg_write", "data");
-        /// `sync_write.blocks`
-        pub const SYNC_WRITE_BLOCKS: FieldDesc = FieldDesc::new("sync_write", "blocks");
     }
-    /// Each response as a struct of its own, and the fields its refusals name.
+    /// Each response as a struct of its own.
     pub mod response {
-        use ::busspec_runtime::FieldDesc;
         /// §Status Packet Status Packet (code `0x`, 6 bytes). The answer to every instruction but READ: the error byte alone.
         #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
         #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
@@ -1416,7 +1342,5 @@ pub mod dynamixel {
             /// The bytes read
             pub data: super::rt::Repeated<u8, 253>,
         }
-        /// `read_status.data`
-        pub const READ_STATUS_DATA: FieldDesc = FieldDesc::new("read_status", "data");
     }
 }

@@ -152,40 +152,6 @@ pub mod dynamixel2_stuffed {
             Self(raw)
         }
     }
-    impl request::Ping {
-        pub const NAME: &'static str = "ping";
-        pub const CODE: &'static [u8] = &[0x01];
-        pub const LEN: usize = 10;
-        pub const DESC: rt::MessageDesc = rt::MessageDesc::new(
-            Self::NAME,
-            0x01,
-            1,
-            &[10],
-        );
-        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
-            Request::Ping(*self).encode(address, buf)
-        }
-    }
-    impl request::Write4 {
-        pub const NAME: &'static str = "write4";
-        pub const CODE: &'static [u8] = &[0x03];
-        pub const LEN: usize = 16;
-        pub const DESC: rt::MessageDesc = rt::MessageDesc::new(
-            Self::NAME,
-            0x03,
-            1,
-            &[16],
-        );
-        pub const ADDRESS: rt::Range<usize> = 8..10;
-        pub const VALUE: rt::Range<usize> = 10..14;
-        pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
-            f("address", rt::Int(self.address as i64));
-            f("value", rt::Int(self.value as i64));
-        }
-        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
-            Request::Write4(*self).encode(address, buf)
-        }
-    }
     ///A request (command), host to device.
     #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
     #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
@@ -234,24 +200,16 @@ pub mod dynamixel2_stuffed {
         ///
         /// The frame is written escaped (`framing.escaping`); `buf` of `MAX_FRAME_LEN`
         /// bytes holds any.
-        pub fn encode(
-            &self,
-            address: u8,
-            buf: &mut [u8],
-        ) -> rt::Result<usize, rt::EncodeError> {
+        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             let mut plain = [0u8; UNESCAPED_LEN];
             let len = self.encode_unescaped(address, &mut plain)?;
             rt::escape_frame(&ESCAPING, &plain[..len], buf, |b| u32::from(checksum(b)))
         }
         /// The frame before escaping, into `buf`.
-        fn encode_unescaped(
-            &self,
-            address: u8,
-            buf: &mut [u8],
-        ) -> rt::Result<usize, rt::EncodeError> {
+        fn encode_unescaped(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             rt::encode_address(address, &FRAME)?;
             let len = match *self {
-                Self::Ping(request::Ping {}) => {
+                Self::Ping(_) => {
                     rt::frame_mut::<
                         10,
                     >(buf, &[0xFF, 0xFF, 0xFD, 0x00, address, 0x03, 0x00, 0x01])?
@@ -337,18 +295,17 @@ pub mod dynamixel2_stuffed {
             name: &str,
             mut field: impl FnMut(&'static str) -> rt::Option<rt::FieldValue<'v>>,
         ) -> rt::Result<Self, rt::FieldError> {
-            match name {
-                "ping" => rt::Ok(Self::Ping(request::Ping)),
+            let message = match name {
+                "ping" => Self::Ping(request::Ping),
                 "write4" => {
-                    rt::Ok(
-                        Self::Write4(request::Write4 {
-                            address: rt::get(&mut field, "address")?,
-                            value: rt::get(&mut field, "value")?,
-                        }),
-                    )
+                    Self::Write4(request::Write4 {
+                        address: rt::get(&mut field, "address")?,
+                        value: rt::get(&mut field, "value")?,
+                    })
                 }
-                _ => rt::Err(rt::FieldError::UnknownMessage),
-            }
+                _ => return rt::Err(rt::FieldError::UnknownMessage),
+            };
+            rt::Ok(message)
         }
     }
     impl rt::Message for Request {
@@ -369,11 +326,7 @@ pub mod dynamixel2_stuffed {
             Request::visit(self, f)
         }
         #[inline]
-        fn encode(
-            &self,
-            address: u8,
-            buf: &mut [u8],
-        ) -> rt::Result<usize, rt::EncodeError> {
+        fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             Request::encode(self, address, buf)
         }
         #[inline]
@@ -408,46 +361,6 @@ pub mod dynamixel2_stuffed {
         /// The responses this command may get, bit `i` for row `i` of `Response::MESSAGES`.
         const fn replies(&self) -> u64 {
             Self::COMMANDS[self.index()].3
-        }
-    }
-    impl response::PingStatus {
-        pub const NAME: &'static str = "ping_status";
-        pub const CODE: &'static [u8] = &[0x55];
-        pub const LEN: usize = 14;
-        pub const DESC: rt::MessageDesc = rt::MessageDesc::new(
-            Self::NAME,
-            0x55,
-            1,
-            &[11, 14],
-        );
-        pub const ERROR: rt::Range<usize> = 8..9;
-        pub const MODEL_NUMBER: rt::Range<usize> = 9..11;
-        pub const FIRMWARE_VERSION: rt::Range<usize> = 11..12;
-        pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
-            f("error", rt::Int(self.error.raw() as i64));
-            f("model_number", rt::Int(self.model_number as i64));
-            f("firmware_version", rt::Int(self.firmware_version as i64));
-        }
-        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
-            Response::PingStatus(*self).encode(address, buf)
-        }
-    }
-    impl response::Status {
-        pub const NAME: &'static str = "status";
-        pub const CODE: &'static [u8] = &[0x55];
-        pub const LEN: usize = 11;
-        pub const DESC: rt::MessageDesc = rt::MessageDesc::new(
-            Self::NAME,
-            0x55,
-            1,
-            &[11, 14],
-        );
-        pub const ERROR: rt::Range<usize> = 8..9;
-        pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
-            f("error", rt::Int(self.error.raw() as i64));
-        }
-        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
-            Response::Status(*self).encode(address, buf)
         }
     }
     ///A response, device to host.
@@ -498,21 +411,13 @@ pub mod dynamixel2_stuffed {
         ///
         /// The frame is written escaped (`framing.escaping`); `buf` of `MAX_FRAME_LEN`
         /// bytes holds any.
-        pub fn encode(
-            &self,
-            address: u8,
-            buf: &mut [u8],
-        ) -> rt::Result<usize, rt::EncodeError> {
+        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             let mut plain = [0u8; UNESCAPED_LEN];
             let len = self.encode_unescaped(address, &mut plain)?;
             rt::escape_frame(&ESCAPING, &plain[..len], buf, |b| u32::from(checksum(b)))
         }
         /// The frame before escaping, into `buf`.
-        fn encode_unescaped(
-            &self,
-            address: u8,
-            buf: &mut [u8],
-        ) -> rt::Result<usize, rt::EncodeError> {
+        fn encode_unescaped(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             rt::encode_address(address, &FRAME)?;
             let len = match *self {
                 Self::PingStatus(
@@ -642,25 +547,22 @@ pub mod dynamixel2_stuffed {
             name: &str,
             mut field: impl FnMut(&'static str) -> rt::Option<rt::FieldValue<'v>>,
         ) -> rt::Result<Self, rt::FieldError> {
-            match name {
+            let message = match name {
                 "ping_status" => {
-                    rt::Ok(
-                        Self::PingStatus(response::PingStatus {
-                            error: StatusError::from_raw(rt::get(&mut field, "error")?),
-                            model_number: rt::get(&mut field, "model_number")?,
-                            firmware_version: rt::get(&mut field, "firmware_version")?,
-                        }),
-                    )
+                    Self::PingStatus(response::PingStatus {
+                        error: StatusError::from_raw(rt::get(&mut field, "error")?),
+                        model_number: rt::get(&mut field, "model_number")?,
+                        firmware_version: rt::get(&mut field, "firmware_version")?,
+                    })
                 }
                 "status" => {
-                    rt::Ok(
-                        Self::Status(response::Status {
-                            error: StatusError::from_raw(rt::get(&mut field, "error")?),
-                        }),
-                    )
+                    Self::Status(response::Status {
+                        error: StatusError::from_raw(rt::get(&mut field, "error")?),
+                    })
                 }
-                _ => rt::Err(rt::FieldError::UnknownMessage),
-            }
+                _ => return rt::Err(rt::FieldError::UnknownMessage),
+            };
+            rt::Ok(message)
         }
     }
     impl rt::Message for Response {
@@ -681,11 +583,7 @@ pub mod dynamixel2_stuffed {
             Response::visit(self, f)
         }
         #[inline]
-        fn encode(
-            &self,
-            address: u8,
-            buf: &mut [u8],
-        ) -> rt::Result<usize, rt::EncodeError> {
+        fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             Response::encode(self, address, buf)
         }
         #[inline]
@@ -793,9 +691,63 @@ pub mod dynamixel2_stuffed {
     pub type StreamDecoder = ::busspec_runtime::stream::StreamDecoder<Dynamixel2Stuffed>;
     /// What [`StreamDecoder`] finds in a stream.
     pub type Event = ::busspec_runtime::stream::Event<Request, Response>;
-    /// Each request as a struct of its own (its `DESC` names it as refusals do: name,
-    /// code and the frame lengths of its code), and each field a refusal names
-    /// (`message.field`, `FieldDesc`).
+    impl request::Ping {
+        pub const NAME: &'static str = "ping";
+        pub const CODE: &'static [u8] = &[0x01];
+        pub const LEN: usize = 10;
+        pub const DESC: rt::MessageDesc = rt::desc(Self::NAME, 0x01, 1, &[10]);
+        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            Request::Ping(*self).encode(address, buf)
+        }
+    }
+    impl request::Write4 {
+        pub const NAME: &'static str = "write4";
+        pub const CODE: &'static [u8] = &[0x03];
+        pub const LEN: usize = 16;
+        pub const DESC: rt::MessageDesc = rt::desc(Self::NAME, 0x03, 1, &[16]);
+        pub const ADDRESS: rt::Range<usize> = 8..10;
+        pub const VALUE: rt::Range<usize> = 10..14;
+        pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
+            f("address", rt::Int(self.address as i64));
+            f("value", rt::Int(self.value as i64));
+        }
+        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            Request::Write4(*self).encode(address, buf)
+        }
+    }
+    impl response::PingStatus {
+        pub const NAME: &'static str = "ping_status";
+        pub const CODE: &'static [u8] = &[0x55];
+        pub const LEN: usize = 14;
+        pub const DESC: rt::MessageDesc = rt::desc(Self::NAME, 0x55, 1, &[11, 14]);
+        pub const ERROR: rt::Range<usize> = 8..9;
+        pub const MODEL_NUMBER: rt::Range<usize> = 9..11;
+        pub const FIRMWARE_VERSION: rt::Range<usize> = 11..12;
+        pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
+            f("error", rt::Int(self.error.raw() as i64));
+            f("model_number", rt::Int(self.model_number as i64));
+            f("firmware_version", rt::Int(self.firmware_version as i64));
+        }
+        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            Response::PingStatus(*self).encode(address, buf)
+        }
+    }
+    impl response::Status {
+        pub const NAME: &'static str = "status";
+        pub const CODE: &'static [u8] = &[0x55];
+        pub const LEN: usize = 11;
+        pub const DESC: rt::MessageDesc = rt::desc(Self::NAME, 0x55, 1, &[11, 14]);
+        pub const ERROR: rt::Range<usize> = 8..9;
+        pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
+            f("error", rt::Int(self.error.raw() as i64));
+        }
+        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            Response::Status(*self).encode(address, buf)
+        }
+    }
+    /// Each request as a struct of its own; its constants (`DESC`, which names it as
+    /// refusals do: name, code and the frame lengths of its code; `QUANTITY_DESC`, each
+    /// field a refusal names) and methods are in the `impl` of each.
     pub mod request {
         /// §Ping Ping (code `0x01`, 10 bytes).
         #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
@@ -812,7 +764,7 @@ pub mod dynamixel2_stuffed {
             pub value: u32,
         }
     }
-    /// Each response as a struct of its own, and the fields its refusals name.
+    /// Each response as a struct of its own.
     pub mod response {
         /// §Ping Status packet answering Ping (code `0x55`, 14 bytes).
         #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]

@@ -70,7 +70,7 @@ pub mod ending {
     }
     /// Where `write.values` sits in the frame and how its elements are counted.
     pub const REPEAT_WRITE: rt::RepeatAt = rt::RepeatAt {
-        field: &request::WRITE_VALUES,
+        field: &request::Write::VALUES_DESC,
         base: 7,
         at: 6,
         width: 2,
@@ -83,64 +83,6 @@ pub mod ending {
         min: 1,
         max: 16,
     };
-    impl request::Read {
-        pub const NAME: &'static str = "read";
-        pub const CODE: &'static [u8] = &[0x01];
-        pub const LEN: usize = 8;
-        pub const DESC: rt::MessageDesc = rt::MessageDesc::new(
-            Self::NAME,
-            0x01,
-            1,
-            &[8],
-        );
-        pub const FIRST: rt::Range<usize> = 4..6;
-        pub const QUANTITY: rt::Range<usize> = 6..7;
-        pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
-            f("first", rt::Int(self.first as i64));
-            f("quantity", rt::Int(self.quantity as i64));
-        }
-        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
-            Request::Read(*self).encode(address, buf)
-        }
-    }
-    impl request::Write {
-        pub const NAME: &'static str = "write";
-        pub const CODE: &'static [u8] = &[0x02];
-        pub const MIN_LEN: usize = 9;
-        pub const MAX_LEN: usize = 39;
-        pub const DESC: rt::MessageDesc = rt::MessageDesc::new(
-            Self::NAME,
-            0x02,
-            1,
-            &[7],
-        );
-        pub const QUANTITY: rt::Range<usize> = 4..5;
-        pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
-            f("quantity", rt::Int(self.quantity as i64));
-            f("values", rt::List(self.values.elements()));
-        }
-        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
-            Request::Write(*self).encode(address, buf)
-        }
-    }
-    impl request::Stamp {
-        pub const NAME: &'static str = "stamp";
-        pub const CODE: &'static [u8] = &[0x03];
-        pub const LEN: usize = 8;
-        pub const DESC: rt::MessageDesc = rt::MessageDesc::new(
-            Self::NAME,
-            0x03,
-            1,
-            &[8],
-        );
-        pub const TICKS: rt::Range<usize> = 4..7;
-        pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
-            f("ticks", rt::Int(self.ticks as i64));
-        }
-        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
-            Request::Stamp(*self).encode(address, buf)
-        }
-    }
     ///A request (command), host to device.
     #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
     #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
@@ -177,8 +119,8 @@ pub mod ending {
         /// The length of this message's frame, in bytes.
         pub const fn frame_len(&self) -> usize {
             match self {
-                Self::Write(request::Write { values: v_values, .. }) => {
-                    REPEAT_WRITE.base + REPEAT_WRITE.bytes_of(v_values.len())
+                Self::Write(m) => {
+                    REPEAT_WRITE.base + REPEAT_WRITE.bytes_of(m.values.len())
                 }
                 _ => Self::MESSAGES[self.index()].2,
             }
@@ -195,11 +137,7 @@ pub mod ending {
         /// Encodes the frame for `address` into `buf`; returns the frame length. Refuses what
         /// decode refuses: an address no frame may carry, the broadcast address for a command
         /// that does not accept it, a value outside its field's range.
-        pub fn encode(
-            &self,
-            address: u8,
-            buf: &mut [u8],
-        ) -> rt::Result<usize, rt::EncodeError> {
+        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             rt::encode_address(address, &FRAME)?;
             let len = match *self {
                 Self::Read(request::Read { first: v_first, quantity: v_quantity }) => {
@@ -269,7 +207,7 @@ pub mod ending {
             match rt::code(frame, 3, 1) {
                 0x01 => {
                     let frame = rt::fixed::<8>(frame, &request::Read::DESC)?;
-                    rt::in_range(&request::READ_QUANTITY, 6, frame[6], 1, 16)?;
+                    rt::in_range(&request::Read::QUANTITY_DESC, 6, frame[6], 1, 16)?;
                     rt::Ok(
                         Self::Read(request::Read {
                             first: u16::from_be_bytes([frame[4], frame[5]]),
@@ -279,9 +217,9 @@ pub mod ending {
                 }
                 0x02 => {
                     let (frame, elements, _) = REPEAT_WRITE.split::<6>(frame)?;
-                    rt::in_range(&request::WRITE_QUANTITY, 4, frame[4], 1, 16)?;
+                    rt::in_range(&request::Write::QUANTITY_DESC, 4, frame[4], 1, 16)?;
                     rt::following(
-                        &request::WRITE_BYTE_COUNT,
+                        &request::Write::BYTE_COUNT_DESC,
                         5,
                         frame[5],
                         frame[4] as i64,
@@ -314,33 +252,28 @@ pub mod ending {
             name: &str,
             mut field: impl FnMut(&'static str) -> rt::Option<rt::FieldValue<'v>>,
         ) -> rt::Result<Self, rt::FieldError> {
-            match name {
+            let message = match name {
                 "read" => {
-                    rt::Ok(
-                        Self::Read(request::Read {
-                            first: rt::get(&mut field, "first")?,
-                            quantity: rt::get(&mut field, "quantity")?,
-                        }),
-                    )
+                    Self::Read(request::Read {
+                        first: rt::get(&mut field, "first")?,
+                        quantity: rt::get(&mut field, "quantity")?,
+                    })
                 }
                 "write" => {
-                    rt::Ok(
-                        Self::Write(request::Write {
-                            quantity: rt::get(&mut field, "quantity")?,
-                            values: rt::list::<u16, 16>(&mut field, "values", 0, 65535)?,
-                        }),
-                    )
+                    Self::Write(request::Write {
+                        quantity: rt::get(&mut field, "quantity")?,
+                        values: rt::list::<u16, 16>(&mut field, "values", 0, 65535)?,
+                    })
                 }
                 "stamp" => {
-                    rt::Ok(
-                        Self::Stamp(request::Stamp {
-                            ticks: rt::field_int("ticks", field("ticks"), 0, 16777215)?
-                                as u32,
-                        }),
-                    )
+                    Self::Stamp(request::Stamp {
+                        ticks: rt::field_int("ticks", field("ticks"), 0, 16777215)?
+                            as u32,
+                    })
                 }
-                _ => rt::Err(rt::FieldError::UnknownMessage),
-            }
+                _ => return rt::Err(rt::FieldError::UnknownMessage),
+            };
+            rt::Ok(message)
         }
     }
     impl rt::Message for Request {
@@ -361,11 +294,7 @@ pub mod ending {
             Request::visit(self, f)
         }
         #[inline]
-        fn encode(
-            &self,
-            address: u8,
-            buf: &mut [u8],
-        ) -> rt::Result<usize, rt::EncodeError> {
+        fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             Request::encode(self, address, buf)
         }
         #[inline]
@@ -405,7 +334,7 @@ pub mod ending {
     }
     /// Where `read_reply.values` sits in the frame and how its elements are counted.
     pub const REPEAT_READ_REPLY: rt::RepeatAt = rt::RepeatAt {
-        field: &response::READ_REPLY_VALUES,
+        field: &response::ReadReply::VALUES_DESC,
         base: 5,
         at: 4,
         width: 2,
@@ -413,60 +342,6 @@ pub mod ending {
         min: 1,
         max: 16,
     };
-    impl response::ReadReply {
-        pub const NAME: &'static str = "read_reply";
-        pub const CODE: &'static [u8] = &[0x01];
-        pub const MIN_LEN: usize = 7;
-        pub const MAX_LEN: usize = 37;
-        pub const DESC: rt::MessageDesc = rt::MessageDesc::new(
-            Self::NAME,
-            0x01,
-            1,
-            &[5],
-        );
-        pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
-            f("values", rt::List(self.values.elements()));
-        }
-        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
-            Response::ReadReply(*self).encode(address, buf)
-        }
-    }
-    impl response::ReadError {
-        pub const NAME: &'static str = "read_error";
-        pub const CODE: &'static [u8] = &[0x81];
-        pub const LEN: usize = 6;
-        pub const DESC: rt::MessageDesc = rt::MessageDesc::new(
-            Self::NAME,
-            0x81,
-            1,
-            &[6],
-        );
-        pub const REASON: rt::Range<usize> = 4..5;
-        pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
-            f("reason", rt::Int(self.reason as i64));
-        }
-        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
-            Response::ReadError(*self).encode(address, buf)
-        }
-    }
-    impl response::WriteReply {
-        pub const NAME: &'static str = "write_reply";
-        pub const CODE: &'static [u8] = &[0x02];
-        pub const LEN: usize = 6;
-        pub const DESC: rt::MessageDesc = rt::MessageDesc::new(
-            Self::NAME,
-            0x02,
-            1,
-            &[6],
-        );
-        pub const STATUS: rt::Range<usize> = 4..5;
-        pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
-            f("status", rt::Int(self.status as i64));
-        }
-        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
-            Response::WriteReply(*self).encode(address, buf)
-        }
-    }
     ///A response, device to host.
     #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
     #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
@@ -503,8 +378,8 @@ pub mod ending {
         /// The length of this message's frame, in bytes.
         pub const fn frame_len(&self) -> usize {
             match self {
-                Self::ReadReply(response::ReadReply { values: v_values, .. }) => {
-                    REPEAT_READ_REPLY.base + REPEAT_READ_REPLY.bytes_of(v_values.len())
+                Self::ReadReply(m) => {
+                    REPEAT_READ_REPLY.base + REPEAT_READ_REPLY.bytes_of(m.values.len())
                 }
                 _ => Self::MESSAGES[self.index()].2,
             }
@@ -521,11 +396,7 @@ pub mod ending {
         /// Encodes the frame for `address` into `buf`; returns the frame length. Refuses what
         /// decode refuses: an address no frame may carry, the broadcast address for a command
         /// that does not accept it, a value outside its field's range.
-        pub fn encode(
-            &self,
-            address: u8,
-            buf: &mut [u8],
-        ) -> rt::Result<usize, rt::EncodeError> {
+        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             rt::encode_address(address, &FRAME)?;
             let len = match *self {
                 Self::ReadReply(response::ReadReply { values: v_values }) => {
@@ -635,30 +506,25 @@ pub mod ending {
             name: &str,
             mut field: impl FnMut(&'static str) -> rt::Option<rt::FieldValue<'v>>,
         ) -> rt::Result<Self, rt::FieldError> {
-            match name {
+            let message = match name {
                 "read_reply" => {
-                    rt::Ok(
-                        Self::ReadReply(response::ReadReply {
-                            values: rt::list::<u16, 16>(&mut field, "values", 0, 65535)?,
-                        }),
-                    )
+                    Self::ReadReply(response::ReadReply {
+                        values: rt::list::<u16, 16>(&mut field, "values", 0, 65535)?,
+                    })
                 }
                 "read_error" => {
-                    rt::Ok(
-                        Self::ReadError(response::ReadError {
-                            reason: rt::get(&mut field, "reason")?,
-                        }),
-                    )
+                    Self::ReadError(response::ReadError {
+                        reason: rt::get(&mut field, "reason")?,
+                    })
                 }
                 "write_reply" => {
-                    rt::Ok(
-                        Self::WriteReply(response::WriteReply {
-                            status: rt::get(&mut field, "status")?,
-                        }),
-                    )
+                    Self::WriteReply(response::WriteReply {
+                        status: rt::get(&mut field, "status")?,
+                    })
                 }
-                _ => rt::Err(rt::FieldError::UnknownMessage),
-            }
+                _ => return rt::Err(rt::FieldError::UnknownMessage),
+            };
+            rt::Ok(message)
         }
     }
     impl rt::Message for Response {
@@ -679,11 +545,7 @@ pub mod ending {
             Response::visit(self, f)
         }
         #[inline]
-        fn encode(
-            &self,
-            address: u8,
-            buf: &mut [u8],
-        ) -> rt::Result<usize, rt::EncodeError> {
+        fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             Response::encode(self, address, buf)
         }
         #[inline]
@@ -705,14 +567,11 @@ pub mod ending {
         /// spec): [`busspec_runtime::DecodeError::InvalidValue`] names the first that differs.
         pub fn follows_request(&self, request: &Request) -> rt::DecodeResult<()> {
             match (self, request) {
-                (
-                    &Self::ReadReply(response::ReadReply { values: v_values, .. }),
-                    &Request::Read(request::Read { quantity: r_quantity, .. }),
-                ) => {
+                (Self::ReadReply(m), Request::Read(r)) => {
                     REPEAT_READ_REPLY
                         .follows_request(
-                            v_values.len(),
-                            r_quantity as i64,
+                            m.values.len(),
+                            r.quantity as i64,
                             (1, 1),
                             "quantity",
                         )?;
@@ -755,7 +614,7 @@ pub mod ending {
             match rt::code(frame, 3, 1) {
                 0x01 => {
                     let frame = rt::fixed::<8>(frame, &request::Read::DESC)?;
-                    rt::in_range(&request::READ_QUANTITY, 6, frame[6], 1, 16)?;
+                    rt::in_range(&request::Read::QUANTITY_DESC, 6, frame[6], 1, 16)?;
                     rt::Ok(Self::Read {
                         first: u16::from_be_bytes([frame[4], frame[5]]),
                         quantity: frame[6],
@@ -763,9 +622,9 @@ pub mod ending {
                 }
                 0x02 => {
                     let (frame, elements, _) = REPEAT_WRITE.split::<6>(frame)?;
-                    rt::in_range(&request::WRITE_QUANTITY, 4, frame[4], 1, 16)?;
+                    rt::in_range(&request::Write::QUANTITY_DESC, 4, frame[4], 1, 16)?;
                     rt::following(
-                        &request::WRITE_BYTE_COUNT,
+                        &request::Write::BYTE_COUNT_DESC,
                         5,
                         frame[5],
                         frame[4] as i64,
@@ -927,14 +786,11 @@ pub mod ending {
         /// spec): [`busspec_runtime::DecodeError::InvalidValue`] names the first that differs.
         pub fn follows_request(&self, request: &Request) -> rt::DecodeResult<()> {
             match (self, request) {
-                (
-                    &Self::ReadReply { values: v_values, .. },
-                    &Request::Read(request::Read { quantity: r_quantity, .. }),
-                ) => {
+                (&Self::ReadReply { values: v_values, .. }, Request::Read(r)) => {
                     REPEAT_READ_REPLY
                         .follows_request(
                             v_values.len(),
-                            r_quantity as i64,
+                            r.quantity as i64,
                             (1, 1),
                             "quantity",
                         )?;
@@ -1073,11 +929,97 @@ pub mod ending {
     pub type StreamDecoder = ::busspec_runtime::stream::StreamDecoder<Ending>;
     /// What [`StreamDecoder`] finds in a stream.
     pub type Event = ::busspec_runtime::stream::Event<Request, Response>;
-    /// Each request as a struct of its own (its `DESC` names it as refusals do: name,
-    /// code and the frame lengths of its code), and each field a refusal names
-    /// (`message.field`, `FieldDesc`).
+    impl request::Read {
+        pub const NAME: &'static str = "read";
+        pub const CODE: &'static [u8] = &[0x01];
+        pub const LEN: usize = 8;
+        pub const DESC: rt::MessageDesc = rt::desc(Self::NAME, 0x01, 1, &[8]);
+        pub const FIRST: rt::Range<usize> = 4..6;
+        pub const QUANTITY: rt::Range<usize> = 6..7;
+        pub const QUANTITY_DESC: rt::FieldDesc = rt::field(Self::NAME, "quantity");
+        pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
+            f("first", rt::Int(self.first as i64));
+            f("quantity", rt::Int(self.quantity as i64));
+        }
+        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            Request::Read(*self).encode(address, buf)
+        }
+    }
+    impl request::Write {
+        pub const NAME: &'static str = "write";
+        pub const CODE: &'static [u8] = &[0x02];
+        pub const MIN_LEN: usize = 9;
+        pub const MAX_LEN: usize = 39;
+        pub const DESC: rt::MessageDesc = rt::desc(Self::NAME, 0x02, 1, &[7]);
+        pub const QUANTITY: rt::Range<usize> = 4..5;
+        pub const VALUES_DESC: rt::FieldDesc = rt::field(Self::NAME, "values");
+        pub const QUANTITY_DESC: rt::FieldDesc = rt::field(Self::NAME, "quantity");
+        pub const BYTE_COUNT_DESC: rt::FieldDesc = rt::field(Self::NAME, "byte_count");
+        pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
+            f("quantity", rt::Int(self.quantity as i64));
+            f("values", rt::List(self.values.elements()));
+        }
+        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            Request::Write(*self).encode(address, buf)
+        }
+    }
+    impl request::Stamp {
+        pub const NAME: &'static str = "stamp";
+        pub const CODE: &'static [u8] = &[0x03];
+        pub const LEN: usize = 8;
+        pub const DESC: rt::MessageDesc = rt::desc(Self::NAME, 0x03, 1, &[8]);
+        pub const TICKS: rt::Range<usize> = 4..7;
+        pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
+            f("ticks", rt::Int(self.ticks as i64));
+        }
+        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            Request::Stamp(*self).encode(address, buf)
+        }
+    }
+    impl response::ReadReply {
+        pub const NAME: &'static str = "read_reply";
+        pub const CODE: &'static [u8] = &[0x01];
+        pub const MIN_LEN: usize = 7;
+        pub const MAX_LEN: usize = 37;
+        pub const DESC: rt::MessageDesc = rt::desc(Self::NAME, 0x01, 1, &[5]);
+        pub const VALUES_DESC: rt::FieldDesc = rt::field(Self::NAME, "values");
+        pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
+            f("values", rt::List(self.values.elements()));
+        }
+        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            Response::ReadReply(*self).encode(address, buf)
+        }
+    }
+    impl response::ReadError {
+        pub const NAME: &'static str = "read_error";
+        pub const CODE: &'static [u8] = &[0x81];
+        pub const LEN: usize = 6;
+        pub const DESC: rt::MessageDesc = rt::desc(Self::NAME, 0x81, 1, &[6]);
+        pub const REASON: rt::Range<usize> = 4..5;
+        pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
+            f("reason", rt::Int(self.reason as i64));
+        }
+        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            Response::ReadError(*self).encode(address, buf)
+        }
+    }
+    impl response::WriteReply {
+        pub const NAME: &'static str = "write_reply";
+        pub const CODE: &'static [u8] = &[0x02];
+        pub const LEN: usize = 6;
+        pub const DESC: rt::MessageDesc = rt::desc(Self::NAME, 0x02, 1, &[6]);
+        pub const STATUS: rt::Range<usize> = 4..5;
+        pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
+            f("status", rt::Int(self.status as i64));
+        }
+        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            Response::WriteReply(*self).encode(address, buf)
+        }
+    }
+    /// Each request as a struct of its own; its constants (`DESC`, which names it as
+    /// refusals do: name, code and the frame lengths of its code; `QUANTITY_DESC`, each
+    /// field a refusal names) and methods are in the `impl` of each.
     pub mod request {
-        use ::busspec_runtime::FieldDesc;
         /// §1 Read (code `0x01`, 8 bytes).
         #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
         #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
@@ -1106,18 +1048,9 @@ pub mod ending {
         pub struct Stamp {
             pub ticks: u32,
         }
-        /// `read.quantity`
-        pub const READ_QUANTITY: FieldDesc = FieldDesc::new("read", "quantity");
-        /// `write.values`
-        pub const WRITE_VALUES: FieldDesc = FieldDesc::new("write", "values");
-        /// `write.quantity`
-        pub const WRITE_QUANTITY: FieldDesc = FieldDesc::new("write", "quantity");
-        /// `write.byte_count`
-        pub const WRITE_BYTE_COUNT: FieldDesc = FieldDesc::new("write", "byte_count");
     }
-    /// Each response as a struct of its own, and the fields its refusals name.
+    /// Each response as a struct of its own.
     pub mod response {
-        use ::busspec_runtime::FieldDesc;
         /// §1 Read reply (code `0x01`, 7 to 37 bytes).
         #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
         #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
@@ -1142,7 +1075,5 @@ pub mod ending {
         pub struct WriteReply {
             pub status: u8,
         }
-        /// `read_reply.values`
-        pub const READ_REPLY_VALUES: FieldDesc = FieldDesc::new("read_reply", "values");
     }
 }

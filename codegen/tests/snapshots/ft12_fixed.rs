@@ -68,62 +68,6 @@ pub mod ft12_fixed {
     pub fn checksum(bytes: &[u8]) -> u8 {
         rt::sum8(bytes)
     }
-    impl request::ResetRemoteLink {
-        pub const NAME: &'static str = "reset_remote_link";
-        pub const CODE: &'static [u8] = &[0x40];
-        pub const LEN: usize = 5;
-        pub const DESC: rt::MessageDesc = rt::MessageDesc::new(
-            Self::NAME,
-            0x40,
-            1,
-            &[5],
-        );
-        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
-            Request::ResetRemoteLink(*self).encode(address, buf)
-        }
-    }
-    impl request::RequestStatusOfLink {
-        pub const NAME: &'static str = "request_status_of_link";
-        pub const CODE: &'static [u8] = &[0x49];
-        pub const LEN: usize = 5;
-        pub const DESC: rt::MessageDesc = rt::MessageDesc::new(
-            Self::NAME,
-            0x49,
-            1,
-            &[5],
-        );
-        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
-            Request::RequestStatusOfLink(*self).encode(address, buf)
-        }
-    }
-    impl request::RequestClass2 {
-        pub const NAME: &'static str = "request_class_2";
-        pub const CODE: &'static [u8] = &[0x5B];
-        pub const LEN: usize = 5;
-        pub const DESC: rt::MessageDesc = rt::MessageDesc::new(
-            Self::NAME,
-            0x5B,
-            1,
-            &[5],
-        );
-        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
-            Request::RequestClass2(*self).encode(address, buf)
-        }
-    }
-    impl request::RequestClass2Fcb {
-        pub const NAME: &'static str = "request_class_2_fcb";
-        pub const CODE: &'static [u8] = &[0x7B];
-        pub const LEN: usize = 5;
-        pub const DESC: rt::MessageDesc = rt::MessageDesc::new(
-            Self::NAME,
-            0x7B,
-            1,
-            &[5],
-        );
-        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
-            Request::RequestClass2Fcb(*self).encode(address, buf)
-        }
-    }
     ///A request (command), host to device.
     #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
     #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
@@ -170,18 +114,12 @@ pub mod ft12_fixed {
         /// Encodes the frame for `address` into `buf`; returns the frame length. Refuses what
         /// decode refuses: an address no frame may carry, the broadcast address for a command
         /// that does not accept it, a value outside its field's range.
-        pub fn encode(
-            &self,
-            address: u8,
-            buf: &mut [u8],
-        ) -> rt::Result<usize, rt::EncodeError> {
+        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             rt::encode_address(address, &FRAME)?;
             let out = rt::frame_mut::<5>(buf, &[])?;
             let len = match *self {
-                Self::ResetRemoteLink(request::ResetRemoteLink {}) => {
-                    rt::head(out, &[0x10, 0x40, address]).len()
-                }
-                Self::RequestStatusOfLink(request::RequestStatusOfLink {}) => {
+                Self::ResetRemoteLink(_) => rt::head(out, &[0x10, 0x40, address]).len(),
+                Self::RequestStatusOfLink(_) => {
                     rt::encode_broadcast(
                         address,
                         0xFF,
@@ -189,11 +127,11 @@ pub mod ft12_fixed {
                     )?;
                     rt::head(out, &[0x10, 0x49, address]).len()
                 }
-                Self::RequestClass2(request::RequestClass2 {}) => {
+                Self::RequestClass2(_) => {
                     rt::encode_broadcast(address, 0xFF, &request::RequestClass2::DESC)?;
                     rt::head(out, &[0x10, 0x5B, address]).len()
                 }
-                Self::RequestClass2Fcb(request::RequestClass2Fcb {}) => {
+                Self::RequestClass2Fcb(_) => {
                     rt::encode_broadcast(
                         address,
                         0xFF,
@@ -259,19 +197,18 @@ pub mod ft12_fixed {
             name: &str,
             _field: impl FnMut(&'static str) -> rt::Option<rt::FieldValue<'v>>,
         ) -> rt::Result<Self, rt::FieldError> {
-            match name {
-                "reset_remote_link" => {
-                    rt::Ok(Self::ResetRemoteLink(request::ResetRemoteLink))
-                }
+            let message = match name {
+                "reset_remote_link" => Self::ResetRemoteLink(request::ResetRemoteLink),
                 "request_status_of_link" => {
-                    rt::Ok(Self::RequestStatusOfLink(request::RequestStatusOfLink))
+                    Self::RequestStatusOfLink(request::RequestStatusOfLink)
                 }
-                "request_class_2" => rt::Ok(Self::RequestClass2(request::RequestClass2)),
+                "request_class_2" => Self::RequestClass2(request::RequestClass2),
                 "request_class_2_fcb" => {
-                    rt::Ok(Self::RequestClass2Fcb(request::RequestClass2Fcb))
+                    Self::RequestClass2Fcb(request::RequestClass2Fcb)
                 }
-                _ => rt::Err(rt::FieldError::UnknownMessage),
-            }
+                _ => return rt::Err(rt::FieldError::UnknownMessage),
+            };
+            rt::Ok(message)
         }
     }
     impl rt::Message for Request {
@@ -292,11 +229,7 @@ pub mod ft12_fixed {
             Request::visit(self, f)
         }
         #[inline]
-        fn encode(
-            &self,
-            address: u8,
-            buf: &mut [u8],
-        ) -> rt::Result<usize, rt::EncodeError> {
+        fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             Request::encode(self, address, buf)
         }
         #[inline]
@@ -336,48 +269,6 @@ pub mod ft12_fixed {
         /// The responses this command may get, bit `i` for row `i` of `Response::MESSAGES`.
         const fn replies(&self) -> u64 {
             Self::COMMANDS[self.index()].3
-        }
-    }
-    impl response::Ack {
-        pub const NAME: &'static str = "ack";
-        pub const CODE: &'static [u8] = &[0x00];
-        pub const LEN: usize = 5;
-        pub const DESC: rt::MessageDesc = rt::MessageDesc::new(
-            Self::NAME,
-            0x00,
-            1,
-            &[5],
-        );
-        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
-            Response::Ack(*self).encode(address, buf)
-        }
-    }
-    impl response::Nack {
-        pub const NAME: &'static str = "nack";
-        pub const CODE: &'static [u8] = &[0x01];
-        pub const LEN: usize = 5;
-        pub const DESC: rt::MessageDesc = rt::MessageDesc::new(
-            Self::NAME,
-            0x01,
-            1,
-            &[5],
-        );
-        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
-            Response::Nack(*self).encode(address, buf)
-        }
-    }
-    impl response::StatusOfLink {
-        pub const NAME: &'static str = "status_of_link";
-        pub const CODE: &'static [u8] = &[0x0B];
-        pub const LEN: usize = 5;
-        pub const DESC: rt::MessageDesc = rt::MessageDesc::new(
-            Self::NAME,
-            0x0B,
-            1,
-            &[5],
-        );
-        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
-            Response::StatusOfLink(*self).encode(address, buf)
         }
     }
     ///A response, device to host.
@@ -423,23 +314,13 @@ pub mod ft12_fixed {
         /// Encodes the frame for `address` into `buf`; returns the frame length. Refuses what
         /// decode refuses: an address no frame may carry, the broadcast address for a command
         /// that does not accept it, a value outside its field's range.
-        pub fn encode(
-            &self,
-            address: u8,
-            buf: &mut [u8],
-        ) -> rt::Result<usize, rt::EncodeError> {
+        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             rt::encode_address(address, &FRAME)?;
             let out = rt::frame_mut::<5>(buf, &[])?;
             let len = match *self {
-                Self::Ack(response::Ack {}) => {
-                    rt::head(out, &[0x10, 0x00, address]).len()
-                }
-                Self::Nack(response::Nack {}) => {
-                    rt::head(out, &[0x10, 0x01, address]).len()
-                }
-                Self::StatusOfLink(response::StatusOfLink {}) => {
-                    rt::head(out, &[0x10, 0x0B, address]).len()
-                }
+                Self::Ack(_) => rt::head(out, &[0x10, 0x00, address]).len(),
+                Self::Nack(_) => rt::head(out, &[0x10, 0x01, address]).len(),
+                Self::StatusOfLink(_) => rt::head(out, &[0x10, 0x0B, address]).len(),
             };
             rt::seal_end(buf, len, |b| u32::from(checksum(rt::covered(b, 1))), &FRAME);
             rt::Ok(len)
@@ -512,12 +393,13 @@ pub mod ft12_fixed {
             name: &str,
             _field: impl FnMut(&'static str) -> rt::Option<rt::FieldValue<'v>>,
         ) -> rt::Result<Self, rt::FieldError> {
-            match name {
-                "ack" => rt::Ok(Self::Ack(response::Ack)),
-                "nack" => rt::Ok(Self::Nack(response::Nack)),
-                "status_of_link" => rt::Ok(Self::StatusOfLink(response::StatusOfLink)),
-                _ => rt::Err(rt::FieldError::UnknownMessage),
-            }
+            let message = match name {
+                "ack" => Self::Ack(response::Ack),
+                "nack" => Self::Nack(response::Nack),
+                "status_of_link" => Self::StatusOfLink(response::StatusOfLink),
+                _ => return rt::Err(rt::FieldError::UnknownMessage),
+            };
+            rt::Ok(message)
         }
     }
     impl rt::Message for Response {
@@ -538,11 +420,7 @@ pub mod ft12_fixed {
             Response::visit(self, f)
         }
         #[inline]
-        fn encode(
-            &self,
-            address: u8,
-            buf: &mut [u8],
-        ) -> rt::Result<usize, rt::EncodeError> {
+        fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             Response::encode(self, address, buf)
         }
         #[inline]
@@ -654,9 +532,72 @@ pub mod ft12_fixed {
     pub type StreamDecoder = ::busspec_runtime::stream::StreamDecoder<Ft12Fixed>;
     /// What [`StreamDecoder`] finds in a stream.
     pub type Event = ::busspec_runtime::stream::Event<Request, Response>;
-    /// Each request as a struct of its own (its `DESC` names it as refusals do: name,
-    /// code and the frame lengths of its code), and each field a refusal names
-    /// (`message.field`, `FieldDesc`).
+    impl request::ResetRemoteLink {
+        pub const NAME: &'static str = "reset_remote_link";
+        pub const CODE: &'static [u8] = &[0x40];
+        pub const LEN: usize = 5;
+        pub const DESC: rt::MessageDesc = rt::desc(Self::NAME, 0x40, 1, &[5]);
+        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            Request::ResetRemoteLink(*self).encode(address, buf)
+        }
+    }
+    impl request::RequestStatusOfLink {
+        pub const NAME: &'static str = "request_status_of_link";
+        pub const CODE: &'static [u8] = &[0x49];
+        pub const LEN: usize = 5;
+        pub const DESC: rt::MessageDesc = rt::desc(Self::NAME, 0x49, 1, &[5]);
+        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            Request::RequestStatusOfLink(*self).encode(address, buf)
+        }
+    }
+    impl request::RequestClass2 {
+        pub const NAME: &'static str = "request_class_2";
+        pub const CODE: &'static [u8] = &[0x5B];
+        pub const LEN: usize = 5;
+        pub const DESC: rt::MessageDesc = rt::desc(Self::NAME, 0x5B, 1, &[5]);
+        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            Request::RequestClass2(*self).encode(address, buf)
+        }
+    }
+    impl request::RequestClass2Fcb {
+        pub const NAME: &'static str = "request_class_2_fcb";
+        pub const CODE: &'static [u8] = &[0x7B];
+        pub const LEN: usize = 5;
+        pub const DESC: rt::MessageDesc = rt::desc(Self::NAME, 0x7B, 1, &[5]);
+        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            Request::RequestClass2Fcb(*self).encode(address, buf)
+        }
+    }
+    impl response::Ack {
+        pub const NAME: &'static str = "ack";
+        pub const CODE: &'static [u8] = &[0x00];
+        pub const LEN: usize = 5;
+        pub const DESC: rt::MessageDesc = rt::desc(Self::NAME, 0x00, 1, &[5]);
+        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            Response::Ack(*self).encode(address, buf)
+        }
+    }
+    impl response::Nack {
+        pub const NAME: &'static str = "nack";
+        pub const CODE: &'static [u8] = &[0x01];
+        pub const LEN: usize = 5;
+        pub const DESC: rt::MessageDesc = rt::desc(Self::NAME, 0x01, 1, &[5]);
+        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            Response::Nack(*self).encode(address, buf)
+        }
+    }
+    impl response::StatusOfLink {
+        pub const NAME: &'static str = "status_of_link";
+        pub const CODE: &'static [u8] = &[0x0B];
+        pub const LEN: usize = 5;
+        pub const DESC: rt::MessageDesc = rt::desc(Self::NAME, 0x0B, 1, &[5]);
+        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            Response::StatusOfLink(*self).encode(address, buf)
+        }
+    }
+    /// Each request as a struct of its own; its constants (`DESC`, which names it as
+    /// refusals do: name, code and the frame lengths of its code; `QUANTITY_DESC`, each
+    /// field a refusal names) and methods are in the `impl` of each.
     pub mod request {
         /// §3 Reset of remote link (SND_NKE) (code `0x40`, 5 bytes).
         #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
@@ -679,7 +620,7 @@ pub mod ft12_fixed {
         #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]
         pub struct RequestClass2Fcb;
     }
-    /// Each response as a struct of its own, and the fields its refusals name.
+    /// Each response as a struct of its own.
     pub mod response {
         /// §4 Positive acknowledgement (code `0x00`, 5 bytes).
         #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]

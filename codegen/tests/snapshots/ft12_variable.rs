@@ -68,34 +68,6 @@ pub mod ft12_variable {
     pub fn checksum(bytes: &[u8]) -> u8 {
         rt::sum8(bytes)
     }
-    impl request::Reset {
-        pub const NAME: &'static str = "reset";
-        pub const CODE: &'static [u8] = &[0x53];
-        pub const LEN: usize = 9;
-        pub const DESC: rt::MessageDesc = rt::MessageDesc::new(
-            Self::NAME,
-            0x53,
-            1,
-            &[9],
-        );
-        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
-            Request::Reset(*self).encode(address, buf)
-        }
-    }
-    impl request::ReadData {
-        pub const NAME: &'static str = "read_data";
-        pub const CODE: &'static [u8] = &[0x7B];
-        pub const LEN: usize = 9;
-        pub const DESC: rt::MessageDesc = rt::MessageDesc::new(
-            Self::NAME,
-            0x7B,
-            1,
-            &[9],
-        );
-        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
-            Request::ReadData(*self).encode(address, buf)
-        }
-    }
     ///A request (command), host to device.
     #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
     #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
@@ -136,18 +108,14 @@ pub mod ft12_variable {
         /// Encodes the frame for `address` into `buf`; returns the frame length. Refuses what
         /// decode refuses: an address no frame may carry, the broadcast address for a command
         /// that does not accept it, a value outside its field's range.
-        pub fn encode(
-            &self,
-            address: u8,
-            buf: &mut [u8],
-        ) -> rt::Result<usize, rt::EncodeError> {
+        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             rt::encode_address(address, &FRAME)?;
             let out = rt::frame_mut::<9>(buf, &[])?;
             let len = match *self {
-                Self::Reset(request::Reset {}) => {
+                Self::Reset(_) => {
                     rt::head(out, &[0x68, 0x03, 0x03, 0x68, 0x53, address, 0x50]).len()
                 }
-                Self::ReadData(request::ReadData {}) => {
+                Self::ReadData(_) => {
                     rt::encode_broadcast(address, 0xFE, &request::ReadData::DESC)?;
                     rt::head(out, &[0x68, 0x03, 0x03, 0x68, 0x7B, address, 0x5B]).len()
                 }
@@ -180,13 +148,13 @@ pub mod ft12_variable {
             match rt::code(frame, 4, 1) {
                 0x53 => {
                     let frame = rt::fixed::<9>(frame, &request::Reset::DESC)?;
-                    rt::equal(&request::RESET_CI, 6, frame[6], 0x50)?;
+                    rt::equal(&request::Reset::CI_DESC, 6, frame[6], 0x50)?;
                     rt::Ok(Self::Reset(request::Reset))
                 }
                 0x7B => {
                     let frame = rt::fixed::<9>(frame, &request::ReadData::DESC)?;
                     rt::no_broadcast(frame[5], 0xFE, &request::ReadData::DESC)?;
-                    rt::equal(&request::READ_DATA_CI, 6, frame[6], 0x5B)?;
+                    rt::equal(&request::ReadData::CI_DESC, 6, frame[6], 0x5B)?;
                     rt::Ok(Self::ReadData(request::ReadData))
                 }
                 _ => rt::Err(rt::unknown_code(frame, 4, 1, 2, false)),
@@ -199,11 +167,12 @@ pub mod ft12_variable {
             name: &str,
             _field: impl FnMut(&'static str) -> rt::Option<rt::FieldValue<'v>>,
         ) -> rt::Result<Self, rt::FieldError> {
-            match name {
-                "reset" => rt::Ok(Self::Reset(request::Reset)),
-                "read_data" => rt::Ok(Self::ReadData(request::ReadData)),
-                _ => rt::Err(rt::FieldError::UnknownMessage),
-            }
+            let message = match name {
+                "reset" => Self::Reset(request::Reset),
+                "read_data" => Self::ReadData(request::ReadData),
+                _ => return rt::Err(rt::FieldError::UnknownMessage),
+            };
+            rt::Ok(message)
         }
     }
     impl rt::Message for Request {
@@ -224,11 +193,7 @@ pub mod ft12_variable {
             Request::visit(self, f)
         }
         #[inline]
-        fn encode(
-            &self,
-            address: u8,
-            buf: &mut [u8],
-        ) -> rt::Result<usize, rt::EncodeError> {
+        fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             Request::encode(self, address, buf)
         }
         #[inline]
@@ -266,38 +231,6 @@ pub mod ft12_variable {
         /// The responses this command may get, bit `i` for row `i` of `Response::MESSAGES`.
         const fn replies(&self) -> u64 {
             Self::COMMANDS[self.index()].3
-        }
-    }
-    impl response::RspUd {
-        pub const NAME: &'static str = "rsp_ud";
-        pub const CODE: &'static [u8] = &[0x08];
-        pub const LEN: usize = 27;
-        pub const DESC: rt::MessageDesc = rt::MessageDesc::new(
-            Self::NAME,
-            0x08,
-            1,
-            &[27],
-        );
-        pub const IDENTIFICATION: rt::Range<usize> = 7..11;
-        pub const MANUFACTURER: rt::Range<usize> = 11..13;
-        pub const VERSION: rt::Range<usize> = 13..14;
-        pub const MEDIUM: rt::Range<usize> = 14..15;
-        pub const ACCESS: rt::Range<usize> = 15..16;
-        pub const STATUS: rt::Range<usize> = 16..17;
-        pub const SIGNATURE: rt::Range<usize> = 17..19;
-        pub const VOLUME: rt::Range<usize> = 21..25;
-        pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
-            f("identification", rt::Int(self.identification as i64));
-            f("manufacturer", rt::Int(self.manufacturer as i64));
-            f("version", rt::Int(self.version as i64));
-            f("medium", rt::Int(self.medium as i64));
-            f("access", rt::Int(self.access as i64));
-            f("status", rt::Int(self.status as i64));
-            f("signature", rt::Int(self.signature as i64));
-            f("volume", rt::Int(self.volume as i64));
-        }
-        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
-            Response::RspUd(*self).encode(address, buf)
         }
     }
     ///A response, device to host.
@@ -341,11 +274,7 @@ pub mod ft12_variable {
         /// Encodes the frame for `address` into `buf`; returns the frame length. Refuses what
         /// decode refuses: an address no frame may carry, the broadcast address for a command
         /// that does not accept it, a value outside its field's range.
-        pub fn encode(
-            &self,
-            address: u8,
-            buf: &mut [u8],
-        ) -> rt::Result<usize, rt::EncodeError> {
+        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             rt::encode_address(address, &FRAME)?;
             let out = rt::frame_mut::<27>(buf, &[])?;
             let len = match *self {
@@ -441,22 +370,22 @@ pub mod ft12_variable {
             match rt::code(frame, 4, 1) {
                 0x08 => {
                     let frame = rt::fixed::<27>(frame, &response::RspUd::DESC)?;
-                    rt::equal(&response::RSP_UD_CI, 6, frame[6], 0x72)?;
+                    rt::equal(&response::RspUd::CI_DESC, 6, frame[6], 0x72)?;
                     let field_1: u32 = rt::bcd(
-                        &response::RSP_UD_IDENTIFICATION,
+                        &response::RspUd::IDENTIFICATION_DESC,
                         7,
                         u32::from_le_bytes([frame[7], frame[8], frame[9], frame[10]])
                             as u64,
                     )? as u32;
                     rt::in_range(
-                        &response::RSP_UD_IDENTIFICATION,
+                        &response::RspUd::IDENTIFICATION_DESC,
                         7,
                         field_1,
                         0,
                         99999999,
                     )?;
-                    rt::equal(&response::RSP_UD_DIF, 19, frame[19], 0x4)?;
-                    rt::equal(&response::RSP_UD_VIF, 20, frame[20], 0x13)?;
+                    rt::equal(&response::RspUd::DIF_DESC, 19, frame[19], 0x4)?;
+                    rt::equal(&response::RspUd::VIF_DESC, 20, frame[20], 0x13)?;
                     rt::Ok(
                         Self::RspUd(response::RspUd {
                             identification: field_1,
@@ -485,23 +414,22 @@ pub mod ft12_variable {
             name: &str,
             mut field: impl FnMut(&'static str) -> rt::Option<rt::FieldValue<'v>>,
         ) -> rt::Result<Self, rt::FieldError> {
-            match name {
+            let message = match name {
                 "rsp_ud" => {
-                    rt::Ok(
-                        Self::RspUd(response::RspUd {
-                            identification: rt::get(&mut field, "identification")?,
-                            manufacturer: rt::get(&mut field, "manufacturer")?,
-                            version: rt::get(&mut field, "version")?,
-                            medium: rt::get(&mut field, "medium")?,
-                            access: rt::get(&mut field, "access")?,
-                            status: rt::get(&mut field, "status")?,
-                            signature: rt::get(&mut field, "signature")?,
-                            volume: rt::get(&mut field, "volume")?,
-                        }),
-                    )
+                    Self::RspUd(response::RspUd {
+                        identification: rt::get(&mut field, "identification")?,
+                        manufacturer: rt::get(&mut field, "manufacturer")?,
+                        version: rt::get(&mut field, "version")?,
+                        medium: rt::get(&mut field, "medium")?,
+                        access: rt::get(&mut field, "access")?,
+                        status: rt::get(&mut field, "status")?,
+                        signature: rt::get(&mut field, "signature")?,
+                        volume: rt::get(&mut field, "volume")?,
+                    })
                 }
-                _ => rt::Err(rt::FieldError::UnknownMessage),
-            }
+                _ => return rt::Err(rt::FieldError::UnknownMessage),
+            };
+            rt::Ok(message)
         }
     }
     impl rt::Message for Response {
@@ -522,11 +450,7 @@ pub mod ft12_variable {
             Response::visit(self, f)
         }
         #[inline]
-        fn encode(
-            &self,
-            address: u8,
-            buf: &mut [u8],
-        ) -> rt::Result<usize, rt::EncodeError> {
+        fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             Response::encode(self, address, buf)
         }
         #[inline]
@@ -652,11 +576,64 @@ pub mod ft12_variable {
     pub type StreamDecoder = ::busspec_runtime::stream::StreamDecoder<Ft12Variable>;
     /// What [`StreamDecoder`] finds in a stream.
     pub type Event = ::busspec_runtime::stream::Event<Request, Response>;
-    /// Each request as a struct of its own (its `DESC` names it as refusals do: name,
-    /// code and the frame lengths of its code), and each field a refusal names
-    /// (`message.field`, `FieldDesc`).
+    impl request::Reset {
+        pub const NAME: &'static str = "reset";
+        pub const CODE: &'static [u8] = &[0x53];
+        pub const LEN: usize = 9;
+        pub const DESC: rt::MessageDesc = rt::desc(Self::NAME, 0x53, 1, &[9]);
+        pub const CI_DESC: rt::FieldDesc = rt::field(Self::NAME, "ci");
+        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            Request::Reset(*self).encode(address, buf)
+        }
+    }
+    impl request::ReadData {
+        pub const NAME: &'static str = "read_data";
+        pub const CODE: &'static [u8] = &[0x7B];
+        pub const LEN: usize = 9;
+        pub const DESC: rt::MessageDesc = rt::desc(Self::NAME, 0x7B, 1, &[9]);
+        pub const CI_DESC: rt::FieldDesc = rt::field(Self::NAME, "ci");
+        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            Request::ReadData(*self).encode(address, buf)
+        }
+    }
+    impl response::RspUd {
+        pub const NAME: &'static str = "rsp_ud";
+        pub const CODE: &'static [u8] = &[0x08];
+        pub const LEN: usize = 27;
+        pub const DESC: rt::MessageDesc = rt::desc(Self::NAME, 0x08, 1, &[27]);
+        pub const IDENTIFICATION: rt::Range<usize> = 7..11;
+        pub const MANUFACTURER: rt::Range<usize> = 11..13;
+        pub const VERSION: rt::Range<usize> = 13..14;
+        pub const MEDIUM: rt::Range<usize> = 14..15;
+        pub const ACCESS: rt::Range<usize> = 15..16;
+        pub const STATUS: rt::Range<usize> = 16..17;
+        pub const SIGNATURE: rt::Range<usize> = 17..19;
+        pub const VOLUME: rt::Range<usize> = 21..25;
+        pub const CI_DESC: rt::FieldDesc = rt::field(Self::NAME, "ci");
+        pub const IDENTIFICATION_DESC: rt::FieldDesc = rt::field(
+            Self::NAME,
+            "identification",
+        );
+        pub const DIF_DESC: rt::FieldDesc = rt::field(Self::NAME, "dif");
+        pub const VIF_DESC: rt::FieldDesc = rt::field(Self::NAME, "vif");
+        pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
+            f("identification", rt::Int(self.identification as i64));
+            f("manufacturer", rt::Int(self.manufacturer as i64));
+            f("version", rt::Int(self.version as i64));
+            f("medium", rt::Int(self.medium as i64));
+            f("access", rt::Int(self.access as i64));
+            f("status", rt::Int(self.status as i64));
+            f("signature", rt::Int(self.signature as i64));
+            f("volume", rt::Int(self.volume as i64));
+        }
+        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            Response::RspUd(*self).encode(address, buf)
+        }
+    }
+    /// Each request as a struct of its own; its constants (`DESC`, which names it as
+    /// refusals do: name, code and the frame lengths of its code; `QUANTITY_DESC`, each
+    /// field a refusal names) and methods are in the `impl` of each.
     pub mod request {
-        use ::busspec_runtime::FieldDesc;
         /// §3.1 SND_UD: application reset (code `0x53`, 9 bytes).
         #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
         #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
@@ -667,14 +644,9 @@ pub mod ft12_variable {
         #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
         #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]
         pub struct ReadData;
-        /// `reset.ci`
-        pub const RESET_CI: FieldDesc = FieldDesc::new("reset", "ci");
-        /// `read_data.ci`
-        pub const READ_DATA_CI: FieldDesc = FieldDesc::new("read_data", "ci");
     }
-    /// Each response as a struct of its own, and the fields its refusals name.
+    /// Each response as a struct of its own.
     pub mod response {
-        use ::busspec_runtime::FieldDesc;
         /// §3.2 RSP_UD: user data, one instantaneous volume record (code `0x08`, 27 bytes).
         #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
         #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
@@ -693,16 +665,5 @@ pub mod ft12_variable {
             /// \[l\]
             pub volume: u32,
         }
-        /// `rsp_ud.ci`
-        pub const RSP_UD_CI: FieldDesc = FieldDesc::new("rsp_ud", "ci");
-        /// `rsp_ud.identification`
-        pub const RSP_UD_IDENTIFICATION: FieldDesc = FieldDesc::new(
-            "rsp_ud",
-            "identification",
-        );
-        /// `rsp_ud.dif`
-        pub const RSP_UD_DIF: FieldDesc = FieldDesc::new("rsp_ud", "dif");
-        /// `rsp_ud.vif`
-        pub const RSP_UD_VIF: FieldDesc = FieldDesc::new("rsp_ud", "vif");
     }
 }

@@ -102,40 +102,6 @@ pub mod hdlc_like {
     pub fn checksum(bytes: &[u8]) -> u16 {
         CRC.checksum(bytes)
     }
-    impl request::ReadStatus {
-        pub const NAME: &'static str = "read_status";
-        pub const CODE: &'static [u8] = &[0x10];
-        pub const LEN: usize = 6;
-        pub const DESC: rt::MessageDesc = rt::MessageDesc::new(
-            Self::NAME,
-            0x10,
-            1,
-            &[6],
-        );
-        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
-            Request::ReadStatus(*self).encode(address, buf)
-        }
-    }
-    impl request::WriteRegister {
-        pub const NAME: &'static str = "write_register";
-        pub const CODE: &'static [u8] = &[0x20];
-        pub const LEN: usize = 10;
-        pub const DESC: rt::MessageDesc = rt::MessageDesc::new(
-            Self::NAME,
-            0x20,
-            1,
-            &[10],
-        );
-        pub const REGISTER: rt::Range<usize> = 3..5;
-        pub const VALUE: rt::Range<usize> = 5..7;
-        pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
-            f("register", rt::Int(self.register as i64));
-            f("value", rt::Int(self.value as i64));
-        }
-        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
-            Request::WriteRegister(*self).encode(address, buf)
-        }
-    }
     ///A request (command), host to device.
     #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
     #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
@@ -184,11 +150,7 @@ pub mod hdlc_like {
         ///
         /// The frame is written escaped (`framing.escaping`); `buf` of `MAX_FRAME_LEN`
         /// bytes holds any.
-        pub fn encode(
-            &self,
-            address: u8,
-            buf: &mut [u8],
-        ) -> rt::Result<usize, rt::EncodeError> {
+        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             let mut plain = [0u8; UNESCAPED_LEN];
             let len = self.encode_unescaped(address, &mut plain)?;
             rt::escape_frame(
@@ -199,14 +161,10 @@ pub mod hdlc_like {
             )
         }
         /// The frame before escaping, into `buf`.
-        fn encode_unescaped(
-            &self,
-            address: u8,
-            buf: &mut [u8],
-        ) -> rt::Result<usize, rt::EncodeError> {
+        fn encode_unescaped(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             rt::encode_address(address, &FRAME)?;
             let len = match *self {
-                Self::ReadStatus(request::ReadStatus {}) => {
+                Self::ReadStatus(_) => {
                     rt::encode_broadcast(address, 0xFF, &request::ReadStatus::DESC)?;
                     rt::frame_mut::<6>(buf, &[0x7E, address, 0x10])?.len()
                 }
@@ -284,18 +242,17 @@ pub mod hdlc_like {
             name: &str,
             mut field: impl FnMut(&'static str) -> rt::Option<rt::FieldValue<'v>>,
         ) -> rt::Result<Self, rt::FieldError> {
-            match name {
-                "read_status" => rt::Ok(Self::ReadStatus(request::ReadStatus)),
+            let message = match name {
+                "read_status" => Self::ReadStatus(request::ReadStatus),
                 "write_register" => {
-                    rt::Ok(
-                        Self::WriteRegister(request::WriteRegister {
-                            register: rt::get(&mut field, "register")?,
-                            value: rt::get(&mut field, "value")?,
-                        }),
-                    )
+                    Self::WriteRegister(request::WriteRegister {
+                        register: rt::get(&mut field, "register")?,
+                        value: rt::get(&mut field, "value")?,
+                    })
                 }
-                _ => rt::Err(rt::FieldError::UnknownMessage),
-            }
+                _ => return rt::Err(rt::FieldError::UnknownMessage),
+            };
+            rt::Ok(message)
         }
     }
     impl rt::Message for Request {
@@ -316,11 +273,7 @@ pub mod hdlc_like {
             Request::visit(self, f)
         }
         #[inline]
-        fn encode(
-            &self,
-            address: u8,
-            buf: &mut [u8],
-        ) -> rt::Result<usize, rt::EncodeError> {
+        fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             Request::encode(self, address, buf)
         }
         #[inline]
@@ -355,38 +308,6 @@ pub mod hdlc_like {
         /// The responses this command may get, bit `i` for row `i` of `Response::MESSAGES`.
         const fn replies(&self) -> u64 {
             Self::COMMANDS[self.index()].3
-        }
-    }
-    impl response::Status {
-        pub const NAME: &'static str = "status";
-        pub const CODE: &'static [u8] = &[0x90];
-        pub const LEN: usize = 8;
-        pub const DESC: rt::MessageDesc = rt::MessageDesc::new(
-            Self::NAME,
-            0x90,
-            1,
-            &[8],
-        );
-        pub const STATE: rt::Range<usize> = 3..5;
-        pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
-            f("state", rt::Int(self.state as i64));
-        }
-        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
-            Response::Status(*self).encode(address, buf)
-        }
-    }
-    impl response::Ack {
-        pub const NAME: &'static str = "ack";
-        pub const CODE: &'static [u8] = &[0xA0];
-        pub const LEN: usize = 6;
-        pub const DESC: rt::MessageDesc = rt::MessageDesc::new(
-            Self::NAME,
-            0xA0,
-            1,
-            &[6],
-        );
-        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
-            Response::Ack(*self).encode(address, buf)
         }
     }
     ///A response, device to host.
@@ -437,11 +358,7 @@ pub mod hdlc_like {
         ///
         /// The frame is written escaped (`framing.escaping`); `buf` of `MAX_FRAME_LEN`
         /// bytes holds any.
-        pub fn encode(
-            &self,
-            address: u8,
-            buf: &mut [u8],
-        ) -> rt::Result<usize, rt::EncodeError> {
+        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             let mut plain = [0u8; UNESCAPED_LEN];
             let len = self.encode_unescaped(address, &mut plain)?;
             rt::escape_frame(
@@ -452,11 +369,7 @@ pub mod hdlc_like {
             )
         }
         /// The frame before escaping, into `buf`.
-        fn encode_unescaped(
-            &self,
-            address: u8,
-            buf: &mut [u8],
-        ) -> rt::Result<usize, rt::EncodeError> {
+        fn encode_unescaped(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             rt::encode_address(address, &FRAME)?;
             let len = match *self {
                 Self::Status(response::Status { state: v_state }) => {
@@ -464,9 +377,7 @@ pub mod hdlc_like {
                     out[3..5].copy_from_slice(&v_state.to_le_bytes());
                     out.len()
                 }
-                Self::Ack(response::Ack {}) => {
-                    rt::frame_mut::<6>(buf, &[0x7E, address, 0xA0])?.len()
-                }
+                Self::Ack(_) => rt::frame_mut::<6>(buf, &[0x7E, address, 0xA0])?.len(),
             };
             rt::seal_end(buf, len, |b| u32::from(checksum(rt::covered(b, 1))), &FRAME);
             rt::Ok(len)
@@ -559,17 +470,16 @@ pub mod hdlc_like {
             name: &str,
             mut field: impl FnMut(&'static str) -> rt::Option<rt::FieldValue<'v>>,
         ) -> rt::Result<Self, rt::FieldError> {
-            match name {
+            let message = match name {
                 "status" => {
-                    rt::Ok(
-                        Self::Status(response::Status {
-                            state: rt::get(&mut field, "state")?,
-                        }),
-                    )
+                    Self::Status(response::Status {
+                        state: rt::get(&mut field, "state")?,
+                    })
                 }
-                "ack" => rt::Ok(Self::Ack(response::Ack)),
-                _ => rt::Err(rt::FieldError::UnknownMessage),
-            }
+                "ack" => Self::Ack(response::Ack),
+                _ => return rt::Err(rt::FieldError::UnknownMessage),
+            };
+            rt::Ok(message)
         }
     }
     impl rt::Message for Response {
@@ -590,11 +500,7 @@ pub mod hdlc_like {
             Response::visit(self, f)
         }
         #[inline]
-        fn encode(
-            &self,
-            address: u8,
-            buf: &mut [u8],
-        ) -> rt::Result<usize, rt::EncodeError> {
+        fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             Response::encode(self, address, buf)
         }
         #[inline]
@@ -708,9 +614,55 @@ pub mod hdlc_like {
     pub type StreamDecoder = ::busspec_runtime::stream::StreamDecoder<HdlcLike>;
     /// What [`StreamDecoder`] finds in a stream.
     pub type Event = ::busspec_runtime::stream::Event<Request, Response>;
-    /// Each request as a struct of its own (its `DESC` names it as refusals do: name,
-    /// code and the frame lengths of its code), and each field a refusal names
-    /// (`message.field`, `FieldDesc`).
+    impl request::ReadStatus {
+        pub const NAME: &'static str = "read_status";
+        pub const CODE: &'static [u8] = &[0x10];
+        pub const LEN: usize = 6;
+        pub const DESC: rt::MessageDesc = rt::desc(Self::NAME, 0x10, 1, &[6]);
+        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            Request::ReadStatus(*self).encode(address, buf)
+        }
+    }
+    impl request::WriteRegister {
+        pub const NAME: &'static str = "write_register";
+        pub const CODE: &'static [u8] = &[0x20];
+        pub const LEN: usize = 10;
+        pub const DESC: rt::MessageDesc = rt::desc(Self::NAME, 0x20, 1, &[10]);
+        pub const REGISTER: rt::Range<usize> = 3..5;
+        pub const VALUE: rt::Range<usize> = 5..7;
+        pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
+            f("register", rt::Int(self.register as i64));
+            f("value", rt::Int(self.value as i64));
+        }
+        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            Request::WriteRegister(*self).encode(address, buf)
+        }
+    }
+    impl response::Status {
+        pub const NAME: &'static str = "status";
+        pub const CODE: &'static [u8] = &[0x90];
+        pub const LEN: usize = 8;
+        pub const DESC: rt::MessageDesc = rt::desc(Self::NAME, 0x90, 1, &[8]);
+        pub const STATE: rt::Range<usize> = 3..5;
+        pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
+            f("state", rt::Int(self.state as i64));
+        }
+        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            Response::Status(*self).encode(address, buf)
+        }
+    }
+    impl response::Ack {
+        pub const NAME: &'static str = "ack";
+        pub const CODE: &'static [u8] = &[0xA0];
+        pub const LEN: usize = 6;
+        pub const DESC: rt::MessageDesc = rt::desc(Self::NAME, 0xA0, 1, &[6]);
+        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            Response::Ack(*self).encode(address, buf)
+        }
+    }
+    /// Each request as a struct of its own; its constants (`DESC`, which names it as
+    /// refusals do: name, code and the frame lengths of its code; `QUANTITY_DESC`, each
+    /// field a refusal names) and methods are in the `impl` of each.
     pub mod request {
         /// §3.1 Read status (code `0x10`, 6 bytes).
         #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
@@ -727,7 +679,7 @@ pub mod hdlc_like {
             pub value: u16,
         }
     }
-    /// Each response as a struct of its own, and the fields its refusals name.
+    /// Each response as a struct of its own.
     pub mod response {
         /// §4.1 Status (code `0x90`, 8 bytes).
         #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]

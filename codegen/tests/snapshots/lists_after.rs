@@ -70,7 +70,7 @@ pub mod lists_after {
     }
     /// Where `write_block.values` sits in the frame and how its elements are counted.
     pub const REPEAT_WRITE_BLOCK: rt::RepeatAt = rt::RepeatAt {
-        field: &request::WRITE_BLOCK_VALUES,
+        field: &request::WriteBlock::VALUES_DESC,
         base: 7,
         at: 4,
         width: 2,
@@ -88,7 +88,7 @@ pub mod lists_after {
         base: 7,
         lists: &[
             rt::RepeatAt {
-                field: &request::WRITE_BLOCK_VALUES,
+                field: &request::WriteBlock::VALUES_DESC,
                 base: 7,
                 at: 4,
                 width: 2,
@@ -105,7 +105,7 @@ pub mod lists_after {
     };
     /// Where `copy.sources` sits in the frame and how its elements are counted.
     pub const REPEAT_COPY: rt::RepeatAt = rt::RepeatAt {
-        field: &request::COPY_SOURCES,
+        field: &request::Copy::SOURCES_DESC,
         base: 7,
         at: 4,
         width: 1,
@@ -123,7 +123,7 @@ pub mod lists_after {
         base: 7,
         lists: &[
             rt::RepeatAt {
-                field: &request::COPY_SOURCES,
+                field: &request::Copy::SOURCES_DESC,
                 base: 7,
                 at: 4,
                 width: 1,
@@ -137,7 +137,7 @@ pub mod lists_after {
                 max: 4,
             },
             rt::RepeatAt {
-                field: &request::COPY_TARGETS,
+                field: &request::Copy::TARGETS_DESC,
                 base: 7,
                 at: 5,
                 width: 2,
@@ -152,64 +152,6 @@ pub mod lists_after {
             },
         ],
     };
-    impl request::ReadBlock {
-        pub const NAME: &'static str = "read_block";
-        pub const CODE: &'static [u8] = &[0x10];
-        pub const LEN: usize = 7;
-        pub const DESC: rt::MessageDesc = rt::MessageDesc::new(
-            Self::NAME,
-            0x10,
-            1,
-            &[7],
-        );
-        pub const FIRST: rt::Range<usize> = 3..5;
-        pub const QUANTITY: rt::Range<usize> = 5..6;
-        pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
-            f("first", rt::Int(self.first as i64));
-            f("quantity", rt::Int(self.quantity as i64));
-        }
-        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
-            Request::ReadBlock(*self).encode(address, buf)
-        }
-    }
-    impl request::WriteBlock {
-        pub const NAME: &'static str = "write_block";
-        pub const CODE: &'static [u8] = &[0x11];
-        pub const MIN_LEN: usize = 9;
-        pub const MAX_LEN: usize = 23;
-        pub const DESC: rt::MessageDesc = rt::MessageDesc::new(
-            Self::NAME,
-            0x11,
-            1,
-            &[7],
-        );
-        pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
-            f("values", rt::List(self.values.elements()));
-            f("flags", rt::Int(self.flags as i64));
-        }
-        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
-            Request::WriteBlock(*self).encode(address, buf)
-        }
-    }
-    impl request::Copy {
-        pub const NAME: &'static str = "copy";
-        pub const CODE: &'static [u8] = &[0x12];
-        pub const MIN_LEN: usize = 7;
-        pub const MAX_LEN: usize = 19;
-        pub const DESC: rt::MessageDesc = rt::MessageDesc::new(
-            Self::NAME,
-            0x12,
-            1,
-            &[7],
-        );
-        pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
-            f("sources", rt::List(self.sources.elements()));
-            f("targets", rt::List(self.targets.elements()));
-        }
-        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
-            Request::Copy(*self).encode(address, buf)
-        }
-    }
     ///A request (command), host to device.
     #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
     #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
@@ -246,15 +188,13 @@ pub mod lists_after {
         /// The length of this message's frame, in bytes.
         pub const fn frame_len(&self) -> usize {
             match self {
-                Self::WriteBlock(request::WriteBlock { values: v_values, .. }) => {
+                Self::WriteBlock(m) => {
                     LISTS_WRITE_BLOCK.base
-                        + LISTS_WRITE_BLOCK.lists[0].bytes_of(v_values.len())
+                        + LISTS_WRITE_BLOCK.lists[0].bytes_of(m.values.len())
                 }
-                Self::Copy(
-                    request::Copy { sources: v_sources, targets: v_targets, .. },
-                ) => {
-                    LISTS_COPY.base + LISTS_COPY.lists[0].bytes_of(v_sources.len())
-                        + LISTS_COPY.lists[1].bytes_of(v_targets.len())
+                Self::Copy(m) => {
+                    LISTS_COPY.base + LISTS_COPY.lists[0].bytes_of(m.sources.len())
+                        + LISTS_COPY.lists[1].bytes_of(m.targets.len())
                 }
                 _ => Self::MESSAGES[self.index()].2,
             }
@@ -271,11 +211,7 @@ pub mod lists_after {
         /// Encodes the frame for `address` into `buf`; returns the frame length. Refuses what
         /// decode refuses: an address no frame may carry, the broadcast address for a command
         /// that does not accept it, a value outside its field's range.
-        pub fn encode(
-            &self,
-            address: u8,
-            buf: &mut [u8],
-        ) -> rt::Result<usize, rt::EncodeError> {
+        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             rt::encode_address(address, &FRAME)?;
             let len = match *self {
                 Self::ReadBlock(
@@ -369,7 +305,7 @@ pub mod lists_after {
             match rt::code(frame, 2, 1) {
                 0x10 => {
                     let frame = rt::fixed::<7>(frame, &request::ReadBlock::DESC)?;
-                    rt::in_range(&request::READ_BLOCK_QUANTITY, 5, frame[5], 1, 8)?;
+                    rt::in_range(&request::ReadBlock::QUANTITY_DESC, 5, frame[5], 1, 8)?;
                     rt::Ok(
                         Self::ReadBlock(request::ReadBlock {
                             first: u16::from_be_bytes([frame[3], frame[4]]),
@@ -382,7 +318,7 @@ pub mod lists_after {
                     let frame = &s.frame;
                     let field_2: u16 = u16::from_be_bytes([frame[4], frame[5]]);
                     rt::in_range(
-                        &request::WRITE_BLOCK_FLAGS,
+                        &request::WriteBlock::FLAGS_DESC,
                         4 + s.shift(1),
                         field_2,
                         0,
@@ -404,7 +340,7 @@ pub mod lists_after {
                         .lists[1]
                         .elements::<u16, 4>(s.elements(1), false, false)?;
                     s.lists[1].in_range(v_targets.as_slice(), 1, 1000)?;
-                    rt::equal(&request::COPY_MODE, 5 + s.shift(2), frame[5], 0x1)?;
+                    rt::equal(&request::Copy::MODE_DESC, 5 + s.shift(2), frame[5], 0x1)?;
                     rt::Ok(
                         Self::Copy(request::Copy {
                             sources: s
@@ -424,33 +360,28 @@ pub mod lists_after {
             name: &str,
             mut field: impl FnMut(&'static str) -> rt::Option<rt::FieldValue<'v>>,
         ) -> rt::Result<Self, rt::FieldError> {
-            match name {
+            let message = match name {
                 "read_block" => {
-                    rt::Ok(
-                        Self::ReadBlock(request::ReadBlock {
-                            first: rt::get(&mut field, "first")?,
-                            quantity: rt::get(&mut field, "quantity")?,
-                        }),
-                    )
+                    Self::ReadBlock(request::ReadBlock {
+                        first: rt::get(&mut field, "first")?,
+                        quantity: rt::get(&mut field, "quantity")?,
+                    })
                 }
                 "write_block" => {
-                    rt::Ok(
-                        Self::WriteBlock(request::WriteBlock {
-                            values: rt::list::<u16, 8>(&mut field, "values", 0, 65535)?,
-                            flags: rt::get(&mut field, "flags")?,
-                        }),
-                    )
+                    Self::WriteBlock(request::WriteBlock {
+                        values: rt::list::<u16, 8>(&mut field, "values", 0, 65535)?,
+                        flags: rt::get(&mut field, "flags")?,
+                    })
                 }
                 "copy" => {
-                    rt::Ok(
-                        Self::Copy(request::Copy {
-                            sources: rt::list::<u8, 4>(&mut field, "sources", 0, 255)?,
-                            targets: rt::list::<u16, 4>(&mut field, "targets", 0, 65535)?,
-                        }),
-                    )
+                    Self::Copy(request::Copy {
+                        sources: rt::list::<u8, 4>(&mut field, "sources", 0, 255)?,
+                        targets: rt::list::<u16, 4>(&mut field, "targets", 0, 65535)?,
+                    })
                 }
-                _ => rt::Err(rt::FieldError::UnknownMessage),
-            }
+                _ => return rt::Err(rt::FieldError::UnknownMessage),
+            };
+            rt::Ok(message)
         }
     }
     impl rt::Message for Request {
@@ -471,11 +402,7 @@ pub mod lists_after {
             Request::visit(self, f)
         }
         #[inline]
-        fn encode(
-            &self,
-            address: u8,
-            buf: &mut [u8],
-        ) -> rt::Result<usize, rt::EncodeError> {
+        fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             Request::encode(self, address, buf)
         }
         #[inline]
@@ -515,7 +442,7 @@ pub mod lists_after {
     }
     /// Where `block_reply.values` sits in the frame and how its elements are counted.
     pub const REPEAT_BLOCK_REPLY: rt::RepeatAt = rt::RepeatAt {
-        field: &response::BLOCK_REPLY_VALUES,
+        field: &response::BlockReply::VALUES_DESC,
         base: 6,
         at: 3,
         width: 2,
@@ -528,7 +455,7 @@ pub mod lists_after {
         base: 6,
         lists: &[
             rt::RepeatAt {
-                field: &response::BLOCK_REPLY_VALUES,
+                field: &response::BlockReply::VALUES_DESC,
                 base: 6,
                 at: 3,
                 width: 2,
@@ -538,43 +465,6 @@ pub mod lists_after {
             },
         ],
     };
-    impl response::BlockReply {
-        pub const NAME: &'static str = "block_reply";
-        pub const CODE: &'static [u8] = &[0x10];
-        pub const MIN_LEN: usize = 8;
-        pub const MAX_LEN: usize = 22;
-        pub const DESC: rt::MessageDesc = rt::MessageDesc::new(
-            Self::NAME,
-            0x10,
-            1,
-            &[6],
-        );
-        pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
-            f("values", rt::List(self.values.elements()));
-            f("status", rt::Int(self.status as i64));
-        }
-        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
-            Response::BlockReply(*self).encode(address, buf)
-        }
-    }
-    impl response::Ack {
-        pub const NAME: &'static str = "ack";
-        pub const CODE: &'static [u8] = &[0x11];
-        pub const LEN: usize = 5;
-        pub const DESC: rt::MessageDesc = rt::MessageDesc::new(
-            Self::NAME,
-            0x11,
-            1,
-            &[5],
-        );
-        pub const STATUS: rt::Range<usize> = 3..4;
-        pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
-            f("status", rt::Int(self.status as i64));
-        }
-        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
-            Response::Ack(*self).encode(address, buf)
-        }
-    }
     ///A response, device to host.
     #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
     #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
@@ -608,9 +498,9 @@ pub mod lists_after {
         /// The length of this message's frame, in bytes.
         pub const fn frame_len(&self) -> usize {
             match self {
-                Self::BlockReply(response::BlockReply { values: v_values, .. }) => {
+                Self::BlockReply(m) => {
                     LISTS_BLOCK_REPLY.base
-                        + LISTS_BLOCK_REPLY.lists[0].bytes_of(v_values.len())
+                        + LISTS_BLOCK_REPLY.lists[0].bytes_of(m.values.len())
                 }
                 _ => Self::MESSAGES[self.index()].2,
             }
@@ -626,11 +516,7 @@ pub mod lists_after {
         /// Encodes the frame for `address` into `buf`; returns the frame length. Refuses what
         /// decode refuses: an address no frame may carry, the broadcast address for a command
         /// that does not accept it, a value outside its field's range.
-        pub fn encode(
-            &self,
-            address: u8,
-            buf: &mut [u8],
-        ) -> rt::Result<usize, rt::EncodeError> {
+        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             rt::encode_address(address, &FRAME)?;
             let len = match *self {
                 Self::BlockReply(
@@ -731,24 +617,21 @@ pub mod lists_after {
             name: &str,
             mut field: impl FnMut(&'static str) -> rt::Option<rt::FieldValue<'v>>,
         ) -> rt::Result<Self, rt::FieldError> {
-            match name {
+            let message = match name {
                 "block_reply" => {
-                    rt::Ok(
-                        Self::BlockReply(response::BlockReply {
-                            values: rt::list::<u16, 8>(&mut field, "values", 0, 65535)?,
-                            status: rt::get(&mut field, "status")?,
-                        }),
-                    )
+                    Self::BlockReply(response::BlockReply {
+                        values: rt::list::<u16, 8>(&mut field, "values", 0, 65535)?,
+                        status: rt::get(&mut field, "status")?,
+                    })
                 }
                 "ack" => {
-                    rt::Ok(
-                        Self::Ack(response::Ack {
-                            status: rt::get(&mut field, "status")?,
-                        }),
-                    )
+                    Self::Ack(response::Ack {
+                        status: rt::get(&mut field, "status")?,
+                    })
                 }
-                _ => rt::Err(rt::FieldError::UnknownMessage),
-            }
+                _ => return rt::Err(rt::FieldError::UnknownMessage),
+            };
+            rt::Ok(message)
         }
     }
     impl rt::Message for Response {
@@ -769,11 +652,7 @@ pub mod lists_after {
             Response::visit(self, f)
         }
         #[inline]
-        fn encode(
-            &self,
-            address: u8,
-            buf: &mut [u8],
-        ) -> rt::Result<usize, rt::EncodeError> {
+        fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             Response::encode(self, address, buf)
         }
         #[inline]
@@ -795,14 +674,11 @@ pub mod lists_after {
         /// spec): [`busspec_runtime::DecodeError::InvalidValue`] names the first that differs.
         pub fn follows_request(&self, request: &Request) -> rt::DecodeResult<()> {
             match (self, request) {
-                (
-                    &Self::BlockReply(response::BlockReply { values: v_values, .. }),
-                    &Request::ReadBlock(request::ReadBlock { quantity: r_quantity, .. }),
-                ) => {
+                (Self::BlockReply(m), Request::ReadBlock(r)) => {
                     REPEAT_BLOCK_REPLY
                         .follows_request(
-                            v_values.len(),
-                            r_quantity as i64,
+                            m.values.len(),
+                            r.quantity as i64,
                             (1, 1),
                             "quantity",
                         )?;
@@ -844,7 +720,7 @@ pub mod lists_after {
             match rt::code(frame, 2, 1) {
                 0x10 => {
                     let frame = rt::fixed::<7>(frame, &request::ReadBlock::DESC)?;
-                    rt::in_range(&request::READ_BLOCK_QUANTITY, 5, frame[5], 1, 8)?;
+                    rt::in_range(&request::ReadBlock::QUANTITY_DESC, 5, frame[5], 1, 8)?;
                     rt::Ok(Self::ReadBlock {
                         first: u16::from_be_bytes([frame[3], frame[4]]),
                         quantity: frame[5],
@@ -855,7 +731,7 @@ pub mod lists_after {
                     let frame = &s.frame;
                     let field_2: u16 = u16::from_be_bytes([frame[4], frame[5]]);
                     rt::in_range(
-                        &request::WRITE_BLOCK_FLAGS,
+                        &request::WriteBlock::FLAGS_DESC,
                         4 + s.shift(1),
                         field_2,
                         0,
@@ -873,7 +749,7 @@ pub mod lists_after {
                         .lists[1]
                         .view::<u16, 4>(s.elements(1), false, false)?;
                     s.lists[1].view_in_range(&v_targets, 1, 1000)?;
-                    rt::equal(&request::COPY_MODE, 5 + s.shift(2), frame[5], 0x1)?;
+                    rt::equal(&request::Copy::MODE_DESC, 5 + s.shift(2), frame[5], 0x1)?;
                     rt::Ok(Self::Copy {
                         sources: s.lists[0].view::<u8, 4>(s.elements(0), false, false)?,
                         targets: v_targets,
@@ -1016,14 +892,11 @@ pub mod lists_after {
         /// spec): [`busspec_runtime::DecodeError::InvalidValue`] names the first that differs.
         pub fn follows_request(&self, request: &Request) -> rt::DecodeResult<()> {
             match (self, request) {
-                (
-                    &Self::BlockReply { values: v_values, .. },
-                    &Request::ReadBlock(request::ReadBlock { quantity: r_quantity, .. }),
-                ) => {
+                (&Self::BlockReply { values: v_values, .. }, Request::ReadBlock(r)) => {
                     REPEAT_BLOCK_REPLY
                         .follows_request(
                             v_values.len(),
-                            r_quantity as i64,
+                            r.quantity as i64,
                             (1, 1),
                             "quantity",
                         )?;
@@ -1162,11 +1035,87 @@ pub mod lists_after {
     pub type StreamDecoder = ::busspec_runtime::stream::StreamDecoder<ListsAfter>;
     /// What [`StreamDecoder`] finds in a stream.
     pub type Event = ::busspec_runtime::stream::Event<Request, Response>;
-    /// Each request as a struct of its own (its `DESC` names it as refusals do: name,
-    /// code and the frame lengths of its code), and each field a refusal names
-    /// (`message.field`, `FieldDesc`).
+    impl request::ReadBlock {
+        pub const NAME: &'static str = "read_block";
+        pub const CODE: &'static [u8] = &[0x10];
+        pub const LEN: usize = 7;
+        pub const DESC: rt::MessageDesc = rt::desc(Self::NAME, 0x10, 1, &[7]);
+        pub const FIRST: rt::Range<usize> = 3..5;
+        pub const QUANTITY: rt::Range<usize> = 5..6;
+        pub const QUANTITY_DESC: rt::FieldDesc = rt::field(Self::NAME, "quantity");
+        pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
+            f("first", rt::Int(self.first as i64));
+            f("quantity", rt::Int(self.quantity as i64));
+        }
+        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            Request::ReadBlock(*self).encode(address, buf)
+        }
+    }
+    impl request::WriteBlock {
+        pub const NAME: &'static str = "write_block";
+        pub const CODE: &'static [u8] = &[0x11];
+        pub const MIN_LEN: usize = 9;
+        pub const MAX_LEN: usize = 23;
+        pub const DESC: rt::MessageDesc = rt::desc(Self::NAME, 0x11, 1, &[7]);
+        pub const VALUES_DESC: rt::FieldDesc = rt::field(Self::NAME, "values");
+        pub const FLAGS_DESC: rt::FieldDesc = rt::field(Self::NAME, "flags");
+        pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
+            f("values", rt::List(self.values.elements()));
+            f("flags", rt::Int(self.flags as i64));
+        }
+        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            Request::WriteBlock(*self).encode(address, buf)
+        }
+    }
+    impl request::Copy {
+        pub const NAME: &'static str = "copy";
+        pub const CODE: &'static [u8] = &[0x12];
+        pub const MIN_LEN: usize = 7;
+        pub const MAX_LEN: usize = 19;
+        pub const DESC: rt::MessageDesc = rt::desc(Self::NAME, 0x12, 1, &[7]);
+        pub const SOURCES_DESC: rt::FieldDesc = rt::field(Self::NAME, "sources");
+        pub const TARGETS_DESC: rt::FieldDesc = rt::field(Self::NAME, "targets");
+        pub const MODE_DESC: rt::FieldDesc = rt::field(Self::NAME, "mode");
+        pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
+            f("sources", rt::List(self.sources.elements()));
+            f("targets", rt::List(self.targets.elements()));
+        }
+        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            Request::Copy(*self).encode(address, buf)
+        }
+    }
+    impl response::BlockReply {
+        pub const NAME: &'static str = "block_reply";
+        pub const CODE: &'static [u8] = &[0x10];
+        pub const MIN_LEN: usize = 8;
+        pub const MAX_LEN: usize = 22;
+        pub const DESC: rt::MessageDesc = rt::desc(Self::NAME, 0x10, 1, &[6]);
+        pub const VALUES_DESC: rt::FieldDesc = rt::field(Self::NAME, "values");
+        pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
+            f("values", rt::List(self.values.elements()));
+            f("status", rt::Int(self.status as i64));
+        }
+        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            Response::BlockReply(*self).encode(address, buf)
+        }
+    }
+    impl response::Ack {
+        pub const NAME: &'static str = "ack";
+        pub const CODE: &'static [u8] = &[0x11];
+        pub const LEN: usize = 5;
+        pub const DESC: rt::MessageDesc = rt::desc(Self::NAME, 0x11, 1, &[5]);
+        pub const STATUS: rt::Range<usize> = 3..4;
+        pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
+            f("status", rt::Int(self.status as i64));
+        }
+        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            Response::Ack(*self).encode(address, buf)
+        }
+    }
+    /// Each request as a struct of its own; its constants (`DESC`, which names it as
+    /// refusals do: name, code and the frame lengths of its code; `QUANTITY_DESC`, each
+    /// field a refusal names) and methods are in the `impl` of each.
     pub mod request {
-        use ::busspec_runtime::FieldDesc;
         /// §1 Read block (code `0x10`, 7 bytes).
         #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
         #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
@@ -1197,28 +1146,9 @@ pub mod lists_after {
             /// Valid raw range 1..=1000.
             pub targets: super::rt::Repeated<u16, 4>,
         }
-        /// `read_block.quantity`
-        pub const READ_BLOCK_QUANTITY: FieldDesc = FieldDesc::new(
-            "read_block",
-            "quantity",
-        );
-        /// `write_block.values`
-        pub const WRITE_BLOCK_VALUES: FieldDesc = FieldDesc::new(
-            "write_block",
-            "values",
-        );
-        /// `write_block.flags`
-        pub const WRITE_BLOCK_FLAGS: FieldDesc = FieldDesc::new("write_block", "flags");
-        /// `copy.sources`
-        pub const COPY_SOURCES: FieldDesc = FieldDesc::new("copy", "sources");
-        /// `copy.targets`
-        pub const COPY_TARGETS: FieldDesc = FieldDesc::new("copy", "targets");
-        /// `copy.mode`
-        pub const COPY_MODE: FieldDesc = FieldDesc::new("copy", "mode");
     }
-    /// Each response as a struct of its own, and the fields its refusals name.
+    /// Each response as a struct of its own.
     pub mod response {
-        use ::busspec_runtime::FieldDesc;
         /// §1 Block reply (code `0x10`, 8 to 22 bytes).
         #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
         #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
@@ -1236,10 +1166,5 @@ pub mod lists_after {
         pub struct Ack {
             pub status: u8,
         }
-        /// `block_reply.values`
-        pub const BLOCK_REPLY_VALUES: FieldDesc = FieldDesc::new(
-            "block_reply",
-            "values",
-        );
     }
 }

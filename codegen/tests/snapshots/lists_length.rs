@@ -127,7 +127,7 @@ pub mod lists_length {
     }
     /// Where `log.channels` sits in the frame and how its elements are counted.
     pub const REPEAT_LOG: rt::RepeatAt = rt::RepeatAt {
-        field: &request::LOG_CHANNELS,
+        field: &request::Log::CHANNELS_DESC,
         base: 7,
         at: 4,
         width: 1,
@@ -145,7 +145,7 @@ pub mod lists_length {
         base: 7,
         lists: &[
             rt::RepeatAt {
-                field: &request::LOG_CHANNELS,
+                field: &request::Log::CHANNELS_DESC,
                 base: 7,
                 at: 4,
                 width: 1,
@@ -159,7 +159,7 @@ pub mod lists_length {
                 max: 6,
             },
             rt::RepeatAt {
-                field: &request::LOG_SAMPLES,
+                field: &request::Log::SAMPLES_DESC,
                 base: 7,
                 at: 4,
                 width: 2,
@@ -171,7 +171,7 @@ pub mod lists_length {
     };
     /// Where `set_outputs.outputs` sits in the frame and how its elements are counted.
     pub const REPEAT_SET_OUTPUTS: rt::RepeatAt = rt::RepeatAt {
-        field: &request::SET_OUTPUTS_OUTPUTS,
+        field: &request::SetOutputs::OUTPUTS_DESC,
         base: 7,
         at: 4,
         width: 0,
@@ -189,7 +189,7 @@ pub mod lists_length {
         base: 7,
         lists: &[
             rt::RepeatAt {
-                field: &request::SET_OUTPUTS_OUTPUTS,
+                field: &request::SetOutputs::OUTPUTS_DESC,
                 base: 7,
                 at: 4,
                 width: 0,
@@ -204,45 +204,6 @@ pub mod lists_length {
             },
         ],
     };
-    impl request::Log {
-        pub const NAME: &'static str = "log";
-        pub const CODE: &'static [u8] = &[0x20];
-        pub const MIN_LEN: usize = 9;
-        pub const MAX_LEN: usize = 25;
-        pub const DESC: rt::MessageDesc = rt::MessageDesc::new(
-            Self::NAME,
-            0x20,
-            1,
-            &[7],
-        );
-        pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
-            f("channels", rt::List(self.channels.elements()));
-            f("samples", rt::List(self.samples.table()));
-            f("seq", rt::Int(self.seq as i64));
-        }
-        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
-            Request::Log(*self).encode(address, buf)
-        }
-    }
-    impl request::SetOutputs {
-        pub const NAME: &'static str = "set_outputs";
-        pub const CODE: &'static [u8] = &[0x21];
-        pub const MIN_LEN: usize = 8;
-        pub const MAX_LEN: usize = 9;
-        pub const DESC: rt::MessageDesc = rt::MessageDesc::new(
-            Self::NAME,
-            0x21,
-            1,
-            &[7],
-        );
-        pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
-            f("outputs", rt::List(self.outputs.elements()));
-            f("mask", rt::Int(self.mask as i64));
-        }
-        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
-            Request::SetOutputs(*self).encode(address, buf)
-        }
-    }
     ///A request (command), host to device.
     #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
     #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
@@ -276,15 +237,13 @@ pub mod lists_length {
         /// The length of this message's frame, in bytes.
         pub const fn frame_len(&self) -> usize {
             match self {
-                Self::Log(
-                    request::Log { channels: v_channels, samples: v_samples, .. },
-                ) => {
-                    LISTS_LOG.base + LISTS_LOG.lists[0].bytes_of(v_channels.len())
-                        + LISTS_LOG.lists[1].bytes_of(v_samples.len())
+                Self::Log(m) => {
+                    LISTS_LOG.base + LISTS_LOG.lists[0].bytes_of(m.channels.len())
+                        + LISTS_LOG.lists[1].bytes_of(m.samples.len())
                 }
-                Self::SetOutputs(request::SetOutputs { outputs: v_outputs, .. }) => {
+                Self::SetOutputs(m) => {
                     LISTS_SET_OUTPUTS.base
-                        + LISTS_SET_OUTPUTS.lists[0].bytes_of(v_outputs.len())
+                        + LISTS_SET_OUTPUTS.lists[0].bytes_of(m.outputs.len())
                 }
                 _ => Self::MESSAGES[self.index()].2,
             }
@@ -300,11 +259,7 @@ pub mod lists_length {
         /// Encodes the frame for `address` into `buf`; returns the frame length. Refuses what
         /// decode refuses: an address no frame may carry, the broadcast address for a command
         /// that does not accept it, a value outside its field's range.
-        pub fn encode(
-            &self,
-            address: u8,
-            buf: &mut [u8],
-        ) -> rt::Result<usize, rt::EncodeError> {
+        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             rt::encode_address(address, &FRAME)?;
             let len = match *self {
                 Self::Log(
@@ -427,29 +382,26 @@ pub mod lists_length {
             name: &str,
             mut field: impl FnMut(&'static str) -> rt::Option<rt::FieldValue<'v>>,
         ) -> rt::Result<Self, rt::FieldError> {
-            match name {
+            let message = match name {
                 "log" => {
-                    rt::Ok(
-                        Self::Log(request::Log {
-                            channels: rt::list::<u8, 6>(&mut field, "channels", 0, 255)?,
-                            samples: rt::list::<
-                                Millivolts,
-                                6,
-                            >(&mut field, "samples", -32768, 32767)?,
-                            seq: rt::get(&mut field, "seq")?,
-                        }),
-                    )
+                    Self::Log(request::Log {
+                        channels: rt::list::<u8, 6>(&mut field, "channels", 0, 255)?,
+                        samples: rt::list::<
+                            Millivolts,
+                            6,
+                        >(&mut field, "samples", -32768, 32767)?,
+                        seq: rt::get(&mut field, "seq")?,
+                    })
                 }
                 "set_outputs" => {
-                    rt::Ok(
-                        Self::SetOutputs(request::SetOutputs {
-                            outputs: rt::list_bits::<2>(&mut field, "outputs")?,
-                            mask: rt::get(&mut field, "mask")?,
-                        }),
-                    )
+                    Self::SetOutputs(request::SetOutputs {
+                        outputs: rt::list_bits::<2>(&mut field, "outputs")?,
+                        mask: rt::get(&mut field, "mask")?,
+                    })
                 }
-                _ => rt::Err(rt::FieldError::UnknownMessage),
-            }
+                _ => return rt::Err(rt::FieldError::UnknownMessage),
+            };
+            rt::Ok(message)
         }
     }
     impl rt::Message for Request {
@@ -470,11 +422,7 @@ pub mod lists_length {
             Request::visit(self, f)
         }
         #[inline]
-        fn encode(
-            &self,
-            address: u8,
-            buf: &mut [u8],
-        ) -> rt::Result<usize, rt::EncodeError> {
+        fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             Request::encode(self, address, buf)
         }
         #[inline]
@@ -509,24 +457,6 @@ pub mod lists_length {
         /// The responses this command may get, bit `i` for row `i` of `Response::MESSAGES`.
         const fn replies(&self) -> u64 {
             Self::COMMANDS[self.index()].3
-        }
-    }
-    impl response::LogAck {
-        pub const NAME: &'static str = "log_ack";
-        pub const CODE: &'static [u8] = &[0x20];
-        pub const LEN: usize = 6;
-        pub const DESC: rt::MessageDesc = rt::MessageDesc::new(
-            Self::NAME,
-            0x20,
-            1,
-            &[6],
-        );
-        pub const SEQ: rt::Range<usize> = 3..5;
-        pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
-            f("seq", rt::Int(self.seq as i64));
-        }
-        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
-            Response::LogAck(*self).encode(address, buf)
         }
     }
     ///A response, device to host.
@@ -570,11 +500,7 @@ pub mod lists_length {
         /// Encodes the frame for `address` into `buf`; returns the frame length. Refuses what
         /// decode refuses: an address no frame may carry, the broadcast address for a command
         /// that does not accept it, a value outside its field's range.
-        pub fn encode(
-            &self,
-            address: u8,
-            buf: &mut [u8],
-        ) -> rt::Result<usize, rt::EncodeError> {
+        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             rt::encode_address(address, &FRAME)?;
             let out = rt::frame_mut::<6>(buf, &[])?;
             let len = match *self {
@@ -652,16 +578,15 @@ pub mod lists_length {
             name: &str,
             mut field: impl FnMut(&'static str) -> rt::Option<rt::FieldValue<'v>>,
         ) -> rt::Result<Self, rt::FieldError> {
-            match name {
+            let message = match name {
                 "log_ack" => {
-                    rt::Ok(
-                        Self::LogAck(response::LogAck {
-                            seq: rt::get(&mut field, "seq")?,
-                        }),
-                    )
+                    Self::LogAck(response::LogAck {
+                        seq: rt::get(&mut field, "seq")?,
+                    })
                 }
-                _ => rt::Err(rt::FieldError::UnknownMessage),
-            }
+                _ => return rt::Err(rt::FieldError::UnknownMessage),
+            };
+            rt::Ok(message)
         }
     }
     impl rt::Message for Response {
@@ -682,11 +607,7 @@ pub mod lists_length {
             Response::visit(self, f)
         }
         #[inline]
-        fn encode(
-            &self,
-            address: u8,
-            buf: &mut [u8],
-        ) -> rt::Result<usize, rt::EncodeError> {
+        fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             Response::encode(self, address, buf)
         }
         #[inline]
@@ -929,11 +850,55 @@ pub mod lists_length {
     pub type StreamDecoder = ::busspec_runtime::stream::StreamDecoder<ListsLength>;
     /// What [`StreamDecoder`] finds in a stream.
     pub type Event = ::busspec_runtime::stream::Event<Request, Response>;
-    /// Each request as a struct of its own (its `DESC` names it as refusals do: name,
-    /// code and the frame lengths of its code), and each field a refusal names
-    /// (`message.field`, `FieldDesc`).
+    impl request::Log {
+        pub const NAME: &'static str = "log";
+        pub const CODE: &'static [u8] = &[0x20];
+        pub const MIN_LEN: usize = 9;
+        pub const MAX_LEN: usize = 25;
+        pub const DESC: rt::MessageDesc = rt::desc(Self::NAME, 0x20, 1, &[7]);
+        pub const CHANNELS_DESC: rt::FieldDesc = rt::field(Self::NAME, "channels");
+        pub const SAMPLES_DESC: rt::FieldDesc = rt::field(Self::NAME, "samples");
+        pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
+            f("channels", rt::List(self.channels.elements()));
+            f("samples", rt::List(self.samples.table()));
+            f("seq", rt::Int(self.seq as i64));
+        }
+        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            Request::Log(*self).encode(address, buf)
+        }
+    }
+    impl request::SetOutputs {
+        pub const NAME: &'static str = "set_outputs";
+        pub const CODE: &'static [u8] = &[0x21];
+        pub const MIN_LEN: usize = 8;
+        pub const MAX_LEN: usize = 9;
+        pub const DESC: rt::MessageDesc = rt::desc(Self::NAME, 0x21, 1, &[7]);
+        pub const OUTPUTS_DESC: rt::FieldDesc = rt::field(Self::NAME, "outputs");
+        pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
+            f("outputs", rt::List(self.outputs.elements()));
+            f("mask", rt::Int(self.mask as i64));
+        }
+        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            Request::SetOutputs(*self).encode(address, buf)
+        }
+    }
+    impl response::LogAck {
+        pub const NAME: &'static str = "log_ack";
+        pub const CODE: &'static [u8] = &[0x20];
+        pub const LEN: usize = 6;
+        pub const DESC: rt::MessageDesc = rt::desc(Self::NAME, 0x20, 1, &[6]);
+        pub const SEQ: rt::Range<usize> = 3..5;
+        pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
+            f("seq", rt::Int(self.seq as i64));
+        }
+        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            Response::LogAck(*self).encode(address, buf)
+        }
+    }
+    /// Each request as a struct of its own; its constants (`DESC`, which names it as
+    /// refusals do: name, code and the frame lengths of its code; `QUANTITY_DESC`, each
+    /// field a refusal names) and methods are in the `impl` of each.
     pub mod request {
-        use ::busspec_runtime::FieldDesc;
         /// §1 Log samples (code `0x20`, 9 to 25 bytes).
         #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
         #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
@@ -955,17 +920,8 @@ pub mod lists_length {
             pub outputs: super::rt::Bits<2>,
             pub mask: u16,
         }
-        /// `log.channels`
-        pub const LOG_CHANNELS: FieldDesc = FieldDesc::new("log", "channels");
-        /// `log.samples`
-        pub const LOG_SAMPLES: FieldDesc = FieldDesc::new("log", "samples");
-        /// `set_outputs.outputs`
-        pub const SET_OUTPUTS_OUTPUTS: FieldDesc = FieldDesc::new(
-            "set_outputs",
-            "outputs",
-        );
     }
-    /// Each response as a struct of its own, and the fields its refusals name.
+    /// Each response as a struct of its own.
     pub mod response {
         /// §1 Log acknowledged (code `0x20`, 6 bytes).
         #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]

@@ -108,44 +108,6 @@ pub mod maestro_compact {
             rt::Some(Self(raw as u16))
         }
     }
-    impl request::SetTarget {
-        pub const NAME: &'static str = "set_target";
-        pub const CODE: &'static [u8] = &[0x84];
-        pub const LEN: usize = 4;
-        pub const DESC: rt::MessageDesc = rt::MessageDesc::new(
-            Self::NAME,
-            0x84,
-            1,
-            &[4],
-        );
-        pub const CHANNEL: rt::Range<usize> = 1..2;
-        pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
-            f("channel", rt::Int(self.channel as i64));
-            f("target_high", rt::Int(self.target_high.raw() as i64));
-            f("target_low", rt::Int(self.target_low.raw() as i64));
-        }
-        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
-            Request::SetTarget(*self).encode(address, buf)
-        }
-    }
-    impl request::GetPosition {
-        pub const NAME: &'static str = "get_position";
-        pub const CODE: &'static [u8] = &[0x90];
-        pub const LEN: usize = 2;
-        pub const DESC: rt::MessageDesc = rt::MessageDesc::new(
-            Self::NAME,
-            0x90,
-            1,
-            &[2],
-        );
-        pub const CHANNEL: rt::Range<usize> = 1..2;
-        pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
-            f("channel", rt::Int(self.channel as i64));
-        }
-        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
-            Request::GetPosition(*self).encode(address, buf)
-        }
-    }
     ///A request (command), host to device.
     #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
     #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
@@ -191,11 +153,7 @@ pub mod maestro_compact {
         /// Encodes the frame for `address` into `buf`; returns the frame length. Refuses what
         /// decode refuses: an address no frame may carry, the broadcast address for a command
         /// that does not accept it, a value outside its field's range.
-        pub fn encode(
-            &self,
-            address: u8,
-            buf: &mut [u8],
-        ) -> rt::Result<usize, rt::EncodeError> {
+        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             rt::encode_address(address, &FRAME)?;
             let len = match *self {
                 Self::SetTarget(
@@ -250,11 +208,16 @@ pub mod maestro_compact {
             match rt::code(frame, 0, 1) {
                 0x84 => {
                     let frame = rt::fixed::<4>(frame, &request::SetTarget::DESC)?;
-                    rt::in_range(&request::SET_TARGET_CHANNEL, 1, frame[1], 0, 23)?;
+                    rt::in_range(&request::SetTarget::CHANNEL_DESC, 1, frame[1], 0, 23)?;
                     let field_1: u16 = u16::from_le_bytes([frame[2], frame[3]]);
-                    rt::equal(&request::SET_TARGET_ZERO_HIGH, 2, field_1 >> 15, 0x0)?;
                     rt::equal(
-                        &request::SET_TARGET_ZERO_LOW,
+                        &request::SetTarget::ZERO_HIGH_DESC,
+                        2,
+                        field_1 >> 15,
+                        0x0,
+                    )?;
+                    rt::equal(
+                        &request::SetTarget::ZERO_LOW_DESC,
                         2,
                         (field_1 >> 7) & 0x1,
                         0x0,
@@ -273,7 +236,13 @@ pub mod maestro_compact {
                 }
                 0x90 => {
                     let frame = rt::fixed::<2>(frame, &request::GetPosition::DESC)?;
-                    rt::in_range(&request::GET_POSITION_CHANNEL, 1, frame[1], 0, 23)?;
+                    rt::in_range(
+                        &request::GetPosition::CHANNEL_DESC,
+                        1,
+                        frame[1],
+                        0,
+                        23,
+                    )?;
                     rt::Ok(
                         Self::GetPosition(request::GetPosition {
                             channel: frame[1],
@@ -290,31 +259,28 @@ pub mod maestro_compact {
             name: &str,
             mut field: impl FnMut(&'static str) -> rt::Option<rt::FieldValue<'v>>,
         ) -> rt::Result<Self, rt::FieldError> {
-            match name {
+            let message = match name {
                 "set_target" => {
-                    rt::Ok(
-                        Self::SetTarget(request::SetTarget {
-                            channel: rt::get(&mut field, "channel")?,
-                            target_high: QuarterMicroseconds::from_raw(
-                                rt::field_int("target_high", field("target_high"), 0, 127)?
-                                    as u16,
-                            ),
-                            target_low: QuarterMicroseconds::from_raw(
-                                rt::field_int("target_low", field("target_low"), 0, 127)?
-                                    as u16,
-                            ),
-                        }),
-                    )
+                    Self::SetTarget(request::SetTarget {
+                        channel: rt::get(&mut field, "channel")?,
+                        target_high: QuarterMicroseconds::from_raw(
+                            rt::field_int("target_high", field("target_high"), 0, 127)?
+                                as u16,
+                        ),
+                        target_low: QuarterMicroseconds::from_raw(
+                            rt::field_int("target_low", field("target_low"), 0, 127)?
+                                as u16,
+                        ),
+                    })
                 }
                 "get_position" => {
-                    rt::Ok(
-                        Self::GetPosition(request::GetPosition {
-                            channel: rt::get(&mut field, "channel")?,
-                        }),
-                    )
+                    Self::GetPosition(request::GetPosition {
+                        channel: rt::get(&mut field, "channel")?,
+                    })
                 }
-                _ => rt::Err(rt::FieldError::UnknownMessage),
-            }
+                _ => return rt::Err(rt::FieldError::UnknownMessage),
+            };
+            rt::Ok(message)
         }
     }
     impl rt::Message for Request {
@@ -335,11 +301,7 @@ pub mod maestro_compact {
             Request::visit(self, f)
         }
         #[inline]
-        fn encode(
-            &self,
-            address: u8,
-            buf: &mut [u8],
-        ) -> rt::Result<usize, rt::EncodeError> {
+        fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             Request::encode(self, address, buf)
         }
         #[inline]
@@ -377,19 +339,6 @@ pub mod maestro_compact {
         /// The responses this command may get, bit `i` for row `i` of `Response::MESSAGES`.
         const fn replies(&self) -> u64 {
             Self::COMMANDS[self.index()].3
-        }
-    }
-    impl response::Position {
-        pub const NAME: &'static str = "position";
-        pub const CODE: &'static [u8] = &[];
-        pub const LEN: usize = 2;
-        pub const DESC: rt::MessageDesc = rt::MessageDesc::new(Self::NAME, 0, 0, &[2]);
-        pub const POSITION: rt::Range<usize> = 0..2;
-        pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
-            f("position", rt::Int(self.position.raw() as i64));
-        }
-        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
-            Response::Position(*self).encode(address, buf)
         }
     }
     ///A response, device to host.
@@ -433,11 +382,7 @@ pub mod maestro_compact {
         /// Encodes the frame for `address` into `buf`; returns the frame length. Refuses what
         /// decode refuses: an address no frame may carry, the broadcast address for a command
         /// that does not accept it, a value outside its field's range.
-        pub fn encode(
-            &self,
-            address: u8,
-            buf: &mut [u8],
-        ) -> rt::Result<usize, rt::EncodeError> {
+        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             rt::encode_address(address, &FRAME)?;
             let out = rt::frame_mut::<2>(buf, &[])?;
             let len = match *self {
@@ -516,18 +461,17 @@ pub mod maestro_compact {
             name: &str,
             mut field: impl FnMut(&'static str) -> rt::Option<rt::FieldValue<'v>>,
         ) -> rt::Result<Self, rt::FieldError> {
-            match name {
+            let message = match name {
                 "position" => {
-                    rt::Ok(
-                        Self::Position(response::Position {
-                            position: QuarterMicroseconds::from_raw(
-                                rt::get(&mut field, "position")?,
-                            ),
-                        }),
-                    )
+                    Self::Position(response::Position {
+                        position: QuarterMicroseconds::from_raw(
+                            rt::get(&mut field, "position")?,
+                        ),
+                    })
                 }
-                _ => rt::Err(rt::FieldError::UnknownMessage),
-            }
+                _ => return rt::Err(rt::FieldError::UnknownMessage),
+            };
+            rt::Ok(message)
         }
     }
     impl rt::Message for Response {
@@ -548,11 +492,7 @@ pub mod maestro_compact {
             Response::visit(self, f)
         }
         #[inline]
-        fn encode(
-            &self,
-            address: u8,
-            buf: &mut [u8],
-        ) -> rt::Result<usize, rt::EncodeError> {
+        fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             Response::encode(self, address, buf)
         }
         #[inline]
@@ -664,11 +604,55 @@ pub mod maestro_compact {
     pub type StreamDecoder = ::busspec_runtime::stream::StreamDecoder<MaestroCompact>;
     /// What [`StreamDecoder`] finds in a stream.
     pub type Event = ::busspec_runtime::stream::Event<Request, Response>;
-    /// Each request as a struct of its own (its `DESC` names it as refusals do: name,
-    /// code and the frame lengths of its code), and each field a refusal names
-    /// (`message.field`, `FieldDesc`).
+    impl request::SetTarget {
+        pub const NAME: &'static str = "set_target";
+        pub const CODE: &'static [u8] = &[0x84];
+        pub const LEN: usize = 4;
+        pub const DESC: rt::MessageDesc = rt::desc(Self::NAME, 0x84, 1, &[4]);
+        pub const CHANNEL: rt::Range<usize> = 1..2;
+        pub const CHANNEL_DESC: rt::FieldDesc = rt::field(Self::NAME, "channel");
+        pub const ZERO_HIGH_DESC: rt::FieldDesc = rt::field(Self::NAME, "zero_high");
+        pub const ZERO_LOW_DESC: rt::FieldDesc = rt::field(Self::NAME, "zero_low");
+        pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
+            f("channel", rt::Int(self.channel as i64));
+            f("target_high", rt::Int(self.target_high.raw() as i64));
+            f("target_low", rt::Int(self.target_low.raw() as i64));
+        }
+        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            Request::SetTarget(*self).encode(address, buf)
+        }
+    }
+    impl request::GetPosition {
+        pub const NAME: &'static str = "get_position";
+        pub const CODE: &'static [u8] = &[0x90];
+        pub const LEN: usize = 2;
+        pub const DESC: rt::MessageDesc = rt::desc(Self::NAME, 0x90, 1, &[2]);
+        pub const CHANNEL: rt::Range<usize> = 1..2;
+        pub const CHANNEL_DESC: rt::FieldDesc = rt::field(Self::NAME, "channel");
+        pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
+            f("channel", rt::Int(self.channel as i64));
+        }
+        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            Request::GetPosition(*self).encode(address, buf)
+        }
+    }
+    impl response::Position {
+        pub const NAME: &'static str = "position";
+        pub const CODE: &'static [u8] = &[];
+        pub const LEN: usize = 2;
+        pub const DESC: rt::MessageDesc = rt::desc(Self::NAME, 0, 0, &[2]);
+        pub const POSITION: rt::Range<usize> = 0..2;
+        pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
+            f("position", rt::Int(self.position.raw() as i64));
+        }
+        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            Response::Position(*self).encode(address, buf)
+        }
+    }
+    /// Each request as a struct of its own; its constants (`DESC`, which names it as
+    /// refusals do: name, code and the frame lengths of its code; `QUANTITY_DESC`, each
+    /// field a refusal names) and methods are in the `impl` of each.
     pub mod request {
-        use ::busspec_runtime::FieldDesc;
         /// §5.e Set Target (code `0x84`, 4 bytes).
         #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
         #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
@@ -691,28 +675,8 @@ pub mod maestro_compact {
             /// Valid raw range 0..=23.
             pub channel: u8,
         }
-        /// `set_target.channel`
-        pub const SET_TARGET_CHANNEL: FieldDesc = FieldDesc::new(
-            "set_target",
-            "channel",
-        );
-        /// `set_target.zero_high`
-        pub const SET_TARGET_ZERO_HIGH: FieldDesc = FieldDesc::new(
-            "set_target",
-            "zero_high",
-        );
-        /// `set_target.zero_low`
-        pub const SET_TARGET_ZERO_LOW: FieldDesc = FieldDesc::new(
-            "set_target",
-            "zero_low",
-        );
-        /// `get_position.channel`
-        pub const GET_POSITION_CHANNEL: FieldDesc = FieldDesc::new(
-            "get_position",
-            "channel",
-        );
     }
-    /// Each response as a struct of its own, and the fields its refusals name.
+    /// Each response as a struct of its own.
     pub mod response {
         /// §5.e Position (code `0x`, 2 bytes). The reply to Get Position: the channel's position, low byte first.
         #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]

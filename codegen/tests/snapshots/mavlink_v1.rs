@@ -101,68 +101,6 @@ pub mod mavlink_v1 {
             rt::None => CRC.checksum(bytes),
         }
     }
-    impl request::Ping {
-        pub const NAME: &'static str = "ping";
-        pub const CODE: &'static [u8] = &[0x04];
-        pub const LEN: usize = 22;
-        pub const DESC: rt::MessageDesc = rt::MessageDesc::new(
-            Self::NAME,
-            0x04,
-            1,
-            &[22],
-        );
-        pub const SEQUENCE: rt::Range<usize> = 2..3;
-        pub const SYSID: rt::Range<usize> = 3..4;
-        pub const COMPID: rt::Range<usize> = 4..5;
-        pub const TIME_USEC: rt::Range<usize> = 6..14;
-        pub const SEQ: rt::Range<usize> = 14..18;
-        pub const TARGET_SYSTEM: rt::Range<usize> = 18..19;
-        pub const TARGET_COMPONENT: rt::Range<usize> = 19..20;
-        pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
-            f("sequence", rt::Int(self.sequence as i64));
-            f("sysid", rt::Int(self.sysid as i64));
-            f("compid", rt::Int(self.compid as i64));
-            f("time_usec", rt::Int(self.time_usec as i64));
-            f("seq", rt::Int(self.seq as i64));
-            f("target_system", rt::Int(self.target_system as i64));
-            f("target_component", rt::Int(self.target_component as i64));
-        }
-        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
-            Request::Ping(*self).encode(address, buf)
-        }
-    }
-    impl request::RequestDataStream {
-        pub const NAME: &'static str = "request_data_stream";
-        pub const CODE: &'static [u8] = &[0x42];
-        pub const LEN: usize = 14;
-        pub const DESC: rt::MessageDesc = rt::MessageDesc::new(
-            Self::NAME,
-            0x42,
-            1,
-            &[14],
-        );
-        pub const SEQUENCE: rt::Range<usize> = 2..3;
-        pub const SYSID: rt::Range<usize> = 3..4;
-        pub const COMPID: rt::Range<usize> = 4..5;
-        pub const REQ_MESSAGE_RATE: rt::Range<usize> = 6..8;
-        pub const TARGET_SYSTEM: rt::Range<usize> = 8..9;
-        pub const TARGET_COMPONENT: rt::Range<usize> = 9..10;
-        pub const REQ_STREAM_ID: rt::Range<usize> = 10..11;
-        pub const START_STOP: rt::Range<usize> = 11..12;
-        pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
-            f("sequence", rt::Int(self.sequence as i64));
-            f("sysid", rt::Int(self.sysid as i64));
-            f("compid", rt::Int(self.compid as i64));
-            f("req_message_rate", rt::Int(self.req_message_rate as i64));
-            f("target_system", rt::Int(self.target_system as i64));
-            f("target_component", rt::Int(self.target_component as i64));
-            f("req_stream_id", rt::Int(self.req_stream_id as i64));
-            f("start_stop", rt::Int(self.start_stop as i64));
-        }
-        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
-            Request::RequestDataStream(*self).encode(address, buf)
-        }
-    }
     ///A request (command), host to device.
     #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
     #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
@@ -208,11 +146,7 @@ pub mod mavlink_v1 {
         /// Encodes the frame for `address` into `buf`; returns the frame length. Refuses what
         /// decode refuses: an address no frame may carry, the broadcast address for a command
         /// that does not accept it, a value outside its field's range.
-        pub fn encode(
-            &self,
-            address: u8,
-            buf: &mut [u8],
-        ) -> rt::Result<usize, rt::EncodeError> {
+        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             rt::encode_address(address, &FRAME)?;
             let len = match *self {
                 Self::Ping(
@@ -319,7 +253,7 @@ pub mod mavlink_v1 {
                         14,
                     >(frame, &request::RequestDataStream::DESC)?;
                     rt::in_range(
-                        &request::REQUEST_DATA_STREAM_START_STOP,
+                        &request::RequestDataStream::START_STOP_DESC,
                         11,
                         frame[11],
                         0,
@@ -348,36 +282,33 @@ pub mod mavlink_v1 {
             name: &str,
             mut field: impl FnMut(&'static str) -> rt::Option<rt::FieldValue<'v>>,
         ) -> rt::Result<Self, rt::FieldError> {
-            match name {
+            let message = match name {
                 "ping" => {
-                    rt::Ok(
-                        Self::Ping(request::Ping {
-                            sequence: rt::get(&mut field, "sequence")?,
-                            sysid: rt::get(&mut field, "sysid")?,
-                            compid: rt::get(&mut field, "compid")?,
-                            time_usec: rt::get(&mut field, "time_usec")?,
-                            seq: rt::get(&mut field, "seq")?,
-                            target_system: rt::get(&mut field, "target_system")?,
-                            target_component: rt::get(&mut field, "target_component")?,
-                        }),
-                    )
+                    Self::Ping(request::Ping {
+                        sequence: rt::get(&mut field, "sequence")?,
+                        sysid: rt::get(&mut field, "sysid")?,
+                        compid: rt::get(&mut field, "compid")?,
+                        time_usec: rt::get(&mut field, "time_usec")?,
+                        seq: rt::get(&mut field, "seq")?,
+                        target_system: rt::get(&mut field, "target_system")?,
+                        target_component: rt::get(&mut field, "target_component")?,
+                    })
                 }
                 "request_data_stream" => {
-                    rt::Ok(
-                        Self::RequestDataStream(request::RequestDataStream {
-                            sequence: rt::get(&mut field, "sequence")?,
-                            sysid: rt::get(&mut field, "sysid")?,
-                            compid: rt::get(&mut field, "compid")?,
-                            req_message_rate: rt::get(&mut field, "req_message_rate")?,
-                            target_system: rt::get(&mut field, "target_system")?,
-                            target_component: rt::get(&mut field, "target_component")?,
-                            req_stream_id: rt::get(&mut field, "req_stream_id")?,
-                            start_stop: rt::get(&mut field, "start_stop")?,
-                        }),
-                    )
+                    Self::RequestDataStream(request::RequestDataStream {
+                        sequence: rt::get(&mut field, "sequence")?,
+                        sysid: rt::get(&mut field, "sysid")?,
+                        compid: rt::get(&mut field, "compid")?,
+                        req_message_rate: rt::get(&mut field, "req_message_rate")?,
+                        target_system: rt::get(&mut field, "target_system")?,
+                        target_component: rt::get(&mut field, "target_component")?,
+                        req_stream_id: rt::get(&mut field, "req_stream_id")?,
+                        start_stop: rt::get(&mut field, "start_stop")?,
+                    })
                 }
-                _ => rt::Err(rt::FieldError::UnknownMessage),
-            }
+                _ => return rt::Err(rt::FieldError::UnknownMessage),
+            };
+            rt::Ok(message)
         }
     }
     impl rt::Message for Request {
@@ -398,11 +329,7 @@ pub mod mavlink_v1 {
             Request::visit(self, f)
         }
         #[inline]
-        fn encode(
-            &self,
-            address: u8,
-            buf: &mut [u8],
-        ) -> rt::Result<usize, rt::EncodeError> {
+        fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             Request::encode(self, address, buf)
         }
         #[inline]
@@ -440,163 +367,6 @@ pub mod mavlink_v1 {
         /// The responses this command may get, bit `i` for row `i` of `Response::MESSAGES`.
         const fn replies(&self) -> u64 {
             Self::COMMANDS[self.index()].3
-        }
-    }
-    impl response::PingReply {
-        pub const NAME: &'static str = "ping_reply";
-        pub const CODE: &'static [u8] = &[0x04];
-        pub const LEN: usize = 22;
-        pub const DESC: rt::MessageDesc = rt::MessageDesc::new(
-            Self::NAME,
-            0x04,
-            1,
-            &[22],
-        );
-        pub const SEQUENCE: rt::Range<usize> = 2..3;
-        pub const SYSID: rt::Range<usize> = 3..4;
-        pub const COMPID: rt::Range<usize> = 4..5;
-        pub const TIME_USEC: rt::Range<usize> = 6..14;
-        pub const SEQ: rt::Range<usize> = 14..18;
-        pub const TARGET_SYSTEM: rt::Range<usize> = 18..19;
-        pub const TARGET_COMPONENT: rt::Range<usize> = 19..20;
-        pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
-            f("sequence", rt::Int(self.sequence as i64));
-            f("sysid", rt::Int(self.sysid as i64));
-            f("compid", rt::Int(self.compid as i64));
-            f("time_usec", rt::Int(self.time_usec as i64));
-            f("seq", rt::Int(self.seq as i64));
-            f("target_system", rt::Int(self.target_system as i64));
-            f("target_component", rt::Int(self.target_component as i64));
-        }
-        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
-            Response::PingReply(*self).encode(address, buf)
-        }
-    }
-    impl response::Heartbeat {
-        pub const NAME: &'static str = "heartbeat";
-        pub const CODE: &'static [u8] = &[0x00];
-        pub const LEN: usize = 17;
-        pub const DESC: rt::MessageDesc = rt::MessageDesc::new(
-            Self::NAME,
-            0x00,
-            1,
-            &[17],
-        );
-        pub const SEQUENCE: rt::Range<usize> = 2..3;
-        pub const SYSID: rt::Range<usize> = 3..4;
-        pub const COMPID: rt::Range<usize> = 4..5;
-        pub const CUSTOM_MODE: rt::Range<usize> = 6..10;
-        pub const VEHICLE_TYPE: rt::Range<usize> = 10..11;
-        pub const AUTOPILOT: rt::Range<usize> = 11..12;
-        pub const BASE_MODE: rt::Range<usize> = 12..13;
-        pub const SYSTEM_STATUS: rt::Range<usize> = 13..14;
-        pub const MAVLINK_VERSION: rt::Range<usize> = 14..15;
-        pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
-            f("sequence", rt::Int(self.sequence as i64));
-            f("sysid", rt::Int(self.sysid as i64));
-            f("compid", rt::Int(self.compid as i64));
-            f("custom_mode", rt::Int(self.custom_mode as i64));
-            f("vehicle_type", rt::Int(self.vehicle_type as i64));
-            f("autopilot", rt::Int(self.autopilot as i64));
-            f("base_mode", rt::Int(self.base_mode as i64));
-            f("system_status", rt::Int(self.system_status as i64));
-            f("mavlink_version", rt::Int(self.mavlink_version as i64));
-        }
-        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
-            Response::Heartbeat(*self).encode(address, buf)
-        }
-    }
-    impl response::SysStatus {
-        pub const NAME: &'static str = "sys_status";
-        pub const CODE: &'static [u8] = &[0x01];
-        pub const LEN: usize = 39;
-        pub const DESC: rt::MessageDesc = rt::MessageDesc::new(
-            Self::NAME,
-            0x01,
-            1,
-            &[39],
-        );
-        pub const SEQUENCE: rt::Range<usize> = 2..3;
-        pub const SYSID: rt::Range<usize> = 3..4;
-        pub const COMPID: rt::Range<usize> = 4..5;
-        pub const ONBOARD_CONTROL_SENSORS_PRESENT: rt::Range<usize> = 6..10;
-        pub const ONBOARD_CONTROL_SENSORS_ENABLED: rt::Range<usize> = 10..14;
-        pub const ONBOARD_CONTROL_SENSORS_HEALTH: rt::Range<usize> = 14..18;
-        pub const LOAD: rt::Range<usize> = 18..20;
-        pub const VOLTAGE_BATTERY: rt::Range<usize> = 20..22;
-        pub const CURRENT_BATTERY: rt::Range<usize> = 22..24;
-        pub const DROP_RATE_COMM: rt::Range<usize> = 24..26;
-        pub const ERRORS_COMM: rt::Range<usize> = 26..28;
-        pub const ERRORS_COUNT1: rt::Range<usize> = 28..30;
-        pub const ERRORS_COUNT2: rt::Range<usize> = 30..32;
-        pub const ERRORS_COUNT3: rt::Range<usize> = 32..34;
-        pub const ERRORS_COUNT4: rt::Range<usize> = 34..36;
-        pub const BATTERY_REMAINING: rt::Range<usize> = 36..37;
-        pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
-            f("sequence", rt::Int(self.sequence as i64));
-            f("sysid", rt::Int(self.sysid as i64));
-            f("compid", rt::Int(self.compid as i64));
-            f(
-                "onboard_control_sensors_present",
-                rt::Int(self.onboard_control_sensors_present as i64),
-            );
-            f(
-                "onboard_control_sensors_enabled",
-                rt::Int(self.onboard_control_sensors_enabled as i64),
-            );
-            f(
-                "onboard_control_sensors_health",
-                rt::Int(self.onboard_control_sensors_health as i64),
-            );
-            f("load", rt::Int(self.load as i64));
-            f("voltage_battery", rt::Int(self.voltage_battery as i64));
-            f("current_battery", rt::Int(self.current_battery as i64));
-            f("drop_rate_comm", rt::Int(self.drop_rate_comm as i64));
-            f("errors_comm", rt::Int(self.errors_comm as i64));
-            f("errors_count1", rt::Int(self.errors_count1 as i64));
-            f("errors_count2", rt::Int(self.errors_count2 as i64));
-            f("errors_count3", rt::Int(self.errors_count3 as i64));
-            f("errors_count4", rt::Int(self.errors_count4 as i64));
-            f("battery_remaining", rt::Int(self.battery_remaining as i64));
-        }
-        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
-            Response::SysStatus(*self).encode(address, buf)
-        }
-    }
-    impl response::Attitude {
-        pub const NAME: &'static str = "attitude";
-        pub const CODE: &'static [u8] = &[0x1E];
-        pub const LEN: usize = 36;
-        pub const DESC: rt::MessageDesc = rt::MessageDesc::new(
-            Self::NAME,
-            0x1E,
-            1,
-            &[36],
-        );
-        pub const SEQUENCE: rt::Range<usize> = 2..3;
-        pub const SYSID: rt::Range<usize> = 3..4;
-        pub const COMPID: rt::Range<usize> = 4..5;
-        pub const TIME_BOOT_MS: rt::Range<usize> = 6..10;
-        pub const ROLL: rt::Range<usize> = 10..14;
-        pub const PITCH: rt::Range<usize> = 14..18;
-        pub const YAW: rt::Range<usize> = 18..22;
-        pub const ROLLSPEED: rt::Range<usize> = 22..26;
-        pub const PITCHSPEED: rt::Range<usize> = 26..30;
-        pub const YAWSPEED: rt::Range<usize> = 30..34;
-        pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
-            f("sequence", rt::Int(self.sequence as i64));
-            f("sysid", rt::Int(self.sysid as i64));
-            f("compid", rt::Int(self.compid as i64));
-            f("time_boot_ms", rt::Int(self.time_boot_ms as i64));
-            f("roll", rt::Int(rt::raw(self.roll)));
-            f("pitch", rt::Int(rt::raw(self.pitch)));
-            f("yaw", rt::Int(rt::raw(self.yaw)));
-            f("rollspeed", rt::Int(rt::raw(self.rollspeed)));
-            f("pitchspeed", rt::Int(rt::raw(self.pitchspeed)));
-            f("yawspeed", rt::Int(rt::raw(self.yawspeed)));
-        }
-        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
-            Response::Attitude(*self).encode(address, buf)
         }
     }
     ///A response, device to host.
@@ -652,11 +422,7 @@ pub mod mavlink_v1 {
         /// Encodes the frame for `address` into `buf`; returns the frame length. Refuses what
         /// decode refuses: an address no frame may carry, the broadcast address for a command
         /// that does not accept it, a value outside its field's range.
-        pub fn encode(
-            &self,
-            address: u8,
-            buf: &mut [u8],
-        ) -> rt::Result<usize, rt::EncodeError> {
+        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             rt::encode_address(address, &FRAME)?;
             let len = match *self {
                 Self::PingReply(
@@ -984,84 +750,77 @@ pub mod mavlink_v1 {
             name: &str,
             mut field: impl FnMut(&'static str) -> rt::Option<rt::FieldValue<'v>>,
         ) -> rt::Result<Self, rt::FieldError> {
-            match name {
+            let message = match name {
                 "ping_reply" => {
-                    rt::Ok(
-                        Self::PingReply(response::PingReply {
-                            sequence: rt::get(&mut field, "sequence")?,
-                            sysid: rt::get(&mut field, "sysid")?,
-                            compid: rt::get(&mut field, "compid")?,
-                            time_usec: rt::get(&mut field, "time_usec")?,
-                            seq: rt::get(&mut field, "seq")?,
-                            target_system: rt::get(&mut field, "target_system")?,
-                            target_component: rt::get(&mut field, "target_component")?,
-                        }),
-                    )
+                    Self::PingReply(response::PingReply {
+                        sequence: rt::get(&mut field, "sequence")?,
+                        sysid: rt::get(&mut field, "sysid")?,
+                        compid: rt::get(&mut field, "compid")?,
+                        time_usec: rt::get(&mut field, "time_usec")?,
+                        seq: rt::get(&mut field, "seq")?,
+                        target_system: rt::get(&mut field, "target_system")?,
+                        target_component: rt::get(&mut field, "target_component")?,
+                    })
                 }
                 "heartbeat" => {
-                    rt::Ok(
-                        Self::Heartbeat(response::Heartbeat {
-                            sequence: rt::get(&mut field, "sequence")?,
-                            sysid: rt::get(&mut field, "sysid")?,
-                            compid: rt::get(&mut field, "compid")?,
-                            custom_mode: rt::get(&mut field, "custom_mode")?,
-                            vehicle_type: rt::get(&mut field, "vehicle_type")?,
-                            autopilot: rt::get(&mut field, "autopilot")?,
-                            base_mode: rt::get(&mut field, "base_mode")?,
-                            system_status: rt::get(&mut field, "system_status")?,
-                            mavlink_version: rt::get(&mut field, "mavlink_version")?,
-                        }),
-                    )
+                    Self::Heartbeat(response::Heartbeat {
+                        sequence: rt::get(&mut field, "sequence")?,
+                        sysid: rt::get(&mut field, "sysid")?,
+                        compid: rt::get(&mut field, "compid")?,
+                        custom_mode: rt::get(&mut field, "custom_mode")?,
+                        vehicle_type: rt::get(&mut field, "vehicle_type")?,
+                        autopilot: rt::get(&mut field, "autopilot")?,
+                        base_mode: rt::get(&mut field, "base_mode")?,
+                        system_status: rt::get(&mut field, "system_status")?,
+                        mavlink_version: rt::get(&mut field, "mavlink_version")?,
+                    })
                 }
                 "sys_status" => {
-                    rt::Ok(
-                        Self::SysStatus(response::SysStatus {
-                            sequence: rt::get(&mut field, "sequence")?,
-                            sysid: rt::get(&mut field, "sysid")?,
-                            compid: rt::get(&mut field, "compid")?,
-                            onboard_control_sensors_present: rt::get(
-                                &mut field,
-                                "onboard_control_sensors_present",
-                            )?,
-                            onboard_control_sensors_enabled: rt::get(
-                                &mut field,
-                                "onboard_control_sensors_enabled",
-                            )?,
-                            onboard_control_sensors_health: rt::get(
-                                &mut field,
-                                "onboard_control_sensors_health",
-                            )?,
-                            load: rt::get(&mut field, "load")?,
-                            voltage_battery: rt::get(&mut field, "voltage_battery")?,
-                            current_battery: rt::get(&mut field, "current_battery")?,
-                            drop_rate_comm: rt::get(&mut field, "drop_rate_comm")?,
-                            errors_comm: rt::get(&mut field, "errors_comm")?,
-                            errors_count1: rt::get(&mut field, "errors_count1")?,
-                            errors_count2: rt::get(&mut field, "errors_count2")?,
-                            errors_count3: rt::get(&mut field, "errors_count3")?,
-                            errors_count4: rt::get(&mut field, "errors_count4")?,
-                            battery_remaining: rt::get(&mut field, "battery_remaining")?,
-                        }),
-                    )
+                    Self::SysStatus(response::SysStatus {
+                        sequence: rt::get(&mut field, "sequence")?,
+                        sysid: rt::get(&mut field, "sysid")?,
+                        compid: rt::get(&mut field, "compid")?,
+                        onboard_control_sensors_present: rt::get(
+                            &mut field,
+                            "onboard_control_sensors_present",
+                        )?,
+                        onboard_control_sensors_enabled: rt::get(
+                            &mut field,
+                            "onboard_control_sensors_enabled",
+                        )?,
+                        onboard_control_sensors_health: rt::get(
+                            &mut field,
+                            "onboard_control_sensors_health",
+                        )?,
+                        load: rt::get(&mut field, "load")?,
+                        voltage_battery: rt::get(&mut field, "voltage_battery")?,
+                        current_battery: rt::get(&mut field, "current_battery")?,
+                        drop_rate_comm: rt::get(&mut field, "drop_rate_comm")?,
+                        errors_comm: rt::get(&mut field, "errors_comm")?,
+                        errors_count1: rt::get(&mut field, "errors_count1")?,
+                        errors_count2: rt::get(&mut field, "errors_count2")?,
+                        errors_count3: rt::get(&mut field, "errors_count3")?,
+                        errors_count4: rt::get(&mut field, "errors_count4")?,
+                        battery_remaining: rt::get(&mut field, "battery_remaining")?,
+                    })
                 }
                 "attitude" => {
-                    rt::Ok(
-                        Self::Attitude(response::Attitude {
-                            sequence: rt::get(&mut field, "sequence")?,
-                            sysid: rt::get(&mut field, "sysid")?,
-                            compid: rt::get(&mut field, "compid")?,
-                            time_boot_ms: rt::get(&mut field, "time_boot_ms")?,
-                            roll: rt::get(&mut field, "roll")?,
-                            pitch: rt::get(&mut field, "pitch")?,
-                            yaw: rt::get(&mut field, "yaw")?,
-                            rollspeed: rt::get(&mut field, "rollspeed")?,
-                            pitchspeed: rt::get(&mut field, "pitchspeed")?,
-                            yawspeed: rt::get(&mut field, "yawspeed")?,
-                        }),
-                    )
+                    Self::Attitude(response::Attitude {
+                        sequence: rt::get(&mut field, "sequence")?,
+                        sysid: rt::get(&mut field, "sysid")?,
+                        compid: rt::get(&mut field, "compid")?,
+                        time_boot_ms: rt::get(&mut field, "time_boot_ms")?,
+                        roll: rt::get(&mut field, "roll")?,
+                        pitch: rt::get(&mut field, "pitch")?,
+                        yaw: rt::get(&mut field, "yaw")?,
+                        rollspeed: rt::get(&mut field, "rollspeed")?,
+                        pitchspeed: rt::get(&mut field, "pitchspeed")?,
+                        yawspeed: rt::get(&mut field, "yawspeed")?,
+                    })
                 }
-                _ => rt::Err(rt::FieldError::UnknownMessage),
-            }
+                _ => return rt::Err(rt::FieldError::UnknownMessage),
+            };
+            rt::Ok(message)
         }
     }
     impl rt::Message for Response {
@@ -1082,11 +841,7 @@ pub mod mavlink_v1 {
             Response::visit(self, f)
         }
         #[inline]
-        fn encode(
-            &self,
-            address: u8,
-            buf: &mut [u8],
-        ) -> rt::Result<usize, rt::EncodeError> {
+        fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             Response::encode(self, address, buf)
         }
         #[inline]
@@ -1212,11 +967,200 @@ pub mod mavlink_v1 {
     pub type StreamDecoder = ::busspec_runtime::stream::StreamDecoder<MavlinkV1>;
     /// What [`StreamDecoder`] finds in a stream.
     pub type Event = ::busspec_runtime::stream::Event<Request, Response>;
-    /// Each request as a struct of its own (its `DESC` names it as refusals do: name,
-    /// code and the frame lengths of its code), and each field a refusal names
-    /// (`message.field`, `FieldDesc`).
+    impl request::Ping {
+        pub const NAME: &'static str = "ping";
+        pub const CODE: &'static [u8] = &[0x04];
+        pub const LEN: usize = 22;
+        pub const DESC: rt::MessageDesc = rt::desc(Self::NAME, 0x04, 1, &[22]);
+        pub const SEQUENCE: rt::Range<usize> = 2..3;
+        pub const SYSID: rt::Range<usize> = 3..4;
+        pub const COMPID: rt::Range<usize> = 4..5;
+        pub const TIME_USEC: rt::Range<usize> = 6..14;
+        pub const SEQ: rt::Range<usize> = 14..18;
+        pub const TARGET_SYSTEM: rt::Range<usize> = 18..19;
+        pub const TARGET_COMPONENT: rt::Range<usize> = 19..20;
+        pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
+            f("sequence", rt::Int(self.sequence as i64));
+            f("sysid", rt::Int(self.sysid as i64));
+            f("compid", rt::Int(self.compid as i64));
+            f("time_usec", rt::Int(self.time_usec as i64));
+            f("seq", rt::Int(self.seq as i64));
+            f("target_system", rt::Int(self.target_system as i64));
+            f("target_component", rt::Int(self.target_component as i64));
+        }
+        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            Request::Ping(*self).encode(address, buf)
+        }
+    }
+    impl request::RequestDataStream {
+        pub const NAME: &'static str = "request_data_stream";
+        pub const CODE: &'static [u8] = &[0x42];
+        pub const LEN: usize = 14;
+        pub const DESC: rt::MessageDesc = rt::desc(Self::NAME, 0x42, 1, &[14]);
+        pub const SEQUENCE: rt::Range<usize> = 2..3;
+        pub const SYSID: rt::Range<usize> = 3..4;
+        pub const COMPID: rt::Range<usize> = 4..5;
+        pub const REQ_MESSAGE_RATE: rt::Range<usize> = 6..8;
+        pub const TARGET_SYSTEM: rt::Range<usize> = 8..9;
+        pub const TARGET_COMPONENT: rt::Range<usize> = 9..10;
+        pub const REQ_STREAM_ID: rt::Range<usize> = 10..11;
+        pub const START_STOP: rt::Range<usize> = 11..12;
+        pub const START_STOP_DESC: rt::FieldDesc = rt::field(Self::NAME, "start_stop");
+        pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
+            f("sequence", rt::Int(self.sequence as i64));
+            f("sysid", rt::Int(self.sysid as i64));
+            f("compid", rt::Int(self.compid as i64));
+            f("req_message_rate", rt::Int(self.req_message_rate as i64));
+            f("target_system", rt::Int(self.target_system as i64));
+            f("target_component", rt::Int(self.target_component as i64));
+            f("req_stream_id", rt::Int(self.req_stream_id as i64));
+            f("start_stop", rt::Int(self.start_stop as i64));
+        }
+        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            Request::RequestDataStream(*self).encode(address, buf)
+        }
+    }
+    impl response::PingReply {
+        pub const NAME: &'static str = "ping_reply";
+        pub const CODE: &'static [u8] = &[0x04];
+        pub const LEN: usize = 22;
+        pub const DESC: rt::MessageDesc = rt::desc(Self::NAME, 0x04, 1, &[22]);
+        pub const SEQUENCE: rt::Range<usize> = 2..3;
+        pub const SYSID: rt::Range<usize> = 3..4;
+        pub const COMPID: rt::Range<usize> = 4..5;
+        pub const TIME_USEC: rt::Range<usize> = 6..14;
+        pub const SEQ: rt::Range<usize> = 14..18;
+        pub const TARGET_SYSTEM: rt::Range<usize> = 18..19;
+        pub const TARGET_COMPONENT: rt::Range<usize> = 19..20;
+        pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
+            f("sequence", rt::Int(self.sequence as i64));
+            f("sysid", rt::Int(self.sysid as i64));
+            f("compid", rt::Int(self.compid as i64));
+            f("time_usec", rt::Int(self.time_usec as i64));
+            f("seq", rt::Int(self.seq as i64));
+            f("target_system", rt::Int(self.target_system as i64));
+            f("target_component", rt::Int(self.target_component as i64));
+        }
+        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            Response::PingReply(*self).encode(address, buf)
+        }
+    }
+    impl response::Heartbeat {
+        pub const NAME: &'static str = "heartbeat";
+        pub const CODE: &'static [u8] = &[0x00];
+        pub const LEN: usize = 17;
+        pub const DESC: rt::MessageDesc = rt::desc(Self::NAME, 0x00, 1, &[17]);
+        pub const SEQUENCE: rt::Range<usize> = 2..3;
+        pub const SYSID: rt::Range<usize> = 3..4;
+        pub const COMPID: rt::Range<usize> = 4..5;
+        pub const CUSTOM_MODE: rt::Range<usize> = 6..10;
+        pub const VEHICLE_TYPE: rt::Range<usize> = 10..11;
+        pub const AUTOPILOT: rt::Range<usize> = 11..12;
+        pub const BASE_MODE: rt::Range<usize> = 12..13;
+        pub const SYSTEM_STATUS: rt::Range<usize> = 13..14;
+        pub const MAVLINK_VERSION: rt::Range<usize> = 14..15;
+        pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
+            f("sequence", rt::Int(self.sequence as i64));
+            f("sysid", rt::Int(self.sysid as i64));
+            f("compid", rt::Int(self.compid as i64));
+            f("custom_mode", rt::Int(self.custom_mode as i64));
+            f("vehicle_type", rt::Int(self.vehicle_type as i64));
+            f("autopilot", rt::Int(self.autopilot as i64));
+            f("base_mode", rt::Int(self.base_mode as i64));
+            f("system_status", rt::Int(self.system_status as i64));
+            f("mavlink_version", rt::Int(self.mavlink_version as i64));
+        }
+        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            Response::Heartbeat(*self).encode(address, buf)
+        }
+    }
+    impl response::SysStatus {
+        pub const NAME: &'static str = "sys_status";
+        pub const CODE: &'static [u8] = &[0x01];
+        pub const LEN: usize = 39;
+        pub const DESC: rt::MessageDesc = rt::desc(Self::NAME, 0x01, 1, &[39]);
+        pub const SEQUENCE: rt::Range<usize> = 2..3;
+        pub const SYSID: rt::Range<usize> = 3..4;
+        pub const COMPID: rt::Range<usize> = 4..5;
+        pub const ONBOARD_CONTROL_SENSORS_PRESENT: rt::Range<usize> = 6..10;
+        pub const ONBOARD_CONTROL_SENSORS_ENABLED: rt::Range<usize> = 10..14;
+        pub const ONBOARD_CONTROL_SENSORS_HEALTH: rt::Range<usize> = 14..18;
+        pub const LOAD: rt::Range<usize> = 18..20;
+        pub const VOLTAGE_BATTERY: rt::Range<usize> = 20..22;
+        pub const CURRENT_BATTERY: rt::Range<usize> = 22..24;
+        pub const DROP_RATE_COMM: rt::Range<usize> = 24..26;
+        pub const ERRORS_COMM: rt::Range<usize> = 26..28;
+        pub const ERRORS_COUNT1: rt::Range<usize> = 28..30;
+        pub const ERRORS_COUNT2: rt::Range<usize> = 30..32;
+        pub const ERRORS_COUNT3: rt::Range<usize> = 32..34;
+        pub const ERRORS_COUNT4: rt::Range<usize> = 34..36;
+        pub const BATTERY_REMAINING: rt::Range<usize> = 36..37;
+        pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
+            f("sequence", rt::Int(self.sequence as i64));
+            f("sysid", rt::Int(self.sysid as i64));
+            f("compid", rt::Int(self.compid as i64));
+            f(
+                "onboard_control_sensors_present",
+                rt::Int(self.onboard_control_sensors_present as i64),
+            );
+            f(
+                "onboard_control_sensors_enabled",
+                rt::Int(self.onboard_control_sensors_enabled as i64),
+            );
+            f(
+                "onboard_control_sensors_health",
+                rt::Int(self.onboard_control_sensors_health as i64),
+            );
+            f("load", rt::Int(self.load as i64));
+            f("voltage_battery", rt::Int(self.voltage_battery as i64));
+            f("current_battery", rt::Int(self.current_battery as i64));
+            f("drop_rate_comm", rt::Int(self.drop_rate_comm as i64));
+            f("errors_comm", rt::Int(self.errors_comm as i64));
+            f("errors_count1", rt::Int(self.errors_count1 as i64));
+            f("errors_count2", rt::Int(self.errors_count2 as i64));
+            f("errors_count3", rt::Int(self.errors_count3 as i64));
+            f("errors_count4", rt::Int(self.errors_count4 as i64));
+            f("battery_remaining", rt::Int(self.battery_remaining as i64));
+        }
+        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            Response::SysStatus(*self).encode(address, buf)
+        }
+    }
+    impl response::Attitude {
+        pub const NAME: &'static str = "attitude";
+        pub const CODE: &'static [u8] = &[0x1E];
+        pub const LEN: usize = 36;
+        pub const DESC: rt::MessageDesc = rt::desc(Self::NAME, 0x1E, 1, &[36]);
+        pub const SEQUENCE: rt::Range<usize> = 2..3;
+        pub const SYSID: rt::Range<usize> = 3..4;
+        pub const COMPID: rt::Range<usize> = 4..5;
+        pub const TIME_BOOT_MS: rt::Range<usize> = 6..10;
+        pub const ROLL: rt::Range<usize> = 10..14;
+        pub const PITCH: rt::Range<usize> = 14..18;
+        pub const YAW: rt::Range<usize> = 18..22;
+        pub const ROLLSPEED: rt::Range<usize> = 22..26;
+        pub const PITCHSPEED: rt::Range<usize> = 26..30;
+        pub const YAWSPEED: rt::Range<usize> = 30..34;
+        pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
+            f("sequence", rt::Int(self.sequence as i64));
+            f("sysid", rt::Int(self.sysid as i64));
+            f("compid", rt::Int(self.compid as i64));
+            f("time_boot_ms", rt::Int(self.time_boot_ms as i64));
+            f("roll", rt::Int(rt::raw(self.roll)));
+            f("pitch", rt::Int(rt::raw(self.pitch)));
+            f("yaw", rt::Int(rt::raw(self.yaw)));
+            f("rollspeed", rt::Int(rt::raw(self.rollspeed)));
+            f("pitchspeed", rt::Int(rt::raw(self.pitchspeed)));
+            f("yawspeed", rt::Int(rt::raw(self.yawspeed)));
+        }
+        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            Response::Attitude(*self).encode(address, buf)
+        }
+    }
+    /// Each request as a struct of its own; its constants (`DESC`, which names it as
+    /// refusals do: name, code and the frame lengths of its code; `QUANTITY_DESC`, each
+    /// field a refusal names) and methods are in the `impl` of each.
     pub mod request {
-        use ::busspec_runtime::FieldDesc;
         /// §3.1 PING (4) (code `0x04`, 22 bytes).
         #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
         #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
@@ -1255,13 +1199,8 @@ pub mod mavlink_v1 {
             /// Valid raw range 0..=1.
             pub start_stop: u8,
         }
-        /// `request_data_stream.start_stop`
-        pub const REQUEST_DATA_STREAM_START_STOP: FieldDesc = FieldDesc::new(
-            "request_data_stream",
-            "start_stop",
-        );
     }
-    /// Each response as a struct of its own, and the fields its refusals name.
+    /// Each response as a struct of its own.
     pub mod response {
         /// §3.1 PING (4), answered (code `0x04`, 22 bytes).
         #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]

@@ -125,76 +125,6 @@ pub mod mavlink_v2 {
             rt::None => CRC.checksum(bytes),
         }
     }
-    impl request::Ping {
-        pub const NAME: &'static str = "ping";
-        pub const CODE: &'static [u8] = &[0x04, 0x00, 0x00];
-        pub const LEN: usize = 26;
-        pub const DESC: rt::MessageDesc = rt::MessageDesc::new(
-            Self::NAME,
-            0x040000,
-            3,
-            &[26],
-        );
-        pub const INCOMPAT_FLAGS: rt::Range<usize> = 2..3;
-        pub const COMPAT_FLAGS: rt::Range<usize> = 3..4;
-        pub const SEQUENCE: rt::Range<usize> = 4..5;
-        pub const SYSID: rt::Range<usize> = 5..6;
-        pub const COMPID: rt::Range<usize> = 6..7;
-        pub const TIME_USEC: rt::Range<usize> = 10..18;
-        pub const SEQ: rt::Range<usize> = 18..22;
-        pub const TARGET_SYSTEM: rt::Range<usize> = 22..23;
-        pub const TARGET_COMPONENT: rt::Range<usize> = 23..24;
-        pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
-            f("incompat_flags", rt::Int(self.incompat_flags as i64));
-            f("compat_flags", rt::Int(self.compat_flags as i64));
-            f("sequence", rt::Int(self.sequence as i64));
-            f("sysid", rt::Int(self.sysid as i64));
-            f("compid", rt::Int(self.compid as i64));
-            f("time_usec", rt::Int(self.time_usec as i64));
-            f("seq", rt::Int(self.seq as i64));
-            f("target_system", rt::Int(self.target_system as i64));
-            f("target_component", rt::Int(self.target_component as i64));
-        }
-        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
-            Request::Ping(*self).encode(address, buf)
-        }
-    }
-    impl request::RequestDataStream {
-        pub const NAME: &'static str = "request_data_stream";
-        pub const CODE: &'static [u8] = &[0x42, 0x00, 0x00];
-        pub const LEN: usize = 18;
-        pub const DESC: rt::MessageDesc = rt::MessageDesc::new(
-            Self::NAME,
-            0x420000,
-            3,
-            &[18],
-        );
-        pub const INCOMPAT_FLAGS: rt::Range<usize> = 2..3;
-        pub const COMPAT_FLAGS: rt::Range<usize> = 3..4;
-        pub const SEQUENCE: rt::Range<usize> = 4..5;
-        pub const SYSID: rt::Range<usize> = 5..6;
-        pub const COMPID: rt::Range<usize> = 6..7;
-        pub const REQ_MESSAGE_RATE: rt::Range<usize> = 10..12;
-        pub const TARGET_SYSTEM: rt::Range<usize> = 12..13;
-        pub const TARGET_COMPONENT: rt::Range<usize> = 13..14;
-        pub const REQ_STREAM_ID: rt::Range<usize> = 14..15;
-        pub const START_STOP: rt::Range<usize> = 15..16;
-        pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
-            f("incompat_flags", rt::Int(self.incompat_flags as i64));
-            f("compat_flags", rt::Int(self.compat_flags as i64));
-            f("sequence", rt::Int(self.sequence as i64));
-            f("sysid", rt::Int(self.sysid as i64));
-            f("compid", rt::Int(self.compid as i64));
-            f("req_message_rate", rt::Int(self.req_message_rate as i64));
-            f("target_system", rt::Int(self.target_system as i64));
-            f("target_component", rt::Int(self.target_component as i64));
-            f("req_stream_id", rt::Int(self.req_stream_id as i64));
-            f("start_stop", rt::Int(self.start_stop as i64));
-        }
-        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
-            Request::RequestDataStream(*self).encode(address, buf)
-        }
-    }
     ///A request (command), host to device.
     #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
     #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
@@ -243,11 +173,7 @@ pub mod mavlink_v2 {
         ///
         /// The payload's trailing zero bytes are stripped (one byte kept), the length field
         /// and checksum rewritten (`framing.truncation`).
-        pub fn encode(
-            &self,
-            address: u8,
-            buf: &mut [u8],
-        ) -> rt::Result<usize, rt::EncodeError> {
+        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             let len = self.encode_laid_out(address, buf)?;
             rt::Ok(
                 TRUNCATION
@@ -255,11 +181,7 @@ pub mod mavlink_v2 {
             )
         }
         /// The frame laid out with its whole payload, into `buf`.
-        fn encode_laid_out(
-            &self,
-            address: u8,
-            buf: &mut [u8],
-        ) -> rt::Result<usize, rt::EncodeError> {
+        fn encode_laid_out(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             rt::encode_address(address, &FRAME)?;
             let len = match *self {
                 Self::Ping(
@@ -359,7 +281,13 @@ pub mod mavlink_v2 {
             match rt::code(frame, 7, 3) {
                 0x040000 => {
                     let frame = rt::fixed::<26>(frame, &request::Ping::DESC)?;
-                    rt::in_range(&request::PING_INCOMPAT_FLAGS, 2, frame[2], 0, 0)?;
+                    rt::in_range(
+                        &request::Ping::INCOMPAT_FLAGS_DESC,
+                        2,
+                        frame[2],
+                        0,
+                        0,
+                    )?;
                     rt::Ok(
                         Self::Ping(request::Ping {
                             incompat_flags: frame[2],
@@ -393,14 +321,14 @@ pub mod mavlink_v2 {
                         18,
                     >(frame, &request::RequestDataStream::DESC)?;
                     rt::in_range(
-                        &request::REQUEST_DATA_STREAM_INCOMPAT_FLAGS,
+                        &request::RequestDataStream::INCOMPAT_FLAGS_DESC,
                         2,
                         frame[2],
                         0,
                         0,
                     )?;
                     rt::in_range(
-                        &request::REQUEST_DATA_STREAM_START_STOP,
+                        &request::RequestDataStream::START_STOP_DESC,
                         15,
                         frame[15],
                         0,
@@ -431,40 +359,37 @@ pub mod mavlink_v2 {
             name: &str,
             mut field: impl FnMut(&'static str) -> rt::Option<rt::FieldValue<'v>>,
         ) -> rt::Result<Self, rt::FieldError> {
-            match name {
+            let message = match name {
                 "ping" => {
-                    rt::Ok(
-                        Self::Ping(request::Ping {
-                            incompat_flags: rt::get(&mut field, "incompat_flags")?,
-                            compat_flags: rt::get(&mut field, "compat_flags")?,
-                            sequence: rt::get(&mut field, "sequence")?,
-                            sysid: rt::get(&mut field, "sysid")?,
-                            compid: rt::get(&mut field, "compid")?,
-                            time_usec: rt::get(&mut field, "time_usec")?,
-                            seq: rt::get(&mut field, "seq")?,
-                            target_system: rt::get(&mut field, "target_system")?,
-                            target_component: rt::get(&mut field, "target_component")?,
-                        }),
-                    )
+                    Self::Ping(request::Ping {
+                        incompat_flags: rt::get(&mut field, "incompat_flags")?,
+                        compat_flags: rt::get(&mut field, "compat_flags")?,
+                        sequence: rt::get(&mut field, "sequence")?,
+                        sysid: rt::get(&mut field, "sysid")?,
+                        compid: rt::get(&mut field, "compid")?,
+                        time_usec: rt::get(&mut field, "time_usec")?,
+                        seq: rt::get(&mut field, "seq")?,
+                        target_system: rt::get(&mut field, "target_system")?,
+                        target_component: rt::get(&mut field, "target_component")?,
+                    })
                 }
                 "request_data_stream" => {
-                    rt::Ok(
-                        Self::RequestDataStream(request::RequestDataStream {
-                            incompat_flags: rt::get(&mut field, "incompat_flags")?,
-                            compat_flags: rt::get(&mut field, "compat_flags")?,
-                            sequence: rt::get(&mut field, "sequence")?,
-                            sysid: rt::get(&mut field, "sysid")?,
-                            compid: rt::get(&mut field, "compid")?,
-                            req_message_rate: rt::get(&mut field, "req_message_rate")?,
-                            target_system: rt::get(&mut field, "target_system")?,
-                            target_component: rt::get(&mut field, "target_component")?,
-                            req_stream_id: rt::get(&mut field, "req_stream_id")?,
-                            start_stop: rt::get(&mut field, "start_stop")?,
-                        }),
-                    )
+                    Self::RequestDataStream(request::RequestDataStream {
+                        incompat_flags: rt::get(&mut field, "incompat_flags")?,
+                        compat_flags: rt::get(&mut field, "compat_flags")?,
+                        sequence: rt::get(&mut field, "sequence")?,
+                        sysid: rt::get(&mut field, "sysid")?,
+                        compid: rt::get(&mut field, "compid")?,
+                        req_message_rate: rt::get(&mut field, "req_message_rate")?,
+                        target_system: rt::get(&mut field, "target_system")?,
+                        target_component: rt::get(&mut field, "target_component")?,
+                        req_stream_id: rt::get(&mut field, "req_stream_id")?,
+                        start_stop: rt::get(&mut field, "start_stop")?,
+                    })
                 }
-                _ => rt::Err(rt::FieldError::UnknownMessage),
-            }
+                _ => return rt::Err(rt::FieldError::UnknownMessage),
+            };
+            rt::Ok(message)
         }
     }
     impl rt::Message for Request {
@@ -485,11 +410,7 @@ pub mod mavlink_v2 {
             Request::visit(self, f)
         }
         #[inline]
-        fn encode(
-            &self,
-            address: u8,
-            buf: &mut [u8],
-        ) -> rt::Result<usize, rt::EncodeError> {
+        fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             Request::encode(self, address, buf)
         }
         #[inline]
@@ -527,224 +448,6 @@ pub mod mavlink_v2 {
         /// The responses this command may get, bit `i` for row `i` of `Response::MESSAGES`.
         const fn replies(&self) -> u64 {
             Self::COMMANDS[self.index()].3
-        }
-    }
-    impl response::PingReply {
-        pub const NAME: &'static str = "ping_reply";
-        pub const CODE: &'static [u8] = &[0x04, 0x00, 0x00];
-        pub const LEN: usize = 26;
-        pub const DESC: rt::MessageDesc = rt::MessageDesc::new(
-            Self::NAME,
-            0x040000,
-            3,
-            &[26],
-        );
-        pub const INCOMPAT_FLAGS: rt::Range<usize> = 2..3;
-        pub const COMPAT_FLAGS: rt::Range<usize> = 3..4;
-        pub const SEQUENCE: rt::Range<usize> = 4..5;
-        pub const SYSID: rt::Range<usize> = 5..6;
-        pub const COMPID: rt::Range<usize> = 6..7;
-        pub const TIME_USEC: rt::Range<usize> = 10..18;
-        pub const SEQ: rt::Range<usize> = 18..22;
-        pub const TARGET_SYSTEM: rt::Range<usize> = 22..23;
-        pub const TARGET_COMPONENT: rt::Range<usize> = 23..24;
-        pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
-            f("incompat_flags", rt::Int(self.incompat_flags as i64));
-            f("compat_flags", rt::Int(self.compat_flags as i64));
-            f("sequence", rt::Int(self.sequence as i64));
-            f("sysid", rt::Int(self.sysid as i64));
-            f("compid", rt::Int(self.compid as i64));
-            f("time_usec", rt::Int(self.time_usec as i64));
-            f("seq", rt::Int(self.seq as i64));
-            f("target_system", rt::Int(self.target_system as i64));
-            f("target_component", rt::Int(self.target_component as i64));
-        }
-        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
-            Response::PingReply(*self).encode(address, buf)
-        }
-    }
-    impl response::Heartbeat {
-        pub const NAME: &'static str = "heartbeat";
-        pub const CODE: &'static [u8] = &[0x00, 0x00, 0x00];
-        pub const LEN: usize = 21;
-        pub const DESC: rt::MessageDesc = rt::MessageDesc::new(
-            Self::NAME,
-            0x000000,
-            3,
-            &[21],
-        );
-        pub const INCOMPAT_FLAGS: rt::Range<usize> = 2..3;
-        pub const COMPAT_FLAGS: rt::Range<usize> = 3..4;
-        pub const SEQUENCE: rt::Range<usize> = 4..5;
-        pub const SYSID: rt::Range<usize> = 5..6;
-        pub const COMPID: rt::Range<usize> = 6..7;
-        pub const CUSTOM_MODE: rt::Range<usize> = 10..14;
-        pub const VEHICLE_TYPE: rt::Range<usize> = 14..15;
-        pub const AUTOPILOT: rt::Range<usize> = 15..16;
-        pub const BASE_MODE: rt::Range<usize> = 16..17;
-        pub const SYSTEM_STATUS: rt::Range<usize> = 17..18;
-        pub const MAVLINK_VERSION: rt::Range<usize> = 18..19;
-        pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
-            f("incompat_flags", rt::Int(self.incompat_flags as i64));
-            f("compat_flags", rt::Int(self.compat_flags as i64));
-            f("sequence", rt::Int(self.sequence as i64));
-            f("sysid", rt::Int(self.sysid as i64));
-            f("compid", rt::Int(self.compid as i64));
-            f("custom_mode", rt::Int(self.custom_mode as i64));
-            f("vehicle_type", rt::Int(self.vehicle_type as i64));
-            f("autopilot", rt::Int(self.autopilot as i64));
-            f("base_mode", rt::Int(self.base_mode as i64));
-            f("system_status", rt::Int(self.system_status as i64));
-            f("mavlink_version", rt::Int(self.mavlink_version as i64));
-        }
-        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
-            Response::Heartbeat(*self).encode(address, buf)
-        }
-    }
-    impl response::SysStatus {
-        pub const NAME: &'static str = "sys_status";
-        pub const CODE: &'static [u8] = &[0x01, 0x00, 0x00];
-        pub const LEN: usize = 55;
-        pub const DESC: rt::MessageDesc = rt::MessageDesc::new(
-            Self::NAME,
-            0x010000,
-            3,
-            &[55],
-        );
-        pub const INCOMPAT_FLAGS: rt::Range<usize> = 2..3;
-        pub const COMPAT_FLAGS: rt::Range<usize> = 3..4;
-        pub const SEQUENCE: rt::Range<usize> = 4..5;
-        pub const SYSID: rt::Range<usize> = 5..6;
-        pub const COMPID: rt::Range<usize> = 6..7;
-        pub const ONBOARD_CONTROL_SENSORS_PRESENT: rt::Range<usize> = 10..14;
-        pub const ONBOARD_CONTROL_SENSORS_ENABLED: rt::Range<usize> = 14..18;
-        pub const ONBOARD_CONTROL_SENSORS_HEALTH: rt::Range<usize> = 18..22;
-        pub const LOAD: rt::Range<usize> = 22..24;
-        pub const VOLTAGE_BATTERY: rt::Range<usize> = 24..26;
-        pub const CURRENT_BATTERY: rt::Range<usize> = 26..28;
-        pub const DROP_RATE_COMM: rt::Range<usize> = 28..30;
-        pub const ERRORS_COMM: rt::Range<usize> = 30..32;
-        pub const ERRORS_COUNT1: rt::Range<usize> = 32..34;
-        pub const ERRORS_COUNT2: rt::Range<usize> = 34..36;
-        pub const ERRORS_COUNT3: rt::Range<usize> = 36..38;
-        pub const ERRORS_COUNT4: rt::Range<usize> = 38..40;
-        pub const BATTERY_REMAINING: rt::Range<usize> = 40..41;
-        pub const ONBOARD_CONTROL_SENSORS_PRESENT_EXTENDED: rt::Range<usize> = 41..45;
-        pub const ONBOARD_CONTROL_SENSORS_ENABLED_EXTENDED: rt::Range<usize> = 45..49;
-        pub const ONBOARD_CONTROL_SENSORS_HEALTH_EXTENDED: rt::Range<usize> = 49..53;
-        pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
-            f("incompat_flags", rt::Int(self.incompat_flags as i64));
-            f("compat_flags", rt::Int(self.compat_flags as i64));
-            f("sequence", rt::Int(self.sequence as i64));
-            f("sysid", rt::Int(self.sysid as i64));
-            f("compid", rt::Int(self.compid as i64));
-            f(
-                "onboard_control_sensors_present",
-                rt::Int(self.onboard_control_sensors_present as i64),
-            );
-            f(
-                "onboard_control_sensors_enabled",
-                rt::Int(self.onboard_control_sensors_enabled as i64),
-            );
-            f(
-                "onboard_control_sensors_health",
-                rt::Int(self.onboard_control_sensors_health as i64),
-            );
-            f("load", rt::Int(self.load as i64));
-            f("voltage_battery", rt::Int(self.voltage_battery as i64));
-            f("current_battery", rt::Int(self.current_battery as i64));
-            f("drop_rate_comm", rt::Int(self.drop_rate_comm as i64));
-            f("errors_comm", rt::Int(self.errors_comm as i64));
-            f("errors_count1", rt::Int(self.errors_count1 as i64));
-            f("errors_count2", rt::Int(self.errors_count2 as i64));
-            f("errors_count3", rt::Int(self.errors_count3 as i64));
-            f("errors_count4", rt::Int(self.errors_count4 as i64));
-            f("battery_remaining", rt::Int(self.battery_remaining as i64));
-            f(
-                "onboard_control_sensors_present_extended",
-                rt::Int(self.onboard_control_sensors_present_extended as i64),
-            );
-            f(
-                "onboard_control_sensors_enabled_extended",
-                rt::Int(self.onboard_control_sensors_enabled_extended as i64),
-            );
-            f(
-                "onboard_control_sensors_health_extended",
-                rt::Int(self.onboard_control_sensors_health_extended as i64),
-            );
-        }
-        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
-            Response::SysStatus(*self).encode(address, buf)
-        }
-    }
-    impl response::Attitude {
-        pub const NAME: &'static str = "attitude";
-        pub const CODE: &'static [u8] = &[0x1E, 0x00, 0x00];
-        pub const LEN: usize = 40;
-        pub const DESC: rt::MessageDesc = rt::MessageDesc::new(
-            Self::NAME,
-            0x1E0000,
-            3,
-            &[40],
-        );
-        pub const INCOMPAT_FLAGS: rt::Range<usize> = 2..3;
-        pub const COMPAT_FLAGS: rt::Range<usize> = 3..4;
-        pub const SEQUENCE: rt::Range<usize> = 4..5;
-        pub const SYSID: rt::Range<usize> = 5..6;
-        pub const COMPID: rt::Range<usize> = 6..7;
-        pub const TIME_BOOT_MS: rt::Range<usize> = 10..14;
-        pub const ROLL: rt::Range<usize> = 14..18;
-        pub const PITCH: rt::Range<usize> = 18..22;
-        pub const YAW: rt::Range<usize> = 22..26;
-        pub const ROLLSPEED: rt::Range<usize> = 26..30;
-        pub const PITCHSPEED: rt::Range<usize> = 30..34;
-        pub const YAWSPEED: rt::Range<usize> = 34..38;
-        pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
-            f("incompat_flags", rt::Int(self.incompat_flags as i64));
-            f("compat_flags", rt::Int(self.compat_flags as i64));
-            f("sequence", rt::Int(self.sequence as i64));
-            f("sysid", rt::Int(self.sysid as i64));
-            f("compid", rt::Int(self.compid as i64));
-            f("time_boot_ms", rt::Int(self.time_boot_ms as i64));
-            f("roll", rt::Int(rt::raw(self.roll)));
-            f("pitch", rt::Int(rt::raw(self.pitch)));
-            f("yaw", rt::Int(rt::raw(self.yaw)));
-            f("rollspeed", rt::Int(rt::raw(self.rollspeed)));
-            f("pitchspeed", rt::Int(rt::raw(self.pitchspeed)));
-            f("yawspeed", rt::Int(rt::raw(self.yawspeed)));
-        }
-        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
-            Response::Attitude(*self).encode(address, buf)
-        }
-    }
-    impl response::RawRpm {
-        pub const NAME: &'static str = "raw_rpm";
-        pub const CODE: &'static [u8] = &[0x53, 0x01, 0x00];
-        pub const LEN: usize = 17;
-        pub const DESC: rt::MessageDesc = rt::MessageDesc::new(
-            Self::NAME,
-            0x530100,
-            3,
-            &[17],
-        );
-        pub const INCOMPAT_FLAGS: rt::Range<usize> = 2..3;
-        pub const COMPAT_FLAGS: rt::Range<usize> = 3..4;
-        pub const SEQUENCE: rt::Range<usize> = 4..5;
-        pub const SYSID: rt::Range<usize> = 5..6;
-        pub const COMPID: rt::Range<usize> = 6..7;
-        pub const FREQUENCY: rt::Range<usize> = 10..14;
-        pub const INDEX: rt::Range<usize> = 14..15;
-        pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
-            f("incompat_flags", rt::Int(self.incompat_flags as i64));
-            f("compat_flags", rt::Int(self.compat_flags as i64));
-            f("sequence", rt::Int(self.sequence as i64));
-            f("sysid", rt::Int(self.sysid as i64));
-            f("compid", rt::Int(self.compid as i64));
-            f("frequency", rt::Int(rt::raw(self.frequency)));
-            f("index", rt::Int(self.index as i64));
-        }
-        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
-            Response::RawRpm(*self).encode(address, buf)
         }
     }
     ///A response, device to host.
@@ -807,11 +510,7 @@ pub mod mavlink_v2 {
         ///
         /// The payload's trailing zero bytes are stripped (one byte kept), the length field
         /// and checksum rewritten (`framing.truncation`).
-        pub fn encode(
-            &self,
-            address: u8,
-            buf: &mut [u8],
-        ) -> rt::Result<usize, rt::EncodeError> {
+        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             let len = self.encode_laid_out(address, buf)?;
             rt::Ok(
                 TRUNCATION
@@ -819,11 +518,7 @@ pub mod mavlink_v2 {
             )
         }
         /// The frame laid out with its whole payload, into `buf`.
-        fn encode_laid_out(
-            &self,
-            address: u8,
-            buf: &mut [u8],
-        ) -> rt::Result<usize, rt::EncodeError> {
+        fn encode_laid_out(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             rt::encode_address(address, &FRAME)?;
             let len = match *self {
                 Self::PingReply(
@@ -1078,7 +773,7 @@ pub mod mavlink_v2 {
                 0x040000 => {
                     let frame = rt::fixed::<26>(frame, &response::PingReply::DESC)?;
                     rt::in_range(
-                        &response::PING_REPLY_INCOMPAT_FLAGS,
+                        &response::PingReply::INCOMPAT_FLAGS_DESC,
                         2,
                         frame[2],
                         0,
@@ -1115,7 +810,7 @@ pub mod mavlink_v2 {
                 0x000000 => {
                     let frame = rt::fixed::<21>(frame, &response::Heartbeat::DESC)?;
                     rt::in_range(
-                        &response::HEARTBEAT_INCOMPAT_FLAGS,
+                        &response::Heartbeat::INCOMPAT_FLAGS_DESC,
                         2,
                         frame[2],
                         0,
@@ -1145,7 +840,7 @@ pub mod mavlink_v2 {
                 0x010000 => {
                     let frame = rt::fixed::<55>(frame, &response::SysStatus::DESC)?;
                     rt::in_range(
-                        &response::SYS_STATUS_INCOMPAT_FLAGS,
+                        &response::SysStatus::INCOMPAT_FLAGS_DESC,
                         2,
                         frame[2],
                         0,
@@ -1209,7 +904,13 @@ pub mod mavlink_v2 {
                 }
                 0x1E0000 => {
                     let frame = rt::fixed::<40>(frame, &response::Attitude::DESC)?;
-                    rt::in_range(&response::ATTITUDE_INCOMPAT_FLAGS, 2, frame[2], 0, 0)?;
+                    rt::in_range(
+                        &response::Attitude::INCOMPAT_FLAGS_DESC,
+                        2,
+                        frame[2],
+                        0,
+                        0,
+                    )?;
                     rt::Ok(
                         Self::Attitude(response::Attitude {
                             incompat_flags: frame[2],
@@ -1264,7 +965,13 @@ pub mod mavlink_v2 {
                 }
                 0x530100 => {
                     let frame = rt::fixed::<17>(frame, &response::RawRpm::DESC)?;
-                    rt::in_range(&response::RAW_RPM_INCOMPAT_FLAGS, 2, frame[2], 0, 0)?;
+                    rt::in_range(
+                        &response::RawRpm::INCOMPAT_FLAGS_DESC,
+                        2,
+                        frame[2],
+                        0,
+                        0,
+                    )?;
                     rt::Ok(
                         Self::RawRpm(response::RawRpm {
                             incompat_flags: frame[2],
@@ -1292,117 +999,108 @@ pub mod mavlink_v2 {
             name: &str,
             mut field: impl FnMut(&'static str) -> rt::Option<rt::FieldValue<'v>>,
         ) -> rt::Result<Self, rt::FieldError> {
-            match name {
+            let message = match name {
                 "ping_reply" => {
-                    rt::Ok(
-                        Self::PingReply(response::PingReply {
-                            incompat_flags: rt::get(&mut field, "incompat_flags")?,
-                            compat_flags: rt::get(&mut field, "compat_flags")?,
-                            sequence: rt::get(&mut field, "sequence")?,
-                            sysid: rt::get(&mut field, "sysid")?,
-                            compid: rt::get(&mut field, "compid")?,
-                            time_usec: rt::get(&mut field, "time_usec")?,
-                            seq: rt::get(&mut field, "seq")?,
-                            target_system: rt::get(&mut field, "target_system")?,
-                            target_component: rt::get(&mut field, "target_component")?,
-                        }),
-                    )
+                    Self::PingReply(response::PingReply {
+                        incompat_flags: rt::get(&mut field, "incompat_flags")?,
+                        compat_flags: rt::get(&mut field, "compat_flags")?,
+                        sequence: rt::get(&mut field, "sequence")?,
+                        sysid: rt::get(&mut field, "sysid")?,
+                        compid: rt::get(&mut field, "compid")?,
+                        time_usec: rt::get(&mut field, "time_usec")?,
+                        seq: rt::get(&mut field, "seq")?,
+                        target_system: rt::get(&mut field, "target_system")?,
+                        target_component: rt::get(&mut field, "target_component")?,
+                    })
                 }
                 "heartbeat" => {
-                    rt::Ok(
-                        Self::Heartbeat(response::Heartbeat {
-                            incompat_flags: rt::get(&mut field, "incompat_flags")?,
-                            compat_flags: rt::get(&mut field, "compat_flags")?,
-                            sequence: rt::get(&mut field, "sequence")?,
-                            sysid: rt::get(&mut field, "sysid")?,
-                            compid: rt::get(&mut field, "compid")?,
-                            custom_mode: rt::get(&mut field, "custom_mode")?,
-                            vehicle_type: rt::get(&mut field, "vehicle_type")?,
-                            autopilot: rt::get(&mut field, "autopilot")?,
-                            base_mode: rt::get(&mut field, "base_mode")?,
-                            system_status: rt::get(&mut field, "system_status")?,
-                            mavlink_version: rt::get(&mut field, "mavlink_version")?,
-                        }),
-                    )
+                    Self::Heartbeat(response::Heartbeat {
+                        incompat_flags: rt::get(&mut field, "incompat_flags")?,
+                        compat_flags: rt::get(&mut field, "compat_flags")?,
+                        sequence: rt::get(&mut field, "sequence")?,
+                        sysid: rt::get(&mut field, "sysid")?,
+                        compid: rt::get(&mut field, "compid")?,
+                        custom_mode: rt::get(&mut field, "custom_mode")?,
+                        vehicle_type: rt::get(&mut field, "vehicle_type")?,
+                        autopilot: rt::get(&mut field, "autopilot")?,
+                        base_mode: rt::get(&mut field, "base_mode")?,
+                        system_status: rt::get(&mut field, "system_status")?,
+                        mavlink_version: rt::get(&mut field, "mavlink_version")?,
+                    })
                 }
                 "sys_status" => {
-                    rt::Ok(
-                        Self::SysStatus(response::SysStatus {
-                            incompat_flags: rt::get(&mut field, "incompat_flags")?,
-                            compat_flags: rt::get(&mut field, "compat_flags")?,
-                            sequence: rt::get(&mut field, "sequence")?,
-                            sysid: rt::get(&mut field, "sysid")?,
-                            compid: rt::get(&mut field, "compid")?,
-                            onboard_control_sensors_present: rt::get(
-                                &mut field,
-                                "onboard_control_sensors_present",
-                            )?,
-                            onboard_control_sensors_enabled: rt::get(
-                                &mut field,
-                                "onboard_control_sensors_enabled",
-                            )?,
-                            onboard_control_sensors_health: rt::get(
-                                &mut field,
-                                "onboard_control_sensors_health",
-                            )?,
-                            load: rt::get(&mut field, "load")?,
-                            voltage_battery: rt::get(&mut field, "voltage_battery")?,
-                            current_battery: rt::get(&mut field, "current_battery")?,
-                            drop_rate_comm: rt::get(&mut field, "drop_rate_comm")?,
-                            errors_comm: rt::get(&mut field, "errors_comm")?,
-                            errors_count1: rt::get(&mut field, "errors_count1")?,
-                            errors_count2: rt::get(&mut field, "errors_count2")?,
-                            errors_count3: rt::get(&mut field, "errors_count3")?,
-                            errors_count4: rt::get(&mut field, "errors_count4")?,
-                            battery_remaining: rt::get(&mut field, "battery_remaining")?,
-                            onboard_control_sensors_present_extended: rt::get(
-                                &mut field,
-                                "onboard_control_sensors_present_extended",
-                            )?,
-                            onboard_control_sensors_enabled_extended: rt::get(
-                                &mut field,
-                                "onboard_control_sensors_enabled_extended",
-                            )?,
-                            onboard_control_sensors_health_extended: rt::get(
-                                &mut field,
-                                "onboard_control_sensors_health_extended",
-                            )?,
-                        }),
-                    )
+                    Self::SysStatus(response::SysStatus {
+                        incompat_flags: rt::get(&mut field, "incompat_flags")?,
+                        compat_flags: rt::get(&mut field, "compat_flags")?,
+                        sequence: rt::get(&mut field, "sequence")?,
+                        sysid: rt::get(&mut field, "sysid")?,
+                        compid: rt::get(&mut field, "compid")?,
+                        onboard_control_sensors_present: rt::get(
+                            &mut field,
+                            "onboard_control_sensors_present",
+                        )?,
+                        onboard_control_sensors_enabled: rt::get(
+                            &mut field,
+                            "onboard_control_sensors_enabled",
+                        )?,
+                        onboard_control_sensors_health: rt::get(
+                            &mut field,
+                            "onboard_control_sensors_health",
+                        )?,
+                        load: rt::get(&mut field, "load")?,
+                        voltage_battery: rt::get(&mut field, "voltage_battery")?,
+                        current_battery: rt::get(&mut field, "current_battery")?,
+                        drop_rate_comm: rt::get(&mut field, "drop_rate_comm")?,
+                        errors_comm: rt::get(&mut field, "errors_comm")?,
+                        errors_count1: rt::get(&mut field, "errors_count1")?,
+                        errors_count2: rt::get(&mut field, "errors_count2")?,
+                        errors_count3: rt::get(&mut field, "errors_count3")?,
+                        errors_count4: rt::get(&mut field, "errors_count4")?,
+                        battery_remaining: rt::get(&mut field, "battery_remaining")?,
+                        onboard_control_sensors_present_extended: rt::get(
+                            &mut field,
+                            "onboard_control_sensors_present_extended",
+                        )?,
+                        onboard_control_sensors_enabled_extended: rt::get(
+                            &mut field,
+                            "onboard_control_sensors_enabled_extended",
+                        )?,
+                        onboard_control_sensors_health_extended: rt::get(
+                            &mut field,
+                            "onboard_control_sensors_health_extended",
+                        )?,
+                    })
                 }
                 "attitude" => {
-                    rt::Ok(
-                        Self::Attitude(response::Attitude {
-                            incompat_flags: rt::get(&mut field, "incompat_flags")?,
-                            compat_flags: rt::get(&mut field, "compat_flags")?,
-                            sequence: rt::get(&mut field, "sequence")?,
-                            sysid: rt::get(&mut field, "sysid")?,
-                            compid: rt::get(&mut field, "compid")?,
-                            time_boot_ms: rt::get(&mut field, "time_boot_ms")?,
-                            roll: rt::get(&mut field, "roll")?,
-                            pitch: rt::get(&mut field, "pitch")?,
-                            yaw: rt::get(&mut field, "yaw")?,
-                            rollspeed: rt::get(&mut field, "rollspeed")?,
-                            pitchspeed: rt::get(&mut field, "pitchspeed")?,
-                            yawspeed: rt::get(&mut field, "yawspeed")?,
-                        }),
-                    )
+                    Self::Attitude(response::Attitude {
+                        incompat_flags: rt::get(&mut field, "incompat_flags")?,
+                        compat_flags: rt::get(&mut field, "compat_flags")?,
+                        sequence: rt::get(&mut field, "sequence")?,
+                        sysid: rt::get(&mut field, "sysid")?,
+                        compid: rt::get(&mut field, "compid")?,
+                        time_boot_ms: rt::get(&mut field, "time_boot_ms")?,
+                        roll: rt::get(&mut field, "roll")?,
+                        pitch: rt::get(&mut field, "pitch")?,
+                        yaw: rt::get(&mut field, "yaw")?,
+                        rollspeed: rt::get(&mut field, "rollspeed")?,
+                        pitchspeed: rt::get(&mut field, "pitchspeed")?,
+                        yawspeed: rt::get(&mut field, "yawspeed")?,
+                    })
                 }
                 "raw_rpm" => {
-                    rt::Ok(
-                        Self::RawRpm(response::RawRpm {
-                            incompat_flags: rt::get(&mut field, "incompat_flags")?,
-                            compat_flags: rt::get(&mut field, "compat_flags")?,
-                            sequence: rt::get(&mut field, "sequence")?,
-                            sysid: rt::get(&mut field, "sysid")?,
-                            compid: rt::get(&mut field, "compid")?,
-                            frequency: rt::get(&mut field, "frequency")?,
-                            index: rt::get(&mut field, "index")?,
-                        }),
-                    )
+                    Self::RawRpm(response::RawRpm {
+                        incompat_flags: rt::get(&mut field, "incompat_flags")?,
+                        compat_flags: rt::get(&mut field, "compat_flags")?,
+                        sequence: rt::get(&mut field, "sequence")?,
+                        sysid: rt::get(&mut field, "sysid")?,
+                        compid: rt::get(&mut field, "compid")?,
+                        frequency: rt::get(&mut field, "frequency")?,
+                        index: rt::get(&mut field, "index")?,
+                    })
                 }
-                _ => rt::Err(rt::FieldError::UnknownMessage),
-            }
+                _ => return rt::Err(rt::FieldError::UnknownMessage),
+            };
+            rt::Ok(message)
         }
     }
     impl rt::Message for Response {
@@ -1423,11 +1121,7 @@ pub mod mavlink_v2 {
             Response::visit(self, f)
         }
         #[inline]
-        fn encode(
-            &self,
-            address: u8,
-            buf: &mut [u8],
-        ) -> rt::Result<usize, rt::EncodeError> {
+        fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             Response::encode(self, address, buf)
         }
         #[inline]
@@ -1527,11 +1221,292 @@ pub mod mavlink_v2 {
     pub type StreamDecoder = ::busspec_runtime::stream::StreamDecoder<MavlinkV2>;
     /// What [`StreamDecoder`] finds in a stream.
     pub type Event = ::busspec_runtime::stream::Event<Request, Response>;
-    /// Each request as a struct of its own (its `DESC` names it as refusals do: name,
-    /// code and the frame lengths of its code), and each field a refusal names
-    /// (`message.field`, `FieldDesc`).
+    impl request::Ping {
+        pub const NAME: &'static str = "ping";
+        pub const CODE: &'static [u8] = &[0x04, 0x00, 0x00];
+        pub const LEN: usize = 26;
+        pub const DESC: rt::MessageDesc = rt::desc(Self::NAME, 0x040000, 3, &[26]);
+        pub const INCOMPAT_FLAGS: rt::Range<usize> = 2..3;
+        pub const COMPAT_FLAGS: rt::Range<usize> = 3..4;
+        pub const SEQUENCE: rt::Range<usize> = 4..5;
+        pub const SYSID: rt::Range<usize> = 5..6;
+        pub const COMPID: rt::Range<usize> = 6..7;
+        pub const TIME_USEC: rt::Range<usize> = 10..18;
+        pub const SEQ: rt::Range<usize> = 18..22;
+        pub const TARGET_SYSTEM: rt::Range<usize> = 22..23;
+        pub const TARGET_COMPONENT: rt::Range<usize> = 23..24;
+        pub const INCOMPAT_FLAGS_DESC: rt::FieldDesc = rt::field(
+            Self::NAME,
+            "incompat_flags",
+        );
+        pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
+            f("incompat_flags", rt::Int(self.incompat_flags as i64));
+            f("compat_flags", rt::Int(self.compat_flags as i64));
+            f("sequence", rt::Int(self.sequence as i64));
+            f("sysid", rt::Int(self.sysid as i64));
+            f("compid", rt::Int(self.compid as i64));
+            f("time_usec", rt::Int(self.time_usec as i64));
+            f("seq", rt::Int(self.seq as i64));
+            f("target_system", rt::Int(self.target_system as i64));
+            f("target_component", rt::Int(self.target_component as i64));
+        }
+        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            Request::Ping(*self).encode(address, buf)
+        }
+    }
+    impl request::RequestDataStream {
+        pub const NAME: &'static str = "request_data_stream";
+        pub const CODE: &'static [u8] = &[0x42, 0x00, 0x00];
+        pub const LEN: usize = 18;
+        pub const DESC: rt::MessageDesc = rt::desc(Self::NAME, 0x420000, 3, &[18]);
+        pub const INCOMPAT_FLAGS: rt::Range<usize> = 2..3;
+        pub const COMPAT_FLAGS: rt::Range<usize> = 3..4;
+        pub const SEQUENCE: rt::Range<usize> = 4..5;
+        pub const SYSID: rt::Range<usize> = 5..6;
+        pub const COMPID: rt::Range<usize> = 6..7;
+        pub const REQ_MESSAGE_RATE: rt::Range<usize> = 10..12;
+        pub const TARGET_SYSTEM: rt::Range<usize> = 12..13;
+        pub const TARGET_COMPONENT: rt::Range<usize> = 13..14;
+        pub const REQ_STREAM_ID: rt::Range<usize> = 14..15;
+        pub const START_STOP: rt::Range<usize> = 15..16;
+        pub const INCOMPAT_FLAGS_DESC: rt::FieldDesc = rt::field(
+            Self::NAME,
+            "incompat_flags",
+        );
+        pub const START_STOP_DESC: rt::FieldDesc = rt::field(Self::NAME, "start_stop");
+        pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
+            f("incompat_flags", rt::Int(self.incompat_flags as i64));
+            f("compat_flags", rt::Int(self.compat_flags as i64));
+            f("sequence", rt::Int(self.sequence as i64));
+            f("sysid", rt::Int(self.sysid as i64));
+            f("compid", rt::Int(self.compid as i64));
+            f("req_message_rate", rt::Int(self.req_message_rate as i64));
+            f("target_system", rt::Int(self.target_system as i64));
+            f("target_component", rt::Int(self.target_component as i64));
+            f("req_stream_id", rt::Int(self.req_stream_id as i64));
+            f("start_stop", rt::Int(self.start_stop as i64));
+        }
+        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            Request::RequestDataStream(*self).encode(address, buf)
+        }
+    }
+    impl response::PingReply {
+        pub const NAME: &'static str = "ping_reply";
+        pub const CODE: &'static [u8] = &[0x04, 0x00, 0x00];
+        pub const LEN: usize = 26;
+        pub const DESC: rt::MessageDesc = rt::desc(Self::NAME, 0x040000, 3, &[26]);
+        pub const INCOMPAT_FLAGS: rt::Range<usize> = 2..3;
+        pub const COMPAT_FLAGS: rt::Range<usize> = 3..4;
+        pub const SEQUENCE: rt::Range<usize> = 4..5;
+        pub const SYSID: rt::Range<usize> = 5..6;
+        pub const COMPID: rt::Range<usize> = 6..7;
+        pub const TIME_USEC: rt::Range<usize> = 10..18;
+        pub const SEQ: rt::Range<usize> = 18..22;
+        pub const TARGET_SYSTEM: rt::Range<usize> = 22..23;
+        pub const TARGET_COMPONENT: rt::Range<usize> = 23..24;
+        pub const INCOMPAT_FLAGS_DESC: rt::FieldDesc = rt::field(
+            Self::NAME,
+            "incompat_flags",
+        );
+        pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
+            f("incompat_flags", rt::Int(self.incompat_flags as i64));
+            f("compat_flags", rt::Int(self.compat_flags as i64));
+            f("sequence", rt::Int(self.sequence as i64));
+            f("sysid", rt::Int(self.sysid as i64));
+            f("compid", rt::Int(self.compid as i64));
+            f("time_usec", rt::Int(self.time_usec as i64));
+            f("seq", rt::Int(self.seq as i64));
+            f("target_system", rt::Int(self.target_system as i64));
+            f("target_component", rt::Int(self.target_component as i64));
+        }
+        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            Response::PingReply(*self).encode(address, buf)
+        }
+    }
+    impl response::Heartbeat {
+        pub const NAME: &'static str = "heartbeat";
+        pub const CODE: &'static [u8] = &[0x00, 0x00, 0x00];
+        pub const LEN: usize = 21;
+        pub const DESC: rt::MessageDesc = rt::desc(Self::NAME, 0x000000, 3, &[21]);
+        pub const INCOMPAT_FLAGS: rt::Range<usize> = 2..3;
+        pub const COMPAT_FLAGS: rt::Range<usize> = 3..4;
+        pub const SEQUENCE: rt::Range<usize> = 4..5;
+        pub const SYSID: rt::Range<usize> = 5..6;
+        pub const COMPID: rt::Range<usize> = 6..7;
+        pub const CUSTOM_MODE: rt::Range<usize> = 10..14;
+        pub const VEHICLE_TYPE: rt::Range<usize> = 14..15;
+        pub const AUTOPILOT: rt::Range<usize> = 15..16;
+        pub const BASE_MODE: rt::Range<usize> = 16..17;
+        pub const SYSTEM_STATUS: rt::Range<usize> = 17..18;
+        pub const MAVLINK_VERSION: rt::Range<usize> = 18..19;
+        pub const INCOMPAT_FLAGS_DESC: rt::FieldDesc = rt::field(
+            Self::NAME,
+            "incompat_flags",
+        );
+        pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
+            f("incompat_flags", rt::Int(self.incompat_flags as i64));
+            f("compat_flags", rt::Int(self.compat_flags as i64));
+            f("sequence", rt::Int(self.sequence as i64));
+            f("sysid", rt::Int(self.sysid as i64));
+            f("compid", rt::Int(self.compid as i64));
+            f("custom_mode", rt::Int(self.custom_mode as i64));
+            f("vehicle_type", rt::Int(self.vehicle_type as i64));
+            f("autopilot", rt::Int(self.autopilot as i64));
+            f("base_mode", rt::Int(self.base_mode as i64));
+            f("system_status", rt::Int(self.system_status as i64));
+            f("mavlink_version", rt::Int(self.mavlink_version as i64));
+        }
+        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            Response::Heartbeat(*self).encode(address, buf)
+        }
+    }
+    impl response::SysStatus {
+        pub const NAME: &'static str = "sys_status";
+        pub const CODE: &'static [u8] = &[0x01, 0x00, 0x00];
+        pub const LEN: usize = 55;
+        pub const DESC: rt::MessageDesc = rt::desc(Self::NAME, 0x010000, 3, &[55]);
+        pub const INCOMPAT_FLAGS: rt::Range<usize> = 2..3;
+        pub const COMPAT_FLAGS: rt::Range<usize> = 3..4;
+        pub const SEQUENCE: rt::Range<usize> = 4..5;
+        pub const SYSID: rt::Range<usize> = 5..6;
+        pub const COMPID: rt::Range<usize> = 6..7;
+        pub const ONBOARD_CONTROL_SENSORS_PRESENT: rt::Range<usize> = 10..14;
+        pub const ONBOARD_CONTROL_SENSORS_ENABLED: rt::Range<usize> = 14..18;
+        pub const ONBOARD_CONTROL_SENSORS_HEALTH: rt::Range<usize> = 18..22;
+        pub const LOAD: rt::Range<usize> = 22..24;
+        pub const VOLTAGE_BATTERY: rt::Range<usize> = 24..26;
+        pub const CURRENT_BATTERY: rt::Range<usize> = 26..28;
+        pub const DROP_RATE_COMM: rt::Range<usize> = 28..30;
+        pub const ERRORS_COMM: rt::Range<usize> = 30..32;
+        pub const ERRORS_COUNT1: rt::Range<usize> = 32..34;
+        pub const ERRORS_COUNT2: rt::Range<usize> = 34..36;
+        pub const ERRORS_COUNT3: rt::Range<usize> = 36..38;
+        pub const ERRORS_COUNT4: rt::Range<usize> = 38..40;
+        pub const BATTERY_REMAINING: rt::Range<usize> = 40..41;
+        pub const ONBOARD_CONTROL_SENSORS_PRESENT_EXTENDED: rt::Range<usize> = 41..45;
+        pub const ONBOARD_CONTROL_SENSORS_ENABLED_EXTENDED: rt::Range<usize> = 45..49;
+        pub const ONBOARD_CONTROL_SENSORS_HEALTH_EXTENDED: rt::Range<usize> = 49..53;
+        pub const INCOMPAT_FLAGS_DESC: rt::FieldDesc = rt::field(
+            Self::NAME,
+            "incompat_flags",
+        );
+        pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
+            f("incompat_flags", rt::Int(self.incompat_flags as i64));
+            f("compat_flags", rt::Int(self.compat_flags as i64));
+            f("sequence", rt::Int(self.sequence as i64));
+            f("sysid", rt::Int(self.sysid as i64));
+            f("compid", rt::Int(self.compid as i64));
+            f(
+                "onboard_control_sensors_present",
+                rt::Int(self.onboard_control_sensors_present as i64),
+            );
+            f(
+                "onboard_control_sensors_enabled",
+                rt::Int(self.onboard_control_sensors_enabled as i64),
+            );
+            f(
+                "onboard_control_sensors_health",
+                rt::Int(self.onboard_control_sensors_health as i64),
+            );
+            f("load", rt::Int(self.load as i64));
+            f("voltage_battery", rt::Int(self.voltage_battery as i64));
+            f("current_battery", rt::Int(self.current_battery as i64));
+            f("drop_rate_comm", rt::Int(self.drop_rate_comm as i64));
+            f("errors_comm", rt::Int(self.errors_comm as i64));
+            f("errors_count1", rt::Int(self.errors_count1 as i64));
+            f("errors_count2", rt::Int(self.errors_count2 as i64));
+            f("errors_count3", rt::Int(self.errors_count3 as i64));
+            f("errors_count4", rt::Int(self.errors_count4 as i64));
+            f("battery_remaining", rt::Int(self.battery_remaining as i64));
+            f(
+                "onboard_control_sensors_present_extended",
+                rt::Int(self.onboard_control_sensors_present_extended as i64),
+            );
+            f(
+                "onboard_control_sensors_enabled_extended",
+                rt::Int(self.onboard_control_sensors_enabled_extended as i64),
+            );
+            f(
+                "onboard_control_sensors_health_extended",
+                rt::Int(self.onboard_control_sensors_health_extended as i64),
+            );
+        }
+        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            Response::SysStatus(*self).encode(address, buf)
+        }
+    }
+    impl response::Attitude {
+        pub const NAME: &'static str = "attitude";
+        pub const CODE: &'static [u8] = &[0x1E, 0x00, 0x00];
+        pub const LEN: usize = 40;
+        pub const DESC: rt::MessageDesc = rt::desc(Self::NAME, 0x1E0000, 3, &[40]);
+        pub const INCOMPAT_FLAGS: rt::Range<usize> = 2..3;
+        pub const COMPAT_FLAGS: rt::Range<usize> = 3..4;
+        pub const SEQUENCE: rt::Range<usize> = 4..5;
+        pub const SYSID: rt::Range<usize> = 5..6;
+        pub const COMPID: rt::Range<usize> = 6..7;
+        pub const TIME_BOOT_MS: rt::Range<usize> = 10..14;
+        pub const ROLL: rt::Range<usize> = 14..18;
+        pub const PITCH: rt::Range<usize> = 18..22;
+        pub const YAW: rt::Range<usize> = 22..26;
+        pub const ROLLSPEED: rt::Range<usize> = 26..30;
+        pub const PITCHSPEED: rt::Range<usize> = 30..34;
+        pub const YAWSPEED: rt::Range<usize> = 34..38;
+        pub const INCOMPAT_FLAGS_DESC: rt::FieldDesc = rt::field(
+            Self::NAME,
+            "incompat_flags",
+        );
+        pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
+            f("incompat_flags", rt::Int(self.incompat_flags as i64));
+            f("compat_flags", rt::Int(self.compat_flags as i64));
+            f("sequence", rt::Int(self.sequence as i64));
+            f("sysid", rt::Int(self.sysid as i64));
+            f("compid", rt::Int(self.compid as i64));
+            f("time_boot_ms", rt::Int(self.time_boot_ms as i64));
+            f("roll", rt::Int(rt::raw(self.roll)));
+            f("pitch", rt::Int(rt::raw(self.pitch)));
+            f("yaw", rt::Int(rt::raw(self.yaw)));
+            f("rollspeed", rt::Int(rt::raw(self.rollspeed)));
+            f("pitchspeed", rt::Int(rt::raw(self.pitchspeed)));
+            f("yawspeed", rt::Int(rt::raw(self.yawspeed)));
+        }
+        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            Response::Attitude(*self).encode(address, buf)
+        }
+    }
+    impl response::RawRpm {
+        pub const NAME: &'static str = "raw_rpm";
+        pub const CODE: &'static [u8] = &[0x53, 0x01, 0x00];
+        pub const LEN: usize = 17;
+        pub const DESC: rt::MessageDesc = rt::desc(Self::NAME, 0x530100, 3, &[17]);
+        pub const INCOMPAT_FLAGS: rt::Range<usize> = 2..3;
+        pub const COMPAT_FLAGS: rt::Range<usize> = 3..4;
+        pub const SEQUENCE: rt::Range<usize> = 4..5;
+        pub const SYSID: rt::Range<usize> = 5..6;
+        pub const COMPID: rt::Range<usize> = 6..7;
+        pub const FREQUENCY: rt::Range<usize> = 10..14;
+        pub const INDEX: rt::Range<usize> = 14..15;
+        pub const INCOMPAT_FLAGS_DESC: rt::FieldDesc = rt::field(
+            Self::NAME,
+            "incompat_flags",
+        );
+        pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
+            f("incompat_flags", rt::Int(self.incompat_flags as i64));
+            f("compat_flags", rt::Int(self.compat_flags as i64));
+            f("sequence", rt::Int(self.sequence as i64));
+            f("sysid", rt::Int(self.sysid as i64));
+            f("compid", rt::Int(self.compid as i64));
+            f("frequency", rt::Int(rt::raw(self.frequency)));
+            f("index", rt::Int(self.index as i64));
+        }
+        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            Response::RawRpm(*self).encode(address, buf)
+        }
+    }
+    /// Each request as a struct of its own; its constants (`DESC`, which names it as
+    /// refusals do: name, code and the frame lengths of its code; `QUANTITY_DESC`, each
+    /// field a refusal names) and methods are in the `impl` of each.
     pub mod request {
-        use ::busspec_runtime::FieldDesc;
         /// §3.1 PING (4) (code `0x040000`, 26 bytes).
         #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
         #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
@@ -1578,25 +1553,9 @@ pub mod mavlink_v2 {
             /// Valid raw range 0..=1.
             pub start_stop: u8,
         }
-        /// `ping.incompat_flags`
-        pub const PING_INCOMPAT_FLAGS: FieldDesc = FieldDesc::new(
-            "ping",
-            "incompat_flags",
-        );
-        /// `request_data_stream.incompat_flags`
-        pub const REQUEST_DATA_STREAM_INCOMPAT_FLAGS: FieldDesc = FieldDesc::new(
-            "request_data_stream",
-            "incompat_flags",
-        );
-        /// `request_data_stream.start_stop`
-        pub const REQUEST_DATA_STREAM_START_STOP: FieldDesc = FieldDesc::new(
-            "request_data_stream",
-            "start_stop",
-        );
     }
-    /// Each response as a struct of its own, and the fields its refusals name.
+    /// Each response as a struct of its own.
     pub mod response {
-        use ::busspec_runtime::FieldDesc;
         /// §3.1 PING (4), answered (code `0x040000`, 26 bytes).
         #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
         #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
@@ -1733,30 +1692,5 @@ pub mod mavlink_v2 {
             pub frequency: f32,
             pub index: u8,
         }
-        /// `ping_reply.incompat_flags`
-        pub const PING_REPLY_INCOMPAT_FLAGS: FieldDesc = FieldDesc::new(
-            "ping_reply",
-            "incompat_flags",
-        );
-        /// `heartbeat.incompat_flags`
-        pub const HEARTBEAT_INCOMPAT_FLAGS: FieldDesc = FieldDesc::new(
-            "heartbeat",
-            "incompat_flags",
-        );
-        /// `sys_status.incompat_flags`
-        pub const SYS_STATUS_INCOMPAT_FLAGS: FieldDesc = FieldDesc::new(
-            "sys_status",
-            "incompat_flags",
-        );
-        /// `attitude.incompat_flags`
-        pub const ATTITUDE_INCOMPAT_FLAGS: FieldDesc = FieldDesc::new(
-            "attitude",
-            "incompat_flags",
-        );
-        /// `raw_rpm.incompat_flags`
-        pub const RAW_RPM_INCOMPAT_FLAGS: FieldDesc = FieldDesc::new(
-            "raw_rpm",
-            "incompat_flags",
-        );
     }
 }

@@ -85,48 +85,6 @@ pub mod mbus {
     pub fn checksum(bytes: &[u8]) -> u8 {
         rt::sum8(bytes)
     }
-    impl request::SndNke {
-        pub const NAME: &'static str = "snd_nke";
-        pub const CODE: &'static [u8] = &[0x40];
-        pub const LEN: usize = 8;
-        pub const DESC: rt::MessageDesc = rt::MessageDesc::new(
-            Self::NAME,
-            0x40,
-            1,
-            &[8],
-        );
-        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
-            Request::SndNke(*self).encode(address, buf)
-        }
-    }
-    impl request::ReqUd2 {
-        pub const NAME: &'static str = "req_ud2";
-        pub const CODE: &'static [u8] = &[0x5B];
-        pub const LEN: usize = 8;
-        pub const DESC: rt::MessageDesc = rt::MessageDesc::new(
-            Self::NAME,
-            0x5B,
-            1,
-            &[8],
-        );
-        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
-            Request::ReqUd2(*self).encode(address, buf)
-        }
-    }
-    impl request::SndUdReset {
-        pub const NAME: &'static str = "snd_ud_reset";
-        pub const CODE: &'static [u8] = &[0x53];
-        pub const LEN: usize = 9;
-        pub const DESC: rt::MessageDesc = rt::MessageDesc::new(
-            Self::NAME,
-            0x53,
-            1,
-            &[9],
-        );
-        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
-            Request::SndUdReset(*self).encode(address, buf)
-        }
-    }
     ///A request (command), host to device.
     #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
     #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
@@ -174,32 +132,24 @@ pub mod mbus {
         /// The frame travels short where its payload is empty, else in the
         /// framing's own layout (`framing.forms`); `buf` of `MAX_FRAME_LEN` bytes
         /// holds any.
-        pub fn encode(
-            &self,
-            address: u8,
-            buf: &mut [u8],
-        ) -> rt::Result<usize, rt::EncodeError> {
+        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             let len = self.encode_laid_out(address, buf)?;
             rt::Ok(FORM.travel(buf, len))
         }
         /// The frame laid out in the long form's width, into `buf`.
-        fn encode_laid_out(
-            &self,
-            address: u8,
-            buf: &mut [u8],
-        ) -> rt::Result<usize, rt::EncodeError> {
+        fn encode_laid_out(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             rt::encode_address(address, &FRAME)?;
             let len = match *self {
-                Self::SndNke(request::SndNke {}) => {
+                Self::SndNke(_) => {
                     rt::frame_mut::<8>(buf, &[0x68, 0x02, 0x02, 0x68, 0x40, address])?
                         .len()
                 }
-                Self::ReqUd2(request::ReqUd2 {}) => {
+                Self::ReqUd2(_) => {
                     rt::encode_broadcast(address, 0xFF, &request::ReqUd2::DESC)?;
                     rt::frame_mut::<8>(buf, &[0x68, 0x02, 0x02, 0x68, 0x5B, address])?
                         .len()
                 }
-                Self::SndUdReset(request::SndUdReset {}) => {
+                Self::SndUdReset(_) => {
                     rt::frame_mut::<
                         9,
                     >(buf, &[0x68, 0x03, 0x03, 0x68, 0x53, address, 0x50])?
@@ -251,7 +201,7 @@ pub mod mbus {
                 }
                 0x53 => {
                     let frame = rt::fixed::<9>(frame, &request::SndUdReset::DESC)?;
-                    rt::equal(&request::SND_UD_RESET_CI, 6, frame[6], 0x50)?;
+                    rt::equal(&request::SndUdReset::CI_DESC, 6, frame[6], 0x50)?;
                     rt::Ok(Self::SndUdReset(request::SndUdReset))
                 }
                 _ => rt::Err(rt::unknown_code(frame, 4, 1, 2, false)),
@@ -264,12 +214,13 @@ pub mod mbus {
             name: &str,
             _field: impl FnMut(&'static str) -> rt::Option<rt::FieldValue<'v>>,
         ) -> rt::Result<Self, rt::FieldError> {
-            match name {
-                "snd_nke" => rt::Ok(Self::SndNke(request::SndNke)),
-                "req_ud2" => rt::Ok(Self::ReqUd2(request::ReqUd2)),
-                "snd_ud_reset" => rt::Ok(Self::SndUdReset(request::SndUdReset)),
-                _ => rt::Err(rt::FieldError::UnknownMessage),
-            }
+            let message = match name {
+                "snd_nke" => Self::SndNke(request::SndNke),
+                "req_ud2" => Self::ReqUd2(request::ReqUd2),
+                "snd_ud_reset" => Self::SndUdReset(request::SndUdReset),
+                _ => return rt::Err(rt::FieldError::UnknownMessage),
+            };
+            rt::Ok(message)
         }
     }
     impl rt::Message for Request {
@@ -290,11 +241,7 @@ pub mod mbus {
             Request::visit(self, f)
         }
         #[inline]
-        fn encode(
-            &self,
-            address: u8,
-            buf: &mut [u8],
-        ) -> rt::Result<usize, rt::EncodeError> {
+        fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             Request::encode(self, address, buf)
         }
         #[inline]
@@ -330,46 +277,6 @@ pub mod mbus {
         /// The responses this command may get, bit `i` for row `i` of `Response::MESSAGES`.
         const fn replies(&self) -> u64 {
             Self::COMMANDS[self.index()].3
-        }
-    }
-    impl response::RspUd {
-        pub const NAME: &'static str = "rsp_ud";
-        pub const CODE: &'static [u8] = &[0x08];
-        pub const LEN: usize = 27;
-        pub const DESC: rt::MessageDesc = rt::MessageDesc::new(
-            Self::NAME,
-            0x08,
-            1,
-            &[27],
-        );
-        pub const IDENTIFICATION: rt::Range<usize> = 7..11;
-        pub const MANUFACTURER: rt::Range<usize> = 11..13;
-        pub const VERSION: rt::Range<usize> = 13..14;
-        pub const MEDIUM: rt::Range<usize> = 14..15;
-        pub const ACCESS: rt::Range<usize> = 15..16;
-        pub const STATUS: rt::Range<usize> = 16..17;
-        pub const SIGNATURE: rt::Range<usize> = 17..19;
-        pub const VOLUME: rt::Range<usize> = 21..25;
-        pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
-            f("identification", rt::Int(self.identification as i64));
-            f("manufacturer", rt::Int(self.manufacturer as i64));
-            f("version", rt::Int(self.version as i64));
-            f("medium", rt::Int(self.medium as i64));
-            f("access", rt::Int(self.access as i64));
-            f("status", rt::Int(self.status as i64));
-            f("signature", rt::Int(self.signature as i64));
-            f("volume", rt::Int(self.volume as i64));
-        }
-        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
-            Response::RspUd(*self).encode(address, buf)
-        }
-    }
-    impl response::Ack {
-        pub const NAME: &'static str = "ack";
-        pub const CODE: &'static [u8] = &[];
-        pub const LEN: usize = 1;
-        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
-            Response::Ack(*self).encode(address, buf)
         }
     }
     ///A response, device to host.
@@ -421,11 +328,7 @@ pub mod mbus {
         /// The frame travels short where its payload is empty, else in the
         /// framing's own layout (`framing.forms`); `buf` of `MAX_FRAME_LEN` bytes
         /// holds any.
-        pub fn encode(
-            &self,
-            address: u8,
-            buf: &mut [u8],
-        ) -> rt::Result<usize, rt::EncodeError> {
+        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             if let rt::Some(frame) = self.constant_frame() {
                 return rt::put_frame(buf, frame);
             }
@@ -433,11 +336,7 @@ pub mod mbus {
             rt::Ok(FORM.travel(buf, len))
         }
         /// The frame laid out in the long form's width, into `buf`.
-        fn encode_laid_out(
-            &self,
-            address: u8,
-            buf: &mut [u8],
-        ) -> rt::Result<usize, rt::EncodeError> {
+        fn encode_laid_out(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             rt::encode_address(address, &FRAME)?;
             let out = rt::frame_mut::<27>(buf, &[])?;
             let len = match *self {
@@ -567,22 +466,22 @@ pub mod mbus {
             match rt::code(frame, 4, 1) {
                 0x08 => {
                     let frame = rt::fixed::<27>(frame, &response::RspUd::DESC)?;
-                    rt::equal(&response::RSP_UD_CI, 6, frame[6], 0x72)?;
+                    rt::equal(&response::RspUd::CI_DESC, 6, frame[6], 0x72)?;
                     let field_1: u32 = rt::bcd(
-                        &response::RSP_UD_IDENTIFICATION,
+                        &response::RspUd::IDENTIFICATION_DESC,
                         7,
                         u32::from_le_bytes([frame[7], frame[8], frame[9], frame[10]])
                             as u64,
                     )? as u32;
                     rt::in_range(
-                        &response::RSP_UD_IDENTIFICATION,
+                        &response::RspUd::IDENTIFICATION_DESC,
                         7,
                         field_1,
                         0,
                         99999999,
                     )?;
-                    rt::equal(&response::RSP_UD_DIF, 19, frame[19], 0x4)?;
-                    rt::equal(&response::RSP_UD_VIF, 20, frame[20], 0x13)?;
+                    rt::equal(&response::RspUd::DIF_DESC, 19, frame[19], 0x4)?;
+                    rt::equal(&response::RspUd::VIF_DESC, 20, frame[20], 0x13)?;
                     rt::Ok(
                         Self::RspUd(response::RspUd {
                             identification: field_1,
@@ -611,24 +510,23 @@ pub mod mbus {
             name: &str,
             mut field: impl FnMut(&'static str) -> rt::Option<rt::FieldValue<'v>>,
         ) -> rt::Result<Self, rt::FieldError> {
-            match name {
+            let message = match name {
                 "rsp_ud" => {
-                    rt::Ok(
-                        Self::RspUd(response::RspUd {
-                            identification: rt::get(&mut field, "identification")?,
-                            manufacturer: rt::get(&mut field, "manufacturer")?,
-                            version: rt::get(&mut field, "version")?,
-                            medium: rt::get(&mut field, "medium")?,
-                            access: rt::get(&mut field, "access")?,
-                            status: rt::get(&mut field, "status")?,
-                            signature: rt::get(&mut field, "signature")?,
-                            volume: rt::get(&mut field, "volume")?,
-                        }),
-                    )
+                    Self::RspUd(response::RspUd {
+                        identification: rt::get(&mut field, "identification")?,
+                        manufacturer: rt::get(&mut field, "manufacturer")?,
+                        version: rt::get(&mut field, "version")?,
+                        medium: rt::get(&mut field, "medium")?,
+                        access: rt::get(&mut field, "access")?,
+                        status: rt::get(&mut field, "status")?,
+                        signature: rt::get(&mut field, "signature")?,
+                        volume: rt::get(&mut field, "volume")?,
+                    })
                 }
-                "ack" => rt::Ok(Self::Ack(response::Ack)),
-                _ => rt::Err(rt::FieldError::UnknownMessage),
-            }
+                "ack" => Self::Ack(response::Ack),
+                _ => return rt::Err(rt::FieldError::UnknownMessage),
+            };
+            rt::Ok(message)
         }
     }
     impl rt::Message for Response {
@@ -649,11 +547,7 @@ pub mod mbus {
             Response::visit(self, f)
         }
         #[inline]
-        fn encode(
-            &self,
-            address: u8,
-            buf: &mut [u8],
-        ) -> rt::Result<usize, rt::EncodeError> {
+        fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             Response::encode(self, address, buf)
         }
         #[inline]
@@ -767,11 +661,80 @@ pub mod mbus {
     pub type StreamDecoder = ::busspec_runtime::stream::StreamDecoder<Mbus>;
     /// What [`StreamDecoder`] finds in a stream.
     pub type Event = ::busspec_runtime::stream::Event<Request, Response>;
-    /// Each request as a struct of its own (its `DESC` names it as refusals do: name,
-    /// code and the frame lengths of its code), and each field a refusal names
-    /// (`message.field`, `FieldDesc`).
+    impl request::SndNke {
+        pub const NAME: &'static str = "snd_nke";
+        pub const CODE: &'static [u8] = &[0x40];
+        pub const LEN: usize = 8;
+        pub const DESC: rt::MessageDesc = rt::desc(Self::NAME, 0x40, 1, &[8]);
+        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            Request::SndNke(*self).encode(address, buf)
+        }
+    }
+    impl request::ReqUd2 {
+        pub const NAME: &'static str = "req_ud2";
+        pub const CODE: &'static [u8] = &[0x5B];
+        pub const LEN: usize = 8;
+        pub const DESC: rt::MessageDesc = rt::desc(Self::NAME, 0x5B, 1, &[8]);
+        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            Request::ReqUd2(*self).encode(address, buf)
+        }
+    }
+    impl request::SndUdReset {
+        pub const NAME: &'static str = "snd_ud_reset";
+        pub const CODE: &'static [u8] = &[0x53];
+        pub const LEN: usize = 9;
+        pub const DESC: rt::MessageDesc = rt::desc(Self::NAME, 0x53, 1, &[9]);
+        pub const CI_DESC: rt::FieldDesc = rt::field(Self::NAME, "ci");
+        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            Request::SndUdReset(*self).encode(address, buf)
+        }
+    }
+    impl response::RspUd {
+        pub const NAME: &'static str = "rsp_ud";
+        pub const CODE: &'static [u8] = &[0x08];
+        pub const LEN: usize = 27;
+        pub const DESC: rt::MessageDesc = rt::desc(Self::NAME, 0x08, 1, &[27]);
+        pub const IDENTIFICATION: rt::Range<usize> = 7..11;
+        pub const MANUFACTURER: rt::Range<usize> = 11..13;
+        pub const VERSION: rt::Range<usize> = 13..14;
+        pub const MEDIUM: rt::Range<usize> = 14..15;
+        pub const ACCESS: rt::Range<usize> = 15..16;
+        pub const STATUS: rt::Range<usize> = 16..17;
+        pub const SIGNATURE: rt::Range<usize> = 17..19;
+        pub const VOLUME: rt::Range<usize> = 21..25;
+        pub const CI_DESC: rt::FieldDesc = rt::field(Self::NAME, "ci");
+        pub const IDENTIFICATION_DESC: rt::FieldDesc = rt::field(
+            Self::NAME,
+            "identification",
+        );
+        pub const DIF_DESC: rt::FieldDesc = rt::field(Self::NAME, "dif");
+        pub const VIF_DESC: rt::FieldDesc = rt::field(Self::NAME, "vif");
+        pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
+            f("identification", rt::Int(self.identification as i64));
+            f("manufacturer", rt::Int(self.manufacturer as i64));
+            f("version", rt::Int(self.version as i64));
+            f("medium", rt::Int(self.medium as i64));
+            f("access", rt::Int(self.access as i64));
+            f("status", rt::Int(self.status as i64));
+            f("signature", rt::Int(self.signature as i64));
+            f("volume", rt::Int(self.volume as i64));
+        }
+        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            Response::RspUd(*self).encode(address, buf)
+        }
+    }
+    impl response::Ack {
+        pub const NAME: &'static str = "ack";
+        pub const CODE: &'static [u8] = &[];
+        pub const LEN: usize = 1;
+        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            Response::Ack(*self).encode(address, buf)
+        }
+    }
+    /// Each request as a struct of its own; its constants (`DESC`, which names it as
+    /// refusals do: name, code and the frame lengths of its code; `QUANTITY_DESC`, each
+    /// field a refusal names) and methods are in the `impl` of each.
     pub mod request {
-        use ::busspec_runtime::FieldDesc;
         /// §5.5 SND_NKE: initialisation of the slave (short frame) (code `0x40`, 8 bytes).
         #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
         #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
@@ -787,12 +750,9 @@ pub mod mbus {
         #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
         #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]
         pub struct SndUdReset;
-        /// `snd_ud_reset.ci`
-        pub const SND_UD_RESET_CI: FieldDesc = FieldDesc::new("snd_ud_reset", "ci");
     }
-    /// Each response as a struct of its own, and the fields its refusals name.
+    /// Each response as a struct of its own.
     pub mod response {
-        use ::busspec_runtime::FieldDesc;
         /// §6.2 RSP_UD: user data, one instantaneous volume record (long frame) (code `0x08`, 27 bytes).
         #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
         #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
@@ -816,16 +776,5 @@ pub mod mbus {
         #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
         #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]
         pub struct Ack;
-        /// `rsp_ud.ci`
-        pub const RSP_UD_CI: FieldDesc = FieldDesc::new("rsp_ud", "ci");
-        /// `rsp_ud.identification`
-        pub const RSP_UD_IDENTIFICATION: FieldDesc = FieldDesc::new(
-            "rsp_ud",
-            "identification",
-        );
-        /// `rsp_ud.dif`
-        pub const RSP_UD_DIF: FieldDesc = FieldDesc::new("rsp_ud", "dif");
-        /// `rsp_ud.vif`
-        pub const RSP_UD_VIF: FieldDesc = FieldDesc::new("rsp_ud", "vif");
     }
 }

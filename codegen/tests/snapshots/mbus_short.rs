@@ -68,34 +68,6 @@ pub mod mbus_short {
     pub fn checksum(bytes: &[u8]) -> u8 {
         rt::sum8(bytes)
     }
-    impl request::SndNke {
-        pub const NAME: &'static str = "snd_nke";
-        pub const CODE: &'static [u8] = &[0x40];
-        pub const LEN: usize = 5;
-        pub const DESC: rt::MessageDesc = rt::MessageDesc::new(
-            Self::NAME,
-            0x40,
-            1,
-            &[5],
-        );
-        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
-            Request::SndNke(*self).encode(address, buf)
-        }
-    }
-    impl request::ReqSke {
-        pub const NAME: &'static str = "req_ske";
-        pub const CODE: &'static [u8] = &[0x49];
-        pub const LEN: usize = 5;
-        pub const DESC: rt::MessageDesc = rt::MessageDesc::new(
-            Self::NAME,
-            0x49,
-            1,
-            &[5],
-        );
-        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
-            Request::ReqSke(*self).encode(address, buf)
-        }
-    }
     ///A request (command), host to device.
     #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
     #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
@@ -136,18 +108,12 @@ pub mod mbus_short {
         /// Encodes the frame for `address` into `buf`; returns the frame length. Refuses what
         /// decode refuses: an address no frame may carry, the broadcast address for a command
         /// that does not accept it, a value outside its field's range.
-        pub fn encode(
-            &self,
-            address: u8,
-            buf: &mut [u8],
-        ) -> rt::Result<usize, rt::EncodeError> {
+        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             rt::encode_address(address, &FRAME)?;
             let out = rt::frame_mut::<5>(buf, &[])?;
             let len = match *self {
-                Self::SndNke(request::SndNke {}) => {
-                    rt::head(out, &[0x10, 0x40, address]).len()
-                }
-                Self::ReqSke(request::ReqSke {}) => {
+                Self::SndNke(_) => rt::head(out, &[0x10, 0x40, address]).len(),
+                Self::ReqSke(_) => {
                     rt::encode_broadcast(address, 0xFF, &request::ReqSke::DESC)?;
                     rt::head(out, &[0x10, 0x49, address]).len()
                 }
@@ -193,11 +159,12 @@ pub mod mbus_short {
             name: &str,
             _field: impl FnMut(&'static str) -> rt::Option<rt::FieldValue<'v>>,
         ) -> rt::Result<Self, rt::FieldError> {
-            match name {
-                "snd_nke" => rt::Ok(Self::SndNke(request::SndNke)),
-                "req_ske" => rt::Ok(Self::ReqSke(request::ReqSke)),
-                _ => rt::Err(rt::FieldError::UnknownMessage),
-            }
+            let message = match name {
+                "snd_nke" => Self::SndNke(request::SndNke),
+                "req_ske" => Self::ReqSke(request::ReqSke),
+                _ => return rt::Err(rt::FieldError::UnknownMessage),
+            };
+            rt::Ok(message)
         }
     }
     impl rt::Message for Request {
@@ -218,11 +185,7 @@ pub mod mbus_short {
             Request::visit(self, f)
         }
         #[inline]
-        fn encode(
-            &self,
-            address: u8,
-            buf: &mut [u8],
-        ) -> rt::Result<usize, rt::EncodeError> {
+        fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             Request::encode(self, address, buf)
         }
         #[inline]
@@ -257,28 +220,6 @@ pub mod mbus_short {
         /// The responses this command may get, bit `i` for row `i` of `Response::MESSAGES`.
         const fn replies(&self) -> u64 {
             Self::COMMANDS[self.index()].3
-        }
-    }
-    impl response::StatusOfLink {
-        pub const NAME: &'static str = "status_of_link";
-        pub const CODE: &'static [u8] = &[0x0B];
-        pub const LEN: usize = 5;
-        pub const DESC: rt::MessageDesc = rt::MessageDesc::new(
-            Self::NAME,
-            0x0B,
-            1,
-            &[5],
-        );
-        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
-            Response::StatusOfLink(*self).encode(address, buf)
-        }
-    }
-    impl response::Ack {
-        pub const NAME: &'static str = "ack";
-        pub const CODE: &'static [u8] = &[];
-        pub const LEN: usize = 1;
-        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
-            Response::Ack(*self).encode(address, buf)
         }
     }
     ///A response, device to host.
@@ -321,20 +262,14 @@ pub mod mbus_short {
         /// Encodes the frame for `address` into `buf`; returns the frame length. Refuses what
         /// decode refuses: an address no frame may carry, the broadcast address for a command
         /// that does not accept it, a value outside its field's range.
-        pub fn encode(
-            &self,
-            address: u8,
-            buf: &mut [u8],
-        ) -> rt::Result<usize, rt::EncodeError> {
+        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             if let rt::Some(frame) = self.constant_frame() {
                 return rt::put_frame(buf, frame);
             }
             rt::encode_address(address, &FRAME)?;
             let out = rt::frame_mut::<5>(buf, &[])?;
             let len = match *self {
-                Self::StatusOfLink(response::StatusOfLink {}) => {
-                    rt::head(out, &[0x10, 0x0B, address]).len()
-                }
+                Self::StatusOfLink(_) => rt::head(out, &[0x10, 0x0B, address]).len(),
                 Self::Ack(_) => return rt::put_frame(buf, &[0xE5]),
             };
             rt::seal_end(buf, len, |b| u32::from(checksum(rt::covered(b, 1))), &FRAME);
@@ -424,11 +359,12 @@ pub mod mbus_short {
             name: &str,
             _field: impl FnMut(&'static str) -> rt::Option<rt::FieldValue<'v>>,
         ) -> rt::Result<Self, rt::FieldError> {
-            match name {
-                "status_of_link" => rt::Ok(Self::StatusOfLink(response::StatusOfLink)),
-                "ack" => rt::Ok(Self::Ack(response::Ack)),
-                _ => rt::Err(rt::FieldError::UnknownMessage),
-            }
+            let message = match name {
+                "status_of_link" => Self::StatusOfLink(response::StatusOfLink),
+                "ack" => Self::Ack(response::Ack),
+                _ => return rt::Err(rt::FieldError::UnknownMessage),
+            };
+            rt::Ok(message)
         }
     }
     impl rt::Message for Response {
@@ -449,11 +385,7 @@ pub mod mbus_short {
             Response::visit(self, f)
         }
         #[inline]
-        fn encode(
-            &self,
-            address: u8,
-            buf: &mut [u8],
-        ) -> rt::Result<usize, rt::EncodeError> {
+        fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             Response::encode(self, address, buf)
         }
         #[inline]
@@ -592,9 +524,44 @@ pub mod mbus_short {
     pub type StreamDecoder = ::busspec_runtime::stream::StreamDecoder<MbusShort>;
     /// What [`StreamDecoder`] finds in a stream.
     pub type Event = ::busspec_runtime::stream::Event<Request, Response>;
-    /// Each request as a struct of its own (its `DESC` names it as refusals do: name,
-    /// code and the frame lengths of its code), and each field a refusal names
-    /// (`message.field`, `FieldDesc`).
+    impl request::SndNke {
+        pub const NAME: &'static str = "snd_nke";
+        pub const CODE: &'static [u8] = &[0x40];
+        pub const LEN: usize = 5;
+        pub const DESC: rt::MessageDesc = rt::desc(Self::NAME, 0x40, 1, &[5]);
+        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            Request::SndNke(*self).encode(address, buf)
+        }
+    }
+    impl request::ReqSke {
+        pub const NAME: &'static str = "req_ske";
+        pub const CODE: &'static [u8] = &[0x49];
+        pub const LEN: usize = 5;
+        pub const DESC: rt::MessageDesc = rt::desc(Self::NAME, 0x49, 1, &[5]);
+        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            Request::ReqSke(*self).encode(address, buf)
+        }
+    }
+    impl response::StatusOfLink {
+        pub const NAME: &'static str = "status_of_link";
+        pub const CODE: &'static [u8] = &[0x0B];
+        pub const LEN: usize = 5;
+        pub const DESC: rt::MessageDesc = rt::desc(Self::NAME, 0x0B, 1, &[5]);
+        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            Response::StatusOfLink(*self).encode(address, buf)
+        }
+    }
+    impl response::Ack {
+        pub const NAME: &'static str = "ack";
+        pub const CODE: &'static [u8] = &[];
+        pub const LEN: usize = 1;
+        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            Response::Ack(*self).encode(address, buf)
+        }
+    }
+    /// Each request as a struct of its own; its constants (`DESC`, which names it as
+    /// refusals do: name, code and the frame lengths of its code; `QUANTITY_DESC`, each
+    /// field a refusal names) and methods are in the `impl` of each.
     pub mod request {
         /// §5.5 SND_NKE: initialisation of the slave (code `0x40`, 5 bytes).
         #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
@@ -607,7 +574,7 @@ pub mod mbus_short {
         #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]
         pub struct ReqSke;
     }
-    /// Each response as a struct of its own, and the fields its refusals name.
+    /// Each response as a struct of its own.
     pub mod response {
         /// §5.5 RSP_SKE: status of link (code `0x0B`, 5 bytes).
         #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]

@@ -80,40 +80,6 @@ pub mod meter_floats {
     pub fn checksum(bytes: &[u8]) -> u16 {
         CRC.checksum(bytes)
     }
-    impl request::ReadReadings {
-        pub const NAME: &'static str = "read_readings";
-        pub const CODE: &'static [u8] = &[0x04];
-        pub const LEN: usize = 4;
-        pub const DESC: rt::MessageDesc = rt::MessageDesc::new(
-            Self::NAME,
-            0x04,
-            1,
-            &[4],
-        );
-        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
-            Request::ReadReadings(*self).encode(address, buf)
-        }
-    }
-    impl request::SetLimits {
-        pub const NAME: &'static str = "set_limits";
-        pub const CODE: &'static [u8] = &[0x10];
-        pub const LEN: usize = 16;
-        pub const DESC: rt::MessageDesc = rt::MessageDesc::new(
-            Self::NAME,
-            0x10,
-            1,
-            &[16],
-        );
-        pub const VOLTAGE_LIMIT: rt::Range<usize> = 2..6;
-        pub const SERIAL: rt::Range<usize> = 6..14;
-        pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
-            f("voltage_limit", rt::Int(rt::raw(self.voltage_limit)));
-            f("serial", rt::Int(self.serial as i64));
-        }
-        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
-            Request::SetLimits(*self).encode(address, buf)
-        }
-    }
     ///A request (command), host to device.
     #[derive(Debug, Clone, Copy, PartialEq)]
     #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
@@ -159,14 +125,10 @@ pub mod meter_floats {
         /// Encodes the frame for `address` into `buf`; returns the frame length. Refuses what
         /// decode refuses: an address no frame may carry, the broadcast address for a command
         /// that does not accept it, a value outside its field's range.
-        pub fn encode(
-            &self,
-            address: u8,
-            buf: &mut [u8],
-        ) -> rt::Result<usize, rt::EncodeError> {
+        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             rt::encode_address(address, &FRAME)?;
             let len = match *self {
-                Self::ReadReadings(request::ReadReadings {}) => {
+                Self::ReadReadings(_) => {
                     rt::encode_broadcast(address, 0x00, &request::ReadReadings::DESC)?;
                     rt::frame_mut::<4>(buf, &[address, 0x04])?.len()
                 }
@@ -226,7 +188,7 @@ pub mod meter_floats {
                         frame[5],
                     ]);
                     rt::in_range(
-                        &request::SET_LIMITS_VOLTAGE_LIMIT,
+                        &request::SetLimits::VOLTAGE_LIMIT_DESC,
                         2,
                         field_0,
                         rt::f32_raw(0f32),
@@ -258,18 +220,17 @@ pub mod meter_floats {
             name: &str,
             mut field: impl FnMut(&'static str) -> rt::Option<rt::FieldValue<'v>>,
         ) -> rt::Result<Self, rt::FieldError> {
-            match name {
-                "read_readings" => rt::Ok(Self::ReadReadings(request::ReadReadings)),
+            let message = match name {
+                "read_readings" => Self::ReadReadings(request::ReadReadings),
                 "set_limits" => {
-                    rt::Ok(
-                        Self::SetLimits(request::SetLimits {
-                            voltage_limit: rt::get(&mut field, "voltage_limit")?,
-                            serial: rt::get(&mut field, "serial")?,
-                        }),
-                    )
+                    Self::SetLimits(request::SetLimits {
+                        voltage_limit: rt::get(&mut field, "voltage_limit")?,
+                        serial: rt::get(&mut field, "serial")?,
+                    })
                 }
-                _ => rt::Err(rt::FieldError::UnknownMessage),
-            }
+                _ => return rt::Err(rt::FieldError::UnknownMessage),
+            };
+            rt::Ok(message)
         }
     }
     impl rt::Message for Request {
@@ -290,11 +251,7 @@ pub mod meter_floats {
             Request::visit(self, f)
         }
         #[inline]
-        fn encode(
-            &self,
-            address: u8,
-            buf: &mut [u8],
-        ) -> rt::Result<usize, rt::EncodeError> {
+        fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             Request::encode(self, address, buf)
         }
         #[inline]
@@ -329,56 +286,6 @@ pub mod meter_floats {
         /// The responses this command may get, bit `i` for row `i` of `Response::MESSAGES`.
         const fn replies(&self) -> u64 {
             Self::COMMANDS[self.index()].3
-        }
-    }
-    impl response::Readings {
-        pub const NAME: &'static str = "readings";
-        pub const CODE: &'static [u8] = &[0x04];
-        pub const LEN: usize = 52;
-        pub const DESC: rt::MessageDesc = rt::MessageDesc::new(
-            Self::NAME,
-            0x04,
-            1,
-            &[52],
-        );
-        pub const VOLTAGE: rt::Range<usize> = 2..6;
-        pub const FREQUENCY: rt::Range<usize> = 6..10;
-        pub const ENERGY: rt::Range<usize> = 10..18;
-        pub const ENERGY_SWAPPED: rt::Range<usize> = 18..26;
-        pub const PULSES: rt::Range<usize> = 26..34;
-        pub const DRIFT: rt::Range<usize> = 34..42;
-        pub const COUNTER: rt::Range<usize> = 42..46;
-        pub const TEMPERATURE: rt::Range<usize> = 46..50;
-        pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
-            f("voltage", rt::Int(rt::raw(self.voltage)));
-            f("frequency", rt::Int(rt::raw(self.frequency)));
-            f("energy", rt::Int(rt::raw(self.energy)));
-            f("energy_swapped", rt::Int(rt::raw(self.energy_swapped)));
-            f("pulses", rt::Int(self.pulses as i64));
-            f("drift", rt::Int(self.drift as i64));
-            f("counter", rt::Int(self.counter as i64));
-            f("temperature", rt::Int(self.temperature as i64));
-        }
-        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
-            Response::Readings(*self).encode(address, buf)
-        }
-    }
-    impl response::LimitsSet {
-        pub const NAME: &'static str = "limits_set";
-        pub const CODE: &'static [u8] = &[0x10];
-        pub const LEN: usize = 12;
-        pub const DESC: rt::MessageDesc = rt::MessageDesc::new(
-            Self::NAME,
-            0x10,
-            1,
-            &[12],
-        );
-        pub const SERIAL: rt::Range<usize> = 2..10;
-        pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
-            f("serial", rt::Int(self.serial as i64));
-        }
-        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
-            Response::LimitsSet(*self).encode(address, buf)
         }
     }
     ///A response, device to host.
@@ -426,11 +333,7 @@ pub mod meter_floats {
         /// Encodes the frame for `address` into `buf`; returns the frame length. Refuses what
         /// decode refuses: an address no frame may carry, the broadcast address for a command
         /// that does not accept it, a value outside its field's range.
-        pub fn encode(
-            &self,
-            address: u8,
-            buf: &mut [u8],
-        ) -> rt::Result<usize, rt::EncodeError> {
+        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             rt::encode_address(address, &FRAME)?;
             let len = match *self {
                 Self::Readings(
@@ -553,7 +456,7 @@ pub mod meter_floats {
                         frame[9],
                     ]);
                     rt::in_range(
-                        &response::READINGS_FREQUENCY,
+                        &response::Readings::FREQUENCY_DESC,
                         6,
                         field_1,
                         rt::f32_raw(45f32),
@@ -570,7 +473,7 @@ pub mod meter_floats {
                         frame[41],
                     ]);
                     rt::in_range(
-                        &response::READINGS_DRIFT,
+                        &response::Readings::DRIFT_DESC,
                         34,
                         field_5,
                         -9000000000000,
@@ -644,7 +547,7 @@ pub mod meter_floats {
                         frame[9],
                     ]);
                     rt::in_range(
-                        &response::LIMITS_SET_SERIAL,
+                        &response::LimitsSet::SERIAL_DESC,
                         2,
                         field_0,
                         rt::u64_raw(1u64),
@@ -666,30 +569,27 @@ pub mod meter_floats {
             name: &str,
             mut field: impl FnMut(&'static str) -> rt::Option<rt::FieldValue<'v>>,
         ) -> rt::Result<Self, rt::FieldError> {
-            match name {
+            let message = match name {
                 "readings" => {
-                    rt::Ok(
-                        Self::Readings(response::Readings {
-                            voltage: rt::get(&mut field, "voltage")?,
-                            frequency: rt::get(&mut field, "frequency")?,
-                            energy: rt::get(&mut field, "energy")?,
-                            energy_swapped: rt::get(&mut field, "energy_swapped")?,
-                            pulses: rt::get(&mut field, "pulses")?,
-                            drift: rt::get(&mut field, "drift")?,
-                            counter: rt::get(&mut field, "counter")?,
-                            temperature: rt::get(&mut field, "temperature")?,
-                        }),
-                    )
+                    Self::Readings(response::Readings {
+                        voltage: rt::get(&mut field, "voltage")?,
+                        frequency: rt::get(&mut field, "frequency")?,
+                        energy: rt::get(&mut field, "energy")?,
+                        energy_swapped: rt::get(&mut field, "energy_swapped")?,
+                        pulses: rt::get(&mut field, "pulses")?,
+                        drift: rt::get(&mut field, "drift")?,
+                        counter: rt::get(&mut field, "counter")?,
+                        temperature: rt::get(&mut field, "temperature")?,
+                    })
                 }
                 "limits_set" => {
-                    rt::Ok(
-                        Self::LimitsSet(response::LimitsSet {
-                            serial: rt::get(&mut field, "serial")?,
-                        }),
-                    )
+                    Self::LimitsSet(response::LimitsSet {
+                        serial: rt::get(&mut field, "serial")?,
+                    })
                 }
-                _ => rt::Err(rt::FieldError::UnknownMessage),
-            }
+                _ => return rt::Err(rt::FieldError::UnknownMessage),
+            };
+            rt::Ok(message)
         }
     }
     impl rt::Message for Response {
@@ -710,11 +610,7 @@ pub mod meter_floats {
             Response::visit(self, f)
         }
         #[inline]
-        fn encode(
-            &self,
-            address: u8,
-            buf: &mut [u8],
-        ) -> rt::Result<usize, rt::EncodeError> {
+        fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             Response::encode(self, address, buf)
         }
         #[inline]
@@ -826,11 +722,81 @@ pub mod meter_floats {
     pub type StreamDecoder = ::busspec_runtime::stream::StreamDecoder<MeterFloats>;
     /// What [`StreamDecoder`] finds in a stream.
     pub type Event = ::busspec_runtime::stream::Event<Request, Response>;
-    /// Each request as a struct of its own (its `DESC` names it as refusals do: name,
-    /// code and the frame lengths of its code), and each field a refusal names
-    /// (`message.field`, `FieldDesc`).
+    impl request::ReadReadings {
+        pub const NAME: &'static str = "read_readings";
+        pub const CODE: &'static [u8] = &[0x04];
+        pub const LEN: usize = 4;
+        pub const DESC: rt::MessageDesc = rt::desc(Self::NAME, 0x04, 1, &[4]);
+        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            Request::ReadReadings(*self).encode(address, buf)
+        }
+    }
+    impl request::SetLimits {
+        pub const NAME: &'static str = "set_limits";
+        pub const CODE: &'static [u8] = &[0x10];
+        pub const LEN: usize = 16;
+        pub const DESC: rt::MessageDesc = rt::desc(Self::NAME, 0x10, 1, &[16]);
+        pub const VOLTAGE_LIMIT: rt::Range<usize> = 2..6;
+        pub const SERIAL: rt::Range<usize> = 6..14;
+        pub const VOLTAGE_LIMIT_DESC: rt::FieldDesc = rt::field(
+            Self::NAME,
+            "voltage_limit",
+        );
+        pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
+            f("voltage_limit", rt::Int(rt::raw(self.voltage_limit)));
+            f("serial", rt::Int(self.serial as i64));
+        }
+        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            Request::SetLimits(*self).encode(address, buf)
+        }
+    }
+    impl response::Readings {
+        pub const NAME: &'static str = "readings";
+        pub const CODE: &'static [u8] = &[0x04];
+        pub const LEN: usize = 52;
+        pub const DESC: rt::MessageDesc = rt::desc(Self::NAME, 0x04, 1, &[52]);
+        pub const VOLTAGE: rt::Range<usize> = 2..6;
+        pub const FREQUENCY: rt::Range<usize> = 6..10;
+        pub const ENERGY: rt::Range<usize> = 10..18;
+        pub const ENERGY_SWAPPED: rt::Range<usize> = 18..26;
+        pub const PULSES: rt::Range<usize> = 26..34;
+        pub const DRIFT: rt::Range<usize> = 34..42;
+        pub const COUNTER: rt::Range<usize> = 42..46;
+        pub const TEMPERATURE: rt::Range<usize> = 46..50;
+        pub const FREQUENCY_DESC: rt::FieldDesc = rt::field(Self::NAME, "frequency");
+        pub const DRIFT_DESC: rt::FieldDesc = rt::field(Self::NAME, "drift");
+        pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
+            f("voltage", rt::Int(rt::raw(self.voltage)));
+            f("frequency", rt::Int(rt::raw(self.frequency)));
+            f("energy", rt::Int(rt::raw(self.energy)));
+            f("energy_swapped", rt::Int(rt::raw(self.energy_swapped)));
+            f("pulses", rt::Int(self.pulses as i64));
+            f("drift", rt::Int(self.drift as i64));
+            f("counter", rt::Int(self.counter as i64));
+            f("temperature", rt::Int(self.temperature as i64));
+        }
+        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            Response::Readings(*self).encode(address, buf)
+        }
+    }
+    impl response::LimitsSet {
+        pub const NAME: &'static str = "limits_set";
+        pub const CODE: &'static [u8] = &[0x10];
+        pub const LEN: usize = 12;
+        pub const DESC: rt::MessageDesc = rt::desc(Self::NAME, 0x10, 1, &[12]);
+        pub const SERIAL: rt::Range<usize> = 2..10;
+        pub const SERIAL_DESC: rt::FieldDesc = rt::field(Self::NAME, "serial");
+        pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
+            f("serial", rt::Int(self.serial as i64));
+        }
+        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            Response::LimitsSet(*self).encode(address, buf)
+        }
+    }
+    /// Each request as a struct of its own; its constants (`DESC`, which names it as
+    /// refusals do: name, code and the frame lengths of its code; `QUANTITY_DESC`, each
+    /// field a refusal names) and methods are in the `impl` of each.
     pub mod request {
-        use ::busspec_runtime::FieldDesc;
         /// §3.1 Read the readings (code `0x04`, 4 bytes).
         #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
         #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
@@ -846,15 +812,9 @@ pub mod meter_floats {
             pub voltage_limit: f32,
             pub serial: u64,
         }
-        /// `set_limits.voltage_limit`
-        pub const SET_LIMITS_VOLTAGE_LIMIT: FieldDesc = FieldDesc::new(
-            "set_limits",
-            "voltage_limit",
-        );
     }
-    /// Each response as a struct of its own, and the fields its refusals name.
+    /// Each response as a struct of its own.
     pub mod response {
-        use ::busspec_runtime::FieldDesc;
         /// §4.1 Readings (code `0x04`, 52 bytes).
         #[derive(Debug, Clone, Copy, PartialEq)]
         #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
@@ -886,14 +846,5 @@ pub mod meter_floats {
             /// Valid raw range 1..=18446744073709551615.
             pub serial: u64,
         }
-        /// `readings.frequency`
-        pub const READINGS_FREQUENCY: FieldDesc = FieldDesc::new(
-            "readings",
-            "frequency",
-        );
-        /// `readings.drift`
-        pub const READINGS_DRIFT: FieldDesc = FieldDesc::new("readings", "drift");
-        /// `limits_set.serial`
-        pub const LIMITS_SET_SERIAL: FieldDesc = FieldDesc::new("limits_set", "serial");
     }
 }

@@ -280,60 +280,6 @@ pub mod mini {
             Self(raw)
         }
     }
-    impl request::GoTo {
-        pub const NAME: &'static str = "go_to";
-        pub const CODE: &'static [u8] = &[0x20, 0x00];
-        pub const LEN: usize = 9;
-        pub const DESC: rt::MessageDesc = rt::MessageDesc::new(
-            Self::NAME,
-            0x2000,
-            2,
-            &[9],
-        );
-        pub const TARGET: rt::Range<usize> = 4..8;
-        pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
-            f("target", rt::Int(self.target.raw() as i64));
-        }
-        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
-            Request::GoTo(*self).encode(address, buf)
-        }
-    }
-    impl request::SetMode {
-        pub const NAME: &'static str = "set_mode";
-        pub const CODE: &'static [u8] = &[0x30, 0x00];
-        pub const LEN: usize = 6;
-        pub const DESC: rt::MessageDesc = rt::MessageDesc::new(
-            Self::NAME,
-            0x3000,
-            2,
-            &[6],
-        );
-        pub const MODE: rt::Range<usize> = 4..5;
-        pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
-            f("mode", rt::Int(self.mode.raw() as i64));
-        }
-        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
-            Request::SetMode(*self).encode(address, buf)
-        }
-    }
-    impl request::GetStatus {
-        pub const NAME: &'static str = "get_status";
-        pub const CODE: &'static [u8] = &[0x40, 0x00];
-        pub const LEN: usize = 6;
-        pub const DESC: rt::MessageDesc = rt::MessageDesc::new(
-            Self::NAME,
-            0x4000,
-            2,
-            &[6],
-        );
-        pub const CHANNEL: rt::Range<usize> = 4..5;
-        pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
-            f("channel", rt::Int(self.channel as i64));
-        }
-        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
-            Request::GetStatus(*self).encode(address, buf)
-        }
-    }
     ///A request (command), host to device.
     #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
     #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
@@ -383,11 +329,7 @@ pub mod mini {
         /// Encodes the frame for `address` into `buf`; returns the frame length. Refuses what
         /// decode refuses: an address no frame may carry, the broadcast address for a command
         /// that does not accept it, a value outside its field's range.
-        pub fn encode(
-            &self,
-            address: u8,
-            buf: &mut [u8],
-        ) -> rt::Result<usize, rt::EncodeError> {
+        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             rt::encode_address(address, &FRAME)?;
             let len = match *self {
                 Self::GoTo(request::GoTo { target: v_target }) => {
@@ -437,7 +379,7 @@ pub mod mini {
                         frame[6],
                         frame[7],
                     ]);
-                    rt::in_range(&request::GO_TO_TARGET, 4, field_0, 0, 100000)?;
+                    rt::in_range(&request::GoTo::TARGET_DESC, 4, field_0, 0, 100000)?;
                     rt::Ok(
                         Self::GoTo(request::GoTo {
                             target: Capacitance::from_raw(field_0),
@@ -454,7 +396,7 @@ pub mod mini {
                 }
                 0x4000 => {
                     let frame = rt::fixed::<6>(frame, &request::GetStatus::DESC)?;
-                    rt::in_range(&request::GET_STATUS_CHANNEL, 4, frame[4], 0, 3)?;
+                    rt::in_range(&request::GetStatus::CHANNEL_DESC, 4, frame[4], 0, 3)?;
                     rt::Ok(
                         Self::GetStatus(request::GetStatus {
                             channel: frame[4],
@@ -471,30 +413,25 @@ pub mod mini {
             name: &str,
             mut field: impl FnMut(&'static str) -> rt::Option<rt::FieldValue<'v>>,
         ) -> rt::Result<Self, rt::FieldError> {
-            match name {
+            let message = match name {
                 "go_to" => {
-                    rt::Ok(
-                        Self::GoTo(request::GoTo {
-                            target: Capacitance::from_raw(rt::get(&mut field, "target")?),
-                        }),
-                    )
+                    Self::GoTo(request::GoTo {
+                        target: Capacitance::from_raw(rt::get(&mut field, "target")?),
+                    })
                 }
                 "set_mode" => {
-                    rt::Ok(
-                        Self::SetMode(request::SetMode {
-                            mode: Mode::from_raw(rt::get(&mut field, "mode")?),
-                        }),
-                    )
+                    Self::SetMode(request::SetMode {
+                        mode: Mode::from_raw(rt::get(&mut field, "mode")?),
+                    })
                 }
                 "get_status" => {
-                    rt::Ok(
-                        Self::GetStatus(request::GetStatus {
-                            channel: rt::get(&mut field, "channel")?,
-                        }),
-                    )
+                    Self::GetStatus(request::GetStatus {
+                        channel: rt::get(&mut field, "channel")?,
+                    })
                 }
-                _ => rt::Err(rt::FieldError::UnknownMessage),
-            }
+                _ => return rt::Err(rt::FieldError::UnknownMessage),
+            };
+            rt::Ok(message)
         }
     }
     impl rt::Message for Request {
@@ -515,11 +452,7 @@ pub mod mini {
             Request::visit(self, f)
         }
         #[inline]
-        fn encode(
-            &self,
-            address: u8,
-            buf: &mut [u8],
-        ) -> rt::Result<usize, rt::EncodeError> {
+        fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             Request::encode(self, address, buf)
         }
         #[inline]
@@ -555,72 +488,6 @@ pub mod mini {
         /// The responses this command may get, bit `i` for row `i` of `Response::MESSAGES`.
         const fn replies(&self) -> u64 {
             Self::COMMANDS[self.index()].3
-        }
-    }
-    impl response::Started {
-        pub const NAME: &'static str = "started";
-        pub const CODE: &'static [u8] = &[0x50];
-        pub const LEN: usize = 4;
-        pub const DESC: rt::MessageDesc = rt::MessageDesc::new(
-            Self::NAME,
-            0x50,
-            1,
-            &[4],
-        );
-        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
-            Response::Started(*self).encode(address, buf)
-        }
-    }
-    impl response::Nak {
-        pub const NAME: &'static str = "nak";
-        pub const CODE: &'static [u8] = &[0x90];
-        pub const LEN: usize = 4;
-        pub const DESC: rt::MessageDesc = rt::MessageDesc::new(
-            Self::NAME,
-            0x90,
-            1,
-            &[4],
-        );
-        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
-            Response::Nak(*self).encode(address, buf)
-        }
-    }
-    impl response::SetModeAck {
-        pub const NAME: &'static str = "set_mode_ack";
-        pub const CODE: &'static [u8] = &[0x30, 0x00];
-        pub const LEN: usize = 5;
-        pub const DESC: rt::MessageDesc = rt::MessageDesc::new(
-            Self::NAME,
-            0x3000,
-            2,
-            &[5],
-        );
-        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
-            Response::SetModeAck(*self).encode(address, buf)
-        }
-    }
-    impl response::Status {
-        pub const NAME: &'static str = "status";
-        pub const CODE: &'static [u8] = &[0x40, 0x00];
-        pub const LEN: usize = 13;
-        pub const DESC: rt::MessageDesc = rt::MessageDesc::new(
-            Self::NAME,
-            0x4000,
-            2,
-            &[13],
-        );
-        pub const ERROR_BITS: rt::Range<usize> = 4..5;
-        pub const FIRMWARE: rt::Range<usize> = 7..10;
-        pub const TEMPERATURE: rt::Range<usize> = 10..11;
-        pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
-            f("error_bits", rt::Int(self.error_bits.raw() as i64));
-            f("freshness", rt::Int(self.freshness as i64));
-            f("position", rt::Int(self.position.raw() as i64));
-            f("firmware", rt::Text(&self.firmware[..]));
-            f("temperature", rt::Int(self.temperature.raw() as i64));
-        }
-        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
-            Response::Status(*self).encode(address, buf)
         }
     }
     ///A response, device to host.
@@ -674,33 +541,20 @@ pub mod mini {
         /// Encodes the frame for `address` into `buf`; returns the frame length. Refuses what
         /// decode refuses: an address no frame may carry, the broadcast address for a command
         /// that does not accept it, a value outside its field's range.
-        pub fn encode(
-            &self,
-            address: u8,
-            buf: &mut [u8],
-        ) -> rt::Result<usize, rt::EncodeError> {
+        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             rt::encode_address(address, &FRAME)?;
             let len = match *self {
-                Self::Started(response::Started {}) => {
-                    rt::seal_sum8_head(
-                        rt::frame_mut::<4>(buf, &[0xAA, address, 0x50])?,
-                        3,
-                        address.wrapping_add(0xFA),
-                    )
+                Self::Started(_) => {
+                    let out = rt::frame_mut::<4>(buf, &[0xAA, address, 0x50])?;
+                    rt::seal_sum8_head(out, 3, address.wrapping_add(0xFA))
                 }
-                Self::Nak(response::Nak {}) => {
-                    rt::seal_sum8_head(
-                        rt::frame_mut::<4>(buf, &[0xAA, address, 0x90])?,
-                        3,
-                        address.wrapping_add(0x3A),
-                    )
+                Self::Nak(_) => {
+                    let out = rt::frame_mut::<4>(buf, &[0xAA, address, 0x90])?;
+                    rt::seal_sum8_head(out, 3, address.wrapping_add(0x3A))
                 }
-                Self::SetModeAck(response::SetModeAck {}) => {
-                    rt::seal_sum8_head(
-                        rt::frame_mut::<5>(buf, &[0xAA, address, 0x30, 0x00])?,
-                        4,
-                        address.wrapping_add(0xDA),
-                    )
+                Self::SetModeAck(_) => {
+                    let out = rt::frame_mut::<5>(buf, &[0xAA, address, 0x30, 0x00])?;
+                    rt::seal_sum8_head(out, 4, address.wrapping_add(0xDA))
                 }
                 Self::Status(
                     response::Status {
@@ -795,7 +649,7 @@ pub mod mini {
                 0x4000 => {
                     let frame = rt::fixed::<13>(frame, &response::Status::DESC)?;
                     let field_1: u16 = u16::from_le_bytes([frame[5], frame[6]]);
-                    rt::equal(&response::STATUS_RESERVED, 11, frame[11], 0x0)?;
+                    rt::equal(&response::Status::RESERVED_DESC, 11, frame[11], 0x0)?;
                     rt::Ok(
                         Self::Status(response::Status {
                             error_bits: StatusBits::from_raw(frame[4]),
@@ -820,35 +674,30 @@ pub mod mini {
             name: &str,
             mut field: impl FnMut(&'static str) -> rt::Option<rt::FieldValue<'v>>,
         ) -> rt::Result<Self, rt::FieldError> {
-            match name {
-                "started" => rt::Ok(Self::Started(response::Started)),
-                "nak" => rt::Ok(Self::Nak(response::Nak)),
-                "set_mode_ack" => rt::Ok(Self::SetModeAck(response::SetModeAck)),
+            let message = match name {
+                "started" => Self::Started(response::Started),
+                "nak" => Self::Nak(response::Nak),
+                "set_mode_ack" => Self::SetModeAck(response::SetModeAck),
                 "status" => {
-                    rt::Ok(
-                        Self::Status(response::Status {
-                            error_bits: StatusBits::from_raw(
-                                rt::get(&mut field, "error_bits")?,
-                            ),
-                            freshness: rt::field_int(
-                                "freshness",
-                                field("freshness"),
-                                0,
-                                15,
-                            )? as u8,
-                            position: Angle::from_raw(
-                                rt::field_int("position", field("position"), -2048, 2047)?
-                                    as i16,
-                            ),
-                            firmware: rt::text(&mut field, "firmware")?,
-                            temperature: Celsius::from_raw(
-                                rt::get(&mut field, "temperature")?,
-                            ),
-                        }),
-                    )
+                    Self::Status(response::Status {
+                        error_bits: StatusBits::from_raw(
+                            rt::get(&mut field, "error_bits")?,
+                        ),
+                        freshness: rt::field_int("freshness", field("freshness"), 0, 15)?
+                            as u8,
+                        position: Angle::from_raw(
+                            rt::field_int("position", field("position"), -2048, 2047)?
+                                as i16,
+                        ),
+                        firmware: rt::text(&mut field, "firmware")?,
+                        temperature: Celsius::from_raw(
+                            rt::get(&mut field, "temperature")?,
+                        ),
+                    })
                 }
-                _ => rt::Err(rt::FieldError::UnknownMessage),
-            }
+                _ => return rt::Err(rt::FieldError::UnknownMessage),
+            };
+            rt::Ok(message)
         }
     }
     impl rt::Message for Response {
@@ -869,11 +718,7 @@ pub mod mini {
             Response::visit(self, f)
         }
         #[inline]
-        fn encode(
-            &self,
-            address: u8,
-            buf: &mut [u8],
-        ) -> rt::Result<usize, rt::EncodeError> {
+        fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             Response::encode(self, address, buf)
         }
         #[inline]
@@ -999,11 +844,98 @@ pub mod mini {
     pub type StreamDecoder = ::busspec_runtime::stream::StreamDecoder<Mini>;
     /// What [`StreamDecoder`] finds in a stream.
     pub type Event = ::busspec_runtime::stream::Event<Request, Response>;
-    /// Each request as a struct of its own (its `DESC` names it as refusals do: name,
-    /// code and the frame lengths of its code), and each field a refusal names
-    /// (`message.field`, `FieldDesc`).
+    impl request::GoTo {
+        pub const NAME: &'static str = "go_to";
+        pub const CODE: &'static [u8] = &[0x20, 0x00];
+        pub const LEN: usize = 9;
+        pub const DESC: rt::MessageDesc = rt::desc(Self::NAME, 0x2000, 2, &[9]);
+        pub const TARGET: rt::Range<usize> = 4..8;
+        pub const TARGET_DESC: rt::FieldDesc = rt::field(Self::NAME, "target");
+        pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
+            f("target", rt::Int(self.target.raw() as i64));
+        }
+        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            Request::GoTo(*self).encode(address, buf)
+        }
+    }
+    impl request::SetMode {
+        pub const NAME: &'static str = "set_mode";
+        pub const CODE: &'static [u8] = &[0x30, 0x00];
+        pub const LEN: usize = 6;
+        pub const DESC: rt::MessageDesc = rt::desc(Self::NAME, 0x3000, 2, &[6]);
+        pub const MODE: rt::Range<usize> = 4..5;
+        pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
+            f("mode", rt::Int(self.mode.raw() as i64));
+        }
+        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            Request::SetMode(*self).encode(address, buf)
+        }
+    }
+    impl request::GetStatus {
+        pub const NAME: &'static str = "get_status";
+        pub const CODE: &'static [u8] = &[0x40, 0x00];
+        pub const LEN: usize = 6;
+        pub const DESC: rt::MessageDesc = rt::desc(Self::NAME, 0x4000, 2, &[6]);
+        pub const CHANNEL: rt::Range<usize> = 4..5;
+        pub const CHANNEL_DESC: rt::FieldDesc = rt::field(Self::NAME, "channel");
+        pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
+            f("channel", rt::Int(self.channel as i64));
+        }
+        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            Request::GetStatus(*self).encode(address, buf)
+        }
+    }
+    impl response::Started {
+        pub const NAME: &'static str = "started";
+        pub const CODE: &'static [u8] = &[0x50];
+        pub const LEN: usize = 4;
+        pub const DESC: rt::MessageDesc = rt::desc(Self::NAME, 0x50, 1, &[4]);
+        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            Response::Started(*self).encode(address, buf)
+        }
+    }
+    impl response::Nak {
+        pub const NAME: &'static str = "nak";
+        pub const CODE: &'static [u8] = &[0x90];
+        pub const LEN: usize = 4;
+        pub const DESC: rt::MessageDesc = rt::desc(Self::NAME, 0x90, 1, &[4]);
+        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            Response::Nak(*self).encode(address, buf)
+        }
+    }
+    impl response::SetModeAck {
+        pub const NAME: &'static str = "set_mode_ack";
+        pub const CODE: &'static [u8] = &[0x30, 0x00];
+        pub const LEN: usize = 5;
+        pub const DESC: rt::MessageDesc = rt::desc(Self::NAME, 0x3000, 2, &[5]);
+        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            Response::SetModeAck(*self).encode(address, buf)
+        }
+    }
+    impl response::Status {
+        pub const NAME: &'static str = "status";
+        pub const CODE: &'static [u8] = &[0x40, 0x00];
+        pub const LEN: usize = 13;
+        pub const DESC: rt::MessageDesc = rt::desc(Self::NAME, 0x4000, 2, &[13]);
+        pub const ERROR_BITS: rt::Range<usize> = 4..5;
+        pub const FIRMWARE: rt::Range<usize> = 7..10;
+        pub const TEMPERATURE: rt::Range<usize> = 10..11;
+        pub const RESERVED_DESC: rt::FieldDesc = rt::field(Self::NAME, "reserved");
+        pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
+            f("error_bits", rt::Int(self.error_bits.raw() as i64));
+            f("freshness", rt::Int(self.freshness as i64));
+            f("position", rt::Int(self.position.raw() as i64));
+            f("firmware", rt::Text(&self.firmware[..]));
+            f("temperature", rt::Int(self.temperature.raw() as i64));
+        }
+        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            Response::Status(*self).encode(address, buf)
+        }
+    }
+    /// Each request as a struct of its own; its constants (`DESC`, which names it as
+    /// refusals do: name, code and the frame lengths of its code; `QUANTITY_DESC`, each
+    /// field a refusal names) and methods are in the `impl` of each.
     pub mod request {
-        use ::busspec_runtime::FieldDesc;
         /// §4.1 Go to capacitance (code `0x2000`, 9 bytes).
         #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
         #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
@@ -1030,17 +962,9 @@ pub mod mini {
             /// Valid raw range 0..=3.
             pub channel: u8,
         }
-        /// `go_to.target`
-        pub const GO_TO_TARGET: FieldDesc = FieldDesc::new("go_to", "target");
-        /// `get_status.channel`
-        pub const GET_STATUS_CHANNEL: FieldDesc = FieldDesc::new(
-            "get_status",
-            "channel",
-        );
     }
-    /// Each response as a struct of its own, and the fields its refusals name.
+    /// Each response as a struct of its own.
     pub mod response {
-        use ::busspec_runtime::FieldDesc;
         /// §5.1 Movement started (code `0x50`, 4 bytes).
         #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
         #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
@@ -1070,7 +994,5 @@ pub mod mini {
             /// \[°C\]
             pub temperature: super::Celsius,
         }
-        /// `status.reserved`
-        pub const STATUS_RESERVED: FieldDesc = FieldDesc::new("status", "reserved");
     }
 }

@@ -80,52 +80,6 @@ pub mod mini_crc {
     pub fn checksum(bytes: &[u8]) -> u16 {
         CRC.checksum(bytes)
     }
-    impl request::ReadRuntimeHours {
-        pub const NAME: &'static str = "read_runtime_hours";
-        pub const CODE: &'static [u8] = &[0x69];
-        pub const LEN: usize = 6;
-        pub const DESC: rt::MessageDesc = rt::MessageDesc::new(
-            Self::NAME,
-            0x69,
-            1,
-            &[6],
-        );
-        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
-            Request::ReadRuntimeHours(*self).encode(address, buf)
-        }
-    }
-    impl request::ReadRuntimeMinSec {
-        pub const NAME: &'static str = "read_runtime_min_sec";
-        pub const CODE: &'static [u8] = &[0x69];
-        pub const LEN: usize = 6;
-        pub const DESC: rt::MessageDesc = rt::MessageDesc::new(
-            Self::NAME,
-            0x69,
-            1,
-            &[6],
-        );
-        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
-            Request::ReadRuntimeMinSec(*self).encode(address, buf)
-        }
-    }
-    impl request::SetCounter {
-        pub const NAME: &'static str = "set_counter";
-        pub const CODE: &'static [u8] = &[0x70];
-        pub const LEN: usize = 6;
-        pub const DESC: rt::MessageDesc = rt::MessageDesc::new(
-            Self::NAME,
-            0x70,
-            1,
-            &[6],
-        );
-        pub const COUNTER: rt::Range<usize> = 2..4;
-        pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
-            f("counter", rt::Int(self.counter as i64));
-        }
-        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
-            Request::SetCounter(*self).encode(address, buf)
-        }
-    }
     ///A request (command), host to device.
     #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
     #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
@@ -174,15 +128,11 @@ pub mod mini_crc {
         /// Encodes the frame for `address` into `buf`; returns the frame length. Refuses what
         /// decode refuses: an address no frame may carry, the broadcast address for a command
         /// that does not accept it, a value outside its field's range.
-        pub fn encode(
-            &self,
-            address: u8,
-            buf: &mut [u8],
-        ) -> rt::Result<usize, rt::EncodeError> {
+        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             rt::encode_address(address, &FRAME)?;
             let out = rt::frame_mut::<6>(buf, &[])?;
             let len = match *self {
-                Self::ReadRuntimeHours(request::ReadRuntimeHours {}) => {
+                Self::ReadRuntimeHours(_) => {
                     rt::encode_broadcast(
                         address,
                         0x1F,
@@ -190,7 +140,7 @@ pub mod mini_crc {
                     )?;
                     rt::head(out, &[0x69, address, 0x01, 0x00]).len()
                 }
-                Self::ReadRuntimeMinSec(request::ReadRuntimeMinSec {}) => {
+                Self::ReadRuntimeMinSec(_) => {
                     rt::encode_broadcast(
                         address,
                         0x1F,
@@ -235,12 +185,17 @@ pub mod mini_crc {
                             &request::ReadRuntimeHours::DESC,
                         )?;
                         rt::equal(
-                            &request::READ_RUNTIME_HOURS_SELECTOR,
+                            &request::ReadRuntimeHours::SELECTOR_DESC,
                             2,
                             frame[2],
                             0x1,
                         )?;
-                        rt::equal(&request::READ_RUNTIME_HOURS_ARG2, 3, frame[3], 0x0)?;
+                        rt::equal(
+                            &request::ReadRuntimeHours::ARG2_DESC,
+                            3,
+                            frame[3],
+                            0x0,
+                        )?;
                         rt::Ok(Self::ReadRuntimeHours(request::ReadRuntimeHours))
                     });
                     g.attempt(|frame: &[u8; 6]| {
@@ -250,13 +205,13 @@ pub mod mini_crc {
                             &request::ReadRuntimeMinSec::DESC,
                         )?;
                         rt::equal(
-                            &request::READ_RUNTIME_MIN_SEC_SELECTOR,
+                            &request::ReadRuntimeMinSec::SELECTOR_DESC,
                             2,
                             frame[2],
                             0x2,
                         )?;
                         rt::equal(
-                            &request::READ_RUNTIME_MIN_SEC_ARG2,
+                            &request::ReadRuntimeMinSec::ARG2_DESC,
                             3,
                             frame[3],
                             0x0,
@@ -283,22 +238,19 @@ pub mod mini_crc {
             name: &str,
             mut field: impl FnMut(&'static str) -> rt::Option<rt::FieldValue<'v>>,
         ) -> rt::Result<Self, rt::FieldError> {
-            match name {
-                "read_runtime_hours" => {
-                    rt::Ok(Self::ReadRuntimeHours(request::ReadRuntimeHours))
-                }
+            let message = match name {
+                "read_runtime_hours" => Self::ReadRuntimeHours(request::ReadRuntimeHours),
                 "read_runtime_min_sec" => {
-                    rt::Ok(Self::ReadRuntimeMinSec(request::ReadRuntimeMinSec))
+                    Self::ReadRuntimeMinSec(request::ReadRuntimeMinSec)
                 }
                 "set_counter" => {
-                    rt::Ok(
-                        Self::SetCounter(request::SetCounter {
-                            counter: rt::get(&mut field, "counter")?,
-                        }),
-                    )
+                    Self::SetCounter(request::SetCounter {
+                        counter: rt::get(&mut field, "counter")?,
+                    })
                 }
-                _ => rt::Err(rt::FieldError::UnknownMessage),
-            }
+                _ => return rt::Err(rt::FieldError::UnknownMessage),
+            };
+            rt::Ok(message)
         }
     }
     impl rt::Message for Request {
@@ -319,11 +271,7 @@ pub mod mini_crc {
             Request::visit(self, f)
         }
         #[inline]
-        fn encode(
-            &self,
-            address: u8,
-            buf: &mut [u8],
-        ) -> rt::Result<usize, rt::EncodeError> {
+        fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             Request::encode(self, address, buf)
         }
         #[inline]
@@ -359,62 +307,6 @@ pub mod mini_crc {
         /// The responses this command may get, bit `i` for row `i` of `Response::MESSAGES`.
         const fn replies(&self) -> u64 {
             Self::COMMANDS[self.index()].3
-        }
-    }
-    impl response::RuntimeHours {
-        pub const NAME: &'static str = "runtime_hours";
-        pub const CODE: &'static [u8] = &[0x22];
-        pub const LEN: usize = 6;
-        pub const DESC: rt::MessageDesc = rt::MessageDesc::new(
-            Self::NAME,
-            0x22,
-            1,
-            &[6],
-        );
-        pub const HOURS: rt::Range<usize> = 2..4;
-        pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
-            f("hours", rt::Int(self.hours as i64));
-        }
-        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
-            Response::RuntimeHours(*self).encode(address, buf)
-        }
-    }
-    impl response::RuntimeMinSec {
-        pub const NAME: &'static str = "runtime_min_sec";
-        pub const CODE: &'static [u8] = &[0x22];
-        pub const LEN: usize = 6;
-        pub const DESC: rt::MessageDesc = rt::MessageDesc::new(
-            Self::NAME,
-            0x22,
-            1,
-            &[6],
-        );
-        pub const MINUTES: rt::Range<usize> = 2..3;
-        pub const SECONDS: rt::Range<usize> = 3..4;
-        pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
-            f("minutes", rt::Int(self.minutes as i64));
-            f("seconds", rt::Int(self.seconds as i64));
-        }
-        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
-            Response::RuntimeMinSec(*self).encode(address, buf)
-        }
-    }
-    impl response::CounterEcho {
-        pub const NAME: &'static str = "counter_echo";
-        pub const CODE: &'static [u8] = &[0x70];
-        pub const LEN: usize = 6;
-        pub const DESC: rt::MessageDesc = rt::MessageDesc::new(
-            Self::NAME,
-            0x70,
-            1,
-            &[6],
-        );
-        pub const COUNTER: rt::Range<usize> = 2..4;
-        pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
-            f("counter", rt::Int(self.counter as i64));
-        }
-        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
-            Response::CounterEcho(*self).encode(address, buf)
         }
     }
     ///A response, device to host.
@@ -466,11 +358,7 @@ pub mod mini_crc {
         /// Encodes the frame for `address` into `buf`; returns the frame length. Refuses what
         /// decode refuses: an address no frame may carry, the broadcast address for a command
         /// that does not accept it, a value outside its field's range.
-        pub fn encode(
-            &self,
-            address: u8,
-            buf: &mut [u8],
-        ) -> rt::Result<usize, rt::EncodeError> {
+        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             rt::encode_address(address, &FRAME)?;
             let out = rt::frame_mut::<6>(buf, &[])?;
             let len = match *self {
@@ -566,14 +454,14 @@ pub mod mini_crc {
                         &response::RuntimeMinSec::DESC,
                         |frame: &[u8; 6]| {
                             rt::in_range(
-                                &response::RUNTIME_MIN_SEC_MINUTES,
+                                &response::RuntimeMinSec::MINUTES_DESC,
                                 2,
                                 frame[2],
                                 0,
                                 59,
                             )?;
                             rt::in_range(
-                                &response::RUNTIME_MIN_SEC_SECONDS,
+                                &response::RuntimeMinSec::SECONDS_DESC,
                                 3,
                                 frame[3],
                                 0,
@@ -607,31 +495,26 @@ pub mod mini_crc {
             name: &str,
             mut field: impl FnMut(&'static str) -> rt::Option<rt::FieldValue<'v>>,
         ) -> rt::Result<Self, rt::FieldError> {
-            match name {
+            let message = match name {
                 "runtime_hours" => {
-                    rt::Ok(
-                        Self::RuntimeHours(response::RuntimeHours {
-                            hours: rt::get(&mut field, "hours")?,
-                        }),
-                    )
+                    Self::RuntimeHours(response::RuntimeHours {
+                        hours: rt::get(&mut field, "hours")?,
+                    })
                 }
                 "runtime_min_sec" => {
-                    rt::Ok(
-                        Self::RuntimeMinSec(response::RuntimeMinSec {
-                            minutes: rt::get(&mut field, "minutes")?,
-                            seconds: rt::get(&mut field, "seconds")?,
-                        }),
-                    )
+                    Self::RuntimeMinSec(response::RuntimeMinSec {
+                        minutes: rt::get(&mut field, "minutes")?,
+                        seconds: rt::get(&mut field, "seconds")?,
+                    })
                 }
                 "counter_echo" => {
-                    rt::Ok(
-                        Self::CounterEcho(response::CounterEcho {
-                            counter: rt::get(&mut field, "counter")?,
-                        }),
-                    )
+                    Self::CounterEcho(response::CounterEcho {
+                        counter: rt::get(&mut field, "counter")?,
+                    })
                 }
-                _ => rt::Err(rt::FieldError::UnknownMessage),
-            }
+                _ => return rt::Err(rt::FieldError::UnknownMessage),
+            };
+            rt::Ok(message)
         }
     }
     impl rt::Message for Response {
@@ -652,11 +535,7 @@ pub mod mini_crc {
             Response::visit(self, f)
         }
         #[inline]
-        fn encode(
-            &self,
-            address: u8,
-            buf: &mut [u8],
-        ) -> rt::Result<usize, rt::EncodeError> {
+        fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             Response::encode(self, address, buf)
         }
         #[inline]
@@ -757,11 +636,88 @@ pub mod mini_crc {
     pub type StreamDecoder = ::busspec_runtime::stream::StreamDecoder<MiniCrc>;
     /// What [`StreamDecoder`] finds in a stream.
     pub type Event = ::busspec_runtime::stream::Event<Request, Response>;
-    /// Each request as a struct of its own (its `DESC` names it as refusals do: name,
-    /// code and the frame lengths of its code), and each field a refusal names
-    /// (`message.field`, `FieldDesc`).
+    impl request::ReadRuntimeHours {
+        pub const NAME: &'static str = "read_runtime_hours";
+        pub const CODE: &'static [u8] = &[0x69];
+        pub const LEN: usize = 6;
+        pub const DESC: rt::MessageDesc = rt::desc(Self::NAME, 0x69, 1, &[6]);
+        pub const SELECTOR_DESC: rt::FieldDesc = rt::field(Self::NAME, "selector");
+        pub const ARG2_DESC: rt::FieldDesc = rt::field(Self::NAME, "arg2");
+        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            Request::ReadRuntimeHours(*self).encode(address, buf)
+        }
+    }
+    impl request::ReadRuntimeMinSec {
+        pub const NAME: &'static str = "read_runtime_min_sec";
+        pub const CODE: &'static [u8] = &[0x69];
+        pub const LEN: usize = 6;
+        pub const DESC: rt::MessageDesc = rt::desc(Self::NAME, 0x69, 1, &[6]);
+        pub const SELECTOR_DESC: rt::FieldDesc = rt::field(Self::NAME, "selector");
+        pub const ARG2_DESC: rt::FieldDesc = rt::field(Self::NAME, "arg2");
+        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            Request::ReadRuntimeMinSec(*self).encode(address, buf)
+        }
+    }
+    impl request::SetCounter {
+        pub const NAME: &'static str = "set_counter";
+        pub const CODE: &'static [u8] = &[0x70];
+        pub const LEN: usize = 6;
+        pub const DESC: rt::MessageDesc = rt::desc(Self::NAME, 0x70, 1, &[6]);
+        pub const COUNTER: rt::Range<usize> = 2..4;
+        pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
+            f("counter", rt::Int(self.counter as i64));
+        }
+        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            Request::SetCounter(*self).encode(address, buf)
+        }
+    }
+    impl response::RuntimeHours {
+        pub const NAME: &'static str = "runtime_hours";
+        pub const CODE: &'static [u8] = &[0x22];
+        pub const LEN: usize = 6;
+        pub const DESC: rt::MessageDesc = rt::desc(Self::NAME, 0x22, 1, &[6]);
+        pub const HOURS: rt::Range<usize> = 2..4;
+        pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
+            f("hours", rt::Int(self.hours as i64));
+        }
+        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            Response::RuntimeHours(*self).encode(address, buf)
+        }
+    }
+    impl response::RuntimeMinSec {
+        pub const NAME: &'static str = "runtime_min_sec";
+        pub const CODE: &'static [u8] = &[0x22];
+        pub const LEN: usize = 6;
+        pub const DESC: rt::MessageDesc = rt::desc(Self::NAME, 0x22, 1, &[6]);
+        pub const MINUTES: rt::Range<usize> = 2..3;
+        pub const SECONDS: rt::Range<usize> = 3..4;
+        pub const MINUTES_DESC: rt::FieldDesc = rt::field(Self::NAME, "minutes");
+        pub const SECONDS_DESC: rt::FieldDesc = rt::field(Self::NAME, "seconds");
+        pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
+            f("minutes", rt::Int(self.minutes as i64));
+            f("seconds", rt::Int(self.seconds as i64));
+        }
+        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            Response::RuntimeMinSec(*self).encode(address, buf)
+        }
+    }
+    impl response::CounterEcho {
+        pub const NAME: &'static str = "counter_echo";
+        pub const CODE: &'static [u8] = &[0x70];
+        pub const LEN: usize = 6;
+        pub const DESC: rt::MessageDesc = rt::desc(Self::NAME, 0x70, 1, &[6]);
+        pub const COUNTER: rt::Range<usize> = 2..4;
+        pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
+            f("counter", rt::Int(self.counter as i64));
+        }
+        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            Response::CounterEcho(*self).encode(address, buf)
+        }
+    }
+    /// Each request as a struct of its own; its constants (`DESC`, which names it as
+    /// refusals do: name, code and the frame lengths of its code; `QUANTITY_DESC`, each
+    /// field a refusal names) and methods are in the `impl` of each.
     pub mod request {
-        use ::busspec_runtime::FieldDesc;
         /// §3.1 Read run-time hours (code `0x69`, 6 bytes).
         #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
         #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
@@ -780,30 +736,9 @@ pub mod mini_crc {
         pub struct SetCounter {
             pub counter: u16,
         }
-        /// `read_runtime_hours.selector`
-        pub const READ_RUNTIME_HOURS_SELECTOR: FieldDesc = FieldDesc::new(
-            "read_runtime_hours",
-            "selector",
-        );
-        /// `read_runtime_hours.arg2`
-        pub const READ_RUNTIME_HOURS_ARG2: FieldDesc = FieldDesc::new(
-            "read_runtime_hours",
-            "arg2",
-        );
-        /// `read_runtime_min_sec.selector`
-        pub const READ_RUNTIME_MIN_SEC_SELECTOR: FieldDesc = FieldDesc::new(
-            "read_runtime_min_sec",
-            "selector",
-        );
-        /// `read_runtime_min_sec.arg2`
-        pub const READ_RUNTIME_MIN_SEC_ARG2: FieldDesc = FieldDesc::new(
-            "read_runtime_min_sec",
-            "arg2",
-        );
     }
-    /// Each response as a struct of its own, and the fields its refusals name.
+    /// Each response as a struct of its own.
     pub mod response {
-        use ::busspec_runtime::FieldDesc;
         /// §3.1 Run-time hours (code `0x22`, 6 bytes).
         #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
         #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
@@ -832,15 +767,5 @@ pub mod mini_crc {
         pub struct CounterEcho {
             pub counter: u16,
         }
-        /// `runtime_min_sec.minutes`
-        pub const RUNTIME_MIN_SEC_MINUTES: FieldDesc = FieldDesc::new(
-            "runtime_min_sec",
-            "minutes",
-        );
-        /// `runtime_min_sec.seconds`
-        pub const RUNTIME_MIN_SEC_SECONDS: FieldDesc = FieldDesc::new(
-            "runtime_min_sec",
-            "seconds",
-        );
     }
 }

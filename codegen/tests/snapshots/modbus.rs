@@ -221,7 +221,7 @@ pub mod modbus {
     }
     /// Where `write_multiple_coils.outputs` sits in the frame and how its elements are counted.
     pub const REPEAT_WRITE_MULTIPLE_COILS: rt::RepeatAt = rt::RepeatAt {
-        field: &request::WRITE_MULTIPLE_COILS_OUTPUTS,
+        field: &request::WriteMultipleCoils::OUTPUTS_DESC,
         base: 9,
         at: 7,
         width: 0,
@@ -236,7 +236,7 @@ pub mod modbus {
     };
     /// Where `write_multiple_registers.values` sits in the frame and how its elements are counted.
     pub const REPEAT_WRITE_MULTIPLE_REGISTERS: rt::RepeatAt = rt::RepeatAt {
-        field: &request::WRITE_MULTIPLE_REGISTERS_VALUES,
+        field: &request::WriteMultipleRegisters::VALUES_DESC,
         base: 9,
         at: 7,
         width: 2,
@@ -249,170 +249,6 @@ pub mod modbus {
         min: 1,
         max: 123,
     };
-    impl request::ReadCoils {
-        pub const NAME: &'static str = "read_coils";
-        pub const CODE: &'static [u8] = &[0x01];
-        pub const LEN: usize = 8;
-        pub const DESC: rt::MessageDesc = rt::MessageDesc::new(
-            Self::NAME,
-            0x01,
-            1,
-            &[8],
-        );
-        pub const STARTING_ADDRESS: rt::Range<usize> = 2..4;
-        pub const QUANTITY: rt::Range<usize> = 4..6;
-        pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
-            f("starting_address", rt::Int(self.starting_address as i64));
-            f("quantity", rt::Int(self.quantity as i64));
-        }
-        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
-            Request::ReadCoils(*self).encode(address, buf)
-        }
-    }
-    impl request::ReadDiscreteInputs {
-        pub const NAME: &'static str = "read_discrete_inputs";
-        pub const CODE: &'static [u8] = &[0x02];
-        pub const LEN: usize = 8;
-        pub const DESC: rt::MessageDesc = rt::MessageDesc::new(
-            Self::NAME,
-            0x02,
-            1,
-            &[8],
-        );
-        pub const STARTING_ADDRESS: rt::Range<usize> = 2..4;
-        pub const QUANTITY: rt::Range<usize> = 4..6;
-        pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
-            f("starting_address", rt::Int(self.starting_address as i64));
-            f("quantity", rt::Int(self.quantity as i64));
-        }
-        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
-            Request::ReadDiscreteInputs(*self).encode(address, buf)
-        }
-    }
-    impl request::ReadHoldingRegisters {
-        pub const NAME: &'static str = "read_holding_registers";
-        pub const CODE: &'static [u8] = &[0x03];
-        pub const LEN: usize = 8;
-        pub const DESC: rt::MessageDesc = rt::MessageDesc::new(
-            Self::NAME,
-            0x03,
-            1,
-            &[8],
-        );
-        pub const STARTING_ADDRESS: rt::Range<usize> = 2..4;
-        pub const QUANTITY: rt::Range<usize> = 4..6;
-        pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
-            f("starting_address", rt::Int(self.starting_address as i64));
-            f("quantity", rt::Int(self.quantity as i64));
-        }
-        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
-            Request::ReadHoldingRegisters(*self).encode(address, buf)
-        }
-    }
-    impl request::ReadInputRegisters {
-        pub const NAME: &'static str = "read_input_registers";
-        pub const CODE: &'static [u8] = &[0x04];
-        pub const LEN: usize = 8;
-        pub const DESC: rt::MessageDesc = rt::MessageDesc::new(
-            Self::NAME,
-            0x04,
-            1,
-            &[8],
-        );
-        pub const STARTING_ADDRESS: rt::Range<usize> = 2..4;
-        pub const QUANTITY: rt::Range<usize> = 4..6;
-        pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
-            f("starting_address", rt::Int(self.starting_address as i64));
-            f("quantity", rt::Int(self.quantity as i64));
-        }
-        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
-            Request::ReadInputRegisters(*self).encode(address, buf)
-        }
-    }
-    impl request::WriteSingleCoil {
-        pub const NAME: &'static str = "write_single_coil";
-        pub const CODE: &'static [u8] = &[0x05];
-        pub const LEN: usize = 8;
-        pub const DESC: rt::MessageDesc = rt::MessageDesc::new(
-            Self::NAME,
-            0x05,
-            1,
-            &[8],
-        );
-        pub const OUTPUT_ADDRESS: rt::Range<usize> = 2..4;
-        pub const OUTPUT_VALUE: rt::Range<usize> = 4..6;
-        pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
-            f("output_address", rt::Int(self.output_address as i64));
-            f("output_value", rt::Int(self.output_value.raw() as i64));
-        }
-        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
-            Request::WriteSingleCoil(*self).encode(address, buf)
-        }
-    }
-    impl request::WriteSingleRegister {
-        pub const NAME: &'static str = "write_single_register";
-        pub const CODE: &'static [u8] = &[0x06];
-        pub const LEN: usize = 8;
-        pub const DESC: rt::MessageDesc = rt::MessageDesc::new(
-            Self::NAME,
-            0x06,
-            1,
-            &[8],
-        );
-        pub const REGISTER_ADDRESS: rt::Range<usize> = 2..4;
-        pub const REGISTER_VALUE: rt::Range<usize> = 4..6;
-        pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
-            f("register_address", rt::Int(self.register_address as i64));
-            f("register_value", rt::Int(self.register_value as i64));
-        }
-        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
-            Request::WriteSingleRegister(*self).encode(address, buf)
-        }
-    }
-    impl request::WriteMultipleCoils {
-        pub const NAME: &'static str = "write_multiple_coils";
-        pub const CODE: &'static [u8] = &[0x0F];
-        pub const MIN_LEN: usize = 10;
-        pub const MAX_LEN: usize = 255;
-        pub const DESC: rt::MessageDesc = rt::MessageDesc::new(
-            Self::NAME,
-            0x0F,
-            1,
-            &[9],
-        );
-        pub const STARTING_ADDRESS: rt::Range<usize> = 2..4;
-        pub const QUANTITY: rt::Range<usize> = 4..6;
-        pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
-            f("starting_address", rt::Int(self.starting_address as i64));
-            f("quantity", rt::Int(self.quantity as i64));
-            f("outputs", rt::List(self.outputs.elements()));
-        }
-        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
-            Request::WriteMultipleCoils(*self).encode(address, buf)
-        }
-    }
-    impl request::WriteMultipleRegisters {
-        pub const NAME: &'static str = "write_multiple_registers";
-        pub const CODE: &'static [u8] = &[0x10];
-        pub const MIN_LEN: usize = 11;
-        pub const MAX_LEN: usize = 255;
-        pub const DESC: rt::MessageDesc = rt::MessageDesc::new(
-            Self::NAME,
-            0x10,
-            1,
-            &[9],
-        );
-        pub const STARTING_ADDRESS: rt::Range<usize> = 2..4;
-        pub const QUANTITY: rt::Range<usize> = 4..6;
-        pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
-            f("starting_address", rt::Int(self.starting_address as i64));
-            f("quantity", rt::Int(self.quantity as i64));
-            f("values", rt::List(self.values.elements()));
-        }
-        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
-            Request::WriteMultipleRegisters(*self).encode(address, buf)
-        }
-    }
     ///A request (command), host to device.
     #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
     #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
@@ -464,17 +300,13 @@ pub mod modbus {
         /// The length of this message's frame, in bytes.
         pub const fn frame_len(&self) -> usize {
             match self {
-                Self::WriteMultipleCoils(
-                    request::WriteMultipleCoils { outputs: v_outputs, .. },
-                ) => {
+                Self::WriteMultipleCoils(m) => {
                     REPEAT_WRITE_MULTIPLE_COILS.base
-                        + REPEAT_WRITE_MULTIPLE_COILS.bytes_of(v_outputs.len())
+                        + REPEAT_WRITE_MULTIPLE_COILS.bytes_of(m.outputs.len())
                 }
-                Self::WriteMultipleRegisters(
-                    request::WriteMultipleRegisters { values: v_values, .. },
-                ) => {
+                Self::WriteMultipleRegisters(m) => {
                     REPEAT_WRITE_MULTIPLE_REGISTERS.base
-                        + REPEAT_WRITE_MULTIPLE_REGISTERS.bytes_of(v_values.len())
+                        + REPEAT_WRITE_MULTIPLE_REGISTERS.bytes_of(m.values.len())
                 }
                 _ => Self::MESSAGES[self.index()].2,
             }
@@ -496,11 +328,7 @@ pub mod modbus {
         /// Encodes the frame for `address` into `buf`; returns the frame length. Refuses what
         /// decode refuses: an address no frame may carry, the broadcast address for a command
         /// that does not accept it, a value outside its field's range.
-        pub fn encode(
-            &self,
-            address: u8,
-            buf: &mut [u8],
-        ) -> rt::Result<usize, rt::EncodeError> {
+        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             rt::encode_address(address, &FRAME)?;
             let len = match *self {
                 Self::ReadCoils(
@@ -668,7 +496,13 @@ pub mod modbus {
                     let frame = rt::fixed::<8>(frame, &request::ReadCoils::DESC)?;
                     rt::no_broadcast(frame[0], 0x00, &request::ReadCoils::DESC)?;
                     let field_1: u16 = u16::from_be_bytes([frame[4], frame[5]]);
-                    rt::in_range(&request::READ_COILS_QUANTITY, 4, field_1, 1, 2000)?;
+                    rt::in_range(
+                        &request::ReadCoils::QUANTITY_DESC,
+                        4,
+                        field_1,
+                        1,
+                        2000,
+                    )?;
                     rt::Ok(
                         Self::ReadCoils(request::ReadCoils {
                             starting_address: u16::from_be_bytes([frame[2], frame[3]]),
@@ -687,7 +521,7 @@ pub mod modbus {
                     )?;
                     let field_1: u16 = u16::from_be_bytes([frame[4], frame[5]]);
                     rt::in_range(
-                        &request::READ_DISCRETE_INPUTS_QUANTITY,
+                        &request::ReadDiscreteInputs::QUANTITY_DESC,
                         4,
                         field_1,
                         1,
@@ -711,7 +545,7 @@ pub mod modbus {
                     )?;
                     let field_1: u16 = u16::from_be_bytes([frame[4], frame[5]]);
                     rt::in_range(
-                        &request::READ_HOLDING_REGISTERS_QUANTITY,
+                        &request::ReadHoldingRegisters::QUANTITY_DESC,
                         4,
                         field_1,
                         1,
@@ -735,7 +569,7 @@ pub mod modbus {
                     )?;
                     let field_1: u16 = u16::from_be_bytes([frame[4], frame[5]]);
                     rt::in_range(
-                        &request::READ_INPUT_REGISTERS_QUANTITY,
+                        &request::ReadInputRegisters::QUANTITY_DESC,
                         4,
                         field_1,
                         1,
@@ -775,14 +609,14 @@ pub mod modbus {
                         .split::<7>(frame)?;
                     let field_1: u16 = u16::from_be_bytes([frame[4], frame[5]]);
                     rt::in_range(
-                        &request::WRITE_MULTIPLE_COILS_QUANTITY,
+                        &request::WriteMultipleCoils::QUANTITY_DESC,
                         4,
                         field_1,
                         1,
                         1968,
                     )?;
                     rt::following(
-                        &request::WRITE_MULTIPLE_COILS_BYTE_COUNT,
+                        &request::WriteMultipleCoils::BYTE_COUNT_DESC,
                         6,
                         frame[6],
                         field_1 as i64,
@@ -803,14 +637,14 @@ pub mod modbus {
                         .split::<7>(frame)?;
                     let field_1: u16 = u16::from_be_bytes([frame[4], frame[5]]);
                     rt::in_range(
-                        &request::WRITE_MULTIPLE_REGISTERS_QUANTITY,
+                        &request::WriteMultipleRegisters::QUANTITY_DESC,
                         4,
                         field_1,
                         1,
                         123,
                     )?;
                     rt::following(
-                        &request::WRITE_MULTIPLE_REGISTERS_BYTE_COUNT,
+                        &request::WriteMultipleRegisters::BYTE_COUNT_DESC,
                         6,
                         frame[6],
                         field_1 as i64,
@@ -836,77 +670,62 @@ pub mod modbus {
             name: &str,
             mut field: impl FnMut(&'static str) -> rt::Option<rt::FieldValue<'v>>,
         ) -> rt::Result<Self, rt::FieldError> {
-            match name {
+            let message = match name {
                 "read_coils" => {
-                    rt::Ok(
-                        Self::ReadCoils(request::ReadCoils {
-                            starting_address: rt::get(&mut field, "starting_address")?,
-                            quantity: rt::get(&mut field, "quantity")?,
-                        }),
-                    )
+                    Self::ReadCoils(request::ReadCoils {
+                        starting_address: rt::get(&mut field, "starting_address")?,
+                        quantity: rt::get(&mut field, "quantity")?,
+                    })
                 }
                 "read_discrete_inputs" => {
-                    rt::Ok(
-                        Self::ReadDiscreteInputs(request::ReadDiscreteInputs {
-                            starting_address: rt::get(&mut field, "starting_address")?,
-                            quantity: rt::get(&mut field, "quantity")?,
-                        }),
-                    )
+                    Self::ReadDiscreteInputs(request::ReadDiscreteInputs {
+                        starting_address: rt::get(&mut field, "starting_address")?,
+                        quantity: rt::get(&mut field, "quantity")?,
+                    })
                 }
                 "read_holding_registers" => {
-                    rt::Ok(
-                        Self::ReadHoldingRegisters(request::ReadHoldingRegisters {
-                            starting_address: rt::get(&mut field, "starting_address")?,
-                            quantity: rt::get(&mut field, "quantity")?,
-                        }),
-                    )
+                    Self::ReadHoldingRegisters(request::ReadHoldingRegisters {
+                        starting_address: rt::get(&mut field, "starting_address")?,
+                        quantity: rt::get(&mut field, "quantity")?,
+                    })
                 }
                 "read_input_registers" => {
-                    rt::Ok(
-                        Self::ReadInputRegisters(request::ReadInputRegisters {
-                            starting_address: rt::get(&mut field, "starting_address")?,
-                            quantity: rt::get(&mut field, "quantity")?,
-                        }),
-                    )
+                    Self::ReadInputRegisters(request::ReadInputRegisters {
+                        starting_address: rt::get(&mut field, "starting_address")?,
+                        quantity: rt::get(&mut field, "quantity")?,
+                    })
                 }
                 "write_single_coil" => {
-                    rt::Ok(
-                        Self::WriteSingleCoil(request::WriteSingleCoil {
-                            output_address: rt::get(&mut field, "output_address")?,
-                            output_value: CoilState::from_raw(
-                                rt::get(&mut field, "output_value")?,
-                            ),
-                        }),
-                    )
+                    Self::WriteSingleCoil(request::WriteSingleCoil {
+                        output_address: rt::get(&mut field, "output_address")?,
+                        output_value: CoilState::from_raw(
+                            rt::get(&mut field, "output_value")?,
+                        ),
+                    })
                 }
                 "write_single_register" => {
-                    rt::Ok(
-                        Self::WriteSingleRegister(request::WriteSingleRegister {
-                            register_address: rt::get(&mut field, "register_address")?,
-                            register_value: rt::get(&mut field, "register_value")?,
-                        }),
-                    )
+                    Self::WriteSingleRegister(request::WriteSingleRegister {
+                        register_address: rt::get(&mut field, "register_address")?,
+                        register_value: rt::get(&mut field, "register_value")?,
+                    })
                 }
                 "write_multiple_coils" => {
-                    rt::Ok(
-                        Self::WriteMultipleCoils(request::WriteMultipleCoils {
-                            starting_address: rt::get(&mut field, "starting_address")?,
-                            quantity: rt::get(&mut field, "quantity")?,
-                            outputs: rt::list_bits::<246>(&mut field, "outputs")?,
-                        }),
-                    )
+                    Self::WriteMultipleCoils(request::WriteMultipleCoils {
+                        starting_address: rt::get(&mut field, "starting_address")?,
+                        quantity: rt::get(&mut field, "quantity")?,
+                        outputs: rt::list_bits::<246>(&mut field, "outputs")?,
+                    })
                 }
                 "write_multiple_registers" => {
-                    rt::Ok(
-                        Self::WriteMultipleRegisters(request::WriteMultipleRegisters {
-                            starting_address: rt::get(&mut field, "starting_address")?,
-                            quantity: rt::get(&mut field, "quantity")?,
-                            values: rt::list::<u16, 123>(&mut field, "values", 0, 65535)?,
-                        }),
-                    )
+                    Self::WriteMultipleRegisters(request::WriteMultipleRegisters {
+                        starting_address: rt::get(&mut field, "starting_address")?,
+                        quantity: rt::get(&mut field, "quantity")?,
+                        values: rt::list::<u16, 123>(&mut field, "values", 0, 65535)?,
+                    })
                 }
-                _ => rt::Err(rt::FieldError::UnknownMessage),
-            }
+                _ => return rt::Err(rt::FieldError::UnknownMessage),
+            };
+            rt::Ok(message)
         }
     }
     impl rt::Message for Request {
@@ -927,11 +746,7 @@ pub mod modbus {
             Request::visit(self, f)
         }
         #[inline]
-        fn encode(
-            &self,
-            address: u8,
-            buf: &mut [u8],
-        ) -> rt::Result<usize, rt::EncodeError> {
+        fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             Request::encode(self, address, buf)
         }
         #[inline]
@@ -979,7 +794,7 @@ pub mod modbus {
     }
     /// Where `read_coils_reply.coils` sits in the frame and how its elements are counted.
     pub const REPEAT_READ_COILS_REPLY: rt::RepeatAt = rt::RepeatAt {
-        field: &response::READ_COILS_REPLY_COILS,
+        field: &response::ReadCoilsReply::COILS_DESC,
         base: 5,
         at: 3,
         width: 0,
@@ -994,7 +809,7 @@ pub mod modbus {
     };
     /// Where `read_discrete_inputs_reply.inputs` sits in the frame and how its elements are counted.
     pub const REPEAT_READ_DISCRETE_INPUTS_REPLY: rt::RepeatAt = rt::RepeatAt {
-        field: &response::READ_DISCRETE_INPUTS_REPLY_INPUTS,
+        field: &response::ReadDiscreteInputsReply::INPUTS_DESC,
         base: 5,
         at: 3,
         width: 0,
@@ -1009,7 +824,7 @@ pub mod modbus {
     };
     /// Where `read_holding_registers_reply.registers` sits in the frame and how its elements are counted.
     pub const REPEAT_READ_HOLDING_REGISTERS_REPLY: rt::RepeatAt = rt::RepeatAt {
-        field: &response::READ_HOLDING_REGISTERS_REPLY_REGISTERS,
+        field: &response::ReadHoldingRegistersReply::REGISTERS_DESC,
         base: 5,
         at: 3,
         width: 2,
@@ -1024,7 +839,7 @@ pub mod modbus {
     };
     /// Where `read_input_registers_reply.registers` sits in the frame and how its elements are counted.
     pub const REPEAT_READ_INPUT_REGISTERS_REPLY: rt::RepeatAt = rt::RepeatAt {
-        field: &response::READ_INPUT_REGISTERS_REPLY_REGISTERS,
+        field: &response::ReadInputRegistersReply::REGISTERS_DESC,
         base: 5,
         at: 3,
         width: 2,
@@ -1037,302 +852,6 @@ pub mod modbus {
         min: 1,
         max: 125,
     };
-    impl response::ReadCoilsReply {
-        pub const NAME: &'static str = "read_coils_reply";
-        pub const CODE: &'static [u8] = &[0x01];
-        pub const MIN_LEN: usize = 6;
-        pub const MAX_LEN: usize = 255;
-        pub const DESC: rt::MessageDesc = rt::MessageDesc::new(
-            Self::NAME,
-            0x01,
-            1,
-            &[5],
-        );
-        pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
-            f("coils", rt::List(self.coils.elements()));
-        }
-        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
-            Response::ReadCoilsReply(*self).encode(address, buf)
-        }
-    }
-    impl response::ReadCoilsException {
-        pub const NAME: &'static str = "read_coils_exception";
-        pub const CODE: &'static [u8] = &[0x81];
-        pub const LEN: usize = 5;
-        pub const DESC: rt::MessageDesc = rt::MessageDesc::new(
-            Self::NAME,
-            0x81,
-            1,
-            &[5],
-        );
-        pub const EXCEPTION_CODE: rt::Range<usize> = 2..3;
-        pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
-            f("exception_code", rt::Int(self.exception_code.raw() as i64));
-        }
-        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
-            Response::ReadCoilsException(*self).encode(address, buf)
-        }
-    }
-    impl response::ReadDiscreteInputsReply {
-        pub const NAME: &'static str = "read_discrete_inputs_reply";
-        pub const CODE: &'static [u8] = &[0x02];
-        pub const MIN_LEN: usize = 6;
-        pub const MAX_LEN: usize = 255;
-        pub const DESC: rt::MessageDesc = rt::MessageDesc::new(
-            Self::NAME,
-            0x02,
-            1,
-            &[5],
-        );
-        pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
-            f("inputs", rt::List(self.inputs.elements()));
-        }
-        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
-            Response::ReadDiscreteInputsReply(*self).encode(address, buf)
-        }
-    }
-    impl response::ReadDiscreteInputsException {
-        pub const NAME: &'static str = "read_discrete_inputs_exception";
-        pub const CODE: &'static [u8] = &[0x82];
-        pub const LEN: usize = 5;
-        pub const DESC: rt::MessageDesc = rt::MessageDesc::new(
-            Self::NAME,
-            0x82,
-            1,
-            &[5],
-        );
-        pub const EXCEPTION_CODE: rt::Range<usize> = 2..3;
-        pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
-            f("exception_code", rt::Int(self.exception_code.raw() as i64));
-        }
-        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
-            Response::ReadDiscreteInputsException(*self).encode(address, buf)
-        }
-    }
-    impl response::ReadHoldingRegistersReply {
-        pub const NAME: &'static str = "read_holding_registers_reply";
-        pub const CODE: &'static [u8] = &[0x03];
-        pub const MIN_LEN: usize = 7;
-        pub const MAX_LEN: usize = 255;
-        pub const DESC: rt::MessageDesc = rt::MessageDesc::new(
-            Self::NAME,
-            0x03,
-            1,
-            &[5],
-        );
-        pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
-            f("registers", rt::List(self.registers.elements()));
-        }
-        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
-            Response::ReadHoldingRegistersReply(*self).encode(address, buf)
-        }
-    }
-    impl response::ReadHoldingRegistersException {
-        pub const NAME: &'static str = "read_holding_registers_exception";
-        pub const CODE: &'static [u8] = &[0x83];
-        pub const LEN: usize = 5;
-        pub const DESC: rt::MessageDesc = rt::MessageDesc::new(
-            Self::NAME,
-            0x83,
-            1,
-            &[5],
-        );
-        pub const EXCEPTION_CODE: rt::Range<usize> = 2..3;
-        pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
-            f("exception_code", rt::Int(self.exception_code.raw() as i64));
-        }
-        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
-            Response::ReadHoldingRegistersException(*self).encode(address, buf)
-        }
-    }
-    impl response::ReadInputRegistersReply {
-        pub const NAME: &'static str = "read_input_registers_reply";
-        pub const CODE: &'static [u8] = &[0x04];
-        pub const MIN_LEN: usize = 7;
-        pub const MAX_LEN: usize = 255;
-        pub const DESC: rt::MessageDesc = rt::MessageDesc::new(
-            Self::NAME,
-            0x04,
-            1,
-            &[5],
-        );
-        pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
-            f("registers", rt::List(self.registers.elements()));
-        }
-        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
-            Response::ReadInputRegistersReply(*self).encode(address, buf)
-        }
-    }
-    impl response::ReadInputRegistersException {
-        pub const NAME: &'static str = "read_input_registers_exception";
-        pub const CODE: &'static [u8] = &[0x84];
-        pub const LEN: usize = 5;
-        pub const DESC: rt::MessageDesc = rt::MessageDesc::new(
-            Self::NAME,
-            0x84,
-            1,
-            &[5],
-        );
-        pub const EXCEPTION_CODE: rt::Range<usize> = 2..3;
-        pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
-            f("exception_code", rt::Int(self.exception_code.raw() as i64));
-        }
-        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
-            Response::ReadInputRegistersException(*self).encode(address, buf)
-        }
-    }
-    impl response::WriteSingleCoilReply {
-        pub const NAME: &'static str = "write_single_coil_reply";
-        pub const CODE: &'static [u8] = &[0x05];
-        pub const LEN: usize = 8;
-        pub const DESC: rt::MessageDesc = rt::MessageDesc::new(
-            Self::NAME,
-            0x05,
-            1,
-            &[8],
-        );
-        pub const OUTPUT_ADDRESS: rt::Range<usize> = 2..4;
-        pub const OUTPUT_VALUE: rt::Range<usize> = 4..6;
-        pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
-            f("output_address", rt::Int(self.output_address as i64));
-            f("output_value", rt::Int(self.output_value.raw() as i64));
-        }
-        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
-            Response::WriteSingleCoilReply(*self).encode(address, buf)
-        }
-    }
-    impl response::WriteSingleCoilException {
-        pub const NAME: &'static str = "write_single_coil_exception";
-        pub const CODE: &'static [u8] = &[0x85];
-        pub const LEN: usize = 5;
-        pub const DESC: rt::MessageDesc = rt::MessageDesc::new(
-            Self::NAME,
-            0x85,
-            1,
-            &[5],
-        );
-        pub const EXCEPTION_CODE: rt::Range<usize> = 2..3;
-        pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
-            f("exception_code", rt::Int(self.exception_code.raw() as i64));
-        }
-        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
-            Response::WriteSingleCoilException(*self).encode(address, buf)
-        }
-    }
-    impl response::WriteSingleRegisterReply {
-        pub const NAME: &'static str = "write_single_register_reply";
-        pub const CODE: &'static [u8] = &[0x06];
-        pub const LEN: usize = 8;
-        pub const DESC: rt::MessageDesc = rt::MessageDesc::new(
-            Self::NAME,
-            0x06,
-            1,
-            &[8],
-        );
-        pub const REGISTER_ADDRESS: rt::Range<usize> = 2..4;
-        pub const REGISTER_VALUE: rt::Range<usize> = 4..6;
-        pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
-            f("register_address", rt::Int(self.register_address as i64));
-            f("register_value", rt::Int(self.register_value as i64));
-        }
-        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
-            Response::WriteSingleRegisterReply(*self).encode(address, buf)
-        }
-    }
-    impl response::WriteSingleRegisterException {
-        pub const NAME: &'static str = "write_single_register_exception";
-        pub const CODE: &'static [u8] = &[0x86];
-        pub const LEN: usize = 5;
-        pub const DESC: rt::MessageDesc = rt::MessageDesc::new(
-            Self::NAME,
-            0x86,
-            1,
-            &[5],
-        );
-        pub const EXCEPTION_CODE: rt::Range<usize> = 2..3;
-        pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
-            f("exception_code", rt::Int(self.exception_code.raw() as i64));
-        }
-        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
-            Response::WriteSingleRegisterException(*self).encode(address, buf)
-        }
-    }
-    impl response::WriteMultipleCoilsReply {
-        pub const NAME: &'static str = "write_multiple_coils_reply";
-        pub const CODE: &'static [u8] = &[0x0F];
-        pub const LEN: usize = 8;
-        pub const DESC: rt::MessageDesc = rt::MessageDesc::new(
-            Self::NAME,
-            0x0F,
-            1,
-            &[8],
-        );
-        pub const STARTING_ADDRESS: rt::Range<usize> = 2..4;
-        pub const QUANTITY: rt::Range<usize> = 4..6;
-        pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
-            f("starting_address", rt::Int(self.starting_address as i64));
-            f("quantity", rt::Int(self.quantity as i64));
-        }
-        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
-            Response::WriteMultipleCoilsReply(*self).encode(address, buf)
-        }
-    }
-    impl response::WriteMultipleCoilsException {
-        pub const NAME: &'static str = "write_multiple_coils_exception";
-        pub const CODE: &'static [u8] = &[0x8F];
-        pub const LEN: usize = 5;
-        pub const DESC: rt::MessageDesc = rt::MessageDesc::new(
-            Self::NAME,
-            0x8F,
-            1,
-            &[5],
-        );
-        pub const EXCEPTION_CODE: rt::Range<usize> = 2..3;
-        pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
-            f("exception_code", rt::Int(self.exception_code.raw() as i64));
-        }
-        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
-            Response::WriteMultipleCoilsException(*self).encode(address, buf)
-        }
-    }
-    impl response::WriteMultipleRegistersReply {
-        pub const NAME: &'static str = "write_multiple_registers_reply";
-        pub const CODE: &'static [u8] = &[0x10];
-        pub const LEN: usize = 8;
-        pub const DESC: rt::MessageDesc = rt::MessageDesc::new(
-            Self::NAME,
-            0x10,
-            1,
-            &[8],
-        );
-        pub const STARTING_ADDRESS: rt::Range<usize> = 2..4;
-        pub const QUANTITY: rt::Range<usize> = 4..6;
-        pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
-            f("starting_address", rt::Int(self.starting_address as i64));
-            f("quantity", rt::Int(self.quantity as i64));
-        }
-        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
-            Response::WriteMultipleRegistersReply(*self).encode(address, buf)
-        }
-    }
-    impl response::WriteMultipleRegistersException {
-        pub const NAME: &'static str = "write_multiple_registers_exception";
-        pub const CODE: &'static [u8] = &[0x90];
-        pub const LEN: usize = 5;
-        pub const DESC: rt::MessageDesc = rt::MessageDesc::new(
-            Self::NAME,
-            0x90,
-            1,
-            &[5],
-        );
-        pub const EXCEPTION_CODE: rt::Range<usize> = 2..3;
-        pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
-            f("exception_code", rt::Int(self.exception_code.raw() as i64));
-        }
-        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
-            Response::WriteMultipleRegistersException(*self).encode(address, buf)
-        }
-    }
     ///A response, device to host.
     #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
     #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
@@ -1408,27 +927,21 @@ pub mod modbus {
         /// The length of this message's frame, in bytes.
         pub const fn frame_len(&self) -> usize {
             match self {
-                Self::ReadCoilsReply(response::ReadCoilsReply { coils: v_coils, .. }) => {
+                Self::ReadCoilsReply(m) => {
                     REPEAT_READ_COILS_REPLY.base
-                        + REPEAT_READ_COILS_REPLY.bytes_of(v_coils.len())
+                        + REPEAT_READ_COILS_REPLY.bytes_of(m.coils.len())
                 }
-                Self::ReadDiscreteInputsReply(
-                    response::ReadDiscreteInputsReply { inputs: v_inputs, .. },
-                ) => {
+                Self::ReadDiscreteInputsReply(m) => {
                     REPEAT_READ_DISCRETE_INPUTS_REPLY.base
-                        + REPEAT_READ_DISCRETE_INPUTS_REPLY.bytes_of(v_inputs.len())
+                        + REPEAT_READ_DISCRETE_INPUTS_REPLY.bytes_of(m.inputs.len())
                 }
-                Self::ReadHoldingRegistersReply(
-                    response::ReadHoldingRegistersReply { registers: v_registers, .. },
-                ) => {
+                Self::ReadHoldingRegistersReply(m) => {
                     REPEAT_READ_HOLDING_REGISTERS_REPLY.base
-                        + REPEAT_READ_HOLDING_REGISTERS_REPLY.bytes_of(v_registers.len())
+                        + REPEAT_READ_HOLDING_REGISTERS_REPLY.bytes_of(m.registers.len())
                 }
-                Self::ReadInputRegistersReply(
-                    response::ReadInputRegistersReply { registers: v_registers, .. },
-                ) => {
+                Self::ReadInputRegistersReply(m) => {
                     REPEAT_READ_INPUT_REGISTERS_REPLY.base
-                        + REPEAT_READ_INPUT_REGISTERS_REPLY.bytes_of(v_registers.len())
+                        + REPEAT_READ_INPUT_REGISTERS_REPLY.bytes_of(m.registers.len())
                 }
                 _ => Self::MESSAGES[self.index()].2,
             }
@@ -1458,11 +971,7 @@ pub mod modbus {
         /// Encodes the frame for `address` into `buf`; returns the frame length. Refuses what
         /// decode refuses: an address no frame may carry, the broadcast address for a command
         /// that does not accept it, a value outside its field's range.
-        pub fn encode(
-            &self,
-            address: u8,
-            buf: &mut [u8],
-        ) -> rt::Result<usize, rt::EncodeError> {
+        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             rt::encode_address(address, &FRAME)?;
             let len = match *self {
                 Self::ReadCoilsReply(response::ReadCoilsReply { coils: v_coils }) => {
@@ -1871,149 +1380,118 @@ pub mod modbus {
             name: &str,
             mut field: impl FnMut(&'static str) -> rt::Option<rt::FieldValue<'v>>,
         ) -> rt::Result<Self, rt::FieldError> {
-            match name {
+            let message = match name {
                 "read_coils_reply" => {
-                    rt::Ok(
-                        Self::ReadCoilsReply(response::ReadCoilsReply {
-                            coils: rt::list_bits::<250>(&mut field, "coils")?,
-                        }),
-                    )
+                    Self::ReadCoilsReply(response::ReadCoilsReply {
+                        coils: rt::list_bits::<250>(&mut field, "coils")?,
+                    })
                 }
                 "read_coils_exception" => {
-                    rt::Ok(
-                        Self::ReadCoilsException(response::ReadCoilsException {
-                            exception_code: ExceptionCode::from_raw(
-                                rt::get(&mut field, "exception_code")?,
-                            ),
-                        }),
-                    )
+                    Self::ReadCoilsException(response::ReadCoilsException {
+                        exception_code: ExceptionCode::from_raw(
+                            rt::get(&mut field, "exception_code")?,
+                        ),
+                    })
                 }
                 "read_discrete_inputs_reply" => {
-                    rt::Ok(
-                        Self::ReadDiscreteInputsReply(response::ReadDiscreteInputsReply {
-                            inputs: rt::list_bits::<250>(&mut field, "inputs")?,
-                        }),
-                    )
+                    Self::ReadDiscreteInputsReply(response::ReadDiscreteInputsReply {
+                        inputs: rt::list_bits::<250>(&mut field, "inputs")?,
+                    })
                 }
                 "read_discrete_inputs_exception" => {
-                    rt::Ok(
-                        Self::ReadDiscreteInputsException(response::ReadDiscreteInputsException {
-                            exception_code: ExceptionCode::from_raw(
-                                rt::get(&mut field, "exception_code")?,
-                            ),
-                        }),
-                    )
+                    Self::ReadDiscreteInputsException(response::ReadDiscreteInputsException {
+                        exception_code: ExceptionCode::from_raw(
+                            rt::get(&mut field, "exception_code")?,
+                        ),
+                    })
                 }
                 "read_holding_registers_reply" => {
-                    rt::Ok(
-                        Self::ReadHoldingRegistersReply(response::ReadHoldingRegistersReply {
-                            registers: rt::list::<
-                                u16,
-                                125,
-                            >(&mut field, "registers", 0, 65535)?,
-                        }),
-                    )
+                    Self::ReadHoldingRegistersReply(response::ReadHoldingRegistersReply {
+                        registers: rt::list::<
+                            u16,
+                            125,
+                        >(&mut field, "registers", 0, 65535)?,
+                    })
                 }
                 "read_holding_registers_exception" => {
-                    rt::Ok(
-                        Self::ReadHoldingRegistersException(response::ReadHoldingRegistersException {
-                            exception_code: ExceptionCode::from_raw(
-                                rt::get(&mut field, "exception_code")?,
-                            ),
-                        }),
-                    )
+                    Self::ReadHoldingRegistersException(response::ReadHoldingRegistersException {
+                        exception_code: ExceptionCode::from_raw(
+                            rt::get(&mut field, "exception_code")?,
+                        ),
+                    })
                 }
                 "read_input_registers_reply" => {
-                    rt::Ok(
-                        Self::ReadInputRegistersReply(response::ReadInputRegistersReply {
-                            registers: rt::list::<
-                                u16,
-                                125,
-                            >(&mut field, "registers", 0, 65535)?,
-                        }),
-                    )
+                    Self::ReadInputRegistersReply(response::ReadInputRegistersReply {
+                        registers: rt::list::<
+                            u16,
+                            125,
+                        >(&mut field, "registers", 0, 65535)?,
+                    })
                 }
                 "read_input_registers_exception" => {
-                    rt::Ok(
-                        Self::ReadInputRegistersException(response::ReadInputRegistersException {
-                            exception_code: ExceptionCode::from_raw(
-                                rt::get(&mut field, "exception_code")?,
-                            ),
-                        }),
-                    )
+                    Self::ReadInputRegistersException(response::ReadInputRegistersException {
+                        exception_code: ExceptionCode::from_raw(
+                            rt::get(&mut field, "exception_code")?,
+                        ),
+                    })
                 }
                 "write_single_coil_reply" => {
-                    rt::Ok(
-                        Self::WriteSingleCoilReply(response::WriteSingleCoilReply {
-                            output_address: rt::get(&mut field, "output_address")?,
-                            output_value: CoilState::from_raw(
-                                rt::get(&mut field, "output_value")?,
-                            ),
-                        }),
-                    )
+                    Self::WriteSingleCoilReply(response::WriteSingleCoilReply {
+                        output_address: rt::get(&mut field, "output_address")?,
+                        output_value: CoilState::from_raw(
+                            rt::get(&mut field, "output_value")?,
+                        ),
+                    })
                 }
                 "write_single_coil_exception" => {
-                    rt::Ok(
-                        Self::WriteSingleCoilException(response::WriteSingleCoilException {
-                            exception_code: ExceptionCode::from_raw(
-                                rt::get(&mut field, "exception_code")?,
-                            ),
-                        }),
-                    )
+                    Self::WriteSingleCoilException(response::WriteSingleCoilException {
+                        exception_code: ExceptionCode::from_raw(
+                            rt::get(&mut field, "exception_code")?,
+                        ),
+                    })
                 }
                 "write_single_register_reply" => {
-                    rt::Ok(
-                        Self::WriteSingleRegisterReply(response::WriteSingleRegisterReply {
-                            register_address: rt::get(&mut field, "register_address")?,
-                            register_value: rt::get(&mut field, "register_value")?,
-                        }),
-                    )
+                    Self::WriteSingleRegisterReply(response::WriteSingleRegisterReply {
+                        register_address: rt::get(&mut field, "register_address")?,
+                        register_value: rt::get(&mut field, "register_value")?,
+                    })
                 }
                 "write_single_register_exception" => {
-                    rt::Ok(
-                        Self::WriteSingleRegisterException(response::WriteSingleRegisterException {
-                            exception_code: ExceptionCode::from_raw(
-                                rt::get(&mut field, "exception_code")?,
-                            ),
-                        }),
-                    )
+                    Self::WriteSingleRegisterException(response::WriteSingleRegisterException {
+                        exception_code: ExceptionCode::from_raw(
+                            rt::get(&mut field, "exception_code")?,
+                        ),
+                    })
                 }
                 "write_multiple_coils_reply" => {
-                    rt::Ok(
-                        Self::WriteMultipleCoilsReply(response::WriteMultipleCoilsReply {
-                            starting_address: rt::get(&mut field, "starting_address")?,
-                            quantity: rt::get(&mut field, "quantity")?,
-                        }),
-                    )
+                    Self::WriteMultipleCoilsReply(response::WriteMultipleCoilsReply {
+                        starting_address: rt::get(&mut field, "starting_address")?,
+                        quantity: rt::get(&mut field, "quantity")?,
+                    })
                 }
                 "write_multiple_coils_exception" => {
-                    rt::Ok(
-                        Self::WriteMultipleCoilsException(response::WriteMultipleCoilsException {
-                            exception_code: ExceptionCode::from_raw(
-                                rt::get(&mut field, "exception_code")?,
-                            ),
-                        }),
-                    )
+                    Self::WriteMultipleCoilsException(response::WriteMultipleCoilsException {
+                        exception_code: ExceptionCode::from_raw(
+                            rt::get(&mut field, "exception_code")?,
+                        ),
+                    })
                 }
                 "write_multiple_registers_reply" => {
-                    rt::Ok(
-                        Self::WriteMultipleRegistersReply(response::WriteMultipleRegistersReply {
-                            starting_address: rt::get(&mut field, "starting_address")?,
-                            quantity: rt::get(&mut field, "quantity")?,
-                        }),
-                    )
+                    Self::WriteMultipleRegistersReply(response::WriteMultipleRegistersReply {
+                        starting_address: rt::get(&mut field, "starting_address")?,
+                        quantity: rt::get(&mut field, "quantity")?,
+                    })
                 }
                 "write_multiple_registers_exception" => {
-                    rt::Ok(
-                        Self::WriteMultipleRegistersException(response::WriteMultipleRegistersException {
-                            exception_code: ExceptionCode::from_raw(
-                                rt::get(&mut field, "exception_code")?,
-                            ),
-                        }),
-                    )
+                    Self::WriteMultipleRegistersException(response::WriteMultipleRegistersException {
+                        exception_code: ExceptionCode::from_raw(
+                            rt::get(&mut field, "exception_code")?,
+                        ),
+                    })
                 }
-                _ => rt::Err(rt::FieldError::UnknownMessage),
-            }
+                _ => return rt::Err(rt::FieldError::UnknownMessage),
+            };
+            rt::Ok(message)
         }
     }
     impl rt::Message for Response {
@@ -2034,11 +1512,7 @@ pub mod modbus {
             Response::visit(self, f)
         }
         #[inline]
-        fn encode(
-            &self,
-            address: u8,
-            buf: &mut [u8],
-        ) -> rt::Result<usize, rt::EncodeError> {
+        fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             Response::encode(self, address, buf)
         }
         #[inline]
@@ -2060,234 +1534,151 @@ pub mod modbus {
         /// spec): [`busspec_runtime::DecodeError::InvalidValue`] names the first that differs.
         pub fn follows_request(&self, request: &Request) -> rt::DecodeResult<()> {
             match (self, request) {
-                (
-                    &Self::ReadCoilsReply(
-                        response::ReadCoilsReply { coils: v_coils, .. },
-                    ),
-                    &Request::ReadCoils(request::ReadCoils { quantity: r_quantity, .. }),
-                ) => {
+                (Self::ReadCoilsReply(m), Request::ReadCoils(r)) => {
                     rt::following(
-                        &response::READ_COILS_REPLY_BYTE_COUNT,
+                        &response::ReadCoilsReply::BYTE_COUNT_DESC,
                         2,
-                        REPEAT_READ_COILS_REPLY.count_value(v_coils.len()) as u64,
-                        r_quantity as i64,
+                        REPEAT_READ_COILS_REPLY.count_value(m.coils.len()) as u64,
+                        r.quantity as i64,
                         (1, 8),
                         "ceil(quantity / 8) of the request",
                     )?;
                     REPEAT_READ_COILS_REPLY
                         .follows_request(
-                            v_coils.len(),
-                            r_quantity as i64,
+                            m.coils.len(),
+                            r.quantity as i64,
                             (1, 1),
                             "quantity",
                         )?;
                 }
-                (
-                    &Self::ReadDiscreteInputsReply(
-                        response::ReadDiscreteInputsReply { inputs: v_inputs, .. },
-                    ),
-                    &Request::ReadDiscreteInputs(
-                        request::ReadDiscreteInputs { quantity: r_quantity, .. },
-                    ),
-                ) => {
+                (Self::ReadDiscreteInputsReply(m), Request::ReadDiscreteInputs(r)) => {
                     rt::following(
-                        &response::READ_DISCRETE_INPUTS_REPLY_BYTE_COUNT,
+                        &response::ReadDiscreteInputsReply::BYTE_COUNT_DESC,
                         2,
-                        REPEAT_READ_DISCRETE_INPUTS_REPLY.count_value(v_inputs.len())
+                        REPEAT_READ_DISCRETE_INPUTS_REPLY.count_value(m.inputs.len())
                             as u64,
-                        r_quantity as i64,
+                        r.quantity as i64,
                         (1, 8),
                         "ceil(quantity / 8) of the request",
                     )?;
                     REPEAT_READ_DISCRETE_INPUTS_REPLY
                         .follows_request(
-                            v_inputs.len(),
-                            r_quantity as i64,
+                            m.inputs.len(),
+                            r.quantity as i64,
                             (1, 1),
                             "quantity",
                         )?;
                 }
                 (
-                    &Self::ReadHoldingRegistersReply(
-                        response::ReadHoldingRegistersReply {
-                            registers: v_registers,
-                            ..
-                        },
-                    ),
-                    &Request::ReadHoldingRegisters(
-                        request::ReadHoldingRegisters { quantity: r_quantity, .. },
-                    ),
+                    Self::ReadHoldingRegistersReply(m),
+                    Request::ReadHoldingRegisters(r),
                 ) => {
                     rt::following(
-                        &response::READ_HOLDING_REGISTERS_REPLY_BYTE_COUNT,
+                        &response::ReadHoldingRegistersReply::BYTE_COUNT_DESC,
                         2,
                         REPEAT_READ_HOLDING_REGISTERS_REPLY
-                            .count_value(v_registers.len()) as u64,
-                        r_quantity as i64,
+                            .count_value(m.registers.len()) as u64,
+                        r.quantity as i64,
                         (2, 1),
                         "2 × quantity of the request",
                     )?;
                     REPEAT_READ_HOLDING_REGISTERS_REPLY
                         .follows_request(
-                            v_registers.len(),
-                            r_quantity as i64,
+                            m.registers.len(),
+                            r.quantity as i64,
                             (1, 1),
                             "quantity",
                         )?;
                 }
-                (
-                    &Self::ReadInputRegistersReply(
-                        response::ReadInputRegistersReply { registers: v_registers, .. },
-                    ),
-                    &Request::ReadInputRegisters(
-                        request::ReadInputRegisters { quantity: r_quantity, .. },
-                    ),
-                ) => {
+                (Self::ReadInputRegistersReply(m), Request::ReadInputRegisters(r)) => {
                     rt::following(
-                        &response::READ_INPUT_REGISTERS_REPLY_BYTE_COUNT,
+                        &response::ReadInputRegistersReply::BYTE_COUNT_DESC,
                         2,
-                        REPEAT_READ_INPUT_REGISTERS_REPLY.count_value(v_registers.len())
+                        REPEAT_READ_INPUT_REGISTERS_REPLY.count_value(m.registers.len())
                             as u64,
-                        r_quantity as i64,
+                        r.quantity as i64,
                         (2, 1),
                         "2 × quantity of the request",
                     )?;
                     REPEAT_READ_INPUT_REGISTERS_REPLY
                         .follows_request(
-                            v_registers.len(),
-                            r_quantity as i64,
+                            m.registers.len(),
+                            r.quantity as i64,
                             (1, 1),
                             "quantity",
                         )?;
                 }
-                (
-                    &Self::WriteSingleCoilReply(
-                        response::WriteSingleCoilReply {
-                            output_address: v_output_address,
-                            output_value: v_output_value,
-                            ..
-                        },
-                    ),
-                    &Request::WriteSingleCoil(
-                        request::WriteSingleCoil {
-                            output_address: r_output_address,
-                            output_value: r_output_value,
-                            ..
-                        },
-                    ),
-                ) => {
+                (Self::WriteSingleCoilReply(m), Request::WriteSingleCoil(r)) => {
                     rt::following(
-                        &response::WRITE_SINGLE_COIL_REPLY_OUTPUT_ADDRESS,
+                        &response::WriteSingleCoilReply::OUTPUT_ADDRESS_DESC,
                         2,
-                        v_output_address,
-                        r_output_address as i64,
+                        m.output_address,
+                        r.output_address as i64,
                         (1, 1),
                         "output_address of the request",
                     )?;
                     rt::following(
-                        &response::WRITE_SINGLE_COIL_REPLY_OUTPUT_VALUE,
+                        &response::WriteSingleCoilReply::OUTPUT_VALUE_DESC,
                         4,
-                        v_output_value.raw(),
-                        r_output_value.raw() as i64,
+                        m.output_value.raw(),
+                        r.output_value.raw() as i64,
                         (1, 1),
                         "output_value of the request",
                     )?;
                 }
-                (
-                    &Self::WriteSingleRegisterReply(
-                        response::WriteSingleRegisterReply {
-                            register_address: v_register_address,
-                            register_value: v_register_value,
-                            ..
-                        },
-                    ),
-                    &Request::WriteSingleRegister(
-                        request::WriteSingleRegister {
-                            register_address: r_register_address,
-                            register_value: r_register_value,
-                            ..
-                        },
-                    ),
-                ) => {
+                (Self::WriteSingleRegisterReply(m), Request::WriteSingleRegister(r)) => {
                     rt::following(
-                        &response::WRITE_SINGLE_REGISTER_REPLY_REGISTER_ADDRESS,
+                        &response::WriteSingleRegisterReply::REGISTER_ADDRESS_DESC,
                         2,
-                        v_register_address,
-                        r_register_address as i64,
+                        m.register_address,
+                        r.register_address as i64,
                         (1, 1),
                         "register_address of the request",
                     )?;
                     rt::following(
-                        &response::WRITE_SINGLE_REGISTER_REPLY_REGISTER_VALUE,
+                        &response::WriteSingleRegisterReply::REGISTER_VALUE_DESC,
                         4,
-                        v_register_value,
-                        r_register_value as i64,
+                        m.register_value,
+                        r.register_value as i64,
                         (1, 1),
                         "register_value of the request",
                     )?;
                 }
-                (
-                    &Self::WriteMultipleCoilsReply(
-                        response::WriteMultipleCoilsReply {
-                            starting_address: v_starting_address,
-                            quantity: v_quantity,
-                            ..
-                        },
-                    ),
-                    &Request::WriteMultipleCoils(
-                        request::WriteMultipleCoils {
-                            starting_address: r_starting_address,
-                            quantity: r_quantity,
-                            ..
-                        },
-                    ),
-                ) => {
+                (Self::WriteMultipleCoilsReply(m), Request::WriteMultipleCoils(r)) => {
                     rt::following(
-                        &response::WRITE_MULTIPLE_COILS_REPLY_STARTING_ADDRESS,
+                        &response::WriteMultipleCoilsReply::STARTING_ADDRESS_DESC,
                         2,
-                        v_starting_address,
-                        r_starting_address as i64,
+                        m.starting_address,
+                        r.starting_address as i64,
                         (1, 1),
                         "starting_address of the request",
                     )?;
                     rt::following(
-                        &response::WRITE_MULTIPLE_COILS_REPLY_QUANTITY,
+                        &response::WriteMultipleCoilsReply::QUANTITY_DESC,
                         4,
-                        v_quantity,
-                        r_quantity as i64,
+                        m.quantity,
+                        r.quantity as i64,
                         (1, 1),
                         "quantity of the request",
                     )?;
                 }
                 (
-                    &Self::WriteMultipleRegistersReply(
-                        response::WriteMultipleRegistersReply {
-                            starting_address: v_starting_address,
-                            quantity: v_quantity,
-                            ..
-                        },
-                    ),
-                    &Request::WriteMultipleRegisters(
-                        request::WriteMultipleRegisters {
-                            starting_address: r_starting_address,
-                            quantity: r_quantity,
-                            ..
-                        },
-                    ),
+                    Self::WriteMultipleRegistersReply(m),
+                    Request::WriteMultipleRegisters(r),
                 ) => {
                     rt::following(
-                        &response::WRITE_MULTIPLE_REGISTERS_REPLY_STARTING_ADDRESS,
+                        &response::WriteMultipleRegistersReply::STARTING_ADDRESS_DESC,
                         2,
-                        v_starting_address,
-                        r_starting_address as i64,
+                        m.starting_address,
+                        r.starting_address as i64,
                         (1, 1),
                         "starting_address of the request",
                     )?;
                     rt::following(
-                        &response::WRITE_MULTIPLE_REGISTERS_REPLY_QUANTITY,
+                        &response::WriteMultipleRegistersReply::QUANTITY_DESC,
                         4,
-                        v_quantity,
-                        r_quantity as i64,
+                        m.quantity,
+                        r.quantity as i64,
                         (1, 1),
                         "quantity of the request",
                     )?;
@@ -2349,7 +1740,13 @@ pub mod modbus {
                     let frame = rt::fixed::<8>(frame, &request::ReadCoils::DESC)?;
                     rt::no_broadcast(frame[0], 0x00, &request::ReadCoils::DESC)?;
                     let field_1: u16 = u16::from_be_bytes([frame[4], frame[5]]);
-                    rt::in_range(&request::READ_COILS_QUANTITY, 4, field_1, 1, 2000)?;
+                    rt::in_range(
+                        &request::ReadCoils::QUANTITY_DESC,
+                        4,
+                        field_1,
+                        1,
+                        2000,
+                    )?;
                     rt::Ok(Self::ReadCoils {
                         starting_address: u16::from_be_bytes([frame[2], frame[3]]),
                         quantity: field_1,
@@ -2366,7 +1763,7 @@ pub mod modbus {
                     )?;
                     let field_1: u16 = u16::from_be_bytes([frame[4], frame[5]]);
                     rt::in_range(
-                        &request::READ_DISCRETE_INPUTS_QUANTITY,
+                        &request::ReadDiscreteInputs::QUANTITY_DESC,
                         4,
                         field_1,
                         1,
@@ -2388,7 +1785,7 @@ pub mod modbus {
                     )?;
                     let field_1: u16 = u16::from_be_bytes([frame[4], frame[5]]);
                     rt::in_range(
-                        &request::READ_HOLDING_REGISTERS_QUANTITY,
+                        &request::ReadHoldingRegisters::QUANTITY_DESC,
                         4,
                         field_1,
                         1,
@@ -2410,7 +1807,7 @@ pub mod modbus {
                     )?;
                     let field_1: u16 = u16::from_be_bytes([frame[4], frame[5]]);
                     rt::in_range(
-                        &request::READ_INPUT_REGISTERS_QUANTITY,
+                        &request::ReadInputRegisters::QUANTITY_DESC,
                         4,
                         field_1,
                         1,
@@ -2444,14 +1841,14 @@ pub mod modbus {
                         .split::<7>(frame)?;
                     let field_1: u16 = u16::from_be_bytes([frame[4], frame[5]]);
                     rt::in_range(
-                        &request::WRITE_MULTIPLE_COILS_QUANTITY,
+                        &request::WriteMultipleCoils::QUANTITY_DESC,
                         4,
                         field_1,
                         1,
                         1968,
                     )?;
                     rt::following(
-                        &request::WRITE_MULTIPLE_COILS_BYTE_COUNT,
+                        &request::WriteMultipleCoils::BYTE_COUNT_DESC,
                         6,
                         frame[6],
                         field_1 as i64,
@@ -2470,14 +1867,14 @@ pub mod modbus {
                         .split::<7>(frame)?;
                     let field_1: u16 = u16::from_be_bytes([frame[4], frame[5]]);
                     rt::in_range(
-                        &request::WRITE_MULTIPLE_REGISTERS_QUANTITY,
+                        &request::WriteMultipleRegisters::QUANTITY_DESC,
                         4,
                         field_1,
                         1,
                         123,
                     )?;
                     rt::following(
-                        &request::WRITE_MULTIPLE_REGISTERS_BYTE_COUNT,
+                        &request::WriteMultipleRegisters::BYTE_COUNT_DESC,
                         6,
                         frame[6],
                         field_1 as i64,
@@ -2913,89 +2310,83 @@ pub mod modbus {
             match (self, request) {
                 (
                     &Self::ReadCoilsReply { coils: v_coils, .. },
-                    &Request::ReadCoils(request::ReadCoils { quantity: r_quantity, .. }),
+                    Request::ReadCoils(r),
                 ) => {
                     rt::following(
-                        &response::READ_COILS_REPLY_BYTE_COUNT,
+                        &response::ReadCoilsReply::BYTE_COUNT_DESC,
                         2,
                         REPEAT_READ_COILS_REPLY.count_value(v_coils.len()) as u64,
-                        r_quantity as i64,
+                        r.quantity as i64,
                         (1, 8),
                         "ceil(quantity / 8) of the request",
                     )?;
                     REPEAT_READ_COILS_REPLY
                         .follows_request(
                             v_coils.len(),
-                            r_quantity as i64,
+                            r.quantity as i64,
                             (1, 1),
                             "quantity",
                         )?;
                 }
                 (
                     &Self::ReadDiscreteInputsReply { inputs: v_inputs, .. },
-                    &Request::ReadDiscreteInputs(
-                        request::ReadDiscreteInputs { quantity: r_quantity, .. },
-                    ),
+                    Request::ReadDiscreteInputs(r),
                 ) => {
                     rt::following(
-                        &response::READ_DISCRETE_INPUTS_REPLY_BYTE_COUNT,
+                        &response::ReadDiscreteInputsReply::BYTE_COUNT_DESC,
                         2,
                         REPEAT_READ_DISCRETE_INPUTS_REPLY.count_value(v_inputs.len())
                             as u64,
-                        r_quantity as i64,
+                        r.quantity as i64,
                         (1, 8),
                         "ceil(quantity / 8) of the request",
                     )?;
                     REPEAT_READ_DISCRETE_INPUTS_REPLY
                         .follows_request(
                             v_inputs.len(),
-                            r_quantity as i64,
+                            r.quantity as i64,
                             (1, 1),
                             "quantity",
                         )?;
                 }
                 (
                     &Self::ReadHoldingRegistersReply { registers: v_registers, .. },
-                    &Request::ReadHoldingRegisters(
-                        request::ReadHoldingRegisters { quantity: r_quantity, .. },
-                    ),
+                    Request::ReadHoldingRegisters(r),
                 ) => {
                     rt::following(
-                        &response::READ_HOLDING_REGISTERS_REPLY_BYTE_COUNT,
+                        &response::ReadHoldingRegistersReply::BYTE_COUNT_DESC,
                         2,
                         REPEAT_READ_HOLDING_REGISTERS_REPLY
                             .count_value(v_registers.len()) as u64,
-                        r_quantity as i64,
+                        r.quantity as i64,
                         (2, 1),
                         "2 × quantity of the request",
                     )?;
                     REPEAT_READ_HOLDING_REGISTERS_REPLY
                         .follows_request(
                             v_registers.len(),
-                            r_quantity as i64,
+                            r.quantity as i64,
                             (1, 1),
                             "quantity",
                         )?;
                 }
                 (
                     &Self::ReadInputRegistersReply { registers: v_registers, .. },
-                    &Request::ReadInputRegisters(
-                        request::ReadInputRegisters { quantity: r_quantity, .. },
-                    ),
+                    Request::ReadInputRegisters(r),
                 ) => {
                     rt::following(
-                        &response::READ_INPUT_REGISTERS_REPLY_BYTE_COUNT,
+                        &response::ReadInputRegistersReply::BYTE_COUNT_DESC,
                         2,
                         REPEAT_READ_INPUT_REGISTERS_REPLY.count_value(v_registers.len())
                             as u64,
-                        r_quantity as i64,
+                        r.quantity as i64,
                         (2, 1),
                         "2 × quantity of the request",
                     )?;
                     REPEAT_READ_INPUT_REGISTERS_REPLY
                         .follows_request(
                             v_registers.len(),
-                            r_quantity as i64,
+                            r.quantity as i64,
                             (1, 1),
                             "quantity",
                         )?;
@@ -3006,27 +2397,21 @@ pub mod modbus {
                         output_value: v_output_value,
                         ..
                     },
-                    &Request::WriteSingleCoil(
-                        request::WriteSingleCoil {
-                            output_address: r_output_address,
-                            output_value: r_output_value,
-                            ..
-                        },
-                    ),
+                    Request::WriteSingleCoil(r),
                 ) => {
                     rt::following(
-                        &response::WRITE_SINGLE_COIL_REPLY_OUTPUT_ADDRESS,
+                        &response::WriteSingleCoilReply::OUTPUT_ADDRESS_DESC,
                         2,
                         v_output_address,
-                        r_output_address as i64,
+                        r.output_address as i64,
                         (1, 1),
                         "output_address of the request",
                     )?;
                     rt::following(
-                        &response::WRITE_SINGLE_COIL_REPLY_OUTPUT_VALUE,
+                        &response::WriteSingleCoilReply::OUTPUT_VALUE_DESC,
                         4,
                         v_output_value.raw(),
-                        r_output_value.raw() as i64,
+                        r.output_value.raw() as i64,
                         (1, 1),
                         "output_value of the request",
                     )?;
@@ -3037,27 +2422,21 @@ pub mod modbus {
                         register_value: v_register_value,
                         ..
                     },
-                    &Request::WriteSingleRegister(
-                        request::WriteSingleRegister {
-                            register_address: r_register_address,
-                            register_value: r_register_value,
-                            ..
-                        },
-                    ),
+                    Request::WriteSingleRegister(r),
                 ) => {
                     rt::following(
-                        &response::WRITE_SINGLE_REGISTER_REPLY_REGISTER_ADDRESS,
+                        &response::WriteSingleRegisterReply::REGISTER_ADDRESS_DESC,
                         2,
                         v_register_address,
-                        r_register_address as i64,
+                        r.register_address as i64,
                         (1, 1),
                         "register_address of the request",
                     )?;
                     rt::following(
-                        &response::WRITE_SINGLE_REGISTER_REPLY_REGISTER_VALUE,
+                        &response::WriteSingleRegisterReply::REGISTER_VALUE_DESC,
                         4,
                         v_register_value,
-                        r_register_value as i64,
+                        r.register_value as i64,
                         (1, 1),
                         "register_value of the request",
                     )?;
@@ -3068,27 +2447,21 @@ pub mod modbus {
                         quantity: v_quantity,
                         ..
                     },
-                    &Request::WriteMultipleCoils(
-                        request::WriteMultipleCoils {
-                            starting_address: r_starting_address,
-                            quantity: r_quantity,
-                            ..
-                        },
-                    ),
+                    Request::WriteMultipleCoils(r),
                 ) => {
                     rt::following(
-                        &response::WRITE_MULTIPLE_COILS_REPLY_STARTING_ADDRESS,
+                        &response::WriteMultipleCoilsReply::STARTING_ADDRESS_DESC,
                         2,
                         v_starting_address,
-                        r_starting_address as i64,
+                        r.starting_address as i64,
                         (1, 1),
                         "starting_address of the request",
                     )?;
                     rt::following(
-                        &response::WRITE_MULTIPLE_COILS_REPLY_QUANTITY,
+                        &response::WriteMultipleCoilsReply::QUANTITY_DESC,
                         4,
                         v_quantity,
-                        r_quantity as i64,
+                        r.quantity as i64,
                         (1, 1),
                         "quantity of the request",
                     )?;
@@ -3099,27 +2472,21 @@ pub mod modbus {
                         quantity: v_quantity,
                         ..
                     },
-                    &Request::WriteMultipleRegisters(
-                        request::WriteMultipleRegisters {
-                            starting_address: r_starting_address,
-                            quantity: r_quantity,
-                            ..
-                        },
-                    ),
+                    Request::WriteMultipleRegisters(r),
                 ) => {
                     rt::following(
-                        &response::WRITE_MULTIPLE_REGISTERS_REPLY_STARTING_ADDRESS,
+                        &response::WriteMultipleRegistersReply::STARTING_ADDRESS_DESC,
                         2,
                         v_starting_address,
-                        r_starting_address as i64,
+                        r.starting_address as i64,
                         (1, 1),
                         "starting_address of the request",
                     )?;
                     rt::following(
-                        &response::WRITE_MULTIPLE_REGISTERS_REPLY_QUANTITY,
+                        &response::WriteMultipleRegistersReply::QUANTITY_DESC,
                         4,
                         v_quantity,
-                        r_quantity as i64,
+                        r.quantity as i64,
                         (1, 1),
                         "quantity of the request",
                     )?;
@@ -3297,11 +2664,394 @@ pub mod modbus {
     pub type StreamDecoder = ::busspec_runtime::stream::StreamDecoder<Modbus>;
     /// What [`StreamDecoder`] finds in a stream.
     pub type Event = ::busspec_runtime::stream::Event<Request, Response>;
-    /// Each request as a struct of its own (its `DESC` names it as refusals do: name,
-    /// code and the frame lengths of its code), and each field a refusal names
-    /// (`message.field`, `FieldDesc`).
+    impl request::ReadCoils {
+        pub const NAME: &'static str = "read_coils";
+        pub const CODE: &'static [u8] = &[0x01];
+        pub const LEN: usize = 8;
+        pub const DESC: rt::MessageDesc = rt::desc(Self::NAME, 0x01, 1, &[8]);
+        pub const STARTING_ADDRESS: rt::Range<usize> = 2..4;
+        pub const QUANTITY: rt::Range<usize> = 4..6;
+        pub const QUANTITY_DESC: rt::FieldDesc = rt::field(Self::NAME, "quantity");
+        pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
+            f("starting_address", rt::Int(self.starting_address as i64));
+            f("quantity", rt::Int(self.quantity as i64));
+        }
+        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            Request::ReadCoils(*self).encode(address, buf)
+        }
+    }
+    impl request::ReadDiscreteInputs {
+        pub const NAME: &'static str = "read_discrete_inputs";
+        pub const CODE: &'static [u8] = &[0x02];
+        pub const LEN: usize = 8;
+        pub const DESC: rt::MessageDesc = rt::desc(Self::NAME, 0x02, 1, &[8]);
+        pub const STARTING_ADDRESS: rt::Range<usize> = 2..4;
+        pub const QUANTITY: rt::Range<usize> = 4..6;
+        pub const QUANTITY_DESC: rt::FieldDesc = rt::field(Self::NAME, "quantity");
+        pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
+            f("starting_address", rt::Int(self.starting_address as i64));
+            f("quantity", rt::Int(self.quantity as i64));
+        }
+        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            Request::ReadDiscreteInputs(*self).encode(address, buf)
+        }
+    }
+    impl request::ReadHoldingRegisters {
+        pub const NAME: &'static str = "read_holding_registers";
+        pub const CODE: &'static [u8] = &[0x03];
+        pub const LEN: usize = 8;
+        pub const DESC: rt::MessageDesc = rt::desc(Self::NAME, 0x03, 1, &[8]);
+        pub const STARTING_ADDRESS: rt::Range<usize> = 2..4;
+        pub const QUANTITY: rt::Range<usize> = 4..6;
+        pub const QUANTITY_DESC: rt::FieldDesc = rt::field(Self::NAME, "quantity");
+        pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
+            f("starting_address", rt::Int(self.starting_address as i64));
+            f("quantity", rt::Int(self.quantity as i64));
+        }
+        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            Request::ReadHoldingRegisters(*self).encode(address, buf)
+        }
+    }
+    impl request::ReadInputRegisters {
+        pub const NAME: &'static str = "read_input_registers";
+        pub const CODE: &'static [u8] = &[0x04];
+        pub const LEN: usize = 8;
+        pub const DESC: rt::MessageDesc = rt::desc(Self::NAME, 0x04, 1, &[8]);
+        pub const STARTING_ADDRESS: rt::Range<usize> = 2..4;
+        pub const QUANTITY: rt::Range<usize> = 4..6;
+        pub const QUANTITY_DESC: rt::FieldDesc = rt::field(Self::NAME, "quantity");
+        pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
+            f("starting_address", rt::Int(self.starting_address as i64));
+            f("quantity", rt::Int(self.quantity as i64));
+        }
+        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            Request::ReadInputRegisters(*self).encode(address, buf)
+        }
+    }
+    impl request::WriteSingleCoil {
+        pub const NAME: &'static str = "write_single_coil";
+        pub const CODE: &'static [u8] = &[0x05];
+        pub const LEN: usize = 8;
+        pub const DESC: rt::MessageDesc = rt::desc(Self::NAME, 0x05, 1, &[8]);
+        pub const OUTPUT_ADDRESS: rt::Range<usize> = 2..4;
+        pub const OUTPUT_VALUE: rt::Range<usize> = 4..6;
+        pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
+            f("output_address", rt::Int(self.output_address as i64));
+            f("output_value", rt::Int(self.output_value.raw() as i64));
+        }
+        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            Request::WriteSingleCoil(*self).encode(address, buf)
+        }
+    }
+    impl request::WriteSingleRegister {
+        pub const NAME: &'static str = "write_single_register";
+        pub const CODE: &'static [u8] = &[0x06];
+        pub const LEN: usize = 8;
+        pub const DESC: rt::MessageDesc = rt::desc(Self::NAME, 0x06, 1, &[8]);
+        pub const REGISTER_ADDRESS: rt::Range<usize> = 2..4;
+        pub const REGISTER_VALUE: rt::Range<usize> = 4..6;
+        pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
+            f("register_address", rt::Int(self.register_address as i64));
+            f("register_value", rt::Int(self.register_value as i64));
+        }
+        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            Request::WriteSingleRegister(*self).encode(address, buf)
+        }
+    }
+    impl request::WriteMultipleCoils {
+        pub const NAME: &'static str = "write_multiple_coils";
+        pub const CODE: &'static [u8] = &[0x0F];
+        pub const MIN_LEN: usize = 10;
+        pub const MAX_LEN: usize = 255;
+        pub const DESC: rt::MessageDesc = rt::desc(Self::NAME, 0x0F, 1, &[9]);
+        pub const STARTING_ADDRESS: rt::Range<usize> = 2..4;
+        pub const QUANTITY: rt::Range<usize> = 4..6;
+        pub const OUTPUTS_DESC: rt::FieldDesc = rt::field(Self::NAME, "outputs");
+        pub const QUANTITY_DESC: rt::FieldDesc = rt::field(Self::NAME, "quantity");
+        pub const BYTE_COUNT_DESC: rt::FieldDesc = rt::field(Self::NAME, "byte_count");
+        pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
+            f("starting_address", rt::Int(self.starting_address as i64));
+            f("quantity", rt::Int(self.quantity as i64));
+            f("outputs", rt::List(self.outputs.elements()));
+        }
+        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            Request::WriteMultipleCoils(*self).encode(address, buf)
+        }
+    }
+    impl request::WriteMultipleRegisters {
+        pub const NAME: &'static str = "write_multiple_registers";
+        pub const CODE: &'static [u8] = &[0x10];
+        pub const MIN_LEN: usize = 11;
+        pub const MAX_LEN: usize = 255;
+        pub const DESC: rt::MessageDesc = rt::desc(Self::NAME, 0x10, 1, &[9]);
+        pub const STARTING_ADDRESS: rt::Range<usize> = 2..4;
+        pub const QUANTITY: rt::Range<usize> = 4..6;
+        pub const VALUES_DESC: rt::FieldDesc = rt::field(Self::NAME, "values");
+        pub const QUANTITY_DESC: rt::FieldDesc = rt::field(Self::NAME, "quantity");
+        pub const BYTE_COUNT_DESC: rt::FieldDesc = rt::field(Self::NAME, "byte_count");
+        pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
+            f("starting_address", rt::Int(self.starting_address as i64));
+            f("quantity", rt::Int(self.quantity as i64));
+            f("values", rt::List(self.values.elements()));
+        }
+        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            Request::WriteMultipleRegisters(*self).encode(address, buf)
+        }
+    }
+    impl response::ReadCoilsReply {
+        pub const NAME: &'static str = "read_coils_reply";
+        pub const CODE: &'static [u8] = &[0x01];
+        pub const MIN_LEN: usize = 6;
+        pub const MAX_LEN: usize = 255;
+        pub const DESC: rt::MessageDesc = rt::desc(Self::NAME, 0x01, 1, &[5]);
+        pub const COILS_DESC: rt::FieldDesc = rt::field(Self::NAME, "coils");
+        pub const BYTE_COUNT_DESC: rt::FieldDesc = rt::field(Self::NAME, "byte_count");
+        pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
+            f("coils", rt::List(self.coils.elements()));
+        }
+        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            Response::ReadCoilsReply(*self).encode(address, buf)
+        }
+    }
+    impl response::ReadCoilsException {
+        pub const NAME: &'static str = "read_coils_exception";
+        pub const CODE: &'static [u8] = &[0x81];
+        pub const LEN: usize = 5;
+        pub const DESC: rt::MessageDesc = rt::desc(Self::NAME, 0x81, 1, &[5]);
+        pub const EXCEPTION_CODE: rt::Range<usize> = 2..3;
+        pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
+            f("exception_code", rt::Int(self.exception_code.raw() as i64));
+        }
+        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            Response::ReadCoilsException(*self).encode(address, buf)
+        }
+    }
+    impl response::ReadDiscreteInputsReply {
+        pub const NAME: &'static str = "read_discrete_inputs_reply";
+        pub const CODE: &'static [u8] = &[0x02];
+        pub const MIN_LEN: usize = 6;
+        pub const MAX_LEN: usize = 255;
+        pub const DESC: rt::MessageDesc = rt::desc(Self::NAME, 0x02, 1, &[5]);
+        pub const INPUTS_DESC: rt::FieldDesc = rt::field(Self::NAME, "inputs");
+        pub const BYTE_COUNT_DESC: rt::FieldDesc = rt::field(Self::NAME, "byte_count");
+        pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
+            f("inputs", rt::List(self.inputs.elements()));
+        }
+        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            Response::ReadDiscreteInputsReply(*self).encode(address, buf)
+        }
+    }
+    impl response::ReadDiscreteInputsException {
+        pub const NAME: &'static str = "read_discrete_inputs_exception";
+        pub const CODE: &'static [u8] = &[0x82];
+        pub const LEN: usize = 5;
+        pub const DESC: rt::MessageDesc = rt::desc(Self::NAME, 0x82, 1, &[5]);
+        pub const EXCEPTION_CODE: rt::Range<usize> = 2..3;
+        pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
+            f("exception_code", rt::Int(self.exception_code.raw() as i64));
+        }
+        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            Response::ReadDiscreteInputsException(*self).encode(address, buf)
+        }
+    }
+    impl response::ReadHoldingRegistersReply {
+        pub const NAME: &'static str = "read_holding_registers_reply";
+        pub const CODE: &'static [u8] = &[0x03];
+        pub const MIN_LEN: usize = 7;
+        pub const MAX_LEN: usize = 255;
+        pub const DESC: rt::MessageDesc = rt::desc(Self::NAME, 0x03, 1, &[5]);
+        pub const REGISTERS_DESC: rt::FieldDesc = rt::field(Self::NAME, "registers");
+        pub const BYTE_COUNT_DESC: rt::FieldDesc = rt::field(Self::NAME, "byte_count");
+        pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
+            f("registers", rt::List(self.registers.elements()));
+        }
+        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            Response::ReadHoldingRegistersReply(*self).encode(address, buf)
+        }
+    }
+    impl response::ReadHoldingRegistersException {
+        pub const NAME: &'static str = "read_holding_registers_exception";
+        pub const CODE: &'static [u8] = &[0x83];
+        pub const LEN: usize = 5;
+        pub const DESC: rt::MessageDesc = rt::desc(Self::NAME, 0x83, 1, &[5]);
+        pub const EXCEPTION_CODE: rt::Range<usize> = 2..3;
+        pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
+            f("exception_code", rt::Int(self.exception_code.raw() as i64));
+        }
+        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            Response::ReadHoldingRegistersException(*self).encode(address, buf)
+        }
+    }
+    impl response::ReadInputRegistersReply {
+        pub const NAME: &'static str = "read_input_registers_reply";
+        pub const CODE: &'static [u8] = &[0x04];
+        pub const MIN_LEN: usize = 7;
+        pub const MAX_LEN: usize = 255;
+        pub const DESC: rt::MessageDesc = rt::desc(Self::NAME, 0x04, 1, &[5]);
+        pub const REGISTERS_DESC: rt::FieldDesc = rt::field(Self::NAME, "registers");
+        pub const BYTE_COUNT_DESC: rt::FieldDesc = rt::field(Self::NAME, "byte_count");
+        pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
+            f("registers", rt::List(self.registers.elements()));
+        }
+        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            Response::ReadInputRegistersReply(*self).encode(address, buf)
+        }
+    }
+    impl response::ReadInputRegistersException {
+        pub const NAME: &'static str = "read_input_registers_exception";
+        pub const CODE: &'static [u8] = &[0x84];
+        pub const LEN: usize = 5;
+        pub const DESC: rt::MessageDesc = rt::desc(Self::NAME, 0x84, 1, &[5]);
+        pub const EXCEPTION_CODE: rt::Range<usize> = 2..3;
+        pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
+            f("exception_code", rt::Int(self.exception_code.raw() as i64));
+        }
+        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            Response::ReadInputRegistersException(*self).encode(address, buf)
+        }
+    }
+    impl response::WriteSingleCoilReply {
+        pub const NAME: &'static str = "write_single_coil_reply";
+        pub const CODE: &'static [u8] = &[0x05];
+        pub const LEN: usize = 8;
+        pub const DESC: rt::MessageDesc = rt::desc(Self::NAME, 0x05, 1, &[8]);
+        pub const OUTPUT_ADDRESS: rt::Range<usize> = 2..4;
+        pub const OUTPUT_VALUE: rt::Range<usize> = 4..6;
+        pub const OUTPUT_ADDRESS_DESC: rt::FieldDesc = rt::field(
+            Self::NAME,
+            "output_address",
+        );
+        pub const OUTPUT_VALUE_DESC: rt::FieldDesc = rt::field(
+            Self::NAME,
+            "output_value",
+        );
+        pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
+            f("output_address", rt::Int(self.output_address as i64));
+            f("output_value", rt::Int(self.output_value.raw() as i64));
+        }
+        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            Response::WriteSingleCoilReply(*self).encode(address, buf)
+        }
+    }
+    impl response::WriteSingleCoilException {
+        pub const NAME: &'static str = "write_single_coil_exception";
+        pub const CODE: &'static [u8] = &[0x85];
+        pub const LEN: usize = 5;
+        pub const DESC: rt::MessageDesc = rt::desc(Self::NAME, 0x85, 1, &[5]);
+        pub const EXCEPTION_CODE: rt::Range<usize> = 2..3;
+        pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
+            f("exception_code", rt::Int(self.exception_code.raw() as i64));
+        }
+        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            Response::WriteSingleCoilException(*self).encode(address, buf)
+        }
+    }
+    impl response::WriteSingleRegisterReply {
+        pub const NAME: &'static str = "write_single_register_reply";
+        pub const CODE: &'static [u8] = &[0x06];
+        pub const LEN: usize = 8;
+        pub const DESC: rt::MessageDesc = rt::desc(Self::NAME, 0x06, 1, &[8]);
+        pub const REGISTER_ADDRESS: rt::Range<usize> = 2..4;
+        pub const REGISTER_VALUE: rt::Range<usize> = 4..6;
+        pub const REGISTER_ADDRESS_DESC: rt::FieldDesc = rt::field(
+            Self::NAME,
+            "register_address",
+        );
+        pub const REGISTER_VALUE_DESC: rt::FieldDesc = rt::field(
+            Self::NAME,
+            "register_value",
+        );
+        pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
+            f("register_address", rt::Int(self.register_address as i64));
+            f("register_value", rt::Int(self.register_value as i64));
+        }
+        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            Response::WriteSingleRegisterReply(*self).encode(address, buf)
+        }
+    }
+    impl response::WriteSingleRegisterException {
+        pub const NAME: &'static str = "write_single_register_exception";
+        pub const CODE: &'static [u8] = &[0x86];
+        pub const LEN: usize = 5;
+        pub const DESC: rt::MessageDesc = rt::desc(Self::NAME, 0x86, 1, &[5]);
+        pub const EXCEPTION_CODE: rt::Range<usize> = 2..3;
+        pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
+            f("exception_code", rt::Int(self.exception_code.raw() as i64));
+        }
+        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            Response::WriteSingleRegisterException(*self).encode(address, buf)
+        }
+    }
+    impl response::WriteMultipleCoilsReply {
+        pub const NAME: &'static str = "write_multiple_coils_reply";
+        pub const CODE: &'static [u8] = &[0x0F];
+        pub const LEN: usize = 8;
+        pub const DESC: rt::MessageDesc = rt::desc(Self::NAME, 0x0F, 1, &[8]);
+        pub const STARTING_ADDRESS: rt::Range<usize> = 2..4;
+        pub const QUANTITY: rt::Range<usize> = 4..6;
+        pub const STARTING_ADDRESS_DESC: rt::FieldDesc = rt::field(
+            Self::NAME,
+            "starting_address",
+        );
+        pub const QUANTITY_DESC: rt::FieldDesc = rt::field(Self::NAME, "quantity");
+        pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
+            f("starting_address", rt::Int(self.starting_address as i64));
+            f("quantity", rt::Int(self.quantity as i64));
+        }
+        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            Response::WriteMultipleCoilsReply(*self).encode(address, buf)
+        }
+    }
+    impl response::WriteMultipleCoilsException {
+        pub const NAME: &'static str = "write_multiple_coils_exception";
+        pub const CODE: &'static [u8] = &[0x8F];
+        pub const LEN: usize = 5;
+        pub const DESC: rt::MessageDesc = rt::desc(Self::NAME, 0x8F, 1, &[5]);
+        pub const EXCEPTION_CODE: rt::Range<usize> = 2..3;
+        pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
+            f("exception_code", rt::Int(self.exception_code.raw() as i64));
+        }
+        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            Response::WriteMultipleCoilsException(*self).encode(address, buf)
+        }
+    }
+    impl response::WriteMultipleRegistersReply {
+        pub const NAME: &'static str = "write_multiple_registers_reply";
+        pub const CODE: &'static [u8] = &[0x10];
+        pub const LEN: usize = 8;
+        pub const DESC: rt::MessageDesc = rt::desc(Self::NAME, 0x10, 1, &[8]);
+        pub const STARTING_ADDRESS: rt::Range<usize> = 2..4;
+        pub const QUANTITY: rt::Range<usize> = 4..6;
+        pub const STARTING_ADDRESS_DESC: rt::FieldDesc = rt::field(
+            Self::NAME,
+            "starting_address",
+        );
+        pub const QUANTITY_DESC: rt::FieldDesc = rt::field(Self::NAME, "quantity");
+        pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
+            f("starting_address", rt::Int(self.starting_address as i64));
+            f("quantity", rt::Int(self.quantity as i64));
+        }
+        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            Response::WriteMultipleRegistersReply(*self).encode(address, buf)
+        }
+    }
+    impl response::WriteMultipleRegistersException {
+        pub const NAME: &'static str = "write_multiple_registers_exception";
+        pub const CODE: &'static [u8] = &[0x90];
+        pub const LEN: usize = 5;
+        pub const DESC: rt::MessageDesc = rt::desc(Self::NAME, 0x90, 1, &[5]);
+        pub const EXCEPTION_CODE: rt::Range<usize> = 2..3;
+        pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
+            f("exception_code", rt::Int(self.exception_code.raw() as i64));
+        }
+        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            Response::WriteMultipleRegistersException(*self).encode(address, buf)
+        }
+    }
+    /// Each request as a struct of its own; its constants (`DESC`, which names it as
+    /// refusals do: name, code and the frame lengths of its code; `QUANTITY_DESC`, each
+    /// field a refusal names) and methods are in the `impl` of each.
     pub mod request {
-        use ::busspec_runtime::FieldDesc;
         /// §6.1 01 (0x01) Read Coils (code `0x01`, 8 bytes). Read 1 to 2000 contiguous coils.
         #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
         #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
@@ -3384,60 +3134,9 @@ pub mod modbus {
             /// Registers value
             pub values: super::rt::Repeated<u16, 123>,
         }
-        /// `read_coils.quantity`
-        pub const READ_COILS_QUANTITY: FieldDesc = FieldDesc::new(
-            "read_coils",
-            "quantity",
-        );
-        /// `read_discrete_inputs.quantity`
-        pub const READ_DISCRETE_INPUTS_QUANTITY: FieldDesc = FieldDesc::new(
-            "read_discrete_inputs",
-            "quantity",
-        );
-        /// `read_holding_registers.quantity`
-        pub const READ_HOLDING_REGISTERS_QUANTITY: FieldDesc = FieldDesc::new(
-            "read_holding_registers",
-            "quantity",
-        );
-        /// `read_input_registers.quantity`
-        pub const READ_INPUT_REGISTERS_QUANTITY: FieldDesc = FieldDesc::new(
-            "read_input_registers",
-            "quantity",
-        );
-        /// `write_multiple_coils.outputs`
-        pub const WRITE_MULTIPLE_COILS_OUTPUTS: FieldDesc = FieldDesc::new(
-            "write_multiple_coils",
-            "outputs",
-        );
-        /// `write_multiple_coils.quantity`
-        pub const WRITE_MULTIPLE_COILS_QUANTITY: FieldDesc = FieldDesc::new(
-            "write_multiple_coils",
-            "quantity",
-        );
-        /// `write_multiple_coils.byte_count`
-        pub const WRITE_MULTIPLE_COILS_BYTE_COUNT: FieldDesc = FieldDesc::new(
-            "write_multiple_coils",
-            "byte_count",
-        );
-        /// `write_multiple_registers.values`
-        pub const WRITE_MULTIPLE_REGISTERS_VALUES: FieldDesc = FieldDesc::new(
-            "write_multiple_registers",
-            "values",
-        );
-        /// `write_multiple_registers.quantity`
-        pub const WRITE_MULTIPLE_REGISTERS_QUANTITY: FieldDesc = FieldDesc::new(
-            "write_multiple_registers",
-            "quantity",
-        );
-        /// `write_multiple_registers.byte_count`
-        pub const WRITE_MULTIPLE_REGISTERS_BYTE_COUNT: FieldDesc = FieldDesc::new(
-            "write_multiple_registers",
-            "byte_count",
-        );
     }
-    /// Each response as a struct of its own, and the fields its refusals name.
+    /// Each response as a struct of its own.
     pub mod response {
-        use ::busspec_runtime::FieldDesc;
         /// §6.1 Read Coils response (code `0x01`, 6 to 255 bytes). Coil status, eight to a byte, the first coil in bit 0 of the first byte; the last byte padded with zeros.
         #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
         #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
@@ -3574,85 +3273,5 @@ pub mod modbus {
         pub struct WriteMultipleRegistersException {
             pub exception_code: super::ExceptionCode,
         }
-        /// `read_coils_reply.coils`
-        pub const READ_COILS_REPLY_COILS: FieldDesc = FieldDesc::new(
-            "read_coils_reply",
-            "coils",
-        );
-        /// `read_coils_reply.byte_count`
-        pub const READ_COILS_REPLY_BYTE_COUNT: FieldDesc = FieldDesc::new(
-            "read_coils_reply",
-            "byte_count",
-        );
-        /// `read_discrete_inputs_reply.inputs`
-        pub const READ_DISCRETE_INPUTS_REPLY_INPUTS: FieldDesc = FieldDesc::new(
-            "read_discrete_inputs_reply",
-            "inputs",
-        );
-        /// `read_discrete_inputs_reply.byte_count`
-        pub const READ_DISCRETE_INPUTS_REPLY_BYTE_COUNT: FieldDesc = FieldDesc::new(
-            "read_discrete_inputs_reply",
-            "byte_count",
-        );
-        /// `read_holding_registers_reply.registers`
-        pub const READ_HOLDING_REGISTERS_REPLY_REGISTERS: FieldDesc = FieldDesc::new(
-            "read_holding_registers_reply",
-            "registers",
-        );
-        /// `read_holding_registers_reply.byte_count`
-        pub const READ_HOLDING_REGISTERS_REPLY_BYTE_COUNT: FieldDesc = FieldDesc::new(
-            "read_holding_registers_reply",
-            "byte_count",
-        );
-        /// `read_input_registers_reply.registers`
-        pub const READ_INPUT_REGISTERS_REPLY_REGISTERS: FieldDesc = FieldDesc::new(
-            "read_input_registers_reply",
-            "registers",
-        );
-        /// `read_input_registers_reply.byte_count`
-        pub const READ_INPUT_REGISTERS_REPLY_BYTE_COUNT: FieldDesc = FieldDesc::new(
-            "read_input_registers_reply",
-            "byte_count",
-        );
-        /// `write_single_coil_reply.output_address`
-        pub const WRITE_SINGLE_COIL_REPLY_OUTPUT_ADDRESS: FieldDesc = FieldDesc::new(
-            "write_single_coil_reply",
-            "output_address",
-        );
-        /// `write_single_coil_reply.output_value`
-        pub const WRITE_SINGLE_COIL_REPLY_OUTPUT_VALUE: FieldDesc = FieldDesc::new(
-            "write_single_coil_reply",
-            "output_value",
-        );
-        /// `write_single_register_reply.register_address`
-        pub const WRITE_SINGLE_REGISTER_REPLY_REGISTER_ADDRESS: FieldDesc = FieldDesc::new(
-            "write_single_register_reply",
-            "register_address",
-        );
-        /// `write_single_register_reply.register_value`
-        pub const WRITE_SINGLE_REGISTER_REPLY_REGISTER_VALUE: FieldDesc = FieldDesc::new(
-            "write_single_register_reply",
-            "register_value",
-        );
-        /// `write_multiple_coils_reply.starting_address`
-        pub const WRITE_MULTIPLE_COILS_REPLY_STARTING_ADDRESS: FieldDesc = FieldDesc::new(
-            "write_multiple_coils_reply",
-            "starting_address",
-        );
-        /// `write_multiple_coils_reply.quantity`
-        pub const WRITE_MULTIPLE_COILS_REPLY_QUANTITY: FieldDesc = FieldDesc::new(
-            "write_multiple_coils_reply",
-            "quantity",
-        );
-        /// `write_multiple_registers_reply.starting_address`
-        pub const WRITE_MULTIPLE_REGISTERS_REPLY_STARTING_ADDRESS: FieldDesc = FieldDesc::new(
-            "write_multiple_registers_reply",
-            "starting_address",
-        );
-        /// `write_multiple_registers_reply.quantity`
-        pub const WRITE_MULTIPLE_REGISTERS_REPLY_QUANTITY: FieldDesc = FieldDesc::new(
-            "write_multiple_registers_reply",
-            "quantity",
-        );
     }
 }

@@ -108,48 +108,6 @@ pub mod msp_by_direction {
             rt::Some(Self(raw as i16))
         }
     }
-    impl request::ApiVersion {
-        pub const NAME: &'static str = "api_version";
-        pub const CODE: &'static [u8] = &[0x01];
-        pub const LEN: usize = 6;
-        pub const DESC: rt::MessageDesc = rt::MessageDesc::new(
-            Self::NAME,
-            0x01,
-            1,
-            &[6],
-        );
-        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
-            Request::ApiVersion(*self).encode(address, buf)
-        }
-    }
-    impl request::Rc {
-        pub const NAME: &'static str = "rc";
-        pub const CODE: &'static [u8] = &[0x69];
-        pub const LEN: usize = 6;
-        pub const DESC: rt::MessageDesc = rt::MessageDesc::new(
-            Self::NAME,
-            0x69,
-            1,
-            &[6],
-        );
-        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
-            Request::Rc(*self).encode(address, buf)
-        }
-    }
-    impl request::Attitude {
-        pub const NAME: &'static str = "attitude";
-        pub const CODE: &'static [u8] = &[0x6C];
-        pub const LEN: usize = 6;
-        pub const DESC: rt::MessageDesc = rt::MessageDesc::new(
-            Self::NAME,
-            0x6C,
-            1,
-            &[6],
-        );
-        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
-            Request::Attitude(*self).encode(address, buf)
-        }
-    }
     ///A request (command), host to device.
     #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
     #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
@@ -193,23 +151,15 @@ pub mod msp_by_direction {
         /// Encodes the frame for `address` into `buf`; returns the frame length. Refuses what
         /// decode refuses: an address no frame may carry, the broadcast address for a command
         /// that does not accept it, a value outside its field's range.
-        pub fn encode(
-            &self,
-            address: u8,
-            buf: &mut [u8],
-        ) -> rt::Result<usize, rt::EncodeError> {
+        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             rt::encode_address(address, &FRAME)?;
             let out = rt::frame_mut::<6>(buf, &[])?;
             let len = match *self {
-                Self::ApiVersion(request::ApiVersion {}) => {
+                Self::ApiVersion(_) => {
                     rt::head(out, &[0x24, 0x4D, 0x3C, 0x00, 0x01]).len()
                 }
-                Self::Rc(request::Rc {}) => {
-                    rt::head(out, &[0x24, 0x4D, 0x3C, 0x00, 0x69]).len()
-                }
-                Self::Attitude(request::Attitude {}) => {
-                    rt::head(out, &[0x24, 0x4D, 0x3C, 0x00, 0x6C]).len()
-                }
+                Self::Rc(_) => rt::head(out, &[0x24, 0x4D, 0x3C, 0x00, 0x69]).len(),
+                Self::Attitude(_) => rt::head(out, &[0x24, 0x4D, 0x3C, 0x00, 0x6C]).len(),
             };
             rt::seal(buf, len, |b| u32::from(checksum(rt::covered(b, 3))), 1, false);
             rt::Ok(len)
@@ -257,12 +207,13 @@ pub mod msp_by_direction {
             name: &str,
             _field: impl FnMut(&'static str) -> rt::Option<rt::FieldValue<'v>>,
         ) -> rt::Result<Self, rt::FieldError> {
-            match name {
-                "api_version" => rt::Ok(Self::ApiVersion(request::ApiVersion)),
-                "rc" => rt::Ok(Self::Rc(request::Rc)),
-                "attitude" => rt::Ok(Self::Attitude(request::Attitude)),
-                _ => rt::Err(rt::FieldError::UnknownMessage),
-            }
+            let message = match name {
+                "api_version" => Self::ApiVersion(request::ApiVersion),
+                "rc" => Self::Rc(request::Rc),
+                "attitude" => Self::Attitude(request::Attitude),
+                _ => return rt::Err(rt::FieldError::UnknownMessage),
+            };
+            rt::Ok(message)
         }
     }
     impl rt::Message for Request {
@@ -283,11 +234,7 @@ pub mod msp_by_direction {
             Request::visit(self, f)
         }
         #[inline]
-        fn encode(
-            &self,
-            address: u8,
-            buf: &mut [u8],
-        ) -> rt::Result<usize, rt::EncodeError> {
+        fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             Request::encode(self, address, buf)
         }
         #[inline]
@@ -327,7 +274,7 @@ pub mod msp_by_direction {
     }
     /// Where `rc_reply.channels` sits in the frame and how its elements are counted.
     pub const REPEAT_RC_REPLY: rt::RepeatAt = rt::RepeatAt {
-        field: &response::RC_REPLY_CHANNELS,
+        field: &response::RcReply::CHANNELS_DESC,
         base: 6,
         at: 5,
         width: 2,
@@ -335,68 +282,6 @@ pub mod msp_by_direction {
         min: 0,
         max: 18,
     };
-    impl response::ApiVersionReply {
-        pub const NAME: &'static str = "api_version_reply";
-        pub const CODE: &'static [u8] = &[0x01];
-        pub const LEN: usize = 9;
-        pub const DESC: rt::MessageDesc = rt::MessageDesc::new(
-            Self::NAME,
-            0x01,
-            1,
-            &[9],
-        );
-        pub const PROTOCOL_VERSION: rt::Range<usize> = 5..6;
-        pub const API_MAJOR: rt::Range<usize> = 6..7;
-        pub const API_MINOR: rt::Range<usize> = 7..8;
-        pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
-            f("protocol_version", rt::Int(self.protocol_version as i64));
-            f("api_major", rt::Int(self.api_major as i64));
-            f("api_minor", rt::Int(self.api_minor as i64));
-        }
-        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
-            Response::ApiVersionReply(*self).encode(address, buf)
-        }
-    }
-    impl response::RcReply {
-        pub const NAME: &'static str = "rc_reply";
-        pub const CODE: &'static [u8] = &[0x69];
-        pub const MIN_LEN: usize = 6;
-        pub const MAX_LEN: usize = 42;
-        pub const DESC: rt::MessageDesc = rt::MessageDesc::new(
-            Self::NAME,
-            0x69,
-            1,
-            &[6],
-        );
-        pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
-            f("channels", rt::List(self.channels.elements()));
-        }
-        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
-            Response::RcReply(*self).encode(address, buf)
-        }
-    }
-    impl response::AttitudeReply {
-        pub const NAME: &'static str = "attitude_reply";
-        pub const CODE: &'static [u8] = &[0x6C];
-        pub const LEN: usize = 12;
-        pub const DESC: rt::MessageDesc = rt::MessageDesc::new(
-            Self::NAME,
-            0x6C,
-            1,
-            &[12],
-        );
-        pub const ROLL: rt::Range<usize> = 5..7;
-        pub const PITCH: rt::Range<usize> = 7..9;
-        pub const YAW: rt::Range<usize> = 9..11;
-        pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
-            f("roll", rt::Int(self.roll.raw() as i64));
-            f("pitch", rt::Int(self.pitch.raw() as i64));
-            f("yaw", rt::Int(self.yaw as i64));
-        }
-        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
-            Response::AttitudeReply(*self).encode(address, buf)
-        }
-    }
     ///A response, device to host.
     #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
     #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
@@ -433,8 +318,8 @@ pub mod msp_by_direction {
         /// The length of this message's frame, in bytes.
         pub const fn frame_len(&self) -> usize {
             match self {
-                Self::RcReply(response::RcReply { channels: v_channels, .. }) => {
-                    REPEAT_RC_REPLY.base + REPEAT_RC_REPLY.bytes_of(v_channels.len())
+                Self::RcReply(m) => {
+                    REPEAT_RC_REPLY.base + REPEAT_RC_REPLY.bytes_of(m.channels.len())
                 }
                 _ => Self::MESSAGES[self.index()].2,
             }
@@ -451,11 +336,7 @@ pub mod msp_by_direction {
         /// Encodes the frame for `address` into `buf`; returns the frame length. Refuses what
         /// decode refuses: an address no frame may carry, the broadcast address for a command
         /// that does not accept it, a value outside its field's range.
-        pub fn encode(
-            &self,
-            address: u8,
-            buf: &mut [u8],
-        ) -> rt::Result<usize, rt::EncodeError> {
+        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             rt::encode_address(address, &FRAME)?;
             let len = match *self {
                 Self::ApiVersionReply(
@@ -583,37 +464,29 @@ pub mod msp_by_direction {
             name: &str,
             mut field: impl FnMut(&'static str) -> rt::Option<rt::FieldValue<'v>>,
         ) -> rt::Result<Self, rt::FieldError> {
-            match name {
+            let message = match name {
                 "api_version_reply" => {
-                    rt::Ok(
-                        Self::ApiVersionReply(response::ApiVersionReply {
-                            protocol_version: rt::get(&mut field, "protocol_version")?,
-                            api_major: rt::get(&mut field, "api_major")?,
-                            api_minor: rt::get(&mut field, "api_minor")?,
-                        }),
-                    )
+                    Self::ApiVersionReply(response::ApiVersionReply {
+                        protocol_version: rt::get(&mut field, "protocol_version")?,
+                        api_major: rt::get(&mut field, "api_major")?,
+                        api_minor: rt::get(&mut field, "api_minor")?,
+                    })
                 }
                 "rc_reply" => {
-                    rt::Ok(
-                        Self::RcReply(response::RcReply {
-                            channels: rt::list::<
-                                u16,
-                                18,
-                            >(&mut field, "channels", 0, 65535)?,
-                        }),
-                    )
+                    Self::RcReply(response::RcReply {
+                        channels: rt::list::<u16, 18>(&mut field, "channels", 0, 65535)?,
+                    })
                 }
                 "attitude_reply" => {
-                    rt::Ok(
-                        Self::AttitudeReply(response::AttitudeReply {
-                            roll: Decidegrees::from_raw(rt::get(&mut field, "roll")?),
-                            pitch: Decidegrees::from_raw(rt::get(&mut field, "pitch")?),
-                            yaw: rt::get(&mut field, "yaw")?,
-                        }),
-                    )
+                    Self::AttitudeReply(response::AttitudeReply {
+                        roll: Decidegrees::from_raw(rt::get(&mut field, "roll")?),
+                        pitch: Decidegrees::from_raw(rt::get(&mut field, "pitch")?),
+                        yaw: rt::get(&mut field, "yaw")?,
+                    })
                 }
-                _ => rt::Err(rt::FieldError::UnknownMessage),
-            }
+                _ => return rt::Err(rt::FieldError::UnknownMessage),
+            };
+            rt::Ok(message)
         }
     }
     impl rt::Message for Response {
@@ -634,11 +507,7 @@ pub mod msp_by_direction {
             Response::visit(self, f)
         }
         #[inline]
-        fn encode(
-            &self,
-            address: u8,
-            buf: &mut [u8],
-        ) -> rt::Result<usize, rt::EncodeError> {
+        fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             Response::encode(self, address, buf)
         }
         #[inline]
@@ -926,9 +795,84 @@ pub mod msp_by_direction {
     pub type StreamDecoder = ::busspec_runtime::stream::StreamDecoder<MspByDirection>;
     /// What [`StreamDecoder`] finds in a stream.
     pub type Event = ::busspec_runtime::stream::Event<Request, Response>;
-    /// Each request as a struct of its own (its `DESC` names it as refusals do: name,
-    /// code and the frame lengths of its code), and each field a refusal names
-    /// (`message.field`, `FieldDesc`).
+    impl request::ApiVersion {
+        pub const NAME: &'static str = "api_version";
+        pub const CODE: &'static [u8] = &[0x01];
+        pub const LEN: usize = 6;
+        pub const DESC: rt::MessageDesc = rt::desc(Self::NAME, 0x01, 1, &[6]);
+        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            Request::ApiVersion(*self).encode(address, buf)
+        }
+    }
+    impl request::Rc {
+        pub const NAME: &'static str = "rc";
+        pub const CODE: &'static [u8] = &[0x69];
+        pub const LEN: usize = 6;
+        pub const DESC: rt::MessageDesc = rt::desc(Self::NAME, 0x69, 1, &[6]);
+        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            Request::Rc(*self).encode(address, buf)
+        }
+    }
+    impl request::Attitude {
+        pub const NAME: &'static str = "attitude";
+        pub const CODE: &'static [u8] = &[0x6C];
+        pub const LEN: usize = 6;
+        pub const DESC: rt::MessageDesc = rt::desc(Self::NAME, 0x6C, 1, &[6]);
+        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            Request::Attitude(*self).encode(address, buf)
+        }
+    }
+    impl response::ApiVersionReply {
+        pub const NAME: &'static str = "api_version_reply";
+        pub const CODE: &'static [u8] = &[0x01];
+        pub const LEN: usize = 9;
+        pub const DESC: rt::MessageDesc = rt::desc(Self::NAME, 0x01, 1, &[9]);
+        pub const PROTOCOL_VERSION: rt::Range<usize> = 5..6;
+        pub const API_MAJOR: rt::Range<usize> = 6..7;
+        pub const API_MINOR: rt::Range<usize> = 7..8;
+        pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
+            f("protocol_version", rt::Int(self.protocol_version as i64));
+            f("api_major", rt::Int(self.api_major as i64));
+            f("api_minor", rt::Int(self.api_minor as i64));
+        }
+        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            Response::ApiVersionReply(*self).encode(address, buf)
+        }
+    }
+    impl response::RcReply {
+        pub const NAME: &'static str = "rc_reply";
+        pub const CODE: &'static [u8] = &[0x69];
+        pub const MIN_LEN: usize = 6;
+        pub const MAX_LEN: usize = 42;
+        pub const DESC: rt::MessageDesc = rt::desc(Self::NAME, 0x69, 1, &[6]);
+        pub const CHANNELS_DESC: rt::FieldDesc = rt::field(Self::NAME, "channels");
+        pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
+            f("channels", rt::List(self.channels.elements()));
+        }
+        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            Response::RcReply(*self).encode(address, buf)
+        }
+    }
+    impl response::AttitudeReply {
+        pub const NAME: &'static str = "attitude_reply";
+        pub const CODE: &'static [u8] = &[0x6C];
+        pub const LEN: usize = 12;
+        pub const DESC: rt::MessageDesc = rt::desc(Self::NAME, 0x6C, 1, &[12]);
+        pub const ROLL: rt::Range<usize> = 5..7;
+        pub const PITCH: rt::Range<usize> = 7..9;
+        pub const YAW: rt::Range<usize> = 9..11;
+        pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
+            f("roll", rt::Int(self.roll.raw() as i64));
+            f("pitch", rt::Int(self.pitch.raw() as i64));
+            f("yaw", rt::Int(self.yaw as i64));
+        }
+        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            Response::AttitudeReply(*self).encode(address, buf)
+        }
+    }
+    /// Each request as a struct of its own; its constants (`DESC`, which names it as
+    /// refusals do: name, code and the frame lengths of its code; `QUANTITY_DESC`, each
+    /// field a refusal names) and methods are in the `impl` of each.
     pub mod request {
         /// §3 MSP_API_VERSION (code `0x01`, 6 bytes).
         #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
@@ -946,9 +890,8 @@ pub mod msp_by_direction {
         #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]
         pub struct Attitude;
     }
-    /// Each response as a struct of its own, and the fields its refusals name.
+    /// Each response as a struct of its own.
     pub mod response {
-        use ::busspec_runtime::FieldDesc;
         /// §3 MSP_API_VERSION reply (code `0x01`, 9 bytes).
         #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
         #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
@@ -981,7 +924,5 @@ pub mod msp_by_direction {
             /// \[°\]
             pub yaw: i16,
         }
-        /// `rc_reply.channels`
-        pub const RC_REPLY_CHANNELS: FieldDesc = FieldDesc::new("rc_reply", "channels");
     }
 }

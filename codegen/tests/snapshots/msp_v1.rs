@@ -108,34 +108,6 @@ pub mod msp_v1 {
             rt::Some(Self(raw as i16))
         }
     }
-    impl request::ApiVersion {
-        pub const NAME: &'static str = "api_version";
-        pub const CODE: &'static [u8] = &[0x3C];
-        pub const LEN: usize = 6;
-        pub const DESC: rt::MessageDesc = rt::MessageDesc::new(
-            Self::NAME,
-            0x3C,
-            1,
-            &[6],
-        );
-        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
-            Request::ApiVersion(*self).encode(address, buf)
-        }
-    }
-    impl request::Attitude {
-        pub const NAME: &'static str = "attitude";
-        pub const CODE: &'static [u8] = &[0x3C];
-        pub const LEN: usize = 6;
-        pub const DESC: rt::MessageDesc = rt::MessageDesc::new(
-            Self::NAME,
-            0x3C,
-            1,
-            &[6],
-        );
-        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
-            Request::Attitude(*self).encode(address, buf)
-        }
-    }
     ///A request (command), host to device.
     #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
     #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
@@ -176,20 +148,14 @@ pub mod msp_v1 {
         /// Encodes the frame for `address` into `buf`; returns the frame length. Refuses what
         /// decode refuses: an address no frame may carry, the broadcast address for a command
         /// that does not accept it, a value outside its field's range.
-        pub fn encode(
-            &self,
-            address: u8,
-            buf: &mut [u8],
-        ) -> rt::Result<usize, rt::EncodeError> {
+        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             rt::encode_address(address, &FRAME)?;
             let out = rt::frame_mut::<6>(buf, &[])?;
             let len = match *self {
-                Self::ApiVersion(request::ApiVersion {}) => {
+                Self::ApiVersion(_) => {
                     rt::head(out, &[0x24, 0x4D, 0x3C, 0x00, 0x01]).len()
                 }
-                Self::Attitude(request::Attitude {}) => {
-                    rt::head(out, &[0x24, 0x4D, 0x3C, 0x00, 0x6C]).len()
-                }
+                Self::Attitude(_) => rt::head(out, &[0x24, 0x4D, 0x3C, 0x00, 0x6C]).len(),
             };
             rt::seal(buf, len, |b| u32::from(checksum(rt::covered(b, 3))), 1, false);
             rt::Ok(len)
@@ -218,11 +184,11 @@ pub mod msp_v1 {
                 0x3C => {
                     let mut g = rt::Group::new(frame, 0x3C, rt::None);
                     g.attempt(|frame: &[u8; 6]| {
-                        rt::equal(&request::API_VERSION_CMD, 4, frame[4], 0x1)?;
+                        rt::equal(&request::ApiVersion::CMD_DESC, 4, frame[4], 0x1)?;
                         rt::Ok(Self::ApiVersion(request::ApiVersion))
                     });
                     g.attempt(|frame: &[u8; 6]| {
-                        rt::equal(&request::ATTITUDE_CMD, 4, frame[4], 0x6C)?;
+                        rt::equal(&request::Attitude::CMD_DESC, 4, frame[4], 0x6C)?;
                         rt::Ok(Self::Attitude(request::Attitude))
                     });
                     g.end(&request::ApiVersion::DESC)
@@ -237,11 +203,12 @@ pub mod msp_v1 {
             name: &str,
             _field: impl FnMut(&'static str) -> rt::Option<rt::FieldValue<'v>>,
         ) -> rt::Result<Self, rt::FieldError> {
-            match name {
-                "api_version" => rt::Ok(Self::ApiVersion(request::ApiVersion)),
-                "attitude" => rt::Ok(Self::Attitude(request::Attitude)),
-                _ => rt::Err(rt::FieldError::UnknownMessage),
-            }
+            let message = match name {
+                "api_version" => Self::ApiVersion(request::ApiVersion),
+                "attitude" => Self::Attitude(request::Attitude),
+                _ => return rt::Err(rt::FieldError::UnknownMessage),
+            };
+            rt::Ok(message)
         }
     }
     impl rt::Message for Request {
@@ -262,11 +229,7 @@ pub mod msp_v1 {
             Request::visit(self, f)
         }
         #[inline]
-        fn encode(
-            &self,
-            address: u8,
-            buf: &mut [u8],
-        ) -> rt::Result<usize, rt::EncodeError> {
+        fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             Request::encode(self, address, buf)
         }
         #[inline]
@@ -301,68 +264,6 @@ pub mod msp_v1 {
         /// The responses this command may get, bit `i` for row `i` of `Response::MESSAGES`.
         const fn replies(&self) -> u64 {
             Self::COMMANDS[self.index()].3
-        }
-    }
-    impl response::ApiVersionReply {
-        pub const NAME: &'static str = "api_version_reply";
-        pub const CODE: &'static [u8] = &[0x3E];
-        pub const LEN: usize = 9;
-        pub const DESC: rt::MessageDesc = rt::MessageDesc::new(
-            Self::NAME,
-            0x3E,
-            1,
-            &[9, 12],
-        );
-        pub const PROTOCOL_VERSION: rt::Range<usize> = 5..6;
-        pub const API_MAJOR: rt::Range<usize> = 6..7;
-        pub const API_MINOR: rt::Range<usize> = 7..8;
-        pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
-            f("protocol_version", rt::Int(self.protocol_version as i64));
-            f("api_major", rt::Int(self.api_major as i64));
-            f("api_minor", rt::Int(self.api_minor as i64));
-        }
-        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
-            Response::ApiVersionReply(*self).encode(address, buf)
-        }
-    }
-    impl response::AttitudeReply {
-        pub const NAME: &'static str = "attitude_reply";
-        pub const CODE: &'static [u8] = &[0x3E];
-        pub const LEN: usize = 12;
-        pub const DESC: rt::MessageDesc = rt::MessageDesc::new(
-            Self::NAME,
-            0x3E,
-            1,
-            &[9, 12],
-        );
-        pub const ROLL: rt::Range<usize> = 5..7;
-        pub const PITCH: rt::Range<usize> = 7..9;
-        pub const YAW: rt::Range<usize> = 9..11;
-        pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
-            f("roll", rt::Int(self.roll.raw() as i64));
-            f("pitch", rt::Int(self.pitch.raw() as i64));
-            f("yaw", rt::Int(self.yaw as i64));
-        }
-        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
-            Response::AttitudeReply(*self).encode(address, buf)
-        }
-    }
-    impl response::Error {
-        pub const NAME: &'static str = "error";
-        pub const CODE: &'static [u8] = &[0x21];
-        pub const LEN: usize = 6;
-        pub const DESC: rt::MessageDesc = rt::MessageDesc::new(
-            Self::NAME,
-            0x21,
-            1,
-            &[6],
-        );
-        pub const CMD: rt::Range<usize> = 4..5;
-        pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
-            f("cmd", rt::Int(self.cmd as i64));
-        }
-        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
-            Response::Error(*self).encode(address, buf)
         }
     }
     ///A response, device to host.
@@ -414,11 +315,7 @@ pub mod msp_v1 {
         /// Encodes the frame for `address` into `buf`; returns the frame length. Refuses what
         /// decode refuses: an address no frame may carry, the broadcast address for a command
         /// that does not accept it, a value outside its field's range.
-        pub fn encode(
-            &self,
-            address: u8,
-            buf: &mut [u8],
-        ) -> rt::Result<usize, rt::EncodeError> {
+        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             rt::encode_address(address, &FRAME)?;
             let len = match *self {
                 Self::ApiVersionReply(
@@ -507,7 +404,12 @@ pub mod msp_v1 {
                 0x3E => {
                     let mut g = rt::Group::new(frame, 0x3E, request.map(Request::name));
                     g.attempt(|frame: &[u8; 9]| {
-                        rt::equal(&response::API_VERSION_REPLY_CMD, 4, frame[4], 0x1)?;
+                        rt::equal(
+                            &response::ApiVersionReply::CMD_DESC,
+                            4,
+                            frame[4],
+                            0x1,
+                        )?;
                         rt::Ok(
                             Self::ApiVersionReply(response::ApiVersionReply {
                                 protocol_version: frame[5],
@@ -517,7 +419,12 @@ pub mod msp_v1 {
                         )
                     });
                     g.attempt(|frame: &[u8; 12]| {
-                        rt::equal(&response::ATTITUDE_REPLY_CMD, 4, frame[4], 0x6C)?;
+                        rt::equal(
+                            &response::AttitudeReply::CMD_DESC,
+                            4,
+                            frame[4],
+                            0x6C,
+                        )?;
                         rt::Ok(
                             Self::AttitudeReply(response::AttitudeReply {
                                 roll: Decidegrees::from_raw(
@@ -546,34 +453,29 @@ pub mod msp_v1 {
             name: &str,
             mut field: impl FnMut(&'static str) -> rt::Option<rt::FieldValue<'v>>,
         ) -> rt::Result<Self, rt::FieldError> {
-            match name {
+            let message = match name {
                 "api_version_reply" => {
-                    rt::Ok(
-                        Self::ApiVersionReply(response::ApiVersionReply {
-                            protocol_version: rt::get(&mut field, "protocol_version")?,
-                            api_major: rt::get(&mut field, "api_major")?,
-                            api_minor: rt::get(&mut field, "api_minor")?,
-                        }),
-                    )
+                    Self::ApiVersionReply(response::ApiVersionReply {
+                        protocol_version: rt::get(&mut field, "protocol_version")?,
+                        api_major: rt::get(&mut field, "api_major")?,
+                        api_minor: rt::get(&mut field, "api_minor")?,
+                    })
                 }
                 "attitude_reply" => {
-                    rt::Ok(
-                        Self::AttitudeReply(response::AttitudeReply {
-                            roll: Decidegrees::from_raw(rt::get(&mut field, "roll")?),
-                            pitch: Decidegrees::from_raw(rt::get(&mut field, "pitch")?),
-                            yaw: rt::get(&mut field, "yaw")?,
-                        }),
-                    )
+                    Self::AttitudeReply(response::AttitudeReply {
+                        roll: Decidegrees::from_raw(rt::get(&mut field, "roll")?),
+                        pitch: Decidegrees::from_raw(rt::get(&mut field, "pitch")?),
+                        yaw: rt::get(&mut field, "yaw")?,
+                    })
                 }
                 "error" => {
-                    rt::Ok(
-                        Self::Error(response::Error {
-                            cmd: rt::get(&mut field, "cmd")?,
-                        }),
-                    )
+                    Self::Error(response::Error {
+                        cmd: rt::get(&mut field, "cmd")?,
+                    })
                 }
-                _ => rt::Err(rt::FieldError::UnknownMessage),
-            }
+                _ => return rt::Err(rt::FieldError::UnknownMessage),
+            };
+            rt::Ok(message)
         }
     }
     impl rt::Message for Response {
@@ -594,11 +496,7 @@ pub mod msp_v1 {
             Response::visit(self, f)
         }
         #[inline]
-        fn encode(
-            &self,
-            address: u8,
-            buf: &mut [u8],
-        ) -> rt::Result<usize, rt::EncodeError> {
+        fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             Response::encode(self, address, buf)
         }
         #[inline]
@@ -620,27 +518,21 @@ pub mod msp_v1 {
         /// spec): [`busspec_runtime::DecodeError::InvalidValue`] names the first that differs.
         pub fn follows_request(&self, request: &Request) -> rt::DecodeResult<()> {
             match (self, request) {
-                (
-                    &Self::Error(response::Error { cmd: v_cmd, .. }),
-                    &Request::ApiVersion(request::ApiVersion { .. }),
-                ) => {
+                (Self::Error(m), Request::ApiVersion(_)) => {
                     rt::following(
-                        &response::ERROR_CMD,
+                        &response::Error::CMD_DESC,
                         4,
-                        v_cmd,
+                        m.cmd,
                         1 as i64,
                         (1, 1),
                         "cmd of the request",
                     )?;
                 }
-                (
-                    &Self::Error(response::Error { cmd: v_cmd, .. }),
-                    &Request::Attitude(request::Attitude { .. }),
-                ) => {
+                (Self::Error(m), Request::Attitude(_)) => {
                     rt::following(
-                        &response::ERROR_CMD,
+                        &response::Error::CMD_DESC,
                         4,
-                        v_cmd,
+                        m.cmd,
                         108 as i64,
                         (1, 1),
                         "cmd of the request",
@@ -769,11 +661,80 @@ pub mod msp_v1 {
     pub type StreamDecoder = ::busspec_runtime::stream::StreamDecoder<MspV1>;
     /// What [`StreamDecoder`] finds in a stream.
     pub type Event = ::busspec_runtime::stream::Event<Request, Response>;
-    /// Each request as a struct of its own (its `DESC` names it as refusals do: name,
-    /// code and the frame lengths of its code), and each field a refusal names
-    /// (`message.field`, `FieldDesc`).
+    impl request::ApiVersion {
+        pub const NAME: &'static str = "api_version";
+        pub const CODE: &'static [u8] = &[0x3C];
+        pub const LEN: usize = 6;
+        pub const DESC: rt::MessageDesc = rt::desc(Self::NAME, 0x3C, 1, &[6]);
+        pub const CMD_DESC: rt::FieldDesc = rt::field(Self::NAME, "cmd");
+        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            Request::ApiVersion(*self).encode(address, buf)
+        }
+    }
+    impl request::Attitude {
+        pub const NAME: &'static str = "attitude";
+        pub const CODE: &'static [u8] = &[0x3C];
+        pub const LEN: usize = 6;
+        pub const DESC: rt::MessageDesc = rt::desc(Self::NAME, 0x3C, 1, &[6]);
+        pub const CMD_DESC: rt::FieldDesc = rt::field(Self::NAME, "cmd");
+        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            Request::Attitude(*self).encode(address, buf)
+        }
+    }
+    impl response::ApiVersionReply {
+        pub const NAME: &'static str = "api_version_reply";
+        pub const CODE: &'static [u8] = &[0x3E];
+        pub const LEN: usize = 9;
+        pub const DESC: rt::MessageDesc = rt::desc(Self::NAME, 0x3E, 1, &[9, 12]);
+        pub const PROTOCOL_VERSION: rt::Range<usize> = 5..6;
+        pub const API_MAJOR: rt::Range<usize> = 6..7;
+        pub const API_MINOR: rt::Range<usize> = 7..8;
+        pub const CMD_DESC: rt::FieldDesc = rt::field(Self::NAME, "cmd");
+        pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
+            f("protocol_version", rt::Int(self.protocol_version as i64));
+            f("api_major", rt::Int(self.api_major as i64));
+            f("api_minor", rt::Int(self.api_minor as i64));
+        }
+        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            Response::ApiVersionReply(*self).encode(address, buf)
+        }
+    }
+    impl response::AttitudeReply {
+        pub const NAME: &'static str = "attitude_reply";
+        pub const CODE: &'static [u8] = &[0x3E];
+        pub const LEN: usize = 12;
+        pub const DESC: rt::MessageDesc = rt::desc(Self::NAME, 0x3E, 1, &[9, 12]);
+        pub const ROLL: rt::Range<usize> = 5..7;
+        pub const PITCH: rt::Range<usize> = 7..9;
+        pub const YAW: rt::Range<usize> = 9..11;
+        pub const CMD_DESC: rt::FieldDesc = rt::field(Self::NAME, "cmd");
+        pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
+            f("roll", rt::Int(self.roll.raw() as i64));
+            f("pitch", rt::Int(self.pitch.raw() as i64));
+            f("yaw", rt::Int(self.yaw as i64));
+        }
+        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            Response::AttitudeReply(*self).encode(address, buf)
+        }
+    }
+    impl response::Error {
+        pub const NAME: &'static str = "error";
+        pub const CODE: &'static [u8] = &[0x21];
+        pub const LEN: usize = 6;
+        pub const DESC: rt::MessageDesc = rt::desc(Self::NAME, 0x21, 1, &[6]);
+        pub const CMD: rt::Range<usize> = 4..5;
+        pub const CMD_DESC: rt::FieldDesc = rt::field(Self::NAME, "cmd");
+        pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
+            f("cmd", rt::Int(self.cmd as i64));
+        }
+        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            Response::Error(*self).encode(address, buf)
+        }
+    }
+    /// Each request as a struct of its own; its constants (`DESC`, which names it as
+    /// refusals do: name, code and the frame lengths of its code; `QUANTITY_DESC`, each
+    /// field a refusal names) and methods are in the `impl` of each.
     pub mod request {
-        use ::busspec_runtime::FieldDesc;
         /// §3 MSP_API_VERSION (code `0x3C`, 6 bytes).
         #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
         #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
@@ -784,14 +745,9 @@ pub mod msp_v1 {
         #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
         #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]
         pub struct Attitude;
-        /// `api_version.cmd`
-        pub const API_VERSION_CMD: FieldDesc = FieldDesc::new("api_version", "cmd");
-        /// `attitude.cmd`
-        pub const ATTITUDE_CMD: FieldDesc = FieldDesc::new("attitude", "cmd");
     }
-    /// Each response as a struct of its own, and the fields its refusals name.
+    /// Each response as a struct of its own.
     pub mod response {
-        use ::busspec_runtime::FieldDesc;
         /// §3 MSP_API_VERSION reply (code `0x3E`, 9 bytes).
         #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
         #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
@@ -823,17 +779,5 @@ pub mod msp_v1 {
         pub struct Error {
             pub cmd: u8,
         }
-        /// `api_version_reply.cmd`
-        pub const API_VERSION_REPLY_CMD: FieldDesc = FieldDesc::new(
-            "api_version_reply",
-            "cmd",
-        );
-        /// `attitude_reply.cmd`
-        pub const ATTITUDE_REPLY_CMD: FieldDesc = FieldDesc::new(
-            "attitude_reply",
-            "cmd",
-        );
-        /// `error.cmd`
-        pub const ERROR_CMD: FieldDesc = FieldDesc::new("error", "cmd");
     }
 }

@@ -80,40 +80,6 @@ pub mod msp_v2 {
     pub fn checksum(bytes: &[u8]) -> u8 {
         CRC.checksum(bytes)
     }
-    impl request::ApiVersion {
-        pub const NAME: &'static str = "api_version";
-        pub const CODE: &'static [u8] = &[0x01, 0x00];
-        pub const LEN: usize = 9;
-        pub const DESC: rt::MessageDesc = rt::MessageDesc::new(
-            Self::NAME,
-            0x0100,
-            2,
-            &[9],
-        );
-        pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
-            f("dont_reply", rt::Int(self.dont_reply as i64));
-        }
-        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
-            Request::ApiVersion(*self).encode(address, buf)
-        }
-    }
-    impl request::FcVariant {
-        pub const NAME: &'static str = "fc_variant";
-        pub const CODE: &'static [u8] = &[0x02, 0x00];
-        pub const LEN: usize = 9;
-        pub const DESC: rt::MessageDesc = rt::MessageDesc::new(
-            Self::NAME,
-            0x0200,
-            2,
-            &[9],
-        );
-        pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
-            f("dont_reply", rt::Int(self.dont_reply as i64));
-        }
-        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
-            Request::FcVariant(*self).encode(address, buf)
-        }
-    }
     ///A request (command), host to device.
     #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
     #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
@@ -159,11 +125,7 @@ pub mod msp_v2 {
         /// Encodes the frame for `address` into `buf`; returns the frame length. Refuses what
         /// decode refuses: an address no frame may carry, the broadcast address for a command
         /// that does not accept it, a value outside its field's range.
-        pub fn encode(
-            &self,
-            address: u8,
-            buf: &mut [u8],
-        ) -> rt::Result<usize, rt::EncodeError> {
+        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             rt::encode_address(address, &FRAME)?;
             let out = rt::frame_mut::<9>(buf, &[])?;
             let len = match *self {
@@ -209,7 +171,7 @@ pub mod msp_v2 {
                 0x0100 => {
                     let frame = rt::fixed::<9>(frame, &request::ApiVersion::DESC)?;
                     rt::equal(
-                        &request::API_VERSION_RESERVED_FLAGS,
+                        &request::ApiVersion::RESERVED_FLAGS_DESC,
                         3,
                         frame[3] >> 1,
                         0x0,
@@ -223,7 +185,7 @@ pub mod msp_v2 {
                 0x0200 => {
                     let frame = rt::fixed::<9>(frame, &request::FcVariant::DESC)?;
                     rt::equal(
-                        &request::FC_VARIANT_RESERVED_FLAGS,
+                        &request::FcVariant::RESERVED_FLAGS_DESC,
                         3,
                         frame[3] >> 1,
                         0x0,
@@ -244,33 +206,30 @@ pub mod msp_v2 {
             name: &str,
             mut field: impl FnMut(&'static str) -> rt::Option<rt::FieldValue<'v>>,
         ) -> rt::Result<Self, rt::FieldError> {
-            match name {
+            let message = match name {
                 "api_version" => {
-                    rt::Ok(
-                        Self::ApiVersion(request::ApiVersion {
-                            dont_reply: rt::field_int(
-                                "dont_reply",
-                                field("dont_reply"),
-                                0,
-                                1,
-                            )? != 0,
-                        }),
-                    )
+                    Self::ApiVersion(request::ApiVersion {
+                        dont_reply: rt::field_int(
+                            "dont_reply",
+                            field("dont_reply"),
+                            0,
+                            1,
+                        )? != 0,
+                    })
                 }
                 "fc_variant" => {
-                    rt::Ok(
-                        Self::FcVariant(request::FcVariant {
-                            dont_reply: rt::field_int(
-                                "dont_reply",
-                                field("dont_reply"),
-                                0,
-                                1,
-                            )? != 0,
-                        }),
-                    )
+                    Self::FcVariant(request::FcVariant {
+                        dont_reply: rt::field_int(
+                            "dont_reply",
+                            field("dont_reply"),
+                            0,
+                            1,
+                        )? != 0,
+                    })
                 }
-                _ => rt::Err(rt::FieldError::UnknownMessage),
-            }
+                _ => return rt::Err(rt::FieldError::UnknownMessage),
+            };
+            rt::Ok(message)
         }
     }
     impl rt::Message for Request {
@@ -291,11 +250,7 @@ pub mod msp_v2 {
             Request::visit(self, f)
         }
         #[inline]
-        fn encode(
-            &self,
-            address: u8,
-            buf: &mut [u8],
-        ) -> rt::Result<usize, rt::EncodeError> {
+        fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             Request::encode(self, address, buf)
         }
         #[inline]
@@ -330,48 +285,6 @@ pub mod msp_v2 {
         /// The responses this command may get, bit `i` for row `i` of `Response::MESSAGES`.
         const fn replies(&self) -> u64 {
             Self::COMMANDS[self.index()].3
-        }
-    }
-    impl response::ApiVersionReply {
-        pub const NAME: &'static str = "api_version_reply";
-        pub const CODE: &'static [u8] = &[0x01, 0x00];
-        pub const LEN: usize = 12;
-        pub const DESC: rt::MessageDesc = rt::MessageDesc::new(
-            Self::NAME,
-            0x0100,
-            2,
-            &[12],
-        );
-        pub const PROTOCOL_VERSION: rt::Range<usize> = 8..9;
-        pub const API_MAJOR: rt::Range<usize> = 9..10;
-        pub const API_MINOR: rt::Range<usize> = 10..11;
-        pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
-            f("dont_reply", rt::Int(self.dont_reply as i64));
-            f("protocol_version", rt::Int(self.protocol_version as i64));
-            f("api_major", rt::Int(self.api_major as i64));
-            f("api_minor", rt::Int(self.api_minor as i64));
-        }
-        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
-            Response::ApiVersionReply(*self).encode(address, buf)
-        }
-    }
-    impl response::FcVariantReply {
-        pub const NAME: &'static str = "fc_variant_reply";
-        pub const CODE: &'static [u8] = &[0x02, 0x00];
-        pub const LEN: usize = 13;
-        pub const DESC: rt::MessageDesc = rt::MessageDesc::new(
-            Self::NAME,
-            0x0200,
-            2,
-            &[13],
-        );
-        pub const VARIANT: rt::Range<usize> = 8..12;
-        pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
-            f("dont_reply", rt::Int(self.dont_reply as i64));
-            f("variant", rt::Text(&self.variant[..]));
-        }
-        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
-            Response::FcVariantReply(*self).encode(address, buf)
         }
     }
     ///A response, device to host.
@@ -419,11 +332,7 @@ pub mod msp_v2 {
         /// Encodes the frame for `address` into `buf`; returns the frame length. Refuses what
         /// decode refuses: an address no frame may carry, the broadcast address for a command
         /// that does not accept it, a value outside its field's range.
-        pub fn encode(
-            &self,
-            address: u8,
-            buf: &mut [u8],
-        ) -> rt::Result<usize, rt::EncodeError> {
+        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             rt::encode_address(address, &FRAME)?;
             let len = match *self {
                 Self::ApiVersionReply(
@@ -513,7 +422,7 @@ pub mod msp_v2 {
                         12,
                     >(frame, &response::ApiVersionReply::DESC)?;
                     rt::equal(
-                        &response::API_VERSION_REPLY_RESERVED_FLAGS,
+                        &response::ApiVersionReply::RESERVED_FLAGS_DESC,
                         3,
                         frame[3] >> 1,
                         0x0,
@@ -530,7 +439,7 @@ pub mod msp_v2 {
                 0x0200 => {
                     let frame = rt::fixed::<13>(frame, &response::FcVariantReply::DESC)?;
                     rt::equal(
-                        &response::FC_VARIANT_REPLY_RESERVED_FLAGS,
+                        &response::FcVariantReply::RESERVED_FLAGS_DESC,
                         3,
                         frame[3] >> 1,
                         0x0,
@@ -552,37 +461,34 @@ pub mod msp_v2 {
             name: &str,
             mut field: impl FnMut(&'static str) -> rt::Option<rt::FieldValue<'v>>,
         ) -> rt::Result<Self, rt::FieldError> {
-            match name {
+            let message = match name {
                 "api_version_reply" => {
-                    rt::Ok(
-                        Self::ApiVersionReply(response::ApiVersionReply {
-                            dont_reply: rt::field_int(
-                                "dont_reply",
-                                field("dont_reply"),
-                                0,
-                                1,
-                            )? != 0,
-                            protocol_version: rt::get(&mut field, "protocol_version")?,
-                            api_major: rt::get(&mut field, "api_major")?,
-                            api_minor: rt::get(&mut field, "api_minor")?,
-                        }),
-                    )
+                    Self::ApiVersionReply(response::ApiVersionReply {
+                        dont_reply: rt::field_int(
+                            "dont_reply",
+                            field("dont_reply"),
+                            0,
+                            1,
+                        )? != 0,
+                        protocol_version: rt::get(&mut field, "protocol_version")?,
+                        api_major: rt::get(&mut field, "api_major")?,
+                        api_minor: rt::get(&mut field, "api_minor")?,
+                    })
                 }
                 "fc_variant_reply" => {
-                    rt::Ok(
-                        Self::FcVariantReply(response::FcVariantReply {
-                            dont_reply: rt::field_int(
-                                "dont_reply",
-                                field("dont_reply"),
-                                0,
-                                1,
-                            )? != 0,
-                            variant: rt::text(&mut field, "variant")?,
-                        }),
-                    )
+                    Self::FcVariantReply(response::FcVariantReply {
+                        dont_reply: rt::field_int(
+                            "dont_reply",
+                            field("dont_reply"),
+                            0,
+                            1,
+                        )? != 0,
+                        variant: rt::text(&mut field, "variant")?,
+                    })
                 }
-                _ => rt::Err(rt::FieldError::UnknownMessage),
-            }
+                _ => return rt::Err(rt::FieldError::UnknownMessage),
+            };
+            rt::Ok(message)
         }
     }
     impl rt::Message for Response {
@@ -603,11 +509,7 @@ pub mod msp_v2 {
             Response::visit(self, f)
         }
         #[inline]
-        fn encode(
-            &self,
-            address: u8,
-            buf: &mut [u8],
-        ) -> rt::Result<usize, rt::EncodeError> {
+        fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             Response::encode(self, address, buf)
         }
         #[inline]
@@ -726,11 +628,82 @@ pub mod msp_v2 {
     pub type StreamDecoder = ::busspec_runtime::stream::StreamDecoder<MspV2>;
     /// What [`StreamDecoder`] finds in a stream.
     pub type Event = ::busspec_runtime::stream::Event<Request, Response>;
-    /// Each request as a struct of its own (its `DESC` names it as refusals do: name,
-    /// code and the frame lengths of its code), and each field a refusal names
-    /// (`message.field`, `FieldDesc`).
+    impl request::ApiVersion {
+        pub const NAME: &'static str = "api_version";
+        pub const CODE: &'static [u8] = &[0x01, 0x00];
+        pub const LEN: usize = 9;
+        pub const DESC: rt::MessageDesc = rt::desc(Self::NAME, 0x0100, 2, &[9]);
+        pub const RESERVED_FLAGS_DESC: rt::FieldDesc = rt::field(
+            Self::NAME,
+            "reserved_flags",
+        );
+        pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
+            f("dont_reply", rt::Int(self.dont_reply as i64));
+        }
+        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            Request::ApiVersion(*self).encode(address, buf)
+        }
+    }
+    impl request::FcVariant {
+        pub const NAME: &'static str = "fc_variant";
+        pub const CODE: &'static [u8] = &[0x02, 0x00];
+        pub const LEN: usize = 9;
+        pub const DESC: rt::MessageDesc = rt::desc(Self::NAME, 0x0200, 2, &[9]);
+        pub const RESERVED_FLAGS_DESC: rt::FieldDesc = rt::field(
+            Self::NAME,
+            "reserved_flags",
+        );
+        pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
+            f("dont_reply", rt::Int(self.dont_reply as i64));
+        }
+        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            Request::FcVariant(*self).encode(address, buf)
+        }
+    }
+    impl response::ApiVersionReply {
+        pub const NAME: &'static str = "api_version_reply";
+        pub const CODE: &'static [u8] = &[0x01, 0x00];
+        pub const LEN: usize = 12;
+        pub const DESC: rt::MessageDesc = rt::desc(Self::NAME, 0x0100, 2, &[12]);
+        pub const PROTOCOL_VERSION: rt::Range<usize> = 8..9;
+        pub const API_MAJOR: rt::Range<usize> = 9..10;
+        pub const API_MINOR: rt::Range<usize> = 10..11;
+        pub const RESERVED_FLAGS_DESC: rt::FieldDesc = rt::field(
+            Self::NAME,
+            "reserved_flags",
+        );
+        pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
+            f("dont_reply", rt::Int(self.dont_reply as i64));
+            f("protocol_version", rt::Int(self.protocol_version as i64));
+            f("api_major", rt::Int(self.api_major as i64));
+            f("api_minor", rt::Int(self.api_minor as i64));
+        }
+        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            Response::ApiVersionReply(*self).encode(address, buf)
+        }
+    }
+    impl response::FcVariantReply {
+        pub const NAME: &'static str = "fc_variant_reply";
+        pub const CODE: &'static [u8] = &[0x02, 0x00];
+        pub const LEN: usize = 13;
+        pub const DESC: rt::MessageDesc = rt::desc(Self::NAME, 0x0200, 2, &[13]);
+        pub const VARIANT: rt::Range<usize> = 8..12;
+        pub const RESERVED_FLAGS_DESC: rt::FieldDesc = rt::field(
+            Self::NAME,
+            "reserved_flags",
+        );
+        pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
+            f("dont_reply", rt::Int(self.dont_reply as i64));
+            f("variant", rt::Text(&self.variant[..]));
+        }
+        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            Response::FcVariantReply(*self).encode(address, buf)
+        }
+    }
+    /// Each request as a struct of its own; its constants (`DESC`, which names it as
+    /// refusals do: name, code and the frame lengths of its code; `QUANTITY_DESC`, each
+    /// field a refusal names) and methods are in the `impl` of each.
     pub mod request {
-        use ::busspec_runtime::FieldDesc;
         /// §3 MSP_API_VERSION (1) (code `0x0100`, 9 bytes).
         #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
         #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
@@ -747,20 +720,9 @@ pub mod msp_v2 {
         pub struct FcVariant {
             pub dont_reply: bool,
         }
-        /// `api_version.reserved_flags`
-        pub const API_VERSION_RESERVED_FLAGS: FieldDesc = FieldDesc::new(
-            "api_version",
-            "reserved_flags",
-        );
-        /// `fc_variant.reserved_flags`
-        pub const FC_VARIANT_RESERVED_FLAGS: FieldDesc = FieldDesc::new(
-            "fc_variant",
-            "reserved_flags",
-        );
     }
-    /// Each response as a struct of its own, and the fields its refusals name.
+    /// Each response as a struct of its own.
     pub mod response {
-        use ::busspec_runtime::FieldDesc;
         /// §3 MSP_API_VERSION (1), answered (code `0x0100`, 12 bytes).
         #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
         #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
@@ -781,15 +743,5 @@ pub mod msp_v2 {
             pub dont_reply: bool,
             pub variant: super::rt::Ascii<4>,
         }
-        /// `api_version_reply.reserved_flags`
-        pub const API_VERSION_REPLY_RESERVED_FLAGS: FieldDesc = FieldDesc::new(
-            "api_version_reply",
-            "reserved_flags",
-        );
-        /// `fc_variant_reply.reserved_flags`
-        pub const FC_VARIANT_REPLY_RESERVED_FLAGS: FieldDesc = FieldDesc::new(
-            "fc_variant_reply",
-            "reserved_flags",
-        );
     }
 }

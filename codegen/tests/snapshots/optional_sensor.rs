@@ -237,34 +237,6 @@ pub mod optional_sensor {
             Self(raw)
         }
     }
-    impl request::Read {
-        pub const NAME: &'static str = "read";
-        pub const CODE: &'static [u8] = &[0x01];
-        pub const LEN: usize = 5;
-        pub const DESC: rt::MessageDesc = rt::MessageDesc::new(
-            Self::NAME,
-            0x01,
-            1,
-            &[5],
-        );
-        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
-            Request::Read(*self).encode(address, buf)
-        }
-    }
-    impl request::LastEvent {
-        pub const NAME: &'static str = "last_event";
-        pub const CODE: &'static [u8] = &[0x02];
-        pub const LEN: usize = 5;
-        pub const DESC: rt::MessageDesc = rt::MessageDesc::new(
-            Self::NAME,
-            0x02,
-            1,
-            &[5],
-        );
-        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
-            Request::LastEvent(*self).encode(address, buf)
-        }
-    }
     ///A request (command), host to device.
     #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
     #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
@@ -305,20 +277,12 @@ pub mod optional_sensor {
         /// Encodes the frame for `address` into `buf`; returns the frame length. Refuses what
         /// decode refuses: an address no frame may carry, the broadcast address for a command
         /// that does not accept it, a value outside its field's range.
-        pub fn encode(
-            &self,
-            address: u8,
-            buf: &mut [u8],
-        ) -> rt::Result<usize, rt::EncodeError> {
+        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             rt::encode_address(address, &FRAME)?;
             let out = rt::frame_mut::<5>(buf, &[])?;
             let len = match *self {
-                Self::Read(request::Read {}) => {
-                    rt::head(out, &[0xA5, address, 0x00, 0x01]).len()
-                }
-                Self::LastEvent(request::LastEvent {}) => {
-                    rt::head(out, &[0xA5, address, 0x00, 0x02]).len()
-                }
+                Self::Read(_) => rt::head(out, &[0xA5, address, 0x00, 0x01]).len(),
+                Self::LastEvent(_) => rt::head(out, &[0xA5, address, 0x00, 0x02]).len(),
             };
             rt::seal(buf, len, |b| u32::from(checksum(rt::covered(b, 1))), 1, true);
             rt::Ok(len)
@@ -361,11 +325,12 @@ pub mod optional_sensor {
             name: &str,
             _field: impl FnMut(&'static str) -> rt::Option<rt::FieldValue<'v>>,
         ) -> rt::Result<Self, rt::FieldError> {
-            match name {
-                "read" => rt::Ok(Self::Read(request::Read)),
-                "last_event" => rt::Ok(Self::LastEvent(request::LastEvent)),
-                _ => rt::Err(rt::FieldError::UnknownMessage),
-            }
+            let message = match name {
+                "read" => Self::Read(request::Read),
+                "last_event" => Self::LastEvent(request::LastEvent),
+                _ => return rt::Err(rt::FieldError::UnknownMessage),
+            };
+            rt::Ok(message)
         }
     }
     impl rt::Message for Request {
@@ -386,11 +351,7 @@ pub mod optional_sensor {
             Request::visit(self, f)
         }
         #[inline]
-        fn encode(
-            &self,
-            address: u8,
-            buf: &mut [u8],
-        ) -> rt::Result<usize, rt::EncodeError> {
+        fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             Request::encode(self, address, buf)
         }
         #[inline]
@@ -486,55 +447,6 @@ pub mod optional_sensor {
         ],
         lengths: &[6, 8],
     };
-    impl response::Reading {
-        pub const NAME: &'static str = "reading";
-        pub const CODE: &'static [u8] = &[0x81];
-        pub const MIN_LEN: usize = 8;
-        pub const MAX_LEN: usize = 14;
-        pub const DESC: rt::MessageDesc = rt::MessageDesc::new(
-            Self::NAME,
-            0x81,
-            1,
-            &[8],
-        );
-        pub const STATUS: rt::Range<usize> = 4..5;
-        pub const TEMPERATURE: rt::Range<usize> = 5..7;
-        pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
-            f("status", rt::Int(self.status.raw() as i64));
-            f("temperature", rt::Int(self.temperature.raw() as i64));
-            if let rt::Some(v_humidity) = self.humidity {
-                f("humidity", rt::Int(v_humidity.raw() as i64))
-            }
-            if let rt::Some(v_pressure) = self.pressure {
-                f("pressure", rt::Int(v_pressure as i64))
-            }
-        }
-        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
-            Response::Reading(*self).encode(address, buf)
-        }
-    }
-    impl response::Event {
-        pub const NAME: &'static str = "event";
-        pub const CODE: &'static [u8] = &[0x82];
-        pub const MIN_LEN: usize = 6;
-        pub const MAX_LEN: usize = 8;
-        pub const DESC: rt::MessageDesc = rt::MessageDesc::new(
-            Self::NAME,
-            0x82,
-            1,
-            &[6],
-        );
-        pub const KIND: rt::Range<usize> = 4..5;
-        pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
-            f("kind", rt::Int(self.kind.raw() as i64));
-            if let rt::Some(v_detail) = self.detail {
-                f("detail", rt::Int(v_detail as i64))
-            }
-        }
-        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
-            Response::Event(*self).encode(address, buf)
-        }
-    }
     ///A response, device to host.
     #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
     #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
@@ -568,15 +480,11 @@ pub mod optional_sensor {
         /// The length of this message's frame, in bytes.
         pub const fn frame_len(&self) -> usize {
             match self {
-                Self::Reading(
-                    response::Reading { humidity: v_humidity, pressure: v_pressure, .. },
-                ) => {
+                Self::Reading(m) => {
                     OPTIONAL_READING
-                        .frame_len(&[v_humidity.is_some(), v_pressure.is_some()])
+                        .frame_len(&[m.humidity.is_some(), m.pressure.is_some()])
                 }
-                Self::Event(response::Event { detail: v_detail, .. }) => {
-                    OPTIONAL_EVENT.frame_len(&[v_detail.is_some()])
-                }
+                Self::Event(m) => OPTIONAL_EVENT.frame_len(&[m.detail.is_some()]),
                 _ => Self::MESSAGES[self.index()].2,
             }
         }
@@ -591,11 +499,7 @@ pub mod optional_sensor {
         /// Encodes the frame for `address` into `buf`; returns the frame length. Refuses what
         /// decode refuses: an address no frame may carry, the broadcast address for a command
         /// that does not accept it, a value outside its field's range.
-        pub fn encode(
-            &self,
-            address: u8,
-            buf: &mut [u8],
-        ) -> rt::Result<usize, rt::EncodeError> {
+        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             rt::encode_address(address, &FRAME)?;
             let len = match *self {
                 Self::Reading(
@@ -724,7 +628,7 @@ pub mod optional_sensor {
                     let v_humidity = if s.has(0) {
                         let field_2: u16 = u16::from_be_bytes([frame[7], frame[8]]);
                         rt::in_range(
-                            &response::READING_HUMIDITY,
+                            &response::Reading::HUMIDITY_DESC,
                             s.at(0),
                             field_2,
                             0,
@@ -782,32 +686,27 @@ pub mod optional_sensor {
             name: &str,
             mut field: impl FnMut(&'static str) -> rt::Option<rt::FieldValue<'v>>,
         ) -> rt::Result<Self, rt::FieldError> {
-            match name {
+            let message = match name {
                 "reading" => {
-                    rt::Ok(
-                        Self::Reading(response::Reading {
-                            status: ReadingPresent::from_raw(
-                                rt::get(&mut field, "status")?,
-                            ),
-                            temperature: Decicelsius::from_raw(
-                                rt::get(&mut field, "temperature")?,
-                            ),
-                            humidity: rt::get_opt::<u16>(&mut field, "humidity")?
-                                .map(Permille::from_raw),
-                            pressure: rt::get_opt::<u32>(&mut field, "pressure")?,
-                        }),
-                    )
+                    Self::Reading(response::Reading {
+                        status: ReadingPresent::from_raw(rt::get(&mut field, "status")?),
+                        temperature: Decicelsius::from_raw(
+                            rt::get(&mut field, "temperature")?,
+                        ),
+                        humidity: rt::get_opt::<u16>(&mut field, "humidity")?
+                            .map(Permille::from_raw),
+                        pressure: rt::get_opt::<u32>(&mut field, "pressure")?,
+                    })
                 }
                 "event" => {
-                    rt::Ok(
-                        Self::Event(response::Event {
-                            kind: EventKind::from_raw(rt::get(&mut field, "kind")?),
-                            detail: rt::get_opt::<u16>(&mut field, "detail")?,
-                        }),
-                    )
+                    Self::Event(response::Event {
+                        kind: EventKind::from_raw(rt::get(&mut field, "kind")?),
+                        detail: rt::get_opt::<u16>(&mut field, "detail")?,
+                    })
                 }
-                _ => rt::Err(rt::FieldError::UnknownMessage),
-            }
+                _ => return rt::Err(rt::FieldError::UnknownMessage),
+            };
+            rt::Ok(message)
         }
     }
     impl rt::Message for Response {
@@ -828,11 +727,7 @@ pub mod optional_sensor {
             Response::visit(self, f)
         }
         #[inline]
-        fn encode(
-            &self,
-            address: u8,
-            buf: &mut [u8],
-        ) -> rt::Result<usize, rt::EncodeError> {
+        fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             Response::encode(self, address, buf)
         }
         #[inline]
@@ -986,9 +881,67 @@ pub mod optional_sensor {
     pub type StreamDecoder = ::busspec_runtime::stream::StreamDecoder<OptionalSensor>;
     /// What [`StreamDecoder`] finds in a stream.
     pub type Event = ::busspec_runtime::stream::Event<Request, Response>;
-    /// Each request as a struct of its own (its `DESC` names it as refusals do: name,
-    /// code and the frame lengths of its code), and each field a refusal names
-    /// (`message.field`, `FieldDesc`).
+    impl request::Read {
+        pub const NAME: &'static str = "read";
+        pub const CODE: &'static [u8] = &[0x01];
+        pub const LEN: usize = 5;
+        pub const DESC: rt::MessageDesc = rt::desc(Self::NAME, 0x01, 1, &[5]);
+        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            Request::Read(*self).encode(address, buf)
+        }
+    }
+    impl request::LastEvent {
+        pub const NAME: &'static str = "last_event";
+        pub const CODE: &'static [u8] = &[0x02];
+        pub const LEN: usize = 5;
+        pub const DESC: rt::MessageDesc = rt::desc(Self::NAME, 0x02, 1, &[5]);
+        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            Request::LastEvent(*self).encode(address, buf)
+        }
+    }
+    impl response::Reading {
+        pub const NAME: &'static str = "reading";
+        pub const CODE: &'static [u8] = &[0x81];
+        pub const MIN_LEN: usize = 8;
+        pub const MAX_LEN: usize = 14;
+        pub const DESC: rt::MessageDesc = rt::desc(Self::NAME, 0x81, 1, &[8]);
+        pub const STATUS: rt::Range<usize> = 4..5;
+        pub const TEMPERATURE: rt::Range<usize> = 5..7;
+        pub const HUMIDITY_DESC: rt::FieldDesc = rt::field(Self::NAME, "humidity");
+        pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
+            f("status", rt::Int(self.status.raw() as i64));
+            f("temperature", rt::Int(self.temperature.raw() as i64));
+            if let rt::Some(v_humidity) = self.humidity {
+                f("humidity", rt::Int(v_humidity.raw() as i64))
+            }
+            if let rt::Some(v_pressure) = self.pressure {
+                f("pressure", rt::Int(v_pressure as i64))
+            }
+        }
+        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            Response::Reading(*self).encode(address, buf)
+        }
+    }
+    impl response::Event {
+        pub const NAME: &'static str = "event";
+        pub const CODE: &'static [u8] = &[0x82];
+        pub const MIN_LEN: usize = 6;
+        pub const MAX_LEN: usize = 8;
+        pub const DESC: rt::MessageDesc = rt::desc(Self::NAME, 0x82, 1, &[6]);
+        pub const KIND: rt::Range<usize> = 4..5;
+        pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
+            f("kind", rt::Int(self.kind.raw() as i64));
+            if let rt::Some(v_detail) = self.detail {
+                f("detail", rt::Int(v_detail as i64))
+            }
+        }
+        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            Response::Event(*self).encode(address, buf)
+        }
+    }
+    /// Each request as a struct of its own; its constants (`DESC`, which names it as
+    /// refusals do: name, code and the frame lengths of its code; `QUANTITY_DESC`, each
+    /// field a refusal names) and methods are in the `impl` of each.
     pub mod request {
         /// §3 Read the sensor (code `0x01`, 5 bytes).
         #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
@@ -1001,9 +954,8 @@ pub mod optional_sensor {
         #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]
         pub struct LastEvent;
     }
-    /// Each response as a struct of its own, and the fields its refusals name.
+    /// Each response as a struct of its own.
     pub mod response {
-        use ::busspec_runtime::FieldDesc;
         /// §3 Reading (code `0x81`, 8 to 14 bytes).
         #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
         #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
@@ -1028,7 +980,5 @@ pub mod optional_sensor {
             /// On the wire only when `kind` = 2; `None` where it is not.
             pub detail: super::rt::Option<u16>,
         }
-        /// `reading.humidity`
-        pub const READING_HUMIDITY: FieldDesc = FieldDesc::new("reading", "humidity");
     }
 }

@@ -80,66 +80,6 @@ pub mod packed_channels {
     pub fn checksum(bytes: &[u8]) -> u8 {
         CRC.checksum(bytes)
     }
-    impl request::Channels {
-        pub const NAME: &'static str = "channels";
-        pub const CODE: &'static [u8] = &[0x16];
-        pub const LEN: usize = 11;
-        pub const DESC: rt::MessageDesc = rt::MessageDesc::new(
-            Self::NAME,
-            0x16,
-            1,
-            &[11],
-        );
-        pub const CHANNELS: rt::Range<usize> = 3..9;
-        pub const FLAGS: rt::Range<usize> = 9..10;
-        pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
-            f("channels", rt::List(self.channels.elements()));
-            f("flags", rt::Int(self.flags as i64));
-        }
-        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
-            Request::Channels(*self).encode(address, buf)
-        }
-    }
-    impl request::Levels {
-        pub const NAME: &'static str = "levels";
-        pub const CODE: &'static [u8] = &[0x17];
-        pub const LEN: usize = 7;
-        pub const DESC: rt::MessageDesc = rt::MessageDesc::new(
-            Self::NAME,
-            0x17,
-            1,
-            &[7],
-        );
-        pub const BANK: rt::Range<usize> = 3..4;
-        pub const LEVELS: rt::Range<usize> = 4..6;
-        pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
-            f("bank", rt::Int(self.bank as i64));
-            f("levels", rt::List(self.levels.elements()));
-        }
-        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
-            Request::Levels(*self).encode(address, buf)
-        }
-    }
-    impl request::Calibrate {
-        pub const NAME: &'static str = "calibrate";
-        pub const CODE: &'static [u8] = &[0x19];
-        pub const LEN: usize = 12;
-        pub const DESC: rt::MessageDesc = rt::MessageDesc::new(
-            Self::NAME,
-            0x19,
-            1,
-            &[12],
-        );
-        pub const OFFSETS: rt::Range<usize> = 3..9;
-        pub const GAINS: rt::Range<usize> = 9..11;
-        pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
-            f("offsets", rt::List(self.offsets.elements()));
-            f("gains", rt::List(self.gains.elements()));
-        }
-        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
-            Request::Calibrate(*self).encode(address, buf)
-        }
-    }
     ///A request (command), host to device.
     #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
     #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
@@ -189,11 +129,7 @@ pub mod packed_channels {
         /// Encodes the frame for `address` into `buf`; returns the frame length. Refuses what
         /// decode refuses: an address no frame may carry, the broadcast address for a command
         /// that does not accept it, a value outside its field's range.
-        pub fn encode(
-            &self,
-            address: u8,
-            buf: &mut [u8],
-        ) -> rt::Result<usize, rt::EncodeError> {
+        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             rt::encode_address(address, &FRAME)?;
             let len = match *self {
                 Self::Channels(
@@ -274,14 +210,14 @@ pub mod packed_channels {
                 0x16 => {
                     let frame = rt::fixed::<11>(frame, &request::Channels::DESC)?;
                     rt::equal(
-                        &request::CHANNELS_CHANNELS,
+                        &request::Channels::CHANNELS_DESC,
                         3 + 5,
                         rt::packed_padding(&frame[3..9], 4, 11, true),
                         0,
                     )?;
                     let v_channels = rt::unpack::<u16, 4>(&frame[3..9], 11, true);
                     rt::packed_in_range(
-                        &request::CHANNELS_CHANNELS,
+                        &request::Channels::CHANNELS_DESC,
                         3,
                         11,
                         v_channels.as_slice(),
@@ -298,14 +234,14 @@ pub mod packed_channels {
                 0x17 => {
                     let frame = rt::fixed::<7>(frame, &request::Levels::DESC)?;
                     rt::equal(
-                        &request::LEVELS_LEVELS,
+                        &request::Levels::LEVELS_DESC,
                         4 + 1,
                         rt::packed_padding(&frame[4..6], 5, 3, false),
                         0,
                     )?;
                     let v_levels = rt::unpack::<u8, 5>(&frame[4..6], 3, false);
                     rt::packed_in_range(
-                        &request::LEVELS_LEVELS,
+                        &request::Levels::LEVELS_DESC,
                         4,
                         3,
                         v_levels.as_slice(),
@@ -322,21 +258,21 @@ pub mod packed_channels {
                 0x19 => {
                     let frame = rt::fixed::<12>(frame, &request::Calibrate::DESC)?;
                     rt::equal(
-                        &request::CALIBRATE_OFFSETS,
+                        &request::Calibrate::OFFSETS_DESC,
                         3 + 5,
                         rt::packed_padding(&frame[3..9], 3, 16, false),
                         0,
                     )?;
                     let v_offsets = rt::unpack::<u16, 3>(&frame[3..9], 16, false);
                     rt::equal(
-                        &request::CALIBRATE_GAINS,
+                        &request::Calibrate::GAINS_DESC,
                         9 + 1,
                         rt::packed_padding(&frame[9..11], 2, 8, false),
                         0,
                     )?;
                     let v_gains = rt::unpack::<u8, 2>(&frame[9..11], 8, false);
                     rt::packed_in_range(
-                        &request::CALIBRATE_GAINS,
+                        &request::Calibrate::GAINS_DESC,
                         9,
                         8,
                         v_gains.as_slice(),
@@ -360,39 +296,28 @@ pub mod packed_channels {
             name: &str,
             mut field: impl FnMut(&'static str) -> rt::Option<rt::FieldValue<'v>>,
         ) -> rt::Result<Self, rt::FieldError> {
-            match name {
+            let message = match name {
                 "channels" => {
-                    rt::Ok(
-                        Self::Channels(request::Channels {
-                            channels: rt::list::<
-                                u16,
-                                4,
-                            >(&mut field, "channels", 0, 65535)?,
-                            flags: rt::get(&mut field, "flags")?,
-                        }),
-                    )
+                    Self::Channels(request::Channels {
+                        channels: rt::list::<u16, 4>(&mut field, "channels", 0, 65535)?,
+                        flags: rt::get(&mut field, "flags")?,
+                    })
                 }
                 "levels" => {
-                    rt::Ok(
-                        Self::Levels(request::Levels {
-                            bank: rt::get(&mut field, "bank")?,
-                            levels: rt::list::<u8, 5>(&mut field, "levels", 0, 255)?,
-                        }),
-                    )
+                    Self::Levels(request::Levels {
+                        bank: rt::get(&mut field, "bank")?,
+                        levels: rt::list::<u8, 5>(&mut field, "levels", 0, 255)?,
+                    })
                 }
                 "calibrate" => {
-                    rt::Ok(
-                        Self::Calibrate(request::Calibrate {
-                            offsets: rt::list::<
-                                u16,
-                                3,
-                            >(&mut field, "offsets", 0, 65535)?,
-                            gains: rt::list::<u8, 2>(&mut field, "gains", 0, 255)?,
-                        }),
-                    )
+                    Self::Calibrate(request::Calibrate {
+                        offsets: rt::list::<u16, 3>(&mut field, "offsets", 0, 65535)?,
+                        gains: rt::list::<u8, 2>(&mut field, "gains", 0, 255)?,
+                    })
                 }
-                _ => rt::Err(rt::FieldError::UnknownMessage),
-            }
+                _ => return rt::Err(rt::FieldError::UnknownMessage),
+            };
+            rt::Ok(message)
         }
     }
     impl rt::Message for Request {
@@ -413,11 +338,7 @@ pub mod packed_channels {
             Request::visit(self, f)
         }
         #[inline]
-        fn encode(
-            &self,
-            address: u8,
-            buf: &mut [u8],
-        ) -> rt::Result<usize, rt::EncodeError> {
+        fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             Request::encode(self, address, buf)
         }
         #[inline]
@@ -458,24 +379,6 @@ pub mod packed_channels {
         /// The responses this command may get, bit `i` for row `i` of `Response::MESSAGES`.
         const fn replies(&self) -> u64 {
             Self::COMMANDS[self.index()].3
-        }
-    }
-    impl response::Readings {
-        pub const NAME: &'static str = "readings";
-        pub const CODE: &'static [u8] = &[0x18];
-        pub const LEN: usize = 12;
-        pub const DESC: rt::MessageDesc = rt::MessageDesc::new(
-            Self::NAME,
-            0x18,
-            1,
-            &[12],
-        );
-        pub const READINGS: rt::Range<usize> = 3..11;
-        pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
-            f("readings", rt::List(self.readings.elements()));
-        }
-        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
-            Response::Readings(*self).encode(address, buf)
         }
     }
     ///A response, device to host.
@@ -519,11 +422,7 @@ pub mod packed_channels {
         /// Encodes the frame for `address` into `buf`; returns the frame length. Refuses what
         /// decode refuses: an address no frame may carry, the broadcast address for a command
         /// that does not accept it, a value outside its field's range.
-        pub fn encode(
-            &self,
-            address: u8,
-            buf: &mut [u8],
-        ) -> rt::Result<usize, rt::EncodeError> {
+        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             rt::encode_address(address, &FRAME)?;
             let out = rt::frame_mut::<12>(buf, &[])?;
             let len = match *self {
@@ -593,7 +492,7 @@ pub mod packed_channels {
                 0x18 => {
                     let frame = rt::fixed::<12>(frame, &response::Readings::DESC)?;
                     rt::equal(
-                        &response::READINGS_READINGS,
+                        &response::Readings::READINGS_DESC,
                         3 + 7,
                         rt::packed_padding(&frame[3..11], 3, 20, false),
                         0,
@@ -615,19 +514,18 @@ pub mod packed_channels {
             name: &str,
             mut field: impl FnMut(&'static str) -> rt::Option<rt::FieldValue<'v>>,
         ) -> rt::Result<Self, rt::FieldError> {
-            match name {
+            let message = match name {
                 "readings" => {
-                    rt::Ok(
-                        Self::Readings(response::Readings {
-                            readings: rt::list::<
-                                u32,
-                                3,
-                            >(&mut field, "readings", 0, 4294967295)?,
-                        }),
-                    )
+                    Self::Readings(response::Readings {
+                        readings: rt::list::<
+                            u32,
+                            3,
+                        >(&mut field, "readings", 0, 4294967295)?,
+                    })
                 }
-                _ => rt::Err(rt::FieldError::UnknownMessage),
-            }
+                _ => return rt::Err(rt::FieldError::UnknownMessage),
+            };
+            rt::Ok(message)
         }
     }
     impl rt::Message for Response {
@@ -648,11 +546,7 @@ pub mod packed_channels {
             Response::visit(self, f)
         }
         #[inline]
-        fn encode(
-            &self,
-            address: u8,
-            buf: &mut [u8],
-        ) -> rt::Result<usize, rt::EncodeError> {
+        fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             Response::encode(self, address, buf)
         }
         #[inline]
@@ -778,11 +672,73 @@ pub mod packed_channels {
     pub type StreamDecoder = ::busspec_runtime::stream::StreamDecoder<PackedChannels>;
     /// What [`StreamDecoder`] finds in a stream.
     pub type Event = ::busspec_runtime::stream::Event<Request, Response>;
-    /// Each request as a struct of its own (its `DESC` names it as refusals do: name,
-    /// code and the frame lengths of its code), and each field a refusal names
-    /// (`message.field`, `FieldDesc`).
+    impl request::Channels {
+        pub const NAME: &'static str = "channels";
+        pub const CODE: &'static [u8] = &[0x16];
+        pub const LEN: usize = 11;
+        pub const DESC: rt::MessageDesc = rt::desc(Self::NAME, 0x16, 1, &[11]);
+        pub const CHANNELS: rt::Range<usize> = 3..9;
+        pub const FLAGS: rt::Range<usize> = 9..10;
+        pub const CHANNELS_DESC: rt::FieldDesc = rt::field(Self::NAME, "channels");
+        pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
+            f("channels", rt::List(self.channels.elements()));
+            f("flags", rt::Int(self.flags as i64));
+        }
+        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            Request::Channels(*self).encode(address, buf)
+        }
+    }
+    impl request::Levels {
+        pub const NAME: &'static str = "levels";
+        pub const CODE: &'static [u8] = &[0x17];
+        pub const LEN: usize = 7;
+        pub const DESC: rt::MessageDesc = rt::desc(Self::NAME, 0x17, 1, &[7]);
+        pub const BANK: rt::Range<usize> = 3..4;
+        pub const LEVELS: rt::Range<usize> = 4..6;
+        pub const LEVELS_DESC: rt::FieldDesc = rt::field(Self::NAME, "levels");
+        pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
+            f("bank", rt::Int(self.bank as i64));
+            f("levels", rt::List(self.levels.elements()));
+        }
+        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            Request::Levels(*self).encode(address, buf)
+        }
+    }
+    impl request::Calibrate {
+        pub const NAME: &'static str = "calibrate";
+        pub const CODE: &'static [u8] = &[0x19];
+        pub const LEN: usize = 12;
+        pub const DESC: rt::MessageDesc = rt::desc(Self::NAME, 0x19, 1, &[12]);
+        pub const OFFSETS: rt::Range<usize> = 3..9;
+        pub const GAINS: rt::Range<usize> = 9..11;
+        pub const OFFSETS_DESC: rt::FieldDesc = rt::field(Self::NAME, "offsets");
+        pub const GAINS_DESC: rt::FieldDesc = rt::field(Self::NAME, "gains");
+        pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
+            f("offsets", rt::List(self.offsets.elements()));
+            f("gains", rt::List(self.gains.elements()));
+        }
+        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            Request::Calibrate(*self).encode(address, buf)
+        }
+    }
+    impl response::Readings {
+        pub const NAME: &'static str = "readings";
+        pub const CODE: &'static [u8] = &[0x18];
+        pub const LEN: usize = 12;
+        pub const DESC: rt::MessageDesc = rt::desc(Self::NAME, 0x18, 1, &[12]);
+        pub const READINGS: rt::Range<usize> = 3..11;
+        pub const READINGS_DESC: rt::FieldDesc = rt::field(Self::NAME, "readings");
+        pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
+            f("readings", rt::List(self.readings.elements()));
+        }
+        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            Response::Readings(*self).encode(address, buf)
+        }
+    }
+    /// Each request as a struct of its own; its constants (`DESC`, which names it as
+    /// refusals do: name, code and the frame lengths of its code; `QUANTITY_DESC`, each
+    /// field a refusal names) and methods are in the `impl` of each.
     pub mod request {
-        use ::busspec_runtime::FieldDesc;
         /// §3.1 Channels (code `0x16`, 11 bytes).
         #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
         #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
@@ -813,18 +769,9 @@ pub mod packed_channels {
             /// Valid raw range 1..=9.
             pub gains: super::rt::Repeated<u8, 2>,
         }
-        /// `channels.channels`
-        pub const CHANNELS_CHANNELS: FieldDesc = FieldDesc::new("channels", "channels");
-        /// `levels.levels`
-        pub const LEVELS_LEVELS: FieldDesc = FieldDesc::new("levels", "levels");
-        /// `calibrate.offsets`
-        pub const CALIBRATE_OFFSETS: FieldDesc = FieldDesc::new("calibrate", "offsets");
-        /// `calibrate.gains`
-        pub const CALIBRATE_GAINS: FieldDesc = FieldDesc::new("calibrate", "gains");
     }
-    /// Each response as a struct of its own, and the fields its refusals name.
+    /// Each response as a struct of its own.
     pub mod response {
-        use ::busspec_runtime::FieldDesc;
         /// §4.1 Readings (code `0x18`, 12 bytes).
         #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
         #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
@@ -834,7 +781,5 @@ pub mod packed_channels {
             /// \[mV\]
             pub readings: super::rt::Repeated<u32, 3>,
         }
-        /// `readings.readings`
-        pub const READINGS_READINGS: FieldDesc = FieldDesc::new("readings", "readings");
     }
 }

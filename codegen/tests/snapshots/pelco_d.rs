@@ -115,70 +115,6 @@ pub mod pelco_d2 {
             Self(raw)
         }
     }
-    impl request::Ptz {
-        pub const NAME: &'static str = "ptz";
-        pub const CODE: &'static [u8] = &[];
-        pub const LEN: usize = 7;
-        pub const DESC: rt::MessageDesc = rt::MessageDesc::new(Self::NAME, 0, 0, &[7]);
-        pub const PAN_SPEED: rt::Range<usize> = 4..5;
-        pub const TILT_SPEED: rt::Range<usize> = 5..6;
-        pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
-            f("sense", rt::Int(self.sense as i64));
-            f("auto_scan", rt::Int(self.auto_scan as i64));
-            f("camera_on", rt::Int(self.camera_on as i64));
-            f("iris_close", rt::Int(self.iris_close as i64));
-            f("iris_open", rt::Int(self.iris_open as i64));
-            f("focus_near", rt::Int(self.focus_near as i64));
-            f("focus_far", rt::Int(self.focus_far as i64));
-            f("zoom_wide", rt::Int(self.zoom_wide as i64));
-            f("zoom_tele", rt::Int(self.zoom_tele as i64));
-            f("tilt_down", rt::Int(self.tilt_down as i64));
-            f("tilt_up", rt::Int(self.tilt_up as i64));
-            f("pan_left", rt::Int(self.pan_left as i64));
-            f("pan_right", rt::Int(self.pan_right as i64));
-            f("pan_speed", rt::Int(self.pan_speed as i64));
-            f("tilt_speed", rt::Int(self.tilt_speed as i64));
-        }
-        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
-            Request::Ptz(*self).encode(address, buf)
-        }
-    }
-    impl request::SetPreset {
-        pub const NAME: &'static str = "set_preset";
-        pub const CODE: &'static [u8] = &[0x00, 0x03];
-        pub const LEN: usize = 7;
-        pub const DESC: rt::MessageDesc = rt::MessageDesc::new(
-            Self::NAME,
-            0x0003,
-            2,
-            &[7],
-        );
-        pub const PRESET: rt::Range<usize> = 5..6;
-        pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
-            f("preset", rt::Int(self.preset as i64));
-        }
-        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
-            Request::SetPreset(*self).encode(address, buf)
-        }
-    }
-    impl request::GoToPreset {
-        pub const NAME: &'static str = "go_to_preset";
-        pub const CODE: &'static [u8] = &[0x00, 0x07];
-        pub const LEN: usize = 7;
-        pub const DESC: rt::MessageDesc = rt::MessageDesc::new(
-            Self::NAME,
-            0x0007,
-            2,
-            &[7],
-        );
-        pub const PRESET: rt::Range<usize> = 5..6;
-        pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
-            f("preset", rt::Int(self.preset as i64));
-        }
-        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
-            Request::GoToPreset(*self).encode(address, buf)
-        }
-    }
     ///A request (command), host to device.
     #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
     #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
@@ -228,11 +164,7 @@ pub mod pelco_d2 {
         /// Encodes the frame for `address` into `buf`; returns the frame length. Refuses what
         /// decode refuses: an address no frame may carry, the broadcast address for a command
         /// that does not accept it, a value outside its field's range.
-        pub fn encode(
-            &self,
-            address: u8,
-            buf: &mut [u8],
-        ) -> rt::Result<usize, rt::EncodeError> {
+        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             rt::encode_address(address, &FRAME)?;
             let out = rt::frame_mut::<7>(buf, &[])?;
             let len = match *self {
@@ -310,9 +242,14 @@ pub mod pelco_d2 {
                         return {
                             let mut g = rt::Group::new(frame, 0x0003, rt::None);
                             g.attempt(|frame: &[u8; 7]| {
-                                rt::equal(&request::SET_PRESET_DATA1, 4, frame[4], 0x0)?;
+                                rt::equal(
+                                    &request::SetPreset::DATA1_DESC,
+                                    4,
+                                    frame[4],
+                                    0x0,
+                                )?;
                                 rt::in_range(
-                                    &request::SET_PRESET_PRESET,
+                                    &request::SetPreset::PRESET_DESC,
                                     5,
                                     frame[5],
                                     1,
@@ -332,9 +269,14 @@ pub mod pelco_d2 {
                         return {
                             let mut g = rt::Group::new(frame, 0x0007, rt::None);
                             g.attempt(|frame: &[u8; 7]| {
-                                rt::equal(&request::GO_TO_PRESET_DATA1, 4, frame[4], 0x0)?;
+                                rt::equal(
+                                    &request::GoToPreset::DATA1_DESC,
+                                    4,
+                                    frame[4],
+                                    0x0,
+                                )?;
                                 rt::in_range(
-                                    &request::GO_TO_PRESET_PRESET,
+                                    &request::GoToPreset::PRESET_DESC,
                                     5,
                                     frame[5],
                                     1,
@@ -359,10 +301,10 @@ pub mod pelco_d2 {
         #[inline]
         fn codeless_ptz(frame: &[u8; 7]) -> rt::DecodeResult<Self> {
             let field_0: u16 = u16::from_be_bytes([frame[2], frame[3]]);
-            rt::equal(&request::PTZ_RESERVED, 2, (field_0 >> 13) & 0x3, 0x0)?;
-            rt::equal(&request::PTZ_EXTENDED, 2, field_0 & 0x1, 0x0)?;
-            rt::in_range_or(&request::PTZ_PAN_SPEED, 4, frame[4], 0, 63, &[255])?;
-            rt::in_range(&request::PTZ_TILT_SPEED, 5, frame[5], 0, 63)?;
+            rt::equal(&request::Ptz::RESERVED_DESC, 2, (field_0 >> 13) & 0x3, 0x0)?;
+            rt::equal(&request::Ptz::EXTENDED_DESC, 2, field_0 & 0x1, 0x0)?;
+            rt::in_range_or(&request::Ptz::PAN_SPEED_DESC, 4, frame[4], 0, 63, &[255])?;
+            rt::in_range(&request::Ptz::TILT_SPEED_DESC, 5, frame[5], 0, 63)?;
             rt::Ok(
                 Self::Ptz(request::Ptz {
                     sense: (field_0 >> 15) != 0,
@@ -390,96 +332,58 @@ pub mod pelco_d2 {
             name: &str,
             mut field: impl FnMut(&'static str) -> rt::Option<rt::FieldValue<'v>>,
         ) -> rt::Result<Self, rt::FieldError> {
-            match name {
+            let message = match name {
                 "ptz" => {
-                    rt::Ok(
-                        Self::Ptz(request::Ptz {
-                            sense: rt::field_int("sense", field("sense"), 0, 1)? != 0,
-                            auto_scan: rt::field_int(
-                                "auto_scan",
-                                field("auto_scan"),
-                                0,
-                                1,
-                            )? != 0,
-                            camera_on: rt::field_int(
-                                "camera_on",
-                                field("camera_on"),
-                                0,
-                                1,
-                            )? != 0,
-                            iris_close: rt::field_int(
-                                "iris_close",
-                                field("iris_close"),
-                                0,
-                                1,
-                            )? != 0,
-                            iris_open: rt::field_int(
-                                "iris_open",
-                                field("iris_open"),
-                                0,
-                                1,
-                            )? != 0,
-                            focus_near: rt::field_int(
-                                "focus_near",
-                                field("focus_near"),
-                                0,
-                                1,
-                            )? != 0,
-                            focus_far: rt::field_int(
-                                "focus_far",
-                                field("focus_far"),
-                                0,
-                                1,
-                            )? != 0,
-                            zoom_wide: rt::field_int(
-                                "zoom_wide",
-                                field("zoom_wide"),
-                                0,
-                                1,
-                            )? != 0,
-                            zoom_tele: rt::field_int(
-                                "zoom_tele",
-                                field("zoom_tele"),
-                                0,
-                                1,
-                            )? != 0,
-                            tilt_down: rt::field_int(
-                                "tilt_down",
-                                field("tilt_down"),
-                                0,
-                                1,
-                            )? != 0,
-                            tilt_up: rt::field_int("tilt_up", field("tilt_up"), 0, 1)?
-                                != 0,
-                            pan_left: rt::field_int("pan_left", field("pan_left"), 0, 1)?
-                                != 0,
-                            pan_right: rt::field_int(
-                                "pan_right",
-                                field("pan_right"),
-                                0,
-                                1,
-                            )? != 0,
-                            pan_speed: rt::get(&mut field, "pan_speed")?,
-                            tilt_speed: rt::get(&mut field, "tilt_speed")?,
-                        }),
-                    )
+                    Self::Ptz(request::Ptz {
+                        sense: rt::field_int("sense", field("sense"), 0, 1)? != 0,
+                        auto_scan: rt::field_int("auto_scan", field("auto_scan"), 0, 1)?
+                            != 0,
+                        camera_on: rt::field_int("camera_on", field("camera_on"), 0, 1)?
+                            != 0,
+                        iris_close: rt::field_int(
+                            "iris_close",
+                            field("iris_close"),
+                            0,
+                            1,
+                        )? != 0,
+                        iris_open: rt::field_int("iris_open", field("iris_open"), 0, 1)?
+                            != 0,
+                        focus_near: rt::field_int(
+                            "focus_near",
+                            field("focus_near"),
+                            0,
+                            1,
+                        )? != 0,
+                        focus_far: rt::field_int("focus_far", field("focus_far"), 0, 1)?
+                            != 0,
+                        zoom_wide: rt::field_int("zoom_wide", field("zoom_wide"), 0, 1)?
+                            != 0,
+                        zoom_tele: rt::field_int("zoom_tele", field("zoom_tele"), 0, 1)?
+                            != 0,
+                        tilt_down: rt::field_int("tilt_down", field("tilt_down"), 0, 1)?
+                            != 0,
+                        tilt_up: rt::field_int("tilt_up", field("tilt_up"), 0, 1)? != 0,
+                        pan_left: rt::field_int("pan_left", field("pan_left"), 0, 1)?
+                            != 0,
+                        pan_right: rt::field_int("pan_right", field("pan_right"), 0, 1)?
+                            != 0,
+                        pan_speed: rt::get(&mut field, "pan_speed")?,
+                        tilt_speed: rt::get(&mut field, "tilt_speed")?,
+                    })
                 }
                 "set_preset" => {
-                    rt::Ok(
-                        Self::SetPreset(request::SetPreset {
-                            preset: rt::get(&mut field, "preset")?,
-                        }),
-                    )
+                    Self::SetPreset(request::SetPreset {
+                        preset: rt::get(&mut field, "preset")?,
+                    })
                 }
                 "go_to_preset" => {
-                    rt::Ok(
-                        Self::GoToPreset(request::GoToPreset {
-                            preset: rt::get(&mut field, "preset")?,
-                        }),
-                    )
+                    Self::GoToPreset(request::GoToPreset {
+                        preset: rt::get(&mut field, "preset")?,
+                    })
                 }
-                _ => rt::Err(rt::FieldError::UnknownMessage),
-            }
+                _ => return rt::Err(rt::FieldError::UnknownMessage),
+            };
+            rt::Ok(message)
         }
     }
     impl rt::Message for Request {
@@ -500,11 +404,7 @@ pub mod pelco_d2 {
             Request::visit(self, f)
         }
         #[inline]
-        fn encode(
-            &self,
-            address: u8,
-            buf: &mut [u8],
-        ) -> rt::Result<usize, rt::EncodeError> {
+        fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             Request::encode(self, address, buf)
         }
         #[inline]
@@ -540,19 +440,6 @@ pub mod pelco_d2 {
         /// The responses this command may get, bit `i` for row `i` of `Response::MESSAGES`.
         const fn replies(&self) -> u64 {
             Self::COMMANDS[self.index()].3
-        }
-    }
-    impl response::GeneralResponse {
-        pub const NAME: &'static str = "general_response";
-        pub const CODE: &'static [u8] = &[];
-        pub const LEN: usize = 4;
-        pub const DESC: rt::MessageDesc = rt::MessageDesc::new(Self::NAME, 0, 0, &[4]);
-        pub const ALARMS: rt::Range<usize> = 2..3;
-        pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
-            f("alarms", rt::Int(self.alarms.raw() as i64));
-        }
-        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
-            Response::GeneralResponse(*self).encode(address, buf)
         }
     }
     ///A response, device to host.
@@ -596,11 +483,7 @@ pub mod pelco_d2 {
         /// Encodes the frame for `address` into `buf`; returns the frame length. Refuses what
         /// decode refuses: an address no frame may carry, the broadcast address for a command
         /// that does not accept it, a value outside its field's range.
-        pub fn encode(
-            &self,
-            address: u8,
-            buf: &mut [u8],
-        ) -> rt::Result<usize, rt::EncodeError> {
+        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             rt::encode_address(address, &FRAME)?;
             let out = rt::frame_mut::<4>(buf, &[])?;
             let len = match *self {
@@ -679,16 +562,15 @@ pub mod pelco_d2 {
             name: &str,
             mut field: impl FnMut(&'static str) -> rt::Option<rt::FieldValue<'v>>,
         ) -> rt::Result<Self, rt::FieldError> {
-            match name {
+            let message = match name {
                 "general_response" => {
-                    rt::Ok(
-                        Self::GeneralResponse(response::GeneralResponse {
-                            alarms: Alarms::from_raw(rt::get(&mut field, "alarms")?),
-                        }),
-                    )
+                    Self::GeneralResponse(response::GeneralResponse {
+                        alarms: Alarms::from_raw(rt::get(&mut field, "alarms")?),
+                    })
                 }
-                _ => rt::Err(rt::FieldError::UnknownMessage),
-            }
+                _ => return rt::Err(rt::FieldError::UnknownMessage),
+            };
+            rt::Ok(message)
         }
     }
     impl rt::Message for Response {
@@ -709,11 +591,7 @@ pub mod pelco_d2 {
             Response::visit(self, f)
         }
         #[inline]
-        fn encode(
-            &self,
-            address: u8,
-            buf: &mut [u8],
-        ) -> rt::Result<usize, rt::EncodeError> {
+        fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             Response::encode(self, address, buf)
         }
         #[inline]
@@ -840,11 +718,87 @@ pub mod pelco_d2 {
     pub type StreamDecoder = ::busspec_runtime::stream::StreamDecoder<PelcoD2>;
     /// What [`StreamDecoder`] finds in a stream.
     pub type Event = ::busspec_runtime::stream::Event<Request, Response>;
-    /// Each request as a struct of its own (its `DESC` names it as refusals do: name,
-    /// code and the frame lengths of its code), and each field a refusal names
-    /// (`message.field`, `FieldDesc`).
+    impl request::Ptz {
+        pub const NAME: &'static str = "ptz";
+        pub const CODE: &'static [u8] = &[];
+        pub const LEN: usize = 7;
+        pub const DESC: rt::MessageDesc = rt::desc(Self::NAME, 0, 0, &[7]);
+        pub const PAN_SPEED: rt::Range<usize> = 4..5;
+        pub const TILT_SPEED: rt::Range<usize> = 5..6;
+        /// `pan_speed`'s special value `turbo`.
+        pub const PAN_SPEED_TURBO: u8 = 0xFF;
+        pub const RESERVED_DESC: rt::FieldDesc = rt::field(Self::NAME, "reserved");
+        pub const EXTENDED_DESC: rt::FieldDesc = rt::field(Self::NAME, "extended");
+        pub const PAN_SPEED_DESC: rt::FieldDesc = rt::field(Self::NAME, "pan_speed");
+        pub const TILT_SPEED_DESC: rt::FieldDesc = rt::field(Self::NAME, "tilt_speed");
+        pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
+            f("sense", rt::Int(self.sense as i64));
+            f("auto_scan", rt::Int(self.auto_scan as i64));
+            f("camera_on", rt::Int(self.camera_on as i64));
+            f("iris_close", rt::Int(self.iris_close as i64));
+            f("iris_open", rt::Int(self.iris_open as i64));
+            f("focus_near", rt::Int(self.focus_near as i64));
+            f("focus_far", rt::Int(self.focus_far as i64));
+            f("zoom_wide", rt::Int(self.zoom_wide as i64));
+            f("zoom_tele", rt::Int(self.zoom_tele as i64));
+            f("tilt_down", rt::Int(self.tilt_down as i64));
+            f("tilt_up", rt::Int(self.tilt_up as i64));
+            f("pan_left", rt::Int(self.pan_left as i64));
+            f("pan_right", rt::Int(self.pan_right as i64));
+            f("pan_speed", rt::Int(self.pan_speed as i64));
+            f("tilt_speed", rt::Int(self.tilt_speed as i64));
+        }
+        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            Request::Ptz(*self).encode(address, buf)
+        }
+    }
+    impl request::SetPreset {
+        pub const NAME: &'static str = "set_preset";
+        pub const CODE: &'static [u8] = &[0x00, 0x03];
+        pub const LEN: usize = 7;
+        pub const DESC: rt::MessageDesc = rt::desc(Self::NAME, 0x0003, 2, &[7]);
+        pub const PRESET: rt::Range<usize> = 5..6;
+        pub const DATA1_DESC: rt::FieldDesc = rt::field(Self::NAME, "data1");
+        pub const PRESET_DESC: rt::FieldDesc = rt::field(Self::NAME, "preset");
+        pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
+            f("preset", rt::Int(self.preset as i64));
+        }
+        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            Request::SetPreset(*self).encode(address, buf)
+        }
+    }
+    impl request::GoToPreset {
+        pub const NAME: &'static str = "go_to_preset";
+        pub const CODE: &'static [u8] = &[0x00, 0x07];
+        pub const LEN: usize = 7;
+        pub const DESC: rt::MessageDesc = rt::desc(Self::NAME, 0x0007, 2, &[7]);
+        pub const PRESET: rt::Range<usize> = 5..6;
+        pub const DATA1_DESC: rt::FieldDesc = rt::field(Self::NAME, "data1");
+        pub const PRESET_DESC: rt::FieldDesc = rt::field(Self::NAME, "preset");
+        pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
+            f("preset", rt::Int(self.preset as i64));
+        }
+        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            Request::GoToPreset(*self).encode(address, buf)
+        }
+    }
+    impl response::GeneralResponse {
+        pub const NAME: &'static str = "general_response";
+        pub const CODE: &'static [u8] = &[];
+        pub const LEN: usize = 4;
+        pub const DESC: rt::MessageDesc = rt::desc(Self::NAME, 0, 0, &[4]);
+        pub const ALARMS: rt::Range<usize> = 2..3;
+        pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
+            f("alarms", rt::Int(self.alarms.raw() as i64));
+        }
+        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            Response::GeneralResponse(*self).encode(address, buf)
+        }
+    }
+    /// Each request as a struct of its own; its constants (`DESC`, which names it as
+    /// refusals do: name, code and the frame lengths of its code; `QUANTITY_DESC`, each
+    /// field a refusal names) and methods are in the `impl` of each.
     pub mod request {
-        use ::busspec_runtime::FieldDesc;
         /// §3 Pan, tilt, zoom, focus, iris (standard command) (code `0x`, 7 bytes).
         #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
         #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
@@ -900,30 +854,8 @@ pub mod pelco_d2 {
             /// \[#\] Valid raw range 1..=255.
             pub preset: u8,
         }
-        /// `ptz.reserved`
-        pub const PTZ_RESERVED: FieldDesc = FieldDesc::new("ptz", "reserved");
-        /// `ptz.extended`
-        pub const PTZ_EXTENDED: FieldDesc = FieldDesc::new("ptz", "extended");
-        /// `ptz.pan_speed`
-        pub const PTZ_PAN_SPEED: FieldDesc = FieldDesc::new("ptz", "pan_speed");
-        /// `ptz.tilt_speed`
-        pub const PTZ_TILT_SPEED: FieldDesc = FieldDesc::new("ptz", "tilt_speed");
-        /// `set_preset.data1`
-        pub const SET_PRESET_DATA1: FieldDesc = FieldDesc::new("set_preset", "data1");
-        /// `set_preset.preset`
-        pub const SET_PRESET_PRESET: FieldDesc = FieldDesc::new("set_preset", "preset");
-        /// `go_to_preset.data1`
-        pub const GO_TO_PRESET_DATA1: FieldDesc = FieldDesc::new(
-            "go_to_preset",
-            "data1",
-        );
-        /// `go_to_preset.preset`
-        pub const GO_TO_PRESET_PRESET: FieldDesc = FieldDesc::new(
-            "go_to_preset",
-            "preset",
-        );
     }
-    /// Each response as a struct of its own, and the fields its refusals name.
+    /// Each response as a struct of its own.
     pub mod response {
         /// §5 General response (code `0x`, 4 bytes). FF, address, alarm bits, checksum: sent by receivers that acknowledge commands.
         #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]

@@ -68,70 +68,6 @@ pub mod pelco_p {
     pub fn checksum(bytes: &[u8]) -> u8 {
         rt::xor8(bytes)
     }
-    impl request::Ptz {
-        pub const NAME: &'static str = "ptz";
-        pub const CODE: &'static [u8] = &[];
-        pub const LEN: usize = 8;
-        pub const DESC: rt::MessageDesc = rt::MessageDesc::new(Self::NAME, 0, 0, &[8]);
-        pub const PAN_SPEED: rt::Range<usize> = 4..5;
-        pub const TILT_SPEED: rt::Range<usize> = 5..6;
-        pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
-            f("camera_on", rt::Int(self.camera_on as i64));
-            f("auto_scan", rt::Int(self.auto_scan as i64));
-            f("camera_on_off", rt::Int(self.camera_on_off as i64));
-            f("iris_close", rt::Int(self.iris_close as i64));
-            f("iris_open", rt::Int(self.iris_open as i64));
-            f("focus_near", rt::Int(self.focus_near as i64));
-            f("focus_far", rt::Int(self.focus_far as i64));
-            f("zoom_wide", rt::Int(self.zoom_wide as i64));
-            f("zoom_tele", rt::Int(self.zoom_tele as i64));
-            f("tilt_down", rt::Int(self.tilt_down as i64));
-            f("tilt_up", rt::Int(self.tilt_up as i64));
-            f("pan_left", rt::Int(self.pan_left as i64));
-            f("pan_right", rt::Int(self.pan_right as i64));
-            f("pan_speed", rt::Int(self.pan_speed as i64));
-            f("tilt_speed", rt::Int(self.tilt_speed as i64));
-        }
-        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
-            Request::Ptz(*self).encode(address, buf)
-        }
-    }
-    impl request::SetPreset {
-        pub const NAME: &'static str = "set_preset";
-        pub const CODE: &'static [u8] = &[0x00, 0x03];
-        pub const LEN: usize = 8;
-        pub const DESC: rt::MessageDesc = rt::MessageDesc::new(
-            Self::NAME,
-            0x0003,
-            2,
-            &[8],
-        );
-        pub const PRESET: rt::Range<usize> = 5..6;
-        pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
-            f("preset", rt::Int(self.preset as i64));
-        }
-        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
-            Request::SetPreset(*self).encode(address, buf)
-        }
-    }
-    impl request::GoToPreset {
-        pub const NAME: &'static str = "go_to_preset";
-        pub const CODE: &'static [u8] = &[0x00, 0x07];
-        pub const LEN: usize = 8;
-        pub const DESC: rt::MessageDesc = rt::MessageDesc::new(
-            Self::NAME,
-            0x0007,
-            2,
-            &[8],
-        );
-        pub const PRESET: rt::Range<usize> = 5..6;
-        pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
-            f("preset", rt::Int(self.preset as i64));
-        }
-        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
-            Request::GoToPreset(*self).encode(address, buf)
-        }
-    }
     ///A request (command), host to device.
     #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
     #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
@@ -181,11 +117,7 @@ pub mod pelco_p {
         /// Encodes the frame for `address` into `buf`; returns the frame length. Refuses what
         /// decode refuses: an address no frame may carry, the broadcast address for a command
         /// that does not accept it, a value outside its field's range.
-        pub fn encode(
-            &self,
-            address: u8,
-            buf: &mut [u8],
-        ) -> rt::Result<usize, rt::EncodeError> {
+        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             rt::encode_address(address, &FRAME)?;
             let out = rt::frame_mut::<8>(buf, &[])?;
             let len = match *self {
@@ -263,9 +195,14 @@ pub mod pelco_p {
                         return {
                             let mut g = rt::Group::new(frame, 0x0003, rt::None);
                             g.attempt(|frame: &[u8; 8]| {
-                                rt::equal(&request::SET_PRESET_DATA3, 4, frame[4], 0x0)?;
+                                rt::equal(
+                                    &request::SetPreset::DATA3_DESC,
+                                    4,
+                                    frame[4],
+                                    0x0,
+                                )?;
                                 rt::in_range(
-                                    &request::SET_PRESET_PRESET,
+                                    &request::SetPreset::PRESET_DESC,
                                     5,
                                     frame[5],
                                     1,
@@ -285,9 +222,14 @@ pub mod pelco_p {
                         return {
                             let mut g = rt::Group::new(frame, 0x0007, rt::None);
                             g.attempt(|frame: &[u8; 8]| {
-                                rt::equal(&request::GO_TO_PRESET_DATA3, 4, frame[4], 0x0)?;
+                                rt::equal(
+                                    &request::GoToPreset::DATA3_DESC,
+                                    4,
+                                    frame[4],
+                                    0x0,
+                                )?;
                                 rt::in_range(
-                                    &request::GO_TO_PRESET_PRESET,
+                                    &request::GoToPreset::PRESET_DESC,
                                     5,
                                     frame[5],
                                     1,
@@ -312,11 +254,11 @@ pub mod pelco_p {
         #[inline]
         fn codeless_ptz(frame: &[u8; 8]) -> rt::DecodeResult<Self> {
             let field_0: u16 = u16::from_be_bytes([frame[2], frame[3]]);
-            rt::equal(&request::PTZ_FIXED_ZERO, 2, field_0 >> 15, 0x0)?;
-            rt::equal(&request::PTZ_FIXED_ZERO_2, 2, (field_0 >> 7) & 0x1, 0x0)?;
-            rt::equal(&request::PTZ_FIXED_ZERO_3, 2, field_0 & 0x1, 0x0)?;
-            rt::in_range(&request::PTZ_PAN_SPEED, 4, frame[4], 0, 64)?;
-            rt::in_range(&request::PTZ_TILT_SPEED, 5, frame[5], 0, 63)?;
+            rt::equal(&request::Ptz::FIXED_ZERO_DESC, 2, field_0 >> 15, 0x0)?;
+            rt::equal(&request::Ptz::FIXED_ZERO_2_DESC, 2, (field_0 >> 7) & 0x1, 0x0)?;
+            rt::equal(&request::Ptz::FIXED_ZERO_3_DESC, 2, field_0 & 0x1, 0x0)?;
+            rt::in_range(&request::Ptz::PAN_SPEED_DESC, 4, frame[4], 0, 64)?;
+            rt::in_range(&request::Ptz::TILT_SPEED_DESC, 5, frame[5], 0, 63)?;
             rt::Ok(
                 Self::Ptz(request::Ptz {
                     camera_on: ((field_0 >> 14) & 0x1) != 0,
@@ -344,101 +286,63 @@ pub mod pelco_p {
             name: &str,
             mut field: impl FnMut(&'static str) -> rt::Option<rt::FieldValue<'v>>,
         ) -> rt::Result<Self, rt::FieldError> {
-            match name {
+            let message = match name {
                 "ptz" => {
-                    rt::Ok(
-                        Self::Ptz(request::Ptz {
-                            camera_on: rt::field_int(
-                                "camera_on",
-                                field("camera_on"),
-                                0,
-                                1,
-                            )? != 0,
-                            auto_scan: rt::field_int(
-                                "auto_scan",
-                                field("auto_scan"),
-                                0,
-                                1,
-                            )? != 0,
-                            camera_on_off: rt::field_int(
-                                "camera_on_off",
-                                field("camera_on_off"),
-                                0,
-                                1,
-                            )? != 0,
-                            iris_close: rt::field_int(
-                                "iris_close",
-                                field("iris_close"),
-                                0,
-                                1,
-                            )? != 0,
-                            iris_open: rt::field_int(
-                                "iris_open",
-                                field("iris_open"),
-                                0,
-                                1,
-                            )? != 0,
-                            focus_near: rt::field_int(
-                                "focus_near",
-                                field("focus_near"),
-                                0,
-                                1,
-                            )? != 0,
-                            focus_far: rt::field_int(
-                                "focus_far",
-                                field("focus_far"),
-                                0,
-                                1,
-                            )? != 0,
-                            zoom_wide: rt::field_int(
-                                "zoom_wide",
-                                field("zoom_wide"),
-                                0,
-                                1,
-                            )? != 0,
-                            zoom_tele: rt::field_int(
-                                "zoom_tele",
-                                field("zoom_tele"),
-                                0,
-                                1,
-                            )? != 0,
-                            tilt_down: rt::field_int(
-                                "tilt_down",
-                                field("tilt_down"),
-                                0,
-                                1,
-                            )? != 0,
-                            tilt_up: rt::field_int("tilt_up", field("tilt_up"), 0, 1)?
-                                != 0,
-                            pan_left: rt::field_int("pan_left", field("pan_left"), 0, 1)?
-                                != 0,
-                            pan_right: rt::field_int(
-                                "pan_right",
-                                field("pan_right"),
-                                0,
-                                1,
-                            )? != 0,
-                            pan_speed: rt::get(&mut field, "pan_speed")?,
-                            tilt_speed: rt::get(&mut field, "tilt_speed")?,
-                        }),
-                    )
+                    Self::Ptz(request::Ptz {
+                        camera_on: rt::field_int("camera_on", field("camera_on"), 0, 1)?
+                            != 0,
+                        auto_scan: rt::field_int("auto_scan", field("auto_scan"), 0, 1)?
+                            != 0,
+                        camera_on_off: rt::field_int(
+                            "camera_on_off",
+                            field("camera_on_off"),
+                            0,
+                            1,
+                        )? != 0,
+                        iris_close: rt::field_int(
+                            "iris_close",
+                            field("iris_close"),
+                            0,
+                            1,
+                        )? != 0,
+                        iris_open: rt::field_int("iris_open", field("iris_open"), 0, 1)?
+                            != 0,
+                        focus_near: rt::field_int(
+                            "focus_near",
+                            field("focus_near"),
+                            0,
+                            1,
+                        )? != 0,
+                        focus_far: rt::field_int("focus_far", field("focus_far"), 0, 1)?
+                            != 0,
+                        zoom_wide: rt::field_int("zoom_wide", field("zoom_wide"), 0, 1)?
+                            != 0,
+                        zoom_tele: rt::field_int("zoom_tele", field("zoom_tele"), 0, 1)?
+                            != 0,
+                        tilt_down: rt::field_int("tilt_down", field("tilt_down"), 0, 1)?
+                            != 0,
+                        tilt_up: rt::field_int("tilt_up", field("tilt_up"), 0, 1)? != 0,
+                        pan_left: rt::field_int("pan_left", field("pan_left"), 0, 1)?
+                            != 0,
+                        pan_right: rt::field_int("pan_right", field("pan_right"), 0, 1)?
+                            != 0,
+                        pan_speed: rt::get(&mut field, "pan_speed")?,
+                        tilt_speed: rt::get(&mut field, "tilt_speed")?,
+                    })
                 }
                 "set_preset" => {
-                    rt::Ok(
-                        Self::SetPreset(request::SetPreset {
-                            preset: rt::get(&mut field, "preset")?,
-                        }),
-                    )
+                    Self::SetPreset(request::SetPreset {
+                        preset: rt::get(&mut field, "preset")?,
+                    })
                 }
                 "go_to_preset" => {
-                    rt::Ok(
-                        Self::GoToPreset(request::GoToPreset {
-                            preset: rt::get(&mut field, "preset")?,
-                        }),
-                    )
+                    Self::GoToPreset(request::GoToPreset {
+                        preset: rt::get(&mut field, "preset")?,
+                    })
                 }
-                _ => rt::Err(rt::FieldError::UnknownMessage),
-            }
+                _ => return rt::Err(rt::FieldError::UnknownMessage),
+            };
+            rt::Ok(message)
         }
     }
     impl rt::Message for Request {
@@ -459,11 +363,7 @@ pub mod pelco_p {
             Request::visit(self, f)
         }
         #[inline]
-        fn encode(
-            &self,
-            address: u8,
-            buf: &mut [u8],
-        ) -> rt::Result<usize, rt::EncodeError> {
+        fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             Request::encode(self, address, buf)
         }
         #[inline]
@@ -544,11 +444,7 @@ pub mod pelco_p {
         /// Encodes the frame for `address` into `buf`; returns the frame length. Refuses what
         /// decode refuses: an address no frame may carry, the broadcast address for a command
         /// that does not accept it, a value outside its field's range.
-        pub fn encode(
-            &self,
-            address: u8,
-            buf: &mut [u8],
-        ) -> rt::Result<usize, rt::EncodeError> {
+        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             rt::encode_address(address, &FRAME)?;
             let len = match *self {};
             rt::seal_end(buf, len, |b| u32::from(checksum(b)), &FRAME);
@@ -608,9 +504,10 @@ pub mod pelco_p {
             name: &str,
             _field: impl FnMut(&'static str) -> rt::Option<rt::FieldValue<'v>>,
         ) -> rt::Result<Self, rt::FieldError> {
-            match name {
-                _ => rt::Err(rt::FieldError::UnknownMessage),
-            }
+            let message = match name {
+                _ => return rt::Err(rt::FieldError::UnknownMessage),
+            };
+            rt::Ok(message)
         }
     }
     impl rt::Message for Response {
@@ -631,11 +528,7 @@ pub mod pelco_p {
             Response::visit(self, f)
         }
         #[inline]
-        fn encode(
-            &self,
-            address: u8,
-            buf: &mut [u8],
-        ) -> rt::Result<usize, rt::EncodeError> {
+        fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             Response::encode(self, address, buf)
         }
         #[inline]
@@ -740,11 +633,79 @@ pub mod pelco_p {
     pub type StreamDecoder = ::busspec_runtime::stream::StreamDecoder<PelcoP>;
     /// What [`StreamDecoder`] finds in a stream.
     pub type Event = ::busspec_runtime::stream::Event<Request, Response>;
-    /// Each request as a struct of its own (its `DESC` names it as refusals do: name,
-    /// code and the frame lengths of its code), and each field a refusal names
-    /// (`message.field`, `FieldDesc`).
+    impl request::Ptz {
+        pub const NAME: &'static str = "ptz";
+        pub const CODE: &'static [u8] = &[];
+        pub const LEN: usize = 8;
+        pub const DESC: rt::MessageDesc = rt::desc(Self::NAME, 0, 0, &[8]);
+        pub const PAN_SPEED: rt::Range<usize> = 4..5;
+        pub const TILT_SPEED: rt::Range<usize> = 5..6;
+        pub const FIXED_ZERO_DESC: rt::FieldDesc = rt::field(Self::NAME, "fixed_zero");
+        pub const FIXED_ZERO_2_DESC: rt::FieldDesc = rt::field(
+            Self::NAME,
+            "fixed_zero_2",
+        );
+        pub const FIXED_ZERO_3_DESC: rt::FieldDesc = rt::field(
+            Self::NAME,
+            "fixed_zero_3",
+        );
+        pub const PAN_SPEED_DESC: rt::FieldDesc = rt::field(Self::NAME, "pan_speed");
+        pub const TILT_SPEED_DESC: rt::FieldDesc = rt::field(Self::NAME, "tilt_speed");
+        pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
+            f("camera_on", rt::Int(self.camera_on as i64));
+            f("auto_scan", rt::Int(self.auto_scan as i64));
+            f("camera_on_off", rt::Int(self.camera_on_off as i64));
+            f("iris_close", rt::Int(self.iris_close as i64));
+            f("iris_open", rt::Int(self.iris_open as i64));
+            f("focus_near", rt::Int(self.focus_near as i64));
+            f("focus_far", rt::Int(self.focus_far as i64));
+            f("zoom_wide", rt::Int(self.zoom_wide as i64));
+            f("zoom_tele", rt::Int(self.zoom_tele as i64));
+            f("tilt_down", rt::Int(self.tilt_down as i64));
+            f("tilt_up", rt::Int(self.tilt_up as i64));
+            f("pan_left", rt::Int(self.pan_left as i64));
+            f("pan_right", rt::Int(self.pan_right as i64));
+            f("pan_speed", rt::Int(self.pan_speed as i64));
+            f("tilt_speed", rt::Int(self.tilt_speed as i64));
+        }
+        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            Request::Ptz(*self).encode(address, buf)
+        }
+    }
+    impl request::SetPreset {
+        pub const NAME: &'static str = "set_preset";
+        pub const CODE: &'static [u8] = &[0x00, 0x03];
+        pub const LEN: usize = 8;
+        pub const DESC: rt::MessageDesc = rt::desc(Self::NAME, 0x0003, 2, &[8]);
+        pub const PRESET: rt::Range<usize> = 5..6;
+        pub const DATA3_DESC: rt::FieldDesc = rt::field(Self::NAME, "data3");
+        pub const PRESET_DESC: rt::FieldDesc = rt::field(Self::NAME, "preset");
+        pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
+            f("preset", rt::Int(self.preset as i64));
+        }
+        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            Request::SetPreset(*self).encode(address, buf)
+        }
+    }
+    impl request::GoToPreset {
+        pub const NAME: &'static str = "go_to_preset";
+        pub const CODE: &'static [u8] = &[0x00, 0x07];
+        pub const LEN: usize = 8;
+        pub const DESC: rt::MessageDesc = rt::desc(Self::NAME, 0x0007, 2, &[8]);
+        pub const PRESET: rt::Range<usize> = 5..6;
+        pub const DATA3_DESC: rt::FieldDesc = rt::field(Self::NAME, "data3");
+        pub const PRESET_DESC: rt::FieldDesc = rt::field(Self::NAME, "preset");
+        pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
+            f("preset", rt::Int(self.preset as i64));
+        }
+        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            Request::GoToPreset(*self).encode(address, buf)
+        }
+    }
+    /// Each request as a struct of its own; its constants (`DESC`, which names it as
+    /// refusals do: name, code and the frame lengths of its code; `QUANTITY_DESC`, each
+    /// field a refusal names) and methods are in the `impl` of each.
     pub mod request {
-        use ::busspec_runtime::FieldDesc;
         /// §3 Pan, tilt, zoom, focus, iris (code `0x`, 8 bytes).
         #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
         #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
@@ -800,31 +761,7 @@ pub mod pelco_p {
             /// \[#\] Valid raw range 1..=255.
             pub preset: u8,
         }
-        /// `ptz.fixed_zero`
-        pub const PTZ_FIXED_ZERO: FieldDesc = FieldDesc::new("ptz", "fixed_zero");
-        /// `ptz.fixed_zero_2`
-        pub const PTZ_FIXED_ZERO_2: FieldDesc = FieldDesc::new("ptz", "fixed_zero_2");
-        /// `ptz.fixed_zero_3`
-        pub const PTZ_FIXED_ZERO_3: FieldDesc = FieldDesc::new("ptz", "fixed_zero_3");
-        /// `ptz.pan_speed`
-        pub const PTZ_PAN_SPEED: FieldDesc = FieldDesc::new("ptz", "pan_speed");
-        /// `ptz.tilt_speed`
-        pub const PTZ_TILT_SPEED: FieldDesc = FieldDesc::new("ptz", "tilt_speed");
-        /// `set_preset.data3`
-        pub const SET_PRESET_DATA3: FieldDesc = FieldDesc::new("set_preset", "data3");
-        /// `set_preset.preset`
-        pub const SET_PRESET_PRESET: FieldDesc = FieldDesc::new("set_preset", "preset");
-        /// `go_to_preset.data3`
-        pub const GO_TO_PRESET_DATA3: FieldDesc = FieldDesc::new(
-            "go_to_preset",
-            "data3",
-        );
-        /// `go_to_preset.preset`
-        pub const GO_TO_PRESET_PRESET: FieldDesc = FieldDesc::new(
-            "go_to_preset",
-            "preset",
-        );
     }
-    /// Each response as a struct of its own, and the fields its refusals name.
+    /// Each response as a struct of its own.
     pub mod response {}
 }

@@ -202,7 +202,7 @@ pub mod records {
     }
     /// Where `sync_write.blocks` sits in the frame and how its elements are counted.
     pub const REPEAT_SYNC_WRITE: rt::RepeatAt = rt::RepeatAt {
-        field: &request::SYNC_WRITE_BLOCKS,
+        field: &request::SyncWrite::BLOCKS_DESC,
         base: 6,
         at: 4,
         width: 4,
@@ -220,7 +220,7 @@ pub mod records {
         base: 6,
         lists: &[
             rt::RepeatAt {
-                field: &request::SYNC_WRITE_BLOCKS,
+                field: &request::SyncWrite::BLOCKS_DESC,
                 base: 6,
                 at: 4,
                 width: 4,
@@ -237,7 +237,7 @@ pub mod records {
     };
     /// Where `write_pairs.pairs` sits in the frame and how its elements are counted.
     pub const REPEAT_WRITE_PAIRS: rt::RepeatAt = rt::RepeatAt {
-        field: &request::WRITE_PAIRS_PAIRS,
+        field: &request::WritePairs::PAIRS_DESC,
         base: 5,
         at: 4,
         width: 5,
@@ -267,10 +267,10 @@ pub mod records {
         /// Reads a record from its bytes, at frame offset `at` (for errors), each field's range checked as the spec says.
         pub fn read(frame: &[u8; 4], at: usize) -> rt::DecodeResult<Self> {
             let v_id: u8 = frame[0];
-            rt::in_range(&request::SYNC_WRITE_BLOCKS_ID, at, v_id, 1, 252)?;
+            rt::in_range(&request::SyncWrite::BLOCKS_ID_DESC, at, v_id, 1, 252)?;
             let v_position: u16 = u16::from_le_bytes([frame[1], frame[2]]);
             rt::in_range(
-                &request::SYNC_WRITE_BLOCKS_POSITION,
+                &request::SyncWrite::BLOCKS_POSITION_DESC,
                 at + 1,
                 v_position,
                 0,
@@ -363,7 +363,7 @@ pub mod records {
             let v_register: u16 = u16::from_le_bytes([frame[0], frame[1]]);
             let v_value: i16 = i16::from_le_bytes([frame[2], frame[3]]);
             let v_bank: u8 = frame[4];
-            rt::in_range(&request::WRITE_PAIRS_PAIRS_BANK, at + 4, v_bank, 1, 4)?;
+            rt::in_range(&request::WritePairs::PAIRS_BANK_DESC, at + 4, v_bank, 1, 4)?;
             rt::Ok(Self {
                 register: v_register,
                 value: v_value,
@@ -418,61 +418,6 @@ pub mod records {
             })
         }
     }
-    impl request::SyncWrite {
-        pub const NAME: &'static str = "sync_write";
-        pub const CODE: &'static [u8] = &[0x83];
-        pub const MIN_LEN: usize = 10;
-        pub const MAX_LEN: usize = 38;
-        pub const DESC: rt::MessageDesc = rt::MessageDesc::new(
-            Self::NAME,
-            0x83,
-            1,
-            &[6],
-        );
-        pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
-            f("blocks", rt::Records(self.blocks.records()));
-            f("flags", rt::Int(self.flags as i64));
-        }
-        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
-            Request::SyncWrite(*self).encode(address, buf)
-        }
-    }
-    impl request::WritePairs {
-        pub const NAME: &'static str = "write_pairs";
-        pub const CODE: &'static [u8] = &[0x84];
-        pub const MIN_LEN: usize = 5;
-        pub const MAX_LEN: usize = 20;
-        pub const DESC: rt::MessageDesc = rt::MessageDesc::new(
-            Self::NAME,
-            0x84,
-            1,
-            &[5],
-        );
-        pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
-            f("pairs", rt::Records(self.pairs.records()));
-        }
-        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
-            Request::WritePairs(*self).encode(address, buf)
-        }
-    }
-    impl request::ReadStatus {
-        pub const NAME: &'static str = "read_status";
-        pub const CODE: &'static [u8] = &[0x85];
-        pub const LEN: usize = 5;
-        pub const DESC: rt::MessageDesc = rt::MessageDesc::new(
-            Self::NAME,
-            0x85,
-            1,
-            &[5],
-        );
-        pub const QUANTITY: rt::Range<usize> = 3..4;
-        pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
-            f("quantity", rt::Int(self.quantity as i64));
-        }
-        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
-            Request::ReadStatus(*self).encode(address, buf)
-        }
-    }
     ///A request (command), host to device.
     #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
     #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
@@ -509,12 +454,12 @@ pub mod records {
         /// The length of this message's frame, in bytes.
         pub const fn frame_len(&self) -> usize {
             match self {
-                Self::SyncWrite(request::SyncWrite { blocks: v_blocks, .. }) => {
+                Self::SyncWrite(m) => {
                     LISTS_SYNC_WRITE.base
-                        + LISTS_SYNC_WRITE.lists[0].bytes_of(v_blocks.len())
+                        + LISTS_SYNC_WRITE.lists[0].bytes_of(m.blocks.len())
                 }
-                Self::WritePairs(request::WritePairs { pairs: v_pairs, .. }) => {
-                    REPEAT_WRITE_PAIRS.base + REPEAT_WRITE_PAIRS.bytes_of(v_pairs.len())
+                Self::WritePairs(m) => {
+                    REPEAT_WRITE_PAIRS.base + REPEAT_WRITE_PAIRS.bytes_of(m.pairs.len())
                 }
                 _ => Self::MESSAGES[self.index()].2,
             }
@@ -531,11 +476,7 @@ pub mod records {
         /// Encodes the frame for `address` into `buf`; returns the frame length. Refuses what
         /// decode refuses: an address no frame may carry, the broadcast address for a command
         /// that does not accept it, a value outside its field's range.
-        pub fn encode(
-            &self,
-            address: u8,
-            buf: &mut [u8],
-        ) -> rt::Result<usize, rt::EncodeError> {
+        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             rt::encode_address(address, &FRAME)?;
             let len = match *self {
                 Self::SyncWrite(
@@ -645,7 +586,13 @@ pub mod records {
                 }
                 0x85 => {
                     let frame = rt::fixed::<5>(frame, &request::ReadStatus::DESC)?;
-                    rt::in_range(&request::READ_STATUS_QUANTITY, 3, frame[3], 1, 6)?;
+                    rt::in_range(
+                        &request::ReadStatus::QUANTITY_DESC,
+                        3,
+                        frame[3],
+                        1,
+                        6,
+                    )?;
                     rt::Ok(
                         Self::ReadStatus(request::ReadStatus {
                             quantity: frame[3],
@@ -662,37 +609,26 @@ pub mod records {
             name: &str,
             mut field: impl FnMut(&'static str) -> rt::Option<rt::FieldValue<'v>>,
         ) -> rt::Result<Self, rt::FieldError> {
-            match name {
+            let message = match name {
                 "sync_write" => {
-                    rt::Ok(
-                        Self::SyncWrite(request::SyncWrite {
-                            blocks: rt::records::<
-                                SyncWriteBlocks,
-                                8,
-                            >(&mut field, "blocks")?,
-                            flags: rt::get(&mut field, "flags")?,
-                        }),
-                    )
+                    Self::SyncWrite(request::SyncWrite {
+                        blocks: rt::records::<SyncWriteBlocks, 8>(&mut field, "blocks")?,
+                        flags: rt::get(&mut field, "flags")?,
+                    })
                 }
                 "write_pairs" => {
-                    rt::Ok(
-                        Self::WritePairs(request::WritePairs {
-                            pairs: rt::records::<
-                                WritePairsPairs,
-                                3,
-                            >(&mut field, "pairs")?,
-                        }),
-                    )
+                    Self::WritePairs(request::WritePairs {
+                        pairs: rt::records::<WritePairsPairs, 3>(&mut field, "pairs")?,
+                    })
                 }
                 "read_status" => {
-                    rt::Ok(
-                        Self::ReadStatus(request::ReadStatus {
-                            quantity: rt::get(&mut field, "quantity")?,
-                        }),
-                    )
+                    Self::ReadStatus(request::ReadStatus {
+                        quantity: rt::get(&mut field, "quantity")?,
+                    })
                 }
-                _ => rt::Err(rt::FieldError::UnknownMessage),
-            }
+                _ => return rt::Err(rt::FieldError::UnknownMessage),
+            };
+            rt::Ok(message)
         }
     }
     impl rt::Message for Request {
@@ -713,11 +649,7 @@ pub mod records {
             Request::visit(self, f)
         }
         #[inline]
-        fn encode(
-            &self,
-            address: u8,
-            buf: &mut [u8],
-        ) -> rt::Result<usize, rt::EncodeError> {
+        fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             Request::encode(self, address, buf)
         }
         #[inline]
@@ -757,7 +689,7 @@ pub mod records {
     }
     /// Where `status_reply.readings` sits in the frame and how its elements are counted.
     pub const REPEAT_STATUS_REPLY: rt::RepeatAt = rt::RepeatAt {
-        field: &response::STATUS_REPLY_READINGS,
+        field: &response::StatusReply::READINGS_DESC,
         base: 4,
         at: 3,
         width: 4,
@@ -841,42 +773,6 @@ pub mod records {
             })
         }
     }
-    impl response::Ack {
-        pub const NAME: &'static str = "ack";
-        pub const CODE: &'static [u8] = &[0x80];
-        pub const LEN: usize = 5;
-        pub const DESC: rt::MessageDesc = rt::MessageDesc::new(
-            Self::NAME,
-            0x80,
-            1,
-            &[5],
-        );
-        pub const STATUS: rt::Range<usize> = 3..4;
-        pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
-            f("status", rt::Int(self.status as i64));
-        }
-        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
-            Response::Ack(*self).encode(address, buf)
-        }
-    }
-    impl response::StatusReply {
-        pub const NAME: &'static str = "status_reply";
-        pub const CODE: &'static [u8] = &[0x85];
-        pub const MIN_LEN: usize = 8;
-        pub const MAX_LEN: usize = 28;
-        pub const DESC: rt::MessageDesc = rt::MessageDesc::new(
-            Self::NAME,
-            0x85,
-            1,
-            &[4],
-        );
-        pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
-            f("readings", rt::Records(self.readings.records()));
-        }
-        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
-            Response::StatusReply(*self).encode(address, buf)
-        }
-    }
     ///A response, device to host.
     #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
     #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
@@ -910,9 +806,9 @@ pub mod records {
         /// The length of this message's frame, in bytes.
         pub const fn frame_len(&self) -> usize {
             match self {
-                Self::StatusReply(response::StatusReply { readings: v_readings, .. }) => {
+                Self::StatusReply(m) => {
                     REPEAT_STATUS_REPLY.base
-                        + REPEAT_STATUS_REPLY.bytes_of(v_readings.len())
+                        + REPEAT_STATUS_REPLY.bytes_of(m.readings.len())
                 }
                 _ => Self::MESSAGES[self.index()].2,
             }
@@ -928,11 +824,7 @@ pub mod records {
         /// Encodes the frame for `address` into `buf`; returns the frame length. Refuses what
         /// decode refuses: an address no frame may carry, the broadcast address for a command
         /// that does not accept it, a value outside its field's range.
-        pub fn encode(
-            &self,
-            address: u8,
-            buf: &mut [u8],
-        ) -> rt::Result<usize, rt::EncodeError> {
+        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             rt::encode_address(address, &FRAME)?;
             let len = match *self {
                 Self::Ack(response::Ack { status: v_status }) => {
@@ -1032,26 +924,23 @@ pub mod records {
             name: &str,
             mut field: impl FnMut(&'static str) -> rt::Option<rt::FieldValue<'v>>,
         ) -> rt::Result<Self, rt::FieldError> {
-            match name {
+            let message = match name {
                 "ack" => {
-                    rt::Ok(
-                        Self::Ack(response::Ack {
-                            status: rt::get(&mut field, "status")?,
-                        }),
-                    )
+                    Self::Ack(response::Ack {
+                        status: rt::get(&mut field, "status")?,
+                    })
                 }
                 "status_reply" => {
-                    rt::Ok(
-                        Self::StatusReply(response::StatusReply {
-                            readings: rt::records::<
-                                StatusReplyReadings,
-                                6,
-                            >(&mut field, "readings")?,
-                        }),
-                    )
+                    Self::StatusReply(response::StatusReply {
+                        readings: rt::records::<
+                            StatusReplyReadings,
+                            6,
+                        >(&mut field, "readings")?,
+                    })
                 }
-                _ => rt::Err(rt::FieldError::UnknownMessage),
-            }
+                _ => return rt::Err(rt::FieldError::UnknownMessage),
+            };
+            rt::Ok(message)
         }
     }
     impl rt::Message for Response {
@@ -1072,11 +961,7 @@ pub mod records {
             Response::visit(self, f)
         }
         #[inline]
-        fn encode(
-            &self,
-            address: u8,
-            buf: &mut [u8],
-        ) -> rt::Result<usize, rt::EncodeError> {
+        fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             Response::encode(self, address, buf)
         }
         #[inline]
@@ -1098,18 +983,11 @@ pub mod records {
         /// spec): [`busspec_runtime::DecodeError::InvalidValue`] names the first that differs.
         pub fn follows_request(&self, request: &Request) -> rt::DecodeResult<()> {
             match (self, request) {
-                (
-                    &Self::StatusReply(
-                        response::StatusReply { readings: v_readings, .. },
-                    ),
-                    &Request::ReadStatus(
-                        request::ReadStatus { quantity: r_quantity, .. },
-                    ),
-                ) => {
+                (Self::StatusReply(m), Request::ReadStatus(r)) => {
                     REPEAT_STATUS_REPLY
                         .follows_request(
-                            v_readings.len(),
-                            r_quantity as i64,
+                            m.readings.len(),
+                            r.quantity as i64,
                             (1, 1),
                             "quantity",
                         )?;
@@ -1246,11 +1124,86 @@ pub mod records {
     pub type StreamDecoder = ::busspec_runtime::stream::StreamDecoder<Records>;
     /// What [`StreamDecoder`] finds in a stream.
     pub type Event = ::busspec_runtime::stream::Event<Request, Response>;
-    /// Each request as a struct of its own (its `DESC` names it as refusals do: name,
-    /// code and the frame lengths of its code), and each field a refusal names
-    /// (`message.field`, `FieldDesc`).
+    impl request::SyncWrite {
+        pub const NAME: &'static str = "sync_write";
+        pub const CODE: &'static [u8] = &[0x83];
+        pub const MIN_LEN: usize = 10;
+        pub const MAX_LEN: usize = 38;
+        pub const DESC: rt::MessageDesc = rt::desc(Self::NAME, 0x83, 1, &[6]);
+        pub const BLOCKS_DESC: rt::FieldDesc = rt::field(Self::NAME, "blocks");
+        pub const BLOCKS_ID_DESC: rt::FieldDesc = rt::field(Self::NAME, "blocks.id");
+        pub const BLOCKS_POSITION_DESC: rt::FieldDesc = rt::field(
+            Self::NAME,
+            "blocks.position",
+        );
+        pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
+            f("blocks", rt::Records(self.blocks.records()));
+            f("flags", rt::Int(self.flags as i64));
+        }
+        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            Request::SyncWrite(*self).encode(address, buf)
+        }
+    }
+    impl request::WritePairs {
+        pub const NAME: &'static str = "write_pairs";
+        pub const CODE: &'static [u8] = &[0x84];
+        pub const MIN_LEN: usize = 5;
+        pub const MAX_LEN: usize = 20;
+        pub const DESC: rt::MessageDesc = rt::desc(Self::NAME, 0x84, 1, &[5]);
+        pub const PAIRS_DESC: rt::FieldDesc = rt::field(Self::NAME, "pairs");
+        pub const PAIRS_BANK_DESC: rt::FieldDesc = rt::field(Self::NAME, "pairs.bank");
+        pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
+            f("pairs", rt::Records(self.pairs.records()));
+        }
+        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            Request::WritePairs(*self).encode(address, buf)
+        }
+    }
+    impl request::ReadStatus {
+        pub const NAME: &'static str = "read_status";
+        pub const CODE: &'static [u8] = &[0x85];
+        pub const LEN: usize = 5;
+        pub const DESC: rt::MessageDesc = rt::desc(Self::NAME, 0x85, 1, &[5]);
+        pub const QUANTITY: rt::Range<usize> = 3..4;
+        pub const QUANTITY_DESC: rt::FieldDesc = rt::field(Self::NAME, "quantity");
+        pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
+            f("quantity", rt::Int(self.quantity as i64));
+        }
+        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            Request::ReadStatus(*self).encode(address, buf)
+        }
+    }
+    impl response::Ack {
+        pub const NAME: &'static str = "ack";
+        pub const CODE: &'static [u8] = &[0x80];
+        pub const LEN: usize = 5;
+        pub const DESC: rt::MessageDesc = rt::desc(Self::NAME, 0x80, 1, &[5]);
+        pub const STATUS: rt::Range<usize> = 3..4;
+        pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
+            f("status", rt::Int(self.status as i64));
+        }
+        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            Response::Ack(*self).encode(address, buf)
+        }
+    }
+    impl response::StatusReply {
+        pub const NAME: &'static str = "status_reply";
+        pub const CODE: &'static [u8] = &[0x85];
+        pub const MIN_LEN: usize = 8;
+        pub const MAX_LEN: usize = 28;
+        pub const DESC: rt::MessageDesc = rt::desc(Self::NAME, 0x85, 1, &[4]);
+        pub const READINGS_DESC: rt::FieldDesc = rt::field(Self::NAME, "readings");
+        pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
+            f("readings", rt::Records(self.readings.records()));
+        }
+        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            Response::StatusReply(*self).encode(address, buf)
+        }
+    }
+    /// Each request as a struct of its own; its constants (`DESC`, which names it as
+    /// refusals do: name, code and the frame lengths of its code; `QUANTITY_DESC`, each
+    /// field a refusal names) and methods are in the `impl` of each.
     pub mod request {
-        use ::busspec_runtime::FieldDesc;
         /// §1 Synchronised write (code `0x83`, 10 to 38 bytes).
         #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
         #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
@@ -1278,34 +1231,9 @@ pub mod records {
             /// Valid raw range 1..=6.
             pub quantity: u8,
         }
-        /// `sync_write.blocks`
-        pub const SYNC_WRITE_BLOCKS: FieldDesc = FieldDesc::new("sync_write", "blocks");
-        /// `sync_write.blocks.id`
-        pub const SYNC_WRITE_BLOCKS_ID: FieldDesc = FieldDesc::new(
-            "sync_write",
-            "blocks.id",
-        );
-        /// `sync_write.blocks.position`
-        pub const SYNC_WRITE_BLOCKS_POSITION: FieldDesc = FieldDesc::new(
-            "sync_write",
-            "blocks.position",
-        );
-        /// `write_pairs.pairs`
-        pub const WRITE_PAIRS_PAIRS: FieldDesc = FieldDesc::new("write_pairs", "pairs");
-        /// `write_pairs.pairs.bank`
-        pub const WRITE_PAIRS_PAIRS_BANK: FieldDesc = FieldDesc::new(
-            "write_pairs",
-            "pairs.bank",
-        );
-        /// `read_status.quantity`
-        pub const READ_STATUS_QUANTITY: FieldDesc = FieldDesc::new(
-            "read_status",
-            "quantity",
-        );
     }
-    /// Each response as a struct of its own, and the fields its refusals name.
+    /// Each response as a struct of its own.
     pub mod response {
-        use ::busspec_runtime::FieldDesc;
         /// §1 Acknowledge (code `0x80`, 5 bytes).
         #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
         #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
@@ -1322,10 +1250,5 @@ pub mod records {
         pub struct StatusReply {
             pub readings: super::rt::Repeated<super::StatusReplyReadings, 6>,
         }
-        /// `status_reply.readings`
-        pub const STATUS_REPLY_READINGS: FieldDesc = FieldDesc::new(
-            "status_reply",
-            "readings",
-        );
     }
 }

@@ -110,7 +110,7 @@ pub mod records_sized {
     }
     /// Where `sync_write.blocks` sits in the frame and how its elements are counted.
     pub const REPEAT_SYNC_WRITE: rt::RepeatAt = rt::RepeatAt {
-        field: &request::SYNC_WRITE_BLOCKS,
+        field: &request::SyncWrite::BLOCKS_DESC,
         base: 9,
         at: 8,
         width: 5,
@@ -129,7 +129,7 @@ pub mod records_sized {
     };
     /// Where `trim.offsets` sits in the frame and how its elements are counted.
     pub const REPEAT_TRIM: rt::RepeatAt = rt::RepeatAt {
-        field: &request::TRIM_OFFSETS,
+        field: &request::Trim::OFFSETS_DESC,
         base: 6,
         at: 5,
         width: 3,
@@ -162,7 +162,7 @@ pub mod records_sized {
         /// Its last field takes `last` bytes (the frame's width field says how many; the array holds a record at its widest).
         pub fn read(frame: &[u8; 5], at: usize, last: usize) -> rt::DecodeResult<Self> {
             let v_id: u8 = frame[0];
-            rt::in_range(&request::SYNC_WRITE_BLOCKS_ID, at, v_id, 0, 252)?;
+            rt::in_range(&request::SyncWrite::BLOCKS_ID_DESC, at, v_id, 0, 252)?;
             let v_data: u32 = rt::sized_int(
                 frame.get(1..1 + last).unwrap_or(&[]),
                 true,
@@ -241,7 +241,13 @@ pub mod records_sized {
                 true,
                 true,
             ) as i16;
-            rt::in_range(&request::TRIM_OFFSETS_OFFSET, at + 1, v_offset, -900, 900)?;
+            rt::in_range(
+                &request::Trim::OFFSETS_OFFSET_DESC,
+                at + 1,
+                v_offset,
+                -900,
+                900,
+            )?;
             rt::Ok(Self {
                 channel: v_channel,
                 offset: TenthDegree::from_raw(v_offset),
@@ -307,48 +313,6 @@ pub mod records_sized {
             })
         }
     }
-    impl request::SyncWrite {
-        pub const NAME: &'static str = "sync_write";
-        pub const CODE: &'static [u8] = &[0x83];
-        pub const MIN_LEN: usize = 11;
-        pub const MAX_LEN: usize = 39;
-        pub const DESC: rt::MessageDesc = rt::MessageDesc::new(
-            Self::NAME,
-            0x83,
-            1,
-            &[9],
-        );
-        pub const START_ADDRESS: rt::Range<usize> = 4..6;
-        pub const DATA_LENGTH: rt::Range<usize> = 6..8;
-        pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
-            f("start_address", rt::Int(self.start_address as i64));
-            f("data_length", rt::Int(self.data_length as i64));
-            f("blocks", rt::Records(self.blocks.records()));
-        }
-        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
-            Request::SyncWrite(*self).encode(address, buf)
-        }
-    }
-    impl request::Trim {
-        pub const NAME: &'static str = "trim";
-        pub const CODE: &'static [u8] = &[0x84];
-        pub const MIN_LEN: usize = 6;
-        pub const MAX_LEN: usize = 18;
-        pub const DESC: rt::MessageDesc = rt::MessageDesc::new(
-            Self::NAME,
-            0x84,
-            1,
-            &[6],
-        );
-        pub const WIDTH: rt::Range<usize> = 4..5;
-        pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
-            f("width", rt::Int(self.width as i64));
-            f("offsets", rt::Records(self.offsets.records()));
-        }
-        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
-            Request::Trim(*self).encode(address, buf)
-        }
-    }
     ///A request (command), host to device.
     #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
     #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
@@ -382,20 +346,12 @@ pub mod records_sized {
         /// The length of this message's frame, in bytes.
         pub const fn frame_len(&self) -> usize {
             match self {
-                Self::SyncWrite(
-                    request::SyncWrite {
-                        blocks: v_blocks,
-                        data_length: v_data_length,
-                        ..
-                    },
-                ) => {
-                    let v_data_length = *v_data_length;
+                Self::SyncWrite(m) => {
                     REPEAT_SYNC_WRITE.base
-                        + v_blocks.len() * (1 + (v_data_length) as usize)
+                        + m.blocks.len() * (1 + (m.data_length) as usize)
                 }
-                Self::Trim(request::Trim { offsets: v_offsets, width: v_width, .. }) => {
-                    let v_width = *v_width;
-                    REPEAT_TRIM.base + v_offsets.len() * (1 + (v_width) as usize)
+                Self::Trim(m) => {
+                    REPEAT_TRIM.base + m.offsets.len() * (1 + (m.width) as usize)
                 }
                 _ => Self::MESSAGES[self.index()].2,
             }
@@ -411,11 +367,7 @@ pub mod records_sized {
         /// Encodes the frame for `address` into `buf`; returns the frame length. Refuses what
         /// decode refuses: an address no frame may carry, the broadcast address for a command
         /// that does not accept it, a value outside its field's range.
-        pub fn encode(
-            &self,
-            address: u8,
-            buf: &mut [u8],
-        ) -> rt::Result<usize, rt::EncodeError> {
+        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             rt::encode_address(address, &FRAME)?;
             let len = match *self {
                 Self::SyncWrite(
@@ -552,32 +504,23 @@ pub mod records_sized {
             name: &str,
             mut field: impl FnMut(&'static str) -> rt::Option<rt::FieldValue<'v>>,
         ) -> rt::Result<Self, rt::FieldError> {
-            match name {
+            let message = match name {
                 "sync_write" => {
-                    rt::Ok(
-                        Self::SyncWrite(request::SyncWrite {
-                            start_address: rt::get(&mut field, "start_address")?,
-                            data_length: rt::get(&mut field, "data_length")?,
-                            blocks: rt::records::<
-                                SyncWriteBlocks,
-                                6,
-                            >(&mut field, "blocks")?,
-                        }),
-                    )
+                    Self::SyncWrite(request::SyncWrite {
+                        start_address: rt::get(&mut field, "start_address")?,
+                        data_length: rt::get(&mut field, "data_length")?,
+                        blocks: rt::records::<SyncWriteBlocks, 6>(&mut field, "blocks")?,
+                    })
                 }
                 "trim" => {
-                    rt::Ok(
-                        Self::Trim(request::Trim {
-                            width: rt::get(&mut field, "width")?,
-                            offsets: rt::records::<
-                                TrimOffsets,
-                                4,
-                            >(&mut field, "offsets")?,
-                        }),
-                    )
+                    Self::Trim(request::Trim {
+                        width: rt::get(&mut field, "width")?,
+                        offsets: rt::records::<TrimOffsets, 4>(&mut field, "offsets")?,
+                    })
                 }
-                _ => rt::Err(rt::FieldError::UnknownMessage),
-            }
+                _ => return rt::Err(rt::FieldError::UnknownMessage),
+            };
+            rt::Ok(message)
         }
     }
     impl rt::Message for Request {
@@ -598,11 +541,7 @@ pub mod records_sized {
             Request::visit(self, f)
         }
         #[inline]
-        fn encode(
-            &self,
-            address: u8,
-            buf: &mut [u8],
-        ) -> rt::Result<usize, rt::EncodeError> {
+        fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             Request::encode(self, address, buf)
         }
         #[inline]
@@ -637,24 +576,6 @@ pub mod records_sized {
         /// The responses this command may get, bit `i` for row `i` of `Response::MESSAGES`.
         const fn replies(&self) -> u64 {
             Self::COMMANDS[self.index()].3
-        }
-    }
-    impl response::Ack {
-        pub const NAME: &'static str = "ack";
-        pub const CODE: &'static [u8] = &[0x55];
-        pub const LEN: usize = 6;
-        pub const DESC: rt::MessageDesc = rt::MessageDesc::new(
-            Self::NAME,
-            0x55,
-            1,
-            &[6],
-        );
-        pub const ERROR: rt::Range<usize> = 4..5;
-        pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
-            f("error", rt::Int(self.error as i64));
-        }
-        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
-            Response::Ack(*self).encode(address, buf)
         }
     }
     ///A response, device to host.
@@ -698,11 +619,7 @@ pub mod records_sized {
         /// Encodes the frame for `address` into `buf`; returns the frame length. Refuses what
         /// decode refuses: an address no frame may carry, the broadcast address for a command
         /// that does not accept it, a value outside its field's range.
-        pub fn encode(
-            &self,
-            address: u8,
-            buf: &mut [u8],
-        ) -> rt::Result<usize, rt::EncodeError> {
+        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             rt::encode_address(address, &FRAME)?;
             let out = rt::frame_mut::<6>(buf, &[])?;
             let len = match *self {
@@ -776,16 +693,15 @@ pub mod records_sized {
             name: &str,
             mut field: impl FnMut(&'static str) -> rt::Option<rt::FieldValue<'v>>,
         ) -> rt::Result<Self, rt::FieldError> {
-            match name {
+            let message = match name {
                 "ack" => {
-                    rt::Ok(
-                        Self::Ack(response::Ack {
-                            error: rt::get(&mut field, "error")?,
-                        }),
-                    )
+                    Self::Ack(response::Ack {
+                        error: rt::get(&mut field, "error")?,
+                    })
                 }
-                _ => rt::Err(rt::FieldError::UnknownMessage),
-            }
+                _ => return rt::Err(rt::FieldError::UnknownMessage),
+            };
+            rt::Ok(message)
         }
     }
     impl rt::Message for Response {
@@ -806,11 +722,7 @@ pub mod records_sized {
             Response::visit(self, f)
         }
         #[inline]
-        fn encode(
-            &self,
-            address: u8,
-            buf: &mut [u8],
-        ) -> rt::Result<usize, rt::EncodeError> {
+        fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             Response::encode(self, address, buf)
         }
         #[inline]
@@ -964,11 +876,62 @@ pub mod records_sized {
     pub type StreamDecoder = ::busspec_runtime::stream::StreamDecoder<RecordsSized>;
     /// What [`StreamDecoder`] finds in a stream.
     pub type Event = ::busspec_runtime::stream::Event<Request, Response>;
-    /// Each request as a struct of its own (its `DESC` names it as refusals do: name,
-    /// code and the frame lengths of its code), and each field a refusal names
-    /// (`message.field`, `FieldDesc`).
+    impl request::SyncWrite {
+        pub const NAME: &'static str = "sync_write";
+        pub const CODE: &'static [u8] = &[0x83];
+        pub const MIN_LEN: usize = 11;
+        pub const MAX_LEN: usize = 39;
+        pub const DESC: rt::MessageDesc = rt::desc(Self::NAME, 0x83, 1, &[9]);
+        pub const START_ADDRESS: rt::Range<usize> = 4..6;
+        pub const DATA_LENGTH: rt::Range<usize> = 6..8;
+        pub const BLOCKS_DESC: rt::FieldDesc = rt::field(Self::NAME, "blocks");
+        pub const BLOCKS_ID_DESC: rt::FieldDesc = rt::field(Self::NAME, "blocks.id");
+        pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
+            f("start_address", rt::Int(self.start_address as i64));
+            f("data_length", rt::Int(self.data_length as i64));
+            f("blocks", rt::Records(self.blocks.records()));
+        }
+        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            Request::SyncWrite(*self).encode(address, buf)
+        }
+    }
+    impl request::Trim {
+        pub const NAME: &'static str = "trim";
+        pub const CODE: &'static [u8] = &[0x84];
+        pub const MIN_LEN: usize = 6;
+        pub const MAX_LEN: usize = 18;
+        pub const DESC: rt::MessageDesc = rt::desc(Self::NAME, 0x84, 1, &[6]);
+        pub const WIDTH: rt::Range<usize> = 4..5;
+        pub const OFFSETS_DESC: rt::FieldDesc = rt::field(Self::NAME, "offsets");
+        pub const OFFSETS_OFFSET_DESC: rt::FieldDesc = rt::field(
+            Self::NAME,
+            "offsets.offset",
+        );
+        pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
+            f("width", rt::Int(self.width as i64));
+            f("offsets", rt::Records(self.offsets.records()));
+        }
+        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            Request::Trim(*self).encode(address, buf)
+        }
+    }
+    impl response::Ack {
+        pub const NAME: &'static str = "ack";
+        pub const CODE: &'static [u8] = &[0x55];
+        pub const LEN: usize = 6;
+        pub const DESC: rt::MessageDesc = rt::desc(Self::NAME, 0x55, 1, &[6]);
+        pub const ERROR: rt::Range<usize> = 4..5;
+        pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
+            f("error", rt::Int(self.error as i64));
+        }
+        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            Response::Ack(*self).encode(address, buf)
+        }
+    }
+    /// Each request as a struct of its own; its constants (`DESC`, which names it as
+    /// refusals do: name, code and the frame lengths of its code; `QUANTITY_DESC`, each
+    /// field a refusal names) and methods are in the `impl` of each.
     pub mod request {
-        use ::busspec_runtime::FieldDesc;
         /// §1 Synchronised write (code `0x83`, 11 to 39 bytes).
         #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
         #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
@@ -989,22 +952,8 @@ pub mod records_sized {
             pub width: u8,
             pub offsets: super::rt::Repeated<super::TrimOffsets, 4>,
         }
-        /// `sync_write.blocks`
-        pub const SYNC_WRITE_BLOCKS: FieldDesc = FieldDesc::new("sync_write", "blocks");
-        /// `sync_write.blocks.id`
-        pub const SYNC_WRITE_BLOCKS_ID: FieldDesc = FieldDesc::new(
-            "sync_write",
-            "blocks.id",
-        );
-        /// `trim.offsets`
-        pub const TRIM_OFFSETS: FieldDesc = FieldDesc::new("trim", "offsets");
-        /// `trim.offsets.offset`
-        pub const TRIM_OFFSETS_OFFSET: FieldDesc = FieldDesc::new(
-            "trim",
-            "offsets.offset",
-        );
     }
-    /// Each response as a struct of its own, and the fields its refusals name.
+    /// Each response as a struct of its own.
     pub mod response {
         /// §1 Acknowledge (code `0x55`, 6 bytes).
         #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]

@@ -325,636 +325,6 @@ pub mod sd {
             Self(raw)
         }
     }
-    impl request::SetPoint {
-        pub const NAME: &'static str = "set_point";
-        pub const CODE: &'static [u8] = &[0x76];
-        pub const LEN: usize = 6;
-        pub const DESC: rt::MessageDesc = rt::MessageDesc::new(
-            Self::NAME,
-            0x76,
-            1,
-            &[6],
-        );
-        pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
-            f("freshness", rt::Int(self.freshness as i64));
-            f("position", rt::Int(self.position.raw() as i64));
-        }
-        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
-            Request::SetPoint(*self).encode(address, buf)
-        }
-    }
-    impl request::ReadActualPosition {
-        pub const NAME: &'static str = "read_actual_position";
-        pub const CODE: &'static [u8] = &[0x69];
-        pub const LEN: usize = 6;
-        pub const DESC: rt::MessageDesc = rt::MessageDesc::new(
-            Self::NAME,
-            0x69,
-            1,
-            &[6],
-        );
-        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
-            Request::ReadActualPosition(*self).encode(address, buf)
-        }
-    }
-    impl request::SetVelocity {
-        pub const NAME: &'static str = "set_velocity";
-        pub const CODE: &'static [u8] = &[0x77];
-        pub const LEN: usize = 6;
-        pub const DESC: rt::MessageDesc = rt::MessageDesc::new(
-            Self::NAME,
-            0x77,
-            1,
-            &[6],
-        );
-        pub const SET_VELOCITY: rt::Range<usize> = 2..4;
-        pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
-            f("set_velocity", rt::Int(self.set_velocity.raw() as i64));
-        }
-        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
-            Request::SetVelocity(*self).encode(address, buf)
-        }
-    }
-    impl request::ReadActualVelocity {
-        pub const NAME: &'static str = "read_actual_velocity";
-        pub const CODE: &'static [u8] = &[0x68];
-        pub const LEN: usize = 6;
-        pub const DESC: rt::MessageDesc = rt::MessageDesc::new(
-            Self::NAME,
-            0x68,
-            1,
-            &[6],
-        );
-        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
-            Request::ReadActualVelocity(*self).encode(address, buf)
-        }
-    }
-    impl request::SetServoId {
-        pub const NAME: &'static str = "set_servo_id";
-        pub const CODE: &'static [u8] = &[0xAA];
-        pub const LEN: usize = 6;
-        pub const DESC: rt::MessageDesc = rt::MessageDesc::new(
-            Self::NAME,
-            0xAA,
-            1,
-            &[6],
-        );
-        pub const NEW_ID: rt::Range<usize> = 2..3;
-        pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
-            f("new_id", rt::Int(self.new_id as i64));
-        }
-        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
-            Request::SetServoId(*self).encode(address, buf)
-        }
-    }
-    impl request::ReadServoId {
-        pub const NAME: &'static str = "read_servo_id";
-        pub const CODE: &'static [u8] = &[0xDA];
-        pub const LEN: usize = 6;
-        pub const DESC: rt::MessageDesc = rt::MessageDesc::new(
-            Self::NAME,
-            0xDA,
-            1,
-            &[6],
-        );
-        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
-            Request::ReadServoId(*self).encode(address, buf)
-        }
-    }
-    impl request::ReadCurrentConsumption {
-        pub const NAME: &'static str = "read_current_consumption";
-        pub const CODE: &'static [u8] = &[0xB0];
-        pub const LEN: usize = 6;
-        pub const DESC: rt::MessageDesc = rt::MessageDesc::new(
-            Self::NAME,
-            0xB0,
-            1,
-            &[6],
-        );
-        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
-            Request::ReadCurrentConsumption(*self).encode(address, buf)
-        }
-    }
-    impl request::ReadBusVoltages {
-        pub const NAME: &'static str = "read_bus_voltages";
-        pub const CODE: &'static [u8] = &[0xB1];
-        pub const LEN: usize = 6;
-        pub const DESC: rt::MessageDesc = rt::MessageDesc::new(
-            Self::NAME,
-            0xB1,
-            1,
-            &[6],
-        );
-        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
-            Request::ReadBusVoltages(*self).encode(address, buf)
-        }
-    }
-    impl request::ReadExtendedCurrentConsumption {
-        pub const NAME: &'static str = "read_extended_current_consumption";
-        pub const CODE: &'static [u8] = &[0xB2];
-        pub const LEN: usize = 6;
-        pub const DESC: rt::MessageDesc = rt::MessageDesc::new(
-            Self::NAME,
-            0xB2,
-            1,
-            &[6],
-        );
-        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
-            Request::ReadExtendedCurrentConsumption(*self).encode(address, buf)
-        }
-    }
-    impl request::ReadTemperatures {
-        pub const NAME: &'static str = "read_temperatures";
-        pub const CODE: &'static [u8] = &[0xA0];
-        pub const LEN: usize = 6;
-        pub const DESC: rt::MessageDesc = rt::MessageDesc::new(
-            Self::NAME,
-            0xA0,
-            1,
-            &[6],
-        );
-        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
-            Request::ReadTemperatures(*self).encode(address, buf)
-        }
-    }
-    impl request::ReadHumidity {
-        pub const NAME: &'static str = "read_humidity";
-        pub const CODE: &'static [u8] = &[0xA1];
-        pub const LEN: usize = 6;
-        pub const DESC: rt::MessageDesc = rt::MessageDesc::new(
-            Self::NAME,
-            0xA1,
-            1,
-            &[6],
-        );
-        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
-            Request::ReadHumidity(*self).encode(address, buf)
-        }
-    }
-    impl request::ReadSkippedFramesCounter {
-        pub const NAME: &'static str = "read_skipped_frames_counter";
-        pub const CODE: &'static [u8] = &[0x37];
-        pub const LEN: usize = 6;
-        pub const DESC: rt::MessageDesc = rt::MessageDesc::new(
-            Self::NAME,
-            0x37,
-            1,
-            &[6],
-        );
-        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
-            Request::ReadSkippedFramesCounter(*self).encode(address, buf)
-        }
-    }
-    impl request::ResetDroppedFramesCounter {
-        pub const NAME: &'static str = "reset_dropped_frames_counter";
-        pub const CODE: &'static [u8] = &[0x37];
-        pub const LEN: usize = 6;
-        pub const DESC: rt::MessageDesc = rt::MessageDesc::new(
-            Self::NAME,
-            0x37,
-            1,
-            &[6],
-        );
-        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
-            Request::ResetDroppedFramesCounter(*self).encode(address, buf)
-        }
-    }
-    impl request::ReadActuatorStatusWord {
-        pub const NAME: &'static str = "read_actuator_status_word";
-        pub const CODE: &'static [u8] = &[0x40];
-        pub const LEN: usize = 6;
-        pub const DESC: rt::MessageDesc = rt::MessageDesc::new(
-            Self::NAME,
-            0x40,
-            1,
-            &[6],
-        );
-        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
-            Request::ReadActuatorStatusWord(*self).encode(address, buf)
-        }
-    }
-    impl request::ResetActuatorStatusWord {
-        pub const NAME: &'static str = "reset_actuator_status_word";
-        pub const CODE: &'static [u8] = &[0x40];
-        pub const LEN: usize = 6;
-        pub const DESC: rt::MessageDesc = rt::MessageDesc::new(
-            Self::NAME,
-            0x40,
-            1,
-            &[6],
-        );
-        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
-            Request::ResetActuatorStatusWord(*self).encode(address, buf)
-        }
-    }
-    impl request::ResetDefaultRoleAndErrorFlags {
-        pub const NAME: &'static str = "reset_default_role_and_error_flags";
-        pub const CODE: &'static [u8] = &[0xB4];
-        pub const LEN: usize = 6;
-        pub const DESC: rt::MessageDesc = rt::MessageDesc::new(
-            Self::NAME,
-            0xB4,
-            1,
-            &[6],
-        );
-        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
-            Request::ResetDefaultRoleAndErrorFlags(*self).encode(address, buf)
-        }
-    }
-    impl request::SetCurrentPositionAsZero {
-        pub const NAME: &'static str = "set_current_position_as_zero";
-        pub const CODE: &'static [u8] = &[0x99];
-        pub const LEN: usize = 6;
-        pub const DESC: rt::MessageDesc = rt::MessageDesc::new(
-            Self::NAME,
-            0x99,
-            1,
-            &[6],
-        );
-        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
-            Request::SetCurrentPositionAsZero(*self).encode(address, buf)
-        }
-    }
-    impl request::ReadCurrentZeroOffset {
-        pub const NAME: &'static str = "read_current_zero_offset";
-        pub const CODE: &'static [u8] = &[0x95];
-        pub const LEN: usize = 6;
-        pub const DESC: rt::MessageDesc = rt::MessageDesc::new(
-            Self::NAME,
-            0x95,
-            1,
-            &[6],
-        );
-        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
-            Request::ReadCurrentZeroOffset(*self).encode(address, buf)
-        }
-    }
-    impl request::ResetZeroOffset {
-        pub const NAME: &'static str = "reset_zero_offset";
-        pub const CODE: &'static [u8] = &[0x98];
-        pub const LEN: usize = 6;
-        pub const DESC: rt::MessageDesc = rt::MessageDesc::new(
-            Self::NAME,
-            0x98,
-            1,
-            &[6],
-        );
-        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
-            Request::ResetZeroOffset(*self).encode(address, buf)
-        }
-    }
-    impl request::ReadElectronicSerialNumber {
-        pub const NAME: &'static str = "read_electronic_serial_number";
-        pub const CODE: &'static [u8] = &[0xF0];
-        pub const LEN: usize = 6;
-        pub const DESC: rt::MessageDesc = rt::MessageDesc::new(
-            Self::NAME,
-            0xF0,
-            1,
-            &[6],
-        );
-        pub const BYTE_NUMBER: rt::Range<usize> = 3..4;
-        pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
-            f("byte_number", rt::Int(self.byte_number as i64));
-        }
-        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
-            Request::ReadElectronicSerialNumber(*self).encode(address, buf)
-        }
-    }
-    impl request::ReadProductDescription {
-        pub const NAME: &'static str = "read_product_description";
-        pub const CODE: &'static [u8] = &[0xF1];
-        pub const LEN: usize = 6;
-        pub const DESC: rt::MessageDesc = rt::MessageDesc::new(
-            Self::NAME,
-            0xF1,
-            1,
-            &[6],
-        );
-        pub const BYTE_NUMBER: rt::Range<usize> = 3..4;
-        pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
-            f("byte_number", rt::Int(self.byte_number as i64));
-        }
-        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
-            Request::ReadProductDescription(*self).encode(address, buf)
-        }
-    }
-    impl request::ReadSoftwareRevision {
-        pub const NAME: &'static str = "read_software_revision";
-        pub const CODE: &'static [u8] = &[0xF2];
-        pub const LEN: usize = 6;
-        pub const DESC: rt::MessageDesc = rt::MessageDesc::new(
-            Self::NAME,
-            0xF2,
-            1,
-            &[6],
-        );
-        pub const BYTE_NUMBER: rt::Range<usize> = 3..4;
-        pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
-            f("byte_number", rt::Int(self.byte_number as i64));
-        }
-        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
-            Request::ReadSoftwareRevision(*self).encode(address, buf)
-        }
-    }
-    impl request::ReadHardwareRevision {
-        pub const NAME: &'static str = "read_hardware_revision";
-        pub const CODE: &'static [u8] = &[0xF3];
-        pub const LEN: usize = 6;
-        pub const DESC: rt::MessageDesc = rt::MessageDesc::new(
-            Self::NAME,
-            0xF3,
-            1,
-            &[6],
-        );
-        pub const BYTE_NUMBER: rt::Range<usize> = 3..4;
-        pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
-            f("byte_number", rt::Int(self.byte_number as i64));
-        }
-        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
-            Request::ReadHardwareRevision(*self).encode(address, buf)
-        }
-    }
-    impl request::ReadTotalRuntimeHours {
-        pub const NAME: &'static str = "read_total_runtime_hours";
-        pub const CODE: &'static [u8] = &[0xA2];
-        pub const LEN: usize = 6;
-        pub const DESC: rt::MessageDesc = rt::MessageDesc::new(
-            Self::NAME,
-            0xA2,
-            1,
-            &[6],
-        );
-        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
-            Request::ReadTotalRuntimeHours(*self).encode(address, buf)
-        }
-    }
-    impl request::ReadTotalRuntimeMinSec {
-        pub const NAME: &'static str = "read_total_runtime_min_sec";
-        pub const CODE: &'static [u8] = &[0xA2];
-        pub const LEN: usize = 6;
-        pub const DESC: rt::MessageDesc = rt::MessageDesc::new(
-            Self::NAME,
-            0xA2,
-            1,
-            &[6],
-        );
-        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
-            Request::ReadTotalRuntimeMinSec(*self).encode(address, buf)
-        }
-    }
-    impl request::ReadLoadRuntime024Hours {
-        pub const NAME: &'static str = "read_load_runtime_0_24_hours";
-        pub const CODE: &'static [u8] = &[0xA3];
-        pub const LEN: usize = 6;
-        pub const DESC: rt::MessageDesc = rt::MessageDesc::new(
-            Self::NAME,
-            0xA3,
-            1,
-            &[6],
-        );
-        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
-            Request::ReadLoadRuntime024Hours(*self).encode(address, buf)
-        }
-    }
-    impl request::ReadLoadRuntime024MinSec {
-        pub const NAME: &'static str = "read_load_runtime_0_24_min_sec";
-        pub const CODE: &'static [u8] = &[0xA3];
-        pub const LEN: usize = 6;
-        pub const DESC: rt::MessageDesc = rt::MessageDesc::new(
-            Self::NAME,
-            0xA3,
-            1,
-            &[6],
-        );
-        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
-            Request::ReadLoadRuntime024MinSec(*self).encode(address, buf)
-        }
-    }
-    impl request::ResetLoadRuntime024 {
-        pub const NAME: &'static str = "reset_load_runtime_0_24";
-        pub const CODE: &'static [u8] = &[0xA3];
-        pub const LEN: usize = 6;
-        pub const DESC: rt::MessageDesc = rt::MessageDesc::new(
-            Self::NAME,
-            0xA3,
-            1,
-            &[6],
-        );
-        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
-            Request::ResetLoadRuntime024(*self).encode(address, buf)
-        }
-    }
-    impl request::ReadLoadRuntime2549Hours {
-        pub const NAME: &'static str = "read_load_runtime_25_49_hours";
-        pub const CODE: &'static [u8] = &[0xA4];
-        pub const LEN: usize = 6;
-        pub const DESC: rt::MessageDesc = rt::MessageDesc::new(
-            Self::NAME,
-            0xA4,
-            1,
-            &[6],
-        );
-        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
-            Request::ReadLoadRuntime2549Hours(*self).encode(address, buf)
-        }
-    }
-    impl request::ReadLoadRuntime2549MinSec {
-        pub const NAME: &'static str = "read_load_runtime_25_49_min_sec";
-        pub const CODE: &'static [u8] = &[0xA4];
-        pub const LEN: usize = 6;
-        pub const DESC: rt::MessageDesc = rt::MessageDesc::new(
-            Self::NAME,
-            0xA4,
-            1,
-            &[6],
-        );
-        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
-            Request::ReadLoadRuntime2549MinSec(*self).encode(address, buf)
-        }
-    }
-    impl request::ResetLoadRuntime2549 {
-        pub const NAME: &'static str = "reset_load_runtime_25_49";
-        pub const CODE: &'static [u8] = &[0xA4];
-        pub const LEN: usize = 6;
-        pub const DESC: rt::MessageDesc = rt::MessageDesc::new(
-            Self::NAME,
-            0xA4,
-            1,
-            &[6],
-        );
-        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
-            Request::ResetLoadRuntime2549(*self).encode(address, buf)
-        }
-    }
-    impl request::ReadLoadRuntime5074Hours {
-        pub const NAME: &'static str = "read_load_runtime_50_74_hours";
-        pub const CODE: &'static [u8] = &[0xA5];
-        pub const LEN: usize = 6;
-        pub const DESC: rt::MessageDesc = rt::MessageDesc::new(
-            Self::NAME,
-            0xA5,
-            1,
-            &[6],
-        );
-        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
-            Request::ReadLoadRuntime5074Hours(*self).encode(address, buf)
-        }
-    }
-    impl request::ReadLoadRuntime5074MinSec {
-        pub const NAME: &'static str = "read_load_runtime_50_74_min_sec";
-        pub const CODE: &'static [u8] = &[0xA5];
-        pub const LEN: usize = 6;
-        pub const DESC: rt::MessageDesc = rt::MessageDesc::new(
-            Self::NAME,
-            0xA5,
-            1,
-            &[6],
-        );
-        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
-            Request::ReadLoadRuntime5074MinSec(*self).encode(address, buf)
-        }
-    }
-    impl request::ResetLoadRuntime5074 {
-        pub const NAME: &'static str = "reset_load_runtime_50_74";
-        pub const CODE: &'static [u8] = &[0xA5];
-        pub const LEN: usize = 6;
-        pub const DESC: rt::MessageDesc = rt::MessageDesc::new(
-            Self::NAME,
-            0xA5,
-            1,
-            &[6],
-        );
-        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
-            Request::ResetLoadRuntime5074(*self).encode(address, buf)
-        }
-    }
-    impl request::ReadLoadRuntime7599Hours {
-        pub const NAME: &'static str = "read_load_runtime_75_99_hours";
-        pub const CODE: &'static [u8] = &[0xA6];
-        pub const LEN: usize = 6;
-        pub const DESC: rt::MessageDesc = rt::MessageDesc::new(
-            Self::NAME,
-            0xA6,
-            1,
-            &[6],
-        );
-        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
-            Request::ReadLoadRuntime7599Hours(*self).encode(address, buf)
-        }
-    }
-    impl request::ReadLoadRuntime7599MinSec {
-        pub const NAME: &'static str = "read_load_runtime_75_99_min_sec";
-        pub const CODE: &'static [u8] = &[0xA6];
-        pub const LEN: usize = 6;
-        pub const DESC: rt::MessageDesc = rt::MessageDesc::new(
-            Self::NAME,
-            0xA6,
-            1,
-            &[6],
-        );
-        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
-            Request::ReadLoadRuntime7599MinSec(*self).encode(address, buf)
-        }
-    }
-    impl request::ResetLoadRuntime7599 {
-        pub const NAME: &'static str = "reset_load_runtime_75_99";
-        pub const CODE: &'static [u8] = &[0xA6];
-        pub const LEN: usize = 6;
-        pub const DESC: rt::MessageDesc = rt::MessageDesc::new(
-            Self::NAME,
-            0xA6,
-            1,
-            &[6],
-        );
-        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
-            Request::ResetLoadRuntime7599(*self).encode(address, buf)
-        }
-    }
-    impl request::ReadLoadRuntime100Hours {
-        pub const NAME: &'static str = "read_load_runtime_100_hours";
-        pub const CODE: &'static [u8] = &[0xA7];
-        pub const LEN: usize = 6;
-        pub const DESC: rt::MessageDesc = rt::MessageDesc::new(
-            Self::NAME,
-            0xA7,
-            1,
-            &[6],
-        );
-        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
-            Request::ReadLoadRuntime100Hours(*self).encode(address, buf)
-        }
-    }
-    impl request::ReadLoadRuntime100MinSec {
-        pub const NAME: &'static str = "read_load_runtime_100_min_sec";
-        pub const CODE: &'static [u8] = &[0xA7];
-        pub const LEN: usize = 6;
-        pub const DESC: rt::MessageDesc = rt::MessageDesc::new(
-            Self::NAME,
-            0xA7,
-            1,
-            &[6],
-        );
-        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
-            Request::ReadLoadRuntime100MinSec(*self).encode(address, buf)
-        }
-    }
-    impl request::ResetLoadRuntime100 {
-        pub const NAME: &'static str = "reset_load_runtime_100";
-        pub const CODE: &'static [u8] = &[0xA7];
-        pub const LEN: usize = 6;
-        pub const DESC: rt::MessageDesc = rt::MessageDesc::new(
-            Self::NAME,
-            0xA7,
-            1,
-            &[6],
-        );
-        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
-            Request::ResetLoadRuntime100(*self).encode(address, buf)
-        }
-    }
-    impl request::ReadStallEventCounter {
-        pub const NAME: &'static str = "read_stall_event_counter";
-        pub const CODE: &'static [u8] = &[0xA8];
-        pub const LEN: usize = 6;
-        pub const DESC: rt::MessageDesc = rt::MessageDesc::new(
-            Self::NAME,
-            0xA8,
-            1,
-            &[6],
-        );
-        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
-            Request::ReadStallEventCounter(*self).encode(address, buf)
-        }
-    }
-    impl request::ResetStallEventCounter {
-        pub const NAME: &'static str = "reset_stall_event_counter";
-        pub const CODE: &'static [u8] = &[0xA8];
-        pub const LEN: usize = 6;
-        pub const DESC: rt::MessageDesc = rt::MessageDesc::new(
-            Self::NAME,
-            0xA8,
-            1,
-            &[6],
-        );
-        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
-            Request::ResetStallEventCounter(*self).encode(address, buf)
-        }
-    }
-    impl request::ReadPowerUpCycles {
-        pub const NAME: &'static str = "read_power_up_cycles";
-        pub const CODE: &'static [u8] = &[0xA9];
-        pub const LEN: usize = 6;
-        pub const DESC: rt::MessageDesc = rt::MessageDesc::new(
-            Self::NAME,
-            0xA9,
-            1,
-            &[6],
-        );
-        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
-            Request::ReadPowerUpCycles(*self).encode(address, buf)
-        }
-    }
     ///A request (command), host to device.
     #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
     #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
@@ -1129,11 +499,7 @@ pub mod sd {
         /// Encodes the frame for `address` into `buf`; returns the frame length. Refuses what
         /// decode refuses: an address no frame may carry, the broadcast address for a command
         /// that does not accept it, a value outside its field's range.
-        pub fn encode(
-            &self,
-            address: u8,
-            buf: &mut [u8],
-        ) -> rt::Result<usize, rt::EncodeError> {
+        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             rt::encode_address(address, &FRAME)?;
             let out = rt::frame_mut::<6>(buf, &[])?;
             let len = match *self {
@@ -1148,7 +514,7 @@ pub mod sd {
                     out[2..4].copy_from_slice(&field_0.to_be_bytes());
                     out.len()
                 }
-                Self::ReadActualPosition(request::ReadActualPosition {}) => {
+                Self::ReadActualPosition(_) => {
                     rt::head(out, &[0x69, address, 0x00, 0x00]).len()
                 }
                 Self::SetVelocity(
@@ -1158,7 +524,7 @@ pub mod sd {
                     out[2..4].copy_from_slice(&v_set_velocity.raw().to_be_bytes());
                     out.len()
                 }
-                Self::ReadActualVelocity(request::ReadActualVelocity {}) => {
+                Self::ReadActualVelocity(_) => {
                     rt::head(out, &[0x68, address, 0x00, 0x00]).len()
                 }
                 Self::SetServoId(request::SetServoId { new_id: v_new_id }) => {
@@ -1169,10 +535,8 @@ pub mod sd {
                     out[3] = field_0;
                     out.len()
                 }
-                Self::ReadServoId(request::ReadServoId {}) => {
-                    rt::head(out, &[0xDA, address, 0x00, 0x00]).len()
-                }
-                Self::ReadCurrentConsumption(request::ReadCurrentConsumption {}) => {
+                Self::ReadServoId(_) => rt::head(out, &[0xDA, address, 0x00, 0x00]).len(),
+                Self::ReadCurrentConsumption(_) => {
                     rt::encode_broadcast(
                         address,
                         0x1F,
@@ -1180,7 +544,7 @@ pub mod sd {
                     )?;
                     rt::head(out, &[0xB0, address, 0x00, 0x00]).len()
                 }
-                Self::ReadBusVoltages(request::ReadBusVoltages {}) => {
+                Self::ReadBusVoltages(_) => {
                     rt::encode_broadcast(
                         address,
                         0x1F,
@@ -1188,9 +552,7 @@ pub mod sd {
                     )?;
                     rt::head(out, &[0xB1, address, 0x00, 0x00]).len()
                 }
-                Self::ReadExtendedCurrentConsumption(
-                    request::ReadExtendedCurrentConsumption {},
-                ) => {
+                Self::ReadExtendedCurrentConsumption(_) => {
                     rt::encode_broadcast(
                         address,
                         0x1F,
@@ -1198,7 +560,7 @@ pub mod sd {
                     )?;
                     rt::head(out, &[0xB2, address, 0x00, 0x00]).len()
                 }
-                Self::ReadTemperatures(request::ReadTemperatures {}) => {
+                Self::ReadTemperatures(_) => {
                     rt::encode_broadcast(
                         address,
                         0x1F,
@@ -1206,11 +568,11 @@ pub mod sd {
                     )?;
                     rt::head(out, &[0xA0, address, 0x00, 0x00]).len()
                 }
-                Self::ReadHumidity(request::ReadHumidity {}) => {
+                Self::ReadHumidity(_) => {
                     rt::encode_broadcast(address, 0x1F, &request::ReadHumidity::DESC)?;
                     rt::head(out, &[0xA1, address, 0x00, 0x00]).len()
                 }
-                Self::ReadSkippedFramesCounter(request::ReadSkippedFramesCounter {}) => {
+                Self::ReadSkippedFramesCounter(_) => {
                     rt::encode_broadcast(
                         address,
                         0x1F,
@@ -1218,9 +580,7 @@ pub mod sd {
                     )?;
                     rt::head(out, &[0x37, address, 0x00, 0x01]).len()
                 }
-                Self::ResetDroppedFramesCounter(
-                    request::ResetDroppedFramesCounter {},
-                ) => {
+                Self::ResetDroppedFramesCounter(_) => {
                     rt::encode_broadcast(
                         address,
                         0x1F,
@@ -1228,7 +588,7 @@ pub mod sd {
                     )?;
                     rt::head(out, &[0x37, address, 0x00, 0x02]).len()
                 }
-                Self::ReadActuatorStatusWord(request::ReadActuatorStatusWord {}) => {
+                Self::ReadActuatorStatusWord(_) => {
                     rt::encode_broadcast(
                         address,
                         0x1F,
@@ -1236,7 +596,7 @@ pub mod sd {
                     )?;
                     rt::head(out, &[0x40, address, 0xAA, 0x02]).len()
                 }
-                Self::ResetActuatorStatusWord(request::ResetActuatorStatusWord {}) => {
+                Self::ResetActuatorStatusWord(_) => {
                     rt::encode_broadcast(
                         address,
                         0x1F,
@@ -1244,9 +604,7 @@ pub mod sd {
                     )?;
                     rt::head(out, &[0x40, address, 0xAA, 0x52]).len()
                 }
-                Self::ResetDefaultRoleAndErrorFlags(
-                    request::ResetDefaultRoleAndErrorFlags {},
-                ) => {
+                Self::ResetDefaultRoleAndErrorFlags(_) => {
                     rt::encode_broadcast(
                         address,
                         0x1F,
@@ -1254,7 +612,7 @@ pub mod sd {
                     )?;
                     rt::head(out, &[0xB4, address, 0x41, 0x53]).len()
                 }
-                Self::SetCurrentPositionAsZero(request::SetCurrentPositionAsZero {}) => {
+                Self::SetCurrentPositionAsZero(_) => {
                     rt::encode_broadcast(
                         address,
                         0x1F,
@@ -1262,7 +620,7 @@ pub mod sd {
                     )?;
                     rt::head(out, &[0x99, address, 0x00, 0x00]).len()
                 }
-                Self::ReadCurrentZeroOffset(request::ReadCurrentZeroOffset {}) => {
+                Self::ReadCurrentZeroOffset(_) => {
                     rt::encode_broadcast(
                         address,
                         0x1F,
@@ -1270,7 +628,7 @@ pub mod sd {
                     )?;
                     rt::head(out, &[0x95, address, 0x00, 0x00]).len()
                 }
-                Self::ResetZeroOffset(request::ResetZeroOffset {}) => {
+                Self::ResetZeroOffset(_) => {
                     rt::encode_broadcast(
                         address,
                         0x1F,
@@ -1330,7 +688,7 @@ pub mod sd {
                     out[3] = v_byte_number;
                     out.len()
                 }
-                Self::ReadTotalRuntimeHours(request::ReadTotalRuntimeHours {}) => {
+                Self::ReadTotalRuntimeHours(_) => {
                     rt::encode_broadcast(
                         address,
                         0x1F,
@@ -1338,7 +696,7 @@ pub mod sd {
                     )?;
                     rt::head(out, &[0xA2, address, 0x00, 0x00]).len()
                 }
-                Self::ReadTotalRuntimeMinSec(request::ReadTotalRuntimeMinSec {}) => {
+                Self::ReadTotalRuntimeMinSec(_) => {
                     rt::encode_broadcast(
                         address,
                         0x1F,
@@ -1346,7 +704,7 @@ pub mod sd {
                     )?;
                     rt::head(out, &[0xA2, address, 0x00, 0x01]).len()
                 }
-                Self::ReadLoadRuntime024Hours(request::ReadLoadRuntime024Hours {}) => {
+                Self::ReadLoadRuntime024Hours(_) => {
                     rt::encode_broadcast(
                         address,
                         0x1F,
@@ -1354,7 +712,7 @@ pub mod sd {
                     )?;
                     rt::head(out, &[0xA3, address, 0x00, 0x00]).len()
                 }
-                Self::ReadLoadRuntime024MinSec(request::ReadLoadRuntime024MinSec {}) => {
+                Self::ReadLoadRuntime024MinSec(_) => {
                     rt::encode_broadcast(
                         address,
                         0x1F,
@@ -1362,7 +720,7 @@ pub mod sd {
                     )?;
                     rt::head(out, &[0xA3, address, 0x00, 0x01]).len()
                 }
-                Self::ResetLoadRuntime024(request::ResetLoadRuntime024 {}) => {
+                Self::ResetLoadRuntime024(_) => {
                     rt::encode_broadcast(
                         address,
                         0x1F,
@@ -1370,7 +728,7 @@ pub mod sd {
                     )?;
                     rt::head(out, &[0xA3, address, 0xAA, 0x55]).len()
                 }
-                Self::ReadLoadRuntime2549Hours(request::ReadLoadRuntime2549Hours {}) => {
+                Self::ReadLoadRuntime2549Hours(_) => {
                     rt::encode_broadcast(
                         address,
                         0x1F,
@@ -1378,9 +736,7 @@ pub mod sd {
                     )?;
                     rt::head(out, &[0xA4, address, 0x00, 0x00]).len()
                 }
-                Self::ReadLoadRuntime2549MinSec(
-                    request::ReadLoadRuntime2549MinSec {},
-                ) => {
+                Self::ReadLoadRuntime2549MinSec(_) => {
                     rt::encode_broadcast(
                         address,
                         0x1F,
@@ -1388,7 +744,7 @@ pub mod sd {
                     )?;
                     rt::head(out, &[0xA4, address, 0x00, 0x01]).len()
                 }
-                Self::ResetLoadRuntime2549(request::ResetLoadRuntime2549 {}) => {
+                Self::ResetLoadRuntime2549(_) => {
                     rt::encode_broadcast(
                         address,
                         0x1F,
@@ -1396,7 +752,7 @@ pub mod sd {
                     )?;
                     rt::head(out, &[0xA4, address, 0xAA, 0x55]).len()
                 }
-                Self::ReadLoadRuntime5074Hours(request::ReadLoadRuntime5074Hours {}) => {
+                Self::ReadLoadRuntime5074Hours(_) => {
                     rt::encode_broadcast(
                         address,
                         0x1F,
@@ -1404,9 +760,7 @@ pub mod sd {
                     )?;
                     rt::head(out, &[0xA5, address, 0x00, 0x00]).len()
                 }
-                Self::ReadLoadRuntime5074MinSec(
-                    request::ReadLoadRuntime5074MinSec {},
-                ) => {
+                Self::ReadLoadRuntime5074MinSec(_) => {
                     rt::encode_broadcast(
                         address,
                         0x1F,
@@ -1414,7 +768,7 @@ pub mod sd {
                     )?;
                     rt::head(out, &[0xA5, address, 0x00, 0x01]).len()
                 }
-                Self::ResetLoadRuntime5074(request::ResetLoadRuntime5074 {}) => {
+                Self::ResetLoadRuntime5074(_) => {
                     rt::encode_broadcast(
                         address,
                         0x1F,
@@ -1422,7 +776,7 @@ pub mod sd {
                     )?;
                     rt::head(out, &[0xA5, address, 0xAA, 0x55]).len()
                 }
-                Self::ReadLoadRuntime7599Hours(request::ReadLoadRuntime7599Hours {}) => {
+                Self::ReadLoadRuntime7599Hours(_) => {
                     rt::encode_broadcast(
                         address,
                         0x1F,
@@ -1430,9 +784,7 @@ pub mod sd {
                     )?;
                     rt::head(out, &[0xA6, address, 0x00, 0x00]).len()
                 }
-                Self::ReadLoadRuntime7599MinSec(
-                    request::ReadLoadRuntime7599MinSec {},
-                ) => {
+                Self::ReadLoadRuntime7599MinSec(_) => {
                     rt::encode_broadcast(
                         address,
                         0x1F,
@@ -1440,7 +792,7 @@ pub mod sd {
                     )?;
                     rt::head(out, &[0xA6, address, 0x00, 0x01]).len()
                 }
-                Self::ResetLoadRuntime7599(request::ResetLoadRuntime7599 {}) => {
+                Self::ResetLoadRuntime7599(_) => {
                     rt::encode_broadcast(
                         address,
                         0x1F,
@@ -1448,7 +800,7 @@ pub mod sd {
                     )?;
                     rt::head(out, &[0xA6, address, 0xAA, 0x55]).len()
                 }
-                Self::ReadLoadRuntime100Hours(request::ReadLoadRuntime100Hours {}) => {
+                Self::ReadLoadRuntime100Hours(_) => {
                     rt::encode_broadcast(
                         address,
                         0x1F,
@@ -1456,7 +808,7 @@ pub mod sd {
                     )?;
                     rt::head(out, &[0xA7, address, 0x00, 0x00]).len()
                 }
-                Self::ReadLoadRuntime100MinSec(request::ReadLoadRuntime100MinSec {}) => {
+                Self::ReadLoadRuntime100MinSec(_) => {
                     rt::encode_broadcast(
                         address,
                         0x1F,
@@ -1464,7 +816,7 @@ pub mod sd {
                     )?;
                     rt::head(out, &[0xA7, address, 0x00, 0x01]).len()
                 }
-                Self::ResetLoadRuntime100(request::ResetLoadRuntime100 {}) => {
+                Self::ResetLoadRuntime100(_) => {
                     rt::encode_broadcast(
                         address,
                         0x1F,
@@ -1472,7 +824,7 @@ pub mod sd {
                     )?;
                     rt::head(out, &[0xA7, address, 0xAA, 0x55]).len()
                 }
-                Self::ReadStallEventCounter(request::ReadStallEventCounter {}) => {
+                Self::ReadStallEventCounter(_) => {
                     rt::encode_broadcast(
                         address,
                         0x1F,
@@ -1480,7 +832,7 @@ pub mod sd {
                     )?;
                     rt::head(out, &[0xA8, address, 0x00, 0x00]).len()
                 }
-                Self::ResetStallEventCounter(request::ResetStallEventCounter {}) => {
+                Self::ResetStallEventCounter(_) => {
                     rt::encode_broadcast(
                         address,
                         0x1F,
@@ -1488,7 +840,7 @@ pub mod sd {
                     )?;
                     rt::head(out, &[0xA8, address, 0xAA, 0x55]).len()
                 }
-                Self::ReadPowerUpCycles(request::ReadPowerUpCycles {}) => {
+                Self::ReadPowerUpCycles(_) => {
                     rt::encode_broadcast(
                         address,
                         0x1F,
@@ -1535,8 +887,18 @@ pub mod sd {
                     let frame = rt::fixed::<
                         6,
                     >(frame, &request::ReadActualPosition::DESC)?;
-                    rt::equal(&request::READ_ACTUAL_POSITION_ARG1, 2, frame[2], 0x0)?;
-                    rt::equal(&request::READ_ACTUAL_POSITION_ARG2, 3, frame[3], 0x0)?;
+                    rt::equal(
+                        &request::ReadActualPosition::ARG1_DESC,
+                        2,
+                        frame[2],
+                        0x0,
+                    )?;
+                    rt::equal(
+                        &request::ReadActualPosition::ARG2_DESC,
+                        3,
+                        frame[3],
+                        0x0,
+                    )?;
                     rt::Ok(Self::ReadActualPosition(request::ReadActualPosition))
                 }
                 0x77 => {
@@ -1553,15 +915,25 @@ pub mod sd {
                     let frame = rt::fixed::<
                         6,
                     >(frame, &request::ReadActualVelocity::DESC)?;
-                    rt::equal(&request::READ_ACTUAL_VELOCITY_ARG1, 2, frame[2], 0x0)?;
-                    rt::equal(&request::READ_ACTUAL_VELOCITY_ARG2, 3, frame[3], 0x0)?;
+                    rt::equal(
+                        &request::ReadActualVelocity::ARG1_DESC,
+                        2,
+                        frame[2],
+                        0x0,
+                    )?;
+                    rt::equal(
+                        &request::ReadActualVelocity::ARG2_DESC,
+                        3,
+                        frame[3],
+                        0x0,
+                    )?;
                     rt::Ok(Self::ReadActualVelocity(request::ReadActualVelocity))
                 }
                 0xAA => {
                     let frame = rt::fixed::<6>(frame, &request::SetServoId::DESC)?;
-                    rt::in_range(&request::SET_SERVO_ID_NEW_ID, 2, frame[2], 1, 30)?;
+                    rt::in_range(&request::SetServoId::NEW_ID_DESC, 2, frame[2], 1, 30)?;
                     rt::same(
-                        &request::SET_SERVO_ID_NEW_ID_REPEAT,
+                        &request::SetServoId::NEW_ID_REPEAT_DESC,
                         3,
                         frame[3],
                         "new_id",
@@ -1575,8 +947,8 @@ pub mod sd {
                 }
                 0xDA => {
                     let frame = rt::fixed::<6>(frame, &request::ReadServoId::DESC)?;
-                    rt::equal(&request::READ_SERVO_ID_ARG1, 2, frame[2], 0x0)?;
-                    rt::equal(&request::READ_SERVO_ID_ARG2, 3, frame[3], 0x0)?;
+                    rt::equal(&request::ReadServoId::ARG1_DESC, 2, frame[2], 0x0)?;
+                    rt::equal(&request::ReadServoId::ARG2_DESC, 3, frame[3], 0x0)?;
                     rt::Ok(Self::ReadServoId(request::ReadServoId))
                 }
                 0xB0 => {
@@ -1589,13 +961,13 @@ pub mod sd {
                         &request::ReadCurrentConsumption::DESC,
                     )?;
                     rt::equal(
-                        &request::READ_CURRENT_CONSUMPTION_ARG1,
+                        &request::ReadCurrentConsumption::ARG1_DESC,
                         2,
                         frame[2],
                         0x0,
                     )?;
                     rt::equal(
-                        &request::READ_CURRENT_CONSUMPTION_ARG2,
+                        &request::ReadCurrentConsumption::ARG2_DESC,
                         3,
                         frame[3],
                         0x0,
@@ -1605,8 +977,8 @@ pub mod sd {
                 0xB1 => {
                     let frame = rt::fixed::<6>(frame, &request::ReadBusVoltages::DESC)?;
                     rt::no_broadcast(frame[1], 0x1F, &request::ReadBusVoltages::DESC)?;
-                    rt::equal(&request::READ_BUS_VOLTAGES_ARG1, 2, frame[2], 0x0)?;
-                    rt::equal(&request::READ_BUS_VOLTAGES_ARG2, 3, frame[3], 0x0)?;
+                    rt::equal(&request::ReadBusVoltages::ARG1_DESC, 2, frame[2], 0x0)?;
+                    rt::equal(&request::ReadBusVoltages::ARG2_DESC, 3, frame[3], 0x0)?;
                     rt::Ok(Self::ReadBusVoltages(request::ReadBusVoltages))
                 }
                 0xB2 => {
@@ -1619,13 +991,13 @@ pub mod sd {
                         &request::ReadExtendedCurrentConsumption::DESC,
                     )?;
                     rt::equal(
-                        &request::READ_EXTENDED_CURRENT_CONSUMPTION_ARG1,
+                        &request::ReadExtendedCurrentConsumption::ARG1_DESC,
                         2,
                         frame[2],
                         0x0,
                     )?;
                     rt::equal(
-                        &request::READ_EXTENDED_CURRENT_CONSUMPTION_ARG2,
+                        &request::ReadExtendedCurrentConsumption::ARG2_DESC,
                         3,
                         frame[3],
                         0x0,
@@ -1639,15 +1011,15 @@ pub mod sd {
                 0xA0 => {
                     let frame = rt::fixed::<6>(frame, &request::ReadTemperatures::DESC)?;
                     rt::no_broadcast(frame[1], 0x1F, &request::ReadTemperatures::DESC)?;
-                    rt::equal(&request::READ_TEMPERATURES_ARG1, 2, frame[2], 0x0)?;
-                    rt::equal(&request::READ_TEMPERATURES_ARG2, 3, frame[3], 0x0)?;
+                    rt::equal(&request::ReadTemperatures::ARG1_DESC, 2, frame[2], 0x0)?;
+                    rt::equal(&request::ReadTemperatures::ARG2_DESC, 3, frame[3], 0x0)?;
                     rt::Ok(Self::ReadTemperatures(request::ReadTemperatures))
                 }
                 0xA1 => {
                     let frame = rt::fixed::<6>(frame, &request::ReadHumidity::DESC)?;
                     rt::no_broadcast(frame[1], 0x1F, &request::ReadHumidity::DESC)?;
-                    rt::equal(&request::READ_HUMIDITY_ARG1, 2, frame[2], 0x0)?;
-                    rt::equal(&request::READ_HUMIDITY_ARG2, 3, frame[3], 0x0)?;
+                    rt::equal(&request::ReadHumidity::ARG1_DESC, 2, frame[2], 0x0)?;
+                    rt::equal(&request::ReadHumidity::ARG2_DESC, 3, frame[3], 0x0)?;
                     rt::Ok(Self::ReadHumidity(request::ReadHumidity))
                 }
                 0x37 => {
@@ -1659,13 +1031,13 @@ pub mod sd {
                             &request::ReadSkippedFramesCounter::DESC,
                         )?;
                         rt::equal(
-                            &request::READ_SKIPPED_FRAMES_COUNTER_ARG1,
+                            &request::ReadSkippedFramesCounter::ARG1_DESC,
                             2,
                             frame[2],
                             0x0,
                         )?;
                         rt::equal(
-                            &request::READ_SKIPPED_FRAMES_COUNTER_ARG2,
+                            &request::ReadSkippedFramesCounter::ARG2_DESC,
                             3,
                             frame[3],
                             0x1,
@@ -1683,13 +1055,13 @@ pub mod sd {
                             &request::ResetDroppedFramesCounter::DESC,
                         )?;
                         rt::equal(
-                            &request::RESET_DROPPED_FRAMES_COUNTER_ARG1,
+                            &request::ResetDroppedFramesCounter::ARG1_DESC,
                             2,
                             frame[2],
                             0x0,
                         )?;
                         rt::equal(
-                            &request::RESET_DROPPED_FRAMES_COUNTER_ARG2,
+                            &request::ResetDroppedFramesCounter::ARG2_DESC,
                             3,
                             frame[3],
                             0x2,
@@ -1711,13 +1083,13 @@ pub mod sd {
                             &request::ReadActuatorStatusWord::DESC,
                         )?;
                         rt::equal(
-                            &request::READ_ACTUATOR_STATUS_WORD_ARG1,
+                            &request::ReadActuatorStatusWord::ARG1_DESC,
                             2,
                             frame[2],
                             0xAA,
                         )?;
                         rt::equal(
-                            &request::READ_ACTUATOR_STATUS_WORD_ARG2,
+                            &request::ReadActuatorStatusWord::ARG2_DESC,
                             3,
                             frame[3],
                             0x2,
@@ -1733,13 +1105,13 @@ pub mod sd {
                             &request::ResetActuatorStatusWord::DESC,
                         )?;
                         rt::equal(
-                            &request::RESET_ACTUATOR_STATUS_WORD_ARG1,
+                            &request::ResetActuatorStatusWord::ARG1_DESC,
                             2,
                             frame[2],
                             0xAA,
                         )?;
                         rt::equal(
-                            &request::RESET_ACTUATOR_STATUS_WORD_ARG2,
+                            &request::ResetActuatorStatusWord::ARG2_DESC,
                             3,
                             frame[3],
                             0x52,
@@ -1762,13 +1134,13 @@ pub mod sd {
                         &request::ResetDefaultRoleAndErrorFlags::DESC,
                     )?;
                     rt::equal(
-                        &request::RESET_DEFAULT_ROLE_AND_ERROR_FLAGS_ARG1,
+                        &request::ResetDefaultRoleAndErrorFlags::ARG1_DESC,
                         2,
                         frame[2],
                         0x41,
                     )?;
                     rt::equal(
-                        &request::RESET_DEFAULT_ROLE_AND_ERROR_FLAGS_ARG2,
+                        &request::ResetDefaultRoleAndErrorFlags::ARG2_DESC,
                         3,
                         frame[3],
                         0x53,
@@ -1789,13 +1161,13 @@ pub mod sd {
                         &request::SetCurrentPositionAsZero::DESC,
                     )?;
                     rt::equal(
-                        &request::SET_CURRENT_POSITION_AS_ZERO_ARG1,
+                        &request::SetCurrentPositionAsZero::ARG1_DESC,
                         2,
                         frame[2],
                         0x0,
                     )?;
                     rt::equal(
-                        &request::SET_CURRENT_POSITION_AS_ZERO_ARG2,
+                        &request::SetCurrentPositionAsZero::ARG2_DESC,
                         3,
                         frame[3],
                         0x0,
@@ -1814,13 +1186,13 @@ pub mod sd {
                         &request::ReadCurrentZeroOffset::DESC,
                     )?;
                     rt::equal(
-                        &request::READ_CURRENT_ZERO_OFFSET_ARG1,
+                        &request::ReadCurrentZeroOffset::ARG1_DESC,
                         2,
                         frame[2],
                         0x0,
                     )?;
                     rt::equal(
-                        &request::READ_CURRENT_ZERO_OFFSET_ARG2,
+                        &request::ReadCurrentZeroOffset::ARG2_DESC,
                         3,
                         frame[3],
                         0x0,
@@ -1830,8 +1202,8 @@ pub mod sd {
                 0x98 => {
                     let frame = rt::fixed::<6>(frame, &request::ResetZeroOffset::DESC)?;
                     rt::no_broadcast(frame[1], 0x1F, &request::ResetZeroOffset::DESC)?;
-                    rt::equal(&request::RESET_ZERO_OFFSET_ARG1, 2, frame[2], 0x0)?;
-                    rt::equal(&request::RESET_ZERO_OFFSET_ARG2, 3, frame[3], 0x0)?;
+                    rt::equal(&request::ResetZeroOffset::ARG1_DESC, 2, frame[2], 0x0)?;
+                    rt::equal(&request::ResetZeroOffset::ARG2_DESC, 3, frame[3], 0x0)?;
                     rt::Ok(Self::ResetZeroOffset(request::ResetZeroOffset))
                 }
                 0xF0 => {
@@ -1844,13 +1216,13 @@ pub mod sd {
                         &request::ReadElectronicSerialNumber::DESC,
                     )?;
                     rt::equal(
-                        &request::READ_ELECTRONIC_SERIAL_NUMBER_ARG1,
+                        &request::ReadElectronicSerialNumber::ARG1_DESC,
                         2,
                         frame[2],
                         0x0,
                     )?;
                     rt::in_range(
-                        &request::READ_ELECTRONIC_SERIAL_NUMBER_BYTE_NUMBER,
+                        &request::ReadElectronicSerialNumber::BYTE_NUMBER_DESC,
                         3,
                         frame[3],
                         0,
@@ -1872,13 +1244,13 @@ pub mod sd {
                         &request::ReadProductDescription::DESC,
                     )?;
                     rt::equal(
-                        &request::READ_PRODUCT_DESCRIPTION_ARG1,
+                        &request::ReadProductDescription::ARG1_DESC,
                         2,
                         frame[2],
                         0x0,
                     )?;
                     rt::in_range(
-                        &request::READ_PRODUCT_DESCRIPTION_BYTE_NUMBER,
+                        &request::ReadProductDescription::BYTE_NUMBER_DESC,
                         3,
                         frame[3],
                         0,
@@ -1899,9 +1271,14 @@ pub mod sd {
                         0x1F,
                         &request::ReadSoftwareRevision::DESC,
                     )?;
-                    rt::equal(&request::READ_SOFTWARE_REVISION_ARG1, 2, frame[2], 0x0)?;
+                    rt::equal(
+                        &request::ReadSoftwareRevision::ARG1_DESC,
+                        2,
+                        frame[2],
+                        0x0,
+                    )?;
                     rt::in_range(
-                        &request::READ_SOFTWARE_REVISION_BYTE_NUMBER,
+                        &request::ReadSoftwareRevision::BYTE_NUMBER_DESC,
                         3,
                         frame[3],
                         0,
@@ -1922,9 +1299,14 @@ pub mod sd {
                         0x1F,
                         &request::ReadHardwareRevision::DESC,
                     )?;
-                    rt::equal(&request::READ_HARDWARE_REVISION_ARG1, 2, frame[2], 0x0)?;
+                    rt::equal(
+                        &request::ReadHardwareRevision::ARG1_DESC,
+                        2,
+                        frame[2],
+                        0x0,
+                    )?;
                     rt::in_range(
-                        &request::READ_HARDWARE_REVISION_BYTE_NUMBER,
+                        &request::ReadHardwareRevision::BYTE_NUMBER_DESC,
                         3,
                         frame[3],
                         0,
@@ -1945,13 +1327,13 @@ pub mod sd {
                             &request::ReadTotalRuntimeHours::DESC,
                         )?;
                         rt::equal(
-                            &request::READ_TOTAL_RUNTIME_HOURS_ARG1,
+                            &request::ReadTotalRuntimeHours::ARG1_DESC,
                             2,
                             frame[2],
                             0x0,
                         )?;
                         rt::equal(
-                            &request::READ_TOTAL_RUNTIME_HOURS_ARG2,
+                            &request::ReadTotalRuntimeHours::ARG2_DESC,
                             3,
                             frame[3],
                             0x0,
@@ -1967,13 +1349,13 @@ pub mod sd {
                             &request::ReadTotalRuntimeMinSec::DESC,
                         )?;
                         rt::equal(
-                            &request::READ_TOTAL_RUNTIME_MIN_SEC_ARG1,
+                            &request::ReadTotalRuntimeMinSec::ARG1_DESC,
                             2,
                             frame[2],
                             0x0,
                         )?;
                         rt::equal(
-                            &request::READ_TOTAL_RUNTIME_MIN_SEC_ARG2,
+                            &request::ReadTotalRuntimeMinSec::ARG2_DESC,
                             3,
                             frame[3],
                             0x1,
@@ -1993,13 +1375,13 @@ pub mod sd {
                             &request::ReadLoadRuntime024Hours::DESC,
                         )?;
                         rt::equal(
-                            &request::READ_LOAD_RUNTIME_0_24_HOURS_ARG1,
+                            &request::ReadLoadRuntime024Hours::ARG1_DESC,
                             2,
                             frame[2],
                             0x0,
                         )?;
                         rt::equal(
-                            &request::READ_LOAD_RUNTIME_0_24_HOURS_ARG2,
+                            &request::ReadLoadRuntime024Hours::ARG2_DESC,
                             3,
                             frame[3],
                             0x0,
@@ -2017,13 +1399,13 @@ pub mod sd {
                             &request::ReadLoadRuntime024MinSec::DESC,
                         )?;
                         rt::equal(
-                            &request::READ_LOAD_RUNTIME_0_24_MIN_SEC_ARG1,
+                            &request::ReadLoadRuntime024MinSec::ARG1_DESC,
                             2,
                             frame[2],
                             0x0,
                         )?;
                         rt::equal(
-                            &request::READ_LOAD_RUNTIME_0_24_MIN_SEC_ARG2,
+                            &request::ReadLoadRuntime024MinSec::ARG2_DESC,
                             3,
                             frame[3],
                             0x1,
@@ -2041,13 +1423,13 @@ pub mod sd {
                             &request::ResetLoadRuntime024::DESC,
                         )?;
                         rt::equal(
-                            &request::RESET_LOAD_RUNTIME_0_24_ARG1,
+                            &request::ResetLoadRuntime024::ARG1_DESC,
                             2,
                             frame[2],
                             0xAA,
                         )?;
                         rt::equal(
-                            &request::RESET_LOAD_RUNTIME_0_24_ARG2,
+                            &request::ResetLoadRuntime024::ARG2_DESC,
                             3,
                             frame[3],
                             0x55,
@@ -2065,13 +1447,13 @@ pub mod sd {
                             &request::ReadLoadRuntime2549Hours::DESC,
                         )?;
                         rt::equal(
-                            &request::READ_LOAD_RUNTIME_25_49_HOURS_ARG1,
+                            &request::ReadLoadRuntime2549Hours::ARG1_DESC,
                             2,
                             frame[2],
                             0x0,
                         )?;
                         rt::equal(
-                            &request::READ_LOAD_RUNTIME_25_49_HOURS_ARG2,
+                            &request::ReadLoadRuntime2549Hours::ARG2_DESC,
                             3,
                             frame[3],
                             0x0,
@@ -2089,13 +1471,13 @@ pub mod sd {
                             &request::ReadLoadRuntime2549MinSec::DESC,
                         )?;
                         rt::equal(
-                            &request::READ_LOAD_RUNTIME_25_49_MIN_SEC_ARG1,
+                            &request::ReadLoadRuntime2549MinSec::ARG1_DESC,
                             2,
                             frame[2],
                             0x0,
                         )?;
                         rt::equal(
-                            &request::READ_LOAD_RUNTIME_25_49_MIN_SEC_ARG2,
+                            &request::ReadLoadRuntime2549MinSec::ARG2_DESC,
                             3,
                             frame[3],
                             0x1,
@@ -2113,13 +1495,13 @@ pub mod sd {
                             &request::ResetLoadRuntime2549::DESC,
                         )?;
                         rt::equal(
-                            &request::RESET_LOAD_RUNTIME_25_49_ARG1,
+                            &request::ResetLoadRuntime2549::ARG1_DESC,
                             2,
                             frame[2],
                             0xAA,
                         )?;
                         rt::equal(
-                            &request::RESET_LOAD_RUNTIME_25_49_ARG2,
+                            &request::ResetLoadRuntime2549::ARG2_DESC,
                             3,
                             frame[3],
                             0x55,
@@ -2137,13 +1519,13 @@ pub mod sd {
                             &request::ReadLoadRuntime5074Hours::DESC,
                         )?;
                         rt::equal(
-                            &request::READ_LOAD_RUNTIME_50_74_HOURS_ARG1,
+                            &request::ReadLoadRuntime5074Hours::ARG1_DESC,
                             2,
                             frame[2],
                             0x0,
                         )?;
                         rt::equal(
-                            &request::READ_LOAD_RUNTIME_50_74_HOURS_ARG2,
+                            &request::ReadLoadRuntime5074Hours::ARG2_DESC,
                             3,
                             frame[3],
                             0x0,
@@ -2161,13 +1543,13 @@ pub mod sd {
                             &request::ReadLoadRuntime5074MinSec::DESC,
                         )?;
                         rt::equal(
-                            &request::READ_LOAD_RUNTIME_50_74_MIN_SEC_ARG1,
+                            &request::ReadLoadRuntime5074MinSec::ARG1_DESC,
                             2,
                             frame[2],
                             0x0,
                         )?;
                         rt::equal(
-                            &request::READ_LOAD_RUNTIME_50_74_MIN_SEC_ARG2,
+                            &request::ReadLoadRuntime5074MinSec::ARG2_DESC,
                             3,
                             frame[3],
                             0x1,
@@ -2185,13 +1567,13 @@ pub mod sd {
                             &request::ResetLoadRuntime5074::DESC,
                         )?;
                         rt::equal(
-                            &request::RESET_LOAD_RUNTIME_50_74_ARG1,
+                            &request::ResetLoadRuntime5074::ARG1_DESC,
                             2,
                             frame[2],
                             0xAA,
                         )?;
                         rt::equal(
-                            &request::RESET_LOAD_RUNTIME_50_74_ARG2,
+                            &request::ResetLoadRuntime5074::ARG2_DESC,
                             3,
                             frame[3],
                             0x55,
@@ -2209,13 +1591,13 @@ pub mod sd {
                             &request::ReadLoadRuntime7599Hours::DESC,
                         )?;
                         rt::equal(
-                            &request::READ_LOAD_RUNTIME_75_99_HOURS_ARG1,
+                            &request::ReadLoadRuntime7599Hours::ARG1_DESC,
                             2,
                             frame[2],
                             0x0,
                         )?;
                         rt::equal(
-                            &request::READ_LOAD_RUNTIME_75_99_HOURS_ARG2,
+                            &request::ReadLoadRuntime7599Hours::ARG2_DESC,
                             3,
                             frame[3],
                             0x0,
@@ -2233,13 +1615,13 @@ pub mod sd {
                             &request::ReadLoadRuntime7599MinSec::DESC,
                         )?;
                         rt::equal(
-                            &request::READ_LOAD_RUNTIME_75_99_MIN_SEC_ARG1,
+                            &request::ReadLoadRuntime7599MinSec::ARG1_DESC,
                             2,
                             frame[2],
                             0x0,
                         )?;
                         rt::equal(
-                            &request::READ_LOAD_RUNTIME_75_99_MIN_SEC_ARG2,
+                            &request::ReadLoadRuntime7599MinSec::ARG2_DESC,
                             3,
                             frame[3],
                             0x1,
@@ -2257,13 +1639,13 @@ pub mod sd {
                             &request::ResetLoadRuntime7599::DESC,
                         )?;
                         rt::equal(
-                            &request::RESET_LOAD_RUNTIME_75_99_ARG1,
+                            &request::ResetLoadRuntime7599::ARG1_DESC,
                             2,
                             frame[2],
                             0xAA,
                         )?;
                         rt::equal(
-                            &request::RESET_LOAD_RUNTIME_75_99_ARG2,
+                            &request::ResetLoadRuntime7599::ARG2_DESC,
                             3,
                             frame[3],
                             0x55,
@@ -2281,13 +1663,13 @@ pub mod sd {
                             &request::ReadLoadRuntime100Hours::DESC,
                         )?;
                         rt::equal(
-                            &request::READ_LOAD_RUNTIME_100_HOURS_ARG1,
+                            &request::ReadLoadRuntime100Hours::ARG1_DESC,
                             2,
                             frame[2],
                             0x0,
                         )?;
                         rt::equal(
-                            &request::READ_LOAD_RUNTIME_100_HOURS_ARG2,
+                            &request::ReadLoadRuntime100Hours::ARG2_DESC,
                             3,
                             frame[3],
                             0x0,
@@ -2305,13 +1687,13 @@ pub mod sd {
                             &request::ReadLoadRuntime100MinSec::DESC,
                         )?;
                         rt::equal(
-                            &request::READ_LOAD_RUNTIME_100_MIN_SEC_ARG1,
+                            &request::ReadLoadRuntime100MinSec::ARG1_DESC,
                             2,
                             frame[2],
                             0x0,
                         )?;
                         rt::equal(
-                            &request::READ_LOAD_RUNTIME_100_MIN_SEC_ARG2,
+                            &request::ReadLoadRuntime100MinSec::ARG2_DESC,
                             3,
                             frame[3],
                             0x1,
@@ -2329,13 +1711,13 @@ pub mod sd {
                             &request::ResetLoadRuntime100::DESC,
                         )?;
                         rt::equal(
-                            &request::RESET_LOAD_RUNTIME_100_ARG1,
+                            &request::ResetLoadRuntime100::ARG1_DESC,
                             2,
                             frame[2],
                             0xAA,
                         )?;
                         rt::equal(
-                            &request::RESET_LOAD_RUNTIME_100_ARG2,
+                            &request::ResetLoadRuntime100::ARG2_DESC,
                             3,
                             frame[3],
                             0x55,
@@ -2353,13 +1735,13 @@ pub mod sd {
                             &request::ReadStallEventCounter::DESC,
                         )?;
                         rt::equal(
-                            &request::READ_STALL_EVENT_COUNTER_ARG1,
+                            &request::ReadStallEventCounter::ARG1_DESC,
                             2,
                             frame[2],
                             0x0,
                         )?;
                         rt::equal(
-                            &request::READ_STALL_EVENT_COUNTER_ARG2,
+                            &request::ReadStallEventCounter::ARG2_DESC,
                             3,
                             frame[3],
                             0x0,
@@ -2375,13 +1757,13 @@ pub mod sd {
                             &request::ResetStallEventCounter::DESC,
                         )?;
                         rt::equal(
-                            &request::RESET_STALL_EVENT_COUNTER_ARG1,
+                            &request::ResetStallEventCounter::ARG1_DESC,
                             2,
                             frame[2],
                             0xAA,
                         )?;
                         rt::equal(
-                            &request::RESET_STALL_EVENT_COUNTER_ARG2,
+                            &request::ResetStallEventCounter::ARG2_DESC,
                             3,
                             frame[3],
                             0x55,
@@ -2397,8 +1779,8 @@ pub mod sd {
                         6,
                     >(frame, &request::ReadPowerUpCycles::DESC)?;
                     rt::no_broadcast(frame[1], 0x1F, &request::ReadPowerUpCycles::DESC)?;
-                    rt::equal(&request::READ_POWER_UP_CYCLES_ARG1, 2, frame[2], 0x0)?;
-                    rt::equal(&request::READ_POWER_UP_CYCLES_ARG2, 3, frame[3], 0x0)?;
+                    rt::equal(&request::ReadPowerUpCycles::ARG1_DESC, 2, frame[2], 0x0)?;
+                    rt::equal(&request::ReadPowerUpCycles::ARG2_DESC, 3, frame[3], 0x0)?;
                     rt::Ok(Self::ReadPowerUpCycles(request::ReadPowerUpCycles))
                 }
                 _ => rt::Err(rt::unknown_code(frame, 0, 1, 2, false)),
@@ -2411,217 +1793,154 @@ pub mod sd {
             name: &str,
             mut field: impl FnMut(&'static str) -> rt::Option<rt::FieldValue<'v>>,
         ) -> rt::Result<Self, rt::FieldError> {
-            match name {
+            let message = match name {
                 "set_point" => {
-                    rt::Ok(
-                        Self::SetPoint(request::SetPoint {
-                            freshness: rt::field_int(
-                                "freshness",
-                                field("freshness"),
-                                0,
-                                15,
-                            )? as u8,
-                            position: Angle::from_raw(
-                                rt::field_int("position", field("position"), -2048, 2047)?
-                                    as i16,
-                            ),
-                        }),
-                    )
+                    Self::SetPoint(request::SetPoint {
+                        freshness: rt::field_int("freshness", field("freshness"), 0, 15)?
+                            as u8,
+                        position: Angle::from_raw(
+                            rt::field_int("position", field("position"), -2048, 2047)?
+                                as i16,
+                        ),
+                    })
                 }
                 "read_actual_position" => {
-                    rt::Ok(Self::ReadActualPosition(request::ReadActualPosition))
+                    Self::ReadActualPosition(request::ReadActualPosition)
                 }
                 "set_velocity" => {
-                    rt::Ok(
-                        Self::SetVelocity(request::SetVelocity {
-                            set_velocity: Velocity::from_raw(
-                                rt::get(&mut field, "set_velocity")?,
-                            ),
-                        }),
-                    )
+                    Self::SetVelocity(request::SetVelocity {
+                        set_velocity: Velocity::from_raw(
+                            rt::get(&mut field, "set_velocity")?,
+                        ),
+                    })
                 }
                 "read_actual_velocity" => {
-                    rt::Ok(Self::ReadActualVelocity(request::ReadActualVelocity))
+                    Self::ReadActualVelocity(request::ReadActualVelocity)
                 }
                 "set_servo_id" => {
-                    rt::Ok(
-                        Self::SetServoId(request::SetServoId {
-                            new_id: rt::get(&mut field, "new_id")?,
-                        }),
-                    )
+                    Self::SetServoId(request::SetServoId {
+                        new_id: rt::get(&mut field, "new_id")?,
+                    })
                 }
-                "read_servo_id" => rt::Ok(Self::ReadServoId(request::ReadServoId)),
+                "read_servo_id" => Self::ReadServoId(request::ReadServoId),
                 "read_current_consumption" => {
-                    rt::Ok(Self::ReadCurrentConsumption(request::ReadCurrentConsumption))
+                    Self::ReadCurrentConsumption(request::ReadCurrentConsumption)
                 }
-                "read_bus_voltages" => {
-                    rt::Ok(Self::ReadBusVoltages(request::ReadBusVoltages))
-                }
+                "read_bus_voltages" => Self::ReadBusVoltages(request::ReadBusVoltages),
                 "read_extended_current_consumption" => {
-                    rt::Ok(
-                        Self::ReadExtendedCurrentConsumption(
-                            request::ReadExtendedCurrentConsumption,
-                        ),
+                    Self::ReadExtendedCurrentConsumption(
+                        request::ReadExtendedCurrentConsumption,
                     )
                 }
-                "read_temperatures" => {
-                    rt::Ok(Self::ReadTemperatures(request::ReadTemperatures))
-                }
-                "read_humidity" => rt::Ok(Self::ReadHumidity(request::ReadHumidity)),
+                "read_temperatures" => Self::ReadTemperatures(request::ReadTemperatures),
+                "read_humidity" => Self::ReadHumidity(request::ReadHumidity),
                 "read_skipped_frames_counter" => {
-                    rt::Ok(
-                        Self::ReadSkippedFramesCounter(request::ReadSkippedFramesCounter),
-                    )
+                    Self::ReadSkippedFramesCounter(request::ReadSkippedFramesCounter)
                 }
                 "reset_dropped_frames_counter" => {
-                    rt::Ok(
-                        Self::ResetDroppedFramesCounter(
-                            request::ResetDroppedFramesCounter,
-                        ),
-                    )
+                    Self::ResetDroppedFramesCounter(request::ResetDroppedFramesCounter)
                 }
                 "read_actuator_status_word" => {
-                    rt::Ok(Self::ReadActuatorStatusWord(request::ReadActuatorStatusWord))
+                    Self::ReadActuatorStatusWord(request::ReadActuatorStatusWord)
                 }
                 "reset_actuator_status_word" => {
-                    rt::Ok(
-                        Self::ResetActuatorStatusWord(request::ResetActuatorStatusWord),
-                    )
+                    Self::ResetActuatorStatusWord(request::ResetActuatorStatusWord)
                 }
                 "reset_default_role_and_error_flags" => {
-                    rt::Ok(
-                        Self::ResetDefaultRoleAndErrorFlags(
-                            request::ResetDefaultRoleAndErrorFlags,
-                        ),
+                    Self::ResetDefaultRoleAndErrorFlags(
+                        request::ResetDefaultRoleAndErrorFlags,
                     )
                 }
                 "set_current_position_as_zero" => {
-                    rt::Ok(
-                        Self::SetCurrentPositionAsZero(request::SetCurrentPositionAsZero),
-                    )
+                    Self::SetCurrentPositionAsZero(request::SetCurrentPositionAsZero)
                 }
                 "read_current_zero_offset" => {
-                    rt::Ok(Self::ReadCurrentZeroOffset(request::ReadCurrentZeroOffset))
+                    Self::ReadCurrentZeroOffset(request::ReadCurrentZeroOffset)
                 }
-                "reset_zero_offset" => {
-                    rt::Ok(Self::ResetZeroOffset(request::ResetZeroOffset))
-                }
+                "reset_zero_offset" => Self::ResetZeroOffset(request::ResetZeroOffset),
                 "read_electronic_serial_number" => {
-                    rt::Ok(
-                        Self::ReadElectronicSerialNumber(request::ReadElectronicSerialNumber {
-                            byte_number: rt::get(&mut field, "byte_number")?,
-                        }),
-                    )
+                    Self::ReadElectronicSerialNumber(request::ReadElectronicSerialNumber {
+                        byte_number: rt::get(&mut field, "byte_number")?,
+                    })
                 }
                 "read_product_description" => {
-                    rt::Ok(
-                        Self::ReadProductDescription(request::ReadProductDescription {
-                            byte_number: rt::get(&mut field, "byte_number")?,
-                        }),
-                    )
+                    Self::ReadProductDescription(request::ReadProductDescription {
+                        byte_number: rt::get(&mut field, "byte_number")?,
+                    })
                 }
                 "read_software_revision" => {
-                    rt::Ok(
-                        Self::ReadSoftwareRevision(request::ReadSoftwareRevision {
-                            byte_number: rt::get(&mut field, "byte_number")?,
-                        }),
-                    )
+                    Self::ReadSoftwareRevision(request::ReadSoftwareRevision {
+                        byte_number: rt::get(&mut field, "byte_number")?,
+                    })
                 }
                 "read_hardware_revision" => {
-                    rt::Ok(
-                        Self::ReadHardwareRevision(request::ReadHardwareRevision {
-                            byte_number: rt::get(&mut field, "byte_number")?,
-                        }),
-                    )
+                    Self::ReadHardwareRevision(request::ReadHardwareRevision {
+                        byte_number: rt::get(&mut field, "byte_number")?,
+                    })
                 }
                 "read_total_runtime_hours" => {
-                    rt::Ok(Self::ReadTotalRuntimeHours(request::ReadTotalRuntimeHours))
+                    Self::ReadTotalRuntimeHours(request::ReadTotalRuntimeHours)
                 }
                 "read_total_runtime_min_sec" => {
-                    rt::Ok(Self::ReadTotalRuntimeMinSec(request::ReadTotalRuntimeMinSec))
+                    Self::ReadTotalRuntimeMinSec(request::ReadTotalRuntimeMinSec)
                 }
                 "read_load_runtime_0_24_hours" => {
-                    rt::Ok(
-                        Self::ReadLoadRuntime024Hours(request::ReadLoadRuntime024Hours),
-                    )
+                    Self::ReadLoadRuntime024Hours(request::ReadLoadRuntime024Hours)
                 }
                 "read_load_runtime_0_24_min_sec" => {
-                    rt::Ok(
-                        Self::ReadLoadRuntime024MinSec(request::ReadLoadRuntime024MinSec),
-                    )
+                    Self::ReadLoadRuntime024MinSec(request::ReadLoadRuntime024MinSec)
                 }
                 "reset_load_runtime_0_24" => {
-                    rt::Ok(Self::ResetLoadRuntime024(request::ResetLoadRuntime024))
+                    Self::ResetLoadRuntime024(request::ResetLoadRuntime024)
                 }
                 "read_load_runtime_25_49_hours" => {
-                    rt::Ok(
-                        Self::ReadLoadRuntime2549Hours(request::ReadLoadRuntime2549Hours),
-                    )
+                    Self::ReadLoadRuntime2549Hours(request::ReadLoadRuntime2549Hours)
                 }
                 "read_load_runtime_25_49_min_sec" => {
-                    rt::Ok(
-                        Self::ReadLoadRuntime2549MinSec(
-                            request::ReadLoadRuntime2549MinSec,
-                        ),
-                    )
+                    Self::ReadLoadRuntime2549MinSec(request::ReadLoadRuntime2549MinSec)
                 }
                 "reset_load_runtime_25_49" => {
-                    rt::Ok(Self::ResetLoadRuntime2549(request::ResetLoadRuntime2549))
+                    Self::ResetLoadRuntime2549(request::ResetLoadRuntime2549)
                 }
                 "read_load_runtime_50_74_hours" => {
-                    rt::Ok(
-                        Self::ReadLoadRuntime5074Hours(request::ReadLoadRuntime5074Hours),
-                    )
+                    Self::ReadLoadRuntime5074Hours(request::ReadLoadRuntime5074Hours)
                 }
                 "read_load_runtime_50_74_min_sec" => {
-                    rt::Ok(
-                        Self::ReadLoadRuntime5074MinSec(
-                            request::ReadLoadRuntime5074MinSec,
-                        ),
-                    )
+                    Self::ReadLoadRuntime5074MinSec(request::ReadLoadRuntime5074MinSec)
                 }
                 "reset_load_runtime_50_74" => {
-                    rt::Ok(Self::ResetLoadRuntime5074(request::ResetLoadRuntime5074))
+                    Self::ResetLoadRuntime5074(request::ResetLoadRuntime5074)
                 }
                 "read_load_runtime_75_99_hours" => {
-                    rt::Ok(
-                        Self::ReadLoadRuntime7599Hours(request::ReadLoadRuntime7599Hours),
-                    )
+                    Self::ReadLoadRuntime7599Hours(request::ReadLoadRuntime7599Hours)
                 }
                 "read_load_runtime_75_99_min_sec" => {
-                    rt::Ok(
-                        Self::ReadLoadRuntime7599MinSec(
-                            request::ReadLoadRuntime7599MinSec,
-                        ),
-                    )
+                    Self::ReadLoadRuntime7599MinSec(request::ReadLoadRuntime7599MinSec)
                 }
                 "reset_load_runtime_75_99" => {
-                    rt::Ok(Self::ResetLoadRuntime7599(request::ResetLoadRuntime7599))
+                    Self::ResetLoadRuntime7599(request::ResetLoadRuntime7599)
                 }
                 "read_load_runtime_100_hours" => {
-                    rt::Ok(
-                        Self::ReadLoadRuntime100Hours(request::ReadLoadRuntime100Hours),
-                    )
+                    Self::ReadLoadRuntime100Hours(request::ReadLoadRuntime100Hours)
                 }
                 "read_load_runtime_100_min_sec" => {
-                    rt::Ok(
-                        Self::ReadLoadRuntime100MinSec(request::ReadLoadRuntime100MinSec),
-                    )
+                    Self::ReadLoadRuntime100MinSec(request::ReadLoadRuntime100MinSec)
                 }
                 "reset_load_runtime_100" => {
-                    rt::Ok(Self::ResetLoadRuntime100(request::ResetLoadRuntime100))
+                    Self::ResetLoadRuntime100(request::ResetLoadRuntime100)
                 }
                 "read_stall_event_counter" => {
-                    rt::Ok(Self::ReadStallEventCounter(request::ReadStallEventCounter))
+                    Self::ReadStallEventCounter(request::ReadStallEventCounter)
                 }
                 "reset_stall_event_counter" => {
-                    rt::Ok(Self::ResetStallEventCounter(request::ResetStallEventCounter))
+                    Self::ResetStallEventCounter(request::ResetStallEventCounter)
                 }
                 "read_power_up_cycles" => {
-                    rt::Ok(Self::ReadPowerUpCycles(request::ReadPowerUpCycles))
+                    Self::ReadPowerUpCycles(request::ReadPowerUpCycles)
                 }
-                _ => rt::Err(rt::FieldError::UnknownMessage),
-            }
+                _ => return rt::Err(rt::FieldError::UnknownMessage),
+            };
+            rt::Ok(message)
         }
     }
     impl rt::Message for Request {
@@ -2642,11 +1961,7 @@ pub mod sd {
             Request::visit(self, f)
         }
         #[inline]
-        fn encode(
-            &self,
-            address: u8,
-            buf: &mut [u8],
-        ) -> rt::Result<usize, rt::EncodeError> {
+        fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             Request::encode(self, address, buf)
         }
         #[inline]
@@ -2747,797 +2062,6 @@ pub mod sd {
         /// The responses this command may get, bit `i` for row `i` of `Response::MESSAGES`.
         const fn replies(&self) -> u64 {
             Self::COMMANDS[self.index()].3
-        }
-    }
-    impl response::SetPointReply {
-        pub const NAME: &'static str = "set_point_reply";
-        pub const CODE: &'static [u8] = &[0x56];
-        pub const LEN: usize = 6;
-        pub const DESC: rt::MessageDesc = rt::MessageDesc::new(
-            Self::NAME,
-            0x56,
-            1,
-            &[6],
-        );
-        pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
-            f("freshness", rt::Int(self.freshness as i64));
-            f("position", rt::Int(self.position.raw() as i64));
-        }
-        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
-            Response::SetPointReply(*self).encode(address, buf)
-        }
-    }
-    impl response::ActualPosition {
-        pub const NAME: &'static str = "actual_position";
-        pub const CODE: &'static [u8] = &[0x49];
-        pub const LEN: usize = 6;
-        pub const DESC: rt::MessageDesc = rt::MessageDesc::new(
-            Self::NAME,
-            0x49,
-            1,
-            &[6],
-        );
-        pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
-            f("position", rt::Int(self.position.raw() as i64));
-        }
-        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
-            Response::ActualPosition(*self).encode(address, buf)
-        }
-    }
-    impl response::SetVelocityReply {
-        pub const NAME: &'static str = "set_velocity_reply";
-        pub const CODE: &'static [u8] = &[0x57];
-        pub const LEN: usize = 6;
-        pub const DESC: rt::MessageDesc = rt::MessageDesc::new(
-            Self::NAME,
-            0x57,
-            1,
-            &[6],
-        );
-        pub const ACTUAL_VELOCITY: rt::Range<usize> = 2..4;
-        pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
-            f("actual_velocity", rt::Int(self.actual_velocity.raw() as i64));
-        }
-        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
-            Response::SetVelocityReply(*self).encode(address, buf)
-        }
-    }
-    impl response::ActualVelocity {
-        pub const NAME: &'static str = "actual_velocity";
-        pub const CODE: &'static [u8] = &[0x48];
-        pub const LEN: usize = 6;
-        pub const DESC: rt::MessageDesc = rt::MessageDesc::new(
-            Self::NAME,
-            0x48,
-            1,
-            &[6],
-        );
-        pub const ACTUAL_VELOCITY: rt::Range<usize> = 2..4;
-        pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
-            f("actual_velocity", rt::Int(self.actual_velocity.raw() as i64));
-        }
-        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
-            Response::ActualVelocity(*self).encode(address, buf)
-        }
-    }
-    impl response::SetServoIdReply {
-        pub const NAME: &'static str = "set_servo_id_reply";
-        pub const CODE: &'static [u8] = &[0x55];
-        pub const LEN: usize = 6;
-        pub const DESC: rt::MessageDesc = rt::MessageDesc::new(
-            Self::NAME,
-            0x55,
-            1,
-            &[6],
-        );
-        pub const NEW_ID: rt::Range<usize> = 2..3;
-        pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
-            f("new_id", rt::Int(self.new_id as i64));
-        }
-        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
-            Response::SetServoIdReply(*self).encode(address, buf)
-        }
-    }
-    impl response::ServoId {
-        pub const NAME: &'static str = "servo_id";
-        pub const CODE: &'static [u8] = &[0x6D];
-        pub const LEN: usize = 6;
-        pub const DESC: rt::MessageDesc = rt::MessageDesc::new(
-            Self::NAME,
-            0x6D,
-            1,
-            &[6],
-        );
-        pub const ID: rt::Range<usize> = 2..3;
-        pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
-            f("id", rt::Int(self.id as i64));
-        }
-        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
-            Response::ServoId(*self).encode(address, buf)
-        }
-    }
-    impl response::CurrentConsumption {
-        pub const NAME: &'static str = "current_consumption";
-        pub const CODE: &'static [u8] = &[0x30];
-        pub const LEN: usize = 6;
-        pub const DESC: rt::MessageDesc = rt::MessageDesc::new(
-            Self::NAME,
-            0x30,
-            1,
-            &[6],
-        );
-        pub const CURRENT: rt::Range<usize> = 2..3;
-        pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
-            f("current", rt::Int(self.current.raw() as i64));
-        }
-        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
-            Response::CurrentConsumption(*self).encode(address, buf)
-        }
-    }
-    impl response::BusVoltages {
-        pub const NAME: &'static str = "bus_voltages";
-        pub const CODE: &'static [u8] = &[0x31];
-        pub const LEN: usize = 6;
-        pub const DESC: rt::MessageDesc = rt::MessageDesc::new(
-            Self::NAME,
-            0x31,
-            1,
-            &[6],
-        );
-        pub const POWER_BUS_1_VOLTAGE: rt::Range<usize> = 2..3;
-        pub const POWER_BUS_2_VOLTAGE: rt::Range<usize> = 3..4;
-        pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
-            f("power_bus_1_voltage", rt::Int(self.power_bus_1_voltage.raw() as i64));
-            f("power_bus_2_voltage", rt::Int(self.power_bus_2_voltage.raw() as i64));
-        }
-        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
-            Response::BusVoltages(*self).encode(address, buf)
-        }
-    }
-    impl response::ExtendedCurrentConsumption {
-        pub const NAME: &'static str = "extended_current_consumption";
-        pub const CODE: &'static [u8] = &[0x32];
-        pub const LEN: usize = 6;
-        pub const DESC: rt::MessageDesc = rt::MessageDesc::new(
-            Self::NAME,
-            0x32,
-            1,
-            &[6],
-        );
-        pub const CURRENT: rt::Range<usize> = 2..4;
-        pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
-            f("current", rt::Int(self.current.raw() as i64));
-        }
-        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
-            Response::ExtendedCurrentConsumption(*self).encode(address, buf)
-        }
-    }
-    impl response::Temperatures {
-        pub const NAME: &'static str = "temperatures";
-        pub const CODE: &'static [u8] = &[0x20];
-        pub const LEN: usize = 6;
-        pub const DESC: rt::MessageDesc = rt::MessageDesc::new(
-            Self::NAME,
-            0x20,
-            1,
-            &[6],
-        );
-        pub const MOTOR_TEMPERATURE: rt::Range<usize> = 2..3;
-        pub const PCB_TEMPERATURE: rt::Range<usize> = 3..4;
-        pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
-            f("motor_temperature", rt::Int(self.motor_temperature.raw() as i64));
-            f("pcb_temperature", rt::Int(self.pcb_temperature.raw() as i64));
-        }
-        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
-            Response::Temperatures(*self).encode(address, buf)
-        }
-    }
-    impl response::Humidity {
-        pub const NAME: &'static str = "humidity";
-        pub const CODE: &'static [u8] = &[0x21];
-        pub const LEN: usize = 6;
-        pub const DESC: rt::MessageDesc = rt::MessageDesc::new(
-            Self::NAME,
-            0x21,
-            1,
-            &[6],
-        );
-        pub const HUMIDITY: rt::Range<usize> = 2..3;
-        pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
-            f("humidity", rt::Int(self.humidity as i64));
-        }
-        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
-            Response::Humidity(*self).encode(address, buf)
-        }
-    }
-    impl response::SkippedFramesCounter {
-        pub const NAME: &'static str = "skipped_frames_counter";
-        pub const CODE: &'static [u8] = &[0x38];
-        pub const LEN: usize = 6;
-        pub const DESC: rt::MessageDesc = rt::MessageDesc::new(
-            Self::NAME,
-            0x38,
-            1,
-            &[6],
-        );
-        pub const HOST_FRESHNESS_COUNTER: rt::Range<usize> = 2..3;
-        pub const DROPPED_FRAMES: rt::Range<usize> = 3..4;
-        pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
-            f("host_freshness_counter", rt::Int(self.host_freshness_counter as i64));
-            f("dropped_frames", rt::Int(self.dropped_frames as i64));
-        }
-        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
-            Response::SkippedFramesCounter(*self).encode(address, buf)
-        }
-    }
-    impl response::DroppedFramesCounterReset {
-        pub const NAME: &'static str = "dropped_frames_counter_reset";
-        pub const CODE: &'static [u8] = &[0x38];
-        pub const LEN: usize = 6;
-        pub const DESC: rt::MessageDesc = rt::MessageDesc::new(
-            Self::NAME,
-            0x38,
-            1,
-            &[6],
-        );
-        pub const HOST_FRESHNESS_COUNTER: rt::Range<usize> = 2..3;
-        pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
-            f("host_freshness_counter", rt::Int(self.host_freshness_counter as i64));
-        }
-        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
-            Response::DroppedFramesCounterReset(*self).encode(address, buf)
-        }
-    }
-    impl response::ActuatorStatusWord {
-        pub const NAME: &'static str = "actuator_status_word";
-        pub const CODE: &'static [u8] = &[0x41];
-        pub const LEN: usize = 6;
-        pub const DESC: rt::MessageDesc = rt::MessageDesc::new(
-            Self::NAME,
-            0x41,
-            1,
-            &[6],
-        );
-        pub const STATUS_BITS: rt::Range<usize> = 2..3;
-        pub const STATUS_ARG2: rt::Range<usize> = 3..4;
-        pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
-            f("status_bits", rt::Int(self.status_bits.raw() as i64));
-            f("status_arg2", rt::Int(self.status_arg2 as i64));
-        }
-        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
-            Response::ActuatorStatusWord(*self).encode(address, buf)
-        }
-    }
-    impl response::ResetDefaultRoleAndErrorFlagsReply {
-        pub const NAME: &'static str = "reset_default_role_and_error_flags_reply";
-        pub const CODE: &'static [u8] = &[0x5A];
-        pub const LEN: usize = 6;
-        pub const DESC: rt::MessageDesc = rt::MessageDesc::new(
-            Self::NAME,
-            0x5A,
-            1,
-            &[6],
-        );
-        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
-            Response::ResetDefaultRoleAndErrorFlagsReply(*self).encode(address, buf)
-        }
-    }
-    impl response::SetCurrentPositionAsZeroReply {
-        pub const NAME: &'static str = "set_current_position_as_zero_reply";
-        pub const CODE: &'static [u8] = &[0x4C];
-        pub const LEN: usize = 6;
-        pub const DESC: rt::MessageDesc = rt::MessageDesc::new(
-            Self::NAME,
-            0x4C,
-            1,
-            &[6],
-        );
-        pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
-            f("zero_offset", rt::Int(self.zero_offset.raw() as i64));
-        }
-        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
-            Response::SetCurrentPositionAsZeroReply(*self).encode(address, buf)
-        }
-    }
-    impl response::CurrentZeroOffset {
-        pub const NAME: &'static str = "current_zero_offset";
-        pub const CODE: &'static [u8] = &[0x65];
-        pub const LEN: usize = 6;
-        pub const DESC: rt::MessageDesc = rt::MessageDesc::new(
-            Self::NAME,
-            0x65,
-            1,
-            &[6],
-        );
-        pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
-            f("zero_offset", rt::Int(self.zero_offset.raw() as i64));
-        }
-        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
-            Response::CurrentZeroOffset(*self).encode(address, buf)
-        }
-    }
-    impl response::ResetZeroOffsetReply {
-        pub const NAME: &'static str = "reset_zero_offset_reply";
-        pub const CODE: &'static [u8] = &[0x64];
-        pub const LEN: usize = 6;
-        pub const DESC: rt::MessageDesc = rt::MessageDesc::new(
-            Self::NAME,
-            0x64,
-            1,
-            &[6],
-        );
-        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
-            Response::ResetZeroOffsetReply(*self).encode(address, buf)
-        }
-    }
-    impl response::ElectronicSerialNumberCharacter {
-        pub const NAME: &'static str = "electronic_serial_number_character";
-        pub const CODE: &'static [u8] = &[0x10];
-        pub const LEN: usize = 6;
-        pub const DESC: rt::MessageDesc = rt::MessageDesc::new(
-            Self::NAME,
-            0x10,
-            1,
-            &[6],
-        );
-        pub const CHARACTER: rt::Range<usize> = 2..3;
-        pub const STRING_LENGTH: rt::Range<usize> = 3..4;
-        pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
-            f("character", rt::Int(self.character as i64));
-            f("string_length", rt::Int(self.string_length as i64));
-        }
-        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
-            Response::ElectronicSerialNumberCharacter(*self).encode(address, buf)
-        }
-    }
-    impl response::ProductDescriptionCharacter {
-        pub const NAME: &'static str = "product_description_character";
-        pub const CODE: &'static [u8] = &[0x11];
-        pub const LEN: usize = 6;
-        pub const DESC: rt::MessageDesc = rt::MessageDesc::new(
-            Self::NAME,
-            0x11,
-            1,
-            &[6],
-        );
-        pub const CHARACTER: rt::Range<usize> = 2..3;
-        pub const STRING_LENGTH: rt::Range<usize> = 3..4;
-        pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
-            f("character", rt::Int(self.character as i64));
-            f("string_length", rt::Int(self.string_length as i64));
-        }
-        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
-            Response::ProductDescriptionCharacter(*self).encode(address, buf)
-        }
-    }
-    impl response::SoftwareRevisionCharacter {
-        pub const NAME: &'static str = "software_revision_character";
-        pub const CODE: &'static [u8] = &[0x12];
-        pub const LEN: usize = 6;
-        pub const DESC: rt::MessageDesc = rt::MessageDesc::new(
-            Self::NAME,
-            0x12,
-            1,
-            &[6],
-        );
-        pub const CHARACTER: rt::Range<usize> = 2..3;
-        pub const STRING_LENGTH: rt::Range<usize> = 3..4;
-        pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
-            f("character", rt::Int(self.character as i64));
-            f("string_length", rt::Int(self.string_length as i64));
-        }
-        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
-            Response::SoftwareRevisionCharacter(*self).encode(address, buf)
-        }
-    }
-    impl response::HardwareRevisionCharacter {
-        pub const NAME: &'static str = "hardware_revision_character";
-        pub const CODE: &'static [u8] = &[0x13];
-        pub const LEN: usize = 6;
-        pub const DESC: rt::MessageDesc = rt::MessageDesc::new(
-            Self::NAME,
-            0x13,
-            1,
-            &[6],
-        );
-        pub const CHARACTER: rt::Range<usize> = 2..3;
-        pub const STRING_LENGTH: rt::Range<usize> = 3..4;
-        pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
-            f("character", rt::Int(self.character as i64));
-            f("string_length", rt::Int(self.string_length as i64));
-        }
-        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
-            Response::HardwareRevisionCharacter(*self).encode(address, buf)
-        }
-    }
-    impl response::TotalRuntimeHours {
-        pub const NAME: &'static str = "total_runtime_hours";
-        pub const CODE: &'static [u8] = &[0x22];
-        pub const LEN: usize = 6;
-        pub const DESC: rt::MessageDesc = rt::MessageDesc::new(
-            Self::NAME,
-            0x22,
-            1,
-            &[6],
-        );
-        pub const RUNTIME_HOURS: rt::Range<usize> = 2..4;
-        pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
-            f("runtime_hours", rt::Int(self.runtime_hours as i64));
-        }
-        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
-            Response::TotalRuntimeHours(*self).encode(address, buf)
-        }
-    }
-    impl response::TotalRuntimeMinSec {
-        pub const NAME: &'static str = "total_runtime_min_sec";
-        pub const CODE: &'static [u8] = &[0x22];
-        pub const LEN: usize = 6;
-        pub const DESC: rt::MessageDesc = rt::MessageDesc::new(
-            Self::NAME,
-            0x22,
-            1,
-            &[6],
-        );
-        pub const RUNTIME_MINUTES: rt::Range<usize> = 2..3;
-        pub const RUNTIME_SECONDS: rt::Range<usize> = 3..4;
-        pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
-            f("runtime_minutes", rt::Int(self.runtime_minutes as i64));
-            f("runtime_seconds", rt::Int(self.runtime_seconds as i64));
-        }
-        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
-            Response::TotalRuntimeMinSec(*self).encode(address, buf)
-        }
-    }
-    impl response::LoadRuntime024Hours {
-        pub const NAME: &'static str = "load_runtime_0_24_hours";
-        pub const CODE: &'static [u8] = &[0x23];
-        pub const LEN: usize = 6;
-        pub const DESC: rt::MessageDesc = rt::MessageDesc::new(
-            Self::NAME,
-            0x23,
-            1,
-            &[6],
-        );
-        pub const RUNTIME_HOURS: rt::Range<usize> = 2..4;
-        pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
-            f("runtime_hours", rt::Int(self.runtime_hours as i64));
-        }
-        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
-            Response::LoadRuntime024Hours(*self).encode(address, buf)
-        }
-    }
-    impl response::LoadRuntime024MinSec {
-        pub const NAME: &'static str = "load_runtime_0_24_min_sec";
-        pub const CODE: &'static [u8] = &[0x23];
-        pub const LEN: usize = 6;
-        pub const DESC: rt::MessageDesc = rt::MessageDesc::new(
-            Self::NAME,
-            0x23,
-            1,
-            &[6],
-        );
-        pub const RUNTIME_MINUTES: rt::Range<usize> = 2..3;
-        pub const RUNTIME_SECONDS: rt::Range<usize> = 3..4;
-        pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
-            f("runtime_minutes", rt::Int(self.runtime_minutes as i64));
-            f("runtime_seconds", rt::Int(self.runtime_seconds as i64));
-        }
-        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
-            Response::LoadRuntime024MinSec(*self).encode(address, buf)
-        }
-    }
-    impl response::LoadRuntime024HoursBeforeReset {
-        pub const NAME: &'static str = "load_runtime_0_24_hours_before_reset";
-        pub const CODE: &'static [u8] = &[0x23];
-        pub const LEN: usize = 6;
-        pub const DESC: rt::MessageDesc = rt::MessageDesc::new(
-            Self::NAME,
-            0x23,
-            1,
-            &[6],
-        );
-        pub const RUNTIME_HOURS_BEFORE_RESET: rt::Range<usize> = 2..4;
-        pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
-            f(
-                "runtime_hours_before_reset",
-                rt::Int(self.runtime_hours_before_reset as i64),
-            );
-        }
-        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
-            Response::LoadRuntime024HoursBeforeReset(*self).encode(address, buf)
-        }
-    }
-    impl response::LoadRuntime2549Hours {
-        pub const NAME: &'static str = "load_runtime_25_49_hours";
-        pub const CODE: &'static [u8] = &[0x24];
-        pub const LEN: usize = 6;
-        pub const DESC: rt::MessageDesc = rt::MessageDesc::new(
-            Self::NAME,
-            0x24,
-            1,
-            &[6],
-        );
-        pub const RUNTIME_HOURS: rt::Range<usize> = 2..4;
-        pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
-            f("runtime_hours", rt::Int(self.runtime_hours as i64));
-        }
-        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
-            Response::LoadRuntime2549Hours(*self).encode(address, buf)
-        }
-    }
-    impl response::LoadRuntime2549MinSec {
-        pub const NAME: &'static str = "load_runtime_25_49_min_sec";
-        pub const CODE: &'static [u8] = &[0x24];
-        pub const LEN: usize = 6;
-        pub const DESC: rt::MessageDesc = rt::MessageDesc::new(
-            Self::NAME,
-            0x24,
-            1,
-            &[6],
-        );
-        pub const RUNTIME_MINUTES: rt::Range<usize> = 2..3;
-        pub const RUNTIME_SECONDS: rt::Range<usize> = 3..4;
-        pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
-            f("runtime_minutes", rt::Int(self.runtime_minutes as i64));
-            f("runtime_seconds", rt::Int(self.runtime_seconds as i64));
-        }
-        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
-            Response::LoadRuntime2549MinSec(*self).encode(address, buf)
-        }
-    }
-    impl response::LoadRuntime2549HoursBeforeReset {
-        pub const NAME: &'static str = "load_runtime_25_49_hours_before_reset";
-        pub const CODE: &'static [u8] = &[0x24];
-        pub const LEN: usize = 6;
-        pub const DESC: rt::MessageDesc = rt::MessageDesc::new(
-            Self::NAME,
-            0x24,
-            1,
-            &[6],
-        );
-        pub const RUNTIME_HOURS_BEFORE_RESET: rt::Range<usize> = 2..4;
-        pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
-            f(
-                "runtime_hours_before_reset",
-                rt::Int(self.runtime_hours_before_reset as i64),
-            );
-        }
-        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
-            Response::LoadRuntime2549HoursBeforeReset(*self).encode(address, buf)
-        }
-    }
-    impl response::LoadRuntime5074Hours {
-        pub const NAME: &'static str = "load_runtime_50_74_hours";
-        pub const CODE: &'static [u8] = &[0x25];
-        pub const LEN: usize = 6;
-        pub const DESC: rt::MessageDesc = rt::MessageDesc::new(
-            Self::NAME,
-            0x25,
-            1,
-            &[6],
-        );
-        pub const RUNTIME_HOURS: rt::Range<usize> = 2..4;
-        pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
-            f("runtime_hours", rt::Int(self.runtime_hours as i64));
-        }
-        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
-            Response::LoadRuntime5074Hours(*self).encode(address, buf)
-        }
-    }
-    impl response::LoadRuntime5074MinSec {
-        pub const NAME: &'static str = "load_runtime_50_74_min_sec";
-        pub const CODE: &'static [u8] = &[0x25];
-        pub const LEN: usize = 6;
-        pub const DESC: rt::MessageDesc = rt::MessageDesc::new(
-            Self::NAME,
-            0x25,
-            1,
-            &[6],
-        );
-        pub const RUNTIME_MINUTES: rt::Range<usize> = 2..3;
-        pub const RUNTIME_SECONDS: rt::Range<usize> = 3..4;
-        pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
-            f("runtime_minutes", rt::Int(self.runtime_minutes as i64));
-            f("runtime_seconds", rt::Int(self.runtime_seconds as i64));
-        }
-        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
-            Response::LoadRuntime5074MinSec(*self).encode(address, buf)
-        }
-    }
-    impl response::LoadRuntime5074HoursBeforeReset {
-        pub const NAME: &'static str = "load_runtime_50_74_hours_before_reset";
-        pub const CODE: &'static [u8] = &[0x25];
-        pub const LEN: usize = 6;
-        pub const DESC: rt::MessageDesc = rt::MessageDesc::new(
-            Self::NAME,
-            0x25,
-            1,
-            &[6],
-        );
-        pub const RUNTIME_HOURS_BEFORE_RESET: rt::Range<usize> = 2..4;
-        pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
-            f(
-                "runtime_hours_before_reset",
-                rt::Int(self.runtime_hours_before_reset as i64),
-            );
-        }
-        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
-            Response::LoadRuntime5074HoursBeforeReset(*self).encode(address, buf)
-        }
-    }
-    impl response::LoadRuntime7599Hours {
-        pub const NAME: &'static str = "load_runtime_75_99_hours";
-        pub const CODE: &'static [u8] = &[0x26];
-        pub const LEN: usize = 6;
-        pub const DESC: rt::MessageDesc = rt::MessageDesc::new(
-            Self::NAME,
-            0x26,
-            1,
-            &[6],
-        );
-        pub const RUNTIME_HOURS: rt::Range<usize> = 2..4;
-        pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
-            f("runtime_hours", rt::Int(self.runtime_hours as i64));
-        }
-        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
-            Response::LoadRuntime7599Hours(*self).encode(address, buf)
-        }
-    }
-    impl response::LoadRuntime7599MinSec {
-        pub const NAME: &'static str = "load_runtime_75_99_min_sec";
-        pub const CODE: &'static [u8] = &[0x26];
-        pub const LEN: usize = 6;
-        pub const DESC: rt::MessageDesc = rt::MessageDesc::new(
-            Self::NAME,
-            0x26,
-            1,
-            &[6],
-        );
-        pub const RUNTIME_MINUTES: rt::Range<usize> = 2..3;
-        pub const RUNTIME_SECONDS: rt::Range<usize> = 3..4;
-        pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
-            f("runtime_minutes", rt::Int(self.runtime_minutes as i64));
-            f("runtime_seconds", rt::Int(self.runtime_seconds as i64));
-        }
-        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
-            Response::LoadRuntime7599MinSec(*self).encode(address, buf)
-        }
-    }
-    impl response::LoadRuntime7599HoursBeforeReset {
-        pub const NAME: &'static str = "load_runtime_75_99_hours_before_reset";
-        pub const CODE: &'static [u8] = &[0x26];
-        pub const LEN: usize = 6;
-        pub const DESC: rt::MessageDesc = rt::MessageDesc::new(
-            Self::NAME,
-            0x26,
-            1,
-            &[6],
-        );
-        pub const RUNTIME_HOURS_BEFORE_RESET: rt::Range<usize> = 2..4;
-        pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
-            f(
-                "runtime_hours_before_reset",
-                rt::Int(self.runtime_hours_before_reset as i64),
-            );
-        }
-        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
-            Response::LoadRuntime7599HoursBeforeReset(*self).encode(address, buf)
-        }
-    }
-    impl response::LoadRuntime100Hours {
-        pub const NAME: &'static str = "load_runtime_100_hours";
-        pub const CODE: &'static [u8] = &[0x27];
-        pub const LEN: usize = 6;
-        pub const DESC: rt::MessageDesc = rt::MessageDesc::new(
-            Self::NAME,
-            0x27,
-            1,
-            &[6],
-        );
-        pub const RUNTIME_HOURS: rt::Range<usize> = 2..4;
-        pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
-            f("runtime_hours", rt::Int(self.runtime_hours as i64));
-        }
-        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
-            Response::LoadRuntime100Hours(*self).encode(address, buf)
-        }
-    }
-    impl response::LoadRuntime100MinSec {
-        pub const NAME: &'static str = "load_runtime_100_min_sec";
-        pub const CODE: &'static [u8] = &[0x27];
-        pub const LEN: usize = 6;
-        pub const DESC: rt::MessageDesc = rt::MessageDesc::new(
-            Self::NAME,
-            0x27,
-            1,
-            &[6],
-        );
-        pub const RUNTIME_MINUTES: rt::Range<usize> = 2..3;
-        pub const RUNTIME_SECONDS: rt::Range<usize> = 3..4;
-        pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
-            f("runtime_minutes", rt::Int(self.runtime_minutes as i64));
-            f("runtime_seconds", rt::Int(self.runtime_seconds as i64));
-        }
-        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
-            Response::LoadRuntime100MinSec(*self).encode(address, buf)
-        }
-    }
-    impl response::LoadRuntime100HoursBeforeReset {
-        pub const NAME: &'static str = "load_runtime_100_hours_before_reset";
-        pub const CODE: &'static [u8] = &[0x27];
-        pub const LEN: usize = 6;
-        pub const DESC: rt::MessageDesc = rt::MessageDesc::new(
-            Self::NAME,
-            0x27,
-            1,
-            &[6],
-        );
-        pub const RUNTIME_HOURS_BEFORE_RESET: rt::Range<usize> = 2..4;
-        pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
-            f(
-                "runtime_hours_before_reset",
-                rt::Int(self.runtime_hours_before_reset as i64),
-            );
-        }
-        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
-            Response::LoadRuntime100HoursBeforeReset(*self).encode(address, buf)
-        }
-    }
-    impl response::StallEventCounter {
-        pub const NAME: &'static str = "stall_event_counter";
-        pub const CODE: &'static [u8] = &[0x28];
-        pub const LEN: usize = 6;
-        pub const DESC: rt::MessageDesc = rt::MessageDesc::new(
-            Self::NAME,
-            0x28,
-            1,
-            &[6],
-        );
-        pub const STALL_EVENTS: rt::Range<usize> = 2..4;
-        pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
-            f("stall_events", rt::Int(self.stall_events as i64));
-        }
-        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
-            Response::StallEventCounter(*self).encode(address, buf)
-        }
-    }
-    impl response::StallEventCounterBeforeReset {
-        pub const NAME: &'static str = "stall_event_counter_before_reset";
-        pub const CODE: &'static [u8] = &[0x28];
-        pub const LEN: usize = 6;
-        pub const DESC: rt::MessageDesc = rt::MessageDesc::new(
-            Self::NAME,
-            0x28,
-            1,
-            &[6],
-        );
-        pub const STALL_EVENTS_BEFORE_RESET: rt::Range<usize> = 2..4;
-        pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
-            f(
-                "stall_events_before_reset",
-                rt::Int(self.stall_events_before_reset as i64),
-            );
-        }
-        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
-            Response::StallEventCounterBeforeReset(*self).encode(address, buf)
-        }
-    }
-    impl response::PowerUpCycles {
-        pub const NAME: &'static str = "power_up_cycles";
-        pub const CODE: &'static [u8] = &[0x29];
-        pub const LEN: usize = 6;
-        pub const DESC: rt::MessageDesc = rt::MessageDesc::new(
-            Self::NAME,
-            0x29,
-            1,
-            &[6],
-        );
-        pub const POWER_UP_CYCLES: rt::Range<usize> = 2..4;
-        pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
-            f("power_up_cycles", rt::Int(self.power_up_cycles as i64));
-        }
-        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
-            Response::PowerUpCycles(*self).encode(address, buf)
         }
     }
     ///A response, device to host.
@@ -3744,11 +2268,7 @@ pub mod sd {
         /// Encodes the frame for `address` into `buf`; returns the frame length. Refuses what
         /// decode refuses: an address no frame may carry, the broadcast address for a command
         /// that does not accept it, a value outside its field's range.
-        pub fn encode(
-            &self,
-            address: u8,
-            buf: &mut [u8],
-        ) -> rt::Result<usize, rt::EncodeError> {
+        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             rt::encode_address(address, &FRAME)?;
             let out = rt::frame_mut::<6>(buf, &[])?;
             let len = match *self {
@@ -3890,9 +2410,9 @@ pub mod sd {
                     out[3] = v_status_arg2;
                     out.len()
                 }
-                Self::ResetDefaultRoleAndErrorFlagsReply(
-                    response::ResetDefaultRoleAndErrorFlagsReply {},
-                ) => rt::head(out, &[0x5A, address, 0x41, 0x53]).len(),
+                Self::ResetDefaultRoleAndErrorFlagsReply(_) => {
+                    rt::head(out, &[0x5A, address, 0x41, 0x53]).len()
+                }
                 Self::SetCurrentPositionAsZeroReply(
                     response::SetCurrentPositionAsZeroReply {
                         zero_offset: v_zero_offset,
@@ -3921,7 +2441,7 @@ pub mod sd {
                     out[2..4].copy_from_slice(&field_0.to_be_bytes());
                     out.len()
                 }
-                Self::ResetZeroOffsetReply(response::ResetZeroOffsetReply {}) => {
+                Self::ResetZeroOffsetReply(_) => {
                     rt::head(out, &[0x64, address, 0x00, 0x00]).len()
                 }
                 Self::ElectronicSerialNumberCharacter(
@@ -4235,7 +2755,12 @@ pub mod sd {
                 0x49 => {
                     let frame = rt::fixed::<6>(frame, &response::ActualPosition::DESC)?;
                     let field_0: u16 = u16::from_be_bytes([frame[2], frame[3]]);
-                    rt::equal(&response::ACTUAL_POSITION_ZERO, 2, field_0 >> 12, 0x0)?;
+                    rt::equal(
+                        &response::ActualPosition::ZERO_DESC,
+                        2,
+                        field_0 >> 12,
+                        0x0,
+                    )?;
                     rt::Ok(
                         Self::ActualPosition(response::ActualPosition {
                             position: Angle::from_raw(
@@ -4269,14 +2794,14 @@ pub mod sd {
                 0x55 => {
                     let frame = rt::fixed::<6>(frame, &response::SetServoIdReply::DESC)?;
                     rt::in_range(
-                        &response::SET_SERVO_ID_REPLY_NEW_ID,
+                        &response::SetServoIdReply::NEW_ID_DESC,
                         2,
                         frame[2],
                         1,
                         30,
                     )?;
                     rt::same(
-                        &response::SET_SERVO_ID_REPLY_NEW_ID_REPEAT,
+                        &response::SetServoIdReply::NEW_ID_REPEAT_DESC,
                         3,
                         frame[3],
                         "new_id",
@@ -4290,9 +2815,9 @@ pub mod sd {
                 }
                 0x6D => {
                     let frame = rt::fixed::<6>(frame, &response::ServoId::DESC)?;
-                    rt::in_range(&response::SERVO_ID_ID, 2, frame[2], 1, 30)?;
+                    rt::in_range(&response::ServoId::ID_DESC, 2, frame[2], 1, 30)?;
                     rt::same(
-                        &response::SERVO_ID_ID_REPEAT,
+                        &response::ServoId::ID_REPEAT_DESC,
                         3,
                         frame[3],
                         "id",
@@ -4305,7 +2830,7 @@ pub mod sd {
                         6,
                     >(frame, &response::CurrentConsumption::DESC)?;
                     rt::same(
-                        &response::CURRENT_CONSUMPTION_CURRENT_REPEAT,
+                        &response::CurrentConsumption::CURRENT_REPEAT_DESC,
                         3,
                         frame[3],
                         "current",
@@ -4350,7 +2875,7 @@ pub mod sd {
                 0x21 => {
                     let frame = rt::fixed::<6>(frame, &response::Humidity::DESC)?;
                     rt::in_range_or(
-                        &response::HUMIDITY_HUMIDITY,
+                        &response::Humidity::HUMIDITY_DESC,
                         2,
                         frame[2],
                         1,
@@ -4358,7 +2883,7 @@ pub mod sd {
                         &[0],
                     )?;
                     rt::same(
-                        &response::HUMIDITY_HUMIDITY_REPEAT,
+                        &response::Humidity::HUMIDITY_REPEAT_DESC,
                         3,
                         frame[3],
                         "humidity",
@@ -4389,7 +2914,7 @@ pub mod sd {
                         &response::DroppedFramesCounterReset::DESC,
                         |frame: &[u8; 6]| {
                             rt::equal(
-                                &response::DROPPED_FRAMES_COUNTER_RESET_ARG2,
+                                &response::DroppedFramesCounterReset::ARG2_DESC,
                                 3,
                                 frame[3],
                                 0x0,
@@ -4419,13 +2944,13 @@ pub mod sd {
                         6,
                     >(frame, &response::ResetDefaultRoleAndErrorFlagsReply::DESC)?;
                     rt::equal(
-                        &response::RESET_DEFAULT_ROLE_AND_ERROR_FLAGS_REPLY_ARG1,
+                        &response::ResetDefaultRoleAndErrorFlagsReply::ARG1_DESC,
                         2,
                         frame[2],
                         0x41,
                     )?;
                     rt::equal(
-                        &response::RESET_DEFAULT_ROLE_AND_ERROR_FLAGS_REPLY_ARG2,
+                        &response::ResetDefaultRoleAndErrorFlagsReply::ARG2_DESC,
                         3,
                         frame[3],
                         0x53,
@@ -4442,7 +2967,7 @@ pub mod sd {
                     >(frame, &response::SetCurrentPositionAsZeroReply::DESC)?;
                     let field_0: u16 = u16::from_be_bytes([frame[2], frame[3]]);
                     rt::equal(
-                        &response::SET_CURRENT_POSITION_AS_ZERO_REPLY_ZERO,
+                        &response::SetCurrentPositionAsZeroReply::ZERO_DESC,
                         2,
                         field_0 >> 12,
                         0x0,
@@ -4461,7 +2986,7 @@ pub mod sd {
                     >(frame, &response::CurrentZeroOffset::DESC)?;
                     let field_0: u16 = u16::from_be_bytes([frame[2], frame[3]]);
                     rt::equal(
-                        &response::CURRENT_ZERO_OFFSET_ZERO,
+                        &response::CurrentZeroOffset::ZERO_DESC,
                         2,
                         field_0 >> 12,
                         0x0,
@@ -4479,13 +3004,13 @@ pub mod sd {
                         6,
                     >(frame, &response::ResetZeroOffsetReply::DESC)?;
                     rt::equal(
-                        &response::RESET_ZERO_OFFSET_REPLY_ARG1,
+                        &response::ResetZeroOffsetReply::ARG1_DESC,
                         2,
                         frame[2],
                         0x0,
                     )?;
                     rt::equal(
-                        &response::RESET_ZERO_OFFSET_REPLY_ARG2,
+                        &response::ResetZeroOffsetReply::ARG2_DESC,
                         3,
                         frame[3],
                         0x0,
@@ -4497,7 +3022,7 @@ pub mod sd {
                         6,
                     >(frame, &response::ElectronicSerialNumberCharacter::DESC)?;
                     rt::in_range(
-                        &response::ELECTRONIC_SERIAL_NUMBER_CHARACTER_STRING_LENGTH,
+                        &response::ElectronicSerialNumberCharacter::STRING_LENGTH_DESC,
                         3,
                         frame[3],
                         0,
@@ -4515,7 +3040,7 @@ pub mod sd {
                         6,
                     >(frame, &response::ProductDescriptionCharacter::DESC)?;
                     rt::in_range(
-                        &response::PRODUCT_DESCRIPTION_CHARACTER_STRING_LENGTH,
+                        &response::ProductDescriptionCharacter::STRING_LENGTH_DESC,
                         3,
                         frame[3],
                         0,
@@ -4533,7 +3058,7 @@ pub mod sd {
                         6,
                     >(frame, &response::SoftwareRevisionCharacter::DESC)?;
                     rt::in_range(
-                        &response::SOFTWARE_REVISION_CHARACTER_STRING_LENGTH,
+                        &response::SoftwareRevisionCharacter::STRING_LENGTH_DESC,
                         3,
                         frame[3],
                         0,
@@ -4551,7 +3076,7 @@ pub mod sd {
                         6,
                     >(frame, &response::HardwareRevisionCharacter::DESC)?;
                     rt::in_range(
-                        &response::HARDWARE_REVISION_CHARACTER_STRING_LENGTH,
+                        &response::HardwareRevisionCharacter::STRING_LENGTH_DESC,
                         3,
                         frame[3],
                         0,
@@ -4582,14 +3107,14 @@ pub mod sd {
                         &response::TotalRuntimeMinSec::DESC,
                         |frame: &[u8; 6]| {
                             rt::in_range(
-                                &response::TOTAL_RUNTIME_MIN_SEC_RUNTIME_MINUTES,
+                                &response::TotalRuntimeMinSec::RUNTIME_MINUTES_DESC,
                                 2,
                                 frame[2],
                                 0,
                                 59,
                             )?;
                             rt::in_range(
-                                &response::TOTAL_RUNTIME_MIN_SEC_RUNTIME_SECONDS,
+                                &response::TotalRuntimeMinSec::RUNTIME_SECONDS_DESC,
                                 3,
                                 frame[3],
                                 0,
@@ -4623,14 +3148,14 @@ pub mod sd {
                         &response::LoadRuntime024MinSec::DESC,
                         |frame: &[u8; 6]| {
                             rt::in_range(
-                                &response::LOAD_RUNTIME_0_24_MIN_SEC_RUNTIME_MINUTES,
+                                &response::LoadRuntime024MinSec::RUNTIME_MINUTES_DESC,
                                 2,
                                 frame[2],
                                 0,
                                 59,
                             )?;
                             rt::in_range(
-                                &response::LOAD_RUNTIME_0_24_MIN_SEC_RUNTIME_SECONDS,
+                                &response::LoadRuntime024MinSec::RUNTIME_SECONDS_DESC,
                                 3,
                                 frame[3],
                                 0,
@@ -4678,14 +3203,14 @@ pub mod sd {
                         &response::LoadRuntime2549MinSec::DESC,
                         |frame: &[u8; 6]| {
                             rt::in_range(
-                                &response::LOAD_RUNTIME_25_49_MIN_SEC_RUNTIME_MINUTES,
+                                &response::LoadRuntime2549MinSec::RUNTIME_MINUTES_DESC,
                                 2,
                                 frame[2],
                                 0,
                                 59,
                             )?;
                             rt::in_range(
-                                &response::LOAD_RUNTIME_25_49_MIN_SEC_RUNTIME_SECONDS,
+                                &response::LoadRuntime2549MinSec::RUNTIME_SECONDS_DESC,
                                 3,
                                 frame[3],
                                 0,
@@ -4733,14 +3258,14 @@ pub mod sd {
                         &response::LoadRuntime5074MinSec::DESC,
                         |frame: &[u8; 6]| {
                             rt::in_range(
-                                &response::LOAD_RUNTIME_50_74_MIN_SEC_RUNTIME_MINUTES,
+                                &response::LoadRuntime5074MinSec::RUNTIME_MINUTES_DESC,
                                 2,
                                 frame[2],
                                 0,
                                 59,
                             )?;
                             rt::in_range(
-                                &response::LOAD_RUNTIME_50_74_MIN_SEC_RUNTIME_SECONDS,
+                                &response::LoadRuntime5074MinSec::RUNTIME_SECONDS_DESC,
                                 3,
                                 frame[3],
                                 0,
@@ -4788,14 +3313,14 @@ pub mod sd {
                         &response::LoadRuntime7599MinSec::DESC,
                         |frame: &[u8; 6]| {
                             rt::in_range(
-                                &response::LOAD_RUNTIME_75_99_MIN_SEC_RUNTIME_MINUTES,
+                                &response::LoadRuntime7599MinSec::RUNTIME_MINUTES_DESC,
                                 2,
                                 frame[2],
                                 0,
                                 59,
                             )?;
                             rt::in_range(
-                                &response::LOAD_RUNTIME_75_99_MIN_SEC_RUNTIME_SECONDS,
+                                &response::LoadRuntime7599MinSec::RUNTIME_SECONDS_DESC,
                                 3,
                                 frame[3],
                                 0,
@@ -4843,14 +3368,14 @@ pub mod sd {
                         &response::LoadRuntime100MinSec::DESC,
                         |frame: &[u8; 6]| {
                             rt::in_range(
-                                &response::LOAD_RUNTIME_100_MIN_SEC_RUNTIME_MINUTES,
+                                &response::LoadRuntime100MinSec::RUNTIME_MINUTES_DESC,
                                 2,
                                 frame[2],
                                 0,
                                 59,
                             )?;
                             rt::in_range(
-                                &response::LOAD_RUNTIME_100_MIN_SEC_RUNTIME_SECONDS,
+                                &response::LoadRuntime100MinSec::RUNTIME_SECONDS_DESC,
                                 3,
                                 frame[3],
                                 0,
@@ -4927,379 +3452,294 @@ pub mod sd {
             name: &str,
             mut field: impl FnMut(&'static str) -> rt::Option<rt::FieldValue<'v>>,
         ) -> rt::Result<Self, rt::FieldError> {
-            match name {
+            let message = match name {
                 "set_point_reply" => {
-                    rt::Ok(
-                        Self::SetPointReply(response::SetPointReply {
-                            freshness: rt::field_int(
-                                "freshness",
-                                field("freshness"),
-                                0,
-                                15,
-                            )? as u8,
-                            position: Angle::from_raw(
-                                rt::field_int("position", field("position"), -2048, 2047)?
-                                    as i16,
-                            ),
-                        }),
-                    )
+                    Self::SetPointReply(response::SetPointReply {
+                        freshness: rt::field_int("freshness", field("freshness"), 0, 15)?
+                            as u8,
+                        position: Angle::from_raw(
+                            rt::field_int("position", field("position"), -2048, 2047)?
+                                as i16,
+                        ),
+                    })
                 }
                 "actual_position" => {
-                    rt::Ok(
-                        Self::ActualPosition(response::ActualPosition {
-                            position: Angle::from_raw(
-                                rt::field_int("position", field("position"), -2048, 2047)?
-                                    as i16,
-                            ),
-                        }),
-                    )
+                    Self::ActualPosition(response::ActualPosition {
+                        position: Angle::from_raw(
+                            rt::field_int("position", field("position"), -2048, 2047)?
+                                as i16,
+                        ),
+                    })
                 }
                 "set_velocity_reply" => {
-                    rt::Ok(
-                        Self::SetVelocityReply(response::SetVelocityReply {
-                            actual_velocity: Velocity::from_raw(
-                                rt::get(&mut field, "actual_velocity")?,
-                            ),
-                        }),
-                    )
+                    Self::SetVelocityReply(response::SetVelocityReply {
+                        actual_velocity: Velocity::from_raw(
+                            rt::get(&mut field, "actual_velocity")?,
+                        ),
+                    })
                 }
                 "actual_velocity" => {
-                    rt::Ok(
-                        Self::ActualVelocity(response::ActualVelocity {
-                            actual_velocity: Velocity::from_raw(
-                                rt::get(&mut field, "actual_velocity")?,
-                            ),
-                        }),
-                    )
+                    Self::ActualVelocity(response::ActualVelocity {
+                        actual_velocity: Velocity::from_raw(
+                            rt::get(&mut field, "actual_velocity")?,
+                        ),
+                    })
                 }
                 "set_servo_id_reply" => {
-                    rt::Ok(
-                        Self::SetServoIdReply(response::SetServoIdReply {
-                            new_id: rt::get(&mut field, "new_id")?,
-                        }),
-                    )
+                    Self::SetServoIdReply(response::SetServoIdReply {
+                        new_id: rt::get(&mut field, "new_id")?,
+                    })
                 }
                 "servo_id" => {
-                    rt::Ok(
-                        Self::ServoId(response::ServoId {
-                            id: rt::get(&mut field, "id")?,
-                        }),
-                    )
+                    Self::ServoId(response::ServoId {
+                        id: rt::get(&mut field, "id")?,
+                    })
                 }
                 "current_consumption" => {
-                    rt::Ok(
-                        Self::CurrentConsumption(response::CurrentConsumption {
-                            current: Current::from_raw(
-                                (rt::get::<u8>(&mut field, "current")?) as u16,
-                            ),
-                        }),
-                    )
+                    Self::CurrentConsumption(response::CurrentConsumption {
+                        current: Current::from_raw(
+                            (rt::get::<u8>(&mut field, "current")?) as u16,
+                        ),
+                    })
                 }
                 "bus_voltages" => {
-                    rt::Ok(
-                        Self::BusVoltages(response::BusVoltages {
-                            power_bus_1_voltage: Voltage::from_raw(
-                                rt::get(&mut field, "power_bus_1_voltage")?,
-                            ),
-                            power_bus_2_voltage: Voltage::from_raw(
-                                rt::get(&mut field, "power_bus_2_voltage")?,
-                            ),
-                        }),
-                    )
+                    Self::BusVoltages(response::BusVoltages {
+                        power_bus_1_voltage: Voltage::from_raw(
+                            rt::get(&mut field, "power_bus_1_voltage")?,
+                        ),
+                        power_bus_2_voltage: Voltage::from_raw(
+                            rt::get(&mut field, "power_bus_2_voltage")?,
+                        ),
+                    })
                 }
                 "extended_current_consumption" => {
-                    rt::Ok(
-                        Self::ExtendedCurrentConsumption(response::ExtendedCurrentConsumption {
-                            current: Current::from_raw(rt::get(&mut field, "current")?),
-                        }),
-                    )
+                    Self::ExtendedCurrentConsumption(response::ExtendedCurrentConsumption {
+                        current: Current::from_raw(rt::get(&mut field, "current")?),
+                    })
                 }
                 "temperatures" => {
-                    rt::Ok(
-                        Self::Temperatures(response::Temperatures {
-                            motor_temperature: Temperature::from_raw(
-                                rt::get(&mut field, "motor_temperature")?,
-                            ),
-                            pcb_temperature: Temperature::from_raw(
-                                rt::get(&mut field, "pcb_temperature")?,
-                            ),
-                        }),
-                    )
+                    Self::Temperatures(response::Temperatures {
+                        motor_temperature: Temperature::from_raw(
+                            rt::get(&mut field, "motor_temperature")?,
+                        ),
+                        pcb_temperature: Temperature::from_raw(
+                            rt::get(&mut field, "pcb_temperature")?,
+                        ),
+                    })
                 }
                 "humidity" => {
-                    rt::Ok(
-                        Self::Humidity(response::Humidity {
-                            humidity: rt::get(&mut field, "humidity")?,
-                        }),
-                    )
+                    Self::Humidity(response::Humidity {
+                        humidity: rt::get(&mut field, "humidity")?,
+                    })
                 }
                 "skipped_frames_counter" => {
-                    rt::Ok(
-                        Self::SkippedFramesCounter(response::SkippedFramesCounter {
-                            host_freshness_counter: rt::get(
-                                &mut field,
-                                "host_freshness_counter",
-                            )?,
-                            dropped_frames: rt::get(&mut field, "dropped_frames")?,
-                        }),
-                    )
+                    Self::SkippedFramesCounter(response::SkippedFramesCounter {
+                        host_freshness_counter: rt::get(
+                            &mut field,
+                            "host_freshness_counter",
+                        )?,
+                        dropped_frames: rt::get(&mut field, "dropped_frames")?,
+                    })
                 }
                 "dropped_frames_counter_reset" => {
-                    rt::Ok(
-                        Self::DroppedFramesCounterReset(response::DroppedFramesCounterReset {
-                            host_freshness_counter: rt::get(
-                                &mut field,
-                                "host_freshness_counter",
-                            )?,
-                        }),
-                    )
+                    Self::DroppedFramesCounterReset(response::DroppedFramesCounterReset {
+                        host_freshness_counter: rt::get(
+                            &mut field,
+                            "host_freshness_counter",
+                        )?,
+                    })
                 }
                 "actuator_status_word" => {
-                    rt::Ok(
-                        Self::ActuatorStatusWord(response::ActuatorStatusWord {
-                            status_bits: ActuatorStatusBits::from_raw(
-                                rt::get(&mut field, "status_bits")?,
-                            ),
-                            status_arg2: rt::get(&mut field, "status_arg2")?,
-                        }),
-                    )
+                    Self::ActuatorStatusWord(response::ActuatorStatusWord {
+                        status_bits: ActuatorStatusBits::from_raw(
+                            rt::get(&mut field, "status_bits")?,
+                        ),
+                        status_arg2: rt::get(&mut field, "status_arg2")?,
+                    })
                 }
                 "reset_default_role_and_error_flags_reply" => {
-                    rt::Ok(
-                        Self::ResetDefaultRoleAndErrorFlagsReply(
-                            response::ResetDefaultRoleAndErrorFlagsReply,
-                        ),
+                    Self::ResetDefaultRoleAndErrorFlagsReply(
+                        response::ResetDefaultRoleAndErrorFlagsReply,
                     )
                 }
                 "set_current_position_as_zero_reply" => {
-                    rt::Ok(
-                        Self::SetCurrentPositionAsZeroReply(response::SetCurrentPositionAsZeroReply {
-                            zero_offset: Angle::from_raw(
-                                rt::field_int(
-                                    "zero_offset",
-                                    field("zero_offset"),
-                                    -2048,
-                                    2047,
-                                )? as i16,
-                            ),
-                        }),
-                    )
+                    Self::SetCurrentPositionAsZeroReply(response::SetCurrentPositionAsZeroReply {
+                        zero_offset: Angle::from_raw(
+                            rt::field_int(
+                                "zero_offset",
+                                field("zero_offset"),
+                                -2048,
+                                2047,
+                            )? as i16,
+                        ),
+                    })
                 }
                 "current_zero_offset" => {
-                    rt::Ok(
-                        Self::CurrentZeroOffset(response::CurrentZeroOffset {
-                            zero_offset: Angle::from_raw(
-                                rt::field_int(
-                                    "zero_offset",
-                                    field("zero_offset"),
-                                    -2048,
-                                    2047,
-                                )? as i16,
-                            ),
-                        }),
-                    )
+                    Self::CurrentZeroOffset(response::CurrentZeroOffset {
+                        zero_offset: Angle::from_raw(
+                            rt::field_int(
+                                "zero_offset",
+                                field("zero_offset"),
+                                -2048,
+                                2047,
+                            )? as i16,
+                        ),
+                    })
                 }
                 "reset_zero_offset_reply" => {
-                    rt::Ok(Self::ResetZeroOffsetReply(response::ResetZeroOffsetReply))
+                    Self::ResetZeroOffsetReply(response::ResetZeroOffsetReply)
                 }
                 "electronic_serial_number_character" => {
-                    rt::Ok(
-                        Self::ElectronicSerialNumberCharacter(response::ElectronicSerialNumberCharacter {
-                            character: rt::get(&mut field, "character")?,
-                            string_length: rt::get(&mut field, "string_length")?,
-                        }),
-                    )
+                    Self::ElectronicSerialNumberCharacter(response::ElectronicSerialNumberCharacter {
+                        character: rt::get(&mut field, "character")?,
+                        string_length: rt::get(&mut field, "string_length")?,
+                    })
                 }
                 "product_description_character" => {
-                    rt::Ok(
-                        Self::ProductDescriptionCharacter(response::ProductDescriptionCharacter {
-                            character: rt::get(&mut field, "character")?,
-                            string_length: rt::get(&mut field, "string_length")?,
-                        }),
-                    )
+                    Self::ProductDescriptionCharacter(response::ProductDescriptionCharacter {
+                        character: rt::get(&mut field, "character")?,
+                        string_length: rt::get(&mut field, "string_length")?,
+                    })
                 }
                 "software_revision_character" => {
-                    rt::Ok(
-                        Self::SoftwareRevisionCharacter(response::SoftwareRevisionCharacter {
-                            character: rt::get(&mut field, "character")?,
-                            string_length: rt::get(&mut field, "string_length")?,
-                        }),
-                    )
+                    Self::SoftwareRevisionCharacter(response::SoftwareRevisionCharacter {
+                        character: rt::get(&mut field, "character")?,
+                        string_length: rt::get(&mut field, "string_length")?,
+                    })
                 }
                 "hardware_revision_character" => {
-                    rt::Ok(
-                        Self::HardwareRevisionCharacter(response::HardwareRevisionCharacter {
-                            character: rt::get(&mut field, "character")?,
-                            string_length: rt::get(&mut field, "string_length")?,
-                        }),
-                    )
+                    Self::HardwareRevisionCharacter(response::HardwareRevisionCharacter {
+                        character: rt::get(&mut field, "character")?,
+                        string_length: rt::get(&mut field, "string_length")?,
+                    })
                 }
                 "total_runtime_hours" => {
-                    rt::Ok(
-                        Self::TotalRuntimeHours(response::TotalRuntimeHours {
-                            runtime_hours: rt::get(&mut field, "runtime_hours")?,
-                        }),
-                    )
+                    Self::TotalRuntimeHours(response::TotalRuntimeHours {
+                        runtime_hours: rt::get(&mut field, "runtime_hours")?,
+                    })
                 }
                 "total_runtime_min_sec" => {
-                    rt::Ok(
-                        Self::TotalRuntimeMinSec(response::TotalRuntimeMinSec {
-                            runtime_minutes: rt::get(&mut field, "runtime_minutes")?,
-                            runtime_seconds: rt::get(&mut field, "runtime_seconds")?,
-                        }),
-                    )
+                    Self::TotalRuntimeMinSec(response::TotalRuntimeMinSec {
+                        runtime_minutes: rt::get(&mut field, "runtime_minutes")?,
+                        runtime_seconds: rt::get(&mut field, "runtime_seconds")?,
+                    })
                 }
                 "load_runtime_0_24_hours" => {
-                    rt::Ok(
-                        Self::LoadRuntime024Hours(response::LoadRuntime024Hours {
-                            runtime_hours: rt::get(&mut field, "runtime_hours")?,
-                        }),
-                    )
+                    Self::LoadRuntime024Hours(response::LoadRuntime024Hours {
+                        runtime_hours: rt::get(&mut field, "runtime_hours")?,
+                    })
                 }
                 "load_runtime_0_24_min_sec" => {
-                    rt::Ok(
-                        Self::LoadRuntime024MinSec(response::LoadRuntime024MinSec {
-                            runtime_minutes: rt::get(&mut field, "runtime_minutes")?,
-                            runtime_seconds: rt::get(&mut field, "runtime_seconds")?,
-                        }),
-                    )
+                    Self::LoadRuntime024MinSec(response::LoadRuntime024MinSec {
+                        runtime_minutes: rt::get(&mut field, "runtime_minutes")?,
+                        runtime_seconds: rt::get(&mut field, "runtime_seconds")?,
+                    })
                 }
                 "load_runtime_0_24_hours_before_reset" => {
-                    rt::Ok(
-                        Self::LoadRuntime024HoursBeforeReset(response::LoadRuntime024HoursBeforeReset {
-                            runtime_hours_before_reset: rt::get(
-                                &mut field,
-                                "runtime_hours_before_reset",
-                            )?,
-                        }),
-                    )
+                    Self::LoadRuntime024HoursBeforeReset(response::LoadRuntime024HoursBeforeReset {
+                        runtime_hours_before_reset: rt::get(
+                            &mut field,
+                            "runtime_hours_before_reset",
+                        )?,
+                    })
                 }
                 "load_runtime_25_49_hours" => {
-                    rt::Ok(
-                        Self::LoadRuntime2549Hours(response::LoadRuntime2549Hours {
-                            runtime_hours: rt::get(&mut field, "runtime_hours")?,
-                        }),
-                    )
+                    Self::LoadRuntime2549Hours(response::LoadRuntime2549Hours {
+                        runtime_hours: rt::get(&mut field, "runtime_hours")?,
+                    })
                 }
                 "load_runtime_25_49_min_sec" => {
-                    rt::Ok(
-                        Self::LoadRuntime2549MinSec(response::LoadRuntime2549MinSec {
-                            runtime_minutes: rt::get(&mut field, "runtime_minutes")?,
-                            runtime_seconds: rt::get(&mut field, "runtime_seconds")?,
-                        }),
-                    )
+                    Self::LoadRuntime2549MinSec(response::LoadRuntime2549MinSec {
+                        runtime_minutes: rt::get(&mut field, "runtime_minutes")?,
+                        runtime_seconds: rt::get(&mut field, "runtime_seconds")?,
+                    })
                 }
                 "load_runtime_25_49_hours_before_reset" => {
-                    rt::Ok(
-                        Self::LoadRuntime2549HoursBeforeReset(response::LoadRuntime2549HoursBeforeReset {
-                            runtime_hours_before_reset: rt::get(
-                                &mut field,
-                                "runtime_hours_before_reset",
-                            )?,
-                        }),
-                    )
+                    Self::LoadRuntime2549HoursBeforeReset(response::LoadRuntime2549HoursBeforeReset {
+                        runtime_hours_before_reset: rt::get(
+                            &mut field,
+                            "runtime_hours_before_reset",
+                        )?,
+                    })
                 }
                 "load_runtime_50_74_hours" => {
-                    rt::Ok(
-                        Self::LoadRuntime5074Hours(response::LoadRuntime5074Hours {
-                            runtime_hours: rt::get(&mut field, "runtime_hours")?,
-                        }),
-                    )
+                    Self::LoadRuntime5074Hours(response::LoadRuntime5074Hours {
+                        runtime_hours: rt::get(&mut field, "runtime_hours")?,
+                    })
                 }
                 "load_runtime_50_74_min_sec" => {
-                    rt::Ok(
-                        Self::LoadRuntime5074MinSec(response::LoadRuntime5074MinSec {
-                            runtime_minutes: rt::get(&mut field, "runtime_minutes")?,
-                            runtime_seconds: rt::get(&mut field, "runtime_seconds")?,
-                        }),
-                    )
+                    Self::LoadRuntime5074MinSec(response::LoadRuntime5074MinSec {
+                        runtime_minutes: rt::get(&mut field, "runtime_minutes")?,
+                        runtime_seconds: rt::get(&mut field, "runtime_seconds")?,
+                    })
                 }
                 "load_runtime_50_74_hours_before_reset" => {
-                    rt::Ok(
-                        Self::LoadRuntime5074HoursBeforeReset(response::LoadRuntime5074HoursBeforeReset {
-                            runtime_hours_before_reset: rt::get(
-                                &mut field,
-                                "runtime_hours_before_reset",
-                            )?,
-                        }),
-                    )
+                    Self::LoadRuntime5074HoursBeforeReset(response::LoadRuntime5074HoursBeforeReset {
+                        runtime_hours_before_reset: rt::get(
+                            &mut field,
+                            "runtime_hours_before_reset",
+                        )?,
+                    })
                 }
                 "load_runtime_75_99_hours" => {
-                    rt::Ok(
-                        Self::LoadRuntime7599Hours(response::LoadRuntime7599Hours {
-                            runtime_hours: rt::get(&mut field, "runtime_hours")?,
-                        }),
-                    )
+                    Self::LoadRuntime7599Hours(response::LoadRuntime7599Hours {
+                        runtime_hours: rt::get(&mut field, "runtime_hours")?,
+                    })
                 }
                 "load_runtime_75_99_min_sec" => {
-                    rt::Ok(
-                        Self::LoadRuntime7599MinSec(response::LoadRuntime7599MinSec {
-                            runtime_minutes: rt::get(&mut field, "runtime_minutes")?,
-                            runtime_seconds: rt::get(&mut field, "runtime_seconds")?,
-                        }),
-                    )
+                    Self::LoadRuntime7599MinSec(response::LoadRuntime7599MinSec {
+                        runtime_minutes: rt::get(&mut field, "runtime_minutes")?,
+                        runtime_seconds: rt::get(&mut field, "runtime_seconds")?,
+                    })
                 }
                 "load_runtime_75_99_hours_before_reset" => {
-                    rt::Ok(
-                        Self::LoadRuntime7599HoursBeforeReset(response::LoadRuntime7599HoursBeforeReset {
-                            runtime_hours_before_reset: rt::get(
-                                &mut field,
-                                "runtime_hours_before_reset",
-                            )?,
-                        }),
-                    )
+                    Self::LoadRuntime7599HoursBeforeReset(response::LoadRuntime7599HoursBeforeReset {
+                        runtime_hours_before_reset: rt::get(
+                            &mut field,
+                            "runtime_hours_before_reset",
+                        )?,
+                    })
                 }
                 "load_runtime_100_hours" => {
-                    rt::Ok(
-                        Self::LoadRuntime100Hours(response::LoadRuntime100Hours {
-                            runtime_hours: rt::get(&mut field, "runtime_hours")?,
-                        }),
-                    )
+                    Self::LoadRuntime100Hours(response::LoadRuntime100Hours {
+                        runtime_hours: rt::get(&mut field, "runtime_hours")?,
+                    })
                 }
                 "load_runtime_100_min_sec" => {
-                    rt::Ok(
-                        Self::LoadRuntime100MinSec(response::LoadRuntime100MinSec {
-                            runtime_minutes: rt::get(&mut field, "runtime_minutes")?,
-                            runtime_seconds: rt::get(&mut field, "runtime_seconds")?,
-                        }),
-                    )
+                    Self::LoadRuntime100MinSec(response::LoadRuntime100MinSec {
+                        runtime_minutes: rt::get(&mut field, "runtime_minutes")?,
+                        runtime_seconds: rt::get(&mut field, "runtime_seconds")?,
+                    })
                 }
                 "load_runtime_100_hours_before_reset" => {
-                    rt::Ok(
-                        Self::LoadRuntime100HoursBeforeReset(response::LoadRuntime100HoursBeforeReset {
-                            runtime_hours_before_reset: rt::get(
-                                &mut field,
-                                "runtime_hours_before_reset",
-                            )?,
-                        }),
-                    )
+                    Self::LoadRuntime100HoursBeforeReset(response::LoadRuntime100HoursBeforeReset {
+                        runtime_hours_before_reset: rt::get(
+                            &mut field,
+                            "runtime_hours_before_reset",
+                        )?,
+                    })
                 }
                 "stall_event_counter" => {
-                    rt::Ok(
-                        Self::StallEventCounter(response::StallEventCounter {
-                            stall_events: rt::get(&mut field, "stall_events")?,
-                        }),
-                    )
+                    Self::StallEventCounter(response::StallEventCounter {
+                        stall_events: rt::get(&mut field, "stall_events")?,
+                    })
                 }
                 "stall_event_counter_before_reset" => {
-                    rt::Ok(
-                        Self::StallEventCounterBeforeReset(response::StallEventCounterBeforeReset {
-                            stall_events_before_reset: rt::get(
-                                &mut field,
-                                "stall_events_before_reset",
-                            )?,
-                        }),
-                    )
+                    Self::StallEventCounterBeforeReset(response::StallEventCounterBeforeReset {
+                        stall_events_before_reset: rt::get(
+                            &mut field,
+                            "stall_events_before_reset",
+                        )?,
+                    })
                 }
                 "power_up_cycles" => {
-                    rt::Ok(
-                        Self::PowerUpCycles(response::PowerUpCycles {
-                            power_up_cycles: rt::get(&mut field, "power_up_cycles")?,
-                        }),
-                    )
+                    Self::PowerUpCycles(response::PowerUpCycles {
+                        power_up_cycles: rt::get(&mut field, "power_up_cycles")?,
+                    })
                 }
-                _ => rt::Err(rt::FieldError::UnknownMessage),
-            }
+                _ => return rt::Err(rt::FieldError::UnknownMessage),
+            };
+            rt::Ok(message)
         }
     }
     impl rt::Message for Response {
@@ -5320,11 +3760,7 @@ pub mod sd {
             Response::visit(self, f)
         }
         #[inline]
-        fn encode(
-            &self,
-            address: u8,
-            buf: &mut [u8],
-        ) -> rt::Result<usize, rt::EncodeError> {
+        fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             Response::encode(self, address, buf)
         }
         #[inline]
@@ -5431,11 +3867,1189 @@ pub mod sd {
     pub type StreamDecoder = ::busspec_runtime::stream::StreamDecoder<Sd>;
     /// What [`StreamDecoder`] finds in a stream.
     pub type Event = ::busspec_runtime::stream::Event<Request, Response>;
-    /// Each request as a struct of its own (its `DESC` names it as refusals do: name,
-    /// code and the frame lengths of its code), and each field a refusal names
-    /// (`message.field`, `FieldDesc`).
+    impl request::SetPoint {
+        pub const NAME: &'static str = "set_point";
+        pub const CODE: &'static [u8] = &[0x76];
+        pub const LEN: usize = 6;
+        pub const DESC: rt::MessageDesc = rt::desc(Self::NAME, 0x76, 1, &[6]);
+        pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
+            f("freshness", rt::Int(self.freshness as i64));
+            f("position", rt::Int(self.position.raw() as i64));
+        }
+        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            Request::SetPoint(*self).encode(address, buf)
+        }
+    }
+    impl request::ReadActualPosition {
+        pub const NAME: &'static str = "read_actual_position";
+        pub const CODE: &'static [u8] = &[0x69];
+        pub const LEN: usize = 6;
+        pub const DESC: rt::MessageDesc = rt::desc(Self::NAME, 0x69, 1, &[6]);
+        pub const ARG1_DESC: rt::FieldDesc = rt::field(Self::NAME, "arg1");
+        pub const ARG2_DESC: rt::FieldDesc = rt::field(Self::NAME, "arg2");
+        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            Request::ReadActualPosition(*self).encode(address, buf)
+        }
+    }
+    impl request::SetVelocity {
+        pub const NAME: &'static str = "set_velocity";
+        pub const CODE: &'static [u8] = &[0x77];
+        pub const LEN: usize = 6;
+        pub const DESC: rt::MessageDesc = rt::desc(Self::NAME, 0x77, 1, &[6]);
+        pub const SET_VELOCITY: rt::Range<usize> = 2..4;
+        pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
+            f("set_velocity", rt::Int(self.set_velocity.raw() as i64));
+        }
+        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            Request::SetVelocity(*self).encode(address, buf)
+        }
+    }
+    impl request::ReadActualVelocity {
+        pub const NAME: &'static str = "read_actual_velocity";
+        pub const CODE: &'static [u8] = &[0x68];
+        pub const LEN: usize = 6;
+        pub const DESC: rt::MessageDesc = rt::desc(Self::NAME, 0x68, 1, &[6]);
+        pub const ARG1_DESC: rt::FieldDesc = rt::field(Self::NAME, "arg1");
+        pub const ARG2_DESC: rt::FieldDesc = rt::field(Self::NAME, "arg2");
+        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            Request::ReadActualVelocity(*self).encode(address, buf)
+        }
+    }
+    impl request::SetServoId {
+        pub const NAME: &'static str = "set_servo_id";
+        pub const CODE: &'static [u8] = &[0xAA];
+        pub const LEN: usize = 6;
+        pub const DESC: rt::MessageDesc = rt::desc(Self::NAME, 0xAA, 1, &[6]);
+        pub const NEW_ID: rt::Range<usize> = 2..3;
+        pub const NEW_ID_DESC: rt::FieldDesc = rt::field(Self::NAME, "new_id");
+        pub const NEW_ID_REPEAT_DESC: rt::FieldDesc = rt::field(
+            Self::NAME,
+            "new_id_repeat",
+        );
+        pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
+            f("new_id", rt::Int(self.new_id as i64));
+        }
+        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            Request::SetServoId(*self).encode(address, buf)
+        }
+    }
+    impl request::ReadServoId {
+        pub const NAME: &'static str = "read_servo_id";
+        pub const CODE: &'static [u8] = &[0xDA];
+        pub const LEN: usize = 6;
+        pub const DESC: rt::MessageDesc = rt::desc(Self::NAME, 0xDA, 1, &[6]);
+        pub const ARG1_DESC: rt::FieldDesc = rt::field(Self::NAME, "arg1");
+        pub const ARG2_DESC: rt::FieldDesc = rt::field(Self::NAME, "arg2");
+        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            Request::ReadServoId(*self).encode(address, buf)
+        }
+    }
+    impl request::ReadCurrentConsumption {
+        pub const NAME: &'static str = "read_current_consumption";
+        pub const CODE: &'static [u8] = &[0xB0];
+        pub const LEN: usize = 6;
+        pub const DESC: rt::MessageDesc = rt::desc(Self::NAME, 0xB0, 1, &[6]);
+        pub const ARG1_DESC: rt::FieldDesc = rt::field(Self::NAME, "arg1");
+        pub const ARG2_DESC: rt::FieldDesc = rt::field(Self::NAME, "arg2");
+        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            Request::ReadCurrentConsumption(*self).encode(address, buf)
+        }
+    }
+    impl request::ReadBusVoltages {
+        pub const NAME: &'static str = "read_bus_voltages";
+        pub const CODE: &'static [u8] = &[0xB1];
+        pub const LEN: usize = 6;
+        pub const DESC: rt::MessageDesc = rt::desc(Self::NAME, 0xB1, 1, &[6]);
+        pub const ARG1_DESC: rt::FieldDesc = rt::field(Self::NAME, "arg1");
+        pub const ARG2_DESC: rt::FieldDesc = rt::field(Self::NAME, "arg2");
+        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            Request::ReadBusVoltages(*self).encode(address, buf)
+        }
+    }
+    impl request::ReadExtendedCurrentConsumption {
+        pub const NAME: &'static str = "read_extended_current_consumption";
+        pub const CODE: &'static [u8] = &[0xB2];
+        pub const LEN: usize = 6;
+        pub const DESC: rt::MessageDesc = rt::desc(Self::NAME, 0xB2, 1, &[6]);
+        pub const ARG1_DESC: rt::FieldDesc = rt::field(Self::NAME, "arg1");
+        pub const ARG2_DESC: rt::FieldDesc = rt::field(Self::NAME, "arg2");
+        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            Request::ReadExtendedCurrentConsumption(*self).encode(address, buf)
+        }
+    }
+    impl request::ReadTemperatures {
+        pub const NAME: &'static str = "read_temperatures";
+        pub const CODE: &'static [u8] = &[0xA0];
+        pub const LEN: usize = 6;
+        pub const DESC: rt::MessageDesc = rt::desc(Self::NAME, 0xA0, 1, &[6]);
+        pub const ARG1_DESC: rt::FieldDesc = rt::field(Self::NAME, "arg1");
+        pub const ARG2_DESC: rt::FieldDesc = rt::field(Self::NAME, "arg2");
+        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            Request::ReadTemperatures(*self).encode(address, buf)
+        }
+    }
+    impl request::ReadHumidity {
+        pub const NAME: &'static str = "read_humidity";
+        pub const CODE: &'static [u8] = &[0xA1];
+        pub const LEN: usize = 6;
+        pub const DESC: rt::MessageDesc = rt::desc(Self::NAME, 0xA1, 1, &[6]);
+        pub const ARG1_DESC: rt::FieldDesc = rt::field(Self::NAME, "arg1");
+        pub const ARG2_DESC: rt::FieldDesc = rt::field(Self::NAME, "arg2");
+        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            Request::ReadHumidity(*self).encode(address, buf)
+        }
+    }
+    impl request::ReadSkippedFramesCounter {
+        pub const NAME: &'static str = "read_skipped_frames_counter";
+        pub const CODE: &'static [u8] = &[0x37];
+        pub const LEN: usize = 6;
+        pub const DESC: rt::MessageDesc = rt::desc(Self::NAME, 0x37, 1, &[6]);
+        pub const ARG1_DESC: rt::FieldDesc = rt::field(Self::NAME, "arg1");
+        pub const ARG2_DESC: rt::FieldDesc = rt::field(Self::NAME, "arg2");
+        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            Request::ReadSkippedFramesCounter(*self).encode(address, buf)
+        }
+    }
+    impl request::ResetDroppedFramesCounter {
+        pub const NAME: &'static str = "reset_dropped_frames_counter";
+        pub const CODE: &'static [u8] = &[0x37];
+        pub const LEN: usize = 6;
+        pub const DESC: rt::MessageDesc = rt::desc(Self::NAME, 0x37, 1, &[6]);
+        pub const ARG1_DESC: rt::FieldDesc = rt::field(Self::NAME, "arg1");
+        pub const ARG2_DESC: rt::FieldDesc = rt::field(Self::NAME, "arg2");
+        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            Request::ResetDroppedFramesCounter(*self).encode(address, buf)
+        }
+    }
+    impl request::ReadActuatorStatusWord {
+        pub const NAME: &'static str = "read_actuator_status_word";
+        pub const CODE: &'static [u8] = &[0x40];
+        pub const LEN: usize = 6;
+        pub const DESC: rt::MessageDesc = rt::desc(Self::NAME, 0x40, 1, &[6]);
+        pub const ARG1_DESC: rt::FieldDesc = rt::field(Self::NAME, "arg1");
+        pub const ARG2_DESC: rt::FieldDesc = rt::field(Self::NAME, "arg2");
+        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            Request::ReadActuatorStatusWord(*self).encode(address, buf)
+        }
+    }
+    impl request::ResetActuatorStatusWord {
+        pub const NAME: &'static str = "reset_actuator_status_word";
+        pub const CODE: &'static [u8] = &[0x40];
+        pub const LEN: usize = 6;
+        pub const DESC: rt::MessageDesc = rt::desc(Self::NAME, 0x40, 1, &[6]);
+        pub const ARG1_DESC: rt::FieldDesc = rt::field(Self::NAME, "arg1");
+        pub const ARG2_DESC: rt::FieldDesc = rt::field(Self::NAME, "arg2");
+        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            Request::ResetActuatorStatusWord(*self).encode(address, buf)
+        }
+    }
+    impl request::ResetDefaultRoleAndErrorFlags {
+        pub const NAME: &'static str = "reset_default_role_and_error_flags";
+        pub const CODE: &'static [u8] = &[0xB4];
+        pub const LEN: usize = 6;
+        pub const DESC: rt::MessageDesc = rt::desc(Self::NAME, 0xB4, 1, &[6]);
+        pub const ARG1_DESC: rt::FieldDesc = rt::field(Self::NAME, "arg1");
+        pub const ARG2_DESC: rt::FieldDesc = rt::field(Self::NAME, "arg2");
+        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            Request::ResetDefaultRoleAndErrorFlags(*self).encode(address, buf)
+        }
+    }
+    impl request::SetCurrentPositionAsZero {
+        pub const NAME: &'static str = "set_current_position_as_zero";
+        pub const CODE: &'static [u8] = &[0x99];
+        pub const LEN: usize = 6;
+        pub const DESC: rt::MessageDesc = rt::desc(Self::NAME, 0x99, 1, &[6]);
+        pub const ARG1_DESC: rt::FieldDesc = rt::field(Self::NAME, "arg1");
+        pub const ARG2_DESC: rt::FieldDesc = rt::field(Self::NAME, "arg2");
+        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            Request::SetCurrentPositionAsZero(*self).encode(address, buf)
+        }
+    }
+    impl request::ReadCurrentZeroOffset {
+        pub const NAME: &'static str = "read_current_zero_offset";
+        pub const CODE: &'static [u8] = &[0x95];
+        pub const LEN: usize = 6;
+        pub const DESC: rt::MessageDesc = rt::desc(Self::NAME, 0x95, 1, &[6]);
+        pub const ARG1_DESC: rt::FieldDesc = rt::field(Self::NAME, "arg1");
+        pub const ARG2_DESC: rt::FieldDesc = rt::field(Self::NAME, "arg2");
+        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            Request::ReadCurrentZeroOffset(*self).encode(address, buf)
+        }
+    }
+    impl request::ResetZeroOffset {
+        pub const NAME: &'static str = "reset_zero_offset";
+        pub const CODE: &'static [u8] = &[0x98];
+        pub const LEN: usize = 6;
+        pub const DESC: rt::MessageDesc = rt::desc(Self::NAME, 0x98, 1, &[6]);
+        pub const ARG1_DESC: rt::FieldDesc = rt::field(Self::NAME, "arg1");
+        pub const ARG2_DESC: rt::FieldDesc = rt::field(Self::NAME, "arg2");
+        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            Request::ResetZeroOffset(*self).encode(address, buf)
+        }
+    }
+    impl request::ReadElectronicSerialNumber {
+        pub const NAME: &'static str = "read_electronic_serial_number";
+        pub const CODE: &'static [u8] = &[0xF0];
+        pub const LEN: usize = 6;
+        pub const DESC: rt::MessageDesc = rt::desc(Self::NAME, 0xF0, 1, &[6]);
+        pub const BYTE_NUMBER: rt::Range<usize> = 3..4;
+        pub const ARG1_DESC: rt::FieldDesc = rt::field(Self::NAME, "arg1");
+        pub const BYTE_NUMBER_DESC: rt::FieldDesc = rt::field(Self::NAME, "byte_number");
+        pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
+            f("byte_number", rt::Int(self.byte_number as i64));
+        }
+        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            Request::ReadElectronicSerialNumber(*self).encode(address, buf)
+        }
+    }
+    impl request::ReadProductDescription {
+        pub const NAME: &'static str = "read_product_description";
+        pub const CODE: &'static [u8] = &[0xF1];
+        pub const LEN: usize = 6;
+        pub const DESC: rt::MessageDesc = rt::desc(Self::NAME, 0xF1, 1, &[6]);
+        pub const BYTE_NUMBER: rt::Range<usize> = 3..4;
+        pub const ARG1_DESC: rt::FieldDesc = rt::field(Self::NAME, "arg1");
+        pub const BYTE_NUMBER_DESC: rt::FieldDesc = rt::field(Self::NAME, "byte_number");
+        pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
+            f("byte_number", rt::Int(self.byte_number as i64));
+        }
+        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            Request::ReadProductDescription(*self).encode(address, buf)
+        }
+    }
+    impl request::ReadSoftwareRevision {
+        pub const NAME: &'static str = "read_software_revision";
+        pub const CODE: &'static [u8] = &[0xF2];
+        pub const LEN: usize = 6;
+        pub const DESC: rt::MessageDesc = rt::desc(Self::NAME, 0xF2, 1, &[6]);
+        pub const BYTE_NUMBER: rt::Range<usize> = 3..4;
+        pub const ARG1_DESC: rt::FieldDesc = rt::field(Self::NAME, "arg1");
+        pub const BYTE_NUMBER_DESC: rt::FieldDesc = rt::field(Self::NAME, "byte_number");
+        pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
+            f("byte_number", rt::Int(self.byte_number as i64));
+        }
+        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            Request::ReadSoftwareRevision(*self).encode(address, buf)
+        }
+    }
+    impl request::ReadHardwareRevision {
+        pub const NAME: &'static str = "read_hardware_revision";
+        pub const CODE: &'static [u8] = &[0xF3];
+        pub const LEN: usize = 6;
+        pub const DESC: rt::MessageDesc = rt::desc(Self::NAME, 0xF3, 1, &[6]);
+        pub const BYTE_NUMBER: rt::Range<usize> = 3..4;
+        pub const ARG1_DESC: rt::FieldDesc = rt::field(Self::NAME, "arg1");
+        pub const BYTE_NUMBER_DESC: rt::FieldDesc = rt::field(Self::NAME, "byte_number");
+        pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
+            f("byte_number", rt::Int(self.byte_number as i64));
+        }
+        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            Request::ReadHardwareRevision(*self).encode(address, buf)
+        }
+    }
+    impl request::ReadTotalRuntimeHours {
+        pub const NAME: &'static str = "read_total_runtime_hours";
+        pub const CODE: &'static [u8] = &[0xA2];
+        pub const LEN: usize = 6;
+        pub const DESC: rt::MessageDesc = rt::desc(Self::NAME, 0xA2, 1, &[6]);
+        pub const ARG1_DESC: rt::FieldDesc = rt::field(Self::NAME, "arg1");
+        pub const ARG2_DESC: rt::FieldDesc = rt::field(Self::NAME, "arg2");
+        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            Request::ReadTotalRuntimeHours(*self).encode(address, buf)
+        }
+    }
+    impl request::ReadTotalRuntimeMinSec {
+        pub const NAME: &'static str = "read_total_runtime_min_sec";
+        pub const CODE: &'static [u8] = &[0xA2];
+        pub const LEN: usize = 6;
+        pub const DESC: rt::MessageDesc = rt::desc(Self::NAME, 0xA2, 1, &[6]);
+        pub const ARG1_DESC: rt::FieldDesc = rt::field(Self::NAME, "arg1");
+        pub const ARG2_DESC: rt::FieldDesc = rt::field(Self::NAME, "arg2");
+        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            Request::ReadTotalRuntimeMinSec(*self).encode(address, buf)
+        }
+    }
+    impl request::ReadLoadRuntime024Hours {
+        pub const NAME: &'static str = "read_load_runtime_0_24_hours";
+        pub const CODE: &'static [u8] = &[0xA3];
+        pub const LEN: usize = 6;
+        pub const DESC: rt::MessageDesc = rt::desc(Self::NAME, 0xA3, 1, &[6]);
+        pub const ARG1_DESC: rt::FieldDesc = rt::field(Self::NAME, "arg1");
+        pub const ARG2_DESC: rt::FieldDesc = rt::field(Self::NAME, "arg2");
+        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            Request::ReadLoadRuntime024Hours(*self).encode(address, buf)
+        }
+    }
+    impl request::ReadLoadRuntime024MinSec {
+        pub const NAME: &'static str = "read_load_runtime_0_24_min_sec";
+        pub const CODE: &'static [u8] = &[0xA3];
+        pub const LEN: usize = 6;
+        pub const DESC: rt::MessageDesc = rt::desc(Self::NAME, 0xA3, 1, &[6]);
+        pub const ARG1_DESC: rt::FieldDesc = rt::field(Self::NAME, "arg1");
+        pub const ARG2_DESC: rt::FieldDesc = rt::field(Self::NAME, "arg2");
+        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            Request::ReadLoadRuntime024MinSec(*self).encode(address, buf)
+        }
+    }
+    impl request::ResetLoadRuntime024 {
+        pub const NAME: &'static str = "reset_load_runtime_0_24";
+        pub const CODE: &'static [u8] = &[0xA3];
+        pub const LEN: usize = 6;
+        pub const DESC: rt::MessageDesc = rt::desc(Self::NAME, 0xA3, 1, &[6]);
+        pub const ARG1_DESC: rt::FieldDesc = rt::field(Self::NAME, "arg1");
+        pub const ARG2_DESC: rt::FieldDesc = rt::field(Self::NAME, "arg2");
+        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            Request::ResetLoadRuntime024(*self).encode(address, buf)
+        }
+    }
+    impl request::ReadLoadRuntime2549Hours {
+        pub const NAME: &'static str = "read_load_runtime_25_49_hours";
+        pub const CODE: &'static [u8] = &[0xA4];
+        pub const LEN: usize = 6;
+        pub const DESC: rt::MessageDesc = rt::desc(Self::NAME, 0xA4, 1, &[6]);
+        pub const ARG1_DESC: rt::FieldDesc = rt::field(Self::NAME, "arg1");
+        pub const ARG2_DESC: rt::FieldDesc = rt::field(Self::NAME, "arg2");
+        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            Request::ReadLoadRuntime2549Hours(*self).encode(address, buf)
+        }
+    }
+    impl request::ReadLoadRuntime2549MinSec {
+        pub const NAME: &'static str = "read_load_runtime_25_49_min_sec";
+        pub const CODE: &'static [u8] = &[0xA4];
+        pub const LEN: usize = 6;
+        pub const DESC: rt::MessageDesc = rt::desc(Self::NAME, 0xA4, 1, &[6]);
+        pub const ARG1_DESC: rt::FieldDesc = rt::field(Self::NAME, "arg1");
+        pub const ARG2_DESC: rt::FieldDesc = rt::field(Self::NAME, "arg2");
+        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            Request::ReadLoadRuntime2549MinSec(*self).encode(address, buf)
+        }
+    }
+    impl request::ResetLoadRuntime2549 {
+        pub const NAME: &'static str = "reset_load_runtime_25_49";
+        pub const CODE: &'static [u8] = &[0xA4];
+        pub const LEN: usize = 6;
+        pub const DESC: rt::MessageDesc = rt::desc(Self::NAME, 0xA4, 1, &[6]);
+        pub const ARG1_DESC: rt::FieldDesc = rt::field(Self::NAME, "arg1");
+        pub const ARG2_DESC: rt::FieldDesc = rt::field(Self::NAME, "arg2");
+        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            Request::ResetLoadRuntime2549(*self).encode(address, buf)
+        }
+    }
+    impl request::ReadLoadRuntime5074Hours {
+        pub const NAME: &'static str = "read_load_runtime_50_74_hours";
+        pub const CODE: &'static [u8] = &[0xA5];
+        pub const LEN: usize = 6;
+        pub const DESC: rt::MessageDesc = rt::desc(Self::NAME, 0xA5, 1, &[6]);
+        pub const ARG1_DESC: rt::FieldDesc = rt::field(Self::NAME, "arg1");
+        pub const ARG2_DESC: rt::FieldDesc = rt::field(Self::NAME, "arg2");
+        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            Request::ReadLoadRuntime5074Hours(*self).encode(address, buf)
+        }
+    }
+    impl request::ReadLoadRuntime5074MinSec {
+        pub const NAME: &'static str = "read_load_runtime_50_74_min_sec";
+        pub const CODE: &'static [u8] = &[0xA5];
+        pub const LEN: usize = 6;
+        pub const DESC: rt::MessageDesc = rt::desc(Self::NAME, 0xA5, 1, &[6]);
+        pub const ARG1_DESC: rt::FieldDesc = rt::field(Self::NAME, "arg1");
+        pub const ARG2_DESC: rt::FieldDesc = rt::field(Self::NAME, "arg2");
+        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            Request::ReadLoadRuntime5074MinSec(*self).encode(address, buf)
+        }
+    }
+    impl request::ResetLoadRuntime5074 {
+        pub const NAME: &'static str = "reset_load_runtime_50_74";
+        pub const CODE: &'static [u8] = &[0xA5];
+        pub const LEN: usize = 6;
+        pub const DESC: rt::MessageDesc = rt::desc(Self::NAME, 0xA5, 1, &[6]);
+        pub const ARG1_DESC: rt::FieldDesc = rt::field(Self::NAME, "arg1");
+        pub const ARG2_DESC: rt::FieldDesc = rt::field(Self::NAME, "arg2");
+        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            Request::ResetLoadRuntime5074(*self).encode(address, buf)
+        }
+    }
+    impl request::ReadLoadRuntime7599Hours {
+        pub const NAME: &'static str = "read_load_runtime_75_99_hours";
+        pub const CODE: &'static [u8] = &[0xA6];
+        pub const LEN: usize = 6;
+        pub const DESC: rt::MessageDesc = rt::desc(Self::NAME, 0xA6, 1, &[6]);
+        pub const ARG1_DESC: rt::FieldDesc = rt::field(Self::NAME, "arg1");
+        pub const ARG2_DESC: rt::FieldDesc = rt::field(Self::NAME, "arg2");
+        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            Request::ReadLoadRuntime7599Hours(*self).encode(address, buf)
+        }
+    }
+    impl request::ReadLoadRuntime7599MinSec {
+        pub const NAME: &'static str = "read_load_runtime_75_99_min_sec";
+        pub const CODE: &'static [u8] = &[0xA6];
+        pub const LEN: usize = 6;
+        pub const DESC: rt::MessageDesc = rt::desc(Self::NAME, 0xA6, 1, &[6]);
+        pub const ARG1_DESC: rt::FieldDesc = rt::field(Self::NAME, "arg1");
+        pub const ARG2_DESC: rt::FieldDesc = rt::field(Self::NAME, "arg2");
+        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            Request::ReadLoadRuntime7599MinSec(*self).encode(address, buf)
+        }
+    }
+    impl request::ResetLoadRuntime7599 {
+        pub const NAME: &'static str = "reset_load_runtime_75_99";
+        pub const CODE: &'static [u8] = &[0xA6];
+        pub const LEN: usize = 6;
+        pub const DESC: rt::MessageDesc = rt::desc(Self::NAME, 0xA6, 1, &[6]);
+        pub const ARG1_DESC: rt::FieldDesc = rt::field(Self::NAME, "arg1");
+        pub const ARG2_DESC: rt::FieldDesc = rt::field(Self::NAME, "arg2");
+        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            Request::ResetLoadRuntime7599(*self).encode(address, buf)
+        }
+    }
+    impl request::ReadLoadRuntime100Hours {
+        pub const NAME: &'static str = "read_load_runtime_100_hours";
+        pub const CODE: &'static [u8] = &[0xA7];
+        pub const LEN: usize = 6;
+        pub const DESC: rt::MessageDesc = rt::desc(Self::NAME, 0xA7, 1, &[6]);
+        pub const ARG1_DESC: rt::FieldDesc = rt::field(Self::NAME, "arg1");
+        pub const ARG2_DESC: rt::FieldDesc = rt::field(Self::NAME, "arg2");
+        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            Request::ReadLoadRuntime100Hours(*self).encode(address, buf)
+        }
+    }
+    impl request::ReadLoadRuntime100MinSec {
+        pub const NAME: &'static str = "read_load_runtime_100_min_sec";
+        pub const CODE: &'static [u8] = &[0xA7];
+        pub const LEN: usize = 6;
+        pub const DESC: rt::MessageDesc = rt::desc(Self::NAME, 0xA7, 1, &[6]);
+        pub const ARG1_DESC: rt::FieldDesc = rt::field(Self::NAME, "arg1");
+        pub const ARG2_DESC: rt::FieldDesc = rt::field(Self::NAME, "arg2");
+        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            Request::ReadLoadRuntime100MinSec(*self).encode(address, buf)
+        }
+    }
+    impl request::ResetLoadRuntime100 {
+        pub const NAME: &'static str = "reset_load_runtime_100";
+        pub const CODE: &'static [u8] = &[0xA7];
+        pub const LEN: usize = 6;
+        pub const DESC: rt::MessageDesc = rt::desc(Self::NAME, 0xA7, 1, &[6]);
+        pub const ARG1_DESC: rt::FieldDesc = rt::field(Self::NAME, "arg1");
+        pub const ARG2_DESC: rt::FieldDesc = rt::field(Self::NAME, "arg2");
+        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            Request::ResetLoadRuntime100(*self).encode(address, buf)
+        }
+    }
+    impl request::ReadStallEventCounter {
+        pub const NAME: &'static str = "read_stall_event_counter";
+        pub const CODE: &'static [u8] = &[0xA8];
+        pub const LEN: usize = 6;
+        pub const DESC: rt::MessageDesc = rt::desc(Self::NAME, 0xA8, 1, &[6]);
+        pub const ARG1_DESC: rt::FieldDesc = rt::field(Self::NAME, "arg1");
+        pub const ARG2_DESC: rt::FieldDesc = rt::field(Self::NAME, "arg2");
+        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            Request::ReadStallEventCounter(*self).encode(address, buf)
+        }
+    }
+    impl request::ResetStallEventCounter {
+        pub const NAME: &'static str = "reset_stall_event_counter";
+        pub const CODE: &'static [u8] = &[0xA8];
+        pub const LEN: usize = 6;
+        pub const DESC: rt::MessageDesc = rt::desc(Self::NAME, 0xA8, 1, &[6]);
+        pub const ARG1_DESC: rt::FieldDesc = rt::field(Self::NAME, "arg1");
+        pub const ARG2_DESC: rt::FieldDesc = rt::field(Self::NAME, "arg2");
+        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            Request::ResetStallEventCounter(*self).encode(address, buf)
+        }
+    }
+    impl request::ReadPowerUpCycles {
+        pub const NAME: &'static str = "read_power_up_cycles";
+        pub const CODE: &'static [u8] = &[0xA9];
+        pub const LEN: usize = 6;
+        pub const DESC: rt::MessageDesc = rt::desc(Self::NAME, 0xA9, 1, &[6]);
+        pub const ARG1_DESC: rt::FieldDesc = rt::field(Self::NAME, "arg1");
+        pub const ARG2_DESC: rt::FieldDesc = rt::field(Self::NAME, "arg2");
+        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            Request::ReadPowerUpCycles(*self).encode(address, buf)
+        }
+    }
+    impl response::SetPointReply {
+        pub const NAME: &'static str = "set_point_reply";
+        pub const CODE: &'static [u8] = &[0x56];
+        pub const LEN: usize = 6;
+        pub const DESC: rt::MessageDesc = rt::desc(Self::NAME, 0x56, 1, &[6]);
+        pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
+            f("freshness", rt::Int(self.freshness as i64));
+            f("position", rt::Int(self.position.raw() as i64));
+        }
+        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            Response::SetPointReply(*self).encode(address, buf)
+        }
+    }
+    impl response::ActualPosition {
+        pub const NAME: &'static str = "actual_position";
+        pub const CODE: &'static [u8] = &[0x49];
+        pub const LEN: usize = 6;
+        pub const DESC: rt::MessageDesc = rt::desc(Self::NAME, 0x49, 1, &[6]);
+        pub const ZERO_DESC: rt::FieldDesc = rt::field(Self::NAME, "zero");
+        pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
+            f("position", rt::Int(self.position.raw() as i64));
+        }
+        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            Response::ActualPosition(*self).encode(address, buf)
+        }
+    }
+    impl response::SetVelocityReply {
+        pub const NAME: &'static str = "set_velocity_reply";
+        pub const CODE: &'static [u8] = &[0x57];
+        pub const LEN: usize = 6;
+        pub const DESC: rt::MessageDesc = rt::desc(Self::NAME, 0x57, 1, &[6]);
+        pub const ACTUAL_VELOCITY: rt::Range<usize> = 2..4;
+        pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
+            f("actual_velocity", rt::Int(self.actual_velocity.raw() as i64));
+        }
+        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            Response::SetVelocityReply(*self).encode(address, buf)
+        }
+    }
+    impl response::ActualVelocity {
+        pub const NAME: &'static str = "actual_velocity";
+        pub const CODE: &'static [u8] = &[0x48];
+        pub const LEN: usize = 6;
+        pub const DESC: rt::MessageDesc = rt::desc(Self::NAME, 0x48, 1, &[6]);
+        pub const ACTUAL_VELOCITY: rt::Range<usize> = 2..4;
+        pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
+            f("actual_velocity", rt::Int(self.actual_velocity.raw() as i64));
+        }
+        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            Response::ActualVelocity(*self).encode(address, buf)
+        }
+    }
+    impl response::SetServoIdReply {
+        pub const NAME: &'static str = "set_servo_id_reply";
+        pub const CODE: &'static [u8] = &[0x55];
+        pub const LEN: usize = 6;
+        pub const DESC: rt::MessageDesc = rt::desc(Self::NAME, 0x55, 1, &[6]);
+        pub const NEW_ID: rt::Range<usize> = 2..3;
+        pub const NEW_ID_DESC: rt::FieldDesc = rt::field(Self::NAME, "new_id");
+        pub const NEW_ID_REPEAT_DESC: rt::FieldDesc = rt::field(
+            Self::NAME,
+            "new_id_repeat",
+        );
+        pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
+            f("new_id", rt::Int(self.new_id as i64));
+        }
+        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            Response::SetServoIdReply(*self).encode(address, buf)
+        }
+    }
+    impl response::ServoId {
+        pub const NAME: &'static str = "servo_id";
+        pub const CODE: &'static [u8] = &[0x6D];
+        pub const LEN: usize = 6;
+        pub const DESC: rt::MessageDesc = rt::desc(Self::NAME, 0x6D, 1, &[6]);
+        pub const ID: rt::Range<usize> = 2..3;
+        pub const ID_DESC: rt::FieldDesc = rt::field(Self::NAME, "id");
+        pub const ID_REPEAT_DESC: rt::FieldDesc = rt::field(Self::NAME, "id_repeat");
+        pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
+            f("id", rt::Int(self.id as i64));
+        }
+        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            Response::ServoId(*self).encode(address, buf)
+        }
+    }
+    impl response::CurrentConsumption {
+        pub const NAME: &'static str = "current_consumption";
+        pub const CODE: &'static [u8] = &[0x30];
+        pub const LEN: usize = 6;
+        pub const DESC: rt::MessageDesc = rt::desc(Self::NAME, 0x30, 1, &[6]);
+        pub const CURRENT: rt::Range<usize> = 2..3;
+        pub const CURRENT_REPEAT_DESC: rt::FieldDesc = rt::field(
+            Self::NAME,
+            "current_repeat",
+        );
+        pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
+            f("current", rt::Int(self.current.raw() as i64));
+        }
+        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            Response::CurrentConsumption(*self).encode(address, buf)
+        }
+    }
+    impl response::BusVoltages {
+        pub const NAME: &'static str = "bus_voltages";
+        pub const CODE: &'static [u8] = &[0x31];
+        pub const LEN: usize = 6;
+        pub const DESC: rt::MessageDesc = rt::desc(Self::NAME, 0x31, 1, &[6]);
+        pub const POWER_BUS_1_VOLTAGE: rt::Range<usize> = 2..3;
+        pub const POWER_BUS_2_VOLTAGE: rt::Range<usize> = 3..4;
+        pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
+            f("power_bus_1_voltage", rt::Int(self.power_bus_1_voltage.raw() as i64));
+            f("power_bus_2_voltage", rt::Int(self.power_bus_2_voltage.raw() as i64));
+        }
+        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            Response::BusVoltages(*self).encode(address, buf)
+        }
+    }
+    impl response::ExtendedCurrentConsumption {
+        pub const NAME: &'static str = "extended_current_consumption";
+        pub const CODE: &'static [u8] = &[0x32];
+        pub const LEN: usize = 6;
+        pub const DESC: rt::MessageDesc = rt::desc(Self::NAME, 0x32, 1, &[6]);
+        pub const CURRENT: rt::Range<usize> = 2..4;
+        pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
+            f("current", rt::Int(self.current.raw() as i64));
+        }
+        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            Response::ExtendedCurrentConsumption(*self).encode(address, buf)
+        }
+    }
+    impl response::Temperatures {
+        pub const NAME: &'static str = "temperatures";
+        pub const CODE: &'static [u8] = &[0x20];
+        pub const LEN: usize = 6;
+        pub const DESC: rt::MessageDesc = rt::desc(Self::NAME, 0x20, 1, &[6]);
+        pub const MOTOR_TEMPERATURE: rt::Range<usize> = 2..3;
+        pub const PCB_TEMPERATURE: rt::Range<usize> = 3..4;
+        /// `motor_temperature`'s special value `no_sensor`: -50 °C: no sensor available (or the measured temperature is below -49 °C)
+        pub const MOTOR_TEMPERATURE_NO_SENSOR: Temperature = Temperature::from_raw(0x00);
+        /// `motor_temperature`'s special value `defective`: 205 °C: the sensor is defective
+        pub const MOTOR_TEMPERATURE_DEFECTIVE: Temperature = Temperature::from_raw(0xFF);
+        /// `pcb_temperature`'s special value `no_sensor`: -50 °C: no sensor available (or the measured temperature is below -49 °C)
+        pub const PCB_TEMPERATURE_NO_SENSOR: Temperature = Temperature::from_raw(0x00);
+        /// `pcb_temperature`'s special value `defective`: 205 °C: the sensor is defective
+        pub const PCB_TEMPERATURE_DEFECTIVE: Temperature = Temperature::from_raw(0xFF);
+        pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
+            f("motor_temperature", rt::Int(self.motor_temperature.raw() as i64));
+            f("pcb_temperature", rt::Int(self.pcb_temperature.raw() as i64));
+        }
+        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            Response::Temperatures(*self).encode(address, buf)
+        }
+    }
+    impl response::Humidity {
+        pub const NAME: &'static str = "humidity";
+        pub const CODE: &'static [u8] = &[0x21];
+        pub const LEN: usize = 6;
+        pub const DESC: rt::MessageDesc = rt::desc(Self::NAME, 0x21, 1, &[6]);
+        pub const HUMIDITY: rt::Range<usize> = 2..3;
+        /// `humidity`'s special value `no_sensor`: no sensor available
+        pub const HUMIDITY_NO_SENSOR: u8 = 0x00;
+        pub const HUMIDITY_DESC: rt::FieldDesc = rt::field(Self::NAME, "humidity");
+        pub const HUMIDITY_REPEAT_DESC: rt::FieldDesc = rt::field(
+            Self::NAME,
+            "humidity_repeat",
+        );
+        pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
+            f("humidity", rt::Int(self.humidity as i64));
+        }
+        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            Response::Humidity(*self).encode(address, buf)
+        }
+    }
+    impl response::SkippedFramesCounter {
+        pub const NAME: &'static str = "skipped_frames_counter";
+        pub const CODE: &'static [u8] = &[0x38];
+        pub const LEN: usize = 6;
+        pub const DESC: rt::MessageDesc = rt::desc(Self::NAME, 0x38, 1, &[6]);
+        pub const HOST_FRESHNESS_COUNTER: rt::Range<usize> = 2..3;
+        pub const DROPPED_FRAMES: rt::Range<usize> = 3..4;
+        pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
+            f("host_freshness_counter", rt::Int(self.host_freshness_counter as i64));
+            f("dropped_frames", rt::Int(self.dropped_frames as i64));
+        }
+        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            Response::SkippedFramesCounter(*self).encode(address, buf)
+        }
+    }
+    impl response::DroppedFramesCounterReset {
+        pub const NAME: &'static str = "dropped_frames_counter_reset";
+        pub const CODE: &'static [u8] = &[0x38];
+        pub const LEN: usize = 6;
+        pub const DESC: rt::MessageDesc = rt::desc(Self::NAME, 0x38, 1, &[6]);
+        pub const HOST_FRESHNESS_COUNTER: rt::Range<usize> = 2..3;
+        pub const ARG2_DESC: rt::FieldDesc = rt::field(Self::NAME, "arg2");
+        pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
+            f("host_freshness_counter", rt::Int(self.host_freshness_counter as i64));
+        }
+        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            Response::DroppedFramesCounterReset(*self).encode(address, buf)
+        }
+    }
+    impl response::ActuatorStatusWord {
+        pub const NAME: &'static str = "actuator_status_word";
+        pub const CODE: &'static [u8] = &[0x41];
+        pub const LEN: usize = 6;
+        pub const DESC: rt::MessageDesc = rt::desc(Self::NAME, 0x41, 1, &[6]);
+        pub const STATUS_BITS: rt::Range<usize> = 2..3;
+        pub const STATUS_ARG2: rt::Range<usize> = 3..4;
+        pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
+            f("status_bits", rt::Int(self.status_bits.raw() as i64));
+            f("status_arg2", rt::Int(self.status_arg2 as i64));
+        }
+        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            Response::ActuatorStatusWord(*self).encode(address, buf)
+        }
+    }
+    impl response::ResetDefaultRoleAndErrorFlagsReply {
+        pub const NAME: &'static str = "reset_default_role_and_error_flags_reply";
+        pub const CODE: &'static [u8] = &[0x5A];
+        pub const LEN: usize = 6;
+        pub const DESC: rt::MessageDesc = rt::desc(Self::NAME, 0x5A, 1, &[6]);
+        pub const ARG1_DESC: rt::FieldDesc = rt::field(Self::NAME, "arg1");
+        pub const ARG2_DESC: rt::FieldDesc = rt::field(Self::NAME, "arg2");
+        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            Response::ResetDefaultRoleAndErrorFlagsReply(*self).encode(address, buf)
+        }
+    }
+    impl response::SetCurrentPositionAsZeroReply {
+        pub const NAME: &'static str = "set_current_position_as_zero_reply";
+        pub const CODE: &'static [u8] = &[0x4C];
+        pub const LEN: usize = 6;
+        pub const DESC: rt::MessageDesc = rt::desc(Self::NAME, 0x4C, 1, &[6]);
+        pub const ZERO_DESC: rt::FieldDesc = rt::field(Self::NAME, "zero");
+        pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
+            f("zero_offset", rt::Int(self.zero_offset.raw() as i64));
+        }
+        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            Response::SetCurrentPositionAsZeroReply(*self).encode(address, buf)
+        }
+    }
+    impl response::CurrentZeroOffset {
+        pub const NAME: &'static str = "current_zero_offset";
+        pub const CODE: &'static [u8] = &[0x65];
+        pub const LEN: usize = 6;
+        pub const DESC: rt::MessageDesc = rt::desc(Self::NAME, 0x65, 1, &[6]);
+        pub const ZERO_DESC: rt::FieldDesc = rt::field(Self::NAME, "zero");
+        pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
+            f("zero_offset", rt::Int(self.zero_offset.raw() as i64));
+        }
+        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            Response::CurrentZeroOffset(*self).encode(address, buf)
+        }
+    }
+    impl response::ResetZeroOffsetReply {
+        pub const NAME: &'static str = "reset_zero_offset_reply";
+        pub const CODE: &'static [u8] = &[0x64];
+        pub const LEN: usize = 6;
+        pub const DESC: rt::MessageDesc = rt::desc(Self::NAME, 0x64, 1, &[6]);
+        pub const ARG1_DESC: rt::FieldDesc = rt::field(Self::NAME, "arg1");
+        pub const ARG2_DESC: rt::FieldDesc = rt::field(Self::NAME, "arg2");
+        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            Response::ResetZeroOffsetReply(*self).encode(address, buf)
+        }
+    }
+    impl response::ElectronicSerialNumberCharacter {
+        pub const NAME: &'static str = "electronic_serial_number_character";
+        pub const CODE: &'static [u8] = &[0x10];
+        pub const LEN: usize = 6;
+        pub const DESC: rt::MessageDesc = rt::desc(Self::NAME, 0x10, 1, &[6]);
+        pub const CHARACTER: rt::Range<usize> = 2..3;
+        pub const STRING_LENGTH: rt::Range<usize> = 3..4;
+        pub const STRING_LENGTH_DESC: rt::FieldDesc = rt::field(
+            Self::NAME,
+            "string_length",
+        );
+        pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
+            f("character", rt::Int(self.character as i64));
+            f("string_length", rt::Int(self.string_length as i64));
+        }
+        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            Response::ElectronicSerialNumberCharacter(*self).encode(address, buf)
+        }
+    }
+    impl response::ProductDescriptionCharacter {
+        pub const NAME: &'static str = "product_description_character";
+        pub const CODE: &'static [u8] = &[0x11];
+        pub const LEN: usize = 6;
+        pub const DESC: rt::MessageDesc = rt::desc(Self::NAME, 0x11, 1, &[6]);
+        pub const CHARACTER: rt::Range<usize> = 2..3;
+        pub const STRING_LENGTH: rt::Range<usize> = 3..4;
+        pub const STRING_LENGTH_DESC: rt::FieldDesc = rt::field(
+            Self::NAME,
+            "string_length",
+        );
+        pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
+            f("character", rt::Int(self.character as i64));
+            f("string_length", rt::Int(self.string_length as i64));
+        }
+        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            Response::ProductDescriptionCharacter(*self).encode(address, buf)
+        }
+    }
+    impl response::SoftwareRevisionCharacter {
+        pub const NAME: &'static str = "software_revision_character";
+        pub const CODE: &'static [u8] = &[0x12];
+        pub const LEN: usize = 6;
+        pub const DESC: rt::MessageDesc = rt::desc(Self::NAME, 0x12, 1, &[6]);
+        pub const CHARACTER: rt::Range<usize> = 2..3;
+        pub const STRING_LENGTH: rt::Range<usize> = 3..4;
+        pub const STRING_LENGTH_DESC: rt::FieldDesc = rt::field(
+            Self::NAME,
+            "string_length",
+        );
+        pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
+            f("character", rt::Int(self.character as i64));
+            f("string_length", rt::Int(self.string_length as i64));
+        }
+        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            Response::SoftwareRevisionCharacter(*self).encode(address, buf)
+        }
+    }
+    impl response::HardwareRevisionCharacter {
+        pub const NAME: &'static str = "hardware_revision_character";
+        pub const CODE: &'static [u8] = &[0x13];
+        pub const LEN: usize = 6;
+        pub const DESC: rt::MessageDesc = rt::desc(Self::NAME, 0x13, 1, &[6]);
+        pub const CHARACTER: rt::Range<usize> = 2..3;
+        pub const STRING_LENGTH: rt::Range<usize> = 3..4;
+        pub const STRING_LENGTH_DESC: rt::FieldDesc = rt::field(
+            Self::NAME,
+            "string_length",
+        );
+        pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
+            f("character", rt::Int(self.character as i64));
+            f("string_length", rt::Int(self.string_length as i64));
+        }
+        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            Response::HardwareRevisionCharacter(*self).encode(address, buf)
+        }
+    }
+    impl response::TotalRuntimeHours {
+        pub const NAME: &'static str = "total_runtime_hours";
+        pub const CODE: &'static [u8] = &[0x22];
+        pub const LEN: usize = 6;
+        pub const DESC: rt::MessageDesc = rt::desc(Self::NAME, 0x22, 1, &[6]);
+        pub const RUNTIME_HOURS: rt::Range<usize> = 2..4;
+        pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
+            f("runtime_hours", rt::Int(self.runtime_hours as i64));
+        }
+        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            Response::TotalRuntimeHours(*self).encode(address, buf)
+        }
+    }
+    impl response::TotalRuntimeMinSec {
+        pub const NAME: &'static str = "total_runtime_min_sec";
+        pub const CODE: &'static [u8] = &[0x22];
+        pub const LEN: usize = 6;
+        pub const DESC: rt::MessageDesc = rt::desc(Self::NAME, 0x22, 1, &[6]);
+        pub const RUNTIME_MINUTES: rt::Range<usize> = 2..3;
+        pub const RUNTIME_SECONDS: rt::Range<usize> = 3..4;
+        pub const RUNTIME_MINUTES_DESC: rt::FieldDesc = rt::field(
+            Self::NAME,
+            "runtime_minutes",
+        );
+        pub const RUNTIME_SECONDS_DESC: rt::FieldDesc = rt::field(
+            Self::NAME,
+            "runtime_seconds",
+        );
+        pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
+            f("runtime_minutes", rt::Int(self.runtime_minutes as i64));
+            f("runtime_seconds", rt::Int(self.runtime_seconds as i64));
+        }
+        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            Response::TotalRuntimeMinSec(*self).encode(address, buf)
+        }
+    }
+    impl response::LoadRuntime024Hours {
+        pub const NAME: &'static str = "load_runtime_0_24_hours";
+        pub const CODE: &'static [u8] = &[0x23];
+        pub const LEN: usize = 6;
+        pub const DESC: rt::MessageDesc = rt::desc(Self::NAME, 0x23, 1, &[6]);
+        pub const RUNTIME_HOURS: rt::Range<usize> = 2..4;
+        pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
+            f("runtime_hours", rt::Int(self.runtime_hours as i64));
+        }
+        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            Response::LoadRuntime024Hours(*self).encode(address, buf)
+        }
+    }
+    impl response::LoadRuntime024MinSec {
+        pub const NAME: &'static str = "load_runtime_0_24_min_sec";
+        pub const CODE: &'static [u8] = &[0x23];
+        pub const LEN: usize = 6;
+        pub const DESC: rt::MessageDesc = rt::desc(Self::NAME, 0x23, 1, &[6]);
+        pub const RUNTIME_MINUTES: rt::Range<usize> = 2..3;
+        pub const RUNTIME_SECONDS: rt::Range<usize> = 3..4;
+        pub const RUNTIME_MINUTES_DESC: rt::FieldDesc = rt::field(
+            Self::NAME,
+            "runtime_minutes",
+        );
+        pub const RUNTIME_SECONDS_DESC: rt::FieldDesc = rt::field(
+            Self::NAME,
+            "runtime_seconds",
+        );
+        pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
+            f("runtime_minutes", rt::Int(self.runtime_minutes as i64));
+            f("runtime_seconds", rt::Int(self.runtime_seconds as i64));
+        }
+        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            Response::LoadRuntime024MinSec(*self).encode(address, buf)
+        }
+    }
+    impl response::LoadRuntime024HoursBeforeReset {
+        pub const NAME: &'static str = "load_runtime_0_24_hours_before_reset";
+        pub const CODE: &'static [u8] = &[0x23];
+        pub const LEN: usize = 6;
+        pub const DESC: rt::MessageDesc = rt::desc(Self::NAME, 0x23, 1, &[6]);
+        pub const RUNTIME_HOURS_BEFORE_RESET: rt::Range<usize> = 2..4;
+        pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
+            f(
+                "runtime_hours_before_reset",
+                rt::Int(self.runtime_hours_before_reset as i64),
+            );
+        }
+        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            Response::LoadRuntime024HoursBeforeReset(*self).encode(address, buf)
+        }
+    }
+    impl response::LoadRuntime2549Hours {
+        pub const NAME: &'static str = "load_runtime_25_49_hours";
+        pub const CODE: &'static [u8] = &[0x24];
+        pub const LEN: usize = 6;
+        pub const DESC: rt::MessageDesc = rt::desc(Self::NAME, 0x24, 1, &[6]);
+        pub const RUNTIME_HOURS: rt::Range<usize> = 2..4;
+        pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
+            f("runtime_hours", rt::Int(self.runtime_hours as i64));
+        }
+        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            Response::LoadRuntime2549Hours(*self).encode(address, buf)
+        }
+    }
+    impl response::LoadRuntime2549MinSec {
+        pub const NAME: &'static str = "load_runtime_25_49_min_sec";
+        pub const CODE: &'static [u8] = &[0x24];
+        pub const LEN: usize = 6;
+        pub const DESC: rt::MessageDesc = rt::desc(Self::NAME, 0x24, 1, &[6]);
+        pub const RUNTIME_MINUTES: rt::Range<usize> = 2..3;
+        pub const RUNTIME_SECONDS: rt::Range<usize> = 3..4;
+        pub const RUNTIME_MINUTES_DESC: rt::FieldDesc = rt::field(
+            Self::NAME,
+            "runtime_minutes",
+        );
+        pub const RUNTIME_SECONDS_DESC: rt::FieldDesc = rt::field(
+            Self::NAME,
+            "runtime_seconds",
+        );
+        pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
+            f("runtime_minutes", rt::Int(self.runtime_minutes as i64));
+            f("runtime_seconds", rt::Int(self.runtime_seconds as i64));
+        }
+        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            Response::LoadRuntime2549MinSec(*self).encode(address, buf)
+        }
+    }
+    impl response::LoadRuntime2549HoursBeforeReset {
+        pub const NAME: &'static str = "load_runtime_25_49_hours_before_reset";
+        pub const CODE: &'static [u8] = &[0x24];
+        pub const LEN: usize = 6;
+        pub const DESC: rt::MessageDesc = rt::desc(Self::NAME, 0x24, 1, &[6]);
+        pub const RUNTIME_HOURS_BEFORE_RESET: rt::Range<usize> = 2..4;
+        pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
+            f(
+                "runtime_hours_before_reset",
+                rt::Int(self.runtime_hours_before_reset as i64),
+            );
+        }
+        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            Response::LoadRuntime2549HoursBeforeReset(*self).encode(address, buf)
+        }
+    }
+    impl response::LoadRuntime5074Hours {
+        pub const NAME: &'static str = "load_runtime_50_74_hours";
+        pub const CODE: &'static [u8] = &[0x25];
+        pub const LEN: usize = 6;
+        pub const DESC: rt::MessageDesc = rt::desc(Self::NAME, 0x25, 1, &[6]);
+        pub const RUNTIME_HOURS: rt::Range<usize> = 2..4;
+        pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
+            f("runtime_hours", rt::Int(self.runtime_hours as i64));
+        }
+        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            Response::LoadRuntime5074Hours(*self).encode(address, buf)
+        }
+    }
+    impl response::LoadRuntime5074MinSec {
+        pub const NAME: &'static str = "load_runtime_50_74_min_sec";
+        pub const CODE: &'static [u8] = &[0x25];
+        pub const LEN: usize = 6;
+        pub const DESC: rt::MessageDesc = rt::desc(Self::NAME, 0x25, 1, &[6]);
+        pub const RUNTIME_MINUTES: rt::Range<usize> = 2..3;
+        pub const RUNTIME_SECONDS: rt::Range<usize> = 3..4;
+        pub const RUNTIME_MINUTES_DESC: rt::FieldDesc = rt::field(
+            Self::NAME,
+            "runtime_minutes",
+        );
+        pub const RUNTIME_SECONDS_DESC: rt::FieldDesc = rt::field(
+            Self::NAME,
+            "runtime_seconds",
+        );
+        pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
+            f("runtime_minutes", rt::Int(self.runtime_minutes as i64));
+            f("runtime_seconds", rt::Int(self.runtime_seconds as i64));
+        }
+        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            Response::LoadRuntime5074MinSec(*self).encode(address, buf)
+        }
+    }
+    impl response::LoadRuntime5074HoursBeforeReset {
+        pub const NAME: &'static str = "load_runtime_50_74_hours_before_reset";
+        pub const CODE: &'static [u8] = &[0x25];
+        pub const LEN: usize = 6;
+        pub const DESC: rt::MessageDesc = rt::desc(Self::NAME, 0x25, 1, &[6]);
+        pub const RUNTIME_HOURS_BEFORE_RESET: rt::Range<usize> = 2..4;
+        pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
+            f(
+                "runtime_hours_before_reset",
+                rt::Int(self.runtime_hours_before_reset as i64),
+            );
+        }
+        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            Response::LoadRuntime5074HoursBeforeReset(*self).encode(address, buf)
+        }
+    }
+    impl response::LoadRuntime7599Hours {
+        pub const NAME: &'static str = "load_runtime_75_99_hours";
+        pub const CODE: &'static [u8] = &[0x26];
+        pub const LEN: usize = 6;
+        pub const DESC: rt::MessageDesc = rt::desc(Self::NAME, 0x26, 1, &[6]);
+        pub const RUNTIME_HOURS: rt::Range<usize> = 2..4;
+        pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
+            f("runtime_hours", rt::Int(self.runtime_hours as i64));
+        }
+        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            Response::LoadRuntime7599Hours(*self).encode(address, buf)
+        }
+    }
+    impl response::LoadRuntime7599MinSec {
+        pub const NAME: &'static str = "load_runtime_75_99_min_sec";
+        pub const CODE: &'static [u8] = &[0x26];
+        pub const LEN: usize = 6;
+        pub const DESC: rt::MessageDesc = rt::desc(Self::NAME, 0x26, 1, &[6]);
+        pub const RUNTIME_MINUTES: rt::Range<usize> = 2..3;
+        pub const RUNTIME_SECONDS: rt::Range<usize> = 3..4;
+        pub const RUNTIME_MINUTES_DESC: rt::FieldDesc = rt::field(
+            Self::NAME,
+            "runtime_minutes",
+        );
+        pub const RUNTIME_SECONDS_DESC: rt::FieldDesc = rt::field(
+            Self::NAME,
+            "runtime_seconds",
+        );
+        pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
+            f("runtime_minutes", rt::Int(self.runtime_minutes as i64));
+            f("runtime_seconds", rt::Int(self.runtime_seconds as i64));
+        }
+        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            Response::LoadRuntime7599MinSec(*self).encode(address, buf)
+        }
+    }
+    impl response::LoadRuntime7599HoursBeforeReset {
+        pub const NAME: &'static str = "load_runtime_75_99_hours_before_reset";
+        pub const CODE: &'static [u8] = &[0x26];
+        pub const LEN: usize = 6;
+        pub const DESC: rt::MessageDesc = rt::desc(Self::NAME, 0x26, 1, &[6]);
+        pub const RUNTIME_HOURS_BEFORE_RESET: rt::Range<usize> = 2..4;
+        pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
+            f(
+                "runtime_hours_before_reset",
+                rt::Int(self.runtime_hours_before_reset as i64),
+            );
+        }
+        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            Response::LoadRuntime7599HoursBeforeReset(*self).encode(address, buf)
+        }
+    }
+    impl response::LoadRuntime100Hours {
+        pub const NAME: &'static str = "load_runtime_100_hours";
+        pub const CODE: &'static [u8] = &[0x27];
+        pub const LEN: usize = 6;
+        pub const DESC: rt::MessageDesc = rt::desc(Self::NAME, 0x27, 1, &[6]);
+        pub const RUNTIME_HOURS: rt::Range<usize> = 2..4;
+        pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
+            f("runtime_hours", rt::Int(self.runtime_hours as i64));
+        }
+        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            Response::LoadRuntime100Hours(*self).encode(address, buf)
+        }
+    }
+    impl response::LoadRuntime100MinSec {
+        pub const NAME: &'static str = "load_runtime_100_min_sec";
+        pub const CODE: &'static [u8] = &[0x27];
+        pub const LEN: usize = 6;
+        pub const DESC: rt::MessageDesc = rt::desc(Self::NAME, 0x27, 1, &[6]);
+        pub const RUNTIME_MINUTES: rt::Range<usize> = 2..3;
+        pub const RUNTIME_SECONDS: rt::Range<usize> = 3..4;
+        pub const RUNTIME_MINUTES_DESC: rt::FieldDesc = rt::field(
+            Self::NAME,
+            "runtime_minutes",
+        );
+        pub const RUNTIME_SECONDS_DESC: rt::FieldDesc = rt::field(
+            Self::NAME,
+            "runtime_seconds",
+        );
+        pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
+            f("runtime_minutes", rt::Int(self.runtime_minutes as i64));
+            f("runtime_seconds", rt::Int(self.runtime_seconds as i64));
+        }
+        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            Response::LoadRuntime100MinSec(*self).encode(address, buf)
+        }
+    }
+    impl response::LoadRuntime100HoursBeforeReset {
+        pub const NAME: &'static str = "load_runtime_100_hours_before_reset";
+        pub const CODE: &'static [u8] = &[0x27];
+        pub const LEN: usize = 6;
+        pub const DESC: rt::MessageDesc = rt::desc(Self::NAME, 0x27, 1, &[6]);
+        pub const RUNTIME_HOURS_BEFORE_RESET: rt::Range<usize> = 2..4;
+        pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
+            f(
+                "runtime_hours_before_reset",
+                rt::Int(self.runtime_hours_before_reset as i64),
+            );
+        }
+        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            Response::LoadRuntime100HoursBeforeReset(*self).encode(address, buf)
+        }
+    }
+    impl response::StallEventCounter {
+        pub const NAME: &'static str = "stall_event_counter";
+        pub const CODE: &'static [u8] = &[0x28];
+        pub const LEN: usize = 6;
+        pub const DESC: rt::MessageDesc = rt::desc(Self::NAME, 0x28, 1, &[6]);
+        pub const STALL_EVENTS: rt::Range<usize> = 2..4;
+        pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
+            f("stall_events", rt::Int(self.stall_events as i64));
+        }
+        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            Response::StallEventCounter(*self).encode(address, buf)
+        }
+    }
+    impl response::StallEventCounterBeforeReset {
+        pub const NAME: &'static str = "stall_event_counter_before_reset";
+        pub const CODE: &'static [u8] = &[0x28];
+        pub const LEN: usize = 6;
+        pub const DESC: rt::MessageDesc = rt::desc(Self::NAME, 0x28, 1, &[6]);
+        pub const STALL_EVENTS_BEFORE_RESET: rt::Range<usize> = 2..4;
+        pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
+            f(
+                "stall_events_before_reset",
+                rt::Int(self.stall_events_before_reset as i64),
+            );
+        }
+        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            Response::StallEventCounterBeforeReset(*self).encode(address, buf)
+        }
+    }
+    impl response::PowerUpCycles {
+        pub const NAME: &'static str = "power_up_cycles";
+        pub const CODE: &'static [u8] = &[0x29];
+        pub const LEN: usize = 6;
+        pub const DESC: rt::MessageDesc = rt::desc(Self::NAME, 0x29, 1, &[6]);
+        pub const POWER_UP_CYCLES: rt::Range<usize> = 2..4;
+        pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
+            f("power_up_cycles", rt::Int(self.power_up_cycles as i64));
+        }
+        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            Response::PowerUpCycles(*self).encode(address, buf)
+        }
+    }
+    /// Each request as a struct of its own; its constants (`DESC`, which names it as
+    /// refusals do: name, code and the frame lengths of its code; `QUANTITY_DESC`, each
+    /// field a refusal names) and methods are in the `impl` of each.
     pub mod request {
-        use ::busspec_runtime::FieldDesc;
         /// §3.1 Set Point Command (code `0x76`, 6 bytes). Set point: move to the given position. The host increments the 4-bit host data freshness counter with every set point command; the actuator checks it against its configured "Freshness Counter Threshold" (0 = no count may be skipped, 1 = one count may be skipped, ..., >= 15 = check disabled) and on a violation loads its set point from the configured "Fail-Safe Position" (erratum sd-e09).
         #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
         #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
@@ -5681,420 +5295,9 @@ pub mod sd {
         #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
         #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]
         pub struct ReadPowerUpCycles;
-        /// `read_actual_position.arg1`
-        pub const READ_ACTUAL_POSITION_ARG1: FieldDesc = FieldDesc::new(
-            "read_actual_position",
-            "arg1",
-        );
-        /// `read_actual_position.arg2`
-        pub const READ_ACTUAL_POSITION_ARG2: FieldDesc = FieldDesc::new(
-            "read_actual_position",
-            "arg2",
-        );
-        /// `read_actual_velocity.arg1`
-        pub const READ_ACTUAL_VELOCITY_ARG1: FieldDesc = FieldDesc::new(
-            "read_actual_velocity",
-            "arg1",
-        );
-        /// `read_actual_velocity.arg2`
-        pub const READ_ACTUAL_VELOCITY_ARG2: FieldDesc = FieldDesc::new(
-            "read_actual_velocity",
-            "arg2",
-        );
-        /// `set_servo_id.new_id`
-        pub const SET_SERVO_ID_NEW_ID: FieldDesc = FieldDesc::new(
-            "set_servo_id",
-            "new_id",
-        );
-        /// `set_servo_id.new_id_repeat`
-        pub const SET_SERVO_ID_NEW_ID_REPEAT: FieldDesc = FieldDesc::new(
-            "set_servo_id",
-            "new_id_repeat",
-        );
-        /// `read_servo_id.arg1`
-        pub const READ_SERVO_ID_ARG1: FieldDesc = FieldDesc::new(
-            "read_servo_id",
-            "arg1",
-        );
-        /// `read_servo_id.arg2`
-        pub const READ_SERVO_ID_ARG2: FieldDesc = FieldDesc::new(
-            "read_servo_id",
-            "arg2",
-        );
-        /// `read_current_consumption.arg1`
-        pub const READ_CURRENT_CONSUMPTION_ARG1: FieldDesc = FieldDesc::new(
-            "read_current_consumption",
-            "arg1",
-        );
-        /// `read_current_consumption.arg2`
-        pub const READ_CURRENT_CONSUMPTION_ARG2: FieldDesc = FieldDesc::new(
-            "read_current_consumption",
-            "arg2",
-        );
-        /// `read_bus_voltages.arg1`
-        pub const READ_BUS_VOLTAGES_ARG1: FieldDesc = FieldDesc::new(
-            "read_bus_voltages",
-            "arg1",
-        );
-        /// `read_bus_voltages.arg2`
-        pub const READ_BUS_VOLTAGES_ARG2: FieldDesc = FieldDesc::new(
-            "read_bus_voltages",
-            "arg2",
-        );
-        /// `read_extended_current_consumption.arg1`
-        pub const READ_EXTENDED_CURRENT_CONSUMPTION_ARG1: FieldDesc = FieldDesc::new(
-            "read_extended_current_consumption",
-            "arg1",
-        );
-        /// `read_extended_current_consumption.arg2`
-        pub const READ_EXTENDED_CURRENT_CONSUMPTION_ARG2: FieldDesc = FieldDesc::new(
-            "read_extended_current_consumption",
-            "arg2",
-        );
-        /// `read_temperatures.arg1`
-        pub const READ_TEMPERATURES_ARG1: FieldDesc = FieldDesc::new(
-            "read_temperatures",
-            "arg1",
-        );
-        /// `read_temperatures.arg2`
-        pub const READ_TEMPERATURES_ARG2: FieldDesc = FieldDesc::new(
-            "read_temperatures",
-            "arg2",
-        );
-        /// `read_humidity.arg1`
-        pub const READ_HUMIDITY_ARG1: FieldDesc = FieldDesc::new(
-            "read_humidity",
-            "arg1",
-        );
-        /// `read_humidity.arg2`
-        pub const READ_HUMIDITY_ARG2: FieldDesc = FieldDesc::new(
-            "read_humidity",
-            "arg2",
-        );
-        /// `read_skipped_frames_counter.arg1`
-        pub const READ_SKIPPED_FRAMES_COUNTER_ARG1: FieldDesc = FieldDesc::new(
-            "read_skipped_frames_counter",
-            "arg1",
-        );
-        /// `read_skipped_frames_counter.arg2`
-        pub const READ_SKIPPED_FRAMES_COUNTER_ARG2: FieldDesc = FieldDesc::new(
-            "read_skipped_frames_counter",
-            "arg2",
-        );
-        /// `reset_dropped_frames_counter.arg1`
-        pub const RESET_DROPPED_FRAMES_COUNTER_ARG1: FieldDesc = FieldDesc::new(
-            "reset_dropped_frames_counter",
-            "arg1",
-        );
-        /// `reset_dropped_frames_counter.arg2`
-        pub const RESET_DROPPED_FRAMES_COUNTER_ARG2: FieldDesc = FieldDesc::new(
-            "reset_dropped_frames_counter",
-            "arg2",
-        );
-        /// `read_actuator_status_word.arg1`
-        pub const READ_ACTUATOR_STATUS_WORD_ARG1: FieldDesc = FieldDesc::new(
-            "read_actuator_status_word",
-            "arg1",
-        );
-        /// `read_actuator_status_word.arg2`
-        pub const READ_ACTUATOR_STATUS_WORD_ARG2: FieldDesc = FieldDesc::new(
-            "read_actuator_status_word",
-            "arg2",
-        );
-        /// `reset_actuator_status_word.arg1`
-        pub const RESET_ACTUATOR_STATUS_WORD_ARG1: FieldDesc = FieldDesc::new(
-            "reset_actuator_status_word",
-            "arg1",
-        );
-        /// `reset_actuator_status_word.arg2`
-        pub const RESET_ACTUATOR_STATUS_WORD_ARG2: FieldDesc = FieldDesc::new(
-            "reset_actuator_status_word",
-            "arg2",
-        );
-        /// `reset_default_role_and_error_flags.arg1`
-        pub const RESET_DEFAULT_ROLE_AND_ERROR_FLAGS_ARG1: FieldDesc = FieldDesc::new(
-            "reset_default_role_and_error_flags",
-            "arg1",
-        );
-        /// `reset_default_role_and_error_flags.arg2`
-        pub const RESET_DEFAULT_ROLE_AND_ERROR_FLAGS_ARG2: FieldDesc = FieldDesc::new(
-            "reset_default_role_and_error_flags",
-            "arg2",
-        );
-        /// `set_current_position_as_zero.arg1`
-        pub const SET_CURRENT_POSITION_AS_ZERO_ARG1: FieldDesc = FieldDesc::new(
-            "set_current_position_as_zero",
-            "arg1",
-        );
-        /// `set_current_position_as_zero.arg2`
-        pub const SET_CURRENT_POSITION_AS_ZERO_ARG2: FieldDesc = FieldDesc::new(
-            "set_current_position_as_zero",
-            "arg2",
-        );
-        /// `read_current_zero_offset.arg1`
-        pub const READ_CURRENT_ZERO_OFFSET_ARG1: FieldDesc = FieldDesc::new(
-            "read_current_zero_offset",
-            "arg1",
-        );
-        /// `read_current_zero_offset.arg2`
-        pub const READ_CURRENT_ZERO_OFFSET_ARG2: FieldDesc = FieldDesc::new(
-            "read_current_zero_offset",
-            "arg2",
-        );
-        /// `reset_zero_offset.arg1`
-        pub const RESET_ZERO_OFFSET_ARG1: FieldDesc = FieldDesc::new(
-            "reset_zero_offset",
-            "arg1",
-        );
-        /// `reset_zero_offset.arg2`
-        pub const RESET_ZERO_OFFSET_ARG2: FieldDesc = FieldDesc::new(
-            "reset_zero_offset",
-            "arg2",
-        );
-        /// `read_electronic_serial_number.arg1`
-        pub const READ_ELECTRONIC_SERIAL_NUMBER_ARG1: FieldDesc = FieldDesc::new(
-            "read_electronic_serial_number",
-            "arg1",
-        );
-        /// `read_electronic_serial_number.byte_number`
-        pub const READ_ELECTRONIC_SERIAL_NUMBER_BYTE_NUMBER: FieldDesc = FieldDesc::new(
-            "read_electronic_serial_number",
-            "byte_number",
-        );
-        /// `read_product_description.arg1`
-        pub const READ_PRODUCT_DESCRIPTION_ARG1: FieldDesc = FieldDesc::new(
-            "read_product_description",
-            "arg1",
-        );
-        /// `read_product_description.byte_number`
-        pub const READ_PRODUCT_DESCRIPTION_BYTE_NUMBER: FieldDesc = FieldDesc::new(
-            "read_product_description",
-            "byte_number",
-        );
-        /// `read_software_revision.arg1`
-        pub const READ_SOFTWARE_REVISION_ARG1: FieldDesc = FieldDesc::new(
-            "read_software_revision",
-            "arg1",
-        );
-        /// `read_software_revision.byte_number`
-        pub const READ_SOFTWARE_REVISION_BYTE_NUMBER: FieldDesc = FieldDesc::new(
-            "read_software_revision",
-            "byte_number",
-        );
-        /// `read_hardware_revision.arg1`
-        pub const READ_HARDWARE_REVISION_ARG1: FieldDesc = FieldDesc::new(
-            "read_hardware_revision",
-            "arg1",
-        );
-        /// `read_hardware_revision.byte_number`
-        pub const READ_HARDWARE_REVISION_BYTE_NUMBER: FieldDesc = FieldDesc::new(
-            "read_hardware_revision",
-            "byte_number",
-        );
-        /// `read_total_runtime_hours.arg1`
-        pub const READ_TOTAL_RUNTIME_HOURS_ARG1: FieldDesc = FieldDesc::new(
-            "read_total_runtime_hours",
-            "arg1",
-        );
-        /// `read_total_runtime_hours.arg2`
-        pub const READ_TOTAL_RUNTIME_HOURS_ARG2: FieldDesc = FieldDesc::new(
-            "read_total_runtime_hours",
-            "arg2",
-        );
-        /// `read_total_runtime_min_sec.arg1`
-        pub const READ_TOTAL_RUNTIME_MIN_SEC_ARG1: FieldDesc = FieldDesc::new(
-            "read_total_runtime_min_sec",
-            "arg1",
-        );
-        /// `read_total_runtime_min_sec.arg2`
-        pub const READ_TOTAL_RUNTIME_MIN_SEC_ARG2: FieldDesc = FieldDesc::new(
-            "read_total_runtime_min_sec",
-            "arg2",
-        );
-        /// `read_load_runtime_0_24_hours.arg1`
-        pub const READ_LOAD_RUNTIME_0_24_HOURS_ARG1: FieldDesc = FieldDesc::new(
-            "read_load_runtime_0_24_hours",
-            "arg1",
-        );
-        /// `read_load_runtime_0_24_hours.arg2`
-        pub const READ_LOAD_RUNTIME_0_24_HOURS_ARG2: FieldDesc = FieldDesc::new(
-            "read_load_runtime_0_24_hours",
-            "arg2",
-        );
-        /// `read_load_runtime_0_24_min_sec.arg1`
-        pub const READ_LOAD_RUNTIME_0_24_MIN_SEC_ARG1: FieldDesc = FieldDesc::new(
-            "read_load_runtime_0_24_min_sec",
-            "arg1",
-        );
-        /// `read_load_runtime_0_24_min_sec.arg2`
-        pub const READ_LOAD_RUNTIME_0_24_MIN_SEC_ARG2: FieldDesc = FieldDesc::new(
-            "read_load_runtime_0_24_min_sec",
-            "arg2",
-        );
-        /// `reset_load_runtime_0_24.arg1`
-        pub const RESET_LOAD_RUNTIME_0_24_ARG1: FieldDesc = FieldDesc::new(
-            "reset_load_runtime_0_24",
-            "arg1",
-        );
-        /// `reset_load_runtime_0_24.arg2`
-        pub const RESET_LOAD_RUNTIME_0_24_ARG2: FieldDesc = FieldDesc::new(
-            "reset_load_runtime_0_24",
-            "arg2",
-        );
-        /// `read_load_runtime_25_49_hours.arg1`
-        pub const READ_LOAD_RUNTIME_25_49_HOURS_ARG1: FieldDesc = FieldDesc::new(
-            "read_load_runtime_25_49_hours",
-            "arg1",
-        );
-        /// `read_load_runtime_25_49_hours.arg2`
-        pub const READ_LOAD_RUNTIME_25_49_HOURS_ARG2: FieldDesc = FieldDesc::new(
-            "read_load_runtime_25_49_hours",
-            "arg2",
-        );
-        /// `read_load_runtime_25_49_min_sec.arg1`
-        pub const READ_LOAD_RUNTIME_25_49_MIN_SEC_ARG1: FieldDesc = FieldDesc::new(
-            "read_load_runtime_25_49_min_sec",
-            "arg1",
-        );
-        /// `read_load_runtime_25_49_min_sec.arg2`
-        pub const READ_LOAD_RUNTIME_25_49_MIN_SEC_ARG2: FieldDesc = FieldDesc::new(
-            "read_load_runtime_25_49_min_sec",
-            "arg2",
-        );
-        /// `reset_load_runtime_25_49.arg1`
-        pub const RESET_LOAD_RUNTIME_25_49_ARG1: FieldDesc = FieldDesc::new(
-            "reset_load_runtime_25_49",
-            "arg1",
-        );
-        /// `reset_load_runtime_25_49.arg2`
-        pub const RESET_LOAD_RUNTIME_25_49_ARG2: FieldDesc = FieldDesc::new(
-            "reset_load_runtime_25_49",
-            "arg2",
-        );
-        /// `read_load_runtime_50_74_hours.arg1`
-        pub const READ_LOAD_RUNTIME_50_74_HOURS_ARG1: FieldDesc = FieldDesc::new(
-            "read_load_runtime_50_74_hours",
-            "arg1",
-        );
-        /// `read_load_runtime_50_74_hours.arg2`
-        pub const READ_LOAD_RUNTIME_50_74_HOURS_ARG2: FieldDesc = FieldDesc::new(
-            "read_load_runtime_50_74_hours",
-            "arg2",
-        );
-        /// `read_load_runtime_50_74_min_sec.arg1`
-        pub const READ_LOAD_RUNTIME_50_74_MIN_SEC_ARG1: FieldDesc = FieldDesc::new(
-            "read_load_runtime_50_74_min_sec",
-            "arg1",
-        );
-        /// `read_load_runtime_50_74_min_sec.arg2`
-        pub const READ_LOAD_RUNTIME_50_74_MIN_SEC_ARG2: FieldDesc = FieldDesc::new(
-            "read_load_runtime_50_74_min_sec",
-            "arg2",
-        );
-        /// `reset_load_runtime_50_74.arg1`
-        pub const RESET_LOAD_RUNTIME_50_74_ARG1: FieldDesc = FieldDesc::new(
-            "reset_load_runtime_50_74",
-            "arg1",
-        );
-        /// `reset_load_runtime_50_74.arg2`
-        pub const RESET_LOAD_RUNTIME_50_74_ARG2: FieldDesc = FieldDesc::new(
-            "reset_load_runtime_50_74",
-            "arg2",
-        );
-        /// `read_load_runtime_75_99_hours.arg1`
-        pub const READ_LOAD_RUNTIME_75_99_HOURS_ARG1: FieldDesc = FieldDesc::new(
-            "read_load_runtime_75_99_hours",
-            "arg1",
-        );
-        /// `read_load_runtime_75_99_hours.arg2`
-        pub const READ_LOAD_RUNTIME_75_99_HOURS_ARG2: FieldDesc = FieldDesc::new(
-            "read_load_runtime_75_99_hours",
-            "arg2",
-        );
-        /// `read_load_runtime_75_99_min_sec.arg1`
-        pub const READ_LOAD_RUNTIME_75_99_MIN_SEC_ARG1: FieldDesc = FieldDesc::new(
-            "read_load_runtime_75_99_min_sec",
-            "arg1",
-        );
-        /// `read_load_runtime_75_99_min_sec.arg2`
-        pub const READ_LOAD_RUNTIME_75_99_MIN_SEC_ARG2: FieldDesc = FieldDesc::new(
-            "read_load_runtime_75_99_min_sec",
-            "arg2",
-        );
-        /// `reset_load_runtime_75_99.arg1`
-        pub const RESET_LOAD_RUNTIME_75_99_ARG1: FieldDesc = FieldDesc::new(
-            "reset_load_runtime_75_99",
-            "arg1",
-        );
-        /// `reset_load_runtime_75_99.arg2`
-        pub const RESET_LOAD_RUNTIME_75_99_ARG2: FieldDesc = FieldDesc::new(
-            "reset_load_runtime_75_99",
-            "arg2",
-        );
-        /// `read_load_runtime_100_hours.arg1`
-        pub const READ_LOAD_RUNTIME_100_HOURS_ARG1: FieldDesc = FieldDesc::new(
-            "read_load_runtime_100_hours",
-            "arg1",
-        );
-        /// `read_load_runtime_100_hours.arg2`
-        pub const READ_LOAD_RUNTIME_100_HOURS_ARG2: FieldDesc = FieldDesc::new(
-            "read_load_runtime_100_hours",
-            "arg2",
-        );
-        /// `read_load_runtime_100_min_sec.arg1`
-        pub const READ_LOAD_RUNTIME_100_MIN_SEC_ARG1: FieldDesc = FieldDesc::new(
-            "read_load_runtime_100_min_sec",
-            "arg1",
-        );
-        /// `read_load_runtime_100_min_sec.arg2`
-        pub const READ_LOAD_RUNTIME_100_MIN_SEC_ARG2: FieldDesc = FieldDesc::new(
-            "read_load_runtime_100_min_sec",
-            "arg2",
-        );
-        /// `reset_load_runtime_100.arg1`
-        pub const RESET_LOAD_RUNTIME_100_ARG1: FieldDesc = FieldDesc::new(
-            "reset_load_runtime_100",
-            "arg1",
-        );
-        /// `reset_load_runtime_100.arg2`
-        pub const RESET_LOAD_RUNTIME_100_ARG2: FieldDesc = FieldDesc::new(
-            "reset_load_runtime_100",
-            "arg2",
-        );
-        /// `read_stall_event_counter.arg1`
-        pub const READ_STALL_EVENT_COUNTER_ARG1: FieldDesc = FieldDesc::new(
-            "read_stall_event_counter",
-            "arg1",
-        );
-        /// `read_stall_event_counter.arg2`
-        pub const READ_STALL_EVENT_COUNTER_ARG2: FieldDesc = FieldDesc::new(
-            "read_stall_event_counter",
-            "arg2",
-        );
-        /// `reset_stall_event_counter.arg1`
-        pub const RESET_STALL_EVENT_COUNTER_ARG1: FieldDesc = FieldDesc::new(
-            "reset_stall_event_counter",
-            "arg1",
-        );
-        /// `reset_stall_event_counter.arg2`
-        pub const RESET_STALL_EVENT_COUNTER_ARG2: FieldDesc = FieldDesc::new(
-            "reset_stall_event_counter",
-            "arg2",
-        );
-        /// `read_power_up_cycles.arg1`
-        pub const READ_POWER_UP_CYCLES_ARG1: FieldDesc = FieldDesc::new(
-            "read_power_up_cycles",
-            "arg1",
-        );
-        /// `read_power_up_cycles.arg2`
-        pub const READ_POWER_UP_CYCLES_ARG2: FieldDesc = FieldDesc::new(
-            "read_power_up_cycles",
-            "arg2",
-        );
     }
-    /// Each response as a struct of its own, and the fields its refusals name.
+    /// Each response as a struct of its own.
     pub mod response {
-        use ::busspec_runtime::FieldDesc;
         /// §3.1 Set point response: actuator data freshness counter and actual position (code `0x56`, 6 bytes). Reply to set_point. The actuator data freshness counter is a 4-bit counter decremented by the servo for each reply (erratum sd-e09); the actual position has the set point's format.
         #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
         #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
@@ -6495,154 +5698,5 @@ pub mod sd {
             /// Number of power up cycles, high byte first
             pub power_up_cycles: u16,
         }
-        /// `actual_position.zero`
-        pub const ACTUAL_POSITION_ZERO: FieldDesc = FieldDesc::new(
-            "actual_position",
-            "zero",
-        );
-        /// `set_servo_id_reply.new_id`
-        pub const SET_SERVO_ID_REPLY_NEW_ID: FieldDesc = FieldDesc::new(
-            "set_servo_id_reply",
-            "new_id",
-        );
-        /// `set_servo_id_reply.new_id_repeat`
-        pub const SET_SERVO_ID_REPLY_NEW_ID_REPEAT: FieldDesc = FieldDesc::new(
-            "set_servo_id_reply",
-            "new_id_repeat",
-        );
-        /// `servo_id.id`
-        pub const SERVO_ID_ID: FieldDesc = FieldDesc::new("servo_id", "id");
-        /// `servo_id.id_repeat`
-        pub const SERVO_ID_ID_REPEAT: FieldDesc = FieldDesc::new(
-            "servo_id",
-            "id_repeat",
-        );
-        /// `current_consumption.current_repeat`
-        pub const CURRENT_CONSUMPTION_CURRENT_REPEAT: FieldDesc = FieldDesc::new(
-            "current_consumption",
-            "current_repeat",
-        );
-        /// `humidity.humidity`
-        pub const HUMIDITY_HUMIDITY: FieldDesc = FieldDesc::new("humidity", "humidity");
-        /// `humidity.humidity_repeat`
-        pub const HUMIDITY_HUMIDITY_REPEAT: FieldDesc = FieldDesc::new(
-            "humidity",
-            "humidity_repeat",
-        );
-        /// `dropped_frames_counter_reset.arg2`
-        pub const DROPPED_FRAMES_COUNTER_RESET_ARG2: FieldDesc = FieldDesc::new(
-            "dropped_frames_counter_reset",
-            "arg2",
-        );
-        /// `reset_default_role_and_error_flags_reply.arg1`
-        pub const RESET_DEFAULT_ROLE_AND_ERROR_FLAGS_REPLY_ARG1: FieldDesc = FieldDesc::new(
-            "reset_default_role_and_error_flags_reply",
-            "arg1",
-        );
-        /// `reset_default_role_and_error_flags_reply.arg2`
-        pub const RESET_DEFAULT_ROLE_AND_ERROR_FLAGS_REPLY_ARG2: FieldDesc = FieldDesc::new(
-            "reset_default_role_and_error_flags_reply",
-            "arg2",
-        );
-        /// `set_current_position_as_zero_reply.zero`
-        pub const SET_CURRENT_POSITION_AS_ZERO_REPLY_ZERO: FieldDesc = FieldDesc::new(
-            "set_current_position_as_zero_reply",
-            "zero",
-        );
-        /// `current_zero_offset.zero`
-        pub const CURRENT_ZERO_OFFSET_ZERO: FieldDesc = FieldDesc::new(
-            "current_zero_offset",
-            "zero",
-        );
-        /// `reset_zero_offset_reply.arg1`
-        pub const RESET_ZERO_OFFSET_REPLY_ARG1: FieldDesc = FieldDesc::new(
-            "reset_zero_offset_reply",
-            "arg1",
-        );
-        /// `reset_zero_offset_reply.arg2`
-        pub const RESET_ZERO_OFFSET_REPLY_ARG2: FieldDesc = FieldDesc::new(
-            "reset_zero_offset_reply",
-            "arg2",
-        );
-        /// `electronic_serial_number_character.string_length`
-        pub const ELECTRONIC_SERIAL_NUMBER_CHARACTER_STRING_LENGTH: FieldDesc = FieldDesc::new(
-            "electronic_serial_number_character",
-            "string_length",
-        );
-        /// `product_description_character.string_length`
-        pub const PRODUCT_DESCRIPTION_CHARACTER_STRING_LENGTH: FieldDesc = FieldDesc::new(
-            "product_description_character",
-            "string_length",
-        );
-        /// `software_revision_character.string_length`
-        pub const SOFTWARE_REVISION_CHARACTER_STRING_LENGTH: FieldDesc = FieldDesc::new(
-            "software_revision_character",
-            "string_length",
-        );
-        /// `hardware_revision_character.string_length`
-        pub const HARDWARE_REVISION_CHARACTER_STRING_LENGTH: FieldDesc = FieldDesc::new(
-            "hardware_revision_character",
-            "string_length",
-        );
-        /// `total_runtime_min_sec.runtime_minutes`
-        pub const TOTAL_RUNTIME_MIN_SEC_RUNTIME_MINUTES: FieldDesc = FieldDesc::new(
-            "total_runtime_min_sec",
-            "runtime_minutes",
-        );
-        /// `total_runtime_min_sec.runtime_seconds`
-        pub const TOTAL_RUNTIME_MIN_SEC_RUNTIME_SECONDS: FieldDesc = FieldDesc::new(
-            "total_runtime_min_sec",
-            "runtime_seconds",
-        );
-        /// `load_runtime_0_24_min_sec.runtime_minutes`
-        pub const LOAD_RUNTIME_0_24_MIN_SEC_RUNTIME_MINUTES: FieldDesc = FieldDesc::new(
-            "load_runtime_0_24_min_sec",
-            "runtime_minutes",
-        );
-        /// `load_runtime_0_24_min_sec.runtime_seconds`
-        pub const LOAD_RUNTIME_0_24_MIN_SEC_RUNTIME_SECONDS: FieldDesc = FieldDesc::new(
-            "load_runtime_0_24_min_sec",
-            "runtime_seconds",
-        );
-        /// `load_runtime_25_49_min_sec.runtime_minutes`
-        pub const LOAD_RUNTIME_25_49_MIN_SEC_RUNTIME_MINUTES: FieldDesc = FieldDesc::new(
-            "load_runtime_25_49_min_sec",
-            "runtime_minutes",
-        );
-        /// `load_runtime_25_49_min_sec.runtime_seconds`
-        pub const LOAD_RUNTIME_25_49_MIN_SEC_RUNTIME_SECONDS: FieldDesc = FieldDesc::new(
-            "load_runtime_25_49_min_sec",
-            "runtime_seconds",
-        );
-        /// `load_runtime_50_74_min_sec.runtime_minutes`
-        pub const LOAD_RUNTIME_50_74_MIN_SEC_RUNTIME_MINUTES: FieldDesc = FieldDesc::new(
-            "load_runtime_50_74_min_sec",
-            "runtime_minutes",
-        );
-        /// `load_runtime_50_74_min_sec.runtime_seconds`
-        pub const LOAD_RUNTIME_50_74_MIN_SEC_RUNTIME_SECONDS: FieldDesc = FieldDesc::new(
-            "load_runtime_50_74_min_sec",
-            "runtime_seconds",
-        );
-        /// `load_runtime_75_99_min_sec.runtime_minutes`
-        pub const LOAD_RUNTIME_75_99_MIN_SEC_RUNTIME_MINUTES: FieldDesc = FieldDesc::new(
-            "load_runtime_75_99_min_sec",
-            "runtime_minutes",
-        );
-        /// `load_runtime_75_99_min_sec.runtime_seconds`
-        pub const LOAD_RUNTIME_75_99_MIN_SEC_RUNTIME_SECONDS: FieldDesc = FieldDesc::new(
-            "load_runtime_75_99_min_sec",
-            "runtime_seconds",
-        );
-        /// `load_runtime_100_min_sec.runtime_minutes`
-        pub const LOAD_RUNTIME_100_MIN_SEC_RUNTIME_MINUTES: FieldDesc = FieldDesc::new(
-            "load_runtime_100_min_sec",
-            "runtime_minutes",
-        );
-        /// `load_runtime_100_min_sec.runtime_seconds`
-        pub const LOAD_RUNTIME_100_MIN_SEC_RUNTIME_SECONDS: FieldDesc = FieldDesc::new(
-            "load_runtime_100_min_sec",
-            "runtime_seconds",
-        );
     }
 }

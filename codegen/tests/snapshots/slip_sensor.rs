@@ -142,52 +142,6 @@ pub mod slip_sensor {
             rt::Some(Self(raw as i16))
         }
     }
-    impl request::ReadTemperature {
-        pub const NAME: &'static str = "read_temperature";
-        pub const CODE: &'static [u8] = &[0x01];
-        pub const LEN: usize = 4;
-        pub const DESC: rt::MessageDesc = rt::MessageDesc::new(
-            Self::NAME,
-            0x01,
-            1,
-            &[4],
-        );
-        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
-            Request::ReadTemperature(*self).encode(address, buf)
-        }
-    }
-    impl request::SetThreshold {
-        pub const NAME: &'static str = "set_threshold";
-        pub const CODE: &'static [u8] = &[0x02];
-        pub const LEN: usize = 6;
-        pub const DESC: rt::MessageDesc = rt::MessageDesc::new(
-            Self::NAME,
-            0x02,
-            1,
-            &[6],
-        );
-        pub const THRESHOLD: rt::Range<usize> = 1..3;
-        pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
-            f("threshold", rt::Int(self.threshold as i64));
-        }
-        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
-            Request::SetThreshold(*self).encode(address, buf)
-        }
-    }
-    impl request::ReadSamples {
-        pub const NAME: &'static str = "read_samples";
-        pub const CODE: &'static [u8] = &[0x03];
-        pub const LEN: usize = 4;
-        pub const DESC: rt::MessageDesc = rt::MessageDesc::new(
-            Self::NAME,
-            0x03,
-            1,
-            &[4],
-        );
-        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
-            Request::ReadSamples(*self).encode(address, buf)
-        }
-    }
     ///A request (command), host to device.
     #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
     #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
@@ -239,34 +193,22 @@ pub mod slip_sensor {
         ///
         /// The frame is written escaped (`framing.escaping`); `buf` of `MAX_FRAME_LEN`
         /// bytes holds any.
-        pub fn encode(
-            &self,
-            address: u8,
-            buf: &mut [u8],
-        ) -> rt::Result<usize, rt::EncodeError> {
+        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             let mut plain = [0u8; UNESCAPED_LEN];
             let len = self.encode_unescaped(address, &mut plain)?;
             rt::escape_frame(&ESCAPING, &plain[..len], buf, |b| u32::from(checksum(b)))
         }
         /// The frame before escaping, into `buf`.
-        fn encode_unescaped(
-            &self,
-            address: u8,
-            buf: &mut [u8],
-        ) -> rt::Result<usize, rt::EncodeError> {
+        fn encode_unescaped(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             rt::encode_address(address, &FRAME)?;
             let len = match *self {
-                Self::ReadTemperature(request::ReadTemperature {}) => {
-                    rt::frame_mut::<4>(buf, &[0x01])?.len()
-                }
+                Self::ReadTemperature(_) => rt::frame_mut::<4>(buf, &[0x01])?.len(),
                 Self::SetThreshold(request::SetThreshold { threshold: v_threshold }) => {
                     let out = rt::frame_mut::<6>(buf, &[0x02])?;
                     out[1..3].copy_from_slice(&v_threshold.to_be_bytes());
                     out.len()
                 }
-                Self::ReadSamples(request::ReadSamples {}) => {
-                    rt::frame_mut::<4>(buf, &[0x03])?.len()
-                }
+                Self::ReadSamples(_) => rt::frame_mut::<4>(buf, &[0x03])?.len(),
             };
             rt::seal_end(buf, len, |b| u32::from(checksum(b)), &FRAME);
             rt::Ok(len)
@@ -335,20 +277,17 @@ pub mod slip_sensor {
             name: &str,
             mut field: impl FnMut(&'static str) -> rt::Option<rt::FieldValue<'v>>,
         ) -> rt::Result<Self, rt::FieldError> {
-            match name {
-                "read_temperature" => {
-                    rt::Ok(Self::ReadTemperature(request::ReadTemperature))
-                }
+            let message = match name {
+                "read_temperature" => Self::ReadTemperature(request::ReadTemperature),
                 "set_threshold" => {
-                    rt::Ok(
-                        Self::SetThreshold(request::SetThreshold {
-                            threshold: rt::get(&mut field, "threshold")?,
-                        }),
-                    )
+                    Self::SetThreshold(request::SetThreshold {
+                        threshold: rt::get(&mut field, "threshold")?,
+                    })
                 }
-                "read_samples" => rt::Ok(Self::ReadSamples(request::ReadSamples)),
-                _ => rt::Err(rt::FieldError::UnknownMessage),
-            }
+                "read_samples" => Self::ReadSamples(request::ReadSamples),
+                _ => return rt::Err(rt::FieldError::UnknownMessage),
+            };
+            rt::Ok(message)
         }
     }
     impl rt::Message for Request {
@@ -369,11 +308,7 @@ pub mod slip_sensor {
             Request::visit(self, f)
         }
         #[inline]
-        fn encode(
-            &self,
-            address: u8,
-            buf: &mut [u8],
-        ) -> rt::Result<usize, rt::EncodeError> {
+        fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             Request::encode(self, address, buf)
         }
         #[inline]
@@ -413,7 +348,7 @@ pub mod slip_sensor {
     }
     /// Where `samples.samples` sits in the frame and how its elements are counted.
     pub const REPEAT_SAMPLES: rt::RepeatAt = rt::RepeatAt {
-        field: &response::SAMPLES_SAMPLES,
+        field: &response::Samples::SAMPLES_DESC,
         base: 4,
         at: 1,
         width: 1,
@@ -421,56 +356,6 @@ pub mod slip_sensor {
         min: 0,
         max: 8,
     };
-    impl response::Temperature {
-        pub const NAME: &'static str = "temperature";
-        pub const CODE: &'static [u8] = &[0x81];
-        pub const LEN: usize = 6;
-        pub const DESC: rt::MessageDesc = rt::MessageDesc::new(
-            Self::NAME,
-            0x81,
-            1,
-            &[6],
-        );
-        pub const TEMPERATURE: rt::Range<usize> = 1..3;
-        pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
-            f("temperature", rt::Int(self.temperature.raw() as i64));
-        }
-        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
-            Response::Temperature(*self).encode(address, buf)
-        }
-    }
-    impl response::Ack {
-        pub const NAME: &'static str = "ack";
-        pub const CODE: &'static [u8] = &[0x82];
-        pub const LEN: usize = 4;
-        pub const DESC: rt::MessageDesc = rt::MessageDesc::new(
-            Self::NAME,
-            0x82,
-            1,
-            &[4],
-        );
-        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
-            Response::Ack(*self).encode(address, buf)
-        }
-    }
-    impl response::Samples {
-        pub const NAME: &'static str = "samples";
-        pub const CODE: &'static [u8] = &[0x83];
-        pub const MIN_LEN: usize = 4;
-        pub const MAX_LEN: usize = 12;
-        pub const DESC: rt::MessageDesc = rt::MessageDesc::new(
-            Self::NAME,
-            0x83,
-            1,
-            &[4],
-        );
-        pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
-            f("samples", rt::List(self.samples.elements()));
-        }
-        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
-            Response::Samples(*self).encode(address, buf)
-        }
-    }
     ///A response, device to host.
     #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
     #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
@@ -507,8 +392,8 @@ pub mod slip_sensor {
         /// The length of this message's frame, in bytes.
         pub const fn frame_len(&self) -> usize {
             match self {
-                Self::Samples(response::Samples { samples: v_samples, .. }) => {
-                    REPEAT_SAMPLES.base + REPEAT_SAMPLES.bytes_of(v_samples.len())
+                Self::Samples(m) => {
+                    REPEAT_SAMPLES.base + REPEAT_SAMPLES.bytes_of(m.samples.len())
                 }
                 _ => Self::MESSAGES[self.index()].2,
             }
@@ -528,21 +413,13 @@ pub mod slip_sensor {
         ///
         /// The frame is written escaped (`framing.escaping`); `buf` of `MAX_FRAME_LEN`
         /// bytes holds any.
-        pub fn encode(
-            &self,
-            address: u8,
-            buf: &mut [u8],
-        ) -> rt::Result<usize, rt::EncodeError> {
+        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             let mut plain = [0u8; UNESCAPED_LEN];
             let len = self.encode_unescaped(address, &mut plain)?;
             rt::escape_frame(&ESCAPING, &plain[..len], buf, |b| u32::from(checksum(b)))
         }
         /// The frame before escaping, into `buf`.
-        fn encode_unescaped(
-            &self,
-            address: u8,
-            buf: &mut [u8],
-        ) -> rt::Result<usize, rt::EncodeError> {
+        fn encode_unescaped(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             rt::encode_address(address, &FRAME)?;
             let len = match *self {
                 Self::Temperature(
@@ -552,7 +429,7 @@ pub mod slip_sensor {
                     out[1..3].copy_from_slice(&v_temperature.raw().to_be_bytes());
                     out.len()
                 }
-                Self::Ack(response::Ack {}) => rt::frame_mut::<4>(buf, &[0x82])?.len(),
+                Self::Ack(_) => rt::frame_mut::<4>(buf, &[0x82])?.len(),
                 Self::Samples(response::Samples { samples: v_samples }) => {
                     let frame_len = REPEAT_SAMPLES.encode_len(v_samples.len())?;
                     let out = rt::frame_mut_len(buf, frame_len, &[0x83])?;
@@ -662,26 +539,23 @@ pub mod slip_sensor {
             name: &str,
             mut field: impl FnMut(&'static str) -> rt::Option<rt::FieldValue<'v>>,
         ) -> rt::Result<Self, rt::FieldError> {
-            match name {
+            let message = match name {
                 "temperature" => {
-                    rt::Ok(
-                        Self::Temperature(response::Temperature {
-                            temperature: Centidegrees::from_raw(
-                                rt::get(&mut field, "temperature")?,
-                            ),
-                        }),
-                    )
+                    Self::Temperature(response::Temperature {
+                        temperature: Centidegrees::from_raw(
+                            rt::get(&mut field, "temperature")?,
+                        ),
+                    })
                 }
-                "ack" => rt::Ok(Self::Ack(response::Ack)),
+                "ack" => Self::Ack(response::Ack),
                 "samples" => {
-                    rt::Ok(
-                        Self::Samples(response::Samples {
-                            samples: rt::list::<u8, 8>(&mut field, "samples", 0, 255)?,
-                        }),
-                    )
+                    Self::Samples(response::Samples {
+                        samples: rt::list::<u8, 8>(&mut field, "samples", 0, 255)?,
+                    })
                 }
-                _ => rt::Err(rt::FieldError::UnknownMessage),
-            }
+                _ => return rt::Err(rt::FieldError::UnknownMessage),
+            };
+            rt::Ok(message)
         }
     }
     impl rt::Message for Response {
@@ -702,11 +576,7 @@ pub mod slip_sensor {
             Response::visit(self, f)
         }
         #[inline]
-        fn encode(
-            &self,
-            address: u8,
-            buf: &mut [u8],
-        ) -> rt::Result<usize, rt::EncodeError> {
+        fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             Response::encode(self, address, buf)
         }
         #[inline]
@@ -814,9 +684,76 @@ pub mod slip_sensor {
     pub type StreamDecoder = ::busspec_runtime::stream::StreamDecoder<SlipSensor>;
     /// What [`StreamDecoder`] finds in a stream.
     pub type Event = ::busspec_runtime::stream::Event<Request, Response>;
-    /// Each request as a struct of its own (its `DESC` names it as refusals do: name,
-    /// code and the frame lengths of its code), and each field a refusal names
-    /// (`message.field`, `FieldDesc`).
+    impl request::ReadTemperature {
+        pub const NAME: &'static str = "read_temperature";
+        pub const CODE: &'static [u8] = &[0x01];
+        pub const LEN: usize = 4;
+        pub const DESC: rt::MessageDesc = rt::desc(Self::NAME, 0x01, 1, &[4]);
+        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            Request::ReadTemperature(*self).encode(address, buf)
+        }
+    }
+    impl request::SetThreshold {
+        pub const NAME: &'static str = "set_threshold";
+        pub const CODE: &'static [u8] = &[0x02];
+        pub const LEN: usize = 6;
+        pub const DESC: rt::MessageDesc = rt::desc(Self::NAME, 0x02, 1, &[6]);
+        pub const THRESHOLD: rt::Range<usize> = 1..3;
+        pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
+            f("threshold", rt::Int(self.threshold as i64));
+        }
+        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            Request::SetThreshold(*self).encode(address, buf)
+        }
+    }
+    impl request::ReadSamples {
+        pub const NAME: &'static str = "read_samples";
+        pub const CODE: &'static [u8] = &[0x03];
+        pub const LEN: usize = 4;
+        pub const DESC: rt::MessageDesc = rt::desc(Self::NAME, 0x03, 1, &[4]);
+        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            Request::ReadSamples(*self).encode(address, buf)
+        }
+    }
+    impl response::Temperature {
+        pub const NAME: &'static str = "temperature";
+        pub const CODE: &'static [u8] = &[0x81];
+        pub const LEN: usize = 6;
+        pub const DESC: rt::MessageDesc = rt::desc(Self::NAME, 0x81, 1, &[6]);
+        pub const TEMPERATURE: rt::Range<usize> = 1..3;
+        pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
+            f("temperature", rt::Int(self.temperature.raw() as i64));
+        }
+        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            Response::Temperature(*self).encode(address, buf)
+        }
+    }
+    impl response::Ack {
+        pub const NAME: &'static str = "ack";
+        pub const CODE: &'static [u8] = &[0x82];
+        pub const LEN: usize = 4;
+        pub const DESC: rt::MessageDesc = rt::desc(Self::NAME, 0x82, 1, &[4]);
+        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            Response::Ack(*self).encode(address, buf)
+        }
+    }
+    impl response::Samples {
+        pub const NAME: &'static str = "samples";
+        pub const CODE: &'static [u8] = &[0x83];
+        pub const MIN_LEN: usize = 4;
+        pub const MAX_LEN: usize = 12;
+        pub const DESC: rt::MessageDesc = rt::desc(Self::NAME, 0x83, 1, &[4]);
+        pub const SAMPLES_DESC: rt::FieldDesc = rt::field(Self::NAME, "samples");
+        pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
+            f("samples", rt::List(self.samples.elements()));
+        }
+        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            Response::Samples(*self).encode(address, buf)
+        }
+    }
+    /// Each request as a struct of its own; its constants (`DESC`, which names it as
+    /// refusals do: name, code and the frame lengths of its code; `QUANTITY_DESC`, each
+    /// field a refusal names) and methods are in the `impl` of each.
     pub mod request {
         /// §3.1 Read temperature (code `0x01`, 4 bytes).
         #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
@@ -837,9 +774,8 @@ pub mod slip_sensor {
         #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]
         pub struct ReadSamples;
     }
-    /// Each response as a struct of its own, and the fields its refusals name.
+    /// Each response as a struct of its own.
     pub mod response {
-        use ::busspec_runtime::FieldDesc;
         /// §4.1 Temperature (code `0x81`, 6 bytes).
         #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
         #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
@@ -862,7 +798,5 @@ pub mod slip_sensor {
         pub struct Samples {
             pub samples: super::rt::Repeated<u8, 8>,
         }
-        /// `samples.samples`
-        pub const SAMPLES_SAMPLES: FieldDesc = FieldDesc::new("samples", "samples");
     }
 }

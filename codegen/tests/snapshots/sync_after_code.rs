@@ -68,24 +68,6 @@ pub mod sync_after_code {
     pub fn checksum(bytes: &[u8]) -> u8 {
         rt::xor8(bytes)
     }
-    impl request::Read {
-        pub const NAME: &'static str = "read";
-        pub const CODE: &'static [u8] = &[0x01, 0x02];
-        pub const LEN: usize = 6;
-        pub const DESC: rt::MessageDesc = rt::MessageDesc::new(
-            Self::NAME,
-            0x0102,
-            2,
-            &[6],
-        );
-        pub const REGISTER: rt::Range<usize> = 4..5;
-        pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
-            f("register", rt::Int(self.register as i64));
-        }
-        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
-            Request::Read(*self).encode(address, buf)
-        }
-    }
     ///A request (command), host to device.
     #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
     #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
@@ -127,11 +109,7 @@ pub mod sync_after_code {
         /// Encodes the frame for `address` into `buf`; returns the frame length. Refuses what
         /// decode refuses: an address no frame may carry, the broadcast address for a command
         /// that does not accept it, a value outside its field's range.
-        pub fn encode(
-            &self,
-            address: u8,
-            buf: &mut [u8],
-        ) -> rt::Result<usize, rt::EncodeError> {
+        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             rt::encode_address(address, &FRAME)?;
             let out = rt::frame_mut::<6>(buf, &[])?;
             let len = match *self {
@@ -183,16 +161,15 @@ pub mod sync_after_code {
             name: &str,
             mut field: impl FnMut(&'static str) -> rt::Option<rt::FieldValue<'v>>,
         ) -> rt::Result<Self, rt::FieldError> {
-            match name {
+            let message = match name {
                 "read" => {
-                    rt::Ok(
-                        Self::Read(request::Read {
-                            register: rt::get(&mut field, "register")?,
-                        }),
-                    )
+                    Self::Read(request::Read {
+                        register: rt::get(&mut field, "register")?,
+                    })
                 }
-                _ => rt::Err(rt::FieldError::UnknownMessage),
-            }
+                _ => return rt::Err(rt::FieldError::UnknownMessage),
+            };
+            rt::Ok(message)
         }
     }
     impl rt::Message for Request {
@@ -213,11 +190,7 @@ pub mod sync_after_code {
             Request::visit(self, f)
         }
         #[inline]
-        fn encode(
-            &self,
-            address: u8,
-            buf: &mut [u8],
-        ) -> rt::Result<usize, rt::EncodeError> {
+        fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             Request::encode(self, address, buf)
         }
         #[inline]
@@ -251,24 +224,6 @@ pub mod sync_after_code {
         /// The responses this command may get, bit `i` for row `i` of `Response::MESSAGES`.
         const fn replies(&self) -> u64 {
             Self::COMMANDS[self.index()].3
-        }
-    }
-    impl response::Value {
-        pub const NAME: &'static str = "value";
-        pub const CODE: &'static [u8] = &[0x81, 0x02];
-        pub const LEN: usize = 7;
-        pub const DESC: rt::MessageDesc = rt::MessageDesc::new(
-            Self::NAME,
-            0x8102,
-            2,
-            &[7],
-        );
-        pub const VALUE: rt::Range<usize> = 4..6;
-        pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
-            f("value", rt::Int(self.value as i64));
-        }
-        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
-            Response::Value(*self).encode(address, buf)
         }
     }
     ///A response, device to host.
@@ -312,11 +267,7 @@ pub mod sync_after_code {
         /// Encodes the frame for `address` into `buf`; returns the frame length. Refuses what
         /// decode refuses: an address no frame may carry, the broadcast address for a command
         /// that does not accept it, a value outside its field's range.
-        pub fn encode(
-            &self,
-            address: u8,
-            buf: &mut [u8],
-        ) -> rt::Result<usize, rt::EncodeError> {
+        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             rt::encode_address(address, &FRAME)?;
             let out = rt::frame_mut::<7>(buf, &[])?;
             let len = match *self {
@@ -395,16 +346,15 @@ pub mod sync_after_code {
             name: &str,
             mut field: impl FnMut(&'static str) -> rt::Option<rt::FieldValue<'v>>,
         ) -> rt::Result<Self, rt::FieldError> {
-            match name {
+            let message = match name {
                 "value" => {
-                    rt::Ok(
-                        Self::Value(response::Value {
-                            value: rt::get(&mut field, "value")?,
-                        }),
-                    )
+                    Self::Value(response::Value {
+                        value: rt::get(&mut field, "value")?,
+                    })
                 }
-                _ => rt::Err(rt::FieldError::UnknownMessage),
-            }
+                _ => return rt::Err(rt::FieldError::UnknownMessage),
+            };
+            rt::Ok(message)
         }
     }
     impl rt::Message for Response {
@@ -425,11 +375,7 @@ pub mod sync_after_code {
             Response::visit(self, f)
         }
         #[inline]
-        fn encode(
-            &self,
-            address: u8,
-            buf: &mut [u8],
-        ) -> rt::Result<usize, rt::EncodeError> {
+        fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             Response::encode(self, address, buf)
         }
         #[inline]
@@ -551,9 +497,35 @@ pub mod sync_after_code {
     pub type StreamDecoder = ::busspec_runtime::stream::StreamDecoder<SyncAfterCode>;
     /// What [`StreamDecoder`] finds in a stream.
     pub type Event = ::busspec_runtime::stream::Event<Request, Response>;
-    /// Each request as a struct of its own (its `DESC` names it as refusals do: name,
-    /// code and the frame lengths of its code), and each field a refusal names
-    /// (`message.field`, `FieldDesc`).
+    impl request::Read {
+        pub const NAME: &'static str = "read";
+        pub const CODE: &'static [u8] = &[0x01, 0x02];
+        pub const LEN: usize = 6;
+        pub const DESC: rt::MessageDesc = rt::desc(Self::NAME, 0x0102, 2, &[6]);
+        pub const REGISTER: rt::Range<usize> = 4..5;
+        pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
+            f("register", rt::Int(self.register as i64));
+        }
+        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            Request::Read(*self).encode(address, buf)
+        }
+    }
+    impl response::Value {
+        pub const NAME: &'static str = "value";
+        pub const CODE: &'static [u8] = &[0x81, 0x02];
+        pub const LEN: usize = 7;
+        pub const DESC: rt::MessageDesc = rt::desc(Self::NAME, 0x8102, 2, &[7]);
+        pub const VALUE: rt::Range<usize> = 4..6;
+        pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
+            f("value", rt::Int(self.value as i64));
+        }
+        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            Response::Value(*self).encode(address, buf)
+        }
+    }
+    /// Each request as a struct of its own; its constants (`DESC`, which names it as
+    /// refusals do: name, code and the frame lengths of its code; `QUANTITY_DESC`, each
+    /// field a refusal names) and methods are in the `impl` of each.
     pub mod request {
         /// §1 Read (code `0x0102`, 6 bytes).
         #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
@@ -564,7 +536,7 @@ pub mod sync_after_code {
             pub register: u8,
         }
     }
-    /// Each response as a struct of its own, and the fields its refusals name.
+    /// Each response as a struct of its own.
     pub mod response {
         /// §2 Value (code `0x8102`, 7 bytes).
         #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]

@@ -108,58 +108,6 @@ pub mod syncy {
             rt::Some(Self(raw as i32))
         }
     }
-    impl request::MoveTo {
-        pub const NAME: &'static str = "move_to";
-        pub const CODE: &'static [u8] = &[0x03];
-        pub const LEN: usize = 9;
-        pub const DESC: rt::MessageDesc = rt::MessageDesc::new(
-            Self::NAME,
-            0x03,
-            1,
-            &[9],
-        );
-        pub const TARGET: rt::Range<usize> = 5..8;
-        pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
-            f("target", rt::Int(self.target.raw() as i64));
-        }
-        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
-            Request::MoveTo(*self).encode(address, buf)
-        }
-    }
-    impl request::GetCounter {
-        pub const NAME: &'static str = "get_counter";
-        pub const CODE: &'static [u8] = &[0x04];
-        pub const LEN: usize = 6;
-        pub const DESC: rt::MessageDesc = rt::MessageDesc::new(
-            Self::NAME,
-            0x04,
-            1,
-            &[6],
-        );
-        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
-            Request::GetCounter(*self).encode(address, buf)
-        }
-    }
-    impl request::SetPair {
-        pub const NAME: &'static str = "set_pair";
-        pub const CODE: &'static [u8] = &[0x05];
-        pub const LEN: usize = 10;
-        pub const DESC: rt::MessageDesc = rt::MessageDesc::new(
-            Self::NAME,
-            0x05,
-            1,
-            &[10],
-        );
-        pub const QUANTITY: rt::Range<usize> = 5..6;
-        pub const LEVEL: rt::Range<usize> = 7..9;
-        pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
-            f("quantity", rt::Int(self.quantity as i64));
-            f("level", rt::Int(self.level as i64));
-        }
-        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
-            Request::SetPair(*self).encode(address, buf)
-        }
-    }
     ///A request (command), host to device.
     #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
     #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
@@ -209,11 +157,7 @@ pub mod syncy {
         /// Encodes the frame for `address` into `buf`; returns the frame length. Refuses what
         /// decode refuses: an address no frame may carry, the broadcast address for a command
         /// that does not accept it, a value outside its field's range.
-        pub fn encode(
-            &self,
-            address: u8,
-            buf: &mut [u8],
-        ) -> rt::Result<usize, rt::EncodeError> {
+        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             rt::encode_address(address, &FRAME)?;
             let len = match *self {
                 Self::MoveTo(request::MoveTo { target: v_target }) => {
@@ -232,7 +176,7 @@ pub mod syncy {
                         );
                     out.len()
                 }
-                Self::GetCounter(request::GetCounter {}) => {
+                Self::GetCounter(_) => {
                     rt::encode_broadcast(address, 0xFE, &request::GetCounter::DESC)?;
                     rt::frame_mut::<6>(buf, &[0xFF, 0xFF, address, 0x02, 0x04])?.len()
                 }
@@ -285,7 +229,7 @@ pub mod syncy {
                     rt::no_broadcast(frame[2], 0xFE, &request::MoveTo::DESC)?;
                     let field_0: i32 = rt::i24([frame[5], frame[6], frame[7]], false);
                     rt::in_range(
-                        &request::MOVE_TO_TARGET,
+                        &request::MoveTo::TARGET_DESC,
                         5,
                         field_0,
                         -1000000,
@@ -305,9 +249,9 @@ pub mod syncy {
                 0x05 => {
                     let frame = rt::fixed::<10>(frame, &request::SetPair::DESC)?;
                     rt::no_broadcast(frame[2], 0xFE, &request::SetPair::DESC)?;
-                    rt::in_range(&request::SET_PAIR_QUANTITY, 5, frame[5], 1, 100)?;
+                    rt::in_range(&request::SetPair::QUANTITY_DESC, 5, frame[5], 1, 100)?;
                     rt::following(
-                        &request::SET_PAIR_DOUBLED,
+                        &request::SetPair::DOUBLED_DESC,
                         6,
                         frame[6],
                         frame[5] as i64,
@@ -331,28 +275,25 @@ pub mod syncy {
             name: &str,
             mut field: impl FnMut(&'static str) -> rt::Option<rt::FieldValue<'v>>,
         ) -> rt::Result<Self, rt::FieldError> {
-            match name {
+            let message = match name {
                 "move_to" => {
-                    rt::Ok(
-                        Self::MoveTo(request::MoveTo {
-                            target: Millimetre::from_raw(
-                                rt::field_int("target", field("target"), -8388608, 8388607)?
-                                    as i32,
-                            ),
-                        }),
-                    )
+                    Self::MoveTo(request::MoveTo {
+                        target: Millimetre::from_raw(
+                            rt::field_int("target", field("target"), -8388608, 8388607)?
+                                as i32,
+                        ),
+                    })
                 }
-                "get_counter" => rt::Ok(Self::GetCounter(request::GetCounter)),
+                "get_counter" => Self::GetCounter(request::GetCounter),
                 "set_pair" => {
-                    rt::Ok(
-                        Self::SetPair(request::SetPair {
-                            quantity: rt::get(&mut field, "quantity")?,
-                            level: rt::get(&mut field, "level")?,
-                        }),
-                    )
+                    Self::SetPair(request::SetPair {
+                        quantity: rt::get(&mut field, "quantity")?,
+                        level: rt::get(&mut field, "level")?,
+                    })
                 }
-                _ => rt::Err(rt::FieldError::UnknownMessage),
-            }
+                _ => return rt::Err(rt::FieldError::UnknownMessage),
+            };
+            rt::Ok(message)
         }
     }
     impl rt::Message for Request {
@@ -373,11 +314,7 @@ pub mod syncy {
             Request::visit(self, f)
         }
         #[inline]
-        fn encode(
-            &self,
-            address: u8,
-            buf: &mut [u8],
-        ) -> rt::Result<usize, rt::EncodeError> {
+        fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             Request::encode(self, address, buf)
         }
         #[inline]
@@ -413,78 +350,6 @@ pub mod syncy {
         /// The responses this command may get, bit `i` for row `i` of `Response::MESSAGES`.
         const fn replies(&self) -> u64 {
             Self::COMMANDS[self.index()].3
-        }
-    }
-    impl response::Moving {
-        pub const NAME: &'static str = "moving";
-        pub const CODE: &'static [u8] = &[0x00];
-        pub const LEN: usize = 6;
-        pub const DESC: rt::MessageDesc = rt::MessageDesc::new(
-            Self::NAME,
-            0x00,
-            1,
-            &[6],
-        );
-        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
-            Response::Moving(*self).encode(address, buf)
-        }
-    }
-    impl response::Counter {
-        pub const NAME: &'static str = "counter";
-        pub const CODE: &'static [u8] = &[0x01];
-        pub const LEN: usize = 12;
-        pub const DESC: rt::MessageDesc = rt::MessageDesc::new(
-            Self::NAME,
-            0x01,
-            1,
-            &[12],
-        );
-        pub const TOTAL: rt::Range<usize> = 5..8;
-        pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
-            f("total", rt::Int(self.total as i64));
-            f("tag", rt::Int(self.tag as i64));
-            f("offset", rt::Int(self.offset as i64));
-        }
-        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
-            Response::Counter(*self).encode(address, buf)
-        }
-    }
-    impl response::SetPairReply {
-        pub const NAME: &'static str = "set_pair_reply";
-        pub const CODE: &'static [u8] = &[0x05];
-        pub const LEN: usize = 8;
-        pub const DESC: rt::MessageDesc = rt::MessageDesc::new(
-            Self::NAME,
-            0x05,
-            1,
-            &[8],
-        );
-        pub const QUANTITY: rt::Range<usize> = 5..6;
-        pub const GROUPS: rt::Range<usize> = 6..7;
-        pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
-            f("quantity", rt::Int(self.quantity as i64));
-            f("groups", rt::Int(self.groups as i64));
-        }
-        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
-            Response::SetPairReply(*self).encode(address, buf)
-        }
-    }
-    impl response::SetPairError {
-        pub const NAME: &'static str = "set_pair_error";
-        pub const CODE: &'static [u8] = &[0x85];
-        pub const LEN: usize = 7;
-        pub const DESC: rt::MessageDesc = rt::MessageDesc::new(
-            Self::NAME,
-            0x85,
-            1,
-            &[7],
-        );
-        pub const REASON: rt::Range<usize> = 5..6;
-        pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
-            f("reason", rt::Int(self.reason as i64));
-        }
-        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
-            Response::SetPairError(*self).encode(address, buf)
         }
     }
     ///A response, device to host.
@@ -540,14 +405,10 @@ pub mod syncy {
         /// Encodes the frame for `address` into `buf`; returns the frame length. Refuses what
         /// decode refuses: an address no frame may carry, the broadcast address for a command
         /// that does not accept it, a value outside its field's range.
-        pub fn encode(
-            &self,
-            address: u8,
-            buf: &mut [u8],
-        ) -> rt::Result<usize, rt::EncodeError> {
+        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             rt::encode_address(address, &FRAME)?;
             let len = match *self {
-                Self::Moving(response::Moving {}) => {
+                Self::Moving(_) => {
                     rt::frame_mut::<6>(buf, &[0xFF, 0xFF, address, 0x02, 0x00])?.len()
                 }
                 Self::Counter(
@@ -682,40 +543,35 @@ pub mod syncy {
             name: &str,
             mut field: impl FnMut(&'static str) -> rt::Option<rt::FieldValue<'v>>,
         ) -> rt::Result<Self, rt::FieldError> {
-            match name {
-                "moving" => rt::Ok(Self::Moving(response::Moving)),
+            let message = match name {
+                "moving" => Self::Moving(response::Moving),
                 "counter" => {
-                    rt::Ok(
-                        Self::Counter(response::Counter {
-                            total: rt::field_int("total", field("total"), 0, 16777215)?
-                                as u32,
-                            tag: rt::field_int("tag", field("tag"), 0, 15)? as u8,
-                            offset: rt::field_int(
-                                "offset",
-                                field("offset"),
-                                -524288,
-                                524287,
-                            )? as i32,
-                        }),
-                    )
+                    Self::Counter(response::Counter {
+                        total: rt::field_int("total", field("total"), 0, 16777215)?
+                            as u32,
+                        tag: rt::field_int("tag", field("tag"), 0, 15)? as u8,
+                        offset: rt::field_int(
+                            "offset",
+                            field("offset"),
+                            -524288,
+                            524287,
+                        )? as i32,
+                    })
                 }
                 "set_pair_reply" => {
-                    rt::Ok(
-                        Self::SetPairReply(response::SetPairReply {
-                            quantity: rt::get(&mut field, "quantity")?,
-                            groups: rt::get(&mut field, "groups")?,
-                        }),
-                    )
+                    Self::SetPairReply(response::SetPairReply {
+                        quantity: rt::get(&mut field, "quantity")?,
+                        groups: rt::get(&mut field, "groups")?,
+                    })
                 }
                 "set_pair_error" => {
-                    rt::Ok(
-                        Self::SetPairError(response::SetPairError {
-                            reason: rt::get(&mut field, "reason")?,
-                        }),
-                    )
+                    Self::SetPairError(response::SetPairError {
+                        reason: rt::get(&mut field, "reason")?,
+                    })
                 }
-                _ => rt::Err(rt::FieldError::UnknownMessage),
-            }
+                _ => return rt::Err(rt::FieldError::UnknownMessage),
+            };
+            rt::Ok(message)
         }
     }
     impl rt::Message for Response {
@@ -736,11 +592,7 @@ pub mod syncy {
             Response::visit(self, f)
         }
         #[inline]
-        fn encode(
-            &self,
-            address: u8,
-            buf: &mut [u8],
-        ) -> rt::Result<usize, rt::EncodeError> {
+        fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             Response::encode(self, address, buf)
         }
         #[inline]
@@ -762,29 +614,20 @@ pub mod syncy {
         /// spec): [`busspec_runtime::DecodeError::InvalidValue`] names the first that differs.
         pub fn follows_request(&self, request: &Request) -> rt::DecodeResult<()> {
             match (self, request) {
-                (
-                    &Self::SetPairReply(
-                        response::SetPairReply {
-                            quantity: v_quantity,
-                            groups: v_groups,
-                            ..
-                        },
-                    ),
-                    &Request::SetPair(request::SetPair { quantity: r_quantity, .. }),
-                ) => {
+                (Self::SetPairReply(m), Request::SetPair(r)) => {
                     rt::following(
-                        &response::SET_PAIR_REPLY_QUANTITY,
+                        &response::SetPairReply::QUANTITY_DESC,
                         5,
-                        v_quantity,
-                        r_quantity as i64,
+                        m.quantity,
+                        r.quantity as i64,
                         (1, 1),
                         "quantity of the request",
                     )?;
                     rt::following(
-                        &response::SET_PAIR_REPLY_GROUPS,
+                        &response::SetPairReply::GROUPS_DESC,
                         6,
-                        v_groups,
-                        r_quantity as i64,
+                        m.groups,
+                        r.quantity as i64,
                         (1, 8),
                         "ceil(quantity / 8) of the request",
                     )?;
@@ -912,11 +755,104 @@ pub mod syncy {
     pub type StreamDecoder = ::busspec_runtime::stream::StreamDecoder<Syncy>;
     /// What [`StreamDecoder`] finds in a stream.
     pub type Event = ::busspec_runtime::stream::Event<Request, Response>;
-    /// Each request as a struct of its own (its `DESC` names it as refusals do: name,
-    /// code and the frame lengths of its code), and each field a refusal names
-    /// (`message.field`, `FieldDesc`).
+    impl request::MoveTo {
+        pub const NAME: &'static str = "move_to";
+        pub const CODE: &'static [u8] = &[0x03];
+        pub const LEN: usize = 9;
+        pub const DESC: rt::MessageDesc = rt::desc(Self::NAME, 0x03, 1, &[9]);
+        pub const TARGET: rt::Range<usize> = 5..8;
+        pub const TARGET_DESC: rt::FieldDesc = rt::field(Self::NAME, "target");
+        pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
+            f("target", rt::Int(self.target.raw() as i64));
+        }
+        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            Request::MoveTo(*self).encode(address, buf)
+        }
+    }
+    impl request::GetCounter {
+        pub const NAME: &'static str = "get_counter";
+        pub const CODE: &'static [u8] = &[0x04];
+        pub const LEN: usize = 6;
+        pub const DESC: rt::MessageDesc = rt::desc(Self::NAME, 0x04, 1, &[6]);
+        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            Request::GetCounter(*self).encode(address, buf)
+        }
+    }
+    impl request::SetPair {
+        pub const NAME: &'static str = "set_pair";
+        pub const CODE: &'static [u8] = &[0x05];
+        pub const LEN: usize = 10;
+        pub const DESC: rt::MessageDesc = rt::desc(Self::NAME, 0x05, 1, &[10]);
+        pub const QUANTITY: rt::Range<usize> = 5..6;
+        pub const LEVEL: rt::Range<usize> = 7..9;
+        pub const QUANTITY_DESC: rt::FieldDesc = rt::field(Self::NAME, "quantity");
+        pub const DOUBLED_DESC: rt::FieldDesc = rt::field(Self::NAME, "doubled");
+        pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
+            f("quantity", rt::Int(self.quantity as i64));
+            f("level", rt::Int(self.level as i64));
+        }
+        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            Request::SetPair(*self).encode(address, buf)
+        }
+    }
+    impl response::Moving {
+        pub const NAME: &'static str = "moving";
+        pub const CODE: &'static [u8] = &[0x00];
+        pub const LEN: usize = 6;
+        pub const DESC: rt::MessageDesc = rt::desc(Self::NAME, 0x00, 1, &[6]);
+        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            Response::Moving(*self).encode(address, buf)
+        }
+    }
+    impl response::Counter {
+        pub const NAME: &'static str = "counter";
+        pub const CODE: &'static [u8] = &[0x01];
+        pub const LEN: usize = 12;
+        pub const DESC: rt::MessageDesc = rt::desc(Self::NAME, 0x01, 1, &[12]);
+        pub const TOTAL: rt::Range<usize> = 5..8;
+        pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
+            f("total", rt::Int(self.total as i64));
+            f("tag", rt::Int(self.tag as i64));
+            f("offset", rt::Int(self.offset as i64));
+        }
+        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            Response::Counter(*self).encode(address, buf)
+        }
+    }
+    impl response::SetPairReply {
+        pub const NAME: &'static str = "set_pair_reply";
+        pub const CODE: &'static [u8] = &[0x05];
+        pub const LEN: usize = 8;
+        pub const DESC: rt::MessageDesc = rt::desc(Self::NAME, 0x05, 1, &[8]);
+        pub const QUANTITY: rt::Range<usize> = 5..6;
+        pub const GROUPS: rt::Range<usize> = 6..7;
+        pub const QUANTITY_DESC: rt::FieldDesc = rt::field(Self::NAME, "quantity");
+        pub const GROUPS_DESC: rt::FieldDesc = rt::field(Self::NAME, "groups");
+        pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
+            f("quantity", rt::Int(self.quantity as i64));
+            f("groups", rt::Int(self.groups as i64));
+        }
+        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            Response::SetPairReply(*self).encode(address, buf)
+        }
+    }
+    impl response::SetPairError {
+        pub const NAME: &'static str = "set_pair_error";
+        pub const CODE: &'static [u8] = &[0x85];
+        pub const LEN: usize = 7;
+        pub const DESC: rt::MessageDesc = rt::desc(Self::NAME, 0x85, 1, &[7]);
+        pub const REASON: rt::Range<usize> = 5..6;
+        pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
+            f("reason", rt::Int(self.reason as i64));
+        }
+        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            Response::SetPairError(*self).encode(address, buf)
+        }
+    }
+    /// Each request as a struct of its own; its constants (`DESC`, which names it as
+    /// refusals do: name, code and the frame lengths of its code; `QUANTITY_DESC`, each
+    /// field a refusal names) and methods are in the `impl` of each.
     pub mod request {
-        use ::busspec_runtime::FieldDesc;
         /// §1 Move to (code `0x03`, 9 bytes).
         #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
         #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
@@ -941,16 +877,9 @@ pub mod syncy {
             pub quantity: u8,
             pub level: u16,
         }
-        /// `move_to.target`
-        pub const MOVE_TO_TARGET: FieldDesc = FieldDesc::new("move_to", "target");
-        /// `set_pair.quantity`
-        pub const SET_PAIR_QUANTITY: FieldDesc = FieldDesc::new("set_pair", "quantity");
-        /// `set_pair.doubled`
-        pub const SET_PAIR_DOUBLED: FieldDesc = FieldDesc::new("set_pair", "doubled");
     }
-    /// Each response as a struct of its own, and the fields its refusals name.
+    /// Each response as a struct of its own.
     pub mod response {
-        use ::busspec_runtime::FieldDesc;
         /// §3 Moving (code `0x00`, 6 bytes).
         #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
         #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
@@ -983,15 +912,5 @@ pub mod syncy {
         pub struct SetPairError {
             pub reason: u8,
         }
-        /// `set_pair_reply.quantity`
-        pub const SET_PAIR_REPLY_QUANTITY: FieldDesc = FieldDesc::new(
-            "set_pair_reply",
-            "quantity",
-        );
-        /// `set_pair_reply.groups`
-        pub const SET_PAIR_REPLY_GROUPS: FieldDesc = FieldDesc::new(
-            "set_pair_reply",
-            "groups",
-        );
     }
 }

@@ -68,40 +68,6 @@ pub mod telemetry_le {
     pub fn checksum(bytes: &[u8]) -> u8 {
         rt::xor8(bytes)
     }
-    impl request::GetState {
-        pub const NAME: &'static str = "get_state";
-        pub const CODE: &'static [u8] = &[0x01];
-        pub const LEN: usize = 5;
-        pub const DESC: rt::MessageDesc = rt::MessageDesc::new(
-            Self::NAME,
-            0x01,
-            1,
-            &[5],
-        );
-        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
-            Request::GetState(*self).encode(address, buf)
-        }
-    }
-    impl request::SetHome {
-        pub const NAME: &'static str = "set_home";
-        pub const CODE: &'static [u8] = &[0x02];
-        pub const LEN: usize = 21;
-        pub const DESC: rt::MessageDesc = rt::MessageDesc::new(
-            Self::NAME,
-            0x02,
-            1,
-            &[21],
-        );
-        pub const LAT: rt::Range<usize> = 4..12;
-        pub const LON: rt::Range<usize> = 12..20;
-        pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
-            f("lat", rt::Int(rt::raw(self.lat)));
-            f("lon", rt::Int(rt::raw(self.lon)));
-        }
-        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
-            Request::SetHome(*self).encode(address, buf)
-        }
-    }
     ///A request (command), host to device.
     #[derive(Debug, Clone, Copy, PartialEq)]
     #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
@@ -147,14 +113,10 @@ pub mod telemetry_le {
         /// Encodes the frame for `address` into `buf`; returns the frame length. Refuses what
         /// decode refuses: an address no frame may carry, the broadcast address for a command
         /// that does not accept it, a value outside its field's range.
-        pub fn encode(
-            &self,
-            address: u8,
-            buf: &mut [u8],
-        ) -> rt::Result<usize, rt::EncodeError> {
+        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             rt::encode_address(address, &FRAME)?;
             let len = match *self {
-                Self::GetState(request::GetState {}) => {
+                Self::GetState(_) => {
                     rt::frame_mut::<5>(buf, &[0xA5, 0x5A, 0x01, 0x01])?.len()
                 }
                 Self::SetHome(request::SetHome { lat: v_lat, lon: v_lon }) => {
@@ -217,7 +179,7 @@ pub mod telemetry_le {
                         frame[11],
                     ]);
                     rt::in_range(
-                        &request::SET_HOME_LAT,
+                        &request::SetHome::LAT_DESC,
                         4,
                         field_0,
                         rt::f64_raw(-90f64),
@@ -234,7 +196,7 @@ pub mod telemetry_le {
                         frame[19],
                     ]);
                     rt::in_range(
-                        &request::SET_HOME_LON,
+                        &request::SetHome::LON_DESC,
                         12,
                         field_1,
                         rt::f64_raw(-180f64),
@@ -257,18 +219,17 @@ pub mod telemetry_le {
             name: &str,
             mut field: impl FnMut(&'static str) -> rt::Option<rt::FieldValue<'v>>,
         ) -> rt::Result<Self, rt::FieldError> {
-            match name {
-                "get_state" => rt::Ok(Self::GetState(request::GetState)),
+            let message = match name {
+                "get_state" => Self::GetState(request::GetState),
                 "set_home" => {
-                    rt::Ok(
-                        Self::SetHome(request::SetHome {
-                            lat: rt::get(&mut field, "lat")?,
-                            lon: rt::get(&mut field, "lon")?,
-                        }),
-                    )
+                    Self::SetHome(request::SetHome {
+                        lat: rt::get(&mut field, "lat")?,
+                        lon: rt::get(&mut field, "lon")?,
+                    })
                 }
-                _ => rt::Err(rt::FieldError::UnknownMessage),
-            }
+                _ => return rt::Err(rt::FieldError::UnknownMessage),
+            };
+            rt::Ok(message)
         }
     }
     impl rt::Message for Request {
@@ -289,11 +250,7 @@ pub mod telemetry_le {
             Request::visit(self, f)
         }
         #[inline]
-        fn encode(
-            &self,
-            address: u8,
-            buf: &mut [u8],
-        ) -> rt::Result<usize, rt::EncodeError> {
+        fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             Request::encode(self, address, buf)
         }
         #[inline]
@@ -328,48 +285,6 @@ pub mod telemetry_le {
         /// The responses this command may get, bit `i` for row `i` of `Response::MESSAGES`.
         const fn replies(&self) -> u64 {
             Self::COMMANDS[self.index()].3
-        }
-    }
-    impl response::State {
-        pub const NAME: &'static str = "state";
-        pub const CODE: &'static [u8] = &[0x81];
-        pub const LEN: usize = 41;
-        pub const DESC: rt::MessageDesc = rt::MessageDesc::new(
-            Self::NAME,
-            0x81,
-            1,
-            &[41],
-        );
-        pub const TIME_US: rt::Range<usize> = 4..12;
-        pub const ALTITUDE: rt::Range<usize> = 12..16;
-        pub const LAT: rt::Range<usize> = 16..24;
-        pub const OFFSET: rt::Range<usize> = 24..32;
-        pub const PRESSURE: rt::Range<usize> = 32..36;
-        pub const TOTAL: rt::Range<usize> = 36..40;
-        pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
-            f("time_us", rt::Int(self.time_us as i64));
-            f("altitude", rt::Int(rt::raw(self.altitude)));
-            f("lat", rt::Int(rt::raw(self.lat)));
-            f("offset", rt::Int(self.offset as i64));
-            f("pressure", rt::Int(rt::raw(self.pressure)));
-            f("total", rt::Int(self.total as i64));
-        }
-        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
-            Response::State(*self).encode(address, buf)
-        }
-    }
-    impl response::Ack {
-        pub const NAME: &'static str = "ack";
-        pub const CODE: &'static [u8] = &[0x82];
-        pub const LEN: usize = 5;
-        pub const DESC: rt::MessageDesc = rt::MessageDesc::new(
-            Self::NAME,
-            0x82,
-            1,
-            &[5],
-        );
-        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
-            Response::Ack(*self).encode(address, buf)
         }
     }
     ///A response, device to host.
@@ -417,11 +332,7 @@ pub mod telemetry_le {
         /// Encodes the frame for `address` into `buf`; returns the frame length. Refuses what
         /// decode refuses: an address no frame may carry, the broadcast address for a command
         /// that does not accept it, a value outside its field's range.
-        pub fn encode(
-            &self,
-            address: u8,
-            buf: &mut [u8],
-        ) -> rt::Result<usize, rt::EncodeError> {
+        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             rt::encode_address(address, &FRAME)?;
             let len = match *self {
                 Self::State(
@@ -455,9 +366,7 @@ pub mod telemetry_le {
                     }
                     out.len()
                 }
-                Self::Ack(response::Ack {}) => {
-                    rt::frame_mut::<5>(buf, &[0xA5, 0x5A, 0x01, 0x82])?.len()
-                }
+                Self::Ack(_) => rt::frame_mut::<5>(buf, &[0xA5, 0x5A, 0x01, 0x82])?.len(),
             };
             rt::seal(buf, len, |b| u32::from(checksum(rt::covered(b, 2))), 1, false);
             rt::Ok(len)
@@ -519,7 +428,7 @@ pub mod telemetry_le {
                         frame[33],
                     ]);
                     rt::in_range(
-                        &response::STATE_PRESSURE,
+                        &response::State::PRESSURE_DESC,
                         32,
                         field_4,
                         rt::f32_raw(300f32),
@@ -587,22 +496,21 @@ pub mod telemetry_le {
             name: &str,
             mut field: impl FnMut(&'static str) -> rt::Option<rt::FieldValue<'v>>,
         ) -> rt::Result<Self, rt::FieldError> {
-            match name {
+            let message = match name {
                 "state" => {
-                    rt::Ok(
-                        Self::State(response::State {
-                            time_us: rt::get(&mut field, "time_us")?,
-                            altitude: rt::get(&mut field, "altitude")?,
-                            lat: rt::get(&mut field, "lat")?,
-                            offset: rt::get(&mut field, "offset")?,
-                            pressure: rt::get(&mut field, "pressure")?,
-                            total: rt::get(&mut field, "total")?,
-                        }),
-                    )
+                    Self::State(response::State {
+                        time_us: rt::get(&mut field, "time_us")?,
+                        altitude: rt::get(&mut field, "altitude")?,
+                        lat: rt::get(&mut field, "lat")?,
+                        offset: rt::get(&mut field, "offset")?,
+                        pressure: rt::get(&mut field, "pressure")?,
+                        total: rt::get(&mut field, "total")?,
+                    })
                 }
-                "ack" => rt::Ok(Self::Ack(response::Ack)),
-                _ => rt::Err(rt::FieldError::UnknownMessage),
-            }
+                "ack" => Self::Ack(response::Ack),
+                _ => return rt::Err(rt::FieldError::UnknownMessage),
+            };
+            rt::Ok(message)
         }
     }
     impl rt::Message for Response {
@@ -623,11 +531,7 @@ pub mod telemetry_le {
             Response::visit(self, f)
         }
         #[inline]
-        fn encode(
-            &self,
-            address: u8,
-            buf: &mut [u8],
-        ) -> rt::Result<usize, rt::EncodeError> {
+        fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             Response::encode(self, address, buf)
         }
         #[inline]
@@ -762,11 +666,69 @@ pub mod telemetry_le {
     pub type StreamDecoder = ::busspec_runtime::stream::StreamDecoder<TelemetryLe>;
     /// What [`StreamDecoder`] finds in a stream.
     pub type Event = ::busspec_runtime::stream::Event<Request, Response>;
-    /// Each request as a struct of its own (its `DESC` names it as refusals do: name,
-    /// code and the frame lengths of its code), and each field a refusal names
-    /// (`message.field`, `FieldDesc`).
+    impl request::GetState {
+        pub const NAME: &'static str = "get_state";
+        pub const CODE: &'static [u8] = &[0x01];
+        pub const LEN: usize = 5;
+        pub const DESC: rt::MessageDesc = rt::desc(Self::NAME, 0x01, 1, &[5]);
+        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            Request::GetState(*self).encode(address, buf)
+        }
+    }
+    impl request::SetHome {
+        pub const NAME: &'static str = "set_home";
+        pub const CODE: &'static [u8] = &[0x02];
+        pub const LEN: usize = 21;
+        pub const DESC: rt::MessageDesc = rt::desc(Self::NAME, 0x02, 1, &[21]);
+        pub const LAT: rt::Range<usize> = 4..12;
+        pub const LON: rt::Range<usize> = 12..20;
+        pub const LAT_DESC: rt::FieldDesc = rt::field(Self::NAME, "lat");
+        pub const LON_DESC: rt::FieldDesc = rt::field(Self::NAME, "lon");
+        pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
+            f("lat", rt::Int(rt::raw(self.lat)));
+            f("lon", rt::Int(rt::raw(self.lon)));
+        }
+        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            Request::SetHome(*self).encode(address, buf)
+        }
+    }
+    impl response::State {
+        pub const NAME: &'static str = "state";
+        pub const CODE: &'static [u8] = &[0x81];
+        pub const LEN: usize = 41;
+        pub const DESC: rt::MessageDesc = rt::desc(Self::NAME, 0x81, 1, &[41]);
+        pub const TIME_US: rt::Range<usize> = 4..12;
+        pub const ALTITUDE: rt::Range<usize> = 12..16;
+        pub const LAT: rt::Range<usize> = 16..24;
+        pub const OFFSET: rt::Range<usize> = 24..32;
+        pub const PRESSURE: rt::Range<usize> = 32..36;
+        pub const TOTAL: rt::Range<usize> = 36..40;
+        pub const PRESSURE_DESC: rt::FieldDesc = rt::field(Self::NAME, "pressure");
+        pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
+            f("time_us", rt::Int(self.time_us as i64));
+            f("altitude", rt::Int(rt::raw(self.altitude)));
+            f("lat", rt::Int(rt::raw(self.lat)));
+            f("offset", rt::Int(self.offset as i64));
+            f("pressure", rt::Int(rt::raw(self.pressure)));
+            f("total", rt::Int(self.total as i64));
+        }
+        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            Response::State(*self).encode(address, buf)
+        }
+    }
+    impl response::Ack {
+        pub const NAME: &'static str = "ack";
+        pub const CODE: &'static [u8] = &[0x82];
+        pub const LEN: usize = 5;
+        pub const DESC: rt::MessageDesc = rt::desc(Self::NAME, 0x82, 1, &[5]);
+        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            Response::Ack(*self).encode(address, buf)
+        }
+    }
+    /// Each request as a struct of its own; its constants (`DESC`, which names it as
+    /// refusals do: name, code and the frame lengths of its code; `QUANTITY_DESC`, each
+    /// field a refusal names) and methods are in the `impl` of each.
     pub mod request {
-        use ::busspec_runtime::FieldDesc;
         /// §3.1 Get the state (code `0x01`, 5 bytes).
         #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
         #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
@@ -783,14 +745,9 @@ pub mod telemetry_le {
             /// \[°\] Valid raw range -180.0..=180.0.
             pub lon: f64,
         }
-        /// `set_home.lat`
-        pub const SET_HOME_LAT: FieldDesc = FieldDesc::new("set_home", "lat");
-        /// `set_home.lon`
-        pub const SET_HOME_LON: FieldDesc = FieldDesc::new("set_home", "lon");
     }
-    /// Each response as a struct of its own, and the fields its refusals name.
+    /// Each response as a struct of its own.
     pub mod response {
-        use ::busspec_runtime::FieldDesc;
         /// §4.1 State (code `0x81`, 41 bytes).
         #[derive(Debug, Clone, Copy, PartialEq)]
         #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
@@ -814,7 +771,5 @@ pub mod telemetry_le {
         #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
         #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]
         pub struct Ack;
-        /// `state.pressure`
-        pub const STATE_PRESSURE: FieldDesc = FieldDesc::new("state", "pressure");
     }
 }

@@ -70,7 +70,7 @@ pub mod text_counted {
     }
     /// Where `set_name.name` sits in the frame and how its elements are counted.
     pub const REPEAT_SET_NAME: rt::RepeatAt = rt::RepeatAt {
-        field: &request::SET_NAME_NAME,
+        field: &request::SetName::NAME_DESC,
         base: 6,
         at: 4,
         width: 1,
@@ -88,7 +88,7 @@ pub mod text_counted {
         base: 6,
         lists: &[
             rt::RepeatAt {
-                field: &request::SET_NAME_NAME,
+                field: &request::SetName::NAME_DESC,
                 base: 6,
                 at: 4,
                 width: 1,
@@ -103,39 +103,6 @@ pub mod text_counted {
             },
         ],
     };
-    impl request::SetName {
-        pub const NAME: &'static str = "set_name";
-        pub const CODE: &'static [u8] = &[0x20];
-        pub const MIN_LEN: usize = 6;
-        pub const MAX_LEN: usize = 22;
-        pub const DESC: rt::MessageDesc = rt::MessageDesc::new(
-            Self::NAME,
-            0x20,
-            1,
-            &[6],
-        );
-        pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
-            f("name", rt::Text(self.name.as_slice()));
-            f("channel", rt::Int(self.channel as i64));
-        }
-        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
-            Request::SetName(*self).encode(address, buf)
-        }
-    }
-    impl request::GetInfo {
-        pub const NAME: &'static str = "get_info";
-        pub const CODE: &'static [u8] = &[0x21];
-        pub const LEN: usize = 4;
-        pub const DESC: rt::MessageDesc = rt::MessageDesc::new(
-            Self::NAME,
-            0x21,
-            1,
-            &[4],
-        );
-        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
-            Request::GetInfo(*self).encode(address, buf)
-        }
-    }
     ///A request (command), host to device.
     #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
     #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
@@ -169,8 +136,8 @@ pub mod text_counted {
         /// The length of this message's frame, in bytes.
         pub const fn frame_len(&self) -> usize {
             match self {
-                Self::SetName(request::SetName { name: v_name, .. }) => {
-                    LISTS_SET_NAME.base + LISTS_SET_NAME.lists[0].bytes_of(v_name.len())
+                Self::SetName(m) => {
+                    LISTS_SET_NAME.base + LISTS_SET_NAME.lists[0].bytes_of(m.name.len())
                 }
                 _ => Self::MESSAGES[self.index()].2,
             }
@@ -186,11 +153,7 @@ pub mod text_counted {
         /// Encodes the frame for `address` into `buf`; returns the frame length. Refuses what
         /// decode refuses: an address no frame may carry, the broadcast address for a command
         /// that does not accept it, a value outside its field's range.
-        pub fn encode(
-            &self,
-            address: u8,
-            buf: &mut [u8],
-        ) -> rt::Result<usize, rt::EncodeError> {
+        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             rt::encode_address(address, &FRAME)?;
             let len = match *self {
                 Self::SetName(request::SetName { name: v_name, channel: v_channel }) => {
@@ -214,7 +177,7 @@ pub mod text_counted {
                     rt::write_elements(v_name.as_slice(), 1, false, &mut out[4..]);
                     out.len()
                 }
-                Self::GetInfo(request::GetInfo {}) => {
+                Self::GetInfo(_) => {
                     rt::frame_mut::<4>(buf, &[0x7E, address, 0x21])?.len()
                 }
             };
@@ -244,7 +207,7 @@ pub mod text_counted {
                     let s = LISTS_SET_NAME.split::<6, 1>(frame)?;
                     let frame = &s.frame;
                     rt::in_range(
-                        &request::SET_NAME_CHANNEL,
+                        &request::SetName::CHANNEL_DESC,
                         4 + s.shift(1),
                         frame[4],
                         0,
@@ -273,18 +236,17 @@ pub mod text_counted {
             name: &str,
             mut field: impl FnMut(&'static str) -> rt::Option<rt::FieldValue<'v>>,
         ) -> rt::Result<Self, rt::FieldError> {
-            match name {
+            let message = match name {
                 "set_name" => {
-                    rt::Ok(
-                        Self::SetName(request::SetName {
-                            name: rt::list_text::<16>(&mut field, "name")?,
-                            channel: rt::get(&mut field, "channel")?,
-                        }),
-                    )
+                    Self::SetName(request::SetName {
+                        name: rt::list_text::<16>(&mut field, "name")?,
+                        channel: rt::get(&mut field, "channel")?,
+                    })
                 }
-                "get_info" => rt::Ok(Self::GetInfo(request::GetInfo)),
-                _ => rt::Err(rt::FieldError::UnknownMessage),
-            }
+                "get_info" => Self::GetInfo(request::GetInfo),
+                _ => return rt::Err(rt::FieldError::UnknownMessage),
+            };
+            rt::Ok(message)
         }
     }
     impl rt::Message for Request {
@@ -305,11 +267,7 @@ pub mod text_counted {
             Request::visit(self, f)
         }
         #[inline]
-        fn encode(
-            &self,
-            address: u8,
-            buf: &mut [u8],
-        ) -> rt::Result<usize, rt::EncodeError> {
+        fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             Request::encode(self, address, buf)
         }
         #[inline]
@@ -348,7 +306,7 @@ pub mod text_counted {
     }
     /// Where `device_info.name` sits in the frame and how its elements are counted.
     pub const REPEAT_DEVICE_INFO: rt::RepeatAt = rt::RepeatAt {
-        field: &response::DEVICE_INFO_NAME,
+        field: &response::DeviceInfo::NAME_DESC,
         base: 10,
         at: 4,
         width: 1,
@@ -366,7 +324,7 @@ pub mod text_counted {
         base: 10,
         lists: &[
             rt::RepeatAt {
-                field: &response::DEVICE_INFO_NAME,
+                field: &response::DeviceInfo::NAME_DESC,
                 base: 10,
                 at: 4,
                 width: 1,
@@ -381,44 +339,6 @@ pub mod text_counted {
             },
         ],
     };
-    impl response::Ack {
-        pub const NAME: &'static str = "ack";
-        pub const CODE: &'static [u8] = &[0x20];
-        pub const LEN: usize = 5;
-        pub const DESC: rt::MessageDesc = rt::MessageDesc::new(
-            Self::NAME,
-            0x20,
-            1,
-            &[5],
-        );
-        pub const STATUS: rt::Range<usize> = 3..4;
-        pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
-            f("status", rt::Int(self.status as i64));
-        }
-        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
-            Response::Ack(*self).encode(address, buf)
-        }
-    }
-    impl response::DeviceInfo {
-        pub const NAME: &'static str = "device_info";
-        pub const CODE: &'static [u8] = &[0x21];
-        pub const MIN_LEN: usize = 11;
-        pub const MAX_LEN: usize = 26;
-        pub const DESC: rt::MessageDesc = rt::MessageDesc::new(
-            Self::NAME,
-            0x21,
-            1,
-            &[10],
-        );
-        pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
-            f("name", rt::Text(self.name.as_slice()));
-            f("serial", rt::Int(self.serial as i64));
-            f("version", rt::Int(self.version as i64));
-        }
-        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
-            Response::DeviceInfo(*self).encode(address, buf)
-        }
-    }
     ///A response, device to host.
     #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
     #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
@@ -452,9 +372,9 @@ pub mod text_counted {
         /// The length of this message's frame, in bytes.
         pub const fn frame_len(&self) -> usize {
             match self {
-                Self::DeviceInfo(response::DeviceInfo { name: v_name, .. }) => {
+                Self::DeviceInfo(m) => {
                     LISTS_DEVICE_INFO.base
-                        + LISTS_DEVICE_INFO.lists[0].bytes_of(v_name.len())
+                        + LISTS_DEVICE_INFO.lists[0].bytes_of(m.name.len())
                 }
                 _ => Self::MESSAGES[self.index()].2,
             }
@@ -470,11 +390,7 @@ pub mod text_counted {
         /// Encodes the frame for `address` into `buf`; returns the frame length. Refuses what
         /// decode refuses: an address no frame may carry, the broadcast address for a command
         /// that does not accept it, a value outside its field's range.
-        pub fn encode(
-            &self,
-            address: u8,
-            buf: &mut [u8],
-        ) -> rt::Result<usize, rt::EncodeError> {
+        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             rt::encode_address(address, &FRAME)?;
             let len = match *self {
                 Self::Ack(response::Ack { status: v_status }) => {
@@ -591,25 +507,22 @@ pub mod text_counted {
             name: &str,
             mut field: impl FnMut(&'static str) -> rt::Option<rt::FieldValue<'v>>,
         ) -> rt::Result<Self, rt::FieldError> {
-            match name {
+            let message = match name {
                 "ack" => {
-                    rt::Ok(
-                        Self::Ack(response::Ack {
-                            status: rt::get(&mut field, "status")?,
-                        }),
-                    )
+                    Self::Ack(response::Ack {
+                        status: rt::get(&mut field, "status")?,
+                    })
                 }
                 "device_info" => {
-                    rt::Ok(
-                        Self::DeviceInfo(response::DeviceInfo {
-                            name: rt::list_text::<16>(&mut field, "name")?,
-                            serial: rt::get(&mut field, "serial")?,
-                            version: rt::get(&mut field, "version")?,
-                        }),
-                    )
+                    Self::DeviceInfo(response::DeviceInfo {
+                        name: rt::list_text::<16>(&mut field, "name")?,
+                        serial: rt::get(&mut field, "serial")?,
+                        version: rt::get(&mut field, "version")?,
+                    })
                 }
-                _ => rt::Err(rt::FieldError::UnknownMessage),
-            }
+                _ => return rt::Err(rt::FieldError::UnknownMessage),
+            };
+            rt::Ok(message)
         }
     }
     impl rt::Message for Response {
@@ -630,11 +543,7 @@ pub mod text_counted {
             Response::visit(self, f)
         }
         #[inline]
-        fn encode(
-            &self,
-            address: u8,
-            buf: &mut [u8],
-        ) -> rt::Result<usize, rt::EncodeError> {
+        fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             Response::encode(self, address, buf)
         }
         #[inline]
@@ -683,7 +592,7 @@ pub mod text_counted {
                     let s = LISTS_SET_NAME.split::<6, 1>(frame)?;
                     let frame = &s.frame;
                     rt::in_range(
-                        &request::SET_NAME_CHANNEL,
+                        &request::SetName::CHANNEL_DESC,
                         4 + s.shift(1),
                         frame[4],
                         0,
@@ -956,11 +865,64 @@ pub mod text_counted {
     pub type StreamDecoder = ::busspec_runtime::stream::StreamDecoder<TextCounted>;
     /// What [`StreamDecoder`] finds in a stream.
     pub type Event = ::busspec_runtime::stream::Event<Request, Response>;
-    /// Each request as a struct of its own (its `DESC` names it as refusals do: name,
-    /// code and the frame lengths of its code), and each field a refusal names
-    /// (`message.field`, `FieldDesc`).
+    impl request::SetName {
+        pub const NAME: &'static str = "set_name";
+        pub const CODE: &'static [u8] = &[0x20];
+        pub const MIN_LEN: usize = 6;
+        pub const MAX_LEN: usize = 22;
+        pub const DESC: rt::MessageDesc = rt::desc(Self::NAME, 0x20, 1, &[6]);
+        pub const NAME_DESC: rt::FieldDesc = rt::field(Self::NAME, "name");
+        pub const CHANNEL_DESC: rt::FieldDesc = rt::field(Self::NAME, "channel");
+        pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
+            f("name", rt::Text(self.name.as_slice()));
+            f("channel", rt::Int(self.channel as i64));
+        }
+        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            Request::SetName(*self).encode(address, buf)
+        }
+    }
+    impl request::GetInfo {
+        pub const NAME: &'static str = "get_info";
+        pub const CODE: &'static [u8] = &[0x21];
+        pub const LEN: usize = 4;
+        pub const DESC: rt::MessageDesc = rt::desc(Self::NAME, 0x21, 1, &[4]);
+        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            Request::GetInfo(*self).encode(address, buf)
+        }
+    }
+    impl response::Ack {
+        pub const NAME: &'static str = "ack";
+        pub const CODE: &'static [u8] = &[0x20];
+        pub const LEN: usize = 5;
+        pub const DESC: rt::MessageDesc = rt::desc(Self::NAME, 0x20, 1, &[5]);
+        pub const STATUS: rt::Range<usize> = 3..4;
+        pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
+            f("status", rt::Int(self.status as i64));
+        }
+        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            Response::Ack(*self).encode(address, buf)
+        }
+    }
+    impl response::DeviceInfo {
+        pub const NAME: &'static str = "device_info";
+        pub const CODE: &'static [u8] = &[0x21];
+        pub const MIN_LEN: usize = 11;
+        pub const MAX_LEN: usize = 26;
+        pub const DESC: rt::MessageDesc = rt::desc(Self::NAME, 0x21, 1, &[10]);
+        pub const NAME_DESC: rt::FieldDesc = rt::field(Self::NAME, "name");
+        pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
+            f("name", rt::Text(self.name.as_slice()));
+            f("serial", rt::Int(self.serial as i64));
+            f("version", rt::Int(self.version as i64));
+        }
+        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            Response::DeviceInfo(*self).encode(address, buf)
+        }
+    }
+    /// Each request as a struct of its own; its constants (`DESC`, which names it as
+    /// refusals do: name, code and the frame lengths of its code; `QUANTITY_DESC`, each
+    /// field a refusal names) and methods are in the `impl` of each.
     pub mod request {
-        use ::busspec_runtime::FieldDesc;
         /// §1 Set the device name (code `0x20`, 6 to 22 bytes).
         #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
         #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
@@ -976,14 +938,9 @@ pub mod text_counted {
         #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
         #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]
         pub struct GetInfo;
-        /// `set_name.name`
-        pub const SET_NAME_NAME: FieldDesc = FieldDesc::new("set_name", "name");
-        /// `set_name.channel`
-        pub const SET_NAME_CHANNEL: FieldDesc = FieldDesc::new("set_name", "channel");
     }
-    /// Each response as a struct of its own, and the fields its refusals name.
+    /// Each response as a struct of its own.
     pub mod response {
-        use ::busspec_runtime::FieldDesc;
         /// §1 Acknowledge (code `0x20`, 5 bytes).
         #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
         #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
@@ -1002,7 +959,5 @@ pub mod text_counted {
             pub serial: u32,
             pub version: u8,
         }
-        /// `device_info.name`
-        pub const DEVICE_INFO_NAME: FieldDesc = FieldDesc::new("device_info", "name");
     }
 }

@@ -70,7 +70,7 @@ pub mod text_terminated {
     }
     /// Where `set_name.name` sits in the frame and how its elements are counted.
     pub const REPEAT_SET_NAME: rt::RepeatAt = rt::RepeatAt {
-        field: &request::SET_NAME_NAME,
+        field: &request::SetName::NAME_DESC,
         base: 5,
         at: 3,
         width: 1,
@@ -83,7 +83,7 @@ pub mod text_terminated {
         base: 5,
         lists: &[
             rt::RepeatAt {
-                field: &request::SET_NAME_NAME,
+                field: &request::SetName::NAME_DESC,
                 base: 5,
                 at: 3,
                 width: 1,
@@ -93,57 +93,6 @@ pub mod text_terminated {
             },
         ],
     };
-    impl request::Ping {
-        pub const NAME: &'static str = "ping";
-        pub const CODE: &'static [u8] = &[0x28];
-        pub const LEN: usize = 4;
-        pub const DESC: rt::MessageDesc = rt::MessageDesc::new(
-            Self::NAME,
-            0x28,
-            1,
-            &[4],
-        );
-        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
-            Request::Ping(*self).encode(address, buf)
-        }
-    }
-    impl request::SetName {
-        pub const NAME: &'static str = "set_name";
-        pub const CODE: &'static [u8] = &[0x2A];
-        pub const MIN_LEN: usize = 6;
-        pub const MAX_LEN: usize = 22;
-        pub const DESC: rt::MessageDesc = rt::MessageDesc::new(
-            Self::NAME,
-            0x2A,
-            1,
-            &[5],
-        );
-        pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
-            f("name", rt::Text(self.name.as_slice()));
-            f("channel", rt::Int(self.channel as i64));
-        }
-        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
-            Request::SetName(*self).encode(address, buf)
-        }
-    }
-    impl request::ReadParameter {
-        pub const NAME: &'static str = "read_parameter";
-        pub const CODE: &'static [u8] = &[0x2C];
-        pub const LEN: usize = 5;
-        pub const DESC: rt::MessageDesc = rt::MessageDesc::new(
-            Self::NAME,
-            0x2C,
-            1,
-            &[5],
-        );
-        pub const INDEX: rt::Range<usize> = 3..4;
-        pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
-            f("index", rt::Int(self.index as i64));
-        }
-        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
-            Request::ReadParameter(*self).encode(address, buf)
-        }
-    }
     ///A request (command), host to device.
     #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
     #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
@@ -180,8 +129,8 @@ pub mod text_terminated {
         /// The length of this message's frame, in bytes.
         pub const fn frame_len(&self) -> usize {
             match self {
-                Self::SetName(request::SetName { name: v_name, .. }) => {
-                    LISTS_SET_NAME.base + LISTS_SET_NAME.lists[0].bytes_of(v_name.len())
+                Self::SetName(m) => {
+                    LISTS_SET_NAME.base + LISTS_SET_NAME.lists[0].bytes_of(m.name.len())
                 }
                 _ => Self::MESSAGES[self.index()].2,
             }
@@ -198,16 +147,10 @@ pub mod text_terminated {
         /// Encodes the frame for `address` into `buf`; returns the frame length. Refuses what
         /// decode refuses: an address no frame may carry, the broadcast address for a command
         /// that does not accept it, a value outside its field's range.
-        pub fn encode(
-            &self,
-            address: u8,
-            buf: &mut [u8],
-        ) -> rt::Result<usize, rt::EncodeError> {
+        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             rt::encode_address(address, &FRAME)?;
             let len = match *self {
-                Self::Ping(request::Ping {}) => {
-                    rt::frame_mut::<4>(buf, &[0xC8, 0x02, 0x28])?.len()
-                }
+                Self::Ping(_) => rt::frame_mut::<4>(buf, &[0xC8, 0x02, 0x28])?.len(),
                 Self::SetName(request::SetName { name: v_name, channel: v_channel }) => {
                     rt::encode_in_range("channel", v_channel, 0, 7)?;
                     LISTS_SET_NAME.lists[0].encode_until(v_name.as_slice())?;
@@ -269,7 +212,7 @@ pub mod text_terminated {
                     let s = LISTS_SET_NAME.split::<5, 1>(frame)?;
                     let frame = &s.frame;
                     rt::in_range(
-                        &request::SET_NAME_CHANNEL,
+                        &request::SetName::CHANNEL_DESC,
                         3 + s.shift(1),
                         frame[3],
                         0,
@@ -302,25 +245,22 @@ pub mod text_terminated {
             name: &str,
             mut field: impl FnMut(&'static str) -> rt::Option<rt::FieldValue<'v>>,
         ) -> rt::Result<Self, rt::FieldError> {
-            match name {
-                "ping" => rt::Ok(Self::Ping(request::Ping)),
+            let message = match name {
+                "ping" => Self::Ping(request::Ping),
                 "set_name" => {
-                    rt::Ok(
-                        Self::SetName(request::SetName {
-                            name: rt::list_text::<16>(&mut field, "name")?,
-                            channel: rt::get(&mut field, "channel")?,
-                        }),
-                    )
+                    Self::SetName(request::SetName {
+                        name: rt::list_text::<16>(&mut field, "name")?,
+                        channel: rt::get(&mut field, "channel")?,
+                    })
                 }
                 "read_parameter" => {
-                    rt::Ok(
-                        Self::ReadParameter(request::ReadParameter {
-                            index: rt::get(&mut field, "index")?,
-                        }),
-                    )
+                    Self::ReadParameter(request::ReadParameter {
+                        index: rt::get(&mut field, "index")?,
+                    })
                 }
-                _ => rt::Err(rt::FieldError::UnknownMessage),
-            }
+                _ => return rt::Err(rt::FieldError::UnknownMessage),
+            };
+            rt::Ok(message)
         }
     }
     impl rt::Message for Request {
@@ -341,11 +281,7 @@ pub mod text_terminated {
             Request::visit(self, f)
         }
         #[inline]
-        fn encode(
-            &self,
-            address: u8,
-            buf: &mut [u8],
-        ) -> rt::Result<usize, rt::EncodeError> {
+        fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             Request::encode(self, address, buf)
         }
         #[inline]
@@ -385,7 +321,7 @@ pub mod text_terminated {
     }
     /// Where `device_info.name` sits in the frame and how its elements are counted.
     pub const REPEAT_DEVICE_INFO: rt::RepeatAt = rt::RepeatAt {
-        field: &response::DEVICE_INFO_NAME,
+        field: &response::DeviceInfo::NAME_DESC,
         base: 18,
         at: 3,
         width: 1,
@@ -398,7 +334,7 @@ pub mod text_terminated {
         base: 18,
         lists: &[
             rt::RepeatAt {
-                field: &response::DEVICE_INFO_NAME,
+                field: &response::DeviceInfo::NAME_DESC,
                 base: 18,
                 at: 3,
                 width: 1,
@@ -410,7 +346,7 @@ pub mod text_terminated {
     };
     /// Where `parameter.label` sits in the frame and how its elements are counted.
     pub const REPEAT_PARAMETER: rt::RepeatAt = rt::RepeatAt {
-        field: &response::PARAMETER_LABEL,
+        field: &response::Parameter::LABEL_DESC,
         base: 7,
         at: 4,
         width: 1,
@@ -423,7 +359,7 @@ pub mod text_terminated {
         base: 7,
         lists: &[
             rt::RepeatAt {
-                field: &response::PARAMETER_LABEL,
+                field: &response::Parameter::LABEL_DESC,
                 base: 7,
                 at: 4,
                 width: 1,
@@ -432,7 +368,7 @@ pub mod text_terminated {
                 max: 16,
             },
             rt::RepeatAt {
-                field: &response::PARAMETER_UNIT,
+                field: &response::Parameter::UNIT_DESC,
                 base: 7,
                 at: 4,
                 width: 1,
@@ -442,69 +378,6 @@ pub mod text_terminated {
             },
         ],
     };
-    impl response::DeviceInfo {
-        pub const NAME: &'static str = "device_info";
-        pub const CODE: &'static [u8] = &[0x29];
-        pub const MIN_LEN: usize = 20;
-        pub const MAX_LEN: usize = 43;
-        pub const DESC: rt::MessageDesc = rt::MessageDesc::new(
-            Self::NAME,
-            0x29,
-            1,
-            &[18],
-        );
-        pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
-            f("name", rt::Text(self.name.as_slice()));
-            f("serial", rt::Int(self.serial as i64));
-            f("hardware", rt::Int(self.hardware as i64));
-            f("firmware", rt::Int(self.firmware as i64));
-            f("parameters", rt::Int(self.parameters as i64));
-            f("version", rt::Int(self.version as i64));
-        }
-        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
-            Response::DeviceInfo(*self).encode(address, buf)
-        }
-    }
-    impl response::Ack {
-        pub const NAME: &'static str = "ack";
-        pub const CODE: &'static [u8] = &[0x2A];
-        pub const LEN: usize = 5;
-        pub const DESC: rt::MessageDesc = rt::MessageDesc::new(
-            Self::NAME,
-            0x2A,
-            1,
-            &[5],
-        );
-        pub const STATUS: rt::Range<usize> = 3..4;
-        pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
-            f("status", rt::Int(self.status as i64));
-        }
-        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
-            Response::Ack(*self).encode(address, buf)
-        }
-    }
-    impl response::Parameter {
-        pub const NAME: &'static str = "parameter";
-        pub const CODE: &'static [u8] = &[0x2B];
-        pub const MIN_LEN: usize = 9;
-        pub const MAX_LEN: usize = 33;
-        pub const DESC: rt::MessageDesc = rt::MessageDesc::new(
-            Self::NAME,
-            0x2B,
-            1,
-            &[7],
-        );
-        pub const INDEX: rt::Range<usize> = 3..4;
-        pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
-            f("index", rt::Int(self.index as i64));
-            f("label", rt::Text(self.label.as_slice()));
-            f("unit", rt::Text(self.unit.as_slice()));
-            f("value", rt::Int(self.value as i64));
-        }
-        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
-            Response::Parameter(*self).encode(address, buf)
-        }
-    }
     ///A response, device to host.
     #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
     #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
@@ -541,16 +414,14 @@ pub mod text_terminated {
         /// The length of this message's frame, in bytes.
         pub const fn frame_len(&self) -> usize {
             match self {
-                Self::DeviceInfo(response::DeviceInfo { name: v_name, .. }) => {
+                Self::DeviceInfo(m) => {
                     LISTS_DEVICE_INFO.base
-                        + LISTS_DEVICE_INFO.lists[0].bytes_of(v_name.len())
+                        + LISTS_DEVICE_INFO.lists[0].bytes_of(m.name.len())
                 }
-                Self::Parameter(
-                    response::Parameter { label: v_label, unit: v_unit, .. },
-                ) => {
+                Self::Parameter(m) => {
                     LISTS_PARAMETER.base
-                        + LISTS_PARAMETER.lists[0].bytes_of(v_label.len())
-                        + LISTS_PARAMETER.lists[1].bytes_of(v_unit.len())
+                        + LISTS_PARAMETER.lists[0].bytes_of(m.label.len())
+                        + LISTS_PARAMETER.lists[1].bytes_of(m.unit.len())
                 }
                 _ => Self::MESSAGES[self.index()].2,
             }
@@ -567,11 +438,7 @@ pub mod text_terminated {
         /// Encodes the frame for `address` into `buf`; returns the frame length. Refuses what
         /// decode refuses: an address no frame may carry, the broadcast address for a command
         /// that does not accept it, a value outside its field's range.
-        pub fn encode(
-            &self,
-            address: u8,
-            buf: &mut [u8],
-        ) -> rt::Result<usize, rt::EncodeError> {
+        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             rt::encode_address(address, &FRAME)?;
             let len = match *self {
                 Self::DeviceInfo(
@@ -770,38 +637,33 @@ pub mod text_terminated {
             name: &str,
             mut field: impl FnMut(&'static str) -> rt::Option<rt::FieldValue<'v>>,
         ) -> rt::Result<Self, rt::FieldError> {
-            match name {
+            let message = match name {
                 "device_info" => {
-                    rt::Ok(
-                        Self::DeviceInfo(response::DeviceInfo {
-                            name: rt::list_text::<24>(&mut field, "name")?,
-                            serial: rt::get(&mut field, "serial")?,
-                            hardware: rt::get(&mut field, "hardware")?,
-                            firmware: rt::get(&mut field, "firmware")?,
-                            parameters: rt::get(&mut field, "parameters")?,
-                            version: rt::get(&mut field, "version")?,
-                        }),
-                    )
+                    Self::DeviceInfo(response::DeviceInfo {
+                        name: rt::list_text::<24>(&mut field, "name")?,
+                        serial: rt::get(&mut field, "serial")?,
+                        hardware: rt::get(&mut field, "hardware")?,
+                        firmware: rt::get(&mut field, "firmware")?,
+                        parameters: rt::get(&mut field, "parameters")?,
+                        version: rt::get(&mut field, "version")?,
+                    })
                 }
                 "ack" => {
-                    rt::Ok(
-                        Self::Ack(response::Ack {
-                            status: rt::get(&mut field, "status")?,
-                        }),
-                    )
+                    Self::Ack(response::Ack {
+                        status: rt::get(&mut field, "status")?,
+                    })
                 }
                 "parameter" => {
-                    rt::Ok(
-                        Self::Parameter(response::Parameter {
-                            index: rt::get(&mut field, "index")?,
-                            label: rt::list_text::<16>(&mut field, "label")?,
-                            unit: rt::list_text::<8>(&mut field, "unit")?,
-                            value: rt::get(&mut field, "value")?,
-                        }),
-                    )
+                    Self::Parameter(response::Parameter {
+                        index: rt::get(&mut field, "index")?,
+                        label: rt::list_text::<16>(&mut field, "label")?,
+                        unit: rt::list_text::<8>(&mut field, "unit")?,
+                        value: rt::get(&mut field, "value")?,
+                    })
                 }
-                _ => rt::Err(rt::FieldError::UnknownMessage),
-            }
+                _ => return rt::Err(rt::FieldError::UnknownMessage),
+            };
+            rt::Ok(message)
         }
     }
     impl rt::Message for Response {
@@ -822,11 +684,7 @@ pub mod text_terminated {
             Response::visit(self, f)
         }
         #[inline]
-        fn encode(
-            &self,
-            address: u8,
-            buf: &mut [u8],
-        ) -> rt::Result<usize, rt::EncodeError> {
+        fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             Response::encode(self, address, buf)
         }
         #[inline]
@@ -879,7 +737,7 @@ pub mod text_terminated {
                     let s = LISTS_SET_NAME.split::<5, 1>(frame)?;
                     let frame = &s.frame;
                     rt::in_range(
-                        &request::SET_NAME_CHANNEL,
+                        &request::SetName::CHANNEL_DESC,
                         3 + s.shift(1),
                         frame[3],
                         0,
@@ -1244,11 +1102,99 @@ pub mod text_terminated {
     pub type StreamDecoder = ::busspec_runtime::stream::StreamDecoder<TextTerminated>;
     /// What [`StreamDecoder`] finds in a stream.
     pub type Event = ::busspec_runtime::stream::Event<Request, Response>;
-    /// Each request as a struct of its own (its `DESC` names it as refusals do: name,
-    /// code and the frame lengths of its code), and each field a refusal names
-    /// (`message.field`, `FieldDesc`).
+    impl request::Ping {
+        pub const NAME: &'static str = "ping";
+        pub const CODE: &'static [u8] = &[0x28];
+        pub const LEN: usize = 4;
+        pub const DESC: rt::MessageDesc = rt::desc(Self::NAME, 0x28, 1, &[4]);
+        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            Request::Ping(*self).encode(address, buf)
+        }
+    }
+    impl request::SetName {
+        pub const NAME: &'static str = "set_name";
+        pub const CODE: &'static [u8] = &[0x2A];
+        pub const MIN_LEN: usize = 6;
+        pub const MAX_LEN: usize = 22;
+        pub const DESC: rt::MessageDesc = rt::desc(Self::NAME, 0x2A, 1, &[5]);
+        pub const NAME_DESC: rt::FieldDesc = rt::field(Self::NAME, "name");
+        pub const CHANNEL_DESC: rt::FieldDesc = rt::field(Self::NAME, "channel");
+        pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
+            f("name", rt::Text(self.name.as_slice()));
+            f("channel", rt::Int(self.channel as i64));
+        }
+        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            Request::SetName(*self).encode(address, buf)
+        }
+    }
+    impl request::ReadParameter {
+        pub const NAME: &'static str = "read_parameter";
+        pub const CODE: &'static [u8] = &[0x2C];
+        pub const LEN: usize = 5;
+        pub const DESC: rt::MessageDesc = rt::desc(Self::NAME, 0x2C, 1, &[5]);
+        pub const INDEX: rt::Range<usize> = 3..4;
+        pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
+            f("index", rt::Int(self.index as i64));
+        }
+        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            Request::ReadParameter(*self).encode(address, buf)
+        }
+    }
+    impl response::DeviceInfo {
+        pub const NAME: &'static str = "device_info";
+        pub const CODE: &'static [u8] = &[0x29];
+        pub const MIN_LEN: usize = 20;
+        pub const MAX_LEN: usize = 43;
+        pub const DESC: rt::MessageDesc = rt::desc(Self::NAME, 0x29, 1, &[18]);
+        pub const NAME_DESC: rt::FieldDesc = rt::field(Self::NAME, "name");
+        pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
+            f("name", rt::Text(self.name.as_slice()));
+            f("serial", rt::Int(self.serial as i64));
+            f("hardware", rt::Int(self.hardware as i64));
+            f("firmware", rt::Int(self.firmware as i64));
+            f("parameters", rt::Int(self.parameters as i64));
+            f("version", rt::Int(self.version as i64));
+        }
+        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            Response::DeviceInfo(*self).encode(address, buf)
+        }
+    }
+    impl response::Ack {
+        pub const NAME: &'static str = "ack";
+        pub const CODE: &'static [u8] = &[0x2A];
+        pub const LEN: usize = 5;
+        pub const DESC: rt::MessageDesc = rt::desc(Self::NAME, 0x2A, 1, &[5]);
+        pub const STATUS: rt::Range<usize> = 3..4;
+        pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
+            f("status", rt::Int(self.status as i64));
+        }
+        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            Response::Ack(*self).encode(address, buf)
+        }
+    }
+    impl response::Parameter {
+        pub const NAME: &'static str = "parameter";
+        pub const CODE: &'static [u8] = &[0x2B];
+        pub const MIN_LEN: usize = 9;
+        pub const MAX_LEN: usize = 33;
+        pub const DESC: rt::MessageDesc = rt::desc(Self::NAME, 0x2B, 1, &[7]);
+        pub const INDEX: rt::Range<usize> = 3..4;
+        pub const LABEL_DESC: rt::FieldDesc = rt::field(Self::NAME, "label");
+        pub const UNIT_DESC: rt::FieldDesc = rt::field(Self::NAME, "unit");
+        pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
+            f("index", rt::Int(self.index as i64));
+            f("label", rt::Text(self.label.as_slice()));
+            f("unit", rt::Text(self.unit.as_slice()));
+            f("value", rt::Int(self.value as i64));
+        }
+        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            Response::Parameter(*self).encode(address, buf)
+        }
+    }
+    /// Each request as a struct of its own; its constants (`DESC`, which names it as
+    /// refusals do: name, code and the frame lengths of its code; `QUANTITY_DESC`, each
+    /// field a refusal names) and methods are in the `impl` of each.
     pub mod request {
-        use ::busspec_runtime::FieldDesc;
         /// §1 Ask for the device information (code `0x28`, 4 bytes).
         #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
         #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
@@ -1272,14 +1218,9 @@ pub mod text_terminated {
         pub struct ReadParameter {
             pub index: u8,
         }
-        /// `set_name.name`
-        pub const SET_NAME_NAME: FieldDesc = FieldDesc::new("set_name", "name");
-        /// `set_name.channel`
-        pub const SET_NAME_CHANNEL: FieldDesc = FieldDesc::new("set_name", "channel");
     }
-    /// Each response as a struct of its own, and the fields its refusals name.
+    /// Each response as a struct of its own.
     pub mod response {
-        use ::busspec_runtime::FieldDesc;
         /// §1 Device information (code `0x29`, 20 to 43 bytes).
         #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
         #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
@@ -1312,11 +1253,5 @@ pub mod text_terminated {
             pub unit: super::rt::Repeated<u8, 8>,
             pub value: i16,
         }
-        /// `device_info.name`
-        pub const DEVICE_INFO_NAME: FieldDesc = FieldDesc::new("device_info", "name");
-        /// `parameter.label`
-        pub const PARAMETER_LABEL: FieldDesc = FieldDesc::new("parameter", "label");
-        /// `parameter.unit`
-        pub const PARAMETER_UNIT: FieldDesc = FieldDesc::new("parameter", "unit");
     }
 }

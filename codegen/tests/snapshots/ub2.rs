@@ -289,734 +289,6 @@ pub mod ub2 {
             Self(raw)
         }
     }
-    impl request::ReferenceRun {
-        pub const NAME: &'static str = "reference_run";
-        pub const CODE: &'static [u8] = &[0x10, 0x00];
-        pub const LEN: usize = 5;
-        pub const DESC: rt::MessageDesc = rt::MessageDesc::new(
-            Self::NAME,
-            0x1000,
-            2,
-            &[5],
-        );
-        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
-            Request::ReferenceRun(*self).encode(address, buf)
-        }
-    }
-    impl request::ReferenceRunStatus {
-        pub const NAME: &'static str = "reference_run_status";
-        pub const CODE: &'static [u8] = &[0x10, 0x01];
-        pub const LEN: usize = 5;
-        pub const DESC: rt::MessageDesc = rt::MessageDesc::new(
-            Self::NAME,
-            0x1001,
-            2,
-            &[5],
-        );
-        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
-            Request::ReferenceRunStatus(*self).encode(address, buf)
-        }
-    }
-    impl request::GoToCapacitance {
-        pub const NAME: &'static str = "go_to_capacitance";
-        pub const CODE: &'static [u8] = &[0x20, 0x00];
-        pub const LEN: usize = 9;
-        pub const DESC: rt::MessageDesc = rt::MessageDesc::new(
-            Self::NAME,
-            0x2000,
-            2,
-            &[9],
-        );
-        pub const TARGET: rt::Range<usize> = 4..8;
-        pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
-            f("target", rt::Int(self.target.raw() as i64));
-        }
-        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
-            Request::GoToCapacitance(*self).encode(address, buf)
-        }
-    }
-    impl request::GoToCapacitanceStatus {
-        pub const NAME: &'static str = "go_to_capacitance_status";
-        pub const CODE: &'static [u8] = &[0x20, 0x01];
-        pub const LEN: usize = 5;
-        pub const DESC: rt::MessageDesc = rt::MessageDesc::new(
-            Self::NAME,
-            0x2001,
-            2,
-            &[5],
-        );
-        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
-            Request::GoToCapacitanceStatus(*self).encode(address, buf)
-        }
-    }
-    impl request::GoToFullStepPosition {
-        pub const NAME: &'static str = "go_to_full_step_position";
-        pub const CODE: &'static [u8] = &[0x21, 0x00];
-        pub const LEN: usize = 7;
-        pub const DESC: rt::MessageDesc = rt::MessageDesc::new(
-            Self::NAME,
-            0x2100,
-            2,
-            &[7],
-        );
-        pub const TARGET: rt::Range<usize> = 4..6;
-        pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
-            f("target", rt::Int(self.target as i64));
-        }
-        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
-            Request::GoToFullStepPosition(*self).encode(address, buf)
-        }
-    }
-    impl request::GoToFullStepPositionStatus {
-        pub const NAME: &'static str = "go_to_full_step_position_status";
-        pub const CODE: &'static [u8] = &[0x21, 0x01];
-        pub const LEN: usize = 5;
-        pub const DESC: rt::MessageDesc = rt::MessageDesc::new(
-            Self::NAME,
-            0x2101,
-            2,
-            &[5],
-        );
-        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
-            Request::GoToFullStepPositionStatus(*self).encode(address, buf)
-        }
-    }
-    impl request::MoveFullSteps {
-        pub const NAME: &'static str = "move_full_steps";
-        pub const CODE: &'static [u8] = &[0x22, 0x00];
-        pub const LEN: usize = 7;
-        pub const DESC: rt::MessageDesc = rt::MessageDesc::new(
-            Self::NAME,
-            0x2200,
-            2,
-            &[7],
-        );
-        pub const STEPS: rt::Range<usize> = 4..6;
-        pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
-            f("steps", rt::Int(self.steps as i64));
-        }
-        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
-            Request::MoveFullSteps(*self).encode(address, buf)
-        }
-    }
-    impl request::MoveFullStepsStatus {
-        pub const NAME: &'static str = "move_full_steps_status";
-        pub const CODE: &'static [u8] = &[0x22, 0x01];
-        pub const LEN: usize = 5;
-        pub const DESC: rt::MessageDesc = rt::MessageDesc::new(
-            Self::NAME,
-            0x2201,
-            2,
-            &[5],
-        );
-        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
-            Request::MoveFullStepsStatus(*self).encode(address, buf)
-        }
-    }
-    impl request::GoToCmin {
-        pub const NAME: &'static str = "go_to_cmin";
-        pub const CODE: &'static [u8] = &[0x23, 0x00];
-        pub const LEN: usize = 5;
-        pub const DESC: rt::MessageDesc = rt::MessageDesc::new(
-            Self::NAME,
-            0x2300,
-            2,
-            &[5],
-        );
-        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
-            Request::GoToCmin(*self).encode(address, buf)
-        }
-    }
-    impl request::GoToCminStatus {
-        pub const NAME: &'static str = "go_to_cmin_status";
-        pub const CODE: &'static [u8] = &[0x23, 0x01];
-        pub const LEN: usize = 5;
-        pub const DESC: rt::MessageDesc = rt::MessageDesc::new(
-            Self::NAME,
-            0x2301,
-            2,
-            &[5],
-        );
-        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
-            Request::GoToCminStatus(*self).encode(address, buf)
-        }
-    }
-    impl request::GoToCmax {
-        pub const NAME: &'static str = "go_to_cmax";
-        pub const CODE: &'static [u8] = &[0x24, 0x00];
-        pub const LEN: usize = 5;
-        pub const DESC: rt::MessageDesc = rt::MessageDesc::new(
-            Self::NAME,
-            0x2400,
-            2,
-            &[5],
-        );
-        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
-            Request::GoToCmax(*self).encode(address, buf)
-        }
-    }
-    impl request::GoToCmaxStatus {
-        pub const NAME: &'static str = "go_to_cmax_status";
-        pub const CODE: &'static [u8] = &[0x24, 0x01];
-        pub const LEN: usize = 5;
-        pub const DESC: rt::MessageDesc = rt::MessageDesc::new(
-            Self::NAME,
-            0x2401,
-            2,
-            &[5],
-        );
-        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
-            Request::GoToCmaxStatus(*self).encode(address, buf)
-        }
-    }
-    impl request::GoToMicroStepPosition {
-        pub const NAME: &'static str = "go_to_micro_step_position";
-        pub const CODE: &'static [u8] = &[0x25, 0x00];
-        pub const LEN: usize = 9;
-        pub const DESC: rt::MessageDesc = rt::MessageDesc::new(
-            Self::NAME,
-            0x2500,
-            2,
-            &[9],
-        );
-        pub const TARGET: rt::Range<usize> = 4..8;
-        pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
-            f("target", rt::Int(self.target as i64));
-        }
-        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
-            Request::GoToMicroStepPosition(*self).encode(address, buf)
-        }
-    }
-    impl request::GoToMicroStepPositionStatus {
-        pub const NAME: &'static str = "go_to_micro_step_position_status";
-        pub const CODE: &'static [u8] = &[0x25, 0x01];
-        pub const LEN: usize = 5;
-        pub const DESC: rt::MessageDesc = rt::MessageDesc::new(
-            Self::NAME,
-            0x2501,
-            2,
-            &[5],
-        );
-        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
-            Request::GoToMicroStepPositionStatus(*self).encode(address, buf)
-        }
-    }
-    impl request::MoveMicroSteps {
-        pub const NAME: &'static str = "move_micro_steps";
-        pub const CODE: &'static [u8] = &[0x26, 0x00];
-        pub const LEN: usize = 9;
-        pub const DESC: rt::MessageDesc = rt::MessageDesc::new(
-            Self::NAME,
-            0x2600,
-            2,
-            &[9],
-        );
-        pub const STEPS: rt::Range<usize> = 4..8;
-        pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
-            f("steps", rt::Int(self.steps as i64));
-        }
-        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
-            Request::MoveMicroSteps(*self).encode(address, buf)
-        }
-    }
-    impl request::MoveMicroStepsStatus {
-        pub const NAME: &'static str = "move_micro_steps_status";
-        pub const CODE: &'static [u8] = &[0x26, 0x01];
-        pub const LEN: usize = 5;
-        pub const DESC: rt::MessageDesc = rt::MessageDesc::new(
-            Self::NAME,
-            0x2601,
-            2,
-            &[5],
-        );
-        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
-            Request::MoveMicroStepsStatus(*self).encode(address, buf)
-        }
-    }
-    impl request::GoToStoredPosition {
-        pub const NAME: &'static str = "go_to_stored_position";
-        pub const CODE: &'static [u8] = &[0x27, 0x00];
-        pub const LEN: usize = 6;
-        pub const DESC: rt::MessageDesc = rt::MessageDesc::new(
-            Self::NAME,
-            0x2700,
-            2,
-            &[6],
-        );
-        pub const INDEX: rt::Range<usize> = 4..5;
-        pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
-            f("index", rt::Int(self.index as i64));
-        }
-        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
-            Request::GoToStoredPosition(*self).encode(address, buf)
-        }
-    }
-    impl request::GoToStoredPositionStatus {
-        pub const NAME: &'static str = "go_to_stored_position_status";
-        pub const CODE: &'static [u8] = &[0x27, 0x01];
-        pub const LEN: usize = 5;
-        pub const DESC: rt::MessageDesc = rt::MessageDesc::new(
-            Self::NAME,
-            0x2701,
-            2,
-            &[5],
-        );
-        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
-            Request::GoToStoredPositionStatus(*self).encode(address, buf)
-        }
-    }
-    impl request::SetAccelerationSpeedIndex {
-        pub const NAME: &'static str = "set_acceleration_speed_index";
-        pub const CODE: &'static [u8] = &[0x43, 0x00];
-        pub const LEN: usize = 7;
-        pub const DESC: rt::MessageDesc = rt::MessageDesc::new(
-            Self::NAME,
-            0x4300,
-            2,
-            &[7],
-        );
-        pub const ACCELERATION_INDEX: rt::Range<usize> = 4..5;
-        pub const SPEED_INDEX: rt::Range<usize> = 5..6;
-        pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
-            f("acceleration_index", rt::Int(self.acceleration_index as i64));
-            f("speed_index", rt::Int(self.speed_index as i64));
-        }
-        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
-            Request::SetAccelerationSpeedIndex(*self).encode(address, buf)
-        }
-    }
-    impl request::SetCurrent {
-        pub const NAME: &'static str = "set_current";
-        pub const CODE: &'static [u8] = &[0x45, 0x00];
-        pub const LEN: usize = 7;
-        pub const DESC: rt::MessageDesc = rt::MessageDesc::new(
-            Self::NAME,
-            0x4500,
-            2,
-            &[7],
-        );
-        pub const IDLE_CURRENT: rt::Range<usize> = 4..5;
-        pub const DRIVE_CURRENT: rt::Range<usize> = 5..6;
-        pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
-            f("idle_current", rt::Int(self.idle_current as i64));
-            f("drive_current", rt::Int(self.drive_current as i64));
-        }
-        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
-            Request::SetCurrent(*self).encode(address, buf)
-        }
-    }
-    impl request::SetSlaveAddress {
-        pub const NAME: &'static str = "set_slave_address";
-        pub const CODE: &'static [u8] = &[0x60, 0x00];
-        pub const LEN: usize = 6;
-        pub const DESC: rt::MessageDesc = rt::MessageDesc::new(
-            Self::NAME,
-            0x6000,
-            2,
-            &[6],
-        );
-        pub const ADDRESS: rt::Range<usize> = 4..5;
-        pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
-            f("address", rt::Int(self.address as i64));
-        }
-        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
-            Request::SetSlaveAddress(*self).encode(address, buf)
-        }
-    }
-    impl request::SetBaudRate {
-        pub const NAME: &'static str = "set_baud_rate";
-        pub const CODE: &'static [u8] = &[0x61, 0x00];
-        pub const LEN: usize = 6;
-        pub const DESC: rt::MessageDesc = rt::MessageDesc::new(
-            Self::NAME,
-            0x6100,
-            2,
-            &[6],
-        );
-        pub const BAUD_RATE: rt::Range<usize> = 4..5;
-        pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
-            f("baud_rate", rt::Int(self.baud_rate.raw() as i64));
-        }
-        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
-            Request::SetBaudRate(*self).encode(address, buf)
-        }
-    }
-    impl request::SetLowerCustomerLimit {
-        pub const NAME: &'static str = "set_lower_customer_limit";
-        pub const CODE: &'static [u8] = &[0x72, 0x01];
-        pub const LEN: usize = 9;
-        pub const DESC: rt::MessageDesc = rt::MessageDesc::new(
-            Self::NAME,
-            0x7201,
-            2,
-            &[9],
-        );
-        pub const LIMIT: rt::Range<usize> = 4..8;
-        pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
-            f("limit", rt::Int(self.limit.raw() as i64));
-        }
-        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
-            Request::SetLowerCustomerLimit(*self).encode(address, buf)
-        }
-    }
-    impl request::SetUpperCustomerLimit {
-        pub const NAME: &'static str = "set_upper_customer_limit";
-        pub const CODE: &'static [u8] = &[0x72, 0x02];
-        pub const LEN: usize = 9;
-        pub const DESC: rt::MessageDesc = rt::MessageDesc::new(
-            Self::NAME,
-            0x7202,
-            2,
-            &[9],
-        );
-        pub const LIMIT: rt::Range<usize> = 4..8;
-        pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
-            f("limit", rt::Int(self.limit.raw() as i64));
-        }
-        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
-            Request::SetUpperCustomerLimit(*self).encode(address, buf)
-        }
-    }
-    impl request::StoreIndexedPosition {
-        pub const NAME: &'static str = "store_indexed_position";
-        pub const CODE: &'static [u8] = &[0x75, 0x00];
-        pub const LEN: usize = 8;
-        pub const DESC: rt::MessageDesc = rt::MessageDesc::new(
-            Self::NAME,
-            0x7500,
-            2,
-            &[8],
-        );
-        pub const INDEX: rt::Range<usize> = 4..5;
-        pub const POSITION: rt::Range<usize> = 5..7;
-        pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
-            f("index", rt::Int(self.index as i64));
-            f("position", rt::Int(self.position as i64));
-        }
-        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
-            Request::StoreIndexedPosition(*self).encode(address, buf)
-        }
-    }
-    impl request::SetModeOfOperation {
-        pub const NAME: &'static str = "set_mode_of_operation";
-        pub const CODE: &'static [u8] = &[0x80, 0x00];
-        pub const LEN: usize = 6;
-        pub const DESC: rt::MessageDesc = rt::MessageDesc::new(
-            Self::NAME,
-            0x8000,
-            2,
-            &[6],
-        );
-        pub const MODE: rt::Range<usize> = 4..5;
-        pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
-            f("mode", rt::Int(self.mode.raw() as i64));
-        }
-        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
-            Request::SetModeOfOperation(*self).encode(address, buf)
-        }
-    }
-    impl request::GetActualCapacitance {
-        pub const NAME: &'static str = "get_actual_capacitance";
-        pub const CODE: &'static [u8] = &[0x40, 0x01];
-        pub const LEN: usize = 5;
-        pub const DESC: rt::MessageDesc = rt::MessageDesc::new(
-            Self::NAME,
-            0x4001,
-            2,
-            &[5],
-        );
-        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
-            Request::GetActualCapacitance(*self).encode(address, buf)
-        }
-    }
-    impl request::GetActualFullStepPosition {
-        pub const NAME: &'static str = "get_actual_full_step_position";
-        pub const CODE: &'static [u8] = &[0x40, 0x02];
-        pub const LEN: usize = 5;
-        pub const DESC: rt::MessageDesc = rt::MessageDesc::new(
-            Self::NAME,
-            0x4002,
-            2,
-            &[5],
-        );
-        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
-            Request::GetActualFullStepPosition(*self).encode(address, buf)
-        }
-    }
-    impl request::GetMinimumCapacitance {
-        pub const NAME: &'static str = "get_minimum_capacitance";
-        pub const CODE: &'static [u8] = &[0x40, 0x10];
-        pub const LEN: usize = 5;
-        pub const DESC: rt::MessageDesc = rt::MessageDesc::new(
-            Self::NAME,
-            0x4010,
-            2,
-            &[5],
-        );
-        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
-            Request::GetMinimumCapacitance(*self).encode(address, buf)
-        }
-    }
-    impl request::GetMaximumCapacitance {
-        pub const NAME: &'static str = "get_maximum_capacitance";
-        pub const CODE: &'static [u8] = &[0x40, 0x11];
-        pub const LEN: usize = 5;
-        pub const DESC: rt::MessageDesc = rt::MessageDesc::new(
-            Self::NAME,
-            0x4011,
-            2,
-            &[5],
-        );
-        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
-            Request::GetMaximumCapacitance(*self).encode(address, buf)
-        }
-    }
-    impl request::GetAccelerationSpeed {
-        pub const NAME: &'static str = "get_acceleration_speed";
-        pub const CODE: &'static [u8] = &[0x40, 0x21];
-        pub const LEN: usize = 5;
-        pub const DESC: rt::MessageDesc = rt::MessageDesc::new(
-            Self::NAME,
-            0x4021,
-            2,
-            &[5],
-        );
-        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
-            Request::GetAccelerationSpeed(*self).encode(address, buf)
-        }
-    }
-    impl request::GetStatus {
-        pub const NAME: &'static str = "get_status";
-        pub const CODE: &'static [u8] = &[0x40, 0x22];
-        pub const LEN: usize = 5;
-        pub const DESC: rt::MessageDesc = rt::MessageDesc::new(
-            Self::NAME,
-            0x4022,
-            2,
-            &[5],
-        );
-        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
-            Request::GetStatus(*self).encode(address, buf)
-        }
-    }
-    impl request::GetCCurveIndexedFullStepCapacitance {
-        pub const NAME: &'static str = "get_c_curve_indexed_full_step_capacitance";
-        pub const CODE: &'static [u8] = &[0x40, 0x30];
-        pub const LEN: usize = 7;
-        pub const DESC: rt::MessageDesc = rt::MessageDesc::new(
-            Self::NAME,
-            0x4030,
-            2,
-            &[7],
-        );
-        pub const INDEX: rt::Range<usize> = 4..6;
-        pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
-            f("index", rt::Int(self.index as i64));
-        }
-        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
-            Request::GetCCurveIndexedFullStepCapacitance(*self).encode(address, buf)
-        }
-    }
-    impl request::GetControllerTemperature {
-        pub const NAME: &'static str = "get_controller_temperature";
-        pub const CODE: &'static [u8] = &[0x40, 0x32];
-        pub const LEN: usize = 5;
-        pub const DESC: rt::MessageDesc = rt::MessageDesc::new(
-            Self::NAME,
-            0x4032,
-            2,
-            &[5],
-        );
-        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
-            Request::GetControllerTemperature(*self).encode(address, buf)
-        }
-    }
-    impl request::GetMicroStepPosition {
-        pub const NAME: &'static str = "get_micro_step_position";
-        pub const CODE: &'static [u8] = &[0x40, 0x36];
-        pub const LEN: usize = 5;
-        pub const DESC: rt::MessageDesc = rt::MessageDesc::new(
-            Self::NAME,
-            0x4036,
-            2,
-            &[5],
-        );
-        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
-            Request::GetMicroStepPosition(*self).encode(address, buf)
-        }
-    }
-    impl request::GetFirmwareVersion {
-        pub const NAME: &'static str = "get_firmware_version";
-        pub const CODE: &'static [u8] = &[0x40, 0x61];
-        pub const LEN: usize = 5;
-        pub const DESC: rt::MessageDesc = rt::MessageDesc::new(
-            Self::NAME,
-            0x4061,
-            2,
-            &[5],
-        );
-        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
-            Request::GetFirmwareVersion(*self).encode(address, buf)
-        }
-    }
-    impl request::GetSerialNumber {
-        pub const NAME: &'static str = "get_serial_number";
-        pub const CODE: &'static [u8] = &[0x40, 0x62];
-        pub const LEN: usize = 5;
-        pub const DESC: rt::MessageDesc = rt::MessageDesc::new(
-            Self::NAME,
-            0x4062,
-            2,
-            &[5],
-        );
-        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
-            Request::GetSerialNumber(*self).encode(address, buf)
-        }
-    }
-    impl request::GetCminNom {
-        pub const NAME: &'static str = "get_cmin_nom";
-        pub const CODE: &'static [u8] = &[0x40, 0x70];
-        pub const LEN: usize = 5;
-        pub const DESC: rt::MessageDesc = rt::MessageDesc::new(
-            Self::NAME,
-            0x4070,
-            2,
-            &[5],
-        );
-        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
-            Request::GetCminNom(*self).encode(address, buf)
-        }
-    }
-    impl request::GetCmaxNom {
-        pub const NAME: &'static str = "get_cmax_nom";
-        pub const CODE: &'static [u8] = &[0x40, 0x71];
-        pub const LEN: usize = 5;
-        pub const DESC: rt::MessageDesc = rt::MessageDesc::new(
-            Self::NAME,
-            0x4071,
-            2,
-            &[5],
-        );
-        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
-            Request::GetCmaxNom(*self).encode(address, buf)
-        }
-    }
-    impl request::GetLowerCustomerLimit {
-        pub const NAME: &'static str = "get_lower_customer_limit";
-        pub const CODE: &'static [u8] = &[0x40, 0x72];
-        pub const LEN: usize = 6;
-        pub const DESC: rt::MessageDesc = rt::MessageDesc::new(
-            Self::NAME,
-            0x4072,
-            2,
-            &[6],
-        );
-        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
-            Request::GetLowerCustomerLimit(*self).encode(address, buf)
-        }
-    }
-    impl request::GetUpperCustomerLimit {
-        pub const NAME: &'static str = "get_upper_customer_limit";
-        pub const CODE: &'static [u8] = &[0x40, 0x72];
-        pub const LEN: usize = 6;
-        pub const DESC: rt::MessageDesc = rt::MessageDesc::new(
-            Self::NAME,
-            0x4072,
-            2,
-            &[6],
-        );
-        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
-            Request::GetUpperCustomerLimit(*self).encode(address, buf)
-        }
-    }
-    impl request::GetLowerFactoryLimit {
-        pub const NAME: &'static str = "get_lower_factory_limit";
-        pub const CODE: &'static [u8] = &[0x40, 0x72];
-        pub const LEN: usize = 6;
-        pub const DESC: rt::MessageDesc = rt::MessageDesc::new(
-            Self::NAME,
-            0x4072,
-            2,
-            &[6],
-        );
-        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
-            Request::GetLowerFactoryLimit(*self).encode(address, buf)
-        }
-    }
-    impl request::GetUpperFactoryLimit {
-        pub const NAME: &'static str = "get_upper_factory_limit";
-        pub const CODE: &'static [u8] = &[0x40, 0x72];
-        pub const LEN: usize = 6;
-        pub const DESC: rt::MessageDesc = rt::MessageDesc::new(
-            Self::NAME,
-            0x4072,
-            2,
-            &[6],
-        );
-        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
-            Request::GetUpperFactoryLimit(*self).encode(address, buf)
-        }
-    }
-    impl request::GetPresetCapacitance {
-        pub const NAME: &'static str = "get_preset_capacitance";
-        pub const CODE: &'static [u8] = &[0x40, 0x73];
-        pub const LEN: usize = 6;
-        pub const DESC: rt::MessageDesc = rt::MessageDesc::new(
-            Self::NAME,
-            0x4073,
-            2,
-            &[6],
-        );
-        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
-            Request::GetPresetCapacitance(*self).encode(address, buf)
-        }
-    }
-    impl request::GetPresetFullStepPosition {
-        pub const NAME: &'static str = "get_preset_full_step_position";
-        pub const CODE: &'static [u8] = &[0x40, 0x73];
-        pub const LEN: usize = 6;
-        pub const DESC: rt::MessageDesc = rt::MessageDesc::new(
-            Self::NAME,
-            0x4073,
-            2,
-            &[6],
-        );
-        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
-            Request::GetPresetFullStepPosition(*self).encode(address, buf)
-        }
-    }
-    impl request::GetStoredFullStepPosition {
-        pub const NAME: &'static str = "get_stored_full_step_position";
-        pub const CODE: &'static [u8] = &[0x40, 0x75];
-        pub const LEN: usize = 6;
-        pub const DESC: rt::MessageDesc = rt::MessageDesc::new(
-            Self::NAME,
-            0x4075,
-            2,
-            &[6],
-        );
-        pub const INDEX: rt::Range<usize> = 4..5;
-        pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
-            f("index", rt::Int(self.index as i64));
-        }
-        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
-            Request::GetStoredFullStepPosition(*self).encode(address, buf)
-        }
-    }
-    impl request::GetModeOfOperation {
-        pub const NAME: &'static str = "get_mode_of_operation";
-        pub const CODE: &'static [u8] = &[0x40, 0x80];
-        pub const LEN: usize = 5;
-        pub const DESC: rt::MessageDesc = rt::MessageDesc::new(
-            Self::NAME,
-            0x4080,
-            2,
-            &[5],
-        );
-        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
-            Request::GetModeOfOperation(*self).encode(address, buf)
-        }
-    }
     ///A request (command), host to device.
     #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
     #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
@@ -1214,38 +486,25 @@ pub mod ub2 {
         /// Encodes the frame for `address` into `buf`; returns the frame length. Refuses what
         /// decode refuses: an address no frame may carry, the broadcast address for a command
         /// that does not accept it, a value outside its field's range.
-        pub fn encode(
-            &self,
-            address: u8,
-            buf: &mut [u8],
-        ) -> rt::Result<usize, rt::EncodeError> {
+        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             rt::encode_address(address, &FRAME)?;
             let len = match *self {
-                Self::ReferenceRun(request::ReferenceRun {}) => {
-                    rt::seal_sum8_head(
-                        rt::frame_mut::<5>(buf, &[0xAA, address, 0x10, 0x00])?,
-                        4,
-                        address.wrapping_add(0xBA),
-                    )
+                Self::ReferenceRun(_) => {
+                    let out = rt::frame_mut::<5>(buf, &[0xAA, address, 0x10, 0x00])?;
+                    rt::seal_sum8_head(out, 4, address.wrapping_add(0xBA))
                 }
-                Self::ReferenceRunStatus(request::ReferenceRunStatus {}) => {
-                    rt::seal_sum8_head(
-                        rt::frame_mut::<5>(buf, &[0xAA, address, 0x10, 0x01])?,
-                        4,
-                        address.wrapping_add(0xBB),
-                    )
+                Self::ReferenceRunStatus(_) => {
+                    let out = rt::frame_mut::<5>(buf, &[0xAA, address, 0x10, 0x01])?;
+                    rt::seal_sum8_head(out, 4, address.wrapping_add(0xBB))
                 }
                 Self::GoToCapacitance(request::GoToCapacitance { target: v_target }) => {
                     let out = rt::frame_mut::<9>(buf, &[0xAA, address, 0x20, 0x00])?;
                     out[4..8].copy_from_slice(&v_target.raw().to_le_bytes());
                     rt::seal_sum8_head(out, 4, address.wrapping_add(0xCA))
                 }
-                Self::GoToCapacitanceStatus(request::GoToCapacitanceStatus {}) => {
-                    rt::seal_sum8_head(
-                        rt::frame_mut::<5>(buf, &[0xAA, address, 0x20, 0x01])?,
-                        4,
-                        address.wrapping_add(0xCB),
-                    )
+                Self::GoToCapacitanceStatus(_) => {
+                    let out = rt::frame_mut::<5>(buf, &[0xAA, address, 0x20, 0x01])?;
+                    rt::seal_sum8_head(out, 4, address.wrapping_add(0xCB))
                 }
                 Self::GoToFullStepPosition(
                     request::GoToFullStepPosition { target: v_target },
@@ -1254,54 +513,34 @@ pub mod ub2 {
                     out[4..6].copy_from_slice(&v_target.to_le_bytes());
                     rt::seal_sum8_head(out, 4, address.wrapping_add(0xCB))
                 }
-                Self::GoToFullStepPositionStatus(
-                    request::GoToFullStepPositionStatus {},
-                ) => {
-                    rt::seal_sum8_head(
-                        rt::frame_mut::<5>(buf, &[0xAA, address, 0x21, 0x01])?,
-                        4,
-                        address.wrapping_add(0xCC),
-                    )
+                Self::GoToFullStepPositionStatus(_) => {
+                    let out = rt::frame_mut::<5>(buf, &[0xAA, address, 0x21, 0x01])?;
+                    rt::seal_sum8_head(out, 4, address.wrapping_add(0xCC))
                 }
                 Self::MoveFullSteps(request::MoveFullSteps { steps: v_steps }) => {
                     let out = rt::frame_mut::<7>(buf, &[0xAA, address, 0x22, 0x00])?;
                     out[4..6].copy_from_slice(&v_steps.to_le_bytes());
                     rt::seal_sum8_head(out, 4, address.wrapping_add(0xCC))
                 }
-                Self::MoveFullStepsStatus(request::MoveFullStepsStatus {}) => {
-                    rt::seal_sum8_head(
-                        rt::frame_mut::<5>(buf, &[0xAA, address, 0x22, 0x01])?,
-                        4,
-                        address.wrapping_add(0xCD),
-                    )
+                Self::MoveFullStepsStatus(_) => {
+                    let out = rt::frame_mut::<5>(buf, &[0xAA, address, 0x22, 0x01])?;
+                    rt::seal_sum8_head(out, 4, address.wrapping_add(0xCD))
                 }
-                Self::GoToCmin(request::GoToCmin {}) => {
-                    rt::seal_sum8_head(
-                        rt::frame_mut::<5>(buf, &[0xAA, address, 0x23, 0x00])?,
-                        4,
-                        address.wrapping_add(0xCD),
-                    )
+                Self::GoToCmin(_) => {
+                    let out = rt::frame_mut::<5>(buf, &[0xAA, address, 0x23, 0x00])?;
+                    rt::seal_sum8_head(out, 4, address.wrapping_add(0xCD))
                 }
-                Self::GoToCminStatus(request::GoToCminStatus {}) => {
-                    rt::seal_sum8_head(
-                        rt::frame_mut::<5>(buf, &[0xAA, address, 0x23, 0x01])?,
-                        4,
-                        address.wrapping_add(0xCE),
-                    )
+                Self::GoToCminStatus(_) => {
+                    let out = rt::frame_mut::<5>(buf, &[0xAA, address, 0x23, 0x01])?;
+                    rt::seal_sum8_head(out, 4, address.wrapping_add(0xCE))
                 }
-                Self::GoToCmax(request::GoToCmax {}) => {
-                    rt::seal_sum8_head(
-                        rt::frame_mut::<5>(buf, &[0xAA, address, 0x24, 0x00])?,
-                        4,
-                        address.wrapping_add(0xCE),
-                    )
+                Self::GoToCmax(_) => {
+                    let out = rt::frame_mut::<5>(buf, &[0xAA, address, 0x24, 0x00])?;
+                    rt::seal_sum8_head(out, 4, address.wrapping_add(0xCE))
                 }
-                Self::GoToCmaxStatus(request::GoToCmaxStatus {}) => {
-                    rt::seal_sum8_head(
-                        rt::frame_mut::<5>(buf, &[0xAA, address, 0x24, 0x01])?,
-                        4,
-                        address.wrapping_add(0xCF),
-                    )
+                Self::GoToCmaxStatus(_) => {
+                    let out = rt::frame_mut::<5>(buf, &[0xAA, address, 0x24, 0x01])?;
+                    rt::seal_sum8_head(out, 4, address.wrapping_add(0xCF))
                 }
                 Self::GoToMicroStepPosition(
                     request::GoToMicroStepPosition { target: v_target },
@@ -1310,26 +549,18 @@ pub mod ub2 {
                     out[4..8].copy_from_slice(&v_target.to_le_bytes());
                     rt::seal_sum8_head(out, 4, address.wrapping_add(0xCF))
                 }
-                Self::GoToMicroStepPositionStatus(
-                    request::GoToMicroStepPositionStatus {},
-                ) => {
-                    rt::seal_sum8_head(
-                        rt::frame_mut::<5>(buf, &[0xAA, address, 0x25, 0x01])?,
-                        4,
-                        address.wrapping_add(0xD0),
-                    )
+                Self::GoToMicroStepPositionStatus(_) => {
+                    let out = rt::frame_mut::<5>(buf, &[0xAA, address, 0x25, 0x01])?;
+                    rt::seal_sum8_head(out, 4, address.wrapping_add(0xD0))
                 }
                 Self::MoveMicroSteps(request::MoveMicroSteps { steps: v_steps }) => {
                     let out = rt::frame_mut::<9>(buf, &[0xAA, address, 0x26, 0x00])?;
                     out[4..8].copy_from_slice(&v_steps.to_le_bytes());
                     rt::seal_sum8_head(out, 4, address.wrapping_add(0xD0))
                 }
-                Self::MoveMicroStepsStatus(request::MoveMicroStepsStatus {}) => {
-                    rt::seal_sum8_head(
-                        rt::frame_mut::<5>(buf, &[0xAA, address, 0x26, 0x01])?,
-                        4,
-                        address.wrapping_add(0xD1),
-                    )
+                Self::MoveMicroStepsStatus(_) => {
+                    let out = rt::frame_mut::<5>(buf, &[0xAA, address, 0x26, 0x01])?;
+                    rt::seal_sum8_head(out, 4, address.wrapping_add(0xD1))
                 }
                 Self::GoToStoredPosition(
                     request::GoToStoredPosition { index: v_index },
@@ -1339,12 +570,9 @@ pub mod ub2 {
                     out[4] = v_index;
                     rt::seal_sum8_head(out, 4, address.wrapping_add(0xD1))
                 }
-                Self::GoToStoredPositionStatus(request::GoToStoredPositionStatus {}) => {
-                    rt::seal_sum8_head(
-                        rt::frame_mut::<5>(buf, &[0xAA, address, 0x27, 0x01])?,
-                        4,
-                        address.wrapping_add(0xD2),
-                    )
+                Self::GoToStoredPositionStatus(_) => {
+                    let out = rt::frame_mut::<5>(buf, &[0xAA, address, 0x27, 0x01])?;
+                    rt::seal_sum8_head(out, 4, address.wrapping_add(0xD2))
                 }
                 Self::SetAccelerationSpeedIndex(
                     request::SetAccelerationSpeedIndex {
@@ -1421,49 +649,29 @@ pub mod ub2 {
                     out[4] = v_mode.raw();
                     rt::seal_sum8_head(out, 4, address.wrapping_add(0x2A))
                 }
-                Self::GetActualCapacitance(request::GetActualCapacitance {}) => {
-                    rt::seal_sum8_head(
-                        rt::frame_mut::<5>(buf, &[0xAA, address, 0x40, 0x01])?,
-                        4,
-                        address.wrapping_add(0xEB),
-                    )
+                Self::GetActualCapacitance(_) => {
+                    let out = rt::frame_mut::<5>(buf, &[0xAA, address, 0x40, 0x01])?;
+                    rt::seal_sum8_head(out, 4, address.wrapping_add(0xEB))
                 }
-                Self::GetActualFullStepPosition(
-                    request::GetActualFullStepPosition {},
-                ) => {
-                    rt::seal_sum8_head(
-                        rt::frame_mut::<5>(buf, &[0xAA, address, 0x40, 0x02])?,
-                        4,
-                        address.wrapping_add(0xEC),
-                    )
+                Self::GetActualFullStepPosition(_) => {
+                    let out = rt::frame_mut::<5>(buf, &[0xAA, address, 0x40, 0x02])?;
+                    rt::seal_sum8_head(out, 4, address.wrapping_add(0xEC))
                 }
-                Self::GetMinimumCapacitance(request::GetMinimumCapacitance {}) => {
-                    rt::seal_sum8_head(
-                        rt::frame_mut::<5>(buf, &[0xAA, address, 0x40, 0x10])?,
-                        4,
-                        address.wrapping_add(0xFA),
-                    )
+                Self::GetMinimumCapacitance(_) => {
+                    let out = rt::frame_mut::<5>(buf, &[0xAA, address, 0x40, 0x10])?;
+                    rt::seal_sum8_head(out, 4, address.wrapping_add(0xFA))
                 }
-                Self::GetMaximumCapacitance(request::GetMaximumCapacitance {}) => {
-                    rt::seal_sum8_head(
-                        rt::frame_mut::<5>(buf, &[0xAA, address, 0x40, 0x11])?,
-                        4,
-                        address.wrapping_add(0xFB),
-                    )
+                Self::GetMaximumCapacitance(_) => {
+                    let out = rt::frame_mut::<5>(buf, &[0xAA, address, 0x40, 0x11])?;
+                    rt::seal_sum8_head(out, 4, address.wrapping_add(0xFB))
                 }
-                Self::GetAccelerationSpeed(request::GetAccelerationSpeed {}) => {
-                    rt::seal_sum8_head(
-                        rt::frame_mut::<5>(buf, &[0xAA, address, 0x40, 0x21])?,
-                        4,
-                        address.wrapping_add(0x0B),
-                    )
+                Self::GetAccelerationSpeed(_) => {
+                    let out = rt::frame_mut::<5>(buf, &[0xAA, address, 0x40, 0x21])?;
+                    rt::seal_sum8_head(out, 4, address.wrapping_add(0x0B))
                 }
-                Self::GetStatus(request::GetStatus {}) => {
-                    rt::seal_sum8_head(
-                        rt::frame_mut::<5>(buf, &[0xAA, address, 0x40, 0x22])?,
-                        4,
-                        address.wrapping_add(0x0C),
-                    )
+                Self::GetStatus(_) => {
+                    let out = rt::frame_mut::<5>(buf, &[0xAA, address, 0x40, 0x22])?;
+                    rt::seal_sum8_head(out, 4, address.wrapping_add(0x0C))
                 }
                 Self::GetCCurveIndexedFullStepCapacitance(
                     request::GetCCurveIndexedFullStepCapacitance { index: v_index },
@@ -1473,91 +681,65 @@ pub mod ub2 {
                     out[4..6].copy_from_slice(&v_index.to_le_bytes());
                     rt::seal_sum8_head(out, 4, address.wrapping_add(0x1A))
                 }
-                Self::GetControllerTemperature(request::GetControllerTemperature {}) => {
-                    rt::seal_sum8_head(
-                        rt::frame_mut::<5>(buf, &[0xAA, address, 0x40, 0x32])?,
-                        4,
-                        address.wrapping_add(0x1C),
-                    )
+                Self::GetControllerTemperature(_) => {
+                    let out = rt::frame_mut::<5>(buf, &[0xAA, address, 0x40, 0x32])?;
+                    rt::seal_sum8_head(out, 4, address.wrapping_add(0x1C))
                 }
-                Self::GetMicroStepPosition(request::GetMicroStepPosition {}) => {
-                    rt::seal_sum8_head(
-                        rt::frame_mut::<5>(buf, &[0xAA, address, 0x40, 0x36])?,
-                        4,
-                        address.wrapping_add(0x20),
-                    )
+                Self::GetMicroStepPosition(_) => {
+                    let out = rt::frame_mut::<5>(buf, &[0xAA, address, 0x40, 0x36])?;
+                    rt::seal_sum8_head(out, 4, address.wrapping_add(0x20))
                 }
-                Self::GetFirmwareVersion(request::GetFirmwareVersion {}) => {
-                    rt::seal_sum8_head(
-                        rt::frame_mut::<5>(buf, &[0xAA, address, 0x40, 0x61])?,
-                        4,
-                        address.wrapping_add(0x4B),
-                    )
+                Self::GetFirmwareVersion(_) => {
+                    let out = rt::frame_mut::<5>(buf, &[0xAA, address, 0x40, 0x61])?;
+                    rt::seal_sum8_head(out, 4, address.wrapping_add(0x4B))
                 }
-                Self::GetSerialNumber(request::GetSerialNumber {}) => {
-                    rt::seal_sum8_head(
-                        rt::frame_mut::<5>(buf, &[0xAA, address, 0x40, 0x62])?,
-                        4,
-                        address.wrapping_add(0x4C),
-                    )
+                Self::GetSerialNumber(_) => {
+                    let out = rt::frame_mut::<5>(buf, &[0xAA, address, 0x40, 0x62])?;
+                    rt::seal_sum8_head(out, 4, address.wrapping_add(0x4C))
                 }
-                Self::GetCminNom(request::GetCminNom {}) => {
-                    rt::seal_sum8_head(
-                        rt::frame_mut::<5>(buf, &[0xAA, address, 0x40, 0x70])?,
-                        4,
-                        address.wrapping_add(0x5A),
-                    )
+                Self::GetCminNom(_) => {
+                    let out = rt::frame_mut::<5>(buf, &[0xAA, address, 0x40, 0x70])?;
+                    rt::seal_sum8_head(out, 4, address.wrapping_add(0x5A))
                 }
-                Self::GetCmaxNom(request::GetCmaxNom {}) => {
-                    rt::seal_sum8_head(
-                        rt::frame_mut::<5>(buf, &[0xAA, address, 0x40, 0x71])?,
-                        4,
-                        address.wrapping_add(0x5B),
-                    )
+                Self::GetCmaxNom(_) => {
+                    let out = rt::frame_mut::<5>(buf, &[0xAA, address, 0x40, 0x71])?;
+                    rt::seal_sum8_head(out, 4, address.wrapping_add(0x5B))
                 }
-                Self::GetLowerCustomerLimit(request::GetLowerCustomerLimit {}) => {
-                    rt::seal_sum8_head(
-                        rt::frame_mut::<6>(buf, &[0xAA, address, 0x40, 0x72, 0x01])?,
-                        5,
-                        address.wrapping_add(0x5D),
-                    )
+                Self::GetLowerCustomerLimit(_) => {
+                    let out = rt::frame_mut::<
+                        6,
+                    >(buf, &[0xAA, address, 0x40, 0x72, 0x01])?;
+                    rt::seal_sum8_head(out, 5, address.wrapping_add(0x5D))
                 }
-                Self::GetUpperCustomerLimit(request::GetUpperCustomerLimit {}) => {
-                    rt::seal_sum8_head(
-                        rt::frame_mut::<6>(buf, &[0xAA, address, 0x40, 0x72, 0x02])?,
-                        5,
-                        address.wrapping_add(0x5E),
-                    )
+                Self::GetUpperCustomerLimit(_) => {
+                    let out = rt::frame_mut::<
+                        6,
+                    >(buf, &[0xAA, address, 0x40, 0x72, 0x02])?;
+                    rt::seal_sum8_head(out, 5, address.wrapping_add(0x5E))
                 }
-                Self::GetLowerFactoryLimit(request::GetLowerFactoryLimit {}) => {
-                    rt::seal_sum8_head(
-                        rt::frame_mut::<6>(buf, &[0xAA, address, 0x40, 0x72, 0x03])?,
-                        5,
-                        address.wrapping_add(0x5F),
-                    )
+                Self::GetLowerFactoryLimit(_) => {
+                    let out = rt::frame_mut::<
+                        6,
+                    >(buf, &[0xAA, address, 0x40, 0x72, 0x03])?;
+                    rt::seal_sum8_head(out, 5, address.wrapping_add(0x5F))
                 }
-                Self::GetUpperFactoryLimit(request::GetUpperFactoryLimit {}) => {
-                    rt::seal_sum8_head(
-                        rt::frame_mut::<6>(buf, &[0xAA, address, 0x40, 0x72, 0x04])?,
-                        5,
-                        address.wrapping_add(0x60),
-                    )
+                Self::GetUpperFactoryLimit(_) => {
+                    let out = rt::frame_mut::<
+                        6,
+                    >(buf, &[0xAA, address, 0x40, 0x72, 0x04])?;
+                    rt::seal_sum8_head(out, 5, address.wrapping_add(0x60))
                 }
-                Self::GetPresetCapacitance(request::GetPresetCapacitance {}) => {
-                    rt::seal_sum8_head(
-                        rt::frame_mut::<6>(buf, &[0xAA, address, 0x40, 0x73, 0x00])?,
-                        5,
-                        address.wrapping_add(0x5D),
-                    )
+                Self::GetPresetCapacitance(_) => {
+                    let out = rt::frame_mut::<
+                        6,
+                    >(buf, &[0xAA, address, 0x40, 0x73, 0x00])?;
+                    rt::seal_sum8_head(out, 5, address.wrapping_add(0x5D))
                 }
-                Self::GetPresetFullStepPosition(
-                    request::GetPresetFullStepPosition {},
-                ) => {
-                    rt::seal_sum8_head(
-                        rt::frame_mut::<6>(buf, &[0xAA, address, 0x40, 0x73, 0x01])?,
-                        5,
-                        address.wrapping_add(0x5E),
-                    )
+                Self::GetPresetFullStepPosition(_) => {
+                    let out = rt::frame_mut::<
+                        6,
+                    >(buf, &[0xAA, address, 0x40, 0x73, 0x01])?;
+                    rt::seal_sum8_head(out, 5, address.wrapping_add(0x5E))
                 }
                 Self::GetStoredFullStepPosition(
                     request::GetStoredFullStepPosition { index: v_index },
@@ -1567,12 +749,9 @@ pub mod ub2 {
                     out[4] = v_index;
                     rt::seal_sum8_head(out, 4, address.wrapping_add(0x5F))
                 }
-                Self::GetModeOfOperation(request::GetModeOfOperation {}) => {
-                    rt::seal_sum8_head(
-                        rt::frame_mut::<5>(buf, &[0xAA, address, 0x40, 0x80])?,
-                        4,
-                        address.wrapping_add(0x6A),
-                    )
+                Self::GetModeOfOperation(_) => {
+                    let out = rt::frame_mut::<5>(buf, &[0xAA, address, 0x40, 0x80])?;
+                    rt::seal_sum8_head(out, 4, address.wrapping_add(0x6A))
                 }
             };
             rt::Ok(len)
@@ -1709,7 +888,7 @@ pub mod ub2 {
                         6,
                     >(frame, &request::GoToStoredPosition::DESC)?;
                     rt::in_range(
-                        &request::GO_TO_STORED_POSITION_INDEX,
+                        &request::GoToStoredPosition::INDEX_DESC,
                         4,
                         frame[4],
                         0,
@@ -1732,14 +911,14 @@ pub mod ub2 {
                         7,
                     >(frame, &request::SetAccelerationSpeedIndex::DESC)?;
                     rt::in_range(
-                        &request::SET_ACCELERATION_SPEED_INDEX_ACCELERATION_INDEX,
+                        &request::SetAccelerationSpeedIndex::ACCELERATION_INDEX_DESC,
                         4,
                         frame[4],
                         0,
                         18,
                     )?;
                     rt::in_range(
-                        &request::SET_ACCELERATION_SPEED_INDEX_SPEED_INDEX,
+                        &request::SetAccelerationSpeedIndex::SPEED_INDEX_DESC,
                         5,
                         frame[5],
                         0,
@@ -1764,7 +943,7 @@ pub mod ub2 {
                 0x6000 => {
                     let frame = rt::fixed::<6>(frame, &request::SetSlaveAddress::DESC)?;
                     rt::in_range(
-                        &request::SET_SLAVE_ADDRESS_ADDRESS,
+                        &request::SetSlaveAddress::ADDRESS_DESC,
                         4,
                         frame[4],
                         33,
@@ -1813,7 +992,7 @@ pub mod ub2 {
                         8,
                     >(frame, &request::StoreIndexedPosition::DESC)?;
                     rt::in_range(
-                        &request::STORE_INDEXED_POSITION_INDEX,
+                        &request::StoreIndexedPosition::INDEX_DESC,
                         4,
                         frame[4],
                         0,
@@ -1876,7 +1055,7 @@ pub mod ub2 {
                     >(frame, &request::GetCCurveIndexedFullStepCapacitance::DESC)?;
                     let field_0: u16 = u16::from_le_bytes([frame[4], frame[5]]);
                     rt::in_range(
-                        &request::GET_C_CURVE_INDEXED_FULL_STEP_CAPACITANCE_INDEX,
+                        &request::GetCCurveIndexedFullStepCapacitance::INDEX_DESC,
                         4,
                         field_0,
                         0,
@@ -1920,7 +1099,7 @@ pub mod ub2 {
                     let mut g = rt::Group::new(frame, 0x4072, rt::None);
                     g.attempt(|frame: &[u8; 6]| {
                         rt::equal(
-                            &request::GET_LOWER_CUSTOMER_LIMIT_INDEX,
+                            &request::GetLowerCustomerLimit::INDEX_DESC,
                             4,
                             frame[4],
                             0x1,
@@ -1931,7 +1110,7 @@ pub mod ub2 {
                     });
                     g.attempt(|frame: &[u8; 6]| {
                         rt::equal(
-                            &request::GET_UPPER_CUSTOMER_LIMIT_INDEX,
+                            &request::GetUpperCustomerLimit::INDEX_DESC,
                             4,
                             frame[4],
                             0x2,
@@ -1942,7 +1121,7 @@ pub mod ub2 {
                     });
                     g.attempt(|frame: &[u8; 6]| {
                         rt::equal(
-                            &request::GET_LOWER_FACTORY_LIMIT_INDEX,
+                            &request::GetLowerFactoryLimit::INDEX_DESC,
                             4,
                             frame[4],
                             0x3,
@@ -1951,7 +1130,7 @@ pub mod ub2 {
                     });
                     g.attempt(|frame: &[u8; 6]| {
                         rt::equal(
-                            &request::GET_UPPER_FACTORY_LIMIT_INDEX,
+                            &request::GetUpperFactoryLimit::INDEX_DESC,
                             4,
                             frame[4],
                             0x4,
@@ -1964,7 +1143,7 @@ pub mod ub2 {
                     let mut g = rt::Group::new(frame, 0x4073, rt::None);
                     g.attempt(|frame: &[u8; 6]| {
                         rt::equal(
-                            &request::GET_PRESET_CAPACITANCE_INDEX,
+                            &request::GetPresetCapacitance::INDEX_DESC,
                             4,
                             frame[4],
                             0x0,
@@ -1973,7 +1152,7 @@ pub mod ub2 {
                     });
                     g.attempt(|frame: &[u8; 6]| {
                         rt::equal(
-                            &request::GET_PRESET_FULL_STEP_POSITION_INDEX,
+                            &request::GetPresetFullStepPosition::INDEX_DESC,
                             4,
                             frame[4],
                             0x1,
@@ -1991,7 +1170,7 @@ pub mod ub2 {
                         6,
                     >(frame, &request::GetStoredFullStepPosition::DESC)?;
                     rt::in_range(
-                        &request::GET_STORED_FULL_STEP_POSITION_INDEX,
+                        &request::GetStoredFullStepPosition::INDEX_DESC,
                         4,
                         frame[4],
                         0,
@@ -2017,230 +1196,172 @@ pub mod ub2 {
             name: &str,
             mut field: impl FnMut(&'static str) -> rt::Option<rt::FieldValue<'v>>,
         ) -> rt::Result<Self, rt::FieldError> {
-            match name {
-                "reference_run" => rt::Ok(Self::ReferenceRun(request::ReferenceRun)),
+            let message = match name {
+                "reference_run" => Self::ReferenceRun(request::ReferenceRun),
                 "reference_run_status" => {
-                    rt::Ok(Self::ReferenceRunStatus(request::ReferenceRunStatus))
+                    Self::ReferenceRunStatus(request::ReferenceRunStatus)
                 }
                 "go_to_capacitance" => {
-                    rt::Ok(
-                        Self::GoToCapacitance(request::GoToCapacitance {
-                            target: Capacitance::from_raw(rt::get(&mut field, "target")?),
-                        }),
-                    )
+                    Self::GoToCapacitance(request::GoToCapacitance {
+                        target: Capacitance::from_raw(rt::get(&mut field, "target")?),
+                    })
                 }
                 "go_to_capacitance_status" => {
-                    rt::Ok(Self::GoToCapacitanceStatus(request::GoToCapacitanceStatus))
+                    Self::GoToCapacitanceStatus(request::GoToCapacitanceStatus)
                 }
                 "go_to_full_step_position" => {
-                    rt::Ok(
-                        Self::GoToFullStepPosition(request::GoToFullStepPosition {
-                            target: rt::get(&mut field, "target")?,
-                        }),
-                    )
+                    Self::GoToFullStepPosition(request::GoToFullStepPosition {
+                        target: rt::get(&mut field, "target")?,
+                    })
                 }
                 "go_to_full_step_position_status" => {
-                    rt::Ok(
-                        Self::GoToFullStepPositionStatus(
-                            request::GoToFullStepPositionStatus,
-                        ),
-                    )
+                    Self::GoToFullStepPositionStatus(request::GoToFullStepPositionStatus)
                 }
                 "move_full_steps" => {
-                    rt::Ok(
-                        Self::MoveFullSteps(request::MoveFullSteps {
-                            steps: rt::get(&mut field, "steps")?,
-                        }),
-                    )
+                    Self::MoveFullSteps(request::MoveFullSteps {
+                        steps: rt::get(&mut field, "steps")?,
+                    })
                 }
                 "move_full_steps_status" => {
-                    rt::Ok(Self::MoveFullStepsStatus(request::MoveFullStepsStatus))
+                    Self::MoveFullStepsStatus(request::MoveFullStepsStatus)
                 }
-                "go_to_cmin" => rt::Ok(Self::GoToCmin(request::GoToCmin)),
-                "go_to_cmin_status" => {
-                    rt::Ok(Self::GoToCminStatus(request::GoToCminStatus))
-                }
-                "go_to_cmax" => rt::Ok(Self::GoToCmax(request::GoToCmax)),
-                "go_to_cmax_status" => {
-                    rt::Ok(Self::GoToCmaxStatus(request::GoToCmaxStatus))
-                }
+                "go_to_cmin" => Self::GoToCmin(request::GoToCmin),
+                "go_to_cmin_status" => Self::GoToCminStatus(request::GoToCminStatus),
+                "go_to_cmax" => Self::GoToCmax(request::GoToCmax),
+                "go_to_cmax_status" => Self::GoToCmaxStatus(request::GoToCmaxStatus),
                 "go_to_micro_step_position" => {
-                    rt::Ok(
-                        Self::GoToMicroStepPosition(request::GoToMicroStepPosition {
-                            target: rt::get(&mut field, "target")?,
-                        }),
-                    )
+                    Self::GoToMicroStepPosition(request::GoToMicroStepPosition {
+                        target: rt::get(&mut field, "target")?,
+                    })
                 }
                 "go_to_micro_step_position_status" => {
-                    rt::Ok(
-                        Self::GoToMicroStepPositionStatus(
-                            request::GoToMicroStepPositionStatus,
-                        ),
+                    Self::GoToMicroStepPositionStatus(
+                        request::GoToMicroStepPositionStatus,
                     )
                 }
                 "move_micro_steps" => {
-                    rt::Ok(
-                        Self::MoveMicroSteps(request::MoveMicroSteps {
-                            steps: rt::get(&mut field, "steps")?,
-                        }),
-                    )
+                    Self::MoveMicroSteps(request::MoveMicroSteps {
+                        steps: rt::get(&mut field, "steps")?,
+                    })
                 }
                 "move_micro_steps_status" => {
-                    rt::Ok(Self::MoveMicroStepsStatus(request::MoveMicroStepsStatus))
+                    Self::MoveMicroStepsStatus(request::MoveMicroStepsStatus)
                 }
                 "go_to_stored_position" => {
-                    rt::Ok(
-                        Self::GoToStoredPosition(request::GoToStoredPosition {
-                            index: rt::get(&mut field, "index")?,
-                        }),
-                    )
+                    Self::GoToStoredPosition(request::GoToStoredPosition {
+                        index: rt::get(&mut field, "index")?,
+                    })
                 }
                 "go_to_stored_position_status" => {
-                    rt::Ok(
-                        Self::GoToStoredPositionStatus(request::GoToStoredPositionStatus),
-                    )
+                    Self::GoToStoredPositionStatus(request::GoToStoredPositionStatus)
                 }
                 "set_acceleration_speed_index" => {
-                    rt::Ok(
-                        Self::SetAccelerationSpeedIndex(request::SetAccelerationSpeedIndex {
-                            acceleration_index: rt::get(
-                                &mut field,
-                                "acceleration_index",
-                            )?,
-                            speed_index: rt::get(&mut field, "speed_index")?,
-                        }),
-                    )
+                    Self::SetAccelerationSpeedIndex(request::SetAccelerationSpeedIndex {
+                        acceleration_index: rt::get(&mut field, "acceleration_index")?,
+                        speed_index: rt::get(&mut field, "speed_index")?,
+                    })
                 }
                 "set_current" => {
-                    rt::Ok(
-                        Self::SetCurrent(request::SetCurrent {
-                            idle_current: rt::get(&mut field, "idle_current")?,
-                            drive_current: rt::get(&mut field, "drive_current")?,
-                        }),
-                    )
+                    Self::SetCurrent(request::SetCurrent {
+                        idle_current: rt::get(&mut field, "idle_current")?,
+                        drive_current: rt::get(&mut field, "drive_current")?,
+                    })
                 }
                 "set_slave_address" => {
-                    rt::Ok(
-                        Self::SetSlaveAddress(request::SetSlaveAddress {
-                            address: rt::get(&mut field, "address")?,
-                        }),
-                    )
+                    Self::SetSlaveAddress(request::SetSlaveAddress {
+                        address: rt::get(&mut field, "address")?,
+                    })
                 }
                 "set_baud_rate" => {
-                    rt::Ok(
-                        Self::SetBaudRate(request::SetBaudRate {
-                            baud_rate: BaudRateIndex::from_raw(
-                                rt::get(&mut field, "baud_rate")?,
-                            ),
-                        }),
-                    )
+                    Self::SetBaudRate(request::SetBaudRate {
+                        baud_rate: BaudRateIndex::from_raw(
+                            rt::get(&mut field, "baud_rate")?,
+                        ),
+                    })
                 }
                 "set_lower_customer_limit" => {
-                    rt::Ok(
-                        Self::SetLowerCustomerLimit(request::SetLowerCustomerLimit {
-                            limit: Capacitance::from_raw(rt::get(&mut field, "limit")?),
-                        }),
-                    )
+                    Self::SetLowerCustomerLimit(request::SetLowerCustomerLimit {
+                        limit: Capacitance::from_raw(rt::get(&mut field, "limit")?),
+                    })
                 }
                 "set_upper_customer_limit" => {
-                    rt::Ok(
-                        Self::SetUpperCustomerLimit(request::SetUpperCustomerLimit {
-                            limit: Capacitance::from_raw(rt::get(&mut field, "limit")?),
-                        }),
-                    )
+                    Self::SetUpperCustomerLimit(request::SetUpperCustomerLimit {
+                        limit: Capacitance::from_raw(rt::get(&mut field, "limit")?),
+                    })
                 }
                 "store_indexed_position" => {
-                    rt::Ok(
-                        Self::StoreIndexedPosition(request::StoreIndexedPosition {
-                            index: rt::get(&mut field, "index")?,
-                            position: rt::get(&mut field, "position")?,
-                        }),
-                    )
+                    Self::StoreIndexedPosition(request::StoreIndexedPosition {
+                        index: rt::get(&mut field, "index")?,
+                        position: rt::get(&mut field, "position")?,
+                    })
                 }
                 "set_mode_of_operation" => {
-                    rt::Ok(
-                        Self::SetModeOfOperation(request::SetModeOfOperation {
-                            mode: ModeOfOperation::from_raw(rt::get(&mut field, "mode")?),
-                        }),
-                    )
+                    Self::SetModeOfOperation(request::SetModeOfOperation {
+                        mode: ModeOfOperation::from_raw(rt::get(&mut field, "mode")?),
+                    })
                 }
                 "get_actual_capacitance" => {
-                    rt::Ok(Self::GetActualCapacitance(request::GetActualCapacitance))
+                    Self::GetActualCapacitance(request::GetActualCapacitance)
                 }
                 "get_actual_full_step_position" => {
-                    rt::Ok(
-                        Self::GetActualFullStepPosition(
-                            request::GetActualFullStepPosition,
-                        ),
-                    )
+                    Self::GetActualFullStepPosition(request::GetActualFullStepPosition)
                 }
                 "get_minimum_capacitance" => {
-                    rt::Ok(Self::GetMinimumCapacitance(request::GetMinimumCapacitance))
+                    Self::GetMinimumCapacitance(request::GetMinimumCapacitance)
                 }
                 "get_maximum_capacitance" => {
-                    rt::Ok(Self::GetMaximumCapacitance(request::GetMaximumCapacitance))
+                    Self::GetMaximumCapacitance(request::GetMaximumCapacitance)
                 }
                 "get_acceleration_speed" => {
-                    rt::Ok(Self::GetAccelerationSpeed(request::GetAccelerationSpeed))
+                    Self::GetAccelerationSpeed(request::GetAccelerationSpeed)
                 }
-                "get_status" => rt::Ok(Self::GetStatus(request::GetStatus)),
+                "get_status" => Self::GetStatus(request::GetStatus),
                 "get_c_curve_indexed_full_step_capacitance" => {
-                    rt::Ok(
-                        Self::GetCCurveIndexedFullStepCapacitance(request::GetCCurveIndexedFullStepCapacitance {
-                            index: rt::get(&mut field, "index")?,
-                        }),
-                    )
+                    Self::GetCCurveIndexedFullStepCapacitance(request::GetCCurveIndexedFullStepCapacitance {
+                        index: rt::get(&mut field, "index")?,
+                    })
                 }
                 "get_controller_temperature" => {
-                    rt::Ok(
-                        Self::GetControllerTemperature(request::GetControllerTemperature),
-                    )
+                    Self::GetControllerTemperature(request::GetControllerTemperature)
                 }
                 "get_micro_step_position" => {
-                    rt::Ok(Self::GetMicroStepPosition(request::GetMicroStepPosition))
+                    Self::GetMicroStepPosition(request::GetMicroStepPosition)
                 }
                 "get_firmware_version" => {
-                    rt::Ok(Self::GetFirmwareVersion(request::GetFirmwareVersion))
+                    Self::GetFirmwareVersion(request::GetFirmwareVersion)
                 }
-                "get_serial_number" => {
-                    rt::Ok(Self::GetSerialNumber(request::GetSerialNumber))
-                }
-                "get_cmin_nom" => rt::Ok(Self::GetCminNom(request::GetCminNom)),
-                "get_cmax_nom" => rt::Ok(Self::GetCmaxNom(request::GetCmaxNom)),
+                "get_serial_number" => Self::GetSerialNumber(request::GetSerialNumber),
+                "get_cmin_nom" => Self::GetCminNom(request::GetCminNom),
+                "get_cmax_nom" => Self::GetCmaxNom(request::GetCmaxNom),
                 "get_lower_customer_limit" => {
-                    rt::Ok(Self::GetLowerCustomerLimit(request::GetLowerCustomerLimit))
+                    Self::GetLowerCustomerLimit(request::GetLowerCustomerLimit)
                 }
                 "get_upper_customer_limit" => {
-                    rt::Ok(Self::GetUpperCustomerLimit(request::GetUpperCustomerLimit))
+                    Self::GetUpperCustomerLimit(request::GetUpperCustomerLimit)
                 }
                 "get_lower_factory_limit" => {
-                    rt::Ok(Self::GetLowerFactoryLimit(request::GetLowerFactoryLimit))
+                    Self::GetLowerFactoryLimit(request::GetLowerFactoryLimit)
                 }
                 "get_upper_factory_limit" => {
-                    rt::Ok(Self::GetUpperFactoryLimit(request::GetUpperFactoryLimit))
+                    Self::GetUpperFactoryLimit(request::GetUpperFactoryLimit)
                 }
                 "get_preset_capacitance" => {
-                    rt::Ok(Self::GetPresetCapacitance(request::GetPresetCapacitance))
+                    Self::GetPresetCapacitance(request::GetPresetCapacitance)
                 }
                 "get_preset_full_step_position" => {
-                    rt::Ok(
-                        Self::GetPresetFullStepPosition(
-                            request::GetPresetFullStepPosition,
-                        ),
-                    )
+                    Self::GetPresetFullStepPosition(request::GetPresetFullStepPosition)
                 }
                 "get_stored_full_step_position" => {
-                    rt::Ok(
-                        Self::GetStoredFullStepPosition(request::GetStoredFullStepPosition {
-                            index: rt::get(&mut field, "index")?,
-                        }),
-                    )
+                    Self::GetStoredFullStepPosition(request::GetStoredFullStepPosition {
+                        index: rt::get(&mut field, "index")?,
+                    })
                 }
                 "get_mode_of_operation" => {
-                    rt::Ok(Self::GetModeOfOperation(request::GetModeOfOperation))
+                    Self::GetModeOfOperation(request::GetModeOfOperation)
                 }
-                _ => rt::Err(rt::FieldError::UnknownMessage),
-            }
+                _ => return rt::Err(rt::FieldError::UnknownMessage),
+            };
+            rt::Ok(message)
         }
     }
     impl rt::Message for Request {
@@ -2261,11 +1382,7 @@ pub mod ub2 {
             Request::visit(self, f)
         }
         #[inline]
-        fn encode(
-            &self,
-            address: u8,
-            buf: &mut [u8],
-        ) -> rt::Result<usize, rt::EncodeError> {
+        fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             Request::encode(self, address, buf)
         }
         #[inline]
@@ -2370,650 +1487,6 @@ pub mod ub2 {
         /// The responses this command may get, bit `i` for row `i` of `Response::MESSAGES`.
         const fn replies(&self) -> u64 {
             Self::COMMANDS[self.index()].3
-        }
-    }
-    impl response::MovementStarted {
-        pub const NAME: &'static str = "movement_started";
-        pub const CODE: &'static [u8] = &[0x50];
-        pub const LEN: usize = 4;
-        pub const DESC: rt::MessageDesc = rt::MessageDesc::new(
-            Self::NAME,
-            0x50,
-            1,
-            &[4],
-        );
-        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
-            Response::MovementStarted(*self).encode(address, buf)
-        }
-    }
-    impl response::MovementCompleted {
-        pub const NAME: &'static str = "movement_completed";
-        pub const CODE: &'static [u8] = &[0x51];
-        pub const LEN: usize = 4;
-        pub const DESC: rt::MessageDesc = rt::MessageDesc::new(
-            Self::NAME,
-            0x51,
-            1,
-            &[4],
-        );
-        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
-            Response::MovementCompleted(*self).encode(address, buf)
-        }
-    }
-    impl response::MovementNotCompleted {
-        pub const NAME: &'static str = "movement_not_completed";
-        pub const CODE: &'static [u8] = &[0x52];
-        pub const LEN: usize = 4;
-        pub const DESC: rt::MessageDesc = rt::MessageDesc::new(
-            Self::NAME,
-            0x52,
-            1,
-            &[4],
-        );
-        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
-            Response::MovementNotCompleted(*self).encode(address, buf)
-        }
-    }
-    impl response::MovementNotTriggered {
-        pub const NAME: &'static str = "movement_not_triggered";
-        pub const CODE: &'static [u8] = &[0x53];
-        pub const LEN: usize = 4;
-        pub const DESC: rt::MessageDesc = rt::MessageDesc::new(
-            Self::NAME,
-            0x53,
-            1,
-            &[4],
-        );
-        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
-            Response::MovementNotTriggered(*self).encode(address, buf)
-        }
-    }
-    impl response::MovementCompletedWithStepLoss {
-        pub const NAME: &'static str = "movement_completed_with_step_loss";
-        pub const CODE: &'static [u8] = &[0x54, 0x00];
-        pub const LEN: usize = 9;
-        pub const DESC: rt::MessageDesc = rt::MessageDesc::new(
-            Self::NAME,
-            0x5400,
-            2,
-            &[9],
-        );
-        pub const LOST_MICRO_STEPS: rt::Range<usize> = 4..8;
-        pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
-            f("lost_micro_steps", rt::Int(self.lost_micro_steps as i64));
-        }
-        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
-            Response::MovementCompletedWithStepLoss(*self).encode(address, buf)
-        }
-    }
-    impl response::NakUnknownCommand {
-        pub const NAME: &'static str = "nak_unknown_command";
-        pub const CODE: &'static [u8] = &[0x90];
-        pub const LEN: usize = 4;
-        pub const DESC: rt::MessageDesc = rt::MessageDesc::new(
-            Self::NAME,
-            0x90,
-            1,
-            &[4],
-        );
-        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
-            Response::NakUnknownCommand(*self).encode(address, buf)
-        }
-    }
-    impl response::NakIncompatibleStatus {
-        pub const NAME: &'static str = "nak_incompatible_status";
-        pub const CODE: &'static [u8] = &[0x91];
-        pub const LEN: usize = 4;
-        pub const DESC: rt::MessageDesc = rt::MessageDesc::new(
-            Self::NAME,
-            0x91,
-            1,
-            &[4],
-        );
-        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
-            Response::NakIncompatibleStatus(*self).encode(address, buf)
-        }
-    }
-    impl response::NakChecksumError {
-        pub const NAME: &'static str = "nak_checksum_error";
-        pub const CODE: &'static [u8] = &[0x92];
-        pub const LEN: usize = 4;
-        pub const DESC: rt::MessageDesc = rt::MessageDesc::new(
-            Self::NAME,
-            0x92,
-            1,
-            &[4],
-        );
-        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
-            Response::NakChecksumError(*self).encode(address, buf)
-        }
-    }
-    impl response::NakLimitReached {
-        pub const NAME: &'static str = "nak_limit_reached";
-        pub const CODE: &'static [u8] = &[0x93];
-        pub const LEN: usize = 4;
-        pub const DESC: rt::MessageDesc = rt::MessageDesc::new(
-            Self::NAME,
-            0x93,
-            1,
-            &[4],
-        );
-        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
-            Response::NakLimitReached(*self).encode(address, buf)
-        }
-    }
-    impl response::NakIndexOutOfRange {
-        pub const NAME: &'static str = "nak_index_out_of_range";
-        pub const CODE: &'static [u8] = &[0x94];
-        pub const LEN: usize = 4;
-        pub const DESC: rt::MessageDesc = rt::MessageDesc::new(
-            Self::NAME,
-            0x94,
-            1,
-            &[4],
-        );
-        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
-            Response::NakIndexOutOfRange(*self).encode(address, buf)
-        }
-    }
-    impl response::SetAccelerationSpeedIndexAck {
-        pub const NAME: &'static str = "set_acceleration_speed_index_ack";
-        pub const CODE: &'static [u8] = &[0x43, 0x00];
-        pub const LEN: usize = 5;
-        pub const DESC: rt::MessageDesc = rt::MessageDesc::new(
-            Self::NAME,
-            0x4300,
-            2,
-            &[5],
-        );
-        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
-            Response::SetAccelerationSpeedIndexAck(*self).encode(address, buf)
-        }
-    }
-    impl response::SetCurrentAck {
-        pub const NAME: &'static str = "set_current_ack";
-        pub const CODE: &'static [u8] = &[0x45, 0x00];
-        pub const LEN: usize = 5;
-        pub const DESC: rt::MessageDesc = rt::MessageDesc::new(
-            Self::NAME,
-            0x4500,
-            2,
-            &[5],
-        );
-        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
-            Response::SetCurrentAck(*self).encode(address, buf)
-        }
-    }
-    impl response::SetSlaveAddressAck {
-        pub const NAME: &'static str = "set_slave_address_ack";
-        pub const CODE: &'static [u8] = &[0x60, 0x00];
-        pub const LEN: usize = 5;
-        pub const DESC: rt::MessageDesc = rt::MessageDesc::new(
-            Self::NAME,
-            0x6000,
-            2,
-            &[5],
-        );
-        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
-            Response::SetSlaveAddressAck(*self).encode(address, buf)
-        }
-    }
-    impl response::SetBaudRateAck {
-        pub const NAME: &'static str = "set_baud_rate_ack";
-        pub const CODE: &'static [u8] = &[0x61, 0x00];
-        pub const LEN: usize = 5;
-        pub const DESC: rt::MessageDesc = rt::MessageDesc::new(
-            Self::NAME,
-            0x6100,
-            2,
-            &[5],
-        );
-        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
-            Response::SetBaudRateAck(*self).encode(address, buf)
-        }
-    }
-    impl response::SetLowerCustomerLimitAck {
-        pub const NAME: &'static str = "set_lower_customer_limit_ack";
-        pub const CODE: &'static [u8] = &[0x72, 0x01];
-        pub const LEN: usize = 5;
-        pub const DESC: rt::MessageDesc = rt::MessageDesc::new(
-            Self::NAME,
-            0x7201,
-            2,
-            &[5],
-        );
-        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
-            Response::SetLowerCustomerLimitAck(*self).encode(address, buf)
-        }
-    }
-    impl response::SetUpperCustomerLimitAck {
-        pub const NAME: &'static str = "set_upper_customer_limit_ack";
-        pub const CODE: &'static [u8] = &[0x72, 0x02];
-        pub const LEN: usize = 5;
-        pub const DESC: rt::MessageDesc = rt::MessageDesc::new(
-            Self::NAME,
-            0x7202,
-            2,
-            &[5],
-        );
-        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
-            Response::SetUpperCustomerLimitAck(*self).encode(address, buf)
-        }
-    }
-    impl response::StoreIndexedPositionAck {
-        pub const NAME: &'static str = "store_indexed_position_ack";
-        pub const CODE: &'static [u8] = &[0x75, 0x00];
-        pub const LEN: usize = 5;
-        pub const DESC: rt::MessageDesc = rt::MessageDesc::new(
-            Self::NAME,
-            0x7500,
-            2,
-            &[5],
-        );
-        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
-            Response::StoreIndexedPositionAck(*self).encode(address, buf)
-        }
-    }
-    impl response::SetModeOfOperationAck {
-        pub const NAME: &'static str = "set_mode_of_operation_ack";
-        pub const CODE: &'static [u8] = &[0x80, 0x00];
-        pub const LEN: usize = 5;
-        pub const DESC: rt::MessageDesc = rt::MessageDesc::new(
-            Self::NAME,
-            0x8000,
-            2,
-            &[5],
-        );
-        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
-            Response::SetModeOfOperationAck(*self).encode(address, buf)
-        }
-    }
-    impl response::ActualCapacitance {
-        pub const NAME: &'static str = "actual_capacitance";
-        pub const CODE: &'static [u8] = &[0x41, 0x01];
-        pub const LEN: usize = 9;
-        pub const DESC: rt::MessageDesc = rt::MessageDesc::new(
-            Self::NAME,
-            0x4101,
-            2,
-            &[9],
-        );
-        pub const CAPACITANCE: rt::Range<usize> = 4..8;
-        pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
-            f("capacitance", rt::Int(self.capacitance.raw() as i64));
-        }
-        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
-            Response::ActualCapacitance(*self).encode(address, buf)
-        }
-    }
-    impl response::ActualFullStepPosition {
-        pub const NAME: &'static str = "actual_full_step_position";
-        pub const CODE: &'static [u8] = &[0x41, 0x02];
-        pub const LEN: usize = 7;
-        pub const DESC: rt::MessageDesc = rt::MessageDesc::new(
-            Self::NAME,
-            0x4102,
-            2,
-            &[7],
-        );
-        pub const FULL_STEPS: rt::Range<usize> = 4..6;
-        pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
-            f("full_steps", rt::Int(self.full_steps as i64));
-        }
-        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
-            Response::ActualFullStepPosition(*self).encode(address, buf)
-        }
-    }
-    impl response::MinimumCapacitance {
-        pub const NAME: &'static str = "minimum_capacitance";
-        pub const CODE: &'static [u8] = &[0x41, 0x10];
-        pub const LEN: usize = 9;
-        pub const DESC: rt::MessageDesc = rt::MessageDesc::new(
-            Self::NAME,
-            0x4110,
-            2,
-            &[9],
-        );
-        pub const CAPACITANCE: rt::Range<usize> = 4..8;
-        pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
-            f("capacitance", rt::Int(self.capacitance.raw() as i64));
-        }
-        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
-            Response::MinimumCapacitance(*self).encode(address, buf)
-        }
-    }
-    impl response::MaximumCapacitance {
-        pub const NAME: &'static str = "maximum_capacitance";
-        pub const CODE: &'static [u8] = &[0x41, 0x11];
-        pub const LEN: usize = 9;
-        pub const DESC: rt::MessageDesc = rt::MessageDesc::new(
-            Self::NAME,
-            0x4111,
-            2,
-            &[9],
-        );
-        pub const CAPACITANCE: rt::Range<usize> = 4..8;
-        pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
-            f("capacitance", rt::Int(self.capacitance.raw() as i64));
-        }
-        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
-            Response::MaximumCapacitance(*self).encode(address, buf)
-        }
-    }
-    impl response::AccelerationSpeed {
-        pub const NAME: &'static str = "acceleration_speed";
-        pub const CODE: &'static [u8] = &[0x41, 0x21];
-        pub const LEN: usize = 7;
-        pub const DESC: rt::MessageDesc = rt::MessageDesc::new(
-            Self::NAME,
-            0x4121,
-            2,
-            &[7],
-        );
-        pub const ACCELERATION_INDEX: rt::Range<usize> = 4..5;
-        pub const SPEED_INDEX: rt::Range<usize> = 5..6;
-        pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
-            f("acceleration_index", rt::Int(self.acceleration_index as i64));
-            f("speed_index", rt::Int(self.speed_index as i64));
-        }
-        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
-            Response::AccelerationSpeed(*self).encode(address, buf)
-        }
-    }
-    impl response::Status {
-        pub const NAME: &'static str = "status";
-        pub const CODE: &'static [u8] = &[0x41, 0x22];
-        pub const LEN: usize = 7;
-        pub const DESC: rt::MessageDesc = rt::MessageDesc::new(
-            Self::NAME,
-            0x4122,
-            2,
-            &[7],
-        );
-        pub const ERROR_BITS: rt::Range<usize> = 4..5;
-        pub const RESERVED: rt::Range<usize> = 5..6;
-        pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
-            f("error_bits", rt::Int(self.error_bits.raw() as i64));
-            f("reserved", rt::Int(self.reserved as i64));
-        }
-        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
-            Response::Status(*self).encode(address, buf)
-        }
-    }
-    impl response::CCurveEntry {
-        pub const NAME: &'static str = "c_curve_entry";
-        pub const CODE: &'static [u8] = &[0x41, 0x30];
-        pub const LEN: usize = 13;
-        pub const DESC: rt::MessageDesc = rt::MessageDesc::new(
-            Self::NAME,
-            0x4130,
-            2,
-            &[13],
-        );
-        pub const INDEX: rt::Range<usize> = 4..6;
-        pub const FULL_STEPS: rt::Range<usize> = 6..8;
-        pub const CAPACITANCE: rt::Range<usize> = 8..12;
-        pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
-            f("index", rt::Int(self.index as i64));
-            f("full_steps", rt::Int(self.full_steps as i64));
-            f("capacitance", rt::Int(self.capacitance.raw() as i64));
-        }
-        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
-            Response::CCurveEntry(*self).encode(address, buf)
-        }
-    }
-    impl response::ControllerTemperature {
-        pub const NAME: &'static str = "controller_temperature";
-        pub const CODE: &'static [u8] = &[0x41, 0x32];
-        pub const LEN: usize = 6;
-        pub const DESC: rt::MessageDesc = rt::MessageDesc::new(
-            Self::NAME,
-            0x4132,
-            2,
-            &[6],
-        );
-        pub const TEMPERATURE: rt::Range<usize> = 4..5;
-        pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
-            f("temperature", rt::Int(self.temperature as i64));
-        }
-        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
-            Response::ControllerTemperature(*self).encode(address, buf)
-        }
-    }
-    impl response::MicroStepPosition {
-        pub const NAME: &'static str = "micro_step_position";
-        pub const CODE: &'static [u8] = &[0x41, 0x36];
-        pub const LEN: usize = 9;
-        pub const DESC: rt::MessageDesc = rt::MessageDesc::new(
-            Self::NAME,
-            0x4136,
-            2,
-            &[9],
-        );
-        pub const MICRO_STEPS: rt::Range<usize> = 4..8;
-        pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
-            f("micro_steps", rt::Int(self.micro_steps as i64));
-        }
-        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
-            Response::MicroStepPosition(*self).encode(address, buf)
-        }
-    }
-    impl response::FirmwareVersion {
-        pub const NAME: &'static str = "firmware_version";
-        pub const CODE: &'static [u8] = &[0x41, 0x61];
-        pub const LEN: usize = 16;
-        pub const DESC: rt::MessageDesc = rt::MessageDesc::new(
-            Self::NAME,
-            0x4161,
-            2,
-            &[16],
-        );
-        pub const FIRMWARE_VERSION: rt::Range<usize> = 4..15;
-        pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
-            f("firmware_version", rt::Text(&self.firmware_version[..]));
-        }
-        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
-            Response::FirmwareVersion(*self).encode(address, buf)
-        }
-    }
-    impl response::SerialNumber {
-        pub const NAME: &'static str = "serial_number";
-        pub const CODE: &'static [u8] = &[0x41, 0x62];
-        pub const LEN: usize = 13;
-        pub const DESC: rt::MessageDesc = rt::MessageDesc::new(
-            Self::NAME,
-            0x4162,
-            2,
-            &[13],
-        );
-        pub const SERIAL_NUMBER: rt::Range<usize> = 4..12;
-        pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
-            f("serial_number", rt::Text(&self.serial_number[..]));
-        }
-        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
-            Response::SerialNumber(*self).encode(address, buf)
-        }
-    }
-    impl response::CminNom {
-        pub const NAME: &'static str = "cmin_nom";
-        pub const CODE: &'static [u8] = &[0x41, 0x70];
-        pub const LEN: usize = 9;
-        pub const DESC: rt::MessageDesc = rt::MessageDesc::new(
-            Self::NAME,
-            0x4170,
-            2,
-            &[9],
-        );
-        pub const CAPACITANCE: rt::Range<usize> = 4..8;
-        pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
-            f("capacitance", rt::Int(self.capacitance.raw() as i64));
-        }
-        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
-            Response::CminNom(*self).encode(address, buf)
-        }
-    }
-    impl response::CmaxNom {
-        pub const NAME: &'static str = "cmax_nom";
-        pub const CODE: &'static [u8] = &[0x41, 0x71];
-        pub const LEN: usize = 9;
-        pub const DESC: rt::MessageDesc = rt::MessageDesc::new(
-            Self::NAME,
-            0x4171,
-            2,
-            &[9],
-        );
-        pub const CAPACITANCE: rt::Range<usize> = 4..8;
-        pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
-            f("capacitance", rt::Int(self.capacitance.raw() as i64));
-        }
-        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
-            Response::CmaxNom(*self).encode(address, buf)
-        }
-    }
-    impl response::LowerCustomerLimit {
-        pub const NAME: &'static str = "lower_customer_limit";
-        pub const CODE: &'static [u8] = &[0x41, 0x72];
-        pub const LEN: usize = 10;
-        pub const DESC: rt::MessageDesc = rt::MessageDesc::new(
-            Self::NAME,
-            0x4172,
-            2,
-            &[10],
-        );
-        pub const CAPACITANCE: rt::Range<usize> = 5..9;
-        pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
-            f("capacitance", rt::Int(self.capacitance.raw() as i64));
-        }
-        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
-            Response::LowerCustomerLimit(*self).encode(address, buf)
-        }
-    }
-    impl response::UpperCustomerLimit {
-        pub const NAME: &'static str = "upper_customer_limit";
-        pub const CODE: &'static [u8] = &[0x41, 0x72];
-        pub const LEN: usize = 10;
-        pub const DESC: rt::MessageDesc = rt::MessageDesc::new(
-            Self::NAME,
-            0x4172,
-            2,
-            &[10],
-        );
-        pub const CAPACITANCE: rt::Range<usize> = 5..9;
-        pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
-            f("capacitance", rt::Int(self.capacitance.raw() as i64));
-        }
-        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
-            Response::UpperCustomerLimit(*self).encode(address, buf)
-        }
-    }
-    impl response::LowerFactoryLimit {
-        pub const NAME: &'static str = "lower_factory_limit";
-        pub const CODE: &'static [u8] = &[0x41, 0x72];
-        pub const LEN: usize = 10;
-        pub const DESC: rt::MessageDesc = rt::MessageDesc::new(
-            Self::NAME,
-            0x4172,
-            2,
-            &[10],
-        );
-        pub const CAPACITANCE: rt::Range<usize> = 5..9;
-        pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
-            f("capacitance", rt::Int(self.capacitance.raw() as i64));
-        }
-        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
-            Response::LowerFactoryLimit(*self).encode(address, buf)
-        }
-    }
-    impl response::UpperFactoryLimit {
-        pub const NAME: &'static str = "upper_factory_limit";
-        pub const CODE: &'static [u8] = &[0x41, 0x72];
-        pub const LEN: usize = 10;
-        pub const DESC: rt::MessageDesc = rt::MessageDesc::new(
-            Self::NAME,
-            0x4172,
-            2,
-            &[10],
-        );
-        pub const CAPACITANCE: rt::Range<usize> = 5..9;
-        pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
-            f("capacitance", rt::Int(self.capacitance.raw() as i64));
-        }
-        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
-            Response::UpperFactoryLimit(*self).encode(address, buf)
-        }
-    }
-    impl response::PresetCapacitance {
-        pub const NAME: &'static str = "preset_capacitance";
-        pub const CODE: &'static [u8] = &[0x41, 0x73];
-        pub const LEN: usize = 10;
-        pub const DESC: rt::MessageDesc = rt::MessageDesc::new(
-            Self::NAME,
-            0x4173,
-            2,
-            &[10],
-        );
-        pub const CAPACITANCE: rt::Range<usize> = 5..9;
-        pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
-            f("capacitance", rt::Int(self.capacitance.raw() as i64));
-        }
-        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
-            Response::PresetCapacitance(*self).encode(address, buf)
-        }
-    }
-    impl response::PresetFullStepPosition {
-        pub const NAME: &'static str = "preset_full_step_position";
-        pub const CODE: &'static [u8] = &[0x41, 0x73];
-        pub const LEN: usize = 10;
-        pub const DESC: rt::MessageDesc = rt::MessageDesc::new(
-            Self::NAME,
-            0x4173,
-            2,
-            &[10],
-        );
-        pub const FULL_STEPS: rt::Range<usize> = 5..9;
-        pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
-            f("full_steps", rt::Int(self.full_steps as i64));
-        }
-        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
-            Response::PresetFullStepPosition(*self).encode(address, buf)
-        }
-    }
-    impl response::StoredFullStepPosition {
-        pub const NAME: &'static str = "stored_full_step_position";
-        pub const CODE: &'static [u8] = &[0x41, 0x75];
-        pub const LEN: usize = 8;
-        pub const DESC: rt::MessageDesc = rt::MessageDesc::new(
-            Self::NAME,
-            0x4175,
-            2,
-            &[8],
-        );
-        pub const INDEX: rt::Range<usize> = 4..5;
-        pub const FULL_STEPS: rt::Range<usize> = 5..7;
-        pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
-            f("index", rt::Int(self.index as i64));
-            f("full_steps", rt::Int(self.full_steps as i64));
-        }
-        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
-            Response::StoredFullStepPosition(*self).encode(address, buf)
-        }
-    }
-    impl response::ActualModeOfOperation {
-        pub const NAME: &'static str = "actual_mode_of_operation";
-        pub const CODE: &'static [u8] = &[0x41, 0x80];
-        pub const LEN: usize = 6;
-        pub const DESC: rt::MessageDesc = rt::MessageDesc::new(
-            Self::NAME,
-            0x4180,
-            2,
-            &[6],
-        );
-        pub const MODE: rt::Range<usize> = 4..5;
-        pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
-            f("mode", rt::Int(self.mode.raw() as i64));
-        }
-        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
-            Response::ActualModeOfOperation(*self).encode(address, buf)
         }
     }
     ///A response, device to host.
@@ -3193,40 +1666,24 @@ pub mod ub2 {
         /// Encodes the frame for `address` into `buf`; returns the frame length. Refuses what
         /// decode refuses: an address no frame may carry, the broadcast address for a command
         /// that does not accept it, a value outside its field's range.
-        pub fn encode(
-            &self,
-            address: u8,
-            buf: &mut [u8],
-        ) -> rt::Result<usize, rt::EncodeError> {
+        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             rt::encode_address(address, &FRAME)?;
             let len = match *self {
-                Self::MovementStarted(response::MovementStarted {}) => {
-                    rt::seal_sum8_head(
-                        rt::frame_mut::<4>(buf, &[0xAA, address, 0x50])?,
-                        3,
-                        address.wrapping_add(0xFA),
-                    )
+                Self::MovementStarted(_) => {
+                    let out = rt::frame_mut::<4>(buf, &[0xAA, address, 0x50])?;
+                    rt::seal_sum8_head(out, 3, address.wrapping_add(0xFA))
                 }
-                Self::MovementCompleted(response::MovementCompleted {}) => {
-                    rt::seal_sum8_head(
-                        rt::frame_mut::<4>(buf, &[0xAA, address, 0x51])?,
-                        3,
-                        address.wrapping_add(0xFB),
-                    )
+                Self::MovementCompleted(_) => {
+                    let out = rt::frame_mut::<4>(buf, &[0xAA, address, 0x51])?;
+                    rt::seal_sum8_head(out, 3, address.wrapping_add(0xFB))
                 }
-                Self::MovementNotCompleted(response::MovementNotCompleted {}) => {
-                    rt::seal_sum8_head(
-                        rt::frame_mut::<4>(buf, &[0xAA, address, 0x52])?,
-                        3,
-                        address.wrapping_add(0xFC),
-                    )
+                Self::MovementNotCompleted(_) => {
+                    let out = rt::frame_mut::<4>(buf, &[0xAA, address, 0x52])?;
+                    rt::seal_sum8_head(out, 3, address.wrapping_add(0xFC))
                 }
-                Self::MovementNotTriggered(response::MovementNotTriggered {}) => {
-                    rt::seal_sum8_head(
-                        rt::frame_mut::<4>(buf, &[0xAA, address, 0x53])?,
-                        3,
-                        address.wrapping_add(0xFD),
-                    )
+                Self::MovementNotTriggered(_) => {
+                    let out = rt::frame_mut::<4>(buf, &[0xAA, address, 0x53])?;
+                    rt::seal_sum8_head(out, 3, address.wrapping_add(0xFD))
                 }
                 Self::MovementCompletedWithStepLoss(
                     response::MovementCompletedWithStepLoss {
@@ -3237,98 +1694,57 @@ pub mod ub2 {
                     out[4..8].copy_from_slice(&v_lost_micro_steps.to_le_bytes());
                     rt::seal_sum8_head(out, 4, address.wrapping_add(0xFE))
                 }
-                Self::NakUnknownCommand(response::NakUnknownCommand {}) => {
-                    rt::seal_sum8_head(
-                        rt::frame_mut::<4>(buf, &[0xAA, address, 0x90])?,
-                        3,
-                        address.wrapping_add(0x3A),
-                    )
+                Self::NakUnknownCommand(_) => {
+                    let out = rt::frame_mut::<4>(buf, &[0xAA, address, 0x90])?;
+                    rt::seal_sum8_head(out, 3, address.wrapping_add(0x3A))
                 }
-                Self::NakIncompatibleStatus(response::NakIncompatibleStatus {}) => {
-                    rt::seal_sum8_head(
-                        rt::frame_mut::<4>(buf, &[0xAA, address, 0x91])?,
-                        3,
-                        address.wrapping_add(0x3B),
-                    )
+                Self::NakIncompatibleStatus(_) => {
+                    let out = rt::frame_mut::<4>(buf, &[0xAA, address, 0x91])?;
+                    rt::seal_sum8_head(out, 3, address.wrapping_add(0x3B))
                 }
-                Self::NakChecksumError(response::NakChecksumError {}) => {
-                    rt::seal_sum8_head(
-                        rt::frame_mut::<4>(buf, &[0xAA, address, 0x92])?,
-                        3,
-                        address.wrapping_add(0x3C),
-                    )
+                Self::NakChecksumError(_) => {
+                    let out = rt::frame_mut::<4>(buf, &[0xAA, address, 0x92])?;
+                    rt::seal_sum8_head(out, 3, address.wrapping_add(0x3C))
                 }
-                Self::NakLimitReached(response::NakLimitReached {}) => {
-                    rt::seal_sum8_head(
-                        rt::frame_mut::<4>(buf, &[0xAA, address, 0x93])?,
-                        3,
-                        address.wrapping_add(0x3D),
-                    )
+                Self::NakLimitReached(_) => {
+                    let out = rt::frame_mut::<4>(buf, &[0xAA, address, 0x93])?;
+                    rt::seal_sum8_head(out, 3, address.wrapping_add(0x3D))
                 }
-                Self::NakIndexOutOfRange(response::NakIndexOutOfRange {}) => {
-                    rt::seal_sum8_head(
-                        rt::frame_mut::<4>(buf, &[0xAA, address, 0x94])?,
-                        3,
-                        address.wrapping_add(0x3E),
-                    )
+                Self::NakIndexOutOfRange(_) => {
+                    let out = rt::frame_mut::<4>(buf, &[0xAA, address, 0x94])?;
+                    rt::seal_sum8_head(out, 3, address.wrapping_add(0x3E))
                 }
-                Self::SetAccelerationSpeedIndexAck(
-                    response::SetAccelerationSpeedIndexAck {},
-                ) => {
-                    rt::seal_sum8_head(
-                        rt::frame_mut::<5>(buf, &[0xAA, address, 0x43, 0x00])?,
-                        4,
-                        address.wrapping_add(0xED),
-                    )
+                Self::SetAccelerationSpeedIndexAck(_) => {
+                    let out = rt::frame_mut::<5>(buf, &[0xAA, address, 0x43, 0x00])?;
+                    rt::seal_sum8_head(out, 4, address.wrapping_add(0xED))
                 }
-                Self::SetCurrentAck(response::SetCurrentAck {}) => {
-                    rt::seal_sum8_head(
-                        rt::frame_mut::<5>(buf, &[0xAA, address, 0x45, 0x00])?,
-                        4,
-                        address.wrapping_add(0xEF),
-                    )
+                Self::SetCurrentAck(_) => {
+                    let out = rt::frame_mut::<5>(buf, &[0xAA, address, 0x45, 0x00])?;
+                    rt::seal_sum8_head(out, 4, address.wrapping_add(0xEF))
                 }
-                Self::SetSlaveAddressAck(response::SetSlaveAddressAck {}) => {
-                    rt::seal_sum8_head(
-                        rt::frame_mut::<5>(buf, &[0xAA, address, 0x60, 0x00])?,
-                        4,
-                        address.wrapping_add(0x0A),
-                    )
+                Self::SetSlaveAddressAck(_) => {
+                    let out = rt::frame_mut::<5>(buf, &[0xAA, address, 0x60, 0x00])?;
+                    rt::seal_sum8_head(out, 4, address.wrapping_add(0x0A))
                 }
-                Self::SetBaudRateAck(response::SetBaudRateAck {}) => {
-                    rt::seal_sum8_head(
-                        rt::frame_mut::<5>(buf, &[0xAA, address, 0x61, 0x00])?,
-                        4,
-                        address.wrapping_add(0x0B),
-                    )
+                Self::SetBaudRateAck(_) => {
+                    let out = rt::frame_mut::<5>(buf, &[0xAA, address, 0x61, 0x00])?;
+                    rt::seal_sum8_head(out, 4, address.wrapping_add(0x0B))
                 }
-                Self::SetLowerCustomerLimitAck(response::SetLowerCustomerLimitAck {}) => {
-                    rt::seal_sum8_head(
-                        rt::frame_mut::<5>(buf, &[0xAA, address, 0x72, 0x01])?,
-                        4,
-                        address.wrapping_add(0x1D),
-                    )
+                Self::SetLowerCustomerLimitAck(_) => {
+                    let out = rt::frame_mut::<5>(buf, &[0xAA, address, 0x72, 0x01])?;
+                    rt::seal_sum8_head(out, 4, address.wrapping_add(0x1D))
                 }
-                Self::SetUpperCustomerLimitAck(response::SetUpperCustomerLimitAck {}) => {
-                    rt::seal_sum8_head(
-                        rt::frame_mut::<5>(buf, &[0xAA, address, 0x72, 0x02])?,
-                        4,
-                        address.wrapping_add(0x1E),
-                    )
+                Self::SetUpperCustomerLimitAck(_) => {
+                    let out = rt::frame_mut::<5>(buf, &[0xAA, address, 0x72, 0x02])?;
+                    rt::seal_sum8_head(out, 4, address.wrapping_add(0x1E))
                 }
-                Self::StoreIndexedPositionAck(response::StoreIndexedPositionAck {}) => {
-                    rt::seal_sum8_head(
-                        rt::frame_mut::<5>(buf, &[0xAA, address, 0x75, 0x00])?,
-                        4,
-                        address.wrapping_add(0x1F),
-                    )
+                Self::StoreIndexedPositionAck(_) => {
+                    let out = rt::frame_mut::<5>(buf, &[0xAA, address, 0x75, 0x00])?;
+                    rt::seal_sum8_head(out, 4, address.wrapping_add(0x1F))
                 }
-                Self::SetModeOfOperationAck(response::SetModeOfOperationAck {}) => {
-                    rt::seal_sum8_head(
-                        rt::frame_mut::<5>(buf, &[0xAA, address, 0x80, 0x00])?,
-                        4,
-                        address.wrapping_add(0x2A),
-                    )
+                Self::SetModeOfOperationAck(_) => {
+                    let out = rt::frame_mut::<5>(buf, &[0xAA, address, 0x80, 0x00])?;
+                    rt::seal_sum8_head(out, 4, address.wrapping_add(0x2A))
                 }
                 Self::ActualCapacitance(
                     response::ActualCapacitance { capacitance: v_capacitance },
@@ -3731,14 +2147,14 @@ pub mod ub2 {
                         7,
                     >(frame, &response::AccelerationSpeed::DESC)?;
                     rt::in_range(
-                        &response::ACCELERATION_SPEED_ACCELERATION_INDEX,
+                        &response::AccelerationSpeed::ACCELERATION_INDEX_DESC,
                         4,
                         frame[4],
                         0,
                         18,
                     )?;
                     rt::in_range(
-                        &response::ACCELERATION_SPEED_SPEED_INDEX,
+                        &response::AccelerationSpeed::SPEED_INDEX_DESC,
                         5,
                         frame[5],
                         0,
@@ -3763,7 +2179,13 @@ pub mod ub2 {
                 0x4130 => {
                     let frame = rt::fixed::<13>(frame, &response::CCurveEntry::DESC)?;
                     let field_0: u16 = u16::from_le_bytes([frame[4], frame[5]]);
-                    rt::in_range(&response::C_CURVE_ENTRY_INDEX, 4, field_0, 0, 499)?;
+                    rt::in_range(
+                        &response::CCurveEntry::INDEX_DESC,
+                        4,
+                        field_0,
+                        0,
+                        499,
+                    )?;
                     rt::Ok(
                         Self::CCurveEntry(response::CCurveEntry {
                             index: field_0,
@@ -3854,7 +2276,7 @@ pub mod ub2 {
                     );
                     g.attempt(|frame: &[u8; 10]| {
                         rt::equal(
-                            &response::LOWER_CUSTOMER_LIMIT_INDEX,
+                            &response::LowerCustomerLimit::INDEX_DESC,
                             4,
                             frame[4],
                             0x1,
@@ -3869,7 +2291,7 @@ pub mod ub2 {
                     });
                     g.attempt(|frame: &[u8; 10]| {
                         rt::equal(
-                            &response::UPPER_CUSTOMER_LIMIT_INDEX,
+                            &response::UpperCustomerLimit::INDEX_DESC,
                             4,
                             frame[4],
                             0x2,
@@ -3884,7 +2306,7 @@ pub mod ub2 {
                     });
                     g.attempt(|frame: &[u8; 10]| {
                         rt::equal(
-                            &response::LOWER_FACTORY_LIMIT_INDEX,
+                            &response::LowerFactoryLimit::INDEX_DESC,
                             4,
                             frame[4],
                             0x3,
@@ -3899,7 +2321,7 @@ pub mod ub2 {
                     });
                     g.attempt(|frame: &[u8; 10]| {
                         rt::equal(
-                            &response::UPPER_FACTORY_LIMIT_INDEX,
+                            &response::UpperFactoryLimit::INDEX_DESC,
                             4,
                             frame[4],
                             0x4,
@@ -3922,7 +2344,7 @@ pub mod ub2 {
                     );
                     g.attempt(|frame: &[u8; 10]| {
                         rt::equal(
-                            &response::PRESET_CAPACITANCE_INDEX,
+                            &response::PresetCapacitance::INDEX_DESC,
                             4,
                             frame[4],
                             0x0,
@@ -3937,7 +2359,7 @@ pub mod ub2 {
                     });
                     g.attempt(|frame: &[u8; 10]| {
                         rt::equal(
-                            &response::PRESET_FULL_STEP_POSITION_INDEX,
+                            &response::PresetFullStepPosition::INDEX_DESC,
                             4,
                             frame[4],
                             0x1,
@@ -3960,7 +2382,7 @@ pub mod ub2 {
                         8,
                     >(frame, &response::StoredFullStepPosition::DESC)?;
                     rt::in_range(
-                        &response::STORED_FULL_STEP_POSITION_INDEX,
+                        &response::StoredFullStepPosition::INDEX_DESC,
                         4,
                         frame[4],
                         0,
@@ -3993,258 +2415,194 @@ pub mod ub2 {
             name: &str,
             mut field: impl FnMut(&'static str) -> rt::Option<rt::FieldValue<'v>>,
         ) -> rt::Result<Self, rt::FieldError> {
-            match name {
-                "movement_started" => {
-                    rt::Ok(Self::MovementStarted(response::MovementStarted))
-                }
+            let message = match name {
+                "movement_started" => Self::MovementStarted(response::MovementStarted),
                 "movement_completed" => {
-                    rt::Ok(Self::MovementCompleted(response::MovementCompleted))
+                    Self::MovementCompleted(response::MovementCompleted)
                 }
                 "movement_not_completed" => {
-                    rt::Ok(Self::MovementNotCompleted(response::MovementNotCompleted))
+                    Self::MovementNotCompleted(response::MovementNotCompleted)
                 }
                 "movement_not_triggered" => {
-                    rt::Ok(Self::MovementNotTriggered(response::MovementNotTriggered))
+                    Self::MovementNotTriggered(response::MovementNotTriggered)
                 }
                 "movement_completed_with_step_loss" => {
-                    rt::Ok(
-                        Self::MovementCompletedWithStepLoss(response::MovementCompletedWithStepLoss {
-                            lost_micro_steps: rt::get(&mut field, "lost_micro_steps")?,
-                        }),
-                    )
+                    Self::MovementCompletedWithStepLoss(response::MovementCompletedWithStepLoss {
+                        lost_micro_steps: rt::get(&mut field, "lost_micro_steps")?,
+                    })
                 }
                 "nak_unknown_command" => {
-                    rt::Ok(Self::NakUnknownCommand(response::NakUnknownCommand))
+                    Self::NakUnknownCommand(response::NakUnknownCommand)
                 }
                 "nak_incompatible_status" => {
-                    rt::Ok(Self::NakIncompatibleStatus(response::NakIncompatibleStatus))
+                    Self::NakIncompatibleStatus(response::NakIncompatibleStatus)
                 }
                 "nak_checksum_error" => {
-                    rt::Ok(Self::NakChecksumError(response::NakChecksumError))
+                    Self::NakChecksumError(response::NakChecksumError)
                 }
-                "nak_limit_reached" => {
-                    rt::Ok(Self::NakLimitReached(response::NakLimitReached))
-                }
+                "nak_limit_reached" => Self::NakLimitReached(response::NakLimitReached),
                 "nak_index_out_of_range" => {
-                    rt::Ok(Self::NakIndexOutOfRange(response::NakIndexOutOfRange))
+                    Self::NakIndexOutOfRange(response::NakIndexOutOfRange)
                 }
                 "set_acceleration_speed_index_ack" => {
-                    rt::Ok(
-                        Self::SetAccelerationSpeedIndexAck(
-                            response::SetAccelerationSpeedIndexAck,
-                        ),
+                    Self::SetAccelerationSpeedIndexAck(
+                        response::SetAccelerationSpeedIndexAck,
                     )
                 }
-                "set_current_ack" => rt::Ok(Self::SetCurrentAck(response::SetCurrentAck)),
+                "set_current_ack" => Self::SetCurrentAck(response::SetCurrentAck),
                 "set_slave_address_ack" => {
-                    rt::Ok(Self::SetSlaveAddressAck(response::SetSlaveAddressAck))
+                    Self::SetSlaveAddressAck(response::SetSlaveAddressAck)
                 }
-                "set_baud_rate_ack" => {
-                    rt::Ok(Self::SetBaudRateAck(response::SetBaudRateAck))
-                }
+                "set_baud_rate_ack" => Self::SetBaudRateAck(response::SetBaudRateAck),
                 "set_lower_customer_limit_ack" => {
-                    rt::Ok(
-                        Self::SetLowerCustomerLimitAck(
-                            response::SetLowerCustomerLimitAck,
-                        ),
-                    )
+                    Self::SetLowerCustomerLimitAck(response::SetLowerCustomerLimitAck)
                 }
                 "set_upper_customer_limit_ack" => {
-                    rt::Ok(
-                        Self::SetUpperCustomerLimitAck(
-                            response::SetUpperCustomerLimitAck,
-                        ),
-                    )
+                    Self::SetUpperCustomerLimitAck(response::SetUpperCustomerLimitAck)
                 }
                 "store_indexed_position_ack" => {
-                    rt::Ok(
-                        Self::StoreIndexedPositionAck(response::StoreIndexedPositionAck),
-                    )
+                    Self::StoreIndexedPositionAck(response::StoreIndexedPositionAck)
                 }
                 "set_mode_of_operation_ack" => {
-                    rt::Ok(Self::SetModeOfOperationAck(response::SetModeOfOperationAck))
+                    Self::SetModeOfOperationAck(response::SetModeOfOperationAck)
                 }
                 "actual_capacitance" => {
-                    rt::Ok(
-                        Self::ActualCapacitance(response::ActualCapacitance {
-                            capacitance: Capacitance::from_raw(
-                                rt::get(&mut field, "capacitance")?,
-                            ),
-                        }),
-                    )
+                    Self::ActualCapacitance(response::ActualCapacitance {
+                        capacitance: Capacitance::from_raw(
+                            rt::get(&mut field, "capacitance")?,
+                        ),
+                    })
                 }
                 "actual_full_step_position" => {
-                    rt::Ok(
-                        Self::ActualFullStepPosition(response::ActualFullStepPosition {
-                            full_steps: rt::get(&mut field, "full_steps")?,
-                        }),
-                    )
+                    Self::ActualFullStepPosition(response::ActualFullStepPosition {
+                        full_steps: rt::get(&mut field, "full_steps")?,
+                    })
                 }
                 "minimum_capacitance" => {
-                    rt::Ok(
-                        Self::MinimumCapacitance(response::MinimumCapacitance {
-                            capacitance: Capacitance::from_raw(
-                                rt::get(&mut field, "capacitance")?,
-                            ),
-                        }),
-                    )
+                    Self::MinimumCapacitance(response::MinimumCapacitance {
+                        capacitance: Capacitance::from_raw(
+                            rt::get(&mut field, "capacitance")?,
+                        ),
+                    })
                 }
                 "maximum_capacitance" => {
-                    rt::Ok(
-                        Self::MaximumCapacitance(response::MaximumCapacitance {
-                            capacitance: Capacitance::from_raw(
-                                rt::get(&mut field, "capacitance")?,
-                            ),
-                        }),
-                    )
+                    Self::MaximumCapacitance(response::MaximumCapacitance {
+                        capacitance: Capacitance::from_raw(
+                            rt::get(&mut field, "capacitance")?,
+                        ),
+                    })
                 }
                 "acceleration_speed" => {
-                    rt::Ok(
-                        Self::AccelerationSpeed(response::AccelerationSpeed {
-                            acceleration_index: rt::get(
-                                &mut field,
-                                "acceleration_index",
-                            )?,
-                            speed_index: rt::get(&mut field, "speed_index")?,
-                        }),
-                    )
+                    Self::AccelerationSpeed(response::AccelerationSpeed {
+                        acceleration_index: rt::get(&mut field, "acceleration_index")?,
+                        speed_index: rt::get(&mut field, "speed_index")?,
+                    })
                 }
                 "status" => {
-                    rt::Ok(
-                        Self::Status(response::Status {
-                            error_bits: StatusErrorBits::from_raw(
-                                rt::get(&mut field, "error_bits")?,
-                            ),
-                            reserved: rt::get(&mut field, "reserved")?,
-                        }),
-                    )
+                    Self::Status(response::Status {
+                        error_bits: StatusErrorBits::from_raw(
+                            rt::get(&mut field, "error_bits")?,
+                        ),
+                        reserved: rt::get(&mut field, "reserved")?,
+                    })
                 }
                 "c_curve_entry" => {
-                    rt::Ok(
-                        Self::CCurveEntry(response::CCurveEntry {
-                            index: rt::get(&mut field, "index")?,
-                            full_steps: rt::get(&mut field, "full_steps")?,
-                            capacitance: Capacitance::from_raw(
-                                rt::get(&mut field, "capacitance")?,
-                            ),
-                        }),
-                    )
+                    Self::CCurveEntry(response::CCurveEntry {
+                        index: rt::get(&mut field, "index")?,
+                        full_steps: rt::get(&mut field, "full_steps")?,
+                        capacitance: Capacitance::from_raw(
+                            rt::get(&mut field, "capacitance")?,
+                        ),
+                    })
                 }
                 "controller_temperature" => {
-                    rt::Ok(
-                        Self::ControllerTemperature(response::ControllerTemperature {
-                            temperature: rt::get(&mut field, "temperature")?,
-                        }),
-                    )
+                    Self::ControllerTemperature(response::ControllerTemperature {
+                        temperature: rt::get(&mut field, "temperature")?,
+                    })
                 }
                 "micro_step_position" => {
-                    rt::Ok(
-                        Self::MicroStepPosition(response::MicroStepPosition {
-                            micro_steps: rt::get(&mut field, "micro_steps")?,
-                        }),
-                    )
+                    Self::MicroStepPosition(response::MicroStepPosition {
+                        micro_steps: rt::get(&mut field, "micro_steps")?,
+                    })
                 }
                 "firmware_version" => {
-                    rt::Ok(
-                        Self::FirmwareVersion(response::FirmwareVersion {
-                            firmware_version: rt::text(&mut field, "firmware_version")?,
-                        }),
-                    )
+                    Self::FirmwareVersion(response::FirmwareVersion {
+                        firmware_version: rt::text(&mut field, "firmware_version")?,
+                    })
                 }
                 "serial_number" => {
-                    rt::Ok(
-                        Self::SerialNumber(response::SerialNumber {
-                            serial_number: rt::text(&mut field, "serial_number")?,
-                        }),
-                    )
+                    Self::SerialNumber(response::SerialNumber {
+                        serial_number: rt::text(&mut field, "serial_number")?,
+                    })
                 }
                 "cmin_nom" => {
-                    rt::Ok(
-                        Self::CminNom(response::CminNom {
-                            capacitance: Capacitance::from_raw(
-                                rt::get(&mut field, "capacitance")?,
-                            ),
-                        }),
-                    )
+                    Self::CminNom(response::CminNom {
+                        capacitance: Capacitance::from_raw(
+                            rt::get(&mut field, "capacitance")?,
+                        ),
+                    })
                 }
                 "cmax_nom" => {
-                    rt::Ok(
-                        Self::CmaxNom(response::CmaxNom {
-                            capacitance: Capacitance::from_raw(
-                                rt::get(&mut field, "capacitance")?,
-                            ),
-                        }),
-                    )
+                    Self::CmaxNom(response::CmaxNom {
+                        capacitance: Capacitance::from_raw(
+                            rt::get(&mut field, "capacitance")?,
+                        ),
+                    })
                 }
                 "lower_customer_limit" => {
-                    rt::Ok(
-                        Self::LowerCustomerLimit(response::LowerCustomerLimit {
-                            capacitance: Capacitance::from_raw(
-                                rt::get(&mut field, "capacitance")?,
-                            ),
-                        }),
-                    )
+                    Self::LowerCustomerLimit(response::LowerCustomerLimit {
+                        capacitance: Capacitance::from_raw(
+                            rt::get(&mut field, "capacitance")?,
+                        ),
+                    })
                 }
                 "upper_customer_limit" => {
-                    rt::Ok(
-                        Self::UpperCustomerLimit(response::UpperCustomerLimit {
-                            capacitance: Capacitance::from_raw(
-                                rt::get(&mut field, "capacitance")?,
-                            ),
-                        }),
-                    )
+                    Self::UpperCustomerLimit(response::UpperCustomerLimit {
+                        capacitance: Capacitance::from_raw(
+                            rt::get(&mut field, "capacitance")?,
+                        ),
+                    })
                 }
                 "lower_factory_limit" => {
-                    rt::Ok(
-                        Self::LowerFactoryLimit(response::LowerFactoryLimit {
-                            capacitance: Capacitance::from_raw(
-                                rt::get(&mut field, "capacitance")?,
-                            ),
-                        }),
-                    )
+                    Self::LowerFactoryLimit(response::LowerFactoryLimit {
+                        capacitance: Capacitance::from_raw(
+                            rt::get(&mut field, "capacitance")?,
+                        ),
+                    })
                 }
                 "upper_factory_limit" => {
-                    rt::Ok(
-                        Self::UpperFactoryLimit(response::UpperFactoryLimit {
-                            capacitance: Capacitance::from_raw(
-                                rt::get(&mut field, "capacitance")?,
-                            ),
-                        }),
-                    )
+                    Self::UpperFactoryLimit(response::UpperFactoryLimit {
+                        capacitance: Capacitance::from_raw(
+                            rt::get(&mut field, "capacitance")?,
+                        ),
+                    })
                 }
                 "preset_capacitance" => {
-                    rt::Ok(
-                        Self::PresetCapacitance(response::PresetCapacitance {
-                            capacitance: Capacitance::from_raw(
-                                rt::get(&mut field, "capacitance")?,
-                            ),
-                        }),
-                    )
+                    Self::PresetCapacitance(response::PresetCapacitance {
+                        capacitance: Capacitance::from_raw(
+                            rt::get(&mut field, "capacitance")?,
+                        ),
+                    })
                 }
                 "preset_full_step_position" => {
-                    rt::Ok(
-                        Self::PresetFullStepPosition(response::PresetFullStepPosition {
-                            full_steps: rt::get(&mut field, "full_steps")?,
-                        }),
-                    )
+                    Self::PresetFullStepPosition(response::PresetFullStepPosition {
+                        full_steps: rt::get(&mut field, "full_steps")?,
+                    })
                 }
                 "stored_full_step_position" => {
-                    rt::Ok(
-                        Self::StoredFullStepPosition(response::StoredFullStepPosition {
-                            index: rt::get(&mut field, "index")?,
-                            full_steps: rt::get(&mut field, "full_steps")?,
-                        }),
-                    )
+                    Self::StoredFullStepPosition(response::StoredFullStepPosition {
+                        index: rt::get(&mut field, "index")?,
+                        full_steps: rt::get(&mut field, "full_steps")?,
+                    })
                 }
                 "actual_mode_of_operation" => {
-                    rt::Ok(
-                        Self::ActualModeOfOperation(response::ActualModeOfOperation {
-                            mode: ModeOfOperation::from_raw(rt::get(&mut field, "mode")?),
-                        }),
-                    )
+                    Self::ActualModeOfOperation(response::ActualModeOfOperation {
+                        mode: ModeOfOperation::from_raw(rt::get(&mut field, "mode")?),
+                    })
                 }
-                _ => rt::Err(rt::FieldError::UnknownMessage),
-            }
+                _ => return rt::Err(rt::FieldError::UnknownMessage),
+            };
+            rt::Ok(message)
         }
     }
     impl rt::Message for Response {
@@ -4265,11 +2623,7 @@ pub mod ub2 {
             Response::visit(self, f)
         }
         #[inline]
-        fn encode(
-            &self,
-            address: u8,
-            buf: &mut [u8],
-        ) -> rt::Result<usize, rt::EncodeError> {
+        fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             Response::encode(self, address, buf)
         }
         #[inline]
@@ -4486,11 +2840,981 @@ pub mod ub2 {
     pub type StreamDecoder = ::busspec_runtime::stream::StreamDecoder<Ub2>;
     /// What [`StreamDecoder`] finds in a stream.
     pub type Event = ::busspec_runtime::stream::Event<Request, Response>;
-    /// Each request as a struct of its own (its `DESC` names it as refusals do: name,
-    /// code and the frame lengths of its code), and each field a refusal names
-    /// (`message.field`, `FieldDesc`).
+    impl request::ReferenceRun {
+        pub const NAME: &'static str = "reference_run";
+        pub const CODE: &'static [u8] = &[0x10, 0x00];
+        pub const LEN: usize = 5;
+        pub const DESC: rt::MessageDesc = rt::desc(Self::NAME, 0x1000, 2, &[5]);
+        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            Request::ReferenceRun(*self).encode(address, buf)
+        }
+    }
+    impl request::ReferenceRunStatus {
+        pub const NAME: &'static str = "reference_run_status";
+        pub const CODE: &'static [u8] = &[0x10, 0x01];
+        pub const LEN: usize = 5;
+        pub const DESC: rt::MessageDesc = rt::desc(Self::NAME, 0x1001, 2, &[5]);
+        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            Request::ReferenceRunStatus(*self).encode(address, buf)
+        }
+    }
+    impl request::GoToCapacitance {
+        pub const NAME: &'static str = "go_to_capacitance";
+        pub const CODE: &'static [u8] = &[0x20, 0x00];
+        pub const LEN: usize = 9;
+        pub const DESC: rt::MessageDesc = rt::desc(Self::NAME, 0x2000, 2, &[9]);
+        pub const TARGET: rt::Range<usize> = 4..8;
+        pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
+            f("target", rt::Int(self.target.raw() as i64));
+        }
+        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            Request::GoToCapacitance(*self).encode(address, buf)
+        }
+    }
+    impl request::GoToCapacitanceStatus {
+        pub const NAME: &'static str = "go_to_capacitance_status";
+        pub const CODE: &'static [u8] = &[0x20, 0x01];
+        pub const LEN: usize = 5;
+        pub const DESC: rt::MessageDesc = rt::desc(Self::NAME, 0x2001, 2, &[5]);
+        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            Request::GoToCapacitanceStatus(*self).encode(address, buf)
+        }
+    }
+    impl request::GoToFullStepPosition {
+        pub const NAME: &'static str = "go_to_full_step_position";
+        pub const CODE: &'static [u8] = &[0x21, 0x00];
+        pub const LEN: usize = 7;
+        pub const DESC: rt::MessageDesc = rt::desc(Self::NAME, 0x2100, 2, &[7]);
+        pub const TARGET: rt::Range<usize> = 4..6;
+        pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
+            f("target", rt::Int(self.target as i64));
+        }
+        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            Request::GoToFullStepPosition(*self).encode(address, buf)
+        }
+    }
+    impl request::GoToFullStepPositionStatus {
+        pub const NAME: &'static str = "go_to_full_step_position_status";
+        pub const CODE: &'static [u8] = &[0x21, 0x01];
+        pub const LEN: usize = 5;
+        pub const DESC: rt::MessageDesc = rt::desc(Self::NAME, 0x2101, 2, &[5]);
+        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            Request::GoToFullStepPositionStatus(*self).encode(address, buf)
+        }
+    }
+    impl request::MoveFullSteps {
+        pub const NAME: &'static str = "move_full_steps";
+        pub const CODE: &'static [u8] = &[0x22, 0x00];
+        pub const LEN: usize = 7;
+        pub const DESC: rt::MessageDesc = rt::desc(Self::NAME, 0x2200, 2, &[7]);
+        pub const STEPS: rt::Range<usize> = 4..6;
+        pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
+            f("steps", rt::Int(self.steps as i64));
+        }
+        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            Request::MoveFullSteps(*self).encode(address, buf)
+        }
+    }
+    impl request::MoveFullStepsStatus {
+        pub const NAME: &'static str = "move_full_steps_status";
+        pub const CODE: &'static [u8] = &[0x22, 0x01];
+        pub const LEN: usize = 5;
+        pub const DESC: rt::MessageDesc = rt::desc(Self::NAME, 0x2201, 2, &[5]);
+        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            Request::MoveFullStepsStatus(*self).encode(address, buf)
+        }
+    }
+    impl request::GoToCmin {
+        pub const NAME: &'static str = "go_to_cmin";
+        pub const CODE: &'static [u8] = &[0x23, 0x00];
+        pub const LEN: usize = 5;
+        pub const DESC: rt::MessageDesc = rt::desc(Self::NAME, 0x2300, 2, &[5]);
+        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            Request::GoToCmin(*self).encode(address, buf)
+        }
+    }
+    impl request::GoToCminStatus {
+        pub const NAME: &'static str = "go_to_cmin_status";
+        pub const CODE: &'static [u8] = &[0x23, 0x01];
+        pub const LEN: usize = 5;
+        pub const DESC: rt::MessageDesc = rt::desc(Self::NAME, 0x2301, 2, &[5]);
+        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            Request::GoToCminStatus(*self).encode(address, buf)
+        }
+    }
+    impl request::GoToCmax {
+        pub const NAME: &'static str = "go_to_cmax";
+        pub const CODE: &'static [u8] = &[0x24, 0x00];
+        pub const LEN: usize = 5;
+        pub const DESC: rt::MessageDesc = rt::desc(Self::NAME, 0x2400, 2, &[5]);
+        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            Request::GoToCmax(*self).encode(address, buf)
+        }
+    }
+    impl request::GoToCmaxStatus {
+        pub const NAME: &'static str = "go_to_cmax_status";
+        pub const CODE: &'static [u8] = &[0x24, 0x01];
+        pub const LEN: usize = 5;
+        pub const DESC: rt::MessageDesc = rt::desc(Self::NAME, 0x2401, 2, &[5]);
+        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            Request::GoToCmaxStatus(*self).encode(address, buf)
+        }
+    }
+    impl request::GoToMicroStepPosition {
+        pub const NAME: &'static str = "go_to_micro_step_position";
+        pub const CODE: &'static [u8] = &[0x25, 0x00];
+        pub const LEN: usize = 9;
+        pub const DESC: rt::MessageDesc = rt::desc(Self::NAME, 0x2500, 2, &[9]);
+        pub const TARGET: rt::Range<usize> = 4..8;
+        pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
+            f("target", rt::Int(self.target as i64));
+        }
+        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            Request::GoToMicroStepPosition(*self).encode(address, buf)
+        }
+    }
+    impl request::GoToMicroStepPositionStatus {
+        pub const NAME: &'static str = "go_to_micro_step_position_status";
+        pub const CODE: &'static [u8] = &[0x25, 0x01];
+        pub const LEN: usize = 5;
+        pub const DESC: rt::MessageDesc = rt::desc(Self::NAME, 0x2501, 2, &[5]);
+        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            Request::GoToMicroStepPositionStatus(*self).encode(address, buf)
+        }
+    }
+    impl request::MoveMicroSteps {
+        pub const NAME: &'static str = "move_micro_steps";
+        pub const CODE: &'static [u8] = &[0x26, 0x00];
+        pub const LEN: usize = 9;
+        pub const DESC: rt::MessageDesc = rt::desc(Self::NAME, 0x2600, 2, &[9]);
+        pub const STEPS: rt::Range<usize> = 4..8;
+        pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
+            f("steps", rt::Int(self.steps as i64));
+        }
+        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            Request::MoveMicroSteps(*self).encode(address, buf)
+        }
+    }
+    impl request::MoveMicroStepsStatus {
+        pub const NAME: &'static str = "move_micro_steps_status";
+        pub const CODE: &'static [u8] = &[0x26, 0x01];
+        pub const LEN: usize = 5;
+        pub const DESC: rt::MessageDesc = rt::desc(Self::NAME, 0x2601, 2, &[5]);
+        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            Request::MoveMicroStepsStatus(*self).encode(address, buf)
+        }
+    }
+    impl request::GoToStoredPosition {
+        pub const NAME: &'static str = "go_to_stored_position";
+        pub const CODE: &'static [u8] = &[0x27, 0x00];
+        pub const LEN: usize = 6;
+        pub const DESC: rt::MessageDesc = rt::desc(Self::NAME, 0x2700, 2, &[6]);
+        pub const INDEX: rt::Range<usize> = 4..5;
+        pub const INDEX_DESC: rt::FieldDesc = rt::field(Self::NAME, "index");
+        pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
+            f("index", rt::Int(self.index as i64));
+        }
+        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            Request::GoToStoredPosition(*self).encode(address, buf)
+        }
+    }
+    impl request::GoToStoredPositionStatus {
+        pub const NAME: &'static str = "go_to_stored_position_status";
+        pub const CODE: &'static [u8] = &[0x27, 0x01];
+        pub const LEN: usize = 5;
+        pub const DESC: rt::MessageDesc = rt::desc(Self::NAME, 0x2701, 2, &[5]);
+        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            Request::GoToStoredPositionStatus(*self).encode(address, buf)
+        }
+    }
+    impl request::SetAccelerationSpeedIndex {
+        pub const NAME: &'static str = "set_acceleration_speed_index";
+        pub const CODE: &'static [u8] = &[0x43, 0x00];
+        pub const LEN: usize = 7;
+        pub const DESC: rt::MessageDesc = rt::desc(Self::NAME, 0x4300, 2, &[7]);
+        pub const ACCELERATION_INDEX: rt::Range<usize> = 4..5;
+        pub const SPEED_INDEX: rt::Range<usize> = 5..6;
+        pub const ACCELERATION_INDEX_DESC: rt::FieldDesc = rt::field(
+            Self::NAME,
+            "acceleration_index",
+        );
+        pub const SPEED_INDEX_DESC: rt::FieldDesc = rt::field(Self::NAME, "speed_index");
+        pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
+            f("acceleration_index", rt::Int(self.acceleration_index as i64));
+            f("speed_index", rt::Int(self.speed_index as i64));
+        }
+        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            Request::SetAccelerationSpeedIndex(*self).encode(address, buf)
+        }
+    }
+    impl request::SetCurrent {
+        pub const NAME: &'static str = "set_current";
+        pub const CODE: &'static [u8] = &[0x45, 0x00];
+        pub const LEN: usize = 7;
+        pub const DESC: rt::MessageDesc = rt::desc(Self::NAME, 0x4500, 2, &[7]);
+        pub const IDLE_CURRENT: rt::Range<usize> = 4..5;
+        pub const DRIVE_CURRENT: rt::Range<usize> = 5..6;
+        pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
+            f("idle_current", rt::Int(self.idle_current as i64));
+            f("drive_current", rt::Int(self.drive_current as i64));
+        }
+        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            Request::SetCurrent(*self).encode(address, buf)
+        }
+    }
+    impl request::SetSlaveAddress {
+        pub const NAME: &'static str = "set_slave_address";
+        pub const CODE: &'static [u8] = &[0x60, 0x00];
+        pub const LEN: usize = 6;
+        pub const DESC: rt::MessageDesc = rt::desc(Self::NAME, 0x6000, 2, &[6]);
+        pub const ADDRESS: rt::Range<usize> = 4..5;
+        pub const ADDRESS_DESC: rt::FieldDesc = rt::field(Self::NAME, "address");
+        pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
+            f("address", rt::Int(self.address as i64));
+        }
+        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            Request::SetSlaveAddress(*self).encode(address, buf)
+        }
+    }
+    impl request::SetBaudRate {
+        pub const NAME: &'static str = "set_baud_rate";
+        pub const CODE: &'static [u8] = &[0x61, 0x00];
+        pub const LEN: usize = 6;
+        pub const DESC: rt::MessageDesc = rt::desc(Self::NAME, 0x6100, 2, &[6]);
+        pub const BAUD_RATE: rt::Range<usize> = 4..5;
+        pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
+            f("baud_rate", rt::Int(self.baud_rate.raw() as i64));
+        }
+        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            Request::SetBaudRate(*self).encode(address, buf)
+        }
+    }
+    impl request::SetLowerCustomerLimit {
+        pub const NAME: &'static str = "set_lower_customer_limit";
+        pub const CODE: &'static [u8] = &[0x72, 0x01];
+        pub const LEN: usize = 9;
+        pub const DESC: rt::MessageDesc = rt::desc(Self::NAME, 0x7201, 2, &[9]);
+        pub const LIMIT: rt::Range<usize> = 4..8;
+        pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
+            f("limit", rt::Int(self.limit.raw() as i64));
+        }
+        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            Request::SetLowerCustomerLimit(*self).encode(address, buf)
+        }
+    }
+    impl request::SetUpperCustomerLimit {
+        pub const NAME: &'static str = "set_upper_customer_limit";
+        pub const CODE: &'static [u8] = &[0x72, 0x02];
+        pub const LEN: usize = 9;
+        pub const DESC: rt::MessageDesc = rt::desc(Self::NAME, 0x7202, 2, &[9]);
+        pub const LIMIT: rt::Range<usize> = 4..8;
+        pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
+            f("limit", rt::Int(self.limit.raw() as i64));
+        }
+        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            Request::SetUpperCustomerLimit(*self).encode(address, buf)
+        }
+    }
+    impl request::StoreIndexedPosition {
+        pub const NAME: &'static str = "store_indexed_position";
+        pub const CODE: &'static [u8] = &[0x75, 0x00];
+        pub const LEN: usize = 8;
+        pub const DESC: rt::MessageDesc = rt::desc(Self::NAME, 0x7500, 2, &[8]);
+        pub const INDEX: rt::Range<usize> = 4..5;
+        pub const POSITION: rt::Range<usize> = 5..7;
+        pub const INDEX_DESC: rt::FieldDesc = rt::field(Self::NAME, "index");
+        pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
+            f("index", rt::Int(self.index as i64));
+            f("position", rt::Int(self.position as i64));
+        }
+        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            Request::StoreIndexedPosition(*self).encode(address, buf)
+        }
+    }
+    impl request::SetModeOfOperation {
+        pub const NAME: &'static str = "set_mode_of_operation";
+        pub const CODE: &'static [u8] = &[0x80, 0x00];
+        pub const LEN: usize = 6;
+        pub const DESC: rt::MessageDesc = rt::desc(Self::NAME, 0x8000, 2, &[6]);
+        pub const MODE: rt::Range<usize> = 4..5;
+        pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
+            f("mode", rt::Int(self.mode.raw() as i64));
+        }
+        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            Request::SetModeOfOperation(*self).encode(address, buf)
+        }
+    }
+    impl request::GetActualCapacitance {
+        pub const NAME: &'static str = "get_actual_capacitance";
+        pub const CODE: &'static [u8] = &[0x40, 0x01];
+        pub const LEN: usize = 5;
+        pub const DESC: rt::MessageDesc = rt::desc(Self::NAME, 0x4001, 2, &[5]);
+        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            Request::GetActualCapacitance(*self).encode(address, buf)
+        }
+    }
+    impl request::GetActualFullStepPosition {
+        pub const NAME: &'static str = "get_actual_full_step_position";
+        pub const CODE: &'static [u8] = &[0x40, 0x02];
+        pub const LEN: usize = 5;
+        pub const DESC: rt::MessageDesc = rt::desc(Self::NAME, 0x4002, 2, &[5]);
+        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            Request::GetActualFullStepPosition(*self).encode(address, buf)
+        }
+    }
+    impl request::GetMinimumCapacitance {
+        pub const NAME: &'static str = "get_minimum_capacitance";
+        pub const CODE: &'static [u8] = &[0x40, 0x10];
+        pub const LEN: usize = 5;
+        pub const DESC: rt::MessageDesc = rt::desc(Self::NAME, 0x4010, 2, &[5]);
+        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            Request::GetMinimumCapacitance(*self).encode(address, buf)
+        }
+    }
+    impl request::GetMaximumCapacitance {
+        pub const NAME: &'static str = "get_maximum_capacitance";
+        pub const CODE: &'static [u8] = &[0x40, 0x11];
+        pub const LEN: usize = 5;
+        pub const DESC: rt::MessageDesc = rt::desc(Self::NAME, 0x4011, 2, &[5]);
+        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            Request::GetMaximumCapacitance(*self).encode(address, buf)
+        }
+    }
+    impl request::GetAccelerationSpeed {
+        pub const NAME: &'static str = "get_acceleration_speed";
+        pub const CODE: &'static [u8] = &[0x40, 0x21];
+        pub const LEN: usize = 5;
+        pub const DESC: rt::MessageDesc = rt::desc(Self::NAME, 0x4021, 2, &[5]);
+        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            Request::GetAccelerationSpeed(*self).encode(address, buf)
+        }
+    }
+    impl request::GetStatus {
+        pub const NAME: &'static str = "get_status";
+        pub const CODE: &'static [u8] = &[0x40, 0x22];
+        pub const LEN: usize = 5;
+        pub const DESC: rt::MessageDesc = rt::desc(Self::NAME, 0x4022, 2, &[5]);
+        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            Request::GetStatus(*self).encode(address, buf)
+        }
+    }
+    impl request::GetCCurveIndexedFullStepCapacitance {
+        pub const NAME: &'static str = "get_c_curve_indexed_full_step_capacitance";
+        pub const CODE: &'static [u8] = &[0x40, 0x30];
+        pub const LEN: usize = 7;
+        pub const DESC: rt::MessageDesc = rt::desc(Self::NAME, 0x4030, 2, &[7]);
+        pub const INDEX: rt::Range<usize> = 4..6;
+        pub const INDEX_DESC: rt::FieldDesc = rt::field(Self::NAME, "index");
+        pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
+            f("index", rt::Int(self.index as i64));
+        }
+        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            Request::GetCCurveIndexedFullStepCapacitance(*self).encode(address, buf)
+        }
+    }
+    impl request::GetControllerTemperature {
+        pub const NAME: &'static str = "get_controller_temperature";
+        pub const CODE: &'static [u8] = &[0x40, 0x32];
+        pub const LEN: usize = 5;
+        pub const DESC: rt::MessageDesc = rt::desc(Self::NAME, 0x4032, 2, &[5]);
+        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            Request::GetControllerTemperature(*self).encode(address, buf)
+        }
+    }
+    impl request::GetMicroStepPosition {
+        pub const NAME: &'static str = "get_micro_step_position";
+        pub const CODE: &'static [u8] = &[0x40, 0x36];
+        pub const LEN: usize = 5;
+        pub const DESC: rt::MessageDesc = rt::desc(Self::NAME, 0x4036, 2, &[5]);
+        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            Request::GetMicroStepPosition(*self).encode(address, buf)
+        }
+    }
+    impl request::GetFirmwareVersion {
+        pub const NAME: &'static str = "get_firmware_version";
+        pub const CODE: &'static [u8] = &[0x40, 0x61];
+        pub const LEN: usize = 5;
+        pub const DESC: rt::MessageDesc = rt::desc(Self::NAME, 0x4061, 2, &[5]);
+        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            Request::GetFirmwareVersion(*self).encode(address, buf)
+        }
+    }
+    impl request::GetSerialNumber {
+        pub const NAME: &'static str = "get_serial_number";
+        pub const CODE: &'static [u8] = &[0x40, 0x62];
+        pub const LEN: usize = 5;
+        pub const DESC: rt::MessageDesc = rt::desc(Self::NAME, 0x4062, 2, &[5]);
+        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            Request::GetSerialNumber(*self).encode(address, buf)
+        }
+    }
+    impl request::GetCminNom {
+        pub const NAME: &'static str = "get_cmin_nom";
+        pub const CODE: &'static [u8] = &[0x40, 0x70];
+        pub const LEN: usize = 5;
+        pub const DESC: rt::MessageDesc = rt::desc(Self::NAME, 0x4070, 2, &[5]);
+        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            Request::GetCminNom(*self).encode(address, buf)
+        }
+    }
+    impl request::GetCmaxNom {
+        pub const NAME: &'static str = "get_cmax_nom";
+        pub const CODE: &'static [u8] = &[0x40, 0x71];
+        pub const LEN: usize = 5;
+        pub const DESC: rt::MessageDesc = rt::desc(Self::NAME, 0x4071, 2, &[5]);
+        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            Request::GetCmaxNom(*self).encode(address, buf)
+        }
+    }
+    impl request::GetLowerCustomerLimit {
+        pub const NAME: &'static str = "get_lower_customer_limit";
+        pub const CODE: &'static [u8] = &[0x40, 0x72];
+        pub const LEN: usize = 6;
+        pub const DESC: rt::MessageDesc = rt::desc(Self::NAME, 0x4072, 2, &[6]);
+        pub const INDEX_DESC: rt::FieldDesc = rt::field(Self::NAME, "index");
+        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            Request::GetLowerCustomerLimit(*self).encode(address, buf)
+        }
+    }
+    impl request::GetUpperCustomerLimit {
+        pub const NAME: &'static str = "get_upper_customer_limit";
+        pub const CODE: &'static [u8] = &[0x40, 0x72];
+        pub const LEN: usize = 6;
+        pub const DESC: rt::MessageDesc = rt::desc(Self::NAME, 0x4072, 2, &[6]);
+        pub const INDEX_DESC: rt::FieldDesc = rt::field(Self::NAME, "index");
+        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            Request::GetUpperCustomerLimit(*self).encode(address, buf)
+        }
+    }
+    impl request::GetLowerFactoryLimit {
+        pub const NAME: &'static str = "get_lower_factory_limit";
+        pub const CODE: &'static [u8] = &[0x40, 0x72];
+        pub const LEN: usize = 6;
+        pub const DESC: rt::MessageDesc = rt::desc(Self::NAME, 0x4072, 2, &[6]);
+        pub const INDEX_DESC: rt::FieldDesc = rt::field(Self::NAME, "index");
+        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            Request::GetLowerFactoryLimit(*self).encode(address, buf)
+        }
+    }
+    impl request::GetUpperFactoryLimit {
+        pub const NAME: &'static str = "get_upper_factory_limit";
+        pub const CODE: &'static [u8] = &[0x40, 0x72];
+        pub const LEN: usize = 6;
+        pub const DESC: rt::MessageDesc = rt::desc(Self::NAME, 0x4072, 2, &[6]);
+        pub const INDEX_DESC: rt::FieldDesc = rt::field(Self::NAME, "index");
+        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            Request::GetUpperFactoryLimit(*self).encode(address, buf)
+        }
+    }
+    impl request::GetPresetCapacitance {
+        pub const NAME: &'static str = "get_preset_capacitance";
+        pub const CODE: &'static [u8] = &[0x40, 0x73];
+        pub const LEN: usize = 6;
+        pub const DESC: rt::MessageDesc = rt::desc(Self::NAME, 0x4073, 2, &[6]);
+        pub const INDEX_DESC: rt::FieldDesc = rt::field(Self::NAME, "index");
+        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            Request::GetPresetCapacitance(*self).encode(address, buf)
+        }
+    }
+    impl request::GetPresetFullStepPosition {
+        pub const NAME: &'static str = "get_preset_full_step_position";
+        pub const CODE: &'static [u8] = &[0x40, 0x73];
+        pub const LEN: usize = 6;
+        pub const DESC: rt::MessageDesc = rt::desc(Self::NAME, 0x4073, 2, &[6]);
+        pub const INDEX_DESC: rt::FieldDesc = rt::field(Self::NAME, "index");
+        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            Request::GetPresetFullStepPosition(*self).encode(address, buf)
+        }
+    }
+    impl request::GetStoredFullStepPosition {
+        pub const NAME: &'static str = "get_stored_full_step_position";
+        pub const CODE: &'static [u8] = &[0x40, 0x75];
+        pub const LEN: usize = 6;
+        pub const DESC: rt::MessageDesc = rt::desc(Self::NAME, 0x4075, 2, &[6]);
+        pub const INDEX: rt::Range<usize> = 4..5;
+        pub const INDEX_DESC: rt::FieldDesc = rt::field(Self::NAME, "index");
+        pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
+            f("index", rt::Int(self.index as i64));
+        }
+        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            Request::GetStoredFullStepPosition(*self).encode(address, buf)
+        }
+    }
+    impl request::GetModeOfOperation {
+        pub const NAME: &'static str = "get_mode_of_operation";
+        pub const CODE: &'static [u8] = &[0x40, 0x80];
+        pub const LEN: usize = 5;
+        pub const DESC: rt::MessageDesc = rt::desc(Self::NAME, 0x4080, 2, &[5]);
+        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            Request::GetModeOfOperation(*self).encode(address, buf)
+        }
+    }
+    impl response::MovementStarted {
+        pub const NAME: &'static str = "movement_started";
+        pub const CODE: &'static [u8] = &[0x50];
+        pub const LEN: usize = 4;
+        pub const DESC: rt::MessageDesc = rt::desc(Self::NAME, 0x50, 1, &[4]);
+        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            Response::MovementStarted(*self).encode(address, buf)
+        }
+    }
+    impl response::MovementCompleted {
+        pub const NAME: &'static str = "movement_completed";
+        pub const CODE: &'static [u8] = &[0x51];
+        pub const LEN: usize = 4;
+        pub const DESC: rt::MessageDesc = rt::desc(Self::NAME, 0x51, 1, &[4]);
+        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            Response::MovementCompleted(*self).encode(address, buf)
+        }
+    }
+    impl response::MovementNotCompleted {
+        pub const NAME: &'static str = "movement_not_completed";
+        pub const CODE: &'static [u8] = &[0x52];
+        pub const LEN: usize = 4;
+        pub const DESC: rt::MessageDesc = rt::desc(Self::NAME, 0x52, 1, &[4]);
+        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            Response::MovementNotCompleted(*self).encode(address, buf)
+        }
+    }
+    impl response::MovementNotTriggered {
+        pub const NAME: &'static str = "movement_not_triggered";
+        pub const CODE: &'static [u8] = &[0x53];
+        pub const LEN: usize = 4;
+        pub const DESC: rt::MessageDesc = rt::desc(Self::NAME, 0x53, 1, &[4]);
+        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            Response::MovementNotTriggered(*self).encode(address, buf)
+        }
+    }
+    impl response::MovementCompletedWithStepLoss {
+        pub const NAME: &'static str = "movement_completed_with_step_loss";
+        pub const CODE: &'static [u8] = &[0x54, 0x00];
+        pub const LEN: usize = 9;
+        pub const DESC: rt::MessageDesc = rt::desc(Self::NAME, 0x5400, 2, &[9]);
+        pub const LOST_MICRO_STEPS: rt::Range<usize> = 4..8;
+        pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
+            f("lost_micro_steps", rt::Int(self.lost_micro_steps as i64));
+        }
+        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            Response::MovementCompletedWithStepLoss(*self).encode(address, buf)
+        }
+    }
+    impl response::NakUnknownCommand {
+        pub const NAME: &'static str = "nak_unknown_command";
+        pub const CODE: &'static [u8] = &[0x90];
+        pub const LEN: usize = 4;
+        pub const DESC: rt::MessageDesc = rt::desc(Self::NAME, 0x90, 1, &[4]);
+        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            Response::NakUnknownCommand(*self).encode(address, buf)
+        }
+    }
+    impl response::NakIncompatibleStatus {
+        pub const NAME: &'static str = "nak_incompatible_status";
+        pub const CODE: &'static [u8] = &[0x91];
+        pub const LEN: usize = 4;
+        pub const DESC: rt::MessageDesc = rt::desc(Self::NAME, 0x91, 1, &[4]);
+        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            Response::NakIncompatibleStatus(*self).encode(address, buf)
+        }
+    }
+    impl response::NakChecksumError {
+        pub const NAME: &'static str = "nak_checksum_error";
+        pub const CODE: &'static [u8] = &[0x92];
+        pub const LEN: usize = 4;
+        pub const DESC: rt::MessageDesc = rt::desc(Self::NAME, 0x92, 1, &[4]);
+        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            Response::NakChecksumError(*self).encode(address, buf)
+        }
+    }
+    impl response::NakLimitReached {
+        pub const NAME: &'static str = "nak_limit_reached";
+        pub const CODE: &'static [u8] = &[0x93];
+        pub const LEN: usize = 4;
+        pub const DESC: rt::MessageDesc = rt::desc(Self::NAME, 0x93, 1, &[4]);
+        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            Response::NakLimitReached(*self).encode(address, buf)
+        }
+    }
+    impl response::NakIndexOutOfRange {
+        pub const NAME: &'static str = "nak_index_out_of_range";
+        pub const CODE: &'static [u8] = &[0x94];
+        pub const LEN: usize = 4;
+        pub const DESC: rt::MessageDesc = rt::desc(Self::NAME, 0x94, 1, &[4]);
+        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            Response::NakIndexOutOfRange(*self).encode(address, buf)
+        }
+    }
+    impl response::SetAccelerationSpeedIndexAck {
+        pub const NAME: &'static str = "set_acceleration_speed_index_ack";
+        pub const CODE: &'static [u8] = &[0x43, 0x00];
+        pub const LEN: usize = 5;
+        pub const DESC: rt::MessageDesc = rt::desc(Self::NAME, 0x4300, 2, &[5]);
+        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            Response::SetAccelerationSpeedIndexAck(*self).encode(address, buf)
+        }
+    }
+    impl response::SetCurrentAck {
+        pub const NAME: &'static str = "set_current_ack";
+        pub const CODE: &'static [u8] = &[0x45, 0x00];
+        pub const LEN: usize = 5;
+        pub const DESC: rt::MessageDesc = rt::desc(Self::NAME, 0x4500, 2, &[5]);
+        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            Response::SetCurrentAck(*self).encode(address, buf)
+        }
+    }
+    impl response::SetSlaveAddressAck {
+        pub const NAME: &'static str = "set_slave_address_ack";
+        pub const CODE: &'static [u8] = &[0x60, 0x00];
+        pub const LEN: usize = 5;
+        pub const DESC: rt::MessageDesc = rt::desc(Self::NAME, 0x6000, 2, &[5]);
+        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            Response::SetSlaveAddressAck(*self).encode(address, buf)
+        }
+    }
+    impl response::SetBaudRateAck {
+        pub const NAME: &'static str = "set_baud_rate_ack";
+        pub const CODE: &'static [u8] = &[0x61, 0x00];
+        pub const LEN: usize = 5;
+        pub const DESC: rt::MessageDesc = rt::desc(Self::NAME, 0x6100, 2, &[5]);
+        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            Response::SetBaudRateAck(*self).encode(address, buf)
+        }
+    }
+    impl response::SetLowerCustomerLimitAck {
+        pub const NAME: &'static str = "set_lower_customer_limit_ack";
+        pub const CODE: &'static [u8] = &[0x72, 0x01];
+        pub const LEN: usize = 5;
+        pub const DESC: rt::MessageDesc = rt::desc(Self::NAME, 0x7201, 2, &[5]);
+        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            Response::SetLowerCustomerLimitAck(*self).encode(address, buf)
+        }
+    }
+    impl response::SetUpperCustomerLimitAck {
+        pub const NAME: &'static str = "set_upper_customer_limit_ack";
+        pub const CODE: &'static [u8] = &[0x72, 0x02];
+        pub const LEN: usize = 5;
+        pub const DESC: rt::MessageDesc = rt::desc(Self::NAME, 0x7202, 2, &[5]);
+        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            Response::SetUpperCustomerLimitAck(*self).encode(address, buf)
+        }
+    }
+    impl response::StoreIndexedPositionAck {
+        pub const NAME: &'static str = "store_indexed_position_ack";
+        pub const CODE: &'static [u8] = &[0x75, 0x00];
+        pub const LEN: usize = 5;
+        pub const DESC: rt::MessageDesc = rt::desc(Self::NAME, 0x7500, 2, &[5]);
+        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            Response::StoreIndexedPositionAck(*self).encode(address, buf)
+        }
+    }
+    impl response::SetModeOfOperationAck {
+        pub const NAME: &'static str = "set_mode_of_operation_ack";
+        pub const CODE: &'static [u8] = &[0x80, 0x00];
+        pub const LEN: usize = 5;
+        pub const DESC: rt::MessageDesc = rt::desc(Self::NAME, 0x8000, 2, &[5]);
+        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            Response::SetModeOfOperationAck(*self).encode(address, buf)
+        }
+    }
+    impl response::ActualCapacitance {
+        pub const NAME: &'static str = "actual_capacitance";
+        pub const CODE: &'static [u8] = &[0x41, 0x01];
+        pub const LEN: usize = 9;
+        pub const DESC: rt::MessageDesc = rt::desc(Self::NAME, 0x4101, 2, &[9]);
+        pub const CAPACITANCE: rt::Range<usize> = 4..8;
+        pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
+            f("capacitance", rt::Int(self.capacitance.raw() as i64));
+        }
+        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            Response::ActualCapacitance(*self).encode(address, buf)
+        }
+    }
+    impl response::ActualFullStepPosition {
+        pub const NAME: &'static str = "actual_full_step_position";
+        pub const CODE: &'static [u8] = &[0x41, 0x02];
+        pub const LEN: usize = 7;
+        pub const DESC: rt::MessageDesc = rt::desc(Self::NAME, 0x4102, 2, &[7]);
+        pub const FULL_STEPS: rt::Range<usize> = 4..6;
+        pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
+            f("full_steps", rt::Int(self.full_steps as i64));
+        }
+        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            Response::ActualFullStepPosition(*self).encode(address, buf)
+        }
+    }
+    impl response::MinimumCapacitance {
+        pub const NAME: &'static str = "minimum_capacitance";
+        pub const CODE: &'static [u8] = &[0x41, 0x10];
+        pub const LEN: usize = 9;
+        pub const DESC: rt::MessageDesc = rt::desc(Self::NAME, 0x4110, 2, &[9]);
+        pub const CAPACITANCE: rt::Range<usize> = 4..8;
+        pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
+            f("capacitance", rt::Int(self.capacitance.raw() as i64));
+        }
+        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            Response::MinimumCapacitance(*self).encode(address, buf)
+        }
+    }
+    impl response::MaximumCapacitance {
+        pub const NAME: &'static str = "maximum_capacitance";
+        pub const CODE: &'static [u8] = &[0x41, 0x11];
+        pub const LEN: usize = 9;
+        pub const DESC: rt::MessageDesc = rt::desc(Self::NAME, 0x4111, 2, &[9]);
+        pub const CAPACITANCE: rt::Range<usize> = 4..8;
+        pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
+            f("capacitance", rt::Int(self.capacitance.raw() as i64));
+        }
+        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            Response::MaximumCapacitance(*self).encode(address, buf)
+        }
+    }
+    impl response::AccelerationSpeed {
+        pub const NAME: &'static str = "acceleration_speed";
+        pub const CODE: &'static [u8] = &[0x41, 0x21];
+        pub const LEN: usize = 7;
+        pub const DESC: rt::MessageDesc = rt::desc(Self::NAME, 0x4121, 2, &[7]);
+        pub const ACCELERATION_INDEX: rt::Range<usize> = 4..5;
+        pub const SPEED_INDEX: rt::Range<usize> = 5..6;
+        pub const ACCELERATION_INDEX_DESC: rt::FieldDesc = rt::field(
+            Self::NAME,
+            "acceleration_index",
+        );
+        pub const SPEED_INDEX_DESC: rt::FieldDesc = rt::field(Self::NAME, "speed_index");
+        pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
+            f("acceleration_index", rt::Int(self.acceleration_index as i64));
+            f("speed_index", rt::Int(self.speed_index as i64));
+        }
+        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            Response::AccelerationSpeed(*self).encode(address, buf)
+        }
+    }
+    impl response::Status {
+        pub const NAME: &'static str = "status";
+        pub const CODE: &'static [u8] = &[0x41, 0x22];
+        pub const LEN: usize = 7;
+        pub const DESC: rt::MessageDesc = rt::desc(Self::NAME, 0x4122, 2, &[7]);
+        pub const ERROR_BITS: rt::Range<usize> = 4..5;
+        pub const RESERVED: rt::Range<usize> = 5..6;
+        pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
+            f("error_bits", rt::Int(self.error_bits.raw() as i64));
+            f("reserved", rt::Int(self.reserved as i64));
+        }
+        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            Response::Status(*self).encode(address, buf)
+        }
+    }
+    impl response::CCurveEntry {
+        pub const NAME: &'static str = "c_curve_entry";
+        pub const CODE: &'static [u8] = &[0x41, 0x30];
+        pub const LEN: usize = 13;
+        pub const DESC: rt::MessageDesc = rt::desc(Self::NAME, 0x4130, 2, &[13]);
+        pub const INDEX: rt::Range<usize> = 4..6;
+        pub const FULL_STEPS: rt::Range<usize> = 6..8;
+        pub const CAPACITANCE: rt::Range<usize> = 8..12;
+        pub const INDEX_DESC: rt::FieldDesc = rt::field(Self::NAME, "index");
+        pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
+            f("index", rt::Int(self.index as i64));
+            f("full_steps", rt::Int(self.full_steps as i64));
+            f("capacitance", rt::Int(self.capacitance.raw() as i64));
+        }
+        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            Response::CCurveEntry(*self).encode(address, buf)
+        }
+    }
+    impl response::ControllerTemperature {
+        pub const NAME: &'static str = "controller_temperature";
+        pub const CODE: &'static [u8] = &[0x41, 0x32];
+        pub const LEN: usize = 6;
+        pub const DESC: rt::MessageDesc = rt::desc(Self::NAME, 0x4132, 2, &[6]);
+        pub const TEMPERATURE: rt::Range<usize> = 4..5;
+        pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
+            f("temperature", rt::Int(self.temperature as i64));
+        }
+        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            Response::ControllerTemperature(*self).encode(address, buf)
+        }
+    }
+    impl response::MicroStepPosition {
+        pub const NAME: &'static str = "micro_step_position";
+        pub const CODE: &'static [u8] = &[0x41, 0x36];
+        pub const LEN: usize = 9;
+        pub const DESC: rt::MessageDesc = rt::desc(Self::NAME, 0x4136, 2, &[9]);
+        pub const MICRO_STEPS: rt::Range<usize> = 4..8;
+        pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
+            f("micro_steps", rt::Int(self.micro_steps as i64));
+        }
+        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            Response::MicroStepPosition(*self).encode(address, buf)
+        }
+    }
+    impl response::FirmwareVersion {
+        pub const NAME: &'static str = "firmware_version";
+        pub const CODE: &'static [u8] = &[0x41, 0x61];
+        pub const LEN: usize = 16;
+        pub const DESC: rt::MessageDesc = rt::desc(Self::NAME, 0x4161, 2, &[16]);
+        pub const FIRMWARE_VERSION: rt::Range<usize> = 4..15;
+        pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
+            f("firmware_version", rt::Text(&self.firmware_version[..]));
+        }
+        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            Response::FirmwareVersion(*self).encode(address, buf)
+        }
+    }
+    impl response::SerialNumber {
+        pub const NAME: &'static str = "serial_number";
+        pub const CODE: &'static [u8] = &[0x41, 0x62];
+        pub const LEN: usize = 13;
+        pub const DESC: rt::MessageDesc = rt::desc(Self::NAME, 0x4162, 2, &[13]);
+        pub const SERIAL_NUMBER: rt::Range<usize> = 4..12;
+        pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
+            f("serial_number", rt::Text(&self.serial_number[..]));
+        }
+        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            Response::SerialNumber(*self).encode(address, buf)
+        }
+    }
+    impl response::CminNom {
+        pub const NAME: &'static str = "cmin_nom";
+        pub const CODE: &'static [u8] = &[0x41, 0x70];
+        pub const LEN: usize = 9;
+        pub const DESC: rt::MessageDesc = rt::desc(Self::NAME, 0x4170, 2, &[9]);
+        pub const CAPACITANCE: rt::Range<usize> = 4..8;
+        pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
+            f("capacitance", rt::Int(self.capacitance.raw() as i64));
+        }
+        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            Response::CminNom(*self).encode(address, buf)
+        }
+    }
+    impl response::CmaxNom {
+        pub const NAME: &'static str = "cmax_nom";
+        pub const CODE: &'static [u8] = &[0x41, 0x71];
+        pub const LEN: usize = 9;
+        pub const DESC: rt::MessageDesc = rt::desc(Self::NAME, 0x4171, 2, &[9]);
+        pub const CAPACITANCE: rt::Range<usize> = 4..8;
+        pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
+            f("capacitance", rt::Int(self.capacitance.raw() as i64));
+        }
+        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            Response::CmaxNom(*self).encode(address, buf)
+        }
+    }
+    impl response::LowerCustomerLimit {
+        pub const NAME: &'static str = "lower_customer_limit";
+        pub const CODE: &'static [u8] = &[0x41, 0x72];
+        pub const LEN: usize = 10;
+        pub const DESC: rt::MessageDesc = rt::desc(Self::NAME, 0x4172, 2, &[10]);
+        pub const CAPACITANCE: rt::Range<usize> = 5..9;
+        pub const INDEX_DESC: rt::FieldDesc = rt::field(Self::NAME, "index");
+        pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
+            f("capacitance", rt::Int(self.capacitance.raw() as i64));
+        }
+        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            Response::LowerCustomerLimit(*self).encode(address, buf)
+        }
+    }
+    impl response::UpperCustomerLimit {
+        pub const NAME: &'static str = "upper_customer_limit";
+        pub const CODE: &'static [u8] = &[0x41, 0x72];
+        pub const LEN: usize = 10;
+        pub const DESC: rt::MessageDesc = rt::desc(Self::NAME, 0x4172, 2, &[10]);
+        pub const CAPACITANCE: rt::Range<usize> = 5..9;
+        pub const INDEX_DESC: rt::FieldDesc = rt::field(Self::NAME, "index");
+        pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
+            f("capacitance", rt::Int(self.capacitance.raw() as i64));
+        }
+        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            Response::UpperCustomerLimit(*self).encode(address, buf)
+        }
+    }
+    impl response::LowerFactoryLimit {
+        pub const NAME: &'static str = "lower_factory_limit";
+        pub const CODE: &'static [u8] = &[0x41, 0x72];
+        pub const LEN: usize = 10;
+        pub const DESC: rt::MessageDesc = rt::desc(Self::NAME, 0x4172, 2, &[10]);
+        pub const CAPACITANCE: rt::Range<usize> = 5..9;
+        pub const INDEX_DESC: rt::FieldDesc = rt::field(Self::NAME, "index");
+        pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
+            f("capacitance", rt::Int(self.capacitance.raw() as i64));
+        }
+        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            Response::LowerFactoryLimit(*self).encode(address, buf)
+        }
+    }
+    impl response::UpperFactoryLimit {
+        pub const NAME: &'static str = "upper_factory_limit";
+        pub const CODE: &'static [u8] = &[0x41, 0x72];
+        pub const LEN: usize = 10;
+        pub const DESC: rt::MessageDesc = rt::desc(Self::NAME, 0x4172, 2, &[10]);
+        pub const CAPACITANCE: rt::Range<usize> = 5..9;
+        pub const INDEX_DESC: rt::FieldDesc = rt::field(Self::NAME, "index");
+        pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
+            f("capacitance", rt::Int(self.capacitance.raw() as i64));
+        }
+        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            Response::UpperFactoryLimit(*self).encode(address, buf)
+        }
+    }
+    impl response::PresetCapacitance {
+        pub const NAME: &'static str = "preset_capacitance";
+        pub const CODE: &'static [u8] = &[0x41, 0x73];
+        pub const LEN: usize = 10;
+        pub const DESC: rt::MessageDesc = rt::desc(Self::NAME, 0x4173, 2, &[10]);
+        pub const CAPACITANCE: rt::Range<usize> = 5..9;
+        pub const INDEX_DESC: rt::FieldDesc = rt::field(Self::NAME, "index");
+        pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
+            f("capacitance", rt::Int(self.capacitance.raw() as i64));
+        }
+        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            Response::PresetCapacitance(*self).encode(address, buf)
+        }
+    }
+    impl response::PresetFullStepPosition {
+        pub const NAME: &'static str = "preset_full_step_position";
+        pub const CODE: &'static [u8] = &[0x41, 0x73];
+        pub const LEN: usize = 10;
+        pub const DESC: rt::MessageDesc = rt::desc(Self::NAME, 0x4173, 2, &[10]);
+        pub const FULL_STEPS: rt::Range<usize> = 5..9;
+        pub const INDEX_DESC: rt::FieldDesc = rt::field(Self::NAME, "index");
+        pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
+            f("full_steps", rt::Int(self.full_steps as i64));
+        }
+        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            Response::PresetFullStepPosition(*self).encode(address, buf)
+        }
+    }
+    impl response::StoredFullStepPosition {
+        pub const NAME: &'static str = "stored_full_step_position";
+        pub const CODE: &'static [u8] = &[0x41, 0x75];
+        pub const LEN: usize = 8;
+        pub const DESC: rt::MessageDesc = rt::desc(Self::NAME, 0x4175, 2, &[8]);
+        pub const INDEX: rt::Range<usize> = 4..5;
+        pub const FULL_STEPS: rt::Range<usize> = 5..7;
+        pub const INDEX_DESC: rt::FieldDesc = rt::field(Self::NAME, "index");
+        pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
+            f("index", rt::Int(self.index as i64));
+            f("full_steps", rt::Int(self.full_steps as i64));
+        }
+        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            Response::StoredFullStepPosition(*self).encode(address, buf)
+        }
+    }
+    impl response::ActualModeOfOperation {
+        pub const NAME: &'static str = "actual_mode_of_operation";
+        pub const CODE: &'static [u8] = &[0x41, 0x80];
+        pub const LEN: usize = 6;
+        pub const DESC: rt::MessageDesc = rt::desc(Self::NAME, 0x4180, 2, &[6]);
+        pub const MODE: rt::Range<usize> = 4..5;
+        pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
+            f("mode", rt::Int(self.mode.raw() as i64));
+        }
+        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            Response::ActualModeOfOperation(*self).encode(address, buf)
+        }
+    }
+    /// Each request as a struct of its own; its constants (`DESC`, which names it as
+    /// refusals do: name, code and the frame lengths of its code; `QUANTITY_DESC`, each
+    /// field a refusal names) and methods are in the `impl` of each.
     pub mod request {
-        use ::busspec_runtime::FieldDesc;
         /// §4.1.1 Triggering the “reference run” (code `0x1000`, 5 bytes). Triggers a full reference run (→ Preset → Cmin → Preset). The preset is a fixed firmware position between Cmin-nom and Cmax-nom; its capacitance and full-step position are read with 0x4073 00 / 0x4073 01 (the document says 0x4070 / 0x4071, ub2-e06).
         #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
         #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
@@ -4796,75 +4120,9 @@ pub mod ub2 {
         #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
         #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]
         pub struct GetModeOfOperation;
-        /// `go_to_stored_position.index`
-        pub const GO_TO_STORED_POSITION_INDEX: FieldDesc = FieldDesc::new(
-            "go_to_stored_position",
-            "index",
-        );
-        /// `set_acceleration_speed_index.acceleration_index`
-        pub const SET_ACCELERATION_SPEED_INDEX_ACCELERATION_INDEX: FieldDesc = FieldDesc::new(
-            "set_acceleration_speed_index",
-            "acceleration_index",
-        );
-        /// `set_acceleration_speed_index.speed_index`
-        pub const SET_ACCELERATION_SPEED_INDEX_SPEED_INDEX: FieldDesc = FieldDesc::new(
-            "set_acceleration_speed_index",
-            "speed_index",
-        );
-        /// `set_slave_address.address`
-        pub const SET_SLAVE_ADDRESS_ADDRESS: FieldDesc = FieldDesc::new(
-            "set_slave_address",
-            "address",
-        );
-        /// `store_indexed_position.index`
-        pub const STORE_INDEXED_POSITION_INDEX: FieldDesc = FieldDesc::new(
-            "store_indexed_position",
-            "index",
-        );
-        /// `get_c_curve_indexed_full_step_capacitance.index`
-        pub const GET_C_CURVE_INDEXED_FULL_STEP_CAPACITANCE_INDEX: FieldDesc = FieldDesc::new(
-            "get_c_curve_indexed_full_step_capacitance",
-            "index",
-        );
-        /// `get_lower_customer_limit.index`
-        pub const GET_LOWER_CUSTOMER_LIMIT_INDEX: FieldDesc = FieldDesc::new(
-            "get_lower_customer_limit",
-            "index",
-        );
-        /// `get_upper_customer_limit.index`
-        pub const GET_UPPER_CUSTOMER_LIMIT_INDEX: FieldDesc = FieldDesc::new(
-            "get_upper_customer_limit",
-            "index",
-        );
-        /// `get_lower_factory_limit.index`
-        pub const GET_LOWER_FACTORY_LIMIT_INDEX: FieldDesc = FieldDesc::new(
-            "get_lower_factory_limit",
-            "index",
-        );
-        /// `get_upper_factory_limit.index`
-        pub const GET_UPPER_FACTORY_LIMIT_INDEX: FieldDesc = FieldDesc::new(
-            "get_upper_factory_limit",
-            "index",
-        );
-        /// `get_preset_capacitance.index`
-        pub const GET_PRESET_CAPACITANCE_INDEX: FieldDesc = FieldDesc::new(
-            "get_preset_capacitance",
-            "index",
-        );
-        /// `get_preset_full_step_position.index`
-        pub const GET_PRESET_FULL_STEP_POSITION_INDEX: FieldDesc = FieldDesc::new(
-            "get_preset_full_step_position",
-            "index",
-        );
-        /// `get_stored_full_step_position.index`
-        pub const GET_STORED_FULL_STEP_POSITION_INDEX: FieldDesc = FieldDesc::new(
-            "get_stored_full_step_position",
-            "index",
-        );
     }
-    /// Each response as a struct of its own, and the fields its refusals name.
+    /// Each response as a struct of its own.
     pub mod response {
-        use ::busspec_runtime::FieldDesc;
         /// §4.1.1 Command approved Movement started (code `0x50`, 4 bytes). Reply to a movement trigger: command approved, movement started.
         #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
         #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
@@ -5158,55 +4416,5 @@ pub mod ub2 {
             /// 0x00 encoder disabled, 0x01 close-loop-control, 0x02 open-loop-control (default)
             pub mode: super::ModeOfOperation,
         }
-        /// `acceleration_speed.acceleration_index`
-        pub const ACCELERATION_SPEED_ACCELERATION_INDEX: FieldDesc = FieldDesc::new(
-            "acceleration_speed",
-            "acceleration_index",
-        );
-        /// `acceleration_speed.speed_index`
-        pub const ACCELERATION_SPEED_SPEED_INDEX: FieldDesc = FieldDesc::new(
-            "acceleration_speed",
-            "speed_index",
-        );
-        /// `c_curve_entry.index`
-        pub const C_CURVE_ENTRY_INDEX: FieldDesc = FieldDesc::new(
-            "c_curve_entry",
-            "index",
-        );
-        /// `lower_customer_limit.index`
-        pub const LOWER_CUSTOMER_LIMIT_INDEX: FieldDesc = FieldDesc::new(
-            "lower_customer_limit",
-            "index",
-        );
-        /// `upper_customer_limit.index`
-        pub const UPPER_CUSTOMER_LIMIT_INDEX: FieldDesc = FieldDesc::new(
-            "upper_customer_limit",
-            "index",
-        );
-        /// `lower_factory_limit.index`
-        pub const LOWER_FACTORY_LIMIT_INDEX: FieldDesc = FieldDesc::new(
-            "lower_factory_limit",
-            "index",
-        );
-        /// `upper_factory_limit.index`
-        pub const UPPER_FACTORY_LIMIT_INDEX: FieldDesc = FieldDesc::new(
-            "upper_factory_limit",
-            "index",
-        );
-        /// `preset_capacitance.index`
-        pub const PRESET_CAPACITANCE_INDEX: FieldDesc = FieldDesc::new(
-            "preset_capacitance",
-            "index",
-        );
-        /// `preset_full_step_position.index`
-        pub const PRESET_FULL_STEP_POSITION_INDEX: FieldDesc = FieldDesc::new(
-            "preset_full_step_position",
-            "index",
-        );
-        /// `stored_full_step_position.index`
-        pub const STORED_FULL_STEP_POSITION_INDEX: FieldDesc = FieldDesc::new(
-            "stored_full_step_position",
-            "index",
-        );
     }
 }

@@ -160,56 +160,6 @@ pub mod ubx_like {
             }
         }
     }
-    impl request::PollRate {
-        pub const NAME: &'static str = "poll_rate";
-        pub const CODE: &'static [u8] = &[0x06, 0x08];
-        pub const LEN: usize = 8;
-        pub const DESC: rt::MessageDesc = rt::MessageDesc::new(
-            Self::NAME,
-            0x0608,
-            2,
-            &[8, 14],
-        );
-        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
-            Request::PollRate(*self).encode(address, buf)
-        }
-    }
-    impl request::SetRate {
-        pub const NAME: &'static str = "set_rate";
-        pub const CODE: &'static [u8] = &[0x06, 0x08];
-        pub const LEN: usize = 14;
-        pub const DESC: rt::MessageDesc = rt::MessageDesc::new(
-            Self::NAME,
-            0x0608,
-            2,
-            &[8, 14],
-        );
-        pub const MEAS_RATE: rt::Range<usize> = 6..8;
-        pub const NAV_RATE: rt::Range<usize> = 8..10;
-        pub const TIME_REF: rt::Range<usize> = 10..12;
-        pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
-            f("meas_rate", rt::Int(self.meas_rate as i64));
-            f("nav_rate", rt::Int(self.nav_rate as i64));
-            f("time_ref", rt::Int(self.time_ref.raw() as i64));
-        }
-        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
-            Request::SetRate(*self).encode(address, buf)
-        }
-    }
-    impl request::PollSatellites {
-        pub const NAME: &'static str = "poll_satellites";
-        pub const CODE: &'static [u8] = &[0x01, 0x35];
-        pub const LEN: usize = 8;
-        pub const DESC: rt::MessageDesc = rt::MessageDesc::new(
-            Self::NAME,
-            0x0135,
-            2,
-            &[8],
-        );
-        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
-            Request::PollSatellites(*self).encode(address, buf)
-        }
-    }
     ///A request (command), host to device.
     #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
     #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
@@ -258,14 +208,10 @@ pub mod ubx_like {
         /// Encodes the frame for `address` into `buf`; returns the frame length. Refuses what
         /// decode refuses: an address no frame may carry, the broadcast address for a command
         /// that does not accept it, a value outside its field's range.
-        pub fn encode(
-            &self,
-            address: u8,
-            buf: &mut [u8],
-        ) -> rt::Result<usize, rt::EncodeError> {
+        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             rt::encode_address(address, &FRAME)?;
             let len = match *self {
-                Self::PollRate(request::PollRate {}) => {
+                Self::PollRate(_) => {
                     rt::frame_mut::<8>(buf, &[0xB5, 0x62, 0x06, 0x08, 0x00, 0x00])?.len()
                 }
                 Self::SetRate(
@@ -285,7 +231,7 @@ pub mod ubx_like {
                     out[10..12].copy_from_slice(&v_time_ref.raw().to_le_bytes());
                     out.len()
                 }
-                Self::PollSatellites(request::PollSatellites {}) => {
+                Self::PollSatellites(_) => {
                     rt::frame_mut::<8>(buf, &[0xB5, 0x62, 0x01, 0x35, 0x00, 0x00])?.len()
                 }
             };
@@ -319,14 +265,20 @@ pub mod ubx_like {
                     g.attempt(|frame: &[u8; 14]| {
                         let field_0: u16 = u16::from_le_bytes([frame[6], frame[7]]);
                         rt::in_range(
-                            &request::SET_RATE_MEAS_RATE,
+                            &request::SetRate::MEAS_RATE_DESC,
                             6,
                             field_0,
                             25,
                             65535,
                         )?;
                         let field_1: u16 = u16::from_le_bytes([frame[8], frame[9]]);
-                        rt::in_range(&request::SET_RATE_NAV_RATE, 8, field_1, 1, 127)?;
+                        rt::in_range(
+                            &request::SetRate::NAV_RATE_DESC,
+                            8,
+                            field_1,
+                            1,
+                            127,
+                        )?;
                         rt::Ok(
                             Self::SetRate(request::SetRate {
                                 meas_rate: field_0,
@@ -353,22 +305,19 @@ pub mod ubx_like {
             name: &str,
             mut field: impl FnMut(&'static str) -> rt::Option<rt::FieldValue<'v>>,
         ) -> rt::Result<Self, rt::FieldError> {
-            match name {
-                "poll_rate" => rt::Ok(Self::PollRate(request::PollRate)),
+            let message = match name {
+                "poll_rate" => Self::PollRate(request::PollRate),
                 "set_rate" => {
-                    rt::Ok(
-                        Self::SetRate(request::SetRate {
-                            meas_rate: rt::get(&mut field, "meas_rate")?,
-                            nav_rate: rt::get(&mut field, "nav_rate")?,
-                            time_ref: TimeRef::from_raw(rt::get(&mut field, "time_ref")?),
-                        }),
-                    )
+                    Self::SetRate(request::SetRate {
+                        meas_rate: rt::get(&mut field, "meas_rate")?,
+                        nav_rate: rt::get(&mut field, "nav_rate")?,
+                        time_ref: TimeRef::from_raw(rt::get(&mut field, "time_ref")?),
+                    })
                 }
-                "poll_satellites" => {
-                    rt::Ok(Self::PollSatellites(request::PollSatellites))
-                }
-                _ => rt::Err(rt::FieldError::UnknownMessage),
-            }
+                "poll_satellites" => Self::PollSatellites(request::PollSatellites),
+                _ => return rt::Err(rt::FieldError::UnknownMessage),
+            };
+            rt::Ok(message)
         }
     }
     impl rt::Message for Request {
@@ -389,11 +338,7 @@ pub mod ubx_like {
             Request::visit(self, f)
         }
         #[inline]
-        fn encode(
-            &self,
-            address: u8,
-            buf: &mut [u8],
-        ) -> rt::Result<usize, rt::EncodeError> {
+        fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             Request::encode(self, address, buf)
         }
         #[inline]
@@ -433,7 +378,7 @@ pub mod ubx_like {
     }
     /// Where `satellites.svs` sits in the frame and how its elements are counted.
     pub const REPEAT_SATELLITES: rt::RepeatAt = rt::RepeatAt {
-        field: &response::SATELLITES_SVS,
+        field: &response::Satellites::SVS_DESC,
         base: 16,
         at: 14,
         width: 12,
@@ -591,90 +536,6 @@ pub mod ubx_like {
             })
         }
     }
-    impl response::Rate {
-        pub const NAME: &'static str = "rate";
-        pub const CODE: &'static [u8] = &[0x06, 0x08];
-        pub const LEN: usize = 14;
-        pub const DESC: rt::MessageDesc = rt::MessageDesc::new(
-            Self::NAME,
-            0x0608,
-            2,
-            &[14],
-        );
-        pub const MEAS_RATE: rt::Range<usize> = 6..8;
-        pub const NAV_RATE: rt::Range<usize> = 8..10;
-        pub const TIME_REF: rt::Range<usize> = 10..12;
-        pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
-            f("meas_rate", rt::Int(self.meas_rate as i64));
-            f("nav_rate", rt::Int(self.nav_rate as i64));
-            f("time_ref", rt::Int(self.time_ref.raw() as i64));
-        }
-        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
-            Response::Rate(*self).encode(address, buf)
-        }
-    }
-    impl response::Ack {
-        pub const NAME: &'static str = "ack";
-        pub const CODE: &'static [u8] = &[0x05, 0x01];
-        pub const LEN: usize = 10;
-        pub const DESC: rt::MessageDesc = rt::MessageDesc::new(
-            Self::NAME,
-            0x0501,
-            2,
-            &[10],
-        );
-        pub const CLASS_ID: rt::Range<usize> = 6..7;
-        pub const MSG_ID: rt::Range<usize> = 7..8;
-        pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
-            f("class_id", rt::Int(self.class_id as i64));
-            f("msg_id", rt::Int(self.msg_id as i64));
-        }
-        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
-            Response::Ack(*self).encode(address, buf)
-        }
-    }
-    impl response::Nak {
-        pub const NAME: &'static str = "nak";
-        pub const CODE: &'static [u8] = &[0x05, 0x00];
-        pub const LEN: usize = 10;
-        pub const DESC: rt::MessageDesc = rt::MessageDesc::new(
-            Self::NAME,
-            0x0500,
-            2,
-            &[10],
-        );
-        pub const CLASS_ID: rt::Range<usize> = 6..7;
-        pub const MSG_ID: rt::Range<usize> = 7..8;
-        pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
-            f("class_id", rt::Int(self.class_id as i64));
-            f("msg_id", rt::Int(self.msg_id as i64));
-        }
-        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
-            Response::Nak(*self).encode(address, buf)
-        }
-    }
-    impl response::Satellites {
-        pub const NAME: &'static str = "satellites";
-        pub const CODE: &'static [u8] = &[0x01, 0x35];
-        pub const MIN_LEN: usize = 16;
-        pub const MAX_LEN: usize = 976;
-        pub const DESC: rt::MessageDesc = rt::MessageDesc::new(
-            Self::NAME,
-            0x0135,
-            2,
-            &[16],
-        );
-        pub const ITOW: rt::Range<usize> = 6..10;
-        pub const RESERVED1: rt::Range<usize> = 12..14;
-        pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
-            f("itow", rt::Int(self.itow as i64));
-            f("reserved1", rt::Int(self.reserved1 as i64));
-            f("svs", rt::Records(self.svs.records()));
-        }
-        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
-            Response::Satellites(*self).encode(address, buf)
-        }
-    }
     ///A response, device to host.
     #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
     #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
@@ -714,8 +575,8 @@ pub mod ubx_like {
         /// The length of this message's frame, in bytes.
         pub const fn frame_len(&self) -> usize {
             match self {
-                Self::Satellites(response::Satellites { svs: v_svs, .. }) => {
-                    REPEAT_SATELLITES.base + REPEAT_SATELLITES.bytes_of(v_svs.len())
+                Self::Satellites(m) => {
+                    REPEAT_SATELLITES.base + REPEAT_SATELLITES.bytes_of(m.svs.len())
                 }
                 _ => Self::MESSAGES[self.index()].2,
             }
@@ -733,11 +594,7 @@ pub mod ubx_like {
         /// Encodes the frame for `address` into `buf`; returns the frame length. Refuses what
         /// decode refuses: an address no frame may carry, the broadcast address for a command
         /// that does not accept it, a value outside its field's range.
-        pub fn encode(
-            &self,
-            address: u8,
-            buf: &mut [u8],
-        ) -> rt::Result<usize, rt::EncodeError> {
+        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             rt::encode_address(address, &FRAME)?;
             let len = match *self {
                 Self::Rate(
@@ -888,7 +745,7 @@ pub mod ubx_like {
                 }
                 0x0135 => {
                     let (frame, elements, _) = REPEAT_SATELLITES.split::<14>(frame)?;
-                    rt::equal(&response::SATELLITES_VERSION, 10, frame[10], 0x1)?;
+                    rt::equal(&response::Satellites::VERSION_DESC, 10, frame[10], 0x1)?;
                     let mut v_svs = rt::Repeated::<SatellitesSvs, 80>::new();
                     for (k, bytes) in elements.chunks_exact(12).enumerate() {
                         let bytes = <[u8; 12]>::try_from(bytes).unwrap_or([0; 12]);
@@ -917,43 +774,36 @@ pub mod ubx_like {
             name: &str,
             mut field: impl FnMut(&'static str) -> rt::Option<rt::FieldValue<'v>>,
         ) -> rt::Result<Self, rt::FieldError> {
-            match name {
+            let message = match name {
                 "rate" => {
-                    rt::Ok(
-                        Self::Rate(response::Rate {
-                            meas_rate: rt::get(&mut field, "meas_rate")?,
-                            nav_rate: rt::get(&mut field, "nav_rate")?,
-                            time_ref: TimeRef::from_raw(rt::get(&mut field, "time_ref")?),
-                        }),
-                    )
+                    Self::Rate(response::Rate {
+                        meas_rate: rt::get(&mut field, "meas_rate")?,
+                        nav_rate: rt::get(&mut field, "nav_rate")?,
+                        time_ref: TimeRef::from_raw(rt::get(&mut field, "time_ref")?),
+                    })
                 }
                 "ack" => {
-                    rt::Ok(
-                        Self::Ack(response::Ack {
-                            class_id: rt::get(&mut field, "class_id")?,
-                            msg_id: rt::get(&mut field, "msg_id")?,
-                        }),
-                    )
+                    Self::Ack(response::Ack {
+                        class_id: rt::get(&mut field, "class_id")?,
+                        msg_id: rt::get(&mut field, "msg_id")?,
+                    })
                 }
                 "nak" => {
-                    rt::Ok(
-                        Self::Nak(response::Nak {
-                            class_id: rt::get(&mut field, "class_id")?,
-                            msg_id: rt::get(&mut field, "msg_id")?,
-                        }),
-                    )
+                    Self::Nak(response::Nak {
+                        class_id: rt::get(&mut field, "class_id")?,
+                        msg_id: rt::get(&mut field, "msg_id")?,
+                    })
                 }
                 "satellites" => {
-                    rt::Ok(
-                        Self::Satellites(response::Satellites {
-                            itow: rt::get(&mut field, "itow")?,
-                            reserved1: rt::get(&mut field, "reserved1")?,
-                            svs: rt::records::<SatellitesSvs, 80>(&mut field, "svs")?,
-                        }),
-                    )
+                    Self::Satellites(response::Satellites {
+                        itow: rt::get(&mut field, "itow")?,
+                        reserved1: rt::get(&mut field, "reserved1")?,
+                        svs: rt::records::<SatellitesSvs, 80>(&mut field, "svs")?,
+                    })
                 }
-                _ => rt::Err(rt::FieldError::UnknownMessage),
-            }
+                _ => return rt::Err(rt::FieldError::UnknownMessage),
+            };
+            rt::Ok(message)
         }
     }
     impl rt::Message for Response {
@@ -974,11 +824,7 @@ pub mod ubx_like {
             Response::visit(self, f)
         }
         #[inline]
-        fn encode(
-            &self,
-            address: u8,
-            buf: &mut [u8],
-        ) -> rt::Result<usize, rt::EncodeError> {
+        fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             Response::encode(self, address, buf)
         }
         #[inline]
@@ -1132,11 +978,113 @@ pub mod ubx_like {
     pub type StreamDecoder = ::busspec_runtime::stream::StreamDecoder<UbxLike>;
     /// What [`StreamDecoder`] finds in a stream.
     pub type Event = ::busspec_runtime::stream::Event<Request, Response>;
-    /// Each request as a struct of its own (its `DESC` names it as refusals do: name,
-    /// code and the frame lengths of its code), and each field a refusal names
-    /// (`message.field`, `FieldDesc`).
+    impl request::PollRate {
+        pub const NAME: &'static str = "poll_rate";
+        pub const CODE: &'static [u8] = &[0x06, 0x08];
+        pub const LEN: usize = 8;
+        pub const DESC: rt::MessageDesc = rt::desc(Self::NAME, 0x0608, 2, &[8, 14]);
+        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            Request::PollRate(*self).encode(address, buf)
+        }
+    }
+    impl request::SetRate {
+        pub const NAME: &'static str = "set_rate";
+        pub const CODE: &'static [u8] = &[0x06, 0x08];
+        pub const LEN: usize = 14;
+        pub const DESC: rt::MessageDesc = rt::desc(Self::NAME, 0x0608, 2, &[8, 14]);
+        pub const MEAS_RATE: rt::Range<usize> = 6..8;
+        pub const NAV_RATE: rt::Range<usize> = 8..10;
+        pub const TIME_REF: rt::Range<usize> = 10..12;
+        pub const MEAS_RATE_DESC: rt::FieldDesc = rt::field(Self::NAME, "meas_rate");
+        pub const NAV_RATE_DESC: rt::FieldDesc = rt::field(Self::NAME, "nav_rate");
+        pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
+            f("meas_rate", rt::Int(self.meas_rate as i64));
+            f("nav_rate", rt::Int(self.nav_rate as i64));
+            f("time_ref", rt::Int(self.time_ref.raw() as i64));
+        }
+        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            Request::SetRate(*self).encode(address, buf)
+        }
+    }
+    impl request::PollSatellites {
+        pub const NAME: &'static str = "poll_satellites";
+        pub const CODE: &'static [u8] = &[0x01, 0x35];
+        pub const LEN: usize = 8;
+        pub const DESC: rt::MessageDesc = rt::desc(Self::NAME, 0x0135, 2, &[8]);
+        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            Request::PollSatellites(*self).encode(address, buf)
+        }
+    }
+    impl response::Rate {
+        pub const NAME: &'static str = "rate";
+        pub const CODE: &'static [u8] = &[0x06, 0x08];
+        pub const LEN: usize = 14;
+        pub const DESC: rt::MessageDesc = rt::desc(Self::NAME, 0x0608, 2, &[14]);
+        pub const MEAS_RATE: rt::Range<usize> = 6..8;
+        pub const NAV_RATE: rt::Range<usize> = 8..10;
+        pub const TIME_REF: rt::Range<usize> = 10..12;
+        pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
+            f("meas_rate", rt::Int(self.meas_rate as i64));
+            f("nav_rate", rt::Int(self.nav_rate as i64));
+            f("time_ref", rt::Int(self.time_ref.raw() as i64));
+        }
+        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            Response::Rate(*self).encode(address, buf)
+        }
+    }
+    impl response::Ack {
+        pub const NAME: &'static str = "ack";
+        pub const CODE: &'static [u8] = &[0x05, 0x01];
+        pub const LEN: usize = 10;
+        pub const DESC: rt::MessageDesc = rt::desc(Self::NAME, 0x0501, 2, &[10]);
+        pub const CLASS_ID: rt::Range<usize> = 6..7;
+        pub const MSG_ID: rt::Range<usize> = 7..8;
+        pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
+            f("class_id", rt::Int(self.class_id as i64));
+            f("msg_id", rt::Int(self.msg_id as i64));
+        }
+        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            Response::Ack(*self).encode(address, buf)
+        }
+    }
+    impl response::Nak {
+        pub const NAME: &'static str = "nak";
+        pub const CODE: &'static [u8] = &[0x05, 0x00];
+        pub const LEN: usize = 10;
+        pub const DESC: rt::MessageDesc = rt::desc(Self::NAME, 0x0500, 2, &[10]);
+        pub const CLASS_ID: rt::Range<usize> = 6..7;
+        pub const MSG_ID: rt::Range<usize> = 7..8;
+        pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
+            f("class_id", rt::Int(self.class_id as i64));
+            f("msg_id", rt::Int(self.msg_id as i64));
+        }
+        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            Response::Nak(*self).encode(address, buf)
+        }
+    }
+    impl response::Satellites {
+        pub const NAME: &'static str = "satellites";
+        pub const CODE: &'static [u8] = &[0x01, 0x35];
+        pub const MIN_LEN: usize = 16;
+        pub const MAX_LEN: usize = 976;
+        pub const DESC: rt::MessageDesc = rt::desc(Self::NAME, 0x0135, 2, &[16]);
+        pub const ITOW: rt::Range<usize> = 6..10;
+        pub const RESERVED1: rt::Range<usize> = 12..14;
+        pub const SVS_DESC: rt::FieldDesc = rt::field(Self::NAME, "svs");
+        pub const VERSION_DESC: rt::FieldDesc = rt::field(Self::NAME, "version");
+        pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
+            f("itow", rt::Int(self.itow as i64));
+            f("reserved1", rt::Int(self.reserved1 as i64));
+            f("svs", rt::Records(self.svs.records()));
+        }
+        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            Response::Satellites(*self).encode(address, buf)
+        }
+    }
+    /// Each request as a struct of its own; its constants (`DESC`, which names it as
+    /// refusals do: name, code and the frame lengths of its code; `QUANTITY_DESC`, each
+    /// field a refusal names) and methods are in the `impl` of each.
     pub mod request {
-        use ::busspec_runtime::FieldDesc;
         /// §3 Poll the navigation rate (CFG-RATE) (code `0x0608`, 8 bytes).
         #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
         #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
@@ -1159,17 +1107,9 @@ pub mod ubx_like {
         #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
         #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]
         pub struct PollSatellites;
-        /// `set_rate.meas_rate`
-        pub const SET_RATE_MEAS_RATE: FieldDesc = FieldDesc::new(
-            "set_rate",
-            "meas_rate",
-        );
-        /// `set_rate.nav_rate`
-        pub const SET_RATE_NAV_RATE: FieldDesc = FieldDesc::new("set_rate", "nav_rate");
     }
-    /// Each response as a struct of its own, and the fields its refusals name.
+    /// Each response as a struct of its own.
     pub mod response {
-        use ::busspec_runtime::FieldDesc;
         /// §3 Navigation rate (CFG-RATE) (code `0x0608`, 14 bytes).
         #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
         #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
@@ -1216,12 +1156,5 @@ pub mod ubx_like {
             pub reserved1: u16,
             pub svs: super::rt::Repeated<super::SatellitesSvs, 80>,
         }
-        /// `satellites.svs`
-        pub const SATELLITES_SVS: FieldDesc = FieldDesc::new("satellites", "svs");
-        /// `satellites.version`
-        pub const SATELLITES_VERSION: FieldDesc = FieldDesc::new(
-            "satellites",
-            "version",
-        );
     }
 }

@@ -108,52 +108,6 @@ pub mod unaddressed {
             rt::Some(Self(raw as i16))
         }
     }
-    impl request::ReadTemperature {
-        pub const NAME: &'static str = "read_temperature";
-        pub const CODE: &'static [u8] = &[0x10];
-        pub const LEN: usize = 5;
-        pub const DESC: rt::MessageDesc = rt::MessageDesc::new(
-            Self::NAME,
-            0x10,
-            1,
-            &[5],
-        );
-        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
-            Request::ReadTemperature(*self).encode(address, buf)
-        }
-    }
-    impl request::SetRate {
-        pub const NAME: &'static str = "set_rate";
-        pub const CODE: &'static [u8] = &[0x20];
-        pub const LEN: usize = 7;
-        pub const DESC: rt::MessageDesc = rt::MessageDesc::new(
-            Self::NAME,
-            0x20,
-            1,
-            &[7],
-        );
-        pub const RATE: rt::Range<usize> = 4..6;
-        pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
-            f("rate", rt::Int(self.rate as i64));
-        }
-        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
-            Request::SetRate(*self).encode(address, buf)
-        }
-    }
-    impl request::ReadVersion {
-        pub const NAME: &'static str = "read_version";
-        pub const CODE: &'static [u8] = &[0x30];
-        pub const LEN: usize = 5;
-        pub const DESC: rt::MessageDesc = rt::MessageDesc::new(
-            Self::NAME,
-            0x30,
-            1,
-            &[5],
-        );
-        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
-            Request::ReadVersion(*self).encode(address, buf)
-        }
-    }
     ///A request (command), host to device.
     #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
     #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
@@ -202,14 +156,10 @@ pub mod unaddressed {
         /// Encodes the frame for `address` into `buf`; returns the frame length. Refuses what
         /// decode refuses: an address no frame may carry, the broadcast address for a command
         /// that does not accept it, a value outside its field's range.
-        pub fn encode(
-            &self,
-            address: u8,
-            buf: &mut [u8],
-        ) -> rt::Result<usize, rt::EncodeError> {
+        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             rt::encode_address(address, &FRAME)?;
             let len = match *self {
-                Self::ReadTemperature(request::ReadTemperature {}) => {
+                Self::ReadTemperature(_) => {
                     rt::frame_mut::<5>(buf, &[0xA5, 0x5A, 0x01, 0x10])?.len()
                 }
                 Self::SetRate(request::SetRate { rate: v_rate }) => {
@@ -218,7 +168,7 @@ pub mod unaddressed {
                     out[4..6].copy_from_slice(&v_rate.to_le_bytes());
                     out.len()
                 }
-                Self::ReadVersion(request::ReadVersion {}) => {
+                Self::ReadVersion(_) => {
                     rt::frame_mut::<5>(buf, &[0xA5, 0x5A, 0x01, 0x30])?.len()
                 }
             };
@@ -253,7 +203,7 @@ pub mod unaddressed {
                 0x20 => {
                     let frame = rt::fixed::<7>(frame, &request::SetRate::DESC)?;
                     let field_0: u16 = u16::from_le_bytes([frame[4], frame[5]]);
-                    rt::in_range(&request::SET_RATE_RATE, 4, field_0, 1, 1000)?;
+                    rt::in_range(&request::SetRate::RATE_DESC, 4, field_0, 1, 1000)?;
                     rt::Ok(Self::SetRate(request::SetRate { rate: field_0 }))
                 }
                 0x30 => {
@@ -270,20 +220,17 @@ pub mod unaddressed {
             name: &str,
             mut field: impl FnMut(&'static str) -> rt::Option<rt::FieldValue<'v>>,
         ) -> rt::Result<Self, rt::FieldError> {
-            match name {
-                "read_temperature" => {
-                    rt::Ok(Self::ReadTemperature(request::ReadTemperature))
-                }
+            let message = match name {
+                "read_temperature" => Self::ReadTemperature(request::ReadTemperature),
                 "set_rate" => {
-                    rt::Ok(
-                        Self::SetRate(request::SetRate {
-                            rate: rt::get(&mut field, "rate")?,
-                        }),
-                    )
+                    Self::SetRate(request::SetRate {
+                        rate: rt::get(&mut field, "rate")?,
+                    })
                 }
-                "read_version" => rt::Ok(Self::ReadVersion(request::ReadVersion)),
-                _ => rt::Err(rt::FieldError::UnknownMessage),
-            }
+                "read_version" => Self::ReadVersion(request::ReadVersion),
+                _ => return rt::Err(rt::FieldError::UnknownMessage),
+            };
+            rt::Ok(message)
         }
     }
     impl rt::Message for Request {
@@ -304,11 +251,7 @@ pub mod unaddressed {
             Request::visit(self, f)
         }
         #[inline]
-        fn encode(
-            &self,
-            address: u8,
-            buf: &mut [u8],
-        ) -> rt::Result<usize, rt::EncodeError> {
+        fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             Request::encode(self, address, buf)
         }
         #[inline]
@@ -344,56 +287,6 @@ pub mod unaddressed {
         /// The responses this command may get, bit `i` for row `i` of `Response::MESSAGES`.
         const fn replies(&self) -> u64 {
             Self::COMMANDS[self.index()].3
-        }
-    }
-    impl response::Temperature {
-        pub const NAME: &'static str = "temperature";
-        pub const CODE: &'static [u8] = &[0x90];
-        pub const LEN: usize = 7;
-        pub const DESC: rt::MessageDesc = rt::MessageDesc::new(
-            Self::NAME,
-            0x90,
-            1,
-            &[7],
-        );
-        pub const TEMPERATURE: rt::Range<usize> = 4..6;
-        pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
-            f("temperature", rt::Int(self.temperature.raw() as i64));
-        }
-        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
-            Response::Temperature(*self).encode(address, buf)
-        }
-    }
-    impl response::Ack {
-        pub const NAME: &'static str = "ack";
-        pub const CODE: &'static [u8] = &[0xA0];
-        pub const LEN: usize = 5;
-        pub const DESC: rt::MessageDesc = rt::MessageDesc::new(
-            Self::NAME,
-            0xA0,
-            1,
-            &[5],
-        );
-        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
-            Response::Ack(*self).encode(address, buf)
-        }
-    }
-    impl response::Version {
-        pub const NAME: &'static str = "version";
-        pub const CODE: &'static [u8] = &[0xB0];
-        pub const LEN: usize = 9;
-        pub const DESC: rt::MessageDesc = rt::MessageDesc::new(
-            Self::NAME,
-            0xB0,
-            1,
-            &[9],
-        );
-        pub const VERSION: rt::Range<usize> = 4..8;
-        pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
-            f("version", rt::Text(&self.version[..]));
-        }
-        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
-            Response::Version(*self).encode(address, buf)
         }
     }
     ///A response, device to host.
@@ -445,11 +338,7 @@ pub mod unaddressed {
         /// Encodes the frame for `address` into `buf`; returns the frame length. Refuses what
         /// decode refuses: an address no frame may carry, the broadcast address for a command
         /// that does not accept it, a value outside its field's range.
-        pub fn encode(
-            &self,
-            address: u8,
-            buf: &mut [u8],
-        ) -> rt::Result<usize, rt::EncodeError> {
+        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             rt::encode_address(address, &FRAME)?;
             let len = match *self {
                 Self::Temperature(
@@ -465,9 +354,7 @@ pub mod unaddressed {
                     out[4..6].copy_from_slice(&v_temperature.raw().to_le_bytes());
                     out.len()
                 }
-                Self::Ack(response::Ack {}) => {
-                    rt::frame_mut::<5>(buf, &[0xA5, 0x5A, 0x01, 0xA0])?.len()
-                }
+                Self::Ack(_) => rt::frame_mut::<5>(buf, &[0xA5, 0x5A, 0x01, 0xA0])?.len(),
                 Self::Version(response::Version { version: v_version }) => {
                     let out = rt::frame_mut::<9>(buf, &[0xA5, 0x5A, 0x05, 0xB0])?;
                     out[4..8].copy_from_slice(&v_version.0);
@@ -529,7 +416,7 @@ pub mod unaddressed {
                     let frame = rt::fixed::<7>(frame, &response::Temperature::DESC)?;
                     let field_0: i16 = i16::from_le_bytes([frame[4], frame[5]]);
                     rt::in_range(
-                        &response::TEMPERATURE_TEMPERATURE,
+                        &response::Temperature::TEMPERATURE_DESC,
                         4,
                         field_0,
                         -4000,
@@ -563,26 +450,23 @@ pub mod unaddressed {
             name: &str,
             mut field: impl FnMut(&'static str) -> rt::Option<rt::FieldValue<'v>>,
         ) -> rt::Result<Self, rt::FieldError> {
-            match name {
+            let message = match name {
                 "temperature" => {
-                    rt::Ok(
-                        Self::Temperature(response::Temperature {
-                            temperature: Centidegrees::from_raw(
-                                rt::get(&mut field, "temperature")?,
-                            ),
-                        }),
-                    )
+                    Self::Temperature(response::Temperature {
+                        temperature: Centidegrees::from_raw(
+                            rt::get(&mut field, "temperature")?,
+                        ),
+                    })
                 }
-                "ack" => rt::Ok(Self::Ack(response::Ack)),
+                "ack" => Self::Ack(response::Ack),
                 "version" => {
-                    rt::Ok(
-                        Self::Version(response::Version {
-                            version: rt::text(&mut field, "version")?,
-                        }),
-                    )
+                    Self::Version(response::Version {
+                        version: rt::text(&mut field, "version")?,
+                    })
                 }
-                _ => rt::Err(rt::FieldError::UnknownMessage),
-            }
+                _ => return rt::Err(rt::FieldError::UnknownMessage),
+            };
+            rt::Ok(message)
         }
     }
     impl rt::Message for Response {
@@ -603,11 +487,7 @@ pub mod unaddressed {
             Response::visit(self, f)
         }
         #[inline]
-        fn encode(
-            &self,
-            address: u8,
-            buf: &mut [u8],
-        ) -> rt::Result<usize, rt::EncodeError> {
+        fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             Response::encode(self, address, buf)
         }
         #[inline]
@@ -742,11 +622,78 @@ pub mod unaddressed {
     pub type StreamDecoder = ::busspec_runtime::stream::StreamDecoder<Unaddressed>;
     /// What [`StreamDecoder`] finds in a stream.
     pub type Event = ::busspec_runtime::stream::Event<Request, Response>;
-    /// Each request as a struct of its own (its `DESC` names it as refusals do: name,
-    /// code and the frame lengths of its code), and each field a refusal names
-    /// (`message.field`, `FieldDesc`).
+    impl request::ReadTemperature {
+        pub const NAME: &'static str = "read_temperature";
+        pub const CODE: &'static [u8] = &[0x10];
+        pub const LEN: usize = 5;
+        pub const DESC: rt::MessageDesc = rt::desc(Self::NAME, 0x10, 1, &[5]);
+        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            Request::ReadTemperature(*self).encode(address, buf)
+        }
+    }
+    impl request::SetRate {
+        pub const NAME: &'static str = "set_rate";
+        pub const CODE: &'static [u8] = &[0x20];
+        pub const LEN: usize = 7;
+        pub const DESC: rt::MessageDesc = rt::desc(Self::NAME, 0x20, 1, &[7]);
+        pub const RATE: rt::Range<usize> = 4..6;
+        pub const RATE_DESC: rt::FieldDesc = rt::field(Self::NAME, "rate");
+        pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
+            f("rate", rt::Int(self.rate as i64));
+        }
+        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            Request::SetRate(*self).encode(address, buf)
+        }
+    }
+    impl request::ReadVersion {
+        pub const NAME: &'static str = "read_version";
+        pub const CODE: &'static [u8] = &[0x30];
+        pub const LEN: usize = 5;
+        pub const DESC: rt::MessageDesc = rt::desc(Self::NAME, 0x30, 1, &[5]);
+        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            Request::ReadVersion(*self).encode(address, buf)
+        }
+    }
+    impl response::Temperature {
+        pub const NAME: &'static str = "temperature";
+        pub const CODE: &'static [u8] = &[0x90];
+        pub const LEN: usize = 7;
+        pub const DESC: rt::MessageDesc = rt::desc(Self::NAME, 0x90, 1, &[7]);
+        pub const TEMPERATURE: rt::Range<usize> = 4..6;
+        pub const TEMPERATURE_DESC: rt::FieldDesc = rt::field(Self::NAME, "temperature");
+        pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
+            f("temperature", rt::Int(self.temperature.raw() as i64));
+        }
+        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            Response::Temperature(*self).encode(address, buf)
+        }
+    }
+    impl response::Ack {
+        pub const NAME: &'static str = "ack";
+        pub const CODE: &'static [u8] = &[0xA0];
+        pub const LEN: usize = 5;
+        pub const DESC: rt::MessageDesc = rt::desc(Self::NAME, 0xA0, 1, &[5]);
+        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            Response::Ack(*self).encode(address, buf)
+        }
+    }
+    impl response::Version {
+        pub const NAME: &'static str = "version";
+        pub const CODE: &'static [u8] = &[0xB0];
+        pub const LEN: usize = 9;
+        pub const DESC: rt::MessageDesc = rt::desc(Self::NAME, 0xB0, 1, &[9]);
+        pub const VERSION: rt::Range<usize> = 4..8;
+        pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
+            f("version", rt::Text(&self.version[..]));
+        }
+        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            Response::Version(*self).encode(address, buf)
+        }
+    }
+    /// Each request as a struct of its own; its constants (`DESC`, which names it as
+    /// refusals do: name, code and the frame lengths of its code; `QUANTITY_DESC`, each
+    /// field a refusal names) and methods are in the `impl` of each.
     pub mod request {
-        use ::busspec_runtime::FieldDesc;
         /// §3.1 Read temperature (code `0x10`, 5 bytes).
         #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
         #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
@@ -766,12 +713,9 @@ pub mod unaddressed {
         #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
         #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]
         pub struct ReadVersion;
-        /// `set_rate.rate`
-        pub const SET_RATE_RATE: FieldDesc = FieldDesc::new("set_rate", "rate");
     }
-    /// Each response as a struct of its own, and the fields its refusals name.
+    /// Each response as a struct of its own.
     pub mod response {
-        use ::busspec_runtime::FieldDesc;
         /// §4.1 Temperature (code `0x90`, 7 bytes).
         #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
         #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
@@ -794,10 +738,5 @@ pub mod unaddressed {
         pub struct Version {
             pub version: super::rt::Ascii<4>,
         }
-        /// `temperature.temperature`
-        pub const TEMPERATURE_TEMPERATURE: FieldDesc = FieldDesc::new(
-            "temperature",
-            "temperature",
-        );
     }
 }

@@ -283,7 +283,7 @@ pub mod xbee_api2 {
     }
     /// Where `at_command.parameter` sits in the frame and how its elements are counted.
     pub const REPEAT_AT_COMMAND: rt::RepeatAt = rt::RepeatAt {
-        field: &request::AT_COMMAND_PARAMETER,
+        field: &request::AtCommand::PARAMETER_DESC,
         base: 8,
         at: 7,
         width: 1,
@@ -293,7 +293,7 @@ pub mod xbee_api2 {
     };
     /// Where `transmit_request.data` sits in the frame and how its elements are counted.
     pub const REPEAT_TRANSMIT_REQUEST: rt::RepeatAt = rt::RepeatAt {
-        field: &request::TRANSMIT_REQUEST_DATA,
+        field: &request::TransmitRequest::DATA_DESC,
         base: 18,
         at: 17,
         width: 1,
@@ -301,56 +301,6 @@ pub mod xbee_api2 {
         min: 0,
         max: 72,
     };
-    impl request::AtCommand {
-        pub const NAME: &'static str = "at_command";
-        pub const CODE: &'static [u8] = &[0x08];
-        pub const MIN_LEN: usize = 8;
-        pub const MAX_LEN: usize = 28;
-        pub const DESC: rt::MessageDesc = rt::MessageDesc::new(
-            Self::NAME,
-            0x08,
-            1,
-            &[8],
-        );
-        pub const FRAME_ID: rt::Range<usize> = 4..5;
-        pub const COMMAND: rt::Range<usize> = 5..7;
-        pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
-            f("frame_id", rt::Int(self.frame_id as i64));
-            f("command", rt::Text(&self.command[..]));
-            f("parameter", rt::List(self.parameter.elements()));
-        }
-        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
-            Request::AtCommand(*self).encode(address, buf)
-        }
-    }
-    impl request::TransmitRequest {
-        pub const NAME: &'static str = "transmit_request";
-        pub const CODE: &'static [u8] = &[0x10];
-        pub const MIN_LEN: usize = 18;
-        pub const MAX_LEN: usize = 90;
-        pub const DESC: rt::MessageDesc = rt::MessageDesc::new(
-            Self::NAME,
-            0x10,
-            1,
-            &[18],
-        );
-        pub const FRAME_ID: rt::Range<usize> = 4..5;
-        pub const DESTINATION64: rt::Range<usize> = 5..13;
-        pub const DESTINATION16: rt::Range<usize> = 13..15;
-        pub const RADIUS: rt::Range<usize> = 15..16;
-        pub const OPTIONS: rt::Range<usize> = 16..17;
-        pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
-            f("frame_id", rt::Int(self.frame_id as i64));
-            f("destination64", rt::Int(self.destination64 as i64));
-            f("destination16", rt::Int(self.destination16 as i64));
-            f("radius", rt::Int(self.radius as i64));
-            f("options", rt::Int(self.options as i64));
-            f("data", rt::List(self.data.elements()));
-        }
-        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
-            Request::TransmitRequest(*self).encode(address, buf)
-        }
-    }
     ///A request (command), host to device.
     #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
     #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
@@ -384,13 +334,13 @@ pub mod xbee_api2 {
         /// The length of this message's frame, in bytes.
         pub const fn frame_len(&self) -> usize {
             match self {
-                Self::AtCommand(request::AtCommand { parameter: v_parameter, .. }) => {
+                Self::AtCommand(m) => {
                     REPEAT_AT_COMMAND.base
-                        + REPEAT_AT_COMMAND.bytes_of(v_parameter.len())
+                        + REPEAT_AT_COMMAND.bytes_of(m.parameter.len())
                 }
-                Self::TransmitRequest(request::TransmitRequest { data: v_data, .. }) => {
+                Self::TransmitRequest(m) => {
                     REPEAT_TRANSMIT_REQUEST.base
-                        + REPEAT_TRANSMIT_REQUEST.bytes_of(v_data.len())
+                        + REPEAT_TRANSMIT_REQUEST.bytes_of(m.data.len())
                 }
                 _ => Self::MESSAGES[self.index()].2,
             }
@@ -409,11 +359,7 @@ pub mod xbee_api2 {
         ///
         /// The frame is written escaped (`framing.escaping`); `buf` of `MAX_FRAME_LEN`
         /// bytes holds any.
-        pub fn encode(
-            &self,
-            address: u8,
-            buf: &mut [u8],
-        ) -> rt::Result<usize, rt::EncodeError> {
+        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             let mut plain = [0u8; UNESCAPED_LEN];
             let len = self.encode_unescaped(address, &mut plain)?;
             rt::escape_frame(
@@ -424,11 +370,7 @@ pub mod xbee_api2 {
             )
         }
         /// The frame before escaping, into `buf`.
-        fn encode_unescaped(
-            &self,
-            address: u8,
-            buf: &mut [u8],
-        ) -> rt::Result<usize, rt::EncodeError> {
+        fn encode_unescaped(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             rt::encode_address(address, &FRAME)?;
             let len = match *self {
                 Self::AtCommand(
@@ -557,33 +499,27 @@ pub mod xbee_api2 {
             name: &str,
             mut field: impl FnMut(&'static str) -> rt::Option<rt::FieldValue<'v>>,
         ) -> rt::Result<Self, rt::FieldError> {
-            match name {
+            let message = match name {
                 "at_command" => {
-                    rt::Ok(
-                        Self::AtCommand(request::AtCommand {
-                            frame_id: rt::get(&mut field, "frame_id")?,
-                            command: rt::text(&mut field, "command")?,
-                            parameter: rt::list::<
-                                u8,
-                                20,
-                            >(&mut field, "parameter", 0, 255)?,
-                        }),
-                    )
+                    Self::AtCommand(request::AtCommand {
+                        frame_id: rt::get(&mut field, "frame_id")?,
+                        command: rt::text(&mut field, "command")?,
+                        parameter: rt::list::<u8, 20>(&mut field, "parameter", 0, 255)?,
+                    })
                 }
                 "transmit_request" => {
-                    rt::Ok(
-                        Self::TransmitRequest(request::TransmitRequest {
-                            frame_id: rt::get(&mut field, "frame_id")?,
-                            destination64: rt::get(&mut field, "destination64")?,
-                            destination16: rt::get(&mut field, "destination16")?,
-                            radius: rt::get(&mut field, "radius")?,
-                            options: rt::get(&mut field, "options")?,
-                            data: rt::list::<u8, 72>(&mut field, "data", 0, 255)?,
-                        }),
-                    )
+                    Self::TransmitRequest(request::TransmitRequest {
+                        frame_id: rt::get(&mut field, "frame_id")?,
+                        destination64: rt::get(&mut field, "destination64")?,
+                        destination16: rt::get(&mut field, "destination16")?,
+                        radius: rt::get(&mut field, "radius")?,
+                        options: rt::get(&mut field, "options")?,
+                        data: rt::list::<u8, 72>(&mut field, "data", 0, 255)?,
+                    })
                 }
-                _ => rt::Err(rt::FieldError::UnknownMessage),
-            }
+                _ => return rt::Err(rt::FieldError::UnknownMessage),
+            };
+            rt::Ok(message)
         }
     }
     impl rt::Message for Request {
@@ -604,11 +540,7 @@ pub mod xbee_api2 {
             Request::visit(self, f)
         }
         #[inline]
-        fn encode(
-            &self,
-            address: u8,
-            buf: &mut [u8],
-        ) -> rt::Result<usize, rt::EncodeError> {
+        fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             Request::encode(self, address, buf)
         }
         #[inline]
@@ -651,7 +583,7 @@ pub mod xbee_api2 {
     }
     /// Where `at_response.data` sits in the frame and how its elements are counted.
     pub const REPEAT_AT_RESPONSE: rt::RepeatAt = rt::RepeatAt {
-        field: &response::AT_RESPONSE_DATA,
+        field: &response::AtResponse::DATA_DESC,
         base: 9,
         at: 8,
         width: 1,
@@ -661,7 +593,7 @@ pub mod xbee_api2 {
     };
     /// Where `receive_packet.data` sits in the frame and how its elements are counted.
     pub const REPEAT_RECEIVE_PACKET: rt::RepeatAt = rt::RepeatAt {
-        field: &response::RECEIVE_PACKET_DATA,
+        field: &response::ReceivePacket::DATA_DESC,
         base: 16,
         at: 15,
         width: 1,
@@ -669,98 +601,6 @@ pub mod xbee_api2 {
         min: 0,
         max: 72,
     };
-    impl response::AtResponse {
-        pub const NAME: &'static str = "at_response";
-        pub const CODE: &'static [u8] = &[0x88];
-        pub const MIN_LEN: usize = 9;
-        pub const MAX_LEN: usize = 29;
-        pub const DESC: rt::MessageDesc = rt::MessageDesc::new(
-            Self::NAME,
-            0x88,
-            1,
-            &[9],
-        );
-        pub const FRAME_ID: rt::Range<usize> = 4..5;
-        pub const COMMAND: rt::Range<usize> = 5..7;
-        pub const STATUS: rt::Range<usize> = 7..8;
-        pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
-            f("frame_id", rt::Int(self.frame_id as i64));
-            f("command", rt::Text(&self.command[..]));
-            f("status", rt::Int(self.status.raw() as i64));
-            f("data", rt::List(self.data.elements()));
-        }
-        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
-            Response::AtResponse(*self).encode(address, buf)
-        }
-    }
-    impl response::TransmitStatus {
-        pub const NAME: &'static str = "transmit_status";
-        pub const CODE: &'static [u8] = &[0x8B];
-        pub const LEN: usize = 11;
-        pub const DESC: rt::MessageDesc = rt::MessageDesc::new(
-            Self::NAME,
-            0x8B,
-            1,
-            &[11],
-        );
-        pub const FRAME_ID: rt::Range<usize> = 4..5;
-        pub const DESTINATION16: rt::Range<usize> = 5..7;
-        pub const RETRIES: rt::Range<usize> = 7..8;
-        pub const DELIVERY: rt::Range<usize> = 8..9;
-        pub const DISCOVERY: rt::Range<usize> = 9..10;
-        pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
-            f("frame_id", rt::Int(self.frame_id as i64));
-            f("destination16", rt::Int(self.destination16 as i64));
-            f("retries", rt::Int(self.retries as i64));
-            f("delivery", rt::Int(self.delivery.raw() as i64));
-            f("discovery", rt::Int(self.discovery as i64));
-        }
-        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
-            Response::TransmitStatus(*self).encode(address, buf)
-        }
-    }
-    impl response::ModemStatus {
-        pub const NAME: &'static str = "modem_status";
-        pub const CODE: &'static [u8] = &[0x8A];
-        pub const LEN: usize = 6;
-        pub const DESC: rt::MessageDesc = rt::MessageDesc::new(
-            Self::NAME,
-            0x8A,
-            1,
-            &[6],
-        );
-        pub const STATUS: rt::Range<usize> = 4..5;
-        pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
-            f("status", rt::Int(self.status.raw() as i64));
-        }
-        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
-            Response::ModemStatus(*self).encode(address, buf)
-        }
-    }
-    impl response::ReceivePacket {
-        pub const NAME: &'static str = "receive_packet";
-        pub const CODE: &'static [u8] = &[0x90];
-        pub const MIN_LEN: usize = 16;
-        pub const MAX_LEN: usize = 88;
-        pub const DESC: rt::MessageDesc = rt::MessageDesc::new(
-            Self::NAME,
-            0x90,
-            1,
-            &[16],
-        );
-        pub const SOURCE64: rt::Range<usize> = 4..12;
-        pub const SOURCE16: rt::Range<usize> = 12..14;
-        pub const OPTIONS: rt::Range<usize> = 14..15;
-        pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
-            f("source64", rt::Int(self.source64 as i64));
-            f("source16", rt::Int(self.source16 as i64));
-            f("options", rt::Int(self.options as i64));
-            f("data", rt::List(self.data.elements()));
-        }
-        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
-            Response::ReceivePacket(*self).encode(address, buf)
-        }
-    }
     ///A response, device to host.
     #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
     #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
@@ -800,12 +640,12 @@ pub mod xbee_api2 {
         /// The length of this message's frame, in bytes.
         pub const fn frame_len(&self) -> usize {
             match self {
-                Self::AtResponse(response::AtResponse { data: v_data, .. }) => {
-                    REPEAT_AT_RESPONSE.base + REPEAT_AT_RESPONSE.bytes_of(v_data.len())
+                Self::AtResponse(m) => {
+                    REPEAT_AT_RESPONSE.base + REPEAT_AT_RESPONSE.bytes_of(m.data.len())
                 }
-                Self::ReceivePacket(response::ReceivePacket { data: v_data, .. }) => {
+                Self::ReceivePacket(m) => {
                     REPEAT_RECEIVE_PACKET.base
-                        + REPEAT_RECEIVE_PACKET.bytes_of(v_data.len())
+                        + REPEAT_RECEIVE_PACKET.bytes_of(m.data.len())
                 }
                 _ => Self::MESSAGES[self.index()].2,
             }
@@ -826,11 +666,7 @@ pub mod xbee_api2 {
         ///
         /// The frame is written escaped (`framing.escaping`); `buf` of `MAX_FRAME_LEN`
         /// bytes holds any.
-        pub fn encode(
-            &self,
-            address: u8,
-            buf: &mut [u8],
-        ) -> rt::Result<usize, rt::EncodeError> {
+        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             let mut plain = [0u8; UNESCAPED_LEN];
             let len = self.encode_unescaped(address, &mut plain)?;
             rt::escape_frame(
@@ -841,11 +677,7 @@ pub mod xbee_api2 {
             )
         }
         /// The frame before escaping, into `buf`.
-        fn encode_unescaped(
-            &self,
-            address: u8,
-            buf: &mut [u8],
-        ) -> rt::Result<usize, rt::EncodeError> {
+        fn encode_unescaped(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             rt::encode_address(address, &FRAME)?;
             let len = match *self {
                 Self::AtResponse(
@@ -1040,49 +872,42 @@ pub mod xbee_api2 {
             name: &str,
             mut field: impl FnMut(&'static str) -> rt::Option<rt::FieldValue<'v>>,
         ) -> rt::Result<Self, rt::FieldError> {
-            match name {
+            let message = match name {
                 "at_response" => {
-                    rt::Ok(
-                        Self::AtResponse(response::AtResponse {
-                            frame_id: rt::get(&mut field, "frame_id")?,
-                            command: rt::text(&mut field, "command")?,
-                            status: AtStatus::from_raw(rt::get(&mut field, "status")?),
-                            data: rt::list::<u8, 20>(&mut field, "data", 0, 255)?,
-                        }),
-                    )
+                    Self::AtResponse(response::AtResponse {
+                        frame_id: rt::get(&mut field, "frame_id")?,
+                        command: rt::text(&mut field, "command")?,
+                        status: AtStatus::from_raw(rt::get(&mut field, "status")?),
+                        data: rt::list::<u8, 20>(&mut field, "data", 0, 255)?,
+                    })
                 }
                 "transmit_status" => {
-                    rt::Ok(
-                        Self::TransmitStatus(response::TransmitStatus {
-                            frame_id: rt::get(&mut field, "frame_id")?,
-                            destination16: rt::get(&mut field, "destination16")?,
-                            retries: rt::get(&mut field, "retries")?,
-                            delivery: DeliveryStatus::from_raw(
-                                rt::get(&mut field, "delivery")?,
-                            ),
-                            discovery: rt::get(&mut field, "discovery")?,
-                        }),
-                    )
+                    Self::TransmitStatus(response::TransmitStatus {
+                        frame_id: rt::get(&mut field, "frame_id")?,
+                        destination16: rt::get(&mut field, "destination16")?,
+                        retries: rt::get(&mut field, "retries")?,
+                        delivery: DeliveryStatus::from_raw(
+                            rt::get(&mut field, "delivery")?,
+                        ),
+                        discovery: rt::get(&mut field, "discovery")?,
+                    })
                 }
                 "modem_status" => {
-                    rt::Ok(
-                        Self::ModemStatus(response::ModemStatus {
-                            status: ModemStatus::from_raw(rt::get(&mut field, "status")?),
-                        }),
-                    )
+                    Self::ModemStatus(response::ModemStatus {
+                        status: ModemStatus::from_raw(rt::get(&mut field, "status")?),
+                    })
                 }
                 "receive_packet" => {
-                    rt::Ok(
-                        Self::ReceivePacket(response::ReceivePacket {
-                            source64: rt::get(&mut field, "source64")?,
-                            source16: rt::get(&mut field, "source16")?,
-                            options: rt::get(&mut field, "options")?,
-                            data: rt::list::<u8, 72>(&mut field, "data", 0, 255)?,
-                        }),
-                    )
+                    Self::ReceivePacket(response::ReceivePacket {
+                        source64: rt::get(&mut field, "source64")?,
+                        source16: rt::get(&mut field, "source16")?,
+                        options: rt::get(&mut field, "options")?,
+                        data: rt::list::<u8, 72>(&mut field, "data", 0, 255)?,
+                    })
                 }
-                _ => rt::Err(rt::FieldError::UnknownMessage),
-            }
+                _ => return rt::Err(rt::FieldError::UnknownMessage),
+            };
+            rt::Ok(message)
         }
     }
     impl rt::Message for Response {
@@ -1103,11 +928,7 @@ pub mod xbee_api2 {
             Response::visit(self, f)
         }
         #[inline]
-        fn encode(
-            &self,
-            address: u8,
-            buf: &mut [u8],
-        ) -> rt::Result<usize, rt::EncodeError> {
+        fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             Response::encode(self, address, buf)
         }
         #[inline]
@@ -1220,11 +1041,126 @@ pub mod xbee_api2 {
     pub type StreamDecoder = ::busspec_runtime::stream::StreamDecoder<XbeeApi2>;
     /// What [`StreamDecoder`] finds in a stream.
     pub type Event = ::busspec_runtime::stream::Event<Request, Response>;
-    /// Each request as a struct of its own (its `DESC` names it as refusals do: name,
-    /// code and the frame lengths of its code), and each field a refusal names
-    /// (`message.field`, `FieldDesc`).
+    impl request::AtCommand {
+        pub const NAME: &'static str = "at_command";
+        pub const CODE: &'static [u8] = &[0x08];
+        pub const MIN_LEN: usize = 8;
+        pub const MAX_LEN: usize = 28;
+        pub const DESC: rt::MessageDesc = rt::desc(Self::NAME, 0x08, 1, &[8]);
+        pub const FRAME_ID: rt::Range<usize> = 4..5;
+        pub const COMMAND: rt::Range<usize> = 5..7;
+        pub const PARAMETER_DESC: rt::FieldDesc = rt::field(Self::NAME, "parameter");
+        pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
+            f("frame_id", rt::Int(self.frame_id as i64));
+            f("command", rt::Text(&self.command[..]));
+            f("parameter", rt::List(self.parameter.elements()));
+        }
+        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            Request::AtCommand(*self).encode(address, buf)
+        }
+    }
+    impl request::TransmitRequest {
+        pub const NAME: &'static str = "transmit_request";
+        pub const CODE: &'static [u8] = &[0x10];
+        pub const MIN_LEN: usize = 18;
+        pub const MAX_LEN: usize = 90;
+        pub const DESC: rt::MessageDesc = rt::desc(Self::NAME, 0x10, 1, &[18]);
+        pub const FRAME_ID: rt::Range<usize> = 4..5;
+        pub const DESTINATION64: rt::Range<usize> = 5..13;
+        pub const DESTINATION16: rt::Range<usize> = 13..15;
+        pub const RADIUS: rt::Range<usize> = 15..16;
+        pub const OPTIONS: rt::Range<usize> = 16..17;
+        pub const DATA_DESC: rt::FieldDesc = rt::field(Self::NAME, "data");
+        pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
+            f("frame_id", rt::Int(self.frame_id as i64));
+            f("destination64", rt::Int(self.destination64 as i64));
+            f("destination16", rt::Int(self.destination16 as i64));
+            f("radius", rt::Int(self.radius as i64));
+            f("options", rt::Int(self.options as i64));
+            f("data", rt::List(self.data.elements()));
+        }
+        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            Request::TransmitRequest(*self).encode(address, buf)
+        }
+    }
+    impl response::AtResponse {
+        pub const NAME: &'static str = "at_response";
+        pub const CODE: &'static [u8] = &[0x88];
+        pub const MIN_LEN: usize = 9;
+        pub const MAX_LEN: usize = 29;
+        pub const DESC: rt::MessageDesc = rt::desc(Self::NAME, 0x88, 1, &[9]);
+        pub const FRAME_ID: rt::Range<usize> = 4..5;
+        pub const COMMAND: rt::Range<usize> = 5..7;
+        pub const STATUS: rt::Range<usize> = 7..8;
+        pub const DATA_DESC: rt::FieldDesc = rt::field(Self::NAME, "data");
+        pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
+            f("frame_id", rt::Int(self.frame_id as i64));
+            f("command", rt::Text(&self.command[..]));
+            f("status", rt::Int(self.status.raw() as i64));
+            f("data", rt::List(self.data.elements()));
+        }
+        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            Response::AtResponse(*self).encode(address, buf)
+        }
+    }
+    impl response::TransmitStatus {
+        pub const NAME: &'static str = "transmit_status";
+        pub const CODE: &'static [u8] = &[0x8B];
+        pub const LEN: usize = 11;
+        pub const DESC: rt::MessageDesc = rt::desc(Self::NAME, 0x8B, 1, &[11]);
+        pub const FRAME_ID: rt::Range<usize> = 4..5;
+        pub const DESTINATION16: rt::Range<usize> = 5..7;
+        pub const RETRIES: rt::Range<usize> = 7..8;
+        pub const DELIVERY: rt::Range<usize> = 8..9;
+        pub const DISCOVERY: rt::Range<usize> = 9..10;
+        pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
+            f("frame_id", rt::Int(self.frame_id as i64));
+            f("destination16", rt::Int(self.destination16 as i64));
+            f("retries", rt::Int(self.retries as i64));
+            f("delivery", rt::Int(self.delivery.raw() as i64));
+            f("discovery", rt::Int(self.discovery as i64));
+        }
+        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            Response::TransmitStatus(*self).encode(address, buf)
+        }
+    }
+    impl response::ModemStatus {
+        pub const NAME: &'static str = "modem_status";
+        pub const CODE: &'static [u8] = &[0x8A];
+        pub const LEN: usize = 6;
+        pub const DESC: rt::MessageDesc = rt::desc(Self::NAME, 0x8A, 1, &[6]);
+        pub const STATUS: rt::Range<usize> = 4..5;
+        pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
+            f("status", rt::Int(self.status.raw() as i64));
+        }
+        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            Response::ModemStatus(*self).encode(address, buf)
+        }
+    }
+    impl response::ReceivePacket {
+        pub const NAME: &'static str = "receive_packet";
+        pub const CODE: &'static [u8] = &[0x90];
+        pub const MIN_LEN: usize = 16;
+        pub const MAX_LEN: usize = 88;
+        pub const DESC: rt::MessageDesc = rt::desc(Self::NAME, 0x90, 1, &[16]);
+        pub const SOURCE64: rt::Range<usize> = 4..12;
+        pub const SOURCE16: rt::Range<usize> = 12..14;
+        pub const OPTIONS: rt::Range<usize> = 14..15;
+        pub const DATA_DESC: rt::FieldDesc = rt::field(Self::NAME, "data");
+        pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
+            f("source64", rt::Int(self.source64 as i64));
+            f("source16", rt::Int(self.source16 as i64));
+            f("options", rt::Int(self.options as i64));
+            f("data", rt::List(self.data.elements()));
+        }
+        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            Response::ReceivePacket(*self).encode(address, buf)
+        }
+    }
+    /// Each request as a struct of its own; its constants (`DESC`, which names it as
+    /// refusals do: name, code and the frame lengths of its code; `QUANTITY_DESC`, each
+    /// field a refusal names) and methods are in the `impl` of each.
     pub mod request {
-        use ::busspec_runtime::FieldDesc;
         /// §0x08 AT Command AT Command (0x08) (code `0x08`, 8 to 28 bytes).
         #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
         #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
@@ -1254,20 +1190,9 @@ pub mod xbee_api2 {
             pub options: u8,
             pub data: super::rt::Repeated<u8, 72>,
         }
-        /// `at_command.parameter`
-        pub const AT_COMMAND_PARAMETER: FieldDesc = FieldDesc::new(
-            "at_command",
-            "parameter",
-        );
-        /// `transmit_request.data`
-        pub const TRANSMIT_REQUEST_DATA: FieldDesc = FieldDesc::new(
-            "transmit_request",
-            "data",
-        );
     }
-    /// Each response as a struct of its own, and the fields its refusals name.
+    /// Each response as a struct of its own.
     pub mod response {
-        use ::busspec_runtime::FieldDesc;
         /// §0x88 AT Command Response AT Command Response (0x88) (code `0x88`, 9 to 29 bytes).
         #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
         #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
@@ -1310,12 +1235,5 @@ pub mod xbee_api2 {
             pub options: u8,
             pub data: super::rt::Repeated<u8, 72>,
         }
-        /// `at_response.data`
-        pub const AT_RESPONSE_DATA: FieldDesc = FieldDesc::new("at_response", "data");
-        /// `receive_packet.data`
-        pub const RECEIVE_PACKET_DATA: FieldDesc = FieldDesc::new(
-            "receive_packet",
-            "data",
-        );
     }
 }
