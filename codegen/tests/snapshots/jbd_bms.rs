@@ -245,60 +245,6 @@ pub mod jbd_bms {
             self.0 as u64
         }
     }
-    impl request::ReadBasicInfo {
-        pub const NAME: &'static str = "read_basic_info";
-        pub const CODE: &'static [u8] = &[0x03];
-        pub const LEN: usize = 7;
-        pub const DESC: rt::MessageDesc = rt::MessageDesc::new(
-            Self::NAME,
-            0x03,
-            1,
-            &[7],
-        );
-        pub const STATE_OR_REGISTER: rt::Range<usize> = 1..2;
-        pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
-            f("state_or_register", rt::Int(self.state_or_register as i64));
-        }
-        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
-            Request::ReadBasicInfo(*self).encode(address, buf)
-        }
-    }
-    impl request::ReadCellVoltages {
-        pub const NAME: &'static str = "read_cell_voltages";
-        pub const CODE: &'static [u8] = &[0x04];
-        pub const LEN: usize = 7;
-        pub const DESC: rt::MessageDesc = rt::MessageDesc::new(
-            Self::NAME,
-            0x04,
-            1,
-            &[7],
-        );
-        pub const STATE_OR_REGISTER: rt::Range<usize> = 1..2;
-        pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
-            f("state_or_register", rt::Int(self.state_or_register as i64));
-        }
-        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
-            Request::ReadCellVoltages(*self).encode(address, buf)
-        }
-    }
-    impl request::ReadVersion {
-        pub const NAME: &'static str = "read_version";
-        pub const CODE: &'static [u8] = &[0x05];
-        pub const LEN: usize = 7;
-        pub const DESC: rt::MessageDesc = rt::MessageDesc::new(
-            Self::NAME,
-            0x05,
-            1,
-            &[7],
-        );
-        pub const STATE_OR_REGISTER: rt::Range<usize> = 1..2;
-        pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
-            f("state_or_register", rt::Int(self.state_or_register as i64));
-        }
-        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
-            Request::ReadVersion(*self).encode(address, buf)
-        }
-    }
     ///A request (command), host to device.
     #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
     #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
@@ -348,11 +294,7 @@ pub mod jbd_bms {
         /// Encodes the frame for `address` into `buf`; returns the frame length. Refuses what
         /// decode refuses: an address no frame may carry, the broadcast address for a command
         /// that does not accept it, a value outside its field's range.
-        pub fn encode(
-            &self,
-            address: u8,
-            buf: &mut [u8],
-        ) -> rt::Result<usize, rt::EncodeError> {
+        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             rt::encode_address(address, &FRAME)?;
             let out = rt::frame_mut::<7>(buf, &[])?;
             let len = match *self {
@@ -438,30 +380,25 @@ pub mod jbd_bms {
             name: &str,
             mut field: impl FnMut(&'static str) -> rt::Option<rt::FieldValue<'v>>,
         ) -> rt::Result<Self, rt::FieldError> {
-            match name {
+            let message = match name {
                 "read_basic_info" => {
-                    rt::Ok(
-                        Self::ReadBasicInfo(request::ReadBasicInfo {
-                            state_or_register: rt::get(&mut field, "state_or_register")?,
-                        }),
-                    )
+                    Self::ReadBasicInfo(request::ReadBasicInfo {
+                        state_or_register: rt::get(&mut field, "state_or_register")?,
+                    })
                 }
                 "read_cell_voltages" => {
-                    rt::Ok(
-                        Self::ReadCellVoltages(request::ReadCellVoltages {
-                            state_or_register: rt::get(&mut field, "state_or_register")?,
-                        }),
-                    )
+                    Self::ReadCellVoltages(request::ReadCellVoltages {
+                        state_or_register: rt::get(&mut field, "state_or_register")?,
+                    })
                 }
                 "read_version" => {
-                    rt::Ok(
-                        Self::ReadVersion(request::ReadVersion {
-                            state_or_register: rt::get(&mut field, "state_or_register")?,
-                        }),
-                    )
+                    Self::ReadVersion(request::ReadVersion {
+                        state_or_register: rt::get(&mut field, "state_or_register")?,
+                    })
                 }
-                _ => rt::Err(rt::FieldError::UnknownMessage),
-            }
+                _ => return rt::Err(rt::FieldError::UnknownMessage),
+            };
+            rt::Ok(message)
         }
     }
     impl rt::Message for Request {
@@ -482,11 +419,7 @@ pub mod jbd_bms {
             Request::visit(self, f)
         }
         #[inline]
-        fn encode(
-            &self,
-            address: u8,
-            buf: &mut [u8],
-        ) -> rt::Result<usize, rt::EncodeError> {
+        fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             Request::encode(self, address, buf)
         }
         #[inline]
@@ -526,7 +459,7 @@ pub mod jbd_bms {
     }
     /// Where `basic_info.temperatures` sits in the frame and how its elements are counted.
     pub const REPEAT_BASIC_INFO: rt::RepeatAt = rt::RepeatAt {
-        field: &response::BASIC_INFO_TEMPERATURES,
+        field: &response::BasicInfo::TEMPERATURES_DESC,
         base: 30,
         at: 27,
         width: 2,
@@ -541,7 +474,7 @@ pub mod jbd_bms {
     };
     /// Where `cell_voltages.cell_voltages` sits in the frame and how its elements are counted.
     pub const REPEAT_CELL_VOLTAGES: rt::RepeatAt = rt::RepeatAt {
-        field: &response::CELL_VOLTAGES_CELL_VOLTAGES,
+        field: &response::CellVoltages::CELL_VOLTAGES_DESC,
         base: 7,
         at: 4,
         width: 2,
@@ -551,7 +484,7 @@ pub mod jbd_bms {
     };
     /// Where `version.version` sits in the frame and how its elements are counted.
     pub const REPEAT_VERSION: rt::RepeatAt = rt::RepeatAt {
-        field: &response::VERSION_VERSION,
+        field: &response::Version::VERSION_DESC,
         base: 7,
         at: 4,
         width: 1,
@@ -559,110 +492,6 @@ pub mod jbd_bms {
         min: 1,
         max: 32,
     };
-    impl response::BasicInfo {
-        pub const NAME: &'static str = "basic_info";
-        pub const CODE: &'static [u8] = &[0x00];
-        pub const MIN_LEN: usize = 30;
-        pub const MAX_LEN: usize = 46;
-        pub const DESC: rt::MessageDesc = rt::MessageDesc::new(
-            Self::NAME,
-            0x00,
-            1,
-            &[7, 30],
-        );
-        pub const STATE_OR_REGISTER: rt::Range<usize> = 1..2;
-        pub const TOTAL_VOLTAGE: rt::Range<usize> = 4..6;
-        pub const CURRENT: rt::Range<usize> = 6..8;
-        pub const REMAINING_CAPACITY: rt::Range<usize> = 8..10;
-        pub const NOMINAL_CAPACITY: rt::Range<usize> = 10..12;
-        pub const CYCLES: rt::Range<usize> = 12..14;
-        pub const PRODUCTION_DATE: rt::Range<usize> = 14..16;
-        pub const BALANCE_LOW: rt::Range<usize> = 16..18;
-        pub const BALANCE_HIGH: rt::Range<usize> = 18..20;
-        pub const PROTECTION: rt::Range<usize> = 20..22;
-        pub const SOFTWARE_VERSION: rt::Range<usize> = 22..23;
-        pub const SOC: rt::Range<usize> = 23..24;
-        pub const FET_CONTROL: rt::Range<usize> = 24..25;
-        pub const CELLS: rt::Range<usize> = 25..26;
-        pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
-            f("state_or_register", rt::Int(self.state_or_register as i64));
-            f("total_voltage", rt::Int(self.total_voltage.raw() as i64));
-            f("current", rt::Int(self.current.raw() as i64));
-            f("remaining_capacity", rt::Int(self.remaining_capacity.raw() as i64));
-            f("nominal_capacity", rt::Int(self.nominal_capacity.raw() as i64));
-            f("cycles", rt::Int(self.cycles as i64));
-            f("production_date", rt::Int(self.production_date as i64));
-            f("balance_low", rt::Int(self.balance_low as i64));
-            f("balance_high", rt::Int(self.balance_high as i64));
-            f("protection", rt::Int(self.protection as i64));
-            f("software_version", rt::Int(self.software_version as i64));
-            f("soc", rt::Int(self.soc as i64));
-            f("fet_control", rt::Int(self.fet_control as i64));
-            f("cells", rt::Int(self.cells as i64));
-            f("temperatures", rt::List(self.temperatures.table()));
-        }
-        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
-            Response::BasicInfo(*self).encode(address, buf)
-        }
-    }
-    impl response::CellVoltages {
-        pub const NAME: &'static str = "cell_voltages";
-        pub const CODE: &'static [u8] = &[0x00];
-        pub const MIN_LEN: usize = 9;
-        pub const MAX_LEN: usize = 71;
-        pub const DESC: rt::MessageDesc = rt::MessageDesc::new(
-            Self::NAME,
-            0x00,
-            1,
-            &[7, 30],
-        );
-        pub const STATE_OR_REGISTER: rt::Range<usize> = 1..2;
-        pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
-            f("state_or_register", rt::Int(self.state_or_register as i64));
-            f("cell_voltages", rt::List(self.cell_voltages.elements()));
-        }
-        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
-            Response::CellVoltages(*self).encode(address, buf)
-        }
-    }
-    impl response::Version {
-        pub const NAME: &'static str = "version";
-        pub const CODE: &'static [u8] = &[0x00];
-        pub const MIN_LEN: usize = 8;
-        pub const MAX_LEN: usize = 39;
-        pub const DESC: rt::MessageDesc = rt::MessageDesc::new(
-            Self::NAME,
-            0x00,
-            1,
-            &[7, 30],
-        );
-        pub const STATE_OR_REGISTER: rt::Range<usize> = 1..2;
-        pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
-            f("state_or_register", rt::Int(self.state_or_register as i64));
-            f("version", rt::Text(self.version.as_slice()));
-        }
-        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
-            Response::Version(*self).encode(address, buf)
-        }
-    }
-    impl response::Error {
-        pub const NAME: &'static str = "error";
-        pub const CODE: &'static [u8] = &[0x80];
-        pub const LEN: usize = 7;
-        pub const DESC: rt::MessageDesc = rt::MessageDesc::new(
-            Self::NAME,
-            0x80,
-            1,
-            &[7],
-        );
-        pub const STATE_OR_REGISTER: rt::Range<usize> = 1..2;
-        pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
-            f("state_or_register", rt::Int(self.state_or_register as i64));
-        }
-        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
-            Response::Error(*self).encode(address, buf)
-        }
-    }
     ///A response, device to host.
     #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
     #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
@@ -702,20 +531,16 @@ pub mod jbd_bms {
         /// The length of this message's frame, in bytes.
         pub const fn frame_len(&self) -> usize {
             match self {
-                Self::BasicInfo(
-                    response::BasicInfo { temperatures: v_temperatures, .. },
-                ) => {
+                Self::BasicInfo(m) => {
                     REPEAT_BASIC_INFO.base
-                        + REPEAT_BASIC_INFO.bytes_of(v_temperatures.len())
+                        + REPEAT_BASIC_INFO.bytes_of(m.temperatures.len())
                 }
-                Self::CellVoltages(
-                    response::CellVoltages { cell_voltages: v_cell_voltages, .. },
-                ) => {
+                Self::CellVoltages(m) => {
                     REPEAT_CELL_VOLTAGES.base
-                        + REPEAT_CELL_VOLTAGES.bytes_of(v_cell_voltages.len())
+                        + REPEAT_CELL_VOLTAGES.bytes_of(m.cell_voltages.len())
                 }
-                Self::Version(response::Version { version: v_version, .. }) => {
-                    REPEAT_VERSION.base + REPEAT_VERSION.bytes_of(v_version.len())
+                Self::Version(m) => {
+                    REPEAT_VERSION.base + REPEAT_VERSION.bytes_of(m.version.len())
                 }
                 _ => Self::MESSAGES[self.index()].2,
             }
@@ -733,11 +558,7 @@ pub mod jbd_bms {
         /// Encodes the frame for `address` into `buf`; returns the frame length. Refuses what
         /// decode refuses: an address no frame may carry, the broadcast address for a command
         /// that does not accept it, a value outside its field's range.
-        pub fn encode(
-            &self,
-            address: u8,
-            buf: &mut [u8],
-        ) -> rt::Result<usize, rt::EncodeError> {
+        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             rt::encode_address(address, &FRAME)?;
             let len = match *self {
                 Self::BasicInfo(
@@ -900,7 +721,7 @@ pub mod jbd_bms {
                         &REPEAT_BASIC_INFO,
                         |frame: &[u8; 27], elements: &[u8], _: usize| {
                             rt::in_range(
-                                &response::BASIC_INFO_SOC,
+                                &response::BasicInfo::SOC_DESC,
                                 23,
                                 frame[23],
                                 0,
@@ -984,67 +805,58 @@ pub mod jbd_bms {
             name: &str,
             mut field: impl FnMut(&'static str) -> rt::Option<rt::FieldValue<'v>>,
         ) -> rt::Result<Self, rt::FieldError> {
-            match name {
+            let message = match name {
                 "basic_info" => {
-                    rt::Ok(
-                        Self::BasicInfo(response::BasicInfo {
-                            state_or_register: rt::get(&mut field, "state_or_register")?,
-                            total_voltage: Centivolts::from_raw(
-                                rt::get(&mut field, "total_voltage")?,
-                            ),
-                            current: Centiamps::from_raw(
-                                rt::get(&mut field, "current")?,
-                            ),
-                            remaining_capacity: CentiampHours::from_raw(
-                                rt::get(&mut field, "remaining_capacity")?,
-                            ),
-                            nominal_capacity: CentiampHours::from_raw(
-                                rt::get(&mut field, "nominal_capacity")?,
-                            ),
-                            cycles: rt::get(&mut field, "cycles")?,
-                            production_date: rt::get(&mut field, "production_date")?,
-                            balance_low: rt::get(&mut field, "balance_low")?,
-                            balance_high: rt::get(&mut field, "balance_high")?,
-                            protection: rt::get(&mut field, "protection")?,
-                            software_version: rt::get(&mut field, "software_version")?,
-                            soc: rt::get(&mut field, "soc")?,
-                            fet_control: rt::get(&mut field, "fet_control")?,
-                            cells: rt::get(&mut field, "cells")?,
-                            temperatures: rt::list::<
-                                DeciKelvin,
-                                8,
-                            >(&mut field, "temperatures", 0, 65535)?,
-                        }),
-                    )
+                    Self::BasicInfo(response::BasicInfo {
+                        state_or_register: rt::get(&mut field, "state_or_register")?,
+                        total_voltage: Centivolts::from_raw(
+                            rt::get(&mut field, "total_voltage")?,
+                        ),
+                        current: Centiamps::from_raw(rt::get(&mut field, "current")?),
+                        remaining_capacity: CentiampHours::from_raw(
+                            rt::get(&mut field, "remaining_capacity")?,
+                        ),
+                        nominal_capacity: CentiampHours::from_raw(
+                            rt::get(&mut field, "nominal_capacity")?,
+                        ),
+                        cycles: rt::get(&mut field, "cycles")?,
+                        production_date: rt::get(&mut field, "production_date")?,
+                        balance_low: rt::get(&mut field, "balance_low")?,
+                        balance_high: rt::get(&mut field, "balance_high")?,
+                        protection: rt::get(&mut field, "protection")?,
+                        software_version: rt::get(&mut field, "software_version")?,
+                        soc: rt::get(&mut field, "soc")?,
+                        fet_control: rt::get(&mut field, "fet_control")?,
+                        cells: rt::get(&mut field, "cells")?,
+                        temperatures: rt::list::<
+                            DeciKelvin,
+                            8,
+                        >(&mut field, "temperatures", 0, 65535)?,
+                    })
                 }
                 "cell_voltages" => {
-                    rt::Ok(
-                        Self::CellVoltages(response::CellVoltages {
-                            state_or_register: rt::get(&mut field, "state_or_register")?,
-                            cell_voltages: rt::list::<
-                                u16,
-                                32,
-                            >(&mut field, "cell_voltages", 0, 65535)?,
-                        }),
-                    )
+                    Self::CellVoltages(response::CellVoltages {
+                        state_or_register: rt::get(&mut field, "state_or_register")?,
+                        cell_voltages: rt::list::<
+                            u16,
+                            32,
+                        >(&mut field, "cell_voltages", 0, 65535)?,
+                    })
                 }
                 "version" => {
-                    rt::Ok(
-                        Self::Version(response::Version {
-                            state_or_register: rt::get(&mut field, "state_or_register")?,
-                            version: rt::list_text::<32>(&mut field, "version")?,
-                        }),
-                    )
+                    Self::Version(response::Version {
+                        state_or_register: rt::get(&mut field, "state_or_register")?,
+                        version: rt::list_text::<32>(&mut field, "version")?,
+                    })
                 }
                 "error" => {
-                    rt::Ok(
-                        Self::Error(response::Error {
-                            state_or_register: rt::get(&mut field, "state_or_register")?,
-                        }),
-                    )
+                    Self::Error(response::Error {
+                        state_or_register: rt::get(&mut field, "state_or_register")?,
+                    })
                 }
-                _ => rt::Err(rt::FieldError::UnknownMessage),
-            }
+                _ => return rt::Err(rt::FieldError::UnknownMessage),
+            };
+            rt::Ok(message)
         }
     }
     impl rt::Message for Response {
@@ -1065,11 +877,7 @@ pub mod jbd_bms {
             Response::visit(self, f)
         }
         #[inline]
-        fn encode(
-            &self,
-            address: u8,
-            buf: &mut [u8],
-        ) -> rt::Result<usize, rt::EncodeError> {
+        fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             Response::encode(self, address, buf)
         }
         #[inline]
@@ -1174,7 +982,7 @@ pub mod jbd_bms {
                         &REPEAT_BASIC_INFO,
                         |frame: &'a [u8; 27], elements: &'a [u8], _: usize| {
                             rt::in_range(
-                                &response::BASIC_INFO_SOC,
+                                &response::BasicInfo::SOC_DESC,
                                 23,
                                 frame[23],
                                 0,
@@ -1461,9 +1269,142 @@ pub mod jbd_bms {
     pub type StreamDecoder = ::busspec_runtime::stream::StreamDecoder<JbdBms>;
     /// What [`StreamDecoder`] finds in a stream.
     pub type Event = ::busspec_runtime::stream::Event<Request, Response>;
-    /// Each request as a struct of its own (its `DESC` names it as refusals do: name,
-    /// code and the frame lengths of its code), and each field a refusal names
-    /// (`message.field`, `FieldDesc`).
+    impl request::ReadBasicInfo {
+        pub const NAME: &'static str = "read_basic_info";
+        pub const CODE: &'static [u8] = &[0x03];
+        pub const LEN: usize = 7;
+        pub const DESC: rt::MessageDesc = rt::desc(Self::NAME, 0x03, 1, &[7]);
+        pub const STATE_OR_REGISTER: rt::Range<usize> = 1..2;
+        pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
+            f("state_or_register", rt::Int(self.state_or_register as i64));
+        }
+        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            Request::ReadBasicInfo(*self).encode(address, buf)
+        }
+    }
+    impl request::ReadCellVoltages {
+        pub const NAME: &'static str = "read_cell_voltages";
+        pub const CODE: &'static [u8] = &[0x04];
+        pub const LEN: usize = 7;
+        pub const DESC: rt::MessageDesc = rt::desc(Self::NAME, 0x04, 1, &[7]);
+        pub const STATE_OR_REGISTER: rt::Range<usize> = 1..2;
+        pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
+            f("state_or_register", rt::Int(self.state_or_register as i64));
+        }
+        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            Request::ReadCellVoltages(*self).encode(address, buf)
+        }
+    }
+    impl request::ReadVersion {
+        pub const NAME: &'static str = "read_version";
+        pub const CODE: &'static [u8] = &[0x05];
+        pub const LEN: usize = 7;
+        pub const DESC: rt::MessageDesc = rt::desc(Self::NAME, 0x05, 1, &[7]);
+        pub const STATE_OR_REGISTER: rt::Range<usize> = 1..2;
+        pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
+            f("state_or_register", rt::Int(self.state_or_register as i64));
+        }
+        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            Request::ReadVersion(*self).encode(address, buf)
+        }
+    }
+    impl response::BasicInfo {
+        pub const NAME: &'static str = "basic_info";
+        pub const CODE: &'static [u8] = &[0x00];
+        pub const MIN_LEN: usize = 30;
+        pub const MAX_LEN: usize = 46;
+        pub const DESC: rt::MessageDesc = rt::desc(Self::NAME, 0x00, 1, &[7, 30]);
+        pub const STATE_OR_REGISTER: rt::Range<usize> = 1..2;
+        pub const TOTAL_VOLTAGE: rt::Range<usize> = 4..6;
+        pub const CURRENT: rt::Range<usize> = 6..8;
+        pub const REMAINING_CAPACITY: rt::Range<usize> = 8..10;
+        pub const NOMINAL_CAPACITY: rt::Range<usize> = 10..12;
+        pub const CYCLES: rt::Range<usize> = 12..14;
+        pub const PRODUCTION_DATE: rt::Range<usize> = 14..16;
+        pub const BALANCE_LOW: rt::Range<usize> = 16..18;
+        pub const BALANCE_HIGH: rt::Range<usize> = 18..20;
+        pub const PROTECTION: rt::Range<usize> = 20..22;
+        pub const SOFTWARE_VERSION: rt::Range<usize> = 22..23;
+        pub const SOC: rt::Range<usize> = 23..24;
+        pub const FET_CONTROL: rt::Range<usize> = 24..25;
+        pub const CELLS: rt::Range<usize> = 25..26;
+        pub const TEMPERATURES_DESC: rt::FieldDesc = rt::field(
+            Self::NAME,
+            "temperatures",
+        );
+        pub const SOC_DESC: rt::FieldDesc = rt::field(Self::NAME, "soc");
+        pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
+            f("state_or_register", rt::Int(self.state_or_register as i64));
+            f("total_voltage", rt::Int(self.total_voltage.raw() as i64));
+            f("current", rt::Int(self.current.raw() as i64));
+            f("remaining_capacity", rt::Int(self.remaining_capacity.raw() as i64));
+            f("nominal_capacity", rt::Int(self.nominal_capacity.raw() as i64));
+            f("cycles", rt::Int(self.cycles as i64));
+            f("production_date", rt::Int(self.production_date as i64));
+            f("balance_low", rt::Int(self.balance_low as i64));
+            f("balance_high", rt::Int(self.balance_high as i64));
+            f("protection", rt::Int(self.protection as i64));
+            f("software_version", rt::Int(self.software_version as i64));
+            f("soc", rt::Int(self.soc as i64));
+            f("fet_control", rt::Int(self.fet_control as i64));
+            f("cells", rt::Int(self.cells as i64));
+            f("temperatures", rt::List(self.temperatures.table()));
+        }
+        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            Response::BasicInfo(*self).encode(address, buf)
+        }
+    }
+    impl response::CellVoltages {
+        pub const NAME: &'static str = "cell_voltages";
+        pub const CODE: &'static [u8] = &[0x00];
+        pub const MIN_LEN: usize = 9;
+        pub const MAX_LEN: usize = 71;
+        pub const DESC: rt::MessageDesc = rt::desc(Self::NAME, 0x00, 1, &[7, 30]);
+        pub const STATE_OR_REGISTER: rt::Range<usize> = 1..2;
+        pub const CELL_VOLTAGES_DESC: rt::FieldDesc = rt::field(
+            Self::NAME,
+            "cell_voltages",
+        );
+        pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
+            f("state_or_register", rt::Int(self.state_or_register as i64));
+            f("cell_voltages", rt::List(self.cell_voltages.elements()));
+        }
+        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            Response::CellVoltages(*self).encode(address, buf)
+        }
+    }
+    impl response::Version {
+        pub const NAME: &'static str = "version";
+        pub const CODE: &'static [u8] = &[0x00];
+        pub const MIN_LEN: usize = 8;
+        pub const MAX_LEN: usize = 39;
+        pub const DESC: rt::MessageDesc = rt::desc(Self::NAME, 0x00, 1, &[7, 30]);
+        pub const STATE_OR_REGISTER: rt::Range<usize> = 1..2;
+        pub const VERSION_DESC: rt::FieldDesc = rt::field(Self::NAME, "version");
+        pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
+            f("state_or_register", rt::Int(self.state_or_register as i64));
+            f("version", rt::Text(self.version.as_slice()));
+        }
+        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            Response::Version(*self).encode(address, buf)
+        }
+    }
+    impl response::Error {
+        pub const NAME: &'static str = "error";
+        pub const CODE: &'static [u8] = &[0x80];
+        pub const LEN: usize = 7;
+        pub const DESC: rt::MessageDesc = rt::desc(Self::NAME, 0x80, 1, &[7]);
+        pub const STATE_OR_REGISTER: rt::Range<usize> = 1..2;
+        pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
+            f("state_or_register", rt::Int(self.state_or_register as i64));
+        }
+        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            Response::Error(*self).encode(address, buf)
+        }
+    }
+    /// Each request as a struct of its own; its constants (`DESC`, which names it as
+    /// refusals do: name, code and the frame lengths of its code; `QUANTITY_DESC`, each
+    /// field a refusal names) and methods are in the `impl` of each.
     pub mod request {
         /// §3 Read basic information and status (03) (code `0x03`, 7 bytes).
         #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
@@ -1493,9 +1434,8 @@ pub mod jbd_bms {
             pub state_or_register: u8,
         }
     }
-    /// Each response as a struct of its own, and the fields its refusals name.
+    /// Each response as a struct of its own.
     pub mod response {
-        use ::busspec_runtime::FieldDesc;
         /// §3 Basic information and status (code `0x00`, 30 to 46 bytes).
         #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
         #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
@@ -1561,19 +1501,5 @@ pub mod jbd_bms {
             /// A request's state (0xA5 read, 0x5A write); a reply's register.
             pub state_or_register: u8,
         }
-        /// `basic_info.temperatures`
-        pub const BASIC_INFO_TEMPERATURES: FieldDesc = FieldDesc::new(
-            "basic_info",
-            "temperatures",
-        );
-        /// `basic_info.soc`
-        pub const BASIC_INFO_SOC: FieldDesc = FieldDesc::new("basic_info", "soc");
-        /// `cell_voltages.cell_voltages`
-        pub const CELL_VOLTAGES_CELL_VOLTAGES: FieldDesc = FieldDesc::new(
-            "cell_voltages",
-            "cell_voltages",
-        );
-        /// `version.version`
-        pub const VERSION_VERSION: FieldDesc = FieldDesc::new("version", "version");
     }
 }
