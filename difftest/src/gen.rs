@@ -2883,7 +2883,7 @@ pub fn constructs(p: &ir::Protocol) -> Vec<&'static str> {
     );
     add(
         fields.iter().any(|x| {
-            x.packed.as_ref().is_some_and(|pk| pk.whole())
+            x.fixed_count().is_some()
                 && (x.signed
                     || x.is_wide()
                     || x.enumeration.is_some()

@@ -150,7 +150,7 @@ pub fn random_values(
                         })
                         .collect();
                     Raw::Text(t)
-                } else if let Some(pk) = f.packed.as_ref().filter(|pk| pk.whole()) {
+                } else if let Some(pk) = f.fixed_count() {
                     // A list of a fixed count: its count (now and then one more or fewer), each
                     // element drawn as a field of its type is (its enum, unit, range).
                     let e = f.element();

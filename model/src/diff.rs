@@ -391,7 +391,7 @@ fn range_text(r: Option<(i64, i64)>) -> String {
 }
 
 fn type_name(f: &Field) -> String {
-    if let Some(pk) = f.packed.as_ref().filter(|pk| pk.whole()) {
+    if let Some(pk) = f.fixed_count() {
         // A list of a fixed count: `i16[4]`, `f32[4]`.
         return format!("{}[{}]", type_name(&f.element()), pk.count);
     }

@@ -345,7 +345,7 @@ fn field(f: &Field, lay: &FrameLayout) -> String {
             pk.count,
             pk.bits,
             lua_bool(pk.lsb_first),
-            lua_bool(pk.whole()),
+            lua_bool(f.fixed_count().is_some()),
             pk.elem_width
         );
     }

@@ -1470,6 +1470,18 @@ impl Field {
         self.ty == FieldType::Ascii
     }
 
+    /// Its packed elements where they are a list of a fixed count (`repeat: {count: N}`):
+    /// elements of whole bytes ([`Packed::whole`]) in its byte order (the bit order the byte
+    /// order). Packed elements of whole bytes in the other bit order (`packed: {count: 3, bits:
+    /// 16, bit_order: lsb_first}` in a big-endian protocol) are not: each element's bytes
+    /// travel reversed, as [`Packed::read`] reads them.
+    pub fn fixed_count(&self) -> Option<&Packed> {
+        self.packed.as_ref().filter(|pk| {
+            pk.whole()
+                && (pk.elem_width == 1 || pk.lsb_first == (self.byte_order == ByteOrder::Little))
+        })
+    }
+
     /// One of its packed elements as a field of its own (its type's width, not packed): how a
     /// list of a fixed count reads and writes each element. Itself where it is not packed.
     pub fn element(&self) -> std::borrow::Cow<'_, Field> {
@@ -1486,12 +1498,13 @@ impl Field {
 
     /// The elements of a packed field from its bytes (missing ones read as 0): elements of
     /// whole bytes ([`Packed::whole`]) each as a field of its type reads ([`Self::element`]:
-    /// sign-extended, its words in their order), others as [`Packed::read`] reads them.
+    /// sign-extended, its words in their order) where they are a list of a fixed count
+    /// ([`Self::fixed_count`]), others as [`Packed::read`] reads them.
     pub fn packed_elements(&self, bytes: &[u8]) -> Vec<i64> {
         let Some(pk) = &self.packed else {
             return Vec::new();
         };
-        if !pk.whole() {
+        if self.fixed_count().is_none() {
             return pk.read(bytes);
         }
         let e = self.element();
@@ -1514,11 +1527,11 @@ impl Field {
             .collect()
     }
 
-    /// The raw values one of its packed elements holds: its type's ([`Self::raw_span`]) for
-    /// elements of whole bytes, else `0..=` [`Packed::max`].
+    /// The raw values one of its packed elements holds: its type's ([`Self::raw_span`]) for a
+    /// list of a fixed count ([`Self::fixed_count`]), else `0..=` [`Packed::max`].
     pub fn packed_span(&self) -> (i64, i64) {
         match &self.packed {
-            Some(pk) if pk.whole() => self.element().raw_span(),
+            Some(_) if self.fixed_count().is_some() => self.element().raw_span(),
             Some(pk) => (0, pk.max()),
             None => self.raw_span(),
         }
@@ -1530,7 +1543,7 @@ impl Field {
         let Some(pk) = &self.packed else {
             return;
         };
-        if !pk.whole() {
+        if self.fixed_count().is_none() {
             return pk.write(items, out);
         }
         let e = self.element();

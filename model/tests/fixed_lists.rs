@@ -204,3 +204,37 @@ fn a_signed_element_outside_its_type_or_range_is_refused() {
         .to_string();
     assert!(e.contains("deltas"), "{e}");
 }
+
+/// Packed elements of whole bytes in the other bit order than the protocol's byte order
+/// (`bit_order: lsb_first` in a big-endian protocol) are no list of a fixed count: each
+/// element's bytes travel least significant first, as the bit stream puts them. (A whole-byte
+/// read in the protocol's byte order took them for a fixed count: random specs found it.)
+#[test]
+fn whole_packed_elements_in_the_other_bit_order_keep_their_bit_order() {
+    let mut t = text();
+    t.truncate(t.find("\nexamples:").unwrap());
+    t = t.replace(
+        "{name: offsets, type: u16, unit: ticks, repeat: {count: 3}}",
+        "{name: offsets, type: u16, unit: ticks, packed: {count: 3, bits: 16, bit_order: lsb_first}}",
+    );
+    t.push_str("\nexamples: []\n");
+    let p = busspec_model::load_str("packed_channels.yaml", &t).unwrap_or_else(|d| panic!("{d}"));
+    let m = p.message(p.find("calibrate").unwrap());
+    let f = m.fields.iter().find(|f| f.name == "offsets").unwrap();
+    assert!(f.packed.unwrap().whole() && f.fixed_count().is_none());
+    let wire = frame(&[0x19, 0x00, 0x01, 0x02, 0x03, 0xFF, 0xFF, 0x07, 0x09]);
+    let (offsets, gains) = lists(&p, &wire);
+    assert_eq!(offsets, Raw::List(vec![0x0100, 0x0302, 0xFFFF]));
+    let values = [
+        Value {
+            name: Cow::Borrowed("offsets"),
+            raw: offsets,
+        },
+        Value {
+            name: Cow::Borrowed("gains"),
+            raw: gains,
+        },
+    ];
+    let back = interp::encode(&p, p.find("calibrate").unwrap(), 0, &values).unwrap();
+    assert_eq!(back, wire);
+}

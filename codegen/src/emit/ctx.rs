@@ -314,7 +314,7 @@ impl<'a> Ctx<'a> {
     /// its unit's newtype (a unit of scale 1 and offset 0 leaves them integers).
     pub(super) fn element_type(&self, f: &Field) -> Option<Ident> {
         // Packed elements of fewer bits than their type's (CRSF's channels) stay integers.
-        let whole = f.packed.is_some_and(|pk| pk.whole());
+        let whole = f.fixed_count().is_some();
         if (f.repeat.is_none() && !whole) || f.ty == FieldType::Bit || f.is_record() {
             return None;
         }
@@ -369,9 +369,8 @@ pub(super) fn record_type(m: &str, f: &Field) -> Ident {
 /// floats, or their words swapped. Unsigned elements of 1, 2 or 4 bytes in their byte order go
 /// through `rt::unpack`/`rt::pack` as other packed elements do.
 pub(super) fn fixed_elements(f: &Field) -> bool {
-    f.packed.is_some_and(|pk| {
-        pk.whole()
-            && (f.signed || f.is_float() || f.word_swapped || !matches!(pk.elem_width, 1 | 2 | 4))
+    f.fixed_count().is_some_and(|pk| {
+        f.signed || f.is_float() || f.word_swapped || !matches!(pk.elem_width, 1 | 2 | 4)
     })
 }
 
