@@ -5054,7 +5054,7 @@ fn compare(
                 if f.is_wide() {
                     // 64-bit and float elements (a list of a fixed count): each read as its
                     // type, as a field of its own is.
-                    let one = StatedValue::Number(n.clone());
+                    let one = StatedValue::Number(*n);
                     compare(p, &f.element(), None, &Raw::Int(raw), &one, excused)
                         .map_err(|e| format!("element {k}: {e}"))?;
                     continue;
