@@ -237,7 +237,18 @@ pub fn random_request(p: &Protocol, rng: &mut fastrand::Rng, address: u8) -> Opt
                     let (lo, hi) = f
                         .range
                         .unwrap_or_else(|| interp::raw_limits(bits, f.signed));
-                    rng.i64(lo..=hi)
+                    // A float's range is of raw bits, which do not order as its numbers (a
+                    // range from -2.0 to 2.0 runs from 0xC0000000 down to 0x40000000), nor do a
+                    // u64's past i64::MAX: one of its ends, each in it.
+                    if lo > hi || (f.is_float() && f.range.is_some()) {
+                        if rng.bool() {
+                            lo
+                        } else {
+                            hi
+                        }
+                    } else {
+                        rng.i64(lo..=hi)
+                    }
                 };
                 if let Some(pk) = &f.packed {
                     Raw::List((0..pk.count).map(|_| one(rng)).collect())

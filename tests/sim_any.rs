@@ -292,6 +292,21 @@ fn a_spec_read_at_run_time_soaks_as_its_generated_code_does() {
     let report = text(&out.stdout);
     assert!(report.starts_with("mini: 2000 transactions"), "{report}");
     assert_eq!(figure(&report, "wrong, accepted silently"), 0, "{report}");
+    // Floats with a range below 0 (raw bits that do not order as the numbers) and lists of a
+    // fixed count of every number type: soaked, not a panic drawing a request.
+    let out = run(&[
+        "soak",
+        "--transactions",
+        "500",
+        "--seed",
+        "3",
+        "--spec",
+        "model/tests/fixtures/valid/packed_channels.yaml",
+        "packed_channels",
+    ]);
+    assert!(out.status.success(), "{}", text(&out.stderr));
+    let report = text(&out.stdout);
+    assert_eq!(figure(&report, "wrong, accepted silently"), 0, "{report}");
     // A protocol without addresses: one device on the bus (two would both answer every
     // request, and every transaction would fail in the collision).
     let out = run(&[

@@ -1771,7 +1771,25 @@ fn packed_snapshot_agrees_with_the_interpreter() {
         for f in m.fields.iter().filter(|f| f.packed.is_some()) {
             let pk = f.packed.unwrap();
             let mut lists: Vec<Vec<i64>> = vec![vec![0; pk.count - 1], vec![0; pk.count + 1]];
-            for v in [0, 1, pk.max(), pk.max() + 1, -1, 1999, 2000, 6, 7] {
+            // And for the elements of a fixed count (`trim`): past a signed type's ends, past
+            // a range below 0, a float's bits past its range, 64 bits all set.
+            let three = i64::from(3.0f32.to_bits());
+            for v in [
+                0,
+                1,
+                pk.max(),
+                pk.max().saturating_add(1),
+                -1,
+                1999,
+                2000,
+                6,
+                7,
+                -901,
+                0x800000,
+                -0x800001,
+                three,
+                i64::MIN,
+            ] {
                 for k in [0, pk.count - 1] {
                     let mut l = vec![1; pk.count];
                     l[k] = v;

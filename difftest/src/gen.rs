@@ -161,6 +161,9 @@ struct G {
     /// Drawn for payload truncation (`Own::Truncation`): a length field, no lists and no
     /// optional fields, so every message has one length.
     fixed: bool,
+    /// Whether a field as drawn becomes a list of a fixed count of it (`Own::FixedElements`):
+    /// a generator of its own, so the fields are drawn as they were.
+    fixed_elements: fastrand::Rng,
 }
 
 /// The types a record's field may have: name, bytes, signed.
@@ -197,6 +200,7 @@ fn equals_target(f: &Gf) -> bool {
     f.ty != "ascii"
         && !is_wide(f.ty)
         && f.repeat_tail == 0
+        && !fixed_count(f)
         && !f.yaml.contains("packed:")
         && !f.yaml.contains("encoding: bcd")
 }
@@ -234,6 +238,9 @@ enum Own {
     BigPayload = 0x0100_0100_0100_0100,
     /// Lists of a fixed count (`repeat: {count: N}`), from packed elements of whole bytes.
     FixedList = 0xF1ED_F1ED_F1ED_F1ED,
+    /// Lists of a fixed count of any number type (signed, 24- and 64-bit, floats, enum and
+    /// unit elements), from fields as drawn.
+    FixedElements = 0xF1ED_E1E5_F1ED_E1E5,
     /// Payload truncation (`framing.truncation`, MAVLink v2): whether a spec tries it.
     Truncation = 0x00FD_00FD_00FD_00FD,
 }
@@ -447,7 +454,41 @@ impl G {
     }
 
     /// One field that is not repeated. `earlier`: the fields before it.
+    /// A field ([`Self::drawn_field`]), in about one in eight where it may be (a number of
+    /// any type, maybe of an enum, a unit, a range, flags or its words swapped; no constant,
+    /// copy, sub-fields, special values or relation) a list of a fixed count of 1 to 4 of it.
     fn field(&mut self, name: String, earlier: &[Gf]) -> Gf {
+        let mut f = self.drawn_field(name, earlier);
+        let eligible = f.repeat_tail == 0
+            && f.yaml.ends_with('}')
+            && [
+                "repeat",
+                "packed:",
+                "value:",
+                "equals:",
+                "bits:",
+                "special:",
+                "follows:",
+                "encoding",
+                "present:",
+                "type: ascii",
+                "type: bit",
+                "type: record",
+            ]
+            .iter()
+            .all(|k| !f.yaml.contains(k));
+        if eligible && self.fixed_elements.u8(..100) < 12 {
+            let n = self.fixed_elements.usize(1..=4);
+            f.yaml.pop();
+            let _ = write!(f.yaml, ", repeat: {{count: {n}}}}}");
+            f.width *= n;
+            f.plain = false;
+            f.countable = false;
+        }
+        f
+    }
+
+    fn drawn_field(&mut self, name: String, earlier: &[Gf]) -> Gf {
         let &(ty, width, signed) = self.pick(&INT_TYPES);
         let (lo, hi) = limits(width, signed);
         let plain_unsigned = |ty: &'static str, width, yaml: String, name: String| Gf {
@@ -1285,6 +1326,21 @@ fn stated_values(p: &ir::Protocol, m: &ir::Message, values: &[interp::Value]) ->
                     .collect();
                 out.push(format!("{}: [{}]", v.name, items.join(", ")));
             }
+            // A list of a fixed count of 64-bit integers or floats: each element as its type
+            // reads it, where every one is a finite number of at most 15 digits (an example
+            // states a list as plain numbers).
+            Raw::List(l) if bits.is_none() && f.is_wide() => {
+                let k = f.num_kind();
+                let items: Vec<String> = l.iter().map(|x| k.text(*x)).collect();
+                let short = |t: &String| {
+                    t.chars().filter(char::is_ascii_digit).count() <= 15
+                        && t.chars()
+                            .all(|c| c.is_ascii_digit() || c == '-' || c == '.')
+                };
+                if !l.is_empty() && items.iter().all(short) {
+                    out.push(format!("{}: [{}]", v.name, items.join(", ")));
+                }
+            }
             Raw::List(l) if plain && f.range.is_none() && !l.is_empty() => {
                 let items: Vec<String> = l.iter().map(|x| x.to_string()).collect();
                 out.push(format!("{}: [{}]", v.name, items.join(", ")));
@@ -1303,6 +1359,7 @@ fn random_spec_without_examples(seed: u64) -> (String, usize) {
         n_flags: 0,
         sized: false,
         fixed: truncation_draw(seed).0,
+        fixed_elements: own_rng(seed, Own::FixedElements),
     };
     let mut y = String::new();
     let _ = writeln!(y, "# busspec-difftest random spec, seed {seed}");
@@ -2837,6 +2894,18 @@ pub fn constructs(p: &ir::Protocol) -> Vec<&'static str> {
             .iter()
             .any(|x| x.packed.as_ref().is_some_and(|pk| pk.whole())),
         "whole packed elements or a fixed count",
+    );
+    add(
+        fields.iter().any(|x| {
+            x.fixed_count().is_some()
+                && (x.signed
+                    || x.is_wide()
+                    || x.enumeration.is_some()
+                    || x.flags.is_some()
+                    || x.word_swapped
+                    || !matches!(x.packed.map_or(0, |pk| pk.elem_width), 1 | 2 | 4))
+        }),
+        "a fixed count of signed, 24- or 64-bit, float, enum or flags elements",
     );
     add(fields.iter().any(|x| x.constant.is_some()), "constant");
     add(fields.iter().any(|x| !x.bits.is_empty()), "bits");

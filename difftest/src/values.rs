@@ -150,6 +150,26 @@ pub fn random_values(
                         })
                         .collect();
                     Raw::Text(t)
+                } else if let Some(pk) = f.fixed_count() {
+                    // A list of a fixed count: its count (now and then one more or fewer), each
+                    // element drawn as a field of its type is (its enum, unit, range).
+                    let e = f.element();
+                    let n = if strict || rng.u8(..8) != 0 {
+                        pk.count
+                    } else {
+                        rng.usize(pk.count.saturating_sub(1)..=pk.count + 1)
+                    };
+                    Raw::List(
+                        (0..n)
+                            .map(|_| {
+                                if e.is_wide() {
+                                    wide(rng, &e, strict)
+                                } else {
+                                    scalar(p, &e, rng, strict)
+                                }
+                            })
+                            .collect(),
+                    )
                 } else if let Some(pk) = &f.packed {
                     // Packed elements: their count (now and then one more or fewer), each
                     // within the range or the element's bits (now and then one past them).

@@ -391,6 +391,10 @@ fn range_text(r: Option<(i64, i64)>) -> String {
 }
 
 fn type_name(f: &Field) -> String {
+    if let Some(pk) = f.fixed_count() {
+        // A list of a fixed count: `i16[4]`, `f32[4]`.
+        return format!("{}[{}]", type_name(&f.element()), pk.count);
+    }
     if let Some(pk) = &f.packed {
         let order = if pk.lsb_first { "lsb" } else { "msb" };
         format!(

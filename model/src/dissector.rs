@@ -241,6 +241,17 @@ fn field(f: &Field, lay: &FrameLayout) -> String {
             }
             o.push_str(" }");
         }
+        if let Some(pk) = &f.packed {
+            // A list of a fixed count of these: each element read whole.
+            let _ = write!(
+                o,
+                ", pk = {{ count = {}, bits = {}, lsb = {}, whole = true, ew = {} }}",
+                pk.count,
+                pk.bits,
+                lua_bool(pk.lsb_first),
+                pk.elem_width
+            );
+        }
         o.push_str(", bits = {} }");
         return o;
     }
@@ -326,12 +337,16 @@ fn field(f: &Field, lay: &FrameLayout) -> String {
         .collect();
     let _ = write!(o, ", bits = {{{}}}", bits.join(", "));
     if let Some(pk) = &f.packed {
+        // Elements of whole bytes (a list of a fixed count: `whole`, each `ew` bytes) are read
+        // as a field of their type is: signed, in their word order.
         let _ = write!(
             o,
-            ", pk = {{ count = {}, bits = {}, lsb = {} }}",
+            ", pk = {{ count = {}, bits = {}, lsb = {}, whole = {}, ew = {} }}",
             pk.count,
             pk.bits,
-            lua_bool(pk.lsb_first)
+            lua_bool(pk.lsb_first),
+            lua_bool(f.fixed_count().is_some()),
+            pk.elem_width
         );
     }
     if f.is_record() {

@@ -564,8 +564,33 @@ end
 
 -- The elements of a packed field (`f.pk`) from byte `at`, and whether the bits after its last
 -- element are all 0 (`ir::Packed::read`, `padding_clear`).
+-- One element of a list of a fixed count (`f.pk.whole`): the field, `ew` bytes wide.
+local function element_of(f)
+  return setmetatable({ width = f.pk.ew }, { __index = f })
+end
+
+-- The elements of a list of a fixed count of floats or 64-bit integers: each as `wide_value`
+-- reads it, and the byte where it starts.
+local function read_wide_elements(f, b, at)
+  local e, out = element_of(f), {}
+  for k = 0, f.pk.count - 1 do
+    local from = at + k * f.pk.ew
+    out[#out + 1] = { w = wide_value(e, b, from), at = from }
+  end
+  return e, out
+end
+
 local function read_packed(f, b, at)
   local out, p = {}, f.pk
+  if p.whole then
+    -- Elements of whole bytes (a list of a fixed count): each as a field of its type reads.
+    local e = element_of(f)
+    for k = 0, p.count - 1 do
+      local _, v = int_of(e, b, at + k * p.ew)
+      out[#out + 1] = v
+    end
+    return out
+  end
   for k = 0, p.count - 1 do
     local v, weight = 0, 1
     for j = 0, p.bits - 1 do
@@ -809,6 +834,15 @@ local function misfit(P, m, b, n, soft)
         local range = range_violation(f, nil, v)
         if range then soft[#soft + 1] = out_of_range(m, f.name, at + (k - 1) * step, v, range) end
       end
+    elseif f.pk and f.wide then
+      local e, els = read_wide_elements(f, b, at)
+      for _, x in ipairs(els) do
+        if not wide_within(e, x.w) then
+          soft[#soft + 1] = fmt("%s.%s at offset %d is %s, outside its range %s..=%s", m.name, f.name,
+            x.at, x.w.text, f.wrange[1], f.wrange[2])
+          break
+        end
+      end
     elseif f.pk then
       if not packed_padding_clear(f, b, at) then return true end
       for k, v in ipairs(read_packed(f, b, at)) do
@@ -1043,9 +1077,18 @@ local function setup(P)
           els = read_elements(f, b, at, stop)
         end
         local vals, raws = {}, {}
-        for k, v in ipairs(els) do
-          vals[k] = value_json(P, f, nil, v)
-          raws[k] = numtext(v)
+        if f.wide then
+          -- Floats and 64-bit integers of a fixed count: each printed as busspec prints one.
+          local _, ws = read_wide_elements(f, b, at)
+          for k, x in ipairs(ws) do
+            vals[k] = x.w.json
+            raws[k] = x.w.raw
+          end
+        else
+          for k, v in ipairs(els) do
+            vals[k] = value_json(P, f, nil, v)
+            raws[k] = numtext(v)
+          end
         end
         local value = "[" .. concat(vals, ",") .. "]"
         local range = tvb:range(0, n)

@@ -24,7 +24,7 @@ fn cell(s: &str) -> String {
 fn type_name(f: &Field) -> String {
     let one = scalar_type_name(f);
     if let Some(pk) = &f.packed {
-        if pk.whole() {
+        if f.fixed_count().is_some() {
             return format!("{one}[{}]", pk.count);
         }
         return format!("{one}[{}] × {} bits", pk.count, pk.bits);
@@ -171,7 +171,7 @@ fn field_notes(p: &Protocol, m: &Message, f: &Field) -> String {
         )),
         None => {}
     }
-    if let Some(pk) = f.packed.as_ref().filter(|pk| !pk.whole()) {
+    if let Some(pk) = f.packed.as_ref().filter(|_| f.fixed_count().is_none()) {
         notes.push(format!(
             "{} elements of {} bits packed into {} bytes, {}",
             pk.count,
@@ -233,7 +233,7 @@ fn fields_table(out: &mut String, p: &Protocol, m: &Message) {
     );
     out.push_str("|---|---|---|---|---|---|---|---|\n");
     for (i, f) in m.fields.iter().enumerate() {
-        let order_cell = if let Some(pk) = f.packed.as_ref().filter(|pk| !pk.whole()) {
+        let order_cell = if let Some(pk) = f.packed.as_ref().filter(|_| f.fixed_count().is_none()) {
             if pk.lsb_first {
                 "bit stream, LSB first"
             } else {

@@ -2059,7 +2059,7 @@ fn misfit(p: &Protocol, m: &Message, wire: &[u8]) -> Option<Misfit> {
                     found: u64::from(packed_padding(pk, bytes)),
                 });
             }
-            for (k, v) in pk.read(bytes).into_iter().enumerate() {
+            for (k, v) in f.packed_elements(bytes).into_iter().enumerate() {
                 if let Some((min, max)) = range_violation(f, None, v) {
                     return Some(Misfit::Range {
                         field: i,
@@ -2068,7 +2068,7 @@ fn misfit(p: &Protocol, m: &Message, wire: &[u8]) -> Option<Misfit> {
                         found: v,
                         min,
                         max,
-                        kind: NumKind::Int,
+                        kind: f.num_kind(),
                     });
                 }
             }
@@ -2214,11 +2214,11 @@ fn values_of<'p>(
             });
             continue;
         }
-        if let Some(pk) = &f.packed {
+        if f.packed.is_some() {
             let bytes = payload.get(at..at + f.width).unwrap_or(&[]);
             values.push(Value {
                 name: Cow::Borrowed(&f.name),
-                raw: Raw::List(pk.read(bytes)),
+                raw: Raw::List(f.packed_elements(bytes)),
             });
             continue;
         }
@@ -2740,16 +2740,17 @@ fn encode_values(
                         kind: f.num_kind(),
                     });
                 }
-                if v < 0 || v > pk.max() {
+                let (lo, hi) = f.packed_span();
+                if v < lo || v > hi {
                     return Err(EncodeError::OutOfRange {
                         field: f.name.clone(),
                         value: v,
-                        min: 0,
-                        max: pk.max(),
+                        min: lo,
+                        max: hi,
                     });
                 }
             }
-            pk.write(list, slot);
+            f.write_packed(list, slot);
             ints.push(0);
             continue;
         }

@@ -1262,7 +1262,8 @@ pub struct Packed {
     pub bits: u32,
     /// `bit_order: lsb_first` (else `msb_first`).
     pub lsb_first: bool,
-    /// The element type's width, bytes (1, 2 or 4).
+    /// The element type's width, bytes (1, 2 or 4; a list of a fixed count's, whose elements
+    /// take whole bytes, 1 to 8).
     pub elem_width: usize,
 }
 
@@ -1278,9 +1279,13 @@ impl Packed {
         (self.count * self.bits as usize).div_ceil(8)
     }
 
-    /// The largest element.
+    /// The largest element (unsigned, of `bits` bits; all of `i64` for 64).
     pub fn max(&self) -> i64 {
-        (1i64 << self.bits) - 1
+        if self.bits >= 63 {
+            i64::MAX
+        } else {
+            (1i64 << self.bits) - 1
+        }
     }
 
     /// The elements packed in `bytes` (at most [`Self::bytes`] of them are read; missing ones
@@ -1469,6 +1474,92 @@ impl Field {
 
     pub fn is_ascii(&self) -> bool {
         self.ty == FieldType::Ascii
+    }
+
+    /// Its packed elements where they are a list of a fixed count (`repeat: {count: N}`):
+    /// elements of whole bytes ([`Packed::whole`]) in its byte order (the bit order the byte
+    /// order). Packed elements of whole bytes in the other bit order (`packed: {count: 3, bits:
+    /// 16, bit_order: lsb_first}` in a big-endian protocol) are not: each element's bytes
+    /// travel reversed, as [`Packed::read`] reads them.
+    pub fn fixed_count(&self) -> Option<&Packed> {
+        self.packed.as_ref().filter(|pk| {
+            pk.whole()
+                && (pk.elem_width == 1 || pk.lsb_first == (self.byte_order == ByteOrder::Little))
+        })
+    }
+
+    /// One of its packed elements as a field of its own (its type's width, not packed): how a
+    /// list of a fixed count reads and writes each element. Itself where it is not packed.
+    pub fn element(&self) -> std::borrow::Cow<'_, Field> {
+        match &self.packed {
+            Some(pk) => {
+                let mut e = self.clone();
+                e.width = pk.elem_width;
+                e.packed = None;
+                std::borrow::Cow::Owned(e)
+            }
+            None => std::borrow::Cow::Borrowed(self),
+        }
+    }
+
+    /// The elements of a packed field from its bytes (missing ones read as 0): elements of
+    /// whole bytes ([`Packed::whole`]) each as a field of its type reads ([`Self::element`]:
+    /// sign-extended, its words in their order) where they are a list of a fixed count
+    /// ([`Self::fixed_count`]), others as [`Packed::read`] reads them.
+    pub fn packed_elements(&self, bytes: &[u8]) -> Vec<i64> {
+        let Some(pk) = &self.packed else {
+            return Vec::new();
+        };
+        if self.fixed_count().is_none() {
+            return pk.read(bytes);
+        }
+        let e = self.element();
+        let w = pk.elem_width.max(1);
+        (0..pk.count)
+            .map(|k| {
+                let mut chunk = [0u8; 8];
+                let n = w.min(8);
+                for (j, slot) in chunk[..n].iter_mut().enumerate() {
+                    *slot = bytes.get(k * w + j).copied().unwrap_or(0);
+                }
+                let u = crate::interp::read_number(&e, &chunk[..n]);
+                if e.signed && n < 8 {
+                    let shift = 64 - 8 * n as u32;
+                    ((u << shift) as i64) >> shift
+                } else {
+                    u as i64
+                }
+            })
+            .collect()
+    }
+
+    /// The raw values one of its packed elements holds: its type's ([`Self::raw_span`]) for a
+    /// list of a fixed count ([`Self::fixed_count`]), else `0..=` [`Packed::max`].
+    pub fn packed_span(&self) -> (i64, i64) {
+        match &self.packed {
+            Some(_) if self.fixed_count().is_some() => self.element().raw_span(),
+            Some(pk) => (0, pk.max()),
+            None => self.raw_span(),
+        }
+    }
+
+    /// Writes packed elements `items` (each within [`Self::packed_span`], at most its count)
+    /// into `out` (zeroed, at least its width long).
+    pub fn write_packed(&self, items: &[i64], out: &mut [u8]) {
+        let Some(pk) = &self.packed else {
+            return;
+        };
+        if self.fixed_count().is_none() {
+            return pk.write(items, out);
+        }
+        let e = self.element();
+        for (v, chunk) in items
+            .iter()
+            .zip(out.chunks_exact_mut(pk.elem_width.max(1)))
+            .take(pk.count)
+        {
+            crate::interp::write_number(&e, *v as u64, chunk);
+        }
     }
 
     /// Whether its value is a list: a repeated field (not counted text) or packed elements.

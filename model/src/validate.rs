@@ -2775,10 +2775,10 @@ fn message_body(
         );
     }
     let fpath = join(path, "fields");
-    let fields: Vec<model::Field> = fields
+    let (fields, fixed): (Vec<model::Field>, Vec<Option<usize>>) = fields
         .iter()
-        .map(|f| fixed_list(f, &join(&fpath, &f.name), byte_order, sink))
-        .collect();
+        .map(|f| fixed_list(f, &join(&fpath, &f.name), sink))
+        .unzip();
     let fields = fields.as_slice();
     // Field and sub-field names share one name space per message: they are the keys of its values.
     // The header fields' values (each whole, or its sub-fields) are named in every message.
@@ -2847,6 +2847,9 @@ fn message_body(
             sink.error(&p, format!("duplicate field name `{}`{what}", f.name));
         }
         let mut field = field(f, &p, offset, byte_order, &out, refs, sink);
+        if let Some(n) = fixed[i] {
+            fixed_elements(&mut field, n);
+        }
         if let Some(pr) = &f.present {
             field.present = presence(f, pr, &p, &out, fields, sink);
         }
@@ -3901,17 +3904,19 @@ fn bcd_field(f: &model::Field, p: &str, mut out: Field, refs: &Refs, sink: &mut 
     out
 }
 
-/// A list of a fixed number of elements (`repeat: {count: 4}`) is packed elements of whole
-/// bytes (`packed: {count: 4, bits: 16, bit_order}` for u16, the bit order the protocol's byte
-/// order): `f` as such, its `repeat` checked here; any other field as it is. Unsigned elements
-/// of 1, 2 or 4 bytes yet; a list of other elements is refused at its type.
-fn fixed_list(f: &model::Field, p: &str, byte_order: ByteOrder, sink: &mut Sink) -> model::Field {
+/// A list of a fixed number of elements (`repeat: {count: 4}`): `f` without its `repeat`
+/// (checked here), validated by [`field`] as one element, and the count, which
+/// [`fixed_elements`] then makes packed elements of whole bytes of. Any other field as it is,
+/// and no count. Elements are numbers of every width (signed, 24- and 64-bit, floats in their
+/// word order), enum and unit typed; records, text and bits of a fixed count are refused at
+/// the field's type.
+fn fixed_list(f: &model::Field, p: &str, sink: &mut Sink) -> (model::Field, Option<usize>) {
     use model::FieldType as T;
     let Some(r) = &f.repeat else {
-        return f.clone();
+        return (f.clone(), None);
     };
     let Ok(n) = r.count.parse::<i64>() else {
-        return f.clone();
+        return (f.clone(), None);
     };
     let rp = join(p, "repeat");
     let mut out = f.clone();
@@ -3954,32 +3959,53 @@ fn fixed_list(f: &model::Field, p: &str, byte_order: ByteOrder, sink: &mut Sink)
     };
     if let Some((k, why)) = refused {
         sink.error(join(&rp, k), why);
-        return out;
+        return (out, None);
     }
-    let bits = match f.ty {
-        T::U8 => 8,
-        T::U16 => 16,
-        T::U32 => 32,
-        _ => {
-            sink.error(
-                join(p, "type"),
-                format!(
-                    "a list of a fixed count (`count: {n}`) holds u8, u16 or u32 elements yet; {} elements are not expressible yet (a list counted by a field or to the `end` takes them)",
-                    format!("{:?}", f.ty).to_lowercase()
-                ),
-            );
-            return out;
-        }
-    };
-    out.packed = Some(model::Packed {
-        count: n,
-        bits,
-        bit_order: match byte_order {
-            ByteOrder::Little => model::BitOrder::LsbFirst,
-            ByteOrder::Big => model::BitOrder::MsbFirst,
-        },
+    if matches!(f.ty, T::Record | T::Ascii | T::Bit) {
+        sink.error(
+            join(p, "type"),
+            format!(
+                "a list of a fixed count (`count: {n}`) holds numbers (integers of 1 to 8 bytes, floats), each maybe of an enum or a unit; {} elements are not expressible yet (a list counted by a field or to the `end` takes them)",
+                format!("{:?}", f.ty).to_lowercase()
+            ),
+        );
+        // Checked no further: a byte in its place, lest its type's own rules speak too.
+        out.ty = T::U8;
+        out.fields.clear();
+        out.length = None;
+        return (out, None);
+    }
+    refuse_keys(
+        f,
+        p,
+        &[
+            "value", "equals", "bits", "special", "follows", "encoding", "present",
+        ],
+        |k| format!("`{k}` cannot be combined with a list of a fixed count (not expressible yet)"),
+        sink,
+    );
+    // Checked as one element without them (each refused once, above).
+    out.value = None;
+    out.equals = None;
+    out.bits.clear();
+    out.special.clear();
+    out.follows = None;
+    out.encoding = None;
+    out.present = None;
+    (out, Some(n as usize))
+}
+
+/// A list of `count` elements of `f`'s type (`repeat: {count}`, [`fixed_list`]), `f` validated
+/// as one element: packed elements of whole bytes, each in the protocol's byte order (and the
+/// field's word order).
+fn fixed_elements(f: &mut Field, count: usize) {
+    f.packed = Some(Packed {
+        count,
+        bits: 8 * f.width as u32,
+        lsb_first: f.byte_order == ByteOrder::Little,
+        elem_width: f.width,
     });
-    out
+    f.width *= count;
 }
 
 /// Packed elements (`packed: {count, bits, bit_order}`): `count` unsigned elements of the
@@ -5039,6 +5065,14 @@ fn compare(
                 ));
             }
             for (k, (&raw, n)) in list.iter().zip(want).enumerate() {
+                if f.is_wide() {
+                    // 64-bit and float elements (a list of a fixed count): each read as its
+                    // type, as a field of its own is.
+                    let one = StatedValue::Number(*n);
+                    compare(p, &f.element(), None, &Raw::Int(raw), &one, excused)
+                        .map_err(|e| format!("element {k}: {e}"))?;
+                    continue;
+                }
                 let got = match f.unit.map(|u| &p.units[u]) {
                     Some(u) => u.physical(raw),
                     None => Rational::int(i128::from(raw)),

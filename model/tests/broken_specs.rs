@@ -151,8 +151,12 @@ const CASES: &[(&str, &[(&str, &str)])] = &[
     ),
     // ---- lists of a fixed count (made from valid/packed_channels, without its examples)
     (
-        "fixed_list_signed",
-        &[("commands.calibrate.fields.offsets.type", "a list of a fixed count (`count: 3`) holds u8, u16 or u32 elements yet; i16 elements are not expressible yet (a list counted by a field or to the `end` takes them)")],
+        "fixed_list_of_bits",
+        &[("commands.calibrate.fields.offsets.type", "a list of a fixed count (`count: 3`) holds numbers (integers of 1 to 8 bytes, floats), each maybe of an enum or a unit; bit elements are not expressible yet (a list counted by a field or to the `end` takes them)")],
+    ),
+    (
+        "fixed_list_with_value",
+        &[("commands.calibrate.fields.offsets.value", "`value` cannot be combined with a list of a fixed count (not expressible yet)")],
     ),
     (
         "fixed_list_max_differs",

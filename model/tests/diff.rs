@@ -561,6 +561,58 @@ fn packed_element_changes_are_wire_breaking() {
     );
 }
 
+/// A list of a fixed count: another count, another element type of the same width (signed,
+/// float) or another word order is wire-breaking, and is named by its elements (`i16[2]`).
+#[test]
+fn fixed_count_and_element_changes_are_wire_breaking() {
+    let path =
+        Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/fixtures/valid/packed_channels.yaml");
+    let text = std::fs::read_to_string(&path).unwrap();
+    let head = &text[..text.find("examples:").unwrap()];
+    let old = busspec_model::load_str("old", head).unwrap_or_else(|d| panic!("{d}"));
+    let edited = head
+        .replace(
+            "{name: deltas, type: i16, unit: tenth_degree, range: {min: -900, max: 900}, repeat: {count: 2}}",
+            "{name: deltas, type: i16, unit: tenth_degree, range: {min: -900, max: 900}, repeat: {count: 3}}",
+        )
+        .replace(
+            "{name: modes, type: u8, enum: mode, repeat: {count: 2}}",
+            "{name: modes, type: i8, enum: mode, repeat: {count: 2}}",
+        )
+        .replace(
+            "{name: factors, type: f32, unit: ticks, range: {min: -2.0, max: 2.0}, repeat: {count: 2}}",
+            "{name: factors, type: u32, unit: ticks, repeat: {count: 2}}",
+        )
+        .replace("type: f64, unit: ticks, word_order: swapped,", "type: f64, unit: ticks,")
+        .replace("payload: {min: 3, max: 36}", "payload: {min: 3, max: 38}");
+    let new = busspec_model::load_str("new", &edited).unwrap_or_else(|d| panic!("{d}"));
+    let found = diff::diff(&old, &new);
+    let kinds: Vec<(Category, &str, &str)> = summary(&found);
+    for (kind, field) in [
+        ("field_width_changed", "deltas"),
+        ("field_signedness_changed", "modes"),
+        ("field_number_kind_changed", "factors"),
+    ] {
+        let path = format!("commands.trim.fields.{field}");
+        assert!(
+            kinds.contains(&(Wire, kind, path.as_str())),
+            "{kind} {field}: {kinds:?}"
+        );
+    }
+    assert!(
+        kinds
+            .iter()
+            .any(|(c, _, p)| *c == Wire && *p == "commands.trim.fields.scale"),
+        "{kinds:?}"
+    );
+    let text = found
+        .iter()
+        .find(|c| c.path == "commands.trim.fields.deltas")
+        .map(|c| c.text.clone())
+        .unwrap_or_default();
+    assert!(text.contains("i16[2] → i16[3] (4 → 6 bytes)"), "{text}");
+}
+
 /// A preamble added, removed, or sending another byte or count is a wire-breaking change of
 /// `framing.preamble`; taking more wake-up bytes is compatible, fewer wire-breaking.
 #[test]

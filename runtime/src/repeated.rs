@@ -1196,7 +1196,79 @@ pub fn pack<T: crate::codec::Wire>(
     Ok(())
 }
 
-/// Every decoded packed element within its spec range `min..=max`; the error names the byte
+/// The byte of a `width`-byte number whose 16-bit words travel swapped (`word_order: swapped`)
+/// that carries byte `i` of it in its byte order.
+#[inline(always)]
+fn swap_index(i: usize, width: usize) -> usize {
+    (width / 2 - 1 - i / 2) * 2 + i % 2
+}
+
+/// `N` elements of `width` bytes each (1 to 8) from `bytes` (a list of a fixed count,
+/// `repeat: {count: N}`, of other elements than unsigned ones of 1, 2 or 4 bytes: those go
+/// through [`unpack`]): each in its byte order (`le`: least significant byte first), its 16-bit
+/// words swapped where `swapped` says (4 and 8 bytes), sign-extended where `signed`, as the
+/// interpreter's `ir::Field::packed_elements` reads them. Missing bytes read as 0.
+#[inline]
+pub fn fixed_elements<T: crate::codec::Wire + Default, const N: usize>(
+    bytes: &[u8],
+    width: usize,
+    le: bool,
+    swapped: bool,
+    signed: bool,
+) -> Repeated<T, N> {
+    let mut r = Repeated::<T, N>::new();
+    let width = width.clamp(1, 8);
+    let swapped = swapped && (width == 4 || width == 8);
+    for (k, slot) in r.items.iter_mut().enumerate() {
+        let mut b = [0u8; 8];
+        for (i, d) in b[..width].iter_mut().enumerate() {
+            let j = if swapped { swap_index(i, width) } else { i };
+            *d = bytes.get(k * width + j).copied().unwrap_or(0);
+        }
+        let u = crate::codec::uint(&b[..width], le);
+        let bits = 8 * width as u32;
+        let v = if signed && bits < 64 {
+            ((u << (64 - bits)) as i64) >> (64 - bits)
+        } else {
+            u as i64
+        };
+        *slot = T::from_i64(v);
+    }
+    r.len = N;
+    r
+}
+
+/// Writes `items` as `count` elements of `width` bytes each into `out` (at least
+/// `count × width` bytes), each in its byte order and word order as [`fixed_elements`] reads
+/// them. A list of another length than `count` is refused for `field`.
+#[inline]
+pub fn write_fixed<T: crate::codec::Wire>(
+    field: &'static str,
+    items: &[T],
+    count: usize,
+    width: usize,
+    le: bool,
+    swapped: bool,
+    out: &mut [u8],
+) -> Result<(), EncodeError> {
+    if items.len() != count {
+        return Err(EncodeError::OutOfRange { field });
+    }
+    let width = width.clamp(1, 8);
+    let swapped = swapped && (width == 4 || width == 8);
+    for (c, v) in out.chunks_exact_mut(width).zip(items) {
+        let u = v.to_u64();
+        for i in 0..width {
+            let shift = if le { 8 * i } else { 8 * (width - 1 - i) };
+            let j = if swapped { swap_index(i, width) } else { i };
+            c[j] = (u >> shift) as u8;
+        }
+    }
+    Ok(())
+}
+
+/// Every decoded packed element within its spec range `min..=max` (raw values, compared as
+/// its type compares numbers); the error names the byte
 /// where the first that is not starts (`at`: where the field does).
 #[inline]
 pub fn packed_in_range<T: crate::codec::Wire>(
@@ -1209,14 +1281,14 @@ pub fn packed_in_range<T: crate::codec::Wire>(
 ) -> Result<(), DecodeError> {
     for (k, v) in items.iter().enumerate() {
         let found = v.to_i64();
-        if !(min..=max).contains(&found) {
+        if !T::within(found, min, max) {
             return Err(DecodeError::OutOfRange {
                 field,
                 offset: at + k * bits / 8,
                 found,
                 min,
                 max,
-                kind: crate::NumKind::Int,
+                kind: T::KIND,
             });
         }
     }
@@ -1233,13 +1305,13 @@ pub fn encode_packed_in_range<T: crate::codec::Wire>(
 ) -> Result<(), EncodeError> {
     for v in items {
         let value = v.to_i64();
-        if !(min..=max).contains(&value) {
+        if !T::within(value, min, max) {
             return Err(EncodeError::NotInRange {
                 field,
                 value,
                 min,
                 max,
-                kind: crate::NumKind::Int,
+                kind: T::KIND,
             });
         }
     }

@@ -2,6 +2,7 @@
 model/tests/fixtures/valid/mavlink_v2.yaml (the interpreter: `busspec decode/encode --spec`):
 
 - pymavlink packs random HEARTBEAT, SYS_STATUS (with its extension fields), PING, ATTITUDE,
+  ATTITUDE_QUATERNION (its extension field repr_offset_q a float[4], a list of a fixed count),
   REQUEST_DATA_STREAM and RAW_RPM (id 339, a 3-byte id above 255) messages with random
   sequence numbers, system and component IDs and compatibility flags, about half of their
   fields zero so that pymavlink strips the payload's trailing zeros (it truncates every v2
@@ -57,6 +58,11 @@ MESSAGES = [
         ("time_boot_ms", "time_boot_ms", "I"), ("roll", "roll", "f"), ("pitch", "pitch", "f"),
         ("yaw", "yaw", "f"), ("rollspeed", "rollspeed", "f"), ("pitchspeed", "pitchspeed", "f"),
         ("yawspeed", "yawspeed", "f")]),
+    ("attitude_quaternion", "response", mav.MAVLink_attitude_quaternion_message, [
+        ("time_boot_ms", "time_boot_ms", "I"), ("q1", "q1", "f"), ("q2", "q2", "f"),
+        ("q3", "q3", "f"), ("q4", "q4", "f"), ("rollspeed", "rollspeed", "f"),
+        ("pitchspeed", "pitchspeed", "f"), ("yawspeed", "yawspeed", "f"),
+        ("repr_offset_q", "repr_offset_q", "4f")]),
     ("request_data_stream", "request", mav.MAVLink_request_data_stream_message, [
         ("req_message_rate", "req_message_rate", "H"), ("target_system", "target_system", "B"),
         ("target_component", "target_component", "B"), ("req_stream_id", "req_stream_id", "B"),
@@ -72,6 +78,12 @@ def fail(what):
 
 
 def value(rng, kind, name):
+    if kind == "4f":
+        # A float[4] (a list of a fixed count): all 0 now and then (an extension field
+        # stripped whole), else each element as a float field is drawn.
+        if rng.random() < 0.3:
+            return [0.0] * 4
+        return [value(rng, "f", name) for _ in range(4)]
     # Half the fields zero, so that payloads end in zeros of every length.
     if rng.random() < 0.5:
         return 0.0 if kind == "f" else 0
@@ -87,6 +99,8 @@ def value(rng, kind, name):
 
 
 def same(kind, a, b):
+    if kind == "4f":
+        return len(a) == len(b) == 4 and all(same("f", x, y) for x, y in zip(a, b))
     if kind == "f":
         return struct.pack("<f", a) == struct.pack("<f", b)
     return a == b
@@ -134,7 +148,7 @@ def main():
     by_dir = {"request": [], "response": []}
     for f, w in zip(frames, wants):
         by_dir[w[1]].append((f, w))
-    decoded = 0
+    decoded, per, per_encoded = 0, {}, {}
     for d, items in by_dir.items():
         if not items:
             continue
@@ -153,6 +167,7 @@ def main():
                 if not same(kind, got["fields"][b], vals[b]):
                     fail(f"{f.hex()}: {b} {got['fields'][b]}, pymavlink packed {vals[b]}")
             decoded += 1
+            per[name] = per.get(name, 0) + 1
     # busspec → pymavlink.
     objs, wants = [], []
     for _ in range(n):
@@ -189,6 +204,7 @@ def main():
             fail(f"busspec encoded {line}, pymavlink packs {ours.hex().upper()}")
         encoded_stripped += len(frame) - 12 < cls.unpacker.size
         parsed += 1
+        per_encoded[name] = per_encoded.get(name, 0) + 1
     if len(lines) != n:
         fail(f"{len(lines)} frames encoded for {n} lines")
     # A signed frame (incompat_flags bit 0, 13 signature bytes after the CRC) is refused, not
@@ -218,7 +234,9 @@ def main():
     print(f"mavlink_v2 against pymavlink: {decoded} pymavlink frames decoded by busspec "
           f"({stripped[0]} of {stripped[1]} truncated, {len(lengths)} distinct message and "
           f"payload lengths), {parsed} busspec frames parsed by pymavlink and packed alike by it "
-          f"({encoded_stripped} truncated), every value and header field alike")
+          f"({encoded_stripped} truncated), every value and header field alike; "
+          f"ATTITUDE_QUATERNION (float[4]): {per.get('attitude_quaternion', 0)} decoded, "
+          f"{per_encoded.get('attitude_quaternion', 0)} encoded")
 
 
 main()

@@ -36,9 +36,14 @@ show('attitude', mav.MAVLink_attitude_message(123456, 0.0625, -0.125, 1.5, 0.5, 
 show('attitude_zero_rates', mav.MAVLink_attitude_message(123456, 0.0625, -0.125, 1.5, 0, 0, 0), 3, 1, 1)
 show('request_data_stream', mav.MAVLink_request_data_stream_message(1, 1, 0, 4, 1), 6, 255, 190)
 show('request_data_stream_stop', mav.MAVLink_request_data_stream_message(1, 1, 0, 4, 0), 7, 255, 190)
+show('attitude_quaternion', mav.MAVLink_attitude_quaternion_message(
+    123456, 0.5, -0.5, 0.25, 0.75, 0.0625, -0.125, 1.5, [0, 0, 0, 0]), 12, 1, 1)
+show('attitude_quaternion_offset', mav.MAVLink_attitude_quaternion_message(
+    123456, 1.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, [0.5, 0.5, -0.5, 0.5]), 13, 1, 1)
 show('raw_rpm', mav.MAVLink_raw_rpm_message(2, 1500.5), 77, 1, 1)
 show('raw_rpm_first', mav.MAVLink_raw_rpm_message(0, 1500.5), 78, 1, 1)
 for c in (mav.MAVLink_heartbeat_message, mav.MAVLink_sys_status_message, mav.MAVLink_ping_message,
-          mav.MAVLink_attitude_message, mav.MAVLink_request_data_stream_message,
+          mav.MAVLink_attitude_message, mav.MAVLink_attitude_quaternion_message,
+          mav.MAVLink_request_data_stream_message,
           mav.MAVLink_raw_rpm_message):
     print(c.id, c.msgname, c.crc_extra, c.ordered_fieldnames, c.unpacker.format)

@@ -259,7 +259,7 @@ impl<'a> Ctx<'a> {
                 return Kind::List {
                     elem: leaf.wire,
                     max: pk.count,
-                    typed: None,
+                    typed: self.element_type(f),
                     text: false,
                 };
             }
@@ -318,7 +318,9 @@ impl<'a> Ctx<'a> {
     /// The type of a repeated field's elements where it is one of the spec's: its enum's, or
     /// its unit's newtype (a unit of scale 1 and offset 0 leaves them integers).
     pub(super) fn element_type(&self, f: &Field) -> Option<Ident> {
-        if f.repeat.is_none() || f.ty == FieldType::Bit || f.is_record() {
+        // Packed elements of fewer bits than their type's (CRSF's channels) stay integers.
+        let whole = f.fixed_count().is_some();
+        if (f.repeat.is_none() && !whole) || f.ty == FieldType::Bit || f.is_record() {
             return None;
         }
         if let Some(e) = f.enumeration {
@@ -365,6 +367,16 @@ impl<'a> Ctx<'a> {
 /// and the field's: `SyncWriteBlocks`).
 pub(super) fn record_type(m: &str, f: &Field) -> Ident {
     type_ident(&format!("{m}_{}", f.name))
+}
+
+/// Whether packed field `f` is a list of a fixed count whose elements the generated code reads
+/// and writes whole (`rt::fixed_elements`, `rt::write_fixed`): signed, 3 or 8 bytes wide,
+/// floats, or their words swapped. Unsigned elements of 1, 2 or 4 bytes in their byte order go
+/// through `rt::unpack`/`rt::pack` as other packed elements do.
+pub(super) fn fixed_elements(f: &Field) -> bool {
+    f.fixed_count().is_some_and(|pk| {
+        f.signed || f.is_float() || f.word_swapped || !matches!(pk.elem_width, 1 | 2 | 4)
+    })
 }
 
 pub(super) fn wire_type(f: &Field) -> IntType {

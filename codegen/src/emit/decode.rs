@@ -78,7 +78,21 @@ pub(super) fn decode_body(ctx: &Ctx, m: &Message) -> (Vec<TokenStream>, TokenStr
             let bytes = quote!(&frame[#read_at..#end]);
             let fd = ctx.field_desc(m, name);
             stmts.push(quote!(rt::equal(#fd, #at + #last, rt::packed_padding(#bytes, #count, #bits, #lsb), 0)?;));
-            stmts.push(quote!(let #v = rt::unpack::<#e, #count>(#bytes, #bits, #lsb);));
+            // Elements typed by their enum or unit where they have one.
+            let e = match ctx.element_type(f) {
+                Some(t) => quote!(#t),
+                None => quote!(#e),
+            };
+            if fixed_elements(f) {
+                // A list of a fixed count of other elements than unsigned ones of 1, 2 or 4
+                // bytes: each whole, in its byte and word order.
+                let width = usize_lit(pk.elem_width);
+                let (le, swapped, signed) =
+                    (f.byte_order == ByteOrder::Little, f.word_swapped, f.signed);
+                stmts.push(quote!(let #v = rt::fixed_elements::<#e, #count>(#bytes, #width, #le, #swapped, #signed);));
+            } else {
+                stmts.push(quote!(let #v = rt::unpack::<#e, #count>(#bytes, #bits, #lsb);));
+            }
             if let Some((lo, hi)) = f.range {
                 let (lo, hi) = (i64_lit(lo), i64_lit(hi));
                 let fd = ctx.field_desc(m, name);

@@ -261,9 +261,13 @@ pub(super) fn emit_encode_arm(
                 usize_lit(pk.bits as usize),
                 pk.lsb_first,
             );
-            stmts.push(
-                quote!(rt::pack(#name, #n.as_slice(), #count, #bits, #lsb, &mut out[#at..#end])?;),
-            );
+            if super::ctx::fixed_elements(f) {
+                let width = usize_lit(pk.elem_width);
+                let (le, swapped) = (f.byte_order == ByteOrder::Little, f.word_swapped);
+                stmts.push(quote!(rt::write_fixed(#name, #n.as_slice(), #count, #width, #le, #swapped, &mut out[#at..#end])?;));
+            } else {
+                stmts.push(quote!(rt::pack(#name, #n.as_slice(), #count, #bits, #lsb, &mut out[#at..#end])?;));
+            }
             continue;
         }
         if f.is_ascii() {

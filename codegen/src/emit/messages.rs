@@ -146,6 +146,10 @@ pub(super) fn emit_messages(ctx: &Ctx, d: Direction) -> TokenStream {
                     Kind::Text(_) => quote!(rt::Text(&#v[..])),
                     Kind::List { text: true, .. } => quote!(rt::Text(#v.as_slice())),
                     Kind::List { typed: Some(_), .. } => quote!(rt::List(#v.table())),
+                    // 64-bit and float elements (a list of a fixed count): by their raw values.
+                    Kind::List { elem, .. } if elem.float || elem.bits == 64 => {
+                        quote!(rt::List(#v.table()))
+                    }
                     Kind::List { .. } | Kind::BitList { .. } => quote!(rt::List(#v.elements())),
                     Kind::Records { .. } => quote!(rt::Records(#v.records())),
                 };
@@ -521,7 +525,12 @@ pub(super) fn emit_from_fields(ctx: &Ctx, d: Direction) -> TokenStream {
                     elem, max, typed, ..
                 } => {
                     let (e, max) = (typed.unwrap_or_else(|| elem.ident()), usize_lit(max));
-                    let (lo, hi) = elem.limits();
+                    // A 64-bit element's raw value is its bits: every `i64`.
+                    let (lo, hi) = if elem.bits == 64 {
+                        (i64::MIN, i64::MAX)
+                    } else {
+                        elem.limits()
+                    };
                     let (lo, hi) = (i64_lit(lo), i64_lit(hi));
                     quote!(rt::list::<#e, #max>(&mut field, #n, #lo, #hi)?)
                 }

@@ -26,7 +26,7 @@ pub mod mavlink_v2 {
     /// The document's date.
     pub const DOCUMENT_DATE: &str = "2026-11-27";
     /// SHA-256 of the spec file this module was generated from, lowercase hex (`sha256sum`).
-    pub const SPEC_SHA256: &str = "1e7ff722f06351979ed3c645c185b37bd03d5651b83ae19961eeb88c570369b4";
+    pub const SPEC_SHA256: &str = "c5bece184ab394a6bedcbc88dce7d4805cf8d33697544f04d89fb5b431539c76";
     /// The spec's text, exactly as this module was generated from it.
     pub const SPEC_YAML: &str = include_str!(
         "../../../model/tests/fixtures/valid/mavlink_v2.yaml"
@@ -34,9 +34,9 @@ pub mod mavlink_v2 {
     /// The longest request frame, in bytes.
     pub const MAX_REQUEST_LEN: usize = 26;
     /// The longest response frame, in bytes.
-    pub const MAX_RESPONSE_LEN: usize = 55;
+    pub const MAX_RESPONSE_LEN: usize = 60;
     /// The longest frame in either direction: a buffer this long holds any frame.
-    pub const MAX_FRAME_LEN: usize = 55;
+    pub const MAX_FRAME_LEN: usize = 60;
     /// The document's baud rate.
     pub const BAUD: u32 = 57600u32;
     /// The quiet time the document demands between frames, in milliseconds, if it says.
@@ -83,6 +83,7 @@ pub mod mavlink_v2 {
             (0x0, 9, 2),
             (0x10000, 43, 2),
             (0x1E0000, 28, 2),
+            (0x1F0000, 48, 2),
             (0x530100, 5, 2),
         ],
     };
@@ -107,6 +108,7 @@ pub mod mavlink_v2 {
             rt::Some(&[0x00, 0x00, 0x00]) => rt::Some(0x32),
             rt::Some(&[0x01, 0x00, 0x00]) => rt::Some(0x7C),
             rt::Some(&[0x1E, 0x00, 0x00]) => rt::Some(0x27),
+            rt::Some(&[0x1F, 0x00, 0x00]) => rt::Some(0xF6),
             rt::Some(&[0x53, 0x01, 0x00]) => rt::Some(0xC7),
             _ => rt::None,
         }
@@ -426,7 +428,7 @@ pub mod mavlink_v2 {
         /// responses it may get (bit `i`: row `i` of `Response::MESSAGES`), in spec order.
         const COMMANDS: [(rt::CommandKind, bool, bool, u64); 2] = [
             (rt::Getter, false, false, 0x1),
-            (rt::Setter, false, false, 0x1e),
+            (rt::Setter, false, false, 0x3e),
         ];
         /// What the spec says of the command beyond its frame: its kind, the broadcast
         /// address, its reply, whether a master may send it again.
@@ -460,15 +462,17 @@ pub mod mavlink_v2 {
         Heartbeat(response::Heartbeat),
         SysStatus(response::SysStatus),
         Attitude(response::Attitude),
+        AttitudeQuaternion(response::AttitudeQuaternion),
         RawRpm(response::RawRpm),
     }
     impl Response {
         /// Each message's spec name, code and frame length, in spec order.
-        const MESSAGES: [(&'static str, &'static [u8], usize); 5] = [
+        const MESSAGES: [(&'static str, &'static [u8], usize); 6] = [
             ("ping_reply", &[0x04, 0x00, 0x00], 26),
             ("heartbeat", &[0x00, 0x00, 0x00], 21),
             ("sys_status", &[0x01, 0x00, 0x00], 55),
             ("attitude", &[0x1E, 0x00, 0x00], 40),
+            ("attitude_quaternion", &[0x1F, 0x00, 0x00], 60),
             ("raw_rpm", &[0x53, 0x01, 0x00], 17),
         ];
         /// This message's row in [`Self::MESSAGES`].
@@ -478,7 +482,8 @@ pub mod mavlink_v2 {
                 Self::Heartbeat(_) => 1,
                 Self::SysStatus(_) => 2,
                 Self::Attitude(_) => 3,
-                Self::RawRpm(_) => 4,
+                Self::AttitudeQuaternion(_) => 4,
+                Self::RawRpm(_) => 5,
             }
         }
         /// The spec's snake_case name of this message.
@@ -501,6 +506,7 @@ pub mod mavlink_v2 {
                 Self::Heartbeat(m) => m.visit(f),
                 Self::SysStatus(m) => m.visit(f),
                 Self::Attitude(m) => m.visit(f),
+                Self::AttitudeQuaternion(m) => m.visit(f),
                 Self::RawRpm(m) => m.visit(f),
             }
         }
@@ -681,6 +687,51 @@ pub mod mavlink_v2 {
                     out[34..38].copy_from_slice(&v_yawspeed.to_le_bytes());
                     out.len()
                 }
+                Self::AttitudeQuaternion(
+                    response::AttitudeQuaternion {
+                        incompat_flags: v_incompat_flags,
+                        compat_flags: v_compat_flags,
+                        sequence: v_sequence,
+                        sysid: v_sysid,
+                        compid: v_compid,
+                        time_boot_ms: v_time_boot_ms,
+                        q1: v_q1,
+                        q2: v_q2,
+                        q3: v_q3,
+                        q4: v_q4,
+                        rollspeed: v_rollspeed,
+                        pitchspeed: v_pitchspeed,
+                        yawspeed: v_yawspeed,
+                        repr_offset_q: v_repr_offset_q,
+                    },
+                ) => {
+                    rt::encode_in_range("incompat_flags", v_incompat_flags, 0, 0)?;
+                    let out = rt::frame_mut::<60>(buf, &[0xFD, 0x30])?;
+                    out[7..10].copy_from_slice(&[0x1F, 0x00, 0x00]);
+                    out[2] = v_incompat_flags;
+                    out[3] = v_compat_flags;
+                    out[4] = v_sequence;
+                    out[5] = v_sysid;
+                    out[6] = v_compid;
+                    out[10..14].copy_from_slice(&v_time_boot_ms.to_le_bytes());
+                    out[14..18].copy_from_slice(&v_q1.to_le_bytes());
+                    out[18..22].copy_from_slice(&v_q2.to_le_bytes());
+                    out[22..26].copy_from_slice(&v_q3.to_le_bytes());
+                    out[26..30].copy_from_slice(&v_q4.to_le_bytes());
+                    out[30..34].copy_from_slice(&v_rollspeed.to_le_bytes());
+                    out[34..38].copy_from_slice(&v_pitchspeed.to_le_bytes());
+                    out[38..42].copy_from_slice(&v_yawspeed.to_le_bytes());
+                    rt::write_fixed(
+                        "repr_offset_q",
+                        v_repr_offset_q.as_slice(),
+                        4,
+                        4,
+                        true,
+                        false,
+                        &mut out[42..58],
+                    )?;
+                    out.len()
+                }
                 Self::RawRpm(
                     response::RawRpm {
                         incompat_flags: v_incompat_flags,
@@ -734,7 +785,7 @@ pub mod mavlink_v2 {
             frame: &[u8],
             request: rt::Option<&Request>,
         ) -> rt::Result<Decoded<Response>, rt::DecodeError> {
-            let mut laid = [0u8; 55];
+            let mut laid = [0u8; 60];
             let laid = TRUNCATION
                 .lay_out(
                     frame,
@@ -752,7 +803,7 @@ pub mod mavlink_v2 {
             let address = rt::check_frame(
                 frame,
                 17,
-                55,
+                60,
                 0,
                 &FRAME,
                 |b| u32::from(checksum(rt::covered(b, 1))),
@@ -963,6 +1014,86 @@ pub mod mavlink_v2 {
                         }),
                     )
                 }
+                0x1F0000 => {
+                    let frame = rt::fixed::<
+                        60,
+                    >(frame, &response::AttitudeQuaternion::DESC)?;
+                    rt::in_range(
+                        &response::AttitudeQuaternion::INCOMPAT_FLAGS_DESC,
+                        2,
+                        frame[2],
+                        0,
+                        0,
+                    )?;
+                    rt::equal(
+                        &response::AttitudeQuaternion::REPR_OFFSET_Q_DESC,
+                        42 + 15,
+                        rt::packed_padding(&frame[42..58], 4, 32, true),
+                        0,
+                    )?;
+                    let v_repr_offset_q = rt::fixed_elements::<
+                        f32,
+                        4,
+                    >(&frame[42..58], 4, true, false, false);
+                    rt::Ok(
+                        Self::AttitudeQuaternion(response::AttitudeQuaternion {
+                            incompat_flags: frame[2],
+                            compat_flags: frame[3],
+                            sequence: frame[4],
+                            sysid: frame[5],
+                            compid: frame[6],
+                            time_boot_ms: u32::from_le_bytes([
+                                frame[10],
+                                frame[11],
+                                frame[12],
+                                frame[13],
+                            ]),
+                            q1: f32::from_le_bytes([
+                                frame[14],
+                                frame[15],
+                                frame[16],
+                                frame[17],
+                            ]),
+                            q2: f32::from_le_bytes([
+                                frame[18],
+                                frame[19],
+                                frame[20],
+                                frame[21],
+                            ]),
+                            q3: f32::from_le_bytes([
+                                frame[22],
+                                frame[23],
+                                frame[24],
+                                frame[25],
+                            ]),
+                            q4: f32::from_le_bytes([
+                                frame[26],
+                                frame[27],
+                                frame[28],
+                                frame[29],
+                            ]),
+                            rollspeed: f32::from_le_bytes([
+                                frame[30],
+                                frame[31],
+                                frame[32],
+                                frame[33],
+                            ]),
+                            pitchspeed: f32::from_le_bytes([
+                                frame[34],
+                                frame[35],
+                                frame[36],
+                                frame[37],
+                            ]),
+                            yawspeed: f32::from_le_bytes([
+                                frame[38],
+                                frame[39],
+                                frame[40],
+                                frame[41],
+                            ]),
+                            repr_offset_q: v_repr_offset_q,
+                        }),
+                    )
+                }
                 0x530100 => {
                     let frame = rt::fixed::<17>(frame, &response::RawRpm::DESC)?;
                     rt::in_range(
@@ -1085,6 +1216,27 @@ pub mod mavlink_v2 {
                         rollspeed: rt::get(&mut field, "rollspeed")?,
                         pitchspeed: rt::get(&mut field, "pitchspeed")?,
                         yawspeed: rt::get(&mut field, "yawspeed")?,
+                    })
+                }
+                "attitude_quaternion" => {
+                    Self::AttitudeQuaternion(response::AttitudeQuaternion {
+                        incompat_flags: rt::get(&mut field, "incompat_flags")?,
+                        compat_flags: rt::get(&mut field, "compat_flags")?,
+                        sequence: rt::get(&mut field, "sequence")?,
+                        sysid: rt::get(&mut field, "sysid")?,
+                        compid: rt::get(&mut field, "compid")?,
+                        time_boot_ms: rt::get(&mut field, "time_boot_ms")?,
+                        q1: rt::get(&mut field, "q1")?,
+                        q2: rt::get(&mut field, "q2")?,
+                        q3: rt::get(&mut field, "q3")?,
+                        q4: rt::get(&mut field, "q4")?,
+                        rollspeed: rt::get(&mut field, "rollspeed")?,
+                        pitchspeed: rt::get(&mut field, "pitchspeed")?,
+                        yawspeed: rt::get(&mut field, "yawspeed")?,
+                        repr_offset_q: rt::list::<
+                            f32,
+                            4,
+                        >(&mut field, "repr_offset_q", 0, 4294967295)?,
                     })
                 }
                 "raw_rpm" => {
@@ -1474,6 +1626,53 @@ pub mod mavlink_v2 {
             Response::Attitude(*self).encode(address, buf)
         }
     }
+    impl response::AttitudeQuaternion {
+        pub const NAME: &'static str = "attitude_quaternion";
+        pub const CODE: &'static [u8] = &[0x1F, 0x00, 0x00];
+        pub const LEN: usize = 60;
+        pub const DESC: rt::MessageDesc = rt::desc(Self::NAME, 0x1F0000, 3, &[60]);
+        pub const INCOMPAT_FLAGS: rt::Range<usize> = 2..3;
+        pub const COMPAT_FLAGS: rt::Range<usize> = 3..4;
+        pub const SEQUENCE: rt::Range<usize> = 4..5;
+        pub const SYSID: rt::Range<usize> = 5..6;
+        pub const COMPID: rt::Range<usize> = 6..7;
+        pub const TIME_BOOT_MS: rt::Range<usize> = 10..14;
+        pub const Q1: rt::Range<usize> = 14..18;
+        pub const Q2: rt::Range<usize> = 18..22;
+        pub const Q3: rt::Range<usize> = 22..26;
+        pub const Q4: rt::Range<usize> = 26..30;
+        pub const ROLLSPEED: rt::Range<usize> = 30..34;
+        pub const PITCHSPEED: rt::Range<usize> = 34..38;
+        pub const YAWSPEED: rt::Range<usize> = 38..42;
+        pub const REPR_OFFSET_Q: rt::Range<usize> = 42..58;
+        pub const INCOMPAT_FLAGS_DESC: rt::FieldDesc = rt::field(
+            Self::NAME,
+            "incompat_flags",
+        );
+        pub const REPR_OFFSET_Q_DESC: rt::FieldDesc = rt::field(
+            Self::NAME,
+            "repr_offset_q",
+        );
+        pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
+            f("incompat_flags", rt::Int(self.incompat_flags as i64));
+            f("compat_flags", rt::Int(self.compat_flags as i64));
+            f("sequence", rt::Int(self.sequence as i64));
+            f("sysid", rt::Int(self.sysid as i64));
+            f("compid", rt::Int(self.compid as i64));
+            f("time_boot_ms", rt::Int(self.time_boot_ms as i64));
+            f("q1", rt::Int(rt::raw(self.q1)));
+            f("q2", rt::Int(rt::raw(self.q2)));
+            f("q3", rt::Int(rt::raw(self.q3)));
+            f("q4", rt::Int(rt::raw(self.q4)));
+            f("rollspeed", rt::Int(rt::raw(self.rollspeed)));
+            f("pitchspeed", rt::Int(rt::raw(self.pitchspeed)));
+            f("yawspeed", rt::Int(rt::raw(self.yawspeed)));
+            f("repr_offset_q", rt::List(self.repr_offset_q.table()));
+        }
+        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            Response::AttitudeQuaternion(*self).encode(address, buf)
+        }
+    }
     impl response::RawRpm {
         pub const NAME: &'static str = "raw_rpm";
         pub const CODE: &'static [u8] = &[0x53, 0x01, 0x00];
@@ -1671,6 +1870,41 @@ pub mod mavlink_v2 {
             pub pitchspeed: f32,
             /// \[rad/s\]
             pub yawspeed: f32,
+        }
+        /// §3.7 ATTITUDE_QUATERNION (31) (code `0x1F0000`, 60 bytes).
+        #[derive(Debug, Clone, Copy, PartialEq)]
+        #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
+        #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]
+        #[repr(align(4))]
+        pub struct AttitudeQuaternion {
+            /// Incompatibility flags: bit 0 says the frame is signed (a 13-byte signature follows the checksum), which is not expressible yet: held to 0. Valid raw range 0..=0.
+            pub incompat_flags: u8,
+            /// Compatibility flags: a receiver that does not know one still handles the frame.
+            pub compat_flags: u8,
+            /// Packet sequence number: one more for each packet the component sends, 255 then 0.
+            pub sequence: u8,
+            /// The sending system's ID.
+            pub sysid: u8,
+            /// The sending component's ID.
+            pub compid: u8,
+            /// \[ms\]
+            pub time_boot_ms: u32,
+            /// Quaternion component 1, w (1 in null-rotation).
+            pub q1: f32,
+            /// Quaternion component 2, x (0 in null-rotation).
+            pub q2: f32,
+            /// Quaternion component 3, y (0 in null-rotation).
+            pub q3: f32,
+            /// Quaternion component 4, z (0 in null-rotation).
+            pub q4: f32,
+            /// \[rad/s\]
+            pub rollspeed: f32,
+            /// \[rad/s\]
+            pub pitchspeed: f32,
+            /// \[rad/s\]
+            pub yawspeed: f32,
+            /// An extension field (MAVLink 2 only), float\[4\]: the rotation offset by which the attitude quaternion and angular speed vector should be rotated for user display (w, x, y, z; zero-rotation \[1, 0, 0, 0\]; all 0 if unused).
+            pub repr_offset_q: super::rt::Repeated<f32, 4>,
         }
         /// §3.6 RAW_RPM (339) (code `0x530100`, 17 bytes).
         #[derive(Debug, Clone, Copy, PartialEq)]

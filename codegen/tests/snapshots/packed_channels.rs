@@ -26,17 +26,17 @@ pub mod packed_channels {
     /// The document's date.
     pub const DOCUMENT_DATE: &str = "2026-11-26";
     /// SHA-256 of the spec file this module was generated from, lowercase hex (`sha256sum`).
-    pub const SPEC_SHA256: &str = "4d0b37741959064d0bc533118ecaf5c11ce0042869c043152cb923bac6da6d0b";
+    pub const SPEC_SHA256: &str = "4cfada502c108ef8ec47e6e29a845f99f950f177581705fded8cae3e77b1affd";
     /// The spec's text, exactly as this module was generated from it.
     pub const SPEC_YAML: &str = include_str!(
         "../../../model/tests/fixtures/valid/packed_channels.yaml"
     );
     /// The longest request frame, in bytes.
-    pub const MAX_REQUEST_LEN: usize = 12;
+    pub const MAX_REQUEST_LEN: usize = 40;
     /// The longest response frame, in bytes.
     pub const MAX_RESPONSE_LEN: usize = 12;
     /// The longest frame in either direction: a buffer this long holds any frame.
-    pub const MAX_FRAME_LEN: usize = 12;
+    pub const MAX_FRAME_LEN: usize = 40;
     /// The document's baud rate.
     pub const BAUD: u32 = 420000u32;
     /// The quiet time the document demands between frames, in milliseconds, if it says.
@@ -80,8 +80,145 @@ pub mod packed_channels {
     pub fn checksum(bytes: &[u8]) -> u8 {
         CRC.checksum(bytes)
     }
-    ///A request (command), host to device.
+    /// Tenths of a degree.
+    ///
+    /// Physical value = raw × 0.1.
+    #[derive(Clone, Copy, PartialEq, Eq, PartialOrd, Ord, Hash, Default)]
+    #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
+    #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]
+    pub struct TenthDegree(pub i16);
+    /// Shows the raw value and the physical one.
+    impl rt::Debug for TenthDegree {
+        fn fmt(&self, f: &mut rt::Formatter<'_>) -> rt::FmtResult {
+            write!(f, "TenthDegree({} = {} °)", self.0, self.value())
+        }
+    }
+    impl TenthDegree {
+        /// The unit's symbol.
+        pub const SYMBOL: &'static str = "°";
+        /// The raw wire value.
+        #[inline]
+        pub const fn raw(self) -> i16 {
+            self.0
+        }
+        /// From a raw wire value.
+        #[inline]
+        pub const fn from_raw(raw: i16) -> Self {
+            Self(raw)
+        }
+        /// The physical value, in [`Self::SYMBOL`].
+        #[inline]
+        pub fn value(self) -> f64 {
+            self.0 as f64 / 10f64
+        }
+        /// The raw value nearest to a physical value; `None` if it is not finite or out of range.
+        pub fn from_value(value: f64) -> rt::Option<Self> {
+            let raw = rt::round(value * 10f64)?;
+            if !(-32768..=32767).contains(&raw) {
+                return rt::None;
+            }
+            rt::Some(Self(raw as i16))
+        }
+    }
+    /// A list's element: its raw value as it travels.
+    impl rt::Wire for TenthDegree {
+        const MIN: i64 = -32768;
+        const MAX: i64 = 32767;
+        #[inline]
+        fn from_i64(v: i64) -> Self {
+            Self(v as i16)
+        }
+        #[inline]
+        fn to_i64(self) -> i64 {
+            self.0 as i64
+        }
+        #[inline]
+        fn to_u64(self) -> u64 {
+            self.0 as u64
+        }
+    }
+    /// How a trimmed axis moves. (§3.4)
+    ///
+    /// Open: a value this revision does not list decodes as `Unknown(raw)` and re-encodes unchanged.
     #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+    #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
+    pub enum Mode {
+        /// Held. (0)
+        Off,
+        /// At a tenth of its speed. (1)
+        Slow,
+        /// At its full speed. (2)
+        Fast,
+        /// A value this revision of the document does not list.
+        Unknown(u8),
+    }
+    /// Not derived: an arbitrary value goes through `from_raw`, so `Unknown` never holds
+    /// a listed value (which would encode as that value and decode as its variant).
+    #[cfg(feature = "arbitrary")]
+    impl<'a> ::arbitrary::Arbitrary<'a> for Mode {
+        fn arbitrary(
+            u: &mut ::arbitrary::Unstructured<'a>,
+        ) -> ::arbitrary::Result<Self> {
+            rt::Ok(Self::from_raw(<u8 as ::arbitrary::Arbitrary<'a>>::arbitrary(u)?))
+        }
+        fn size_hint(depth: usize) -> (usize, rt::Option<usize>) {
+            <u8 as ::arbitrary::Arbitrary<'a>>::size_hint(depth)
+        }
+    }
+    impl Mode {
+        /// From a raw wire value; never fails.
+        pub const fn from_raw(raw: u8) -> Self {
+            match raw {
+                0x0u8 => Self::Off,
+                0x1u8 => Self::Slow,
+                0x2u8 => Self::Fast,
+                other => Self::Unknown(other),
+            }
+        }
+        /// The raw wire value.
+        pub const fn raw(self) -> u8 {
+            match self {
+                Self::Off => 0x0u8,
+                Self::Slow => 0x1u8,
+                Self::Fast => 0x2u8,
+                Self::Unknown(raw) => raw,
+            }
+        }
+        /// The spec's name of this value, `None` for `Unknown`.
+        pub const fn name(self) -> rt::Option<&'static str> {
+            match self {
+                Self::Off => rt::Some("off"),
+                Self::Slow => rt::Some("slow"),
+                Self::Fast => rt::Some("fast"),
+                Self::Unknown(_) => rt::None,
+            }
+        }
+    }
+    /// A list's element: its raw value as it travels.
+    impl rt::Wire for Mode {
+        const MIN: i64 = 0;
+        const MAX: i64 = 255;
+        #[inline]
+        fn from_i64(v: i64) -> Self {
+            Self::from_raw(v as u8)
+        }
+        #[inline]
+        fn to_i64(self) -> i64 {
+            self.raw() as i64
+        }
+        #[inline]
+        fn to_u64(self) -> u64 {
+            self.raw() as u64
+        }
+    }
+    /// A list's empty slots: raw 0.
+    impl ::core::default::Default for Mode {
+        fn default() -> Self {
+            Self::from_raw(0)
+        }
+    }
+    ///A request (command), host to device.
+    #[derive(Debug, Clone, Copy, PartialEq)]
     #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
     #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]
     #[allow(clippy::large_enum_variant)]
@@ -89,13 +226,15 @@ pub mod packed_channels {
         Channels(request::Channels),
         Levels(request::Levels),
         Calibrate(request::Calibrate),
+        Trim(request::Trim),
     }
     impl Request {
         /// Each message's spec name, code and frame length, in spec order.
-        const MESSAGES: [(&'static str, &'static [u8], usize); 3] = [
+        const MESSAGES: [(&'static str, &'static [u8], usize); 4] = [
             ("channels", &[0x16], 11),
             ("levels", &[0x17], 7),
             ("calibrate", &[0x19], 12),
+            ("trim", &[0x1A], 40),
         ];
         /// This message's row in [`Self::MESSAGES`].
         const fn index(&self) -> usize {
@@ -103,6 +242,7 @@ pub mod packed_channels {
                 Self::Channels(_) => 0,
                 Self::Levels(_) => 1,
                 Self::Calibrate(_) => 2,
+                Self::Trim(_) => 3,
             }
         }
         /// The spec's snake_case name of this message.
@@ -124,6 +264,7 @@ pub mod packed_channels {
                 Self::Channels(m) => m.visit(f),
                 Self::Levels(m) => m.visit(f),
                 Self::Calibrate(m) => m.visit(f),
+                Self::Trim(m) => m.visit(f),
             }
         }
         /// Encodes the frame for `address` into `buf`; returns the frame length. Refuses what
@@ -183,6 +324,84 @@ pub mod packed_channels {
                     rt::pack("gains", v_gains.as_slice(), 2, 8, false, &mut out[9..11])?;
                     out.len()
                 }
+                Self::Trim(
+                    request::Trim {
+                        deltas: v_deltas,
+                        factors: v_factors,
+                        modes: v_modes,
+                        trims: v_trims,
+                        stamp: v_stamp,
+                        scale: v_scale,
+                    },
+                ) => {
+                    rt::encode_packed_in_range(
+                        "deltas",
+                        v_deltas.as_slice(),
+                        -900,
+                        900,
+                    )?;
+                    rt::encode_packed_in_range(
+                        "factors",
+                        v_factors.as_slice(),
+                        3221225472,
+                        1073741824,
+                    )?;
+                    let out = rt::frame_mut::<40>(buf, &[0xC8, 0x26, 0x1A])?;
+                    rt::write_fixed(
+                        "deltas",
+                        v_deltas.as_slice(),
+                        2,
+                        2,
+                        false,
+                        false,
+                        &mut out[3..7],
+                    )?;
+                    rt::write_fixed(
+                        "factors",
+                        v_factors.as_slice(),
+                        2,
+                        4,
+                        false,
+                        false,
+                        &mut out[7..15],
+                    )?;
+                    rt::pack(
+                        "modes",
+                        v_modes.as_slice(),
+                        2,
+                        8,
+                        false,
+                        &mut out[15..17],
+                    )?;
+                    rt::write_fixed(
+                        "trims",
+                        v_trims.as_slice(),
+                        2,
+                        3,
+                        false,
+                        false,
+                        &mut out[17..23],
+                    )?;
+                    rt::write_fixed(
+                        "stamp",
+                        v_stamp.as_slice(),
+                        1,
+                        8,
+                        false,
+                        false,
+                        &mut out[23..31],
+                    )?;
+                    rt::write_fixed(
+                        "scale",
+                        v_scale.as_slice(),
+                        1,
+                        8,
+                        false,
+                        true,
+                        &mut out[31..39],
+                    )?;
+                    out.len()
+                }
             };
             rt::seal(buf, len, |b| u32::from(checksum(rt::covered(b, 2))), 1, true);
             rt::Ok(len)
@@ -194,7 +413,7 @@ pub mod packed_channels {
             let address = rt::check_frame(
                 frame,
                 7,
-                12,
+                40,
                 0,
                 &FRAME,
                 |b| u32::from(checksum(rt::covered(b, 2))),
@@ -286,6 +505,92 @@ pub mod packed_channels {
                         }),
                     )
                 }
+                0x1A => {
+                    let frame = rt::fixed::<40>(frame, &request::Trim::DESC)?;
+                    rt::equal(
+                        &request::Trim::DELTAS_DESC,
+                        3 + 3,
+                        rt::packed_padding(&frame[3..7], 2, 16, false),
+                        0,
+                    )?;
+                    let v_deltas = rt::fixed_elements::<
+                        TenthDegree,
+                        2,
+                    >(&frame[3..7], 2, false, false, true);
+                    rt::packed_in_range(
+                        &request::Trim::DELTAS_DESC,
+                        3,
+                        16,
+                        v_deltas.as_slice(),
+                        -900,
+                        900,
+                    )?;
+                    rt::equal(
+                        &request::Trim::FACTORS_DESC,
+                        7 + 7,
+                        rt::packed_padding(&frame[7..15], 2, 32, false),
+                        0,
+                    )?;
+                    let v_factors = rt::fixed_elements::<
+                        f32,
+                        2,
+                    >(&frame[7..15], 4, false, false, false);
+                    rt::packed_in_range(
+                        &request::Trim::FACTORS_DESC,
+                        7,
+                        32,
+                        v_factors.as_slice(),
+                        3221225472,
+                        1073741824,
+                    )?;
+                    rt::equal(
+                        &request::Trim::MODES_DESC,
+                        15 + 1,
+                        rt::packed_padding(&frame[15..17], 2, 8, false),
+                        0,
+                    )?;
+                    let v_modes = rt::unpack::<Mode, 2>(&frame[15..17], 8, false);
+                    rt::equal(
+                        &request::Trim::TRIMS_DESC,
+                        17 + 5,
+                        rt::packed_padding(&frame[17..23], 2, 24, false),
+                        0,
+                    )?;
+                    let v_trims = rt::fixed_elements::<
+                        i32,
+                        2,
+                    >(&frame[17..23], 3, false, false, true);
+                    rt::equal(
+                        &request::Trim::STAMP_DESC,
+                        23 + 7,
+                        rt::packed_padding(&frame[23..31], 1, 64, false),
+                        0,
+                    )?;
+                    let v_stamp = rt::fixed_elements::<
+                        u64,
+                        1,
+                    >(&frame[23..31], 8, false, false, false);
+                    rt::equal(
+                        &request::Trim::SCALE_DESC,
+                        31 + 7,
+                        rt::packed_padding(&frame[31..39], 1, 64, false),
+                        0,
+                    )?;
+                    let v_scale = rt::fixed_elements::<
+                        f64,
+                        1,
+                    >(&frame[31..39], 8, false, true, false);
+                    rt::Ok(
+                        Self::Trim(request::Trim {
+                            deltas: v_deltas,
+                            factors: v_factors,
+                            modes: v_modes,
+                            trims: v_trims,
+                            stamp: v_stamp,
+                            scale: v_scale,
+                        }),
+                    )
+                }
                 _ => rt::Err(rt::unknown_code(frame, 2, 1, 1, false)),
             }
         }
@@ -313,6 +618,41 @@ pub mod packed_channels {
                     Self::Calibrate(request::Calibrate {
                         offsets: rt::list::<u16, 3>(&mut field, "offsets", 0, 65535)?,
                         gains: rt::list::<u8, 2>(&mut field, "gains", 0, 255)?,
+                    })
+                }
+                "trim" => {
+                    Self::Trim(request::Trim {
+                        deltas: rt::list::<
+                            TenthDegree,
+                            2,
+                        >(&mut field, "deltas", -32768, 32767)?,
+                        factors: rt::list::<
+                            f32,
+                            2,
+                        >(&mut field, "factors", 0, 4294967295)?,
+                        modes: rt::list::<Mode, 2>(&mut field, "modes", 0, 255)?,
+                        trims: rt::list::<
+                            i32,
+                            2,
+                        >(&mut field, "trims", -8388608, 8388607)?,
+                        stamp: rt::list::<
+                            u64,
+                            1,
+                        >(
+                            &mut field,
+                            "stamp",
+                            -9223372036854775808,
+                            9223372036854775807,
+                        )?,
+                        scale: rt::list::<
+                            f64,
+                            1,
+                        >(
+                            &mut field,
+                            "scale",
+                            -9223372036854775808,
+                            9223372036854775807,
+                        )?,
                     })
                 }
                 _ => return rt::Err(rt::FieldError::UnknownMessage),
@@ -352,8 +692,9 @@ pub mod packed_channels {
     impl Request {
         /// Each command's kind, whether it accepts and answers the broadcast address, and the
         /// responses it may get (bit `i`: row `i` of `Response::MESSAGES`), in spec order.
-        const COMMANDS: [(rt::CommandKind, bool, bool, u64); 3] = [
+        const COMMANDS: [(rt::CommandKind, bool, bool, u64); 4] = [
             (rt::Setter, false, false, 0x1),
+            (rt::Setter, false, false, 0x0),
             (rt::Setter, false, false, 0x0),
             (rt::Setter, false, false, 0x0),
         ];
@@ -371,6 +712,7 @@ pub mod packed_channels {
                     Request::Channels(_) => rt::Reply::Optional,
                     Request::Levels(_) => rt::Reply::None,
                     Request::Calibrate(_) => rt::Reply::None,
+                    Request::Trim(_) => rt::Reply::None,
                     _ => rt::Reply::Required,
                 },
                 may_retry: c.0.safe_to_repeat(),
@@ -629,7 +971,7 @@ pub mod packed_channels {
     impl rt::Framing for PackedChannels {
         const MAX_REQUEST_LEN: usize = MAX_REQUEST_LEN;
         const MAX_RESPONSE_LEN: usize = MAX_RESPONSE_LEN;
-        const FRAME_LENGTHS: &'static [usize] = &[12, 11, 7];
+        const FRAME_LENGTHS: &'static [usize] = &[40, 12, 11, 7];
         #[inline]
         fn candidates(head: &[u8]) -> rt::Candidates {
             if head.first().is_some_and(|&b| b != 0xC8) {
@@ -638,7 +980,7 @@ pub mod packed_channels {
                     responses: 0,
                 };
             }
-            static TABLE: [u8; 528] = *b"\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\x10 0@\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\x02\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\x04\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\x01\0\0\0\0\0\0\0\x01\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0";
+            static TABLE: [u8; 528] = *b"\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\x10 0@P\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\x04\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\x08\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\x02\0\0\0\0\0\0\0\x02\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\x01\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0";
             let mask = match head.get(2) {
                 rt::Some(&b) => {
                     let i = 256 + TABLE[b as usize] as usize;
@@ -646,7 +988,7 @@ pub mod packed_channels {
                     m.copy_from_slice(&TABLE[i..i + 16]);
                     u128::from_le_bytes(m)
                 }
-                rt::None => 0x10000000000000007,
+                rt::None => 0x2000000000000000f,
             };
             rt::Candidates {
                 requests: mask as u64,
@@ -658,7 +1000,7 @@ pub mod packed_channels {
             if head.first().is_some_and(|&b| b != 0xC8) {
                 return rt::Candidate::NONE;
             }
-            static CELLS: [u8; 512] = *b"\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\x0B\0\x07\0\x8C\0\x0C\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0";
+            static CELLS: [u8; 512] = *b"\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\x0B\0\x07\0\x8C\0\x0C\0(\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0";
             match head.get(2) {
                 rt::Some(&b) => {
                     let i = 2 * b as usize;
@@ -721,6 +1063,35 @@ pub mod packed_channels {
             Request::Calibrate(*self).encode(address, buf)
         }
     }
+    impl request::Trim {
+        pub const NAME: &'static str = "trim";
+        pub const CODE: &'static [u8] = &[0x1A];
+        pub const LEN: usize = 40;
+        pub const DESC: rt::MessageDesc = rt::desc(Self::NAME, 0x1A, 1, &[40]);
+        pub const DELTAS: rt::Range<usize> = 3..7;
+        pub const FACTORS: rt::Range<usize> = 7..15;
+        pub const MODES: rt::Range<usize> = 15..17;
+        pub const TRIMS: rt::Range<usize> = 17..23;
+        pub const STAMP: rt::Range<usize> = 23..31;
+        pub const SCALE: rt::Range<usize> = 31..39;
+        pub const DELTAS_DESC: rt::FieldDesc = rt::field(Self::NAME, "deltas");
+        pub const FACTORS_DESC: rt::FieldDesc = rt::field(Self::NAME, "factors");
+        pub const MODES_DESC: rt::FieldDesc = rt::field(Self::NAME, "modes");
+        pub const TRIMS_DESC: rt::FieldDesc = rt::field(Self::NAME, "trims");
+        pub const STAMP_DESC: rt::FieldDesc = rt::field(Self::NAME, "stamp");
+        pub const SCALE_DESC: rt::FieldDesc = rt::field(Self::NAME, "scale");
+        pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
+            f("deltas", rt::List(self.deltas.table()));
+            f("factors", rt::List(self.factors.table()));
+            f("modes", rt::List(self.modes.table()));
+            f("trims", rt::List(self.trims.elements()));
+            f("stamp", rt::List(self.stamp.table()));
+            f("scale", rt::List(self.scale.table()));
+        }
+        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            Request::Trim(*self).encode(address, buf)
+        }
+    }
     impl response::Readings {
         pub const NAME: &'static str = "readings";
         pub const CODE: &'static [u8] = &[0x18];
@@ -768,6 +1139,22 @@ pub mod packed_channels {
             pub offsets: super::rt::Repeated<u16, 3>,
             /// Valid raw range 1..=9.
             pub gains: super::rt::Repeated<u8, 2>,
+        }
+        /// §3.4 Trim (code `0x1A`, 40 bytes).
+        #[derive(Debug, Clone, Copy, PartialEq)]
+        #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
+        #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]
+        #[repr(align(4))]
+        pub struct Trim {
+            /// \[°\] Valid raw range -900..=900.
+            pub deltas: super::rt::Repeated<super::TenthDegree, 2>,
+            /// Valid raw range -2.0..=2.0.
+            pub factors: super::rt::Repeated<f32, 2>,
+            pub modes: super::rt::Repeated<super::Mode, 2>,
+            pub trims: super::rt::Repeated<i32, 2>,
+            pub stamp: super::rt::Repeated<u64, 1>,
+            /// Its 16-bit words travel swapped.
+            pub scale: super::rt::Repeated<f64, 1>,
         }
     }
     /// Each response as a struct of its own.
