@@ -638,7 +638,7 @@ pub fn write_number(f: &Field, v: u64, out: &mut [u8]) {
     }
 }
 
-fn sign_extend(v: u64, bits: u32) -> i64 {
+pub(crate) fn sign_extend(v: u64, bits: u32) -> i64 {
     if bits == 0 || bits >= 64 {
         return v as i64;
     }

@@ -1523,9 +1523,8 @@ impl Field {
                     *slot = bytes.get(k * w + j).copied().unwrap_or(0);
                 }
                 let u = crate::interp::read_number(&e, &chunk[..n]);
-                if e.signed && n < 8 {
-                    let shift = 64 - 8 * n as u32;
-                    ((u << shift) as i64) >> shift
+                if e.signed {
+                    crate::interp::sign_extend(u, 8 * n as u32)
                 } else {
                     u as i64
                 }

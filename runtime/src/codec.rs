@@ -1416,6 +1416,19 @@ pub fn uint(bytes: &[u8], le: bool) -> u64 {
     }
 }
 
+/// The integer `bytes` hold, as [`uint`] reads it, sign-extended from its width where `signed`
+/// (a list element's raw value, as `FieldValue` carries it).
+#[inline(always)]
+pub fn int(bytes: &[u8], le: bool, signed: bool) -> i64 {
+    let u = uint(bytes, le);
+    let bits = 8 * bytes.len() as u32;
+    if signed && bits < 64 {
+        ((u << (64 - bits)) as i64) >> (64 - bits)
+    } else {
+        u as i64
+    }
+}
+
 /// Checks a length field of `width` bytes at `at` (`le`: least significant byte first): it must
 /// hold `frame.len() + k` where it counts the payload (`grows`), else `k`. A frame whose length
 /// field disagrees is refused with the field's offset and value.

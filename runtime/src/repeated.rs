@@ -1050,14 +1050,7 @@ pub fn read_elements<T: crate::codec::Wire + Default, const N: usize>(
     }
     let mut r = Repeated::<T, N>::new();
     for (slot, c) in r.items.iter_mut().zip(bytes.chunks_exact(width)) {
-        let u = crate::codec::uint(c, le);
-        let bits = 8 * width as u32;
-        let v = if signed && bits < 64 {
-            ((u << (64 - bits)) as i64) >> (64 - bits)
-        } else {
-            u as i64
-        };
-        *slot = T::from_i64(v);
+        *slot = T::from_i64(crate::codec::int(c, le, signed));
     }
     r.len = found;
     Ok(r)
@@ -1225,14 +1218,7 @@ pub fn fixed_elements<T: crate::codec::Wire + Default, const N: usize>(
             let j = if swapped { swap_index(i, width) } else { i };
             *d = bytes.get(k * width + j).copied().unwrap_or(0);
         }
-        let u = crate::codec::uint(&b[..width], le);
-        let bits = 8 * width as u32;
-        let v = if signed && bits < 64 {
-            ((u << (64 - bits)) as i64) >> (64 - bits)
-        } else {
-            u as i64
-        };
-        *slot = T::from_i64(v);
+        *slot = T::from_i64(crate::codec::int(&b[..width], le, signed));
     }
     r.len = N;
     r
