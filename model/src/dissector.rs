@@ -106,7 +106,7 @@ fn escaping(p: &Protocol) -> String {
         }
         crate::ir::EscapeKind::Cobs => "kind = \"cobs\"".to_owned(),
     };
-    let (length_at, length_width) = match (&f.length, f.head(0).length) {
+    let (length_at, length_width) = match (&f.length, f.head(Direction::Request, 0).length) {
         (Some(l), Some(at)) => (at.to_string(), l.width),
         _ => ("false".to_owned(), 0),
     };
@@ -599,7 +599,7 @@ fn protocol(p: &Protocol) -> String {
     let truncation = match f.truncation {
         Some(_) => {
             let code_len = f.request.code_lengths.first().copied().unwrap_or(0);
-            let head = f.head(code_len);
+            let head = f.head(Direction::Request, code_len);
             let mut codes: Vec<String> = Vec::new();
             for d in [Direction::Request, Direction::Response] {
                 for m in p.framed(d) {

@@ -23,7 +23,7 @@
 use std::borrow::Cow;
 
 use crate::interp::{read_uint, write_uint, DecodeError, EscapeFault};
-use crate::ir::{Computed, EscapeKind, Framing, Protocol};
+use crate::ir::{Computed, Direction, EscapeKind, Framing, Protocol};
 
 /// A frame unescaped, with what [`Unescaped::locate`] needs to report the checks the spec
 /// computes on the escaped bytes.
@@ -332,7 +332,7 @@ pub fn unescape_bytes(f: &Framing, wire: &[u8]) -> Result<Vec<u8>, DecodeError> 
 /// validated), and its width.
 fn length_field(p: &Protocol) -> Option<(usize, usize)> {
     let l = p.framing.length.as_ref()?;
-    Some((p.framing.head(0).length?, l.width))
+    Some((p.framing.head(Direction::Request, 0).length?, l.width))
 }
 
 /// Rewrites the unescaped frame `out` of stuffed `wire` (`added` bytes longer) so that its

@@ -964,13 +964,21 @@ fn decode_plain<'p>(
             found: wire.len(),
         });
     }
-    let first = p.framing.head(min_code);
-    // Start bytes that differ by direction tell the frame's direction.
+    let d0 = directions.first().copied().unwrap_or(Direction::Request);
+    let first = p.framing.head(d0, min_code);
+    // Decoded both ways, a frame of the second direction has its parts where that
+    // direction's layout puts them (`framing.layout: {request, response}`).
+    let second = match directions {
+        [_, b] => p.framing.head(*b, min_code),
+        _ => first,
+    };
+    // Start bytes that differ by direction (or sit where each direction's layout puts them)
+    // tell the frame's direction.
     let (sync0, sync1) = match directions {
-        [a, b] if p.framing.sync_by_direction() => {
+        [a, b] if p.framing.sync_by_direction() || p.framing.layout_by_direction() => {
             let (x, y) = (
                 check_sync(p, *a, &first, wire),
-                check_sync(p, *b, &first, wire),
+                check_sync(p, *b, &second, wire),
             );
             if let (Err(e), Err(_)) = (&x, &y) {
                 return Err(e.clone());
@@ -978,12 +986,11 @@ fn decode_plain<'p>(
             (x.is_ok(), y.is_ok())
         }
         _ => {
-            let d = directions.first().copied().unwrap_or(Direction::Request);
-            check_sync(p, d, &first, wire)?;
+            check_sync(p, d0, &first, wire)?;
             (true, true)
         }
     };
-    if wire.len() < shortest.max(first.len) {
+    if wire.len() < shortest.max(first.len.min(second.len)) {
         return Err(DecodeError::Truncated {
             needed: shortest,
             found: wire.len(),
@@ -991,7 +998,27 @@ fn decode_plain<'p>(
     }
     check_end(p, wire)?;
     check_checksum(p, lookup.map(|l| &l.checksum), wire)?;
-    check_address(p, first.address, wire)?;
+    // Where the address sits (or whether frames carry one) differs by direction, each
+    // direction the frame may be is checked at its own; it is refused where none agrees.
+    let (sync0, sync1) = if first.address != second.address {
+        let (x, y) = (
+            check_address(p, first.address, wire),
+            check_address(p, second.address, wire),
+        );
+        match (sync0 && x.is_ok(), sync1 && y.is_ok()) {
+            (false, false) => {
+                if sync0 {
+                    x?;
+                }
+                y?;
+                (false, false)
+            }
+            kept => kept,
+        }
+    } else {
+        check_address(p, first.address, wire)?;
+        (sync0, sync1)
+    };
     // The checksum covers the payload as it travelled; the fields are read with its transform
     // undone (`framing.transform`).
     let plain = p.framing.untransformed(wire);
@@ -1089,7 +1116,7 @@ fn decode_plain<'p>(
     }
     by_code.sort_by_key(|r| coded_first(p, r));
     if by_code.is_empty() {
-        let o = p.framing.head(min_code);
+        let o = p.framing.head(d0, min_code);
         let longest = directions
             .iter()
             .flat_map(|d| p.framing.direction(*d).code_lengths.iter().copied())
@@ -2466,10 +2493,10 @@ fn encode_values(
         return Ok(bytes.clone());
     }
     let a = &p.framing.address;
-    if !p.framing.has_address() && address != 0 {
+    if !p.framing.has_address_in(m.direction) && address != 0 {
         return Err(EncodeError::Unaddressed { address });
     }
-    if !address_allowed(p, address) {
+    if p.framing.has_address_in(m.direction) && !address_allowed(p, address) {
         return Err(EncodeError::BadAddress {
             address,
             min: a.min,

@@ -64,7 +64,12 @@ pub struct Serial {
 #[derive(Debug, Clone)]
 pub struct Framing {
     pub section: Option<String>,
+    /// The layout of a request (the one layout where the spec gives one for both directions).
     pub layout: Vec<Part>,
+    /// The layout of a response: the same as [`Self::layout`] unless the spec gives a layout
+    /// per direction (`framing.layout: {request, response}`, Sensirion SHDLC); see
+    /// [`Self::layout_of`].
+    pub response_layout: Vec<Part>,
     /// The first start byte of a request (the only one where the protocol has one).
     pub start: Option<u8>,
     /// Every start byte of a request, in order (empty without `start`): `FF FF` for Dynamixel.
@@ -85,15 +90,18 @@ pub struct Framing {
     pub request: DirectionFraming,
     pub response: DirectionFraming,
     pub checksum: Checksum,
-    /// The layout of a frame with an empty payload, indexed by code length (0 to
+    /// The layout of a request with an empty payload, indexed by code length (0 to
     /// [`MAX_CODE_LEN`]); see [`Framing::head`].
     pub heads: Vec<FrameLayout>,
+    /// The same for a response: [`Self::heads`] unless the layouts differ by direction.
+    pub response_heads: Vec<FrameLayout>,
     /// How frames are escaped or stuffed on the wire (`None`: they travel as laid out). Every
     /// offset and length of the IR is the unescaped frame's; [`crate::escape`] turns one into
     /// the other.
     pub escaping: Option<Escaping>,
     /// The header fields every message carries (`framing.header`), `offset` counted from the
-    /// layout's `header` part; every message's `fields` begin with copies of them.
+    /// layout's `header` part; every message's `fields` begin with copies of them (with a
+    /// layout per direction, every message of a direction whose layout has `header`).
     pub header: Vec<Field>,
     /// Wake-up bytes before every frame (`framing.preamble`), outside the frame: no offset,
     /// length or checksum of the IR counts them.
@@ -424,12 +432,40 @@ impl FrameLayout {
 }
 
 impl Framing {
-    /// Where the start byte, address and code sit in any frame whose code has `code_len` bytes
-    /// (the payload taken as empty, so `payload`, `checksum` and `len` are those of a frame
-    /// without one). Code lengths are at most [`MAX_CODE_LEN`]; a longer one gets the layout of
-    /// the longest.
-    pub fn head(&self, code_len: usize) -> FrameLayout {
-        self.heads[code_len.min(self.heads.len() - 1)]
+    /// Where the start byte, address and code sit in any frame of direction `d` whose code has
+    /// `code_len` bytes (the payload taken as empty, so `payload`, `checksum` and `len` are
+    /// those of a frame without one). Code lengths are at most [`MAX_CODE_LEN`]; a longer one
+    /// gets the layout of the longest.
+    pub fn head(&self, d: Direction, code_len: usize) -> FrameLayout {
+        let heads = self.heads_of(d);
+        heads[code_len.min(heads.len().saturating_sub(1))]
+    }
+
+    /// The layouts of a direction's frames with an empty payload, by code length.
+    pub fn heads_of(&self, d: Direction) -> &[FrameLayout] {
+        match d {
+            Direction::Request => &self.heads,
+            Direction::Response => &self.response_heads,
+        }
+    }
+
+    /// The layout of a frame of direction `d`.
+    pub fn layout_of(&self, d: Direction) -> &[Part] {
+        match d {
+            Direction::Request => &self.layout,
+            Direction::Response => &self.response_layout,
+        }
+    }
+
+    /// Whether requests and responses are laid out differently (`framing.layout: {request,
+    /// response}`).
+    pub fn layout_by_direction(&self) -> bool {
+        self.layout != self.response_layout
+    }
+
+    /// Whether frames of direction `d` carry the header fields (its layout has `header`).
+    pub fn has_header(&self, d: Direction) -> bool {
+        !self.header.is_empty() && self.layout_of(d).contains(&Part::Header)
     }
 
     /// The start bytes of a frame of direction `d`.
@@ -461,8 +497,9 @@ impl Framing {
             self.escaping.as_ref().map(|e| &e.kind),
             Some(EscapeKind::Bytes { .. } | EscapeKind::Cobs)
         );
-        let framed = self.layout.first() == Some(&Part::Start)
-            && self.layout.last() == Some(&Part::End)
+        let framed = [&self.layout, &self.response_layout]
+            .iter()
+            .all(|l| l.first() == Some(&Part::Start) && l.last() == Some(&Part::End))
             && self.response_sync == self.sync;
         match (self.sync.as_slice(), self.end.as_slice()) {
             ([s], [e]) if escaped && framed && s == e => Some(*s),
@@ -521,7 +558,7 @@ impl Framing {
             return 0..0;
         }
         let code_len = self.request.code_lengths.first().copied().unwrap_or(0);
-        let at = self.head(code_len).payload;
+        let at = self.head(Direction::Request, code_len).payload;
         let end = len.saturating_sub(self.trailer_len()).max(at);
         at..end
     }
@@ -581,14 +618,21 @@ impl Framing {
         self.header.iter().map(|f| f.width).sum()
     }
 
-    /// Whether frames carry an address (the layout has `address`).
+    /// Whether frames carry an address (the layout has `address`; with a layout per
+    /// direction, either direction's).
     pub fn has_address(&self) -> bool {
-        self.layout.contains(&Part::Address)
+        self.layout.contains(&Part::Address) || self.response_layout.contains(&Part::Address)
     }
 
-    /// Bytes in a frame besides code and payload: start, address, checksum.
-    pub fn overhead(&self) -> usize {
-        self.layout
+    /// Whether frames of direction `d` carry an address (its layout has `address`): a frame of
+    /// a direction without one carries address 0, which it does not show.
+    pub fn has_address_in(&self, d: Direction) -> bool {
+        self.layout_of(d).contains(&Part::Address)
+    }
+
+    /// Bytes in a frame of direction `d` besides code and payload: start, address, checksum.
+    pub fn overhead(&self, d: Direction) -> usize {
+        self.layout_of(d)
             .iter()
             .map(|p| match p {
                 Part::Start => self.sync.len(),
@@ -610,7 +654,7 @@ impl Framing {
     pub fn length_rule(&self, d: Direction) -> Option<LengthRule> {
         let l = self.length.as_ref()?;
         let code_len = self.direction(d).code_lengths.first().copied().unwrap_or(0);
-        let head = self.head(code_len);
+        let head = self.head(d, code_len);
         let at = head.length?;
         let base = self.length_value(l, code_len, 0);
         let grows = l.counts.contains(&Part::Payload);
@@ -625,7 +669,8 @@ impl Framing {
     }
 
     /// The value a length field holds for a frame with this code length and payload: every
-    /// part it counts (each time the layout holds it), plus its adjustment.
+    /// part it counts (each time the layout holds it), plus its adjustment. With a layout per
+    /// direction every part it counts is in both (validated), once each.
     pub fn length_value(&self, l: &LengthField, code_len: usize, payload: usize) -> i64 {
         let bytes: usize = l
             .counts
@@ -663,7 +708,7 @@ impl Framing {
                 (lead, self.end.len())
             }
             EscapeKind::Insert { from, .. } => {
-                let h = self.head(0);
+                let h = self.head(Direction::Request, 0);
                 let at = match from {
                     Part::Start => h.start,
                     Part::Address => h.address,
@@ -681,7 +726,7 @@ impl Framing {
     /// Where the escaped bytes of any frame lie: from this offset to this many bytes before
     /// the frame's end (`None` without escaping).
     pub fn escaped_bounds(&self) -> Option<(usize, usize)> {
-        let probe = self.head(0).len + 64;
+        let probe = self.head(Direction::Request, 0).len + 64;
         let (from, to) = self.escaped_region(probe)?;
         Some((from, probe - to))
     }

@@ -228,6 +228,60 @@ pub struct DirectionStart {
     pub response: StartBytes,
 }
 
+/// `framing.layout`: one list of parts for both directions, or (Sensirion SHDLC, whose
+/// replies carry a state byte that requests lack) a list per direction.
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub enum Layout {
+    Same(Vec<Part>),
+    ByDirection(DirectionLayout),
+}
+
+/// `framing.layout: {request: [...], response: [...]}`.
+#[derive(Debug, Clone, PartialEq, Eq, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct DirectionLayout {
+    pub request: Vec<Part>,
+    pub response: Vec<Part>,
+}
+
+/// A mapping is a layout per direction (so a misspelt key is named), anything else the one
+/// layout of both.
+impl<'de> Deserialize<'de> for Layout {
+    fn deserialize<D: Deserializer<'de>>(d: D) -> Result<Self, D::Error> {
+        use serde::de::Error;
+        let v = serde_yaml::Value::deserialize(d)?;
+        if v.is_mapping() {
+            DirectionLayout::deserialize(v)
+                .map(Layout::ByDirection)
+                .map_err(D::Error::custom)
+        } else {
+            Vec::<Part>::deserialize(v)
+                .map(Layout::Same)
+                .map_err(D::Error::custom)
+        }
+    }
+}
+
+impl Layout {
+    /// The layout of a direction (the one layout where it is given once).
+    pub fn of(&self, request: bool) -> &Vec<Part> {
+        match self {
+            Layout::Same(l) => l,
+            Layout::ByDirection(d) if request => &d.request,
+            Layout::ByDirection(d) => &d.response,
+        }
+    }
+}
+
+/// The validator reads a layout as a list where it is one (a layout per direction is split
+/// into two plain framings before anything reads it so): the request's otherwise.
+impl std::ops::Deref for Layout {
+    type Target = Vec<Part>;
+    fn deref(&self) -> &Vec<Part> {
+        self.of(true)
+    }
+}
+
 /// A length field in the framing: its width and which parts of the frame it counts.
 #[derive(Debug, Clone, Deserialize)]
 #[serde(deny_unknown_fields)]
@@ -259,7 +313,7 @@ pub struct LongLength {
 pub struct Framing {
     #[serde(default)]
     pub section: Option<String>,
-    pub layout: Vec<Part>,
+    pub layout: Layout,
     #[serde(default)]
     pub start: Option<Start>,
     #[serde(default)]

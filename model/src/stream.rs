@@ -845,7 +845,7 @@ impl<'p> StreamDecoder<'p> {
     fn escaped_lens(&self, flushing: bool, lens: &mut Vec<usize>, dirs: &mut Vec<u8>) -> Escaped {
         let (p, buf) = (self.p, &self.buf);
         let f = &p.framing;
-        let head = f.head(0);
+        let head = f.head(crate::ir::Direction::Request, 0);
         if let Some(at) = head.start {
             for (i, &b) in f.sync.iter().enumerate() {
                 if buf.get(at + i).is_some_and(|&x| x != b) {
@@ -1017,7 +1017,8 @@ impl<'p> StreamDecoder<'p> {
         } else {
             Escaped::NeedMore
         };
-        let (Some(l), Some(at)) = (&f.length, f.head(0).length) else {
+        let (Some(l), Some(at)) = (&f.length, f.head(crate::ir::Direction::Request, 0).length)
+        else {
             return Escaped::Drop;
         };
         // `ends[n]`: where the first `n` unescaped bytes end on the wire (from `lead` on);

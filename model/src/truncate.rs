@@ -31,7 +31,7 @@ use crate::ir::{Direction, Protocol};
 fn parts(p: &Protocol) -> Option<(usize, usize, usize, usize, usize)> {
     p.framing.truncation?;
     let code_len = p.framing.request.code_lengths.first().copied().unwrap_or(0);
-    let head = p.framing.head(code_len);
+    let head = p.framing.head(Direction::Request, code_len);
     let l = p.framing.length.as_ref()?;
     Some((head.length?, l.width, head.code, code_len, head.payload))
 }
@@ -53,7 +53,7 @@ pub fn canonical(p: &Protocol, wire: &[u8]) -> Result<Option<Vec<u8>>, DecodeErr
     let Some((length_at, width, code_at, code_len, payload_at)) = parts(p) else {
         return Ok(None);
     };
-    let head = p.framing.head(code_len);
+    let head = p.framing.head(Direction::Request, code_len);
     let trailer = p.framing.trailer_len();
     if wire.len() < payload_at + trailer {
         return Ok(None);

@@ -324,7 +324,12 @@ fn validate_ordered(spec: &model::Spec, sink: &mut Sink) -> Option<Protocol> {
             ),
             _ => {}
         }
-        if c.broadcast.is_some() && framing.address.broadcast.is_none() {
+        if c.broadcast.is_some() && !framing.has_address_in(Direction::Request) {
+            sink.error(
+                join(&path, "broadcast"),
+                "requests carry no address (their layout has no `address`): none is a broadcast",
+            );
+        } else if c.broadcast.is_some() && framing.address.broadcast.is_none() {
             sink.error(
                 join(&path, "broadcast"),
                 "the protocol has no broadcast address (framing.address.broadcast)",
@@ -339,7 +344,7 @@ fn validate_ordered(spec: &model::Spec, sink: &mut Sink) -> Option<Protocol> {
             }
         }
         check_section(&c.section, &path, sink);
-        let layout = frame_layout(&framing, code.len(), payload_len);
+        let layout = frame_layout(&framing, Direction::Request, code.len(), payload_len);
         check_length_fits(&framing, &path, code.len(), max_payload, sink);
         commands.push(Message {
             name: c.name.clone(),
@@ -442,7 +447,7 @@ fn validate_ordered(spec: &model::Spec, sink: &mut Sink) -> Option<Protocol> {
         check_section(&r.section, &path, sink);
         let code_from_request = code_from_request(r, &code, &answers, &commands, &path, sink);
         check_request_fields(&fields, &answers, &commands, &path, sink);
-        let layout = frame_layout(&framing, code.len(), payload_len);
+        let layout = frame_layout(&framing, Direction::Response, code.len(), payload_len);
         check_length_fits(&framing, &path, code.len(), max_payload, sink);
         responses.push(Message {
             name: r.name.clone(),
@@ -641,7 +646,15 @@ fn checksum_extras(
         &framing.request.code_lengths,
         &framing.response.code_lengths,
     );
-    let head = framing.head(lens.first().copied().unwrap_or(0));
+    let code_len = lens.first().copied().unwrap_or(0);
+    let head = framing.head(Direction::Request, code_len);
+    let code_at = head.code;
+    if framing.head(Direction::Response, code_len).code != code_at {
+        sink.error(
+            path,
+            "the code sits at another offset in each direction's layout: an extra byte per message is not expressible with it yet",
+        );
+    }
     match lens.as_slice() {
         [n] if *n > 0 => {}
         _ => sink.error(
@@ -649,7 +662,7 @@ fn checksum_extras(
             format!("the extra byte is found by the code, so every message needs a code of one length; code_lengths give {lens:?}"),
         ),
     }
-    if head.code < framing.checksum.covers_from {
+    if code_at < framing.checksum.covers_from {
         sink.error(
             path,
             "the checksum must cover the code, by which its extra byte is found",
@@ -961,6 +974,172 @@ fn part_name(p: Part) -> &'static str {
 }
 
 fn framing(f: &model::Framing, byte_order: ByteOrder, refs: &Refs, sink: &mut Sink) -> Framing {
+    match &f.layout {
+        model::Layout::Same(_) => framing_plain(f, byte_order, refs, sink),
+        model::Layout::ByDirection(d) => framing_by_direction(f, d, byte_order, refs, sink),
+    }
+}
+
+/// A layout per direction (`framing.layout: {request, response}`): each direction's layout
+/// validated as a layout is (each a plain framing of its own, without the sections of the parts
+/// it lacks where the other has them), the errors of both reported once, each layout's own at
+/// `framing.layout.request` or `framing.layout.response`; the two framings joined into one
+/// IR. What neither engine carries with a layout per direction yet is refused here.
+fn framing_by_direction(
+    f: &model::Framing,
+    d: &model::DirectionLayout,
+    byte_order: ByteOrder,
+    refs: &Refs,
+    sink: &mut Sink,
+) -> Framing {
+    let not_yet = |what: &str| {
+        format!("{what} is not expressible with a layout per direction (`framing.layout: {{request, response}}`) yet")
+    };
+    if !f.forms.is_empty() {
+        sink.error("framing.forms", not_yet("a short form of the frame"));
+    }
+    if f.length.as_ref().is_some_and(|l| l.long.is_some()) {
+        sink.error("framing.length.long", not_yet("a long length form"));
+    }
+    if f.truncation.is_some() {
+        sink.error("framing.truncation", not_yet("payload truncation"));
+    }
+    if f.preamble.is_some() {
+        sink.error("framing.preamble", not_yet("a preamble"));
+    }
+    if f.transform.is_some() {
+        sink.error("framing.transform", not_yet("a transform of the payload"));
+    }
+    if let Some(e) = &f.escaping {
+        let bytes = e.escape.is_some() || e.cobs == Some(true);
+        if !bytes {
+            sink.error("framing.escaping", not_yet("escaping by insertion"));
+        } else if !d.request.contains(&Part::End) || !d.response.contains(&Part::End) {
+            sink.error(
+                "framing.escaping",
+                not_yet("escaping without an end byte (frames found by their length field)"),
+            );
+        }
+    }
+    let lists = [("request", &d.request), ("response", &d.response)];
+    for (name, list) in lists {
+        for (part, pname) in [(Part::Start, "start"), (Part::Length, "length")] {
+            if list.iter().filter(|p| **p == part).count() > 1 {
+                sink.error(
+                    format!("framing.layout.{name}"),
+                    not_yet(&format!("a second `{pname}`")),
+                );
+            }
+        }
+    }
+    // Parts that frame every frame (where it starts and ends, its length, its checksum) are
+    // in both directions or in neither; the address and the header fields may be in one.
+    for (part, pname) in [
+        (Part::Start, "start"),
+        (Part::Length, "length"),
+        (Part::Checksum, "checksum"),
+        (Part::End, "end"),
+    ] {
+        let (rq, rs) = (d.request.contains(&part), d.response.contains(&part));
+        if rq != rs {
+            let lacks = if rq { "response" } else { "request" };
+            sink.error(
+                format!("framing.layout.{lacks}"),
+                format!(
+                    "the {lacks}'s layout has no `{pname}`, the other direction's has: {}",
+                    not_yet(&format!("`{pname}` in one direction only"))
+                ),
+            );
+        }
+    }
+    let at = |l: &[Part], p: Part| l.iter().position(|x| *x == p);
+    let end_first = |l: &[Part]| matches!((at(l, Part::End), at(l, Part::Checksum)), (Some(e), Some(c)) if e < c);
+    if end_first(&d.request) != end_first(&d.response) {
+        sink.error(
+            "framing.layout.response",
+            not_yet("end bytes before the checksum in one direction and after it in the other"),
+        );
+    }
+    let mut out: Vec<Framing> = Vec::new();
+    for (name, list) in lists {
+        let other = if name == "request" {
+            &d.response
+        } else {
+            &d.request
+        };
+        let lacks = |p: Part| !list.contains(&p) && other.contains(&p);
+        let mut own = f.clone();
+        own.layout = model::Layout::Same(list.clone());
+        if lacks(Part::Address) {
+            own.address = None;
+        }
+        if lacks(Part::Header) {
+            own.header = None;
+        }
+        let mut errors = Sink::default();
+        out.push(framing_plain(&own, byte_order, refs, &mut errors));
+        for e in errors.items {
+            let path = match e.path.strip_prefix("framing.layout") {
+                Some(rest) => format!("framing.layout.{name}{rest}"),
+                None => e.path,
+            };
+            if !sink
+                .items
+                .iter()
+                .any(|x| x.path == path && x.message == e.message)
+            {
+                sink.error(path, e.message);
+            }
+        }
+    }
+    let response = out.pop().expect("two framings");
+    let mut framing = out.pop().expect("two framings");
+    if framing.checksum.covers_from != response.checksum.covers_from {
+        sink.error(
+            "framing.checksum.covers_from",
+            format!(
+                "the checksum would cover from offset {} in requests and {} in responses: {}",
+                framing.checksum.covers_from,
+                response.checksum.covers_from,
+                not_yet("a checksum whose first covered byte differs by direction")
+            ),
+        );
+    }
+    let (rq, rs) = (framing.heads[0].start, response.heads[0].start);
+    if rq != rs {
+        sink.error(
+            "framing.layout.response",
+            format!(
+                "the start bytes sit at offset {} in requests and {} in responses: {}",
+                rq.unwrap_or(0),
+                rs.unwrap_or(0),
+                not_yet("start bytes at another offset in each direction")
+            ),
+        );
+    }
+    if !framing.layout.contains(&Part::Address) {
+        framing.address = response.address;
+        if framing.address.broadcast.is_some() {
+            sink.error(
+                "framing.address.broadcast",
+                "requests carry no address (their layout has no `address`): none is a broadcast",
+            );
+        }
+    }
+    if framing.header.is_empty() {
+        framing.header = response.header;
+    }
+    framing.response_layout = response.layout;
+    framing.response_heads = response.heads;
+    framing
+}
+
+fn framing_plain(
+    f: &model::Framing,
+    byte_order: ByteOrder,
+    refs: &Refs,
+    sink: &mut Sink,
+) -> Framing {
     let path = "framing";
     let count = |p: Part| f.layout.iter().filter(|x| **x == p).count();
     for (p, name) in [(Part::Code, "code"), (Part::Payload, "payload")] {
@@ -1335,7 +1514,8 @@ fn framing(f: &model::Framing, byte_order: ByteOrder, refs: &Refs, sink: &mut Si
     };
     let mut framing = Framing {
         section: f.section.clone(),
-        layout: f.layout.clone(),
+        layout: f.layout.to_vec(),
+        response_layout: f.layout.to_vec(),
         start,
         sync,
         response_sync,
@@ -1352,6 +1532,7 @@ fn framing(f: &model::Framing, byte_order: ByteOrder, refs: &Refs, sink: &mut Si
         response,
         checksum,
         heads: Vec::new(),
+        response_heads: Vec::new(),
         escaping: None,
         header: header_fields(f, byte_order, refs, sink),
         preamble: None,
@@ -1361,8 +1542,9 @@ fn framing(f: &model::Framing, byte_order: ByteOrder, refs: &Refs, sink: &mut Si
         truncation: None,
     };
     framing.heads = (0..=MAX_CODE_LEN)
-        .map(|l| frame_layout(&framing, l, 0))
+        .map(|l| frame_layout(&framing, Direction::Request, l, 0))
         .collect();
+    framing.response_heads = framing.heads.clone();
     if let Some(e) = &f.escaping {
         framing.escaping = escaping(e, &framing, sink);
     }
@@ -1406,7 +1588,7 @@ fn framing(f: &model::Framing, byte_order: ByteOrder, refs: &Refs, sink: &mut Si
                 ),
             );
         }
-        let head = framing.head(lens.first().copied().unwrap_or(0));
+        let head = framing.head(Direction::Request, lens.first().copied().unwrap_or(0));
         let at = match part {
             Part::Start => head.start,
             Part::Address => head.address,
@@ -1657,7 +1839,7 @@ fn short_form(
             "a frame form needs one code length, the same both ways (`code_lengths`), yet: a short frame has one length",
         );
     }
-    let head = f.head(rq.first().copied().unwrap_or(0));
+    let head = f.head(Direction::Request, rq.first().copied().unwrap_or(0));
     let start_at = head.start.unwrap_or(0);
     // The dropped parts: every copy of the length field, and the second start bytes.
     let mut runs: Vec<(usize, usize)> = head.lengths().map(|at| (at, l.width)).collect();
@@ -1932,7 +2114,7 @@ fn long_form(
             );
         }
     }
-    let head = f.head(0);
+    let head = f.head(Direction::Request, 0);
     let (start_at, length_at) = (head.start.unwrap_or(0), head.length.unwrap_or(1));
     if !f.checksum.is_empty()
         && f.checksum.covers_from < length_at + f.length.as_ref().map_or(0, |l| l.width)
@@ -2082,8 +2264,14 @@ fn escaping(e: &model::Escaping, f: &Framing, sink: &mut Sink) -> Option<Escapin
             .request
             .code_lengths
             .iter()
-            .chain(&f.response.code_lengths);
-        let length_at: Vec<Option<usize>> = codes.map(|&c| f.head(c).length).collect();
+            .map(|&c| (Direction::Request, c))
+            .chain(
+                f.response
+                    .code_lengths
+                    .iter()
+                    .map(|&c| (Direction::Response, c)),
+            );
+        let length_at: Vec<Option<usize>> = codes.map(|(d, c)| f.head(d, c).length).collect();
         let by_length = !f.layout.contains(&Part::End)
             && f.length.is_some()
             && length_at
@@ -2221,14 +2409,14 @@ fn escaping(e: &model::Escaping, f: &Framing, sink: &mut Sink) -> Option<Escapin
             .request
             .code_lengths
             .iter()
-            .map(|&c| (c, f.request.payload_max)))
+            .map(|&c| (Direction::Request, c, f.request.payload_max)))
         .chain(
             f.response
                 .code_lengths
                 .iter()
-                .map(|&c| (c, f.response.payload_max)),
+                .map(|&c| (Direction::Response, c, f.response.payload_max)),
         )
-        .map(|(c, pl)| f.head(c).len + pl)
+        .map(|(d, c, pl)| f.head(d, c).len + pl)
         .max()
         .unwrap_or(0);
         let probe = Framing {
@@ -2380,7 +2568,12 @@ fn header_reference(f: &Field, headers: usize) -> Option<usize> {
 /// Where each part of a frame sits when its code has `code_len` bytes and its payload
 /// `payload_len`. Used only here, while the IR is built; everything else reads the result from
 /// [`Message::layout`] and [`Framing::head`].
-fn frame_layout(framing: &Framing, code_len: usize, payload_len: usize) -> FrameLayout {
+fn frame_layout(
+    framing: &Framing,
+    d: Direction,
+    code_len: usize,
+    payload_len: usize,
+) -> FrameLayout {
     let mut o = FrameLayout {
         start: None,
         start_again: None,
@@ -2394,7 +2587,7 @@ fn frame_layout(framing: &Framing, code_len: usize, payload_len: usize) -> Frame
         len: 0,
     };
     let mut at = 0;
-    for part in &framing.layout {
+    for part in framing.layout_of(d) {
         match part {
             Part::Start => {
                 match o.start {
@@ -2782,8 +2975,12 @@ fn message_body(
     let fields = fields.as_slice();
     // Field and sub-field names share one name space per message: they are the keys of its values.
     // The header fields' values (each whole, or its sub-fields) are named in every message.
-    let mut leaf_names: BTreeSet<String> = framing
-        .header
+    let headers: &[Field] = if framing.has_header(direction) {
+        &framing.header
+    } else {
+        &[]
+    };
+    let mut leaf_names: BTreeSet<String> = headers
         .iter()
         .flat_map(|h| {
             let own = h.bits.is_empty().then(|| h.name.clone());
@@ -2791,7 +2988,7 @@ fn message_body(
         })
         .collect();
     // The header fields every message carries come first (they sit in the frame's header).
-    let mut out: Vec<Field> = framing.header.clone();
+    let mut out: Vec<Field> = headers.to_vec();
     let mut offset = 0usize;
     let mut tail = 0usize;
     let mut min_tail = 0usize;
@@ -2835,8 +3032,7 @@ fn message_body(
             }
         }
         if f.bits.is_empty() && !leaf_names.insert(f.name.clone()) {
-            let what = if framing
-                .header
+            let what = if headers
                 .iter()
                 .any(|h| h.name == f.name || h.bits.iter().any(|b| b.name == f.name))
             {
@@ -2853,7 +3049,7 @@ fn message_body(
         if let Some(pr) = &f.present {
             field.present = presence(f, pr, &p, &out, fields, sink);
         }
-        if let Some(h) = header_reference(&field, framing.header.len()) {
+        if let Some(h) = header_reference(&field, headers.len()) {
             sink.error(
                 &p,
                 format!(
@@ -4935,7 +5131,7 @@ fn frame_problems(
             "frame `{frame_text}` has {} bytes, but a {} frame has {len} ({} overhead + {}-byte code + {} payload)",
             printed.len(),
             m.name,
-            p.framing.overhead(),
+            p.framing.overhead(m.direction),
             m.code.len(),
             m.payload_len
         ));

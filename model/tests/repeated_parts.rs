@@ -21,7 +21,7 @@ const RESET: [u8; 9] = [0x68, 0x03, 0x03, 0x68, 0x53, 0xFE, 0x50, 0xA1, 0x16];
 #[test]
 fn both_copies_are_read_and_written() {
     let p = fixture();
-    let head = p.framing.head(1);
+    let head = p.framing.head(busspec_model::ir::Direction::Request, 1);
     assert_eq!((head.start, head.start_again), (Some(0), Some(3)));
     assert_eq!((head.length, head.length_again), (Some(1), Some(2)));
     let f = interp::decode(&p, None, None, &RESET).unwrap();

@@ -5,8 +5,9 @@ use super::*;
 /// layouts to one code length. 0 where frames carry no address (the frame checks then do not
 /// look at it).
 pub(super) fn address_at(p: &Protocol, d: Direction) -> usize {
-    if p.framing.layout.iter().position(|x| *x == Part::Code)
-        < p.framing.layout.iter().position(|x| *x == Part::Address)
+    let layout = p.framing.layout_of(d);
+    if layout.iter().position(|x| *x == Part::Code)
+        < layout.iter().position(|x| *x == Part::Address)
     {
         let l = p
             .framing
@@ -15,9 +16,9 @@ pub(super) fn address_at(p: &Protocol, d: Direction) -> usize {
             .first()
             .copied()
             .unwrap_or(1);
-        p.framing.head(l).address.unwrap_or(0)
+        p.framing.head(d, l).address.unwrap_or(0)
     } else {
-        p.framing.head(1).address.unwrap_or(0)
+        p.framing.head(d, 1).address.unwrap_or(0)
     }
 }
 
@@ -62,7 +63,7 @@ pub(super) fn emit_dispatch(ctx: &Ctx, d: Direction, ty: &TokenStream) -> TokenS
     let clen = p.framing.trailer_len();
     let min_len = msgs.iter().map(|m| len_range(m).0).min().unwrap_or(0);
     let max_len = msgs.iter().map(|m| m.max_len).max().unwrap_or(0);
-    let code_at = |l: usize| p.framing.head(l).code;
+    let code_at = |l: usize| p.framing.head(d, l).code;
     let replies = d == Direction::Response;
     let first_code_at = usize_lit(code_at(1));
     let unknown = {
@@ -170,7 +171,7 @@ pub(super) fn emit_dispatch(ctx: &Ctx, d: Direction, ty: &TokenStream) -> TokenS
     // A sync sequence's first byte is `FRAME.start`'s; the others are checked first. Start
     // bytes that differ by direction, or come twice, are all checked here (`FRAME.start` is
     // `None`), in the order the interpreter checks them.
-    let by_direction = p.framing.sync_by_direction();
+    let by_direction = starts_by_direction(p);
     // The direction's own layout: a second start after the code sits after its one length.
     let code_len = p
         .framing
@@ -179,7 +180,7 @@ pub(super) fn emit_dispatch(ctx: &Ctx, d: Direction, ty: &TokenStream) -> TokenS
         .first()
         .copied()
         .unwrap_or(0);
-    let head = p.framing.head(code_len);
+    let head = p.framing.head(d, code_len);
     let sync = match (head.start, p.framing.sync_of(d)) {
         (Some(_), sync)
             if sync.len() > 1
@@ -242,11 +243,12 @@ pub(super) fn emit_dispatch(ctx: &Ctx, d: Direction, ty: &TokenStream) -> TokenS
     } else {
         quote!()
     };
+    let frame_const = frame_of(p, d);
     let checks = quote! {
         #constant
         #preamble
         #sync
-        let address = rt::check_frame(frame, #min_len, #max_len, #addr_at, &FRAME, #sum)?;
+        let address = rt::check_frame(frame, #min_len, #max_len, #addr_at, &#frame_const, #sum)?;
         #length
         #untransform
         let message = Self::dispatch(frame #request_arg)?;

@@ -119,7 +119,7 @@ pub(super) fn emit_header(p: &Protocol, source: &str, spec_path: &str) -> TokenS
     });
     let truncation = p.framing.truncation.map(|_| {
         let code_len = p.framing.request.code_lengths.first().copied().unwrap_or(0);
-        let head = p.framing.head(code_len);
+        let head = p.framing.head(Direction::Request, code_len);
         let rule = p.framing.length_rule(Direction::Request);
         let start_at = match head.start {
             Some(at) => {
@@ -193,8 +193,10 @@ pub(super) fn emit_header(p: &Protocol, source: &str, spec_path: &str) -> TokenS
     let broadcast = byte(p.framing.address.broadcast);
     let host = byte(p.framing.address.host);
     // Start bytes that differ by direction are checked by each direction's `decode` alone.
-    let start = match (p.framing.head(1).start, p.framing.start) {
-        _ if p.framing.sync_by_direction() || p.framing.head(1).start_again.is_some() => {
+    let start = match (p.framing.head(Direction::Request, 1).start, p.framing.start) {
+        _ if starts_by_direction(p)
+            || p.framing.head(Direction::Request, 1).start_again.is_some() =>
+        {
             quote!(rt::None)
         }
         (Some(at), Some(s)) => {
@@ -207,6 +209,26 @@ pub(super) fn emit_header(p: &Protocol, source: &str, spec_path: &str) -> TokenS
     let end = p.framing.end.iter().map(|b| hex_u8(*b));
     let end_first = p.framing.end_first();
     let addressed = p.framing.has_address();
+    // A layout per direction with the address in one direction only: the other direction's
+    // frames are checked and encoded as a protocol's without addresses.
+    let unaddressed = if addressed
+        && [Direction::Request, Direction::Response]
+            .iter()
+            .any(|d| !p.framing.has_address_in(*d))
+    {
+        quote! {
+            /// What every frame of the direction whose layout has no address shares.
+            const FRAME_UNADDRESSED: rt::Frame = rt::Frame {
+                addressed: false,
+                devices: (0, 0),
+                broadcast: rt::None,
+                host: rt::None,
+                ..FRAME
+            };
+        }
+    } else {
+        quote!()
+    };
     let checksum_be = p.framing.checksum.byte_order == ByteOrder::Big;
     let baud = p.serial.baud;
     let optional = |v: Option<u32>| match v {
@@ -279,12 +301,29 @@ pub(super) fn emit_header(p: &Protocol, source: &str, spec_path: &str) -> TokenS
             end: &[#(#end),*],
             end_first: #end_first,
         };
+        #unaddressed
         #escaping
         #preamble
         #transform
         #long
         #form
         #truncation
+    }
+}
+
+/// Whether each direction's decode checks its own start bytes where its layout puts them
+/// (`FRAME.start` is `None`): start bytes that differ by direction, or a layout per direction.
+pub(super) fn starts_by_direction(p: &Protocol) -> bool {
+    p.framing.sync_by_direction() || p.framing.layout_by_direction()
+}
+
+/// The frame checks a direction's decode and encode take: `FRAME`, or where the direction's
+/// layout has no address beside one that has, `FRAME_UNADDRESSED`.
+pub(super) fn frame_of(p: &Protocol, d: Direction) -> TokenStream {
+    if p.framing.has_address() && !p.framing.has_address_in(d) {
+        quote!(FRAME_UNADDRESSED)
+    } else {
+        quote!(FRAME)
     }
 }
 
@@ -490,7 +529,7 @@ pub(super) fn emit_escaping(p: &Protocol) -> TokenStream {
     };
     let (from, tail) = f.escaped_bounds().unwrap_or((0, 0));
     let (from_l, tail) = (usize_lit(from), usize_lit(tail));
-    let head = f.head(0);
+    let head = f.head(Direction::Request, 0);
     let (sync_at, sync) = match head.start {
         Some(at) => (at, f.sync.clone()),
         None => (0, Vec::new()),

@@ -202,6 +202,7 @@ pub(super) fn emit_messages(ctx: &Ctx, d: Direction) -> TokenStream {
     } else {
         quote!()
     };
+    let frame_const = frame_of(p, d);
     let take_once = one_len.map(|n| {
         let n = usize_lit(n);
         quote!(let out = rt::frame_mut::<#n>(buf, &[])?;)
@@ -293,7 +294,7 @@ pub(super) fn emit_messages(ctx: &Ctx, d: Direction) -> TokenStream {
             }
             /// The frame after the preamble, into `buf`.
             fn encode_frame(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
-                rt::encode_address(address, &FRAME)?;
+                rt::encode_address(address, &#frame_const)?;
                 #take_once
                 let len = match *self { #(#encode_arms)* };
                 #transform
@@ -315,7 +316,7 @@ pub(super) fn emit_messages(ctx: &Ctx, d: Direction) -> TokenStream {
             }
             /// The frame laid out with its whole payload, into `buf`.
             fn encode_laid_out(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
-                rt::encode_address(address, &FRAME)?;
+                rt::encode_address(address, &#frame_const)?;
                 #take_once
                 let len = match *self { #(#encode_arms)* };
                 #transform
@@ -357,7 +358,7 @@ pub(super) fn emit_messages(ctx: &Ctx, d: Direction) -> TokenStream {
             }
             /// The frame laid out in the long form's width, into `buf`.
             fn encode_laid_out(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
-                rt::encode_address(address, &FRAME)?;
+                rt::encode_address(address, &#frame_const)?;
                 #take_once
                 let len = match *self { #(#encode_arms)* };
                 #transform
@@ -368,7 +369,7 @@ pub(super) fn emit_messages(ctx: &Ctx, d: Direction) -> TokenStream {
         quote! {
             pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
                 #constant_first
-                rt::encode_address(address, &FRAME)?;
+                rt::encode_address(address, &#frame_const)?;
                 #take_once
                 let len = match *self { #(#encode_arms)* };
                 #transform
@@ -388,7 +389,7 @@ pub(super) fn emit_messages(ctx: &Ctx, d: Direction) -> TokenStream {
             }
             /// The frame before escaping, into `buf`.
             fn encode_unescaped(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
-                rt::encode_address(address, &FRAME)?;
+                rt::encode_address(address, &#frame_const)?;
                 #take_once
                 let len = match *self { #(#encode_arms)* };
                 #transform

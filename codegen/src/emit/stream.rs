@@ -54,7 +54,7 @@ pub(super) fn emit_stream(p: &Protocol) -> TokenStream {
             }
         }
     }
-    let first = p.framing.head(1);
+    let first = p.framing.head(Direction::Request, 1);
     let code_at = first.code;
     // Start bytes that differ by direction say which direction's messages the head may start.
     let by_direction = p.framing.sync_by_direction();
@@ -125,7 +125,8 @@ pub(super) fn emit_stream(p: &Protocol) -> TokenStream {
     let variable = emit_variable_candidates(p, start_check(quote!(rt::VarLens::NONE)));
     // Not where a variable-length message exists: the route would ask `variable_candidates`
     // too, and the mask's route pays for both (Modbus 1254.6 -> 1280.5 a frame with it).
-    let candidate = if variable.is_empty() && !by_direction {
+    let code_apart = p.framing.head(Direction::Response, 1).code != code_at;
+    let candidate = if variable.is_empty() && !by_direction && !code_apart {
         emit_candidate(&shapes, &lengths, code_at, {
             let framed = start_check(quote!(rt::Candidate::NONE));
             quote!(#constants_in_table #framed)
@@ -148,77 +149,96 @@ pub(super) fn emit_stream(p: &Protocol) -> TokenStream {
         .last()
         .is_some_and(|(pat, _)| pat.iter().all(|t| t.to_string() == "_"));
     let other = if open { quote!() } else { quote!(_ => 0,) };
-    let arms = arms.into_iter().map(|(pat, mask)| {
-        let mask = mask_lit(mask);
-        let pat = if pat.len() == 1 {
-            pat.into_iter().collect::<TokenStream>()
+    let arms: Vec<TokenStream> = arms
+        .into_iter()
+        .map(|(pat, mask)| {
+            let mask = mask_lit(mask);
+            let pat = if pat.len() == 1 {
+                pat.into_iter().collect::<TokenStream>()
+            } else {
+                quote!((#(#pat),*))
+            };
+            quote!(#pat => #mask,)
+        })
+        .collect();
+    // The mask of the code bytes at `code_at`.
+    let mask_at = |code_at: usize| {
+        let bytes: Vec<TokenStream> = (0..depth).map(|i| head_byte(code_at + i)).collect();
+        let scrutinee = if depth == 1 {
+            quote!(#(#bytes)*)
         } else {
-            quote!((#(#pat),*))
+            quote!((#(#bytes),*))
         };
-        quote!(#pat => #mask,)
-    });
-    let bytes: Vec<TokenStream> = (0..depth).map(|i| head_byte(code_at + i)).collect();
-    let scrutinee = if depth == 1 {
-        quote!(#(#bytes)*)
-    } else {
-        quote!((#(#bytes),*))
+        // One code byte: the masks by table, a class per byte and the distinct masks (SD: three),
+        // where the `match` compiled to a jump table (SD's stream: 132.6 instructions a frame
+        // with it, 131.4 with the table and the one-length route of `Core::fast_with`).
+        let mask = if depth == 1 {
+            let all = shapes.iter().fold(0u128, |a, s| a | s.1);
+            let mut masks: Vec<Vec<u128>> = Vec::new();
+            let class: Vec<u8> = (0..=255u8)
+                .map(|b| {
+                    let m = shapes
+                        .iter()
+                        .filter(|s| s.0.first().map_or(true, |&c| c == b))
+                        .fold(0u128, |a, s| a | s.1);
+                    index_of(&mut masks, vec![m])
+                })
+                .collect();
+            // One table, the classes then the masks (16 bytes each, low first), so one base
+            // address. Up to 16 masks, a class is its mask's offset and the table is padded past
+            // the largest, so the index is neither scaled nor checked (SD: 127.6 -> 125.6
+            // instructions a frame); more, the class is masked to a power of two.
+            let size = masks.len().next_power_of_two();
+            let (mut table, index) = if size <= 16 {
+                let offsets = class.iter().map(|c| 16 * c).collect();
+                (offsets, quote!(TABLE[b as usize] as usize))
+            } else {
+                let last = usize_lit(size - 1);
+                (class, quote!(16 * (TABLE[b as usize] as usize & #last)))
+            };
+            for m in masks.iter().map(|m| m[0]) {
+                table.extend_from_slice(&m.to_le_bytes());
+            }
+            let end = if size <= 16 {
+                256 + 256 + 16
+            } else {
+                256 + 16 * size
+            };
+            table.resize(end, 0);
+            let (n, table) = (usize_lit(table.len()), Literal::byte_string(&table));
+            let (all, byte) = (mask_lit(all), &bytes[0]);
+            quote! {
+                static TABLE: [u8; #n] = *#table;
+                let mask = match #byte {
+                    rt::Some(&b) => {
+                        let i = 256 + #index;
+                        let mut m = [0; 16];
+                        m.copy_from_slice(&TABLE[i..i + 16]);
+                        u128::from_le_bytes(m)
+                    }
+                    rt::None => #all,
+                };
+            }
+        } else {
+            quote! {
+                let mask: u128 = match #scrutinee {
+                    #(#arms)*
+                    #other
+                };
+            }
+        };
+        mask
     };
-    // One code byte: the masks by table, a class per byte and the distinct masks (SD: three),
-    // where the `match` compiled to a jump table (SD's stream: 132.6 instructions a frame
-    // with it, 131.4 with the table and the one-length route of `Core::fast_with`).
-    let mask = if depth == 1 {
-        let all = shapes.iter().fold(0u128, |a, s| a | s.1);
-        let mut masks: Vec<Vec<u128>> = Vec::new();
-        let class: Vec<u8> = (0..=255u8)
-            .map(|b| {
-                let m = shapes
-                    .iter()
-                    .filter(|s| s.0.first().map_or(true, |&c| c == b))
-                    .fold(0u128, |a, s| a | s.1);
-                index_of(&mut masks, vec![m])
-            })
-            .collect();
-        // One table, the classes then the masks (16 bytes each, low first), so one base
-        // address. Up to 16 masks, a class is its mask's offset and the table is padded past
-        // the largest, so the index is neither scaled nor checked (SD: 127.6 -> 125.6
-        // instructions a frame); more, the class is masked to a power of two.
-        let size = masks.len().next_power_of_two();
-        let (mut table, index) = if size <= 16 {
-            let offsets = class.iter().map(|c| 16 * c).collect();
-            (offsets, quote!(TABLE[b as usize] as usize))
-        } else {
-            let last = usize_lit(size - 1);
-            (class, quote!(16 * (TABLE[b as usize] as usize & #last)))
-        };
-        for m in masks.iter().map(|m| m[0]) {
-            table.extend_from_slice(&m.to_le_bytes());
-        }
-        let end = if size <= 16 {
-            256 + 256 + 16
-        } else {
-            256 + 16 * size
-        };
-        table.resize(end, 0);
-        let (n, table) = (usize_lit(table.len()), Literal::byte_string(&table));
-        let (all, byte) = (mask_lit(all), &bytes[0]);
-        quote! {
-            static TABLE: [u8; #n] = *#table;
-            let mask = match #byte {
-                rt::Some(&b) => {
-                    let i = 256 + #index;
-                    let mut m = [0; 16];
-                    m.copy_from_slice(&TABLE[i..i + 16]);
-                    u128::from_le_bytes(m)
-                }
-                rt::None => #all,
-            };
-        }
+    // A layout per direction with the code at another offset in each: a request's candidates
+    // by the bytes where a request's code sits, a response's by a response's.
+    let response_code_at = p.framing.head(Direction::Response, 1).code;
+    let mask = if response_code_at == code_at {
+        mask_at(code_at)
     } else {
+        let (requests, responses) = (mask_at(code_at), mask_at(response_code_at));
         quote! {
-            let mask: u128 = match #scrutinee {
-                #(#arms)*
-                #other
-            };
+            let mask: u128 = ({ #requests mask } & (u64::MAX as u128))
+                | ({ #responses mask } & !(u64::MAX as u128));
         }
     };
     let lens = lengths.iter().map(|l| usize_lit(*l));
@@ -718,7 +738,8 @@ pub(super) fn emit_variable_candidates(p: &Protocol, start_check: TokenStream) -
     let (requests, responses) = (&per[0], &per[1]);
     // Start bytes by direction: a direction whose start bytes the head does not have has no
     // candidate (`start_check`'s early return reads both flags).
-    let by_direction = p.framing.sync_by_direction() && p.framing.head(1).start.is_some();
+    let by_direction =
+        p.framing.sync_by_direction() && p.framing.head(Direction::Request, 1).start.is_some();
     let none = quote!(rt::VarLen::NONE).to_string();
     let only_if = |agree: TokenStream, v: &TokenStream| {
         if by_direction && v.to_string() != none {

@@ -978,7 +978,7 @@ fn response_roundtrip<P: Protocol>(d: &Decoded<P::Response>) {
 /// Where `encode` wrote the code: the bytes of the code in the frame.
 fn code_of<P: Protocol>(frame: &[u8], len: usize) -> &[u8] {
     let p = spec::<P>();
-    let o = p.framing.head(len);
+    let o = p.framing.head(busspec_model::ir::Direction::Request, len);
     &frame[o.code..o.code + len]
 }
 
