@@ -129,6 +129,14 @@ fn sum16_complement_spec_generates_its_snapshot() {
     check("model/tests/fixtures/valid/jbd_bms.yaml", "jbd_bms.rs");
 }
 
+/// A layout per direction (Sensirion SHDLC, the SPS30): replies carry a state byte, a header
+/// field of replies only, that requests lack; byte stuffing of 7E 7D 11 13 and a shared flag
+/// (`snapshots_compile.rs` compiles it and holds it to the interpreter).
+#[test]
+fn layout_by_direction_spec_generates_its_snapshot() {
+    check("model/tests/fixtures/valid/shdlc.yaml", "shdlc.rs");
+}
+
 /// The 8-bit Fletcher checksum of UBX-shaped frames, over code, a 16-bit length and payload
 /// (`snapshots_compile.rs` compiles it and holds it to the interpreter).
 #[test]
