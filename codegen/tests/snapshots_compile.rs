@@ -929,7 +929,9 @@ fn layout_by_direction_snapshot_agrees_with_the_interpreter() {
     let read = [0x7E, 0x00, 0x03, 0x00, 0xFC, 0x7E];
     assert_eq!(
         Request::decode(&read).map(|d| d.message),
-        Ok(Request::ReadMeasuredValues(shdlc::request::ReadMeasuredValues {}))
+        Ok(Request::ReadMeasuredValues(
+            shdlc::request::ReadMeasuredValues {}
+        ))
     );
     let empty = [0x7E, 0x00, 0x03, 0x43, 0x00, 0xB9, 0x7E];
     match Response::decode(&empty).map(|d| d.message) {

@@ -487,8 +487,8 @@ impl Printer {
                 });
             }
         }
-        let addressed = p.framing.has_address();
         let heads = [Direction::Request, Direction::Response].map(|d| {
+            let addressed = p.framing.has_address_in(d);
             (0..=u8::MAX)
                 .map(|address| {
                     let head = format!(

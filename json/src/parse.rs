@@ -40,10 +40,11 @@ impl Parsed {
         let direction = self.message.direction;
         let address = self.address;
         // A constant whole frame is its bytes whatever the address (as `encode` writes it).
-        if m.frame.is_none() && !p.framing.has_address() && address != 0 {
+        let addressed = p.framing.has_address_in(direction);
+        if m.frame.is_none() && !addressed && address != 0 {
             return Err(EncodeError::Unaddressed { address }.to_string());
         }
-        if m.frame.is_none() && !busspec_model::interp::address_allowed(p, address) {
+        if m.frame.is_none() && addressed && !busspec_model::interp::address_allowed(p, address) {
             let a = &p.framing.address;
             return Err(EncodeError::BadAddress {
                 address,
@@ -266,7 +267,10 @@ pub fn parse_line(p: &Spec, line: &str) -> Result<Parsed, String> {
     let m = p.message(r);
     // A protocol whose frames carry no address prints none; a line may still give 0. A
     // constant whole frame carries none either: its line prints 0, and may give any or none.
-    let address = match (&input.address, p.framing.has_address() && m.frame.is_none()) {
+    let address = match (
+        &input.address,
+        p.framing.has_address_in(r.direction) && m.frame.is_none(),
+    ) {
         (Some(n), _) => match n.as_u64().map(u8::try_from) {
             Some(Ok(a)) => a,
             _ => return Err(format!("address {n} is not a byte (0..=255)")),

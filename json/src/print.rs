@@ -213,8 +213,9 @@ fn frame_keys(
         ("protocol", Json::Str(p.name.clone())),
         ("direction", Json::Str(r.direction.as_str().to_owned())),
     ];
-    // A constant whole frame carries no address either.
-    if p.framing.has_address() && m.frame.is_none() {
+    // A constant whole frame carries no address either, nor a frame of a direction whose
+    // layout has none.
+    if p.framing.has_address_in(r.direction) && m.frame.is_none() {
         keys.push(("address", num(address)));
     }
     keys.extend([

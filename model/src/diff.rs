@@ -673,12 +673,27 @@ impl<'a> Differ<'a> {
 
     fn framing(&mut self) {
         let (o, n) = (&self.old.framing, &self.new.framing);
-        if o.layout != n.layout {
-            self.wire(
-                "framing_changed",
-                "framing.layout",
-                format!("frame layout: {:?} → {:?}", o.layout, n.layout).to_lowercase(),
-            );
+        if !o.layout_by_direction() && !n.layout_by_direction() {
+            if o.layout != n.layout {
+                self.wire(
+                    "framing_changed",
+                    "framing.layout",
+                    format!("frame layout: {:?} → {:?}", o.layout, n.layout).to_lowercase(),
+                );
+            }
+        } else {
+            // A layout per direction (`framing.layout: {request, response}`) on either side:
+            // each direction's layout compared, as a layout is.
+            for d in [Direction::Request, Direction::Response] {
+                let (a, b) = (o.layout_of(d), n.layout_of(d));
+                if a != b {
+                    self.wire(
+                        "framing_changed",
+                        format!("framing.layout.{}", d.as_str()),
+                        format!("{} frame layout: {:?} → {:?}", d.as_str(), a, b).to_lowercase(),
+                    );
+                }
+            }
         }
         if o.start != n.start {
             let show = |s: Option<u8>| s.map_or("none".to_owned(), |s| format!("0x{s:02X}"));
@@ -1336,7 +1351,10 @@ impl<'a> Differ<'a> {
         }
         // A field keeps its name where it moved; otherwise what sits at its offset is it. The
         // header fields every message carries lead its fields: `header` compares them once.
-        let (mh, xh) = (o.framing.header.len(), n.framing.header.len());
+        // With a layout per direction only the messages of a direction whose layout has
+        // `header` carry them.
+        let headers = |m: &Message| m.fields.iter().take_while(|f| f.header).count();
+        let (mh, xh) = (headers(m), headers(x));
         let (mf, xf) = (
             &m.fields[mh.min(m.fields.len())..],
             &x.fields[xh.min(x.fields.len())..],

@@ -488,130 +488,149 @@ pub fn render(p: &Protocol, source: &str) -> String {
             .map(|x| format!(" (§{x})"))
             .unwrap_or_default()
     );
-    o.push_str("| Part | Bytes | Content |\n|---|---|---|\n");
-    for part in &f.layout {
-        let row = match part {
-            Part::Start => {
-                let hex = |s: &[u8]| {
-                    s.iter()
+    // A layout per direction (`framing.layout: {request, response}`): a table for each.
+    let tables: Vec<(Option<&str>, &[Part])> = if f.layout_by_direction() {
+        vec![
+            (Some("Requests"), f.layout_of(Direction::Request)),
+            (Some("Responses"), f.layout_of(Direction::Response)),
+        ]
+    } else {
+        vec![(None, &f.layout)]
+    };
+    for (title, layout) in tables {
+        if let Some(t) = title {
+            let _ = writeln!(o, "{t}:\n");
+        }
+        let every = match title {
+            Some("Requests") => "every request",
+            Some(_) => "every response",
+            None => "every message",
+        };
+        o.push_str("| Part | Bytes | Content |\n|---|---|---|\n");
+        for part in layout {
+            let row = match part {
+                Part::Start => {
+                    let hex = |s: &[u8]| {
+                        s.iter()
+                            .map(|b| format!("0x{b:02X}"))
+                            .collect::<Vec<_>>()
+                            .join(" ")
+                    };
+                    let content = if f.sync_by_direction() {
+                        format!(
+                            "requests {}, responses {}",
+                            hex(&f.sync),
+                            hex(&f.response_sync)
+                        )
+                    } else {
+                        hex(&f.sync)
+                    };
+                    // The long form's start byte beside it (`framing.length.long`).
+                    let content = match f.long {
+                        Some(l) => format!("{content}, or 0x{:02X} (long form)", l.start),
+                        None => content,
+                    };
+                    // The short form's start byte beside it (`framing.forms`).
+                    let content = match &f.form {
+                        Some(s) => format!("{content}, or 0x{:02X} (short form)", s.start),
+                        None => content,
+                    };
+                    ("start".to_owned(), f.sync.len().to_string(), content)
+                }
+                Part::Length => {
+                    let l = f.length.as_ref();
+                    let counts: Vec<String> = l
+                        .map(|l| {
+                            l.counts
+                                .iter()
+                                .map(|p| format!("{p:?}").to_lowercase())
+                                .collect()
+                        })
+                        .unwrap_or_default();
+                    let adjust = match l.map_or(0, |l| l.adjust) {
+                        0 => String::new(),
+                        a if a > 0 => format!(" + {a}"),
+                        a => format!(" − {}", -a),
+                    };
+                    (
+                        "length".to_owned(),
+                        match f.long {
+                            Some(g) => format!("{} or {}", g.short_width, g.width),
+                            None => l.map_or(0, |l| l.width).to_string(),
+                        },
+                        format!("bytes of {}{adjust}", counts.join(", ")),
+                    )
+                }
+                Part::Address => ("address".to_owned(), "1".to_owned(), {
+                    let mut t = format!("device 0x{:02X}..=0x{:02X}", f.address.min, f.address.max);
+                    if let Some(h) = f.address.host {
+                        let _ = write!(t, "; host 0x{h:02X}");
+                    }
+                    if let Some(b) = f.address.broadcast {
+                        let _ = write!(t, "; broadcast 0x{b:02X}");
+                    }
+                    if let Some(d) = f.address.default {
+                        let _ = write!(t, "; default 0x{d:02X}");
+                    }
+                    t
+                }),
+                Part::Code => (
+                    "code".to_owned(),
+                    format!(
+                        "request {:?}, response {:?}",
+                        f.request.code_lengths, f.response.code_lengths
+                    ),
+                    "command or response code".to_owned(),
+                ),
+                Part::Payload => (
+                    "data".to_owned(),
+                    format!(
+                        "request {}..={}, response {}..={}",
+                        f.request.payload_min,
+                        f.request.payload_max,
+                        f.response.payload_min,
+                        f.response.payload_max
+                    ),
+                    "fields of the message".to_owned(),
+                ),
+                Part::Header => (
+                    "header".to_owned(),
+                    f.header_len().to_string(),
+                    format!(
+                        "header fields {every} carries: {}",
+                        f.header
+                            .iter()
+                            .map(|h| format!("`{}` ({})", h.name, h.width))
+                            .collect::<Vec<_>>()
+                            .join(", ")
+                    ),
+                ),
+                Part::Checksum => (
+                    "checksum".to_owned(),
+                    f.checksum.len().to_string(),
+                    if f.checksum.covers_from == 0 {
+                        "over every byte before it".to_owned()
+                    } else {
+                        format!(
+                            "over the bytes from offset {} up to it",
+                            f.checksum.covers_from
+                        )
+                    },
+                ),
+                Part::End => (
+                    "end".to_owned(),
+                    f.end.len().to_string(),
+                    f.end
+                        .iter()
                         .map(|b| format!("0x{b:02X}"))
                         .collect::<Vec<_>>()
-                        .join(" ")
-                };
-                let content = if f.sync_by_direction() {
-                    format!(
-                        "requests {}, responses {}",
-                        hex(&f.sync),
-                        hex(&f.response_sync)
-                    )
-                } else {
-                    hex(&f.sync)
-                };
-                // The long form's start byte beside it (`framing.length.long`).
-                let content = match f.long {
-                    Some(l) => format!("{content}, or 0x{:02X} (long form)", l.start),
-                    None => content,
-                };
-                // The short form's start byte beside it (`framing.forms`).
-                let content = match &f.form {
-                    Some(s) => format!("{content}, or 0x{:02X} (short form)", s.start),
-                    None => content,
-                };
-                ("start".to_owned(), f.sync.len().to_string(), content)
-            }
-            Part::Length => {
-                let l = f.length.as_ref();
-                let counts: Vec<String> = l
-                    .map(|l| {
-                        l.counts
-                            .iter()
-                            .map(|p| format!("{p:?}").to_lowercase())
-                            .collect()
-                    })
-                    .unwrap_or_default();
-                let adjust = match l.map_or(0, |l| l.adjust) {
-                    0 => String::new(),
-                    a if a > 0 => format!(" + {a}"),
-                    a => format!(" − {}", -a),
-                };
-                (
-                    "length".to_owned(),
-                    match f.long {
-                        Some(g) => format!("{} or {}", g.short_width, g.width),
-                        None => l.map_or(0, |l| l.width).to_string(),
-                    },
-                    format!("bytes of {}{adjust}", counts.join(", ")),
-                )
-            }
-            Part::Address => ("address".to_owned(), "1".to_owned(), {
-                let mut t = format!("device 0x{:02X}..=0x{:02X}", f.address.min, f.address.max);
-                if let Some(h) = f.address.host {
-                    let _ = write!(t, "; host 0x{h:02X}");
-                }
-                if let Some(b) = f.address.broadcast {
-                    let _ = write!(t, "; broadcast 0x{b:02X}");
-                }
-                if let Some(d) = f.address.default {
-                    let _ = write!(t, "; default 0x{d:02X}");
-                }
-                t
-            }),
-            Part::Code => (
-                "code".to_owned(),
-                format!(
-                    "request {:?}, response {:?}",
-                    f.request.code_lengths, f.response.code_lengths
+                        .join(" "),
                 ),
-                "command or response code".to_owned(),
-            ),
-            Part::Payload => (
-                "data".to_owned(),
-                format!(
-                    "request {}..={}, response {}..={}",
-                    f.request.payload_min,
-                    f.request.payload_max,
-                    f.response.payload_min,
-                    f.response.payload_max
-                ),
-                "fields of the message".to_owned(),
-            ),
-            Part::Header => (
-                "header".to_owned(),
-                f.header_len().to_string(),
-                format!(
-                    "header fields every message carries: {}",
-                    f.header
-                        .iter()
-                        .map(|h| format!("`{}` ({})", h.name, h.width))
-                        .collect::<Vec<_>>()
-                        .join(", ")
-                ),
-            ),
-            Part::Checksum => (
-                "checksum".to_owned(),
-                f.checksum.len().to_string(),
-                if f.checksum.covers_from == 0 {
-                    "over every byte before it".to_owned()
-                } else {
-                    format!(
-                        "over the bytes from offset {} up to it",
-                        f.checksum.covers_from
-                    )
-                },
-            ),
-            Part::End => (
-                "end".to_owned(),
-                f.end.len().to_string(),
-                f.end
-                    .iter()
-                    .map(|b| format!("0x{b:02X}"))
-                    .collect::<Vec<_>>()
-                    .join(" "),
-            ),
-        };
-        let _ = writeln!(o, "| {} | {} | {} |", row.0, row.1, row.2);
+            };
+            let _ = writeln!(o, "| {} | {} | {} |", row.0, row.1, row.2);
+        }
+        o.push('\n');
     }
-    o.push('\n');
     let c = &f.checksum;
     match &c.algorithm {
         ChecksumAlgorithm::None => o.push_str("Frames carry no checksum.\n\n"),

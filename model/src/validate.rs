@@ -1010,15 +1010,18 @@ fn framing_by_direction(
     if f.transform.is_some() {
         sink.error("framing.transform", not_yet("a transform of the payload"));
     }
+    let mut escaping_refused = false;
     if let Some(e) = &f.escaping {
         let bytes = e.escape.is_some() || e.cobs == Some(true);
         if !bytes {
             sink.error("framing.escaping", not_yet("escaping by insertion"));
+            escaping_refused = true;
         } else if !d.request.contains(&Part::End) || !d.response.contains(&Part::End) {
             sink.error(
                 "framing.escaping",
                 not_yet("escaping without an end byte (frames found by their length field)"),
             );
+            escaping_refused = true;
         }
     }
     let lists = [("request", &d.request), ("response", &d.response)];
@@ -1070,11 +1073,35 @@ fn framing_by_direction(
         let lacks = |p: Part| !list.contains(&p) && other.contains(&p);
         let mut own = f.clone();
         own.layout = model::Layout::Same(list.clone());
+        // What is refused above is not validated again on each direction's own.
+        own.forms = Vec::new();
+        own.truncation = None;
+        own.preamble = None;
+        own.transform = None;
+        if escaping_refused {
+            own.escaping = None;
+        }
+        if let Some(l) = &mut own.length {
+            l.long = None;
+        }
         if lacks(Part::Address) {
             own.address = None;
         }
         if lacks(Part::Header) {
             own.header = None;
+        }
+        // Refused above where one direction lacks it: not reported again.
+        if lacks(Part::Start) {
+            own.start = None;
+        }
+        if lacks(Part::Length) {
+            own.length = None;
+        }
+        if lacks(Part::Checksum) {
+            own.checksum = None;
+        }
+        if lacks(Part::End) {
+            own.end = None;
         }
         let mut errors = Sink::default();
         out.push(framing_plain(&own, byte_order, refs, &mut errors));
@@ -1094,7 +1121,12 @@ fn framing_by_direction(
     }
     let response = out.pop().expect("two framings");
     let mut framing = out.pop().expect("two framings");
-    if framing.checksum.covers_from != response.checksum.covers_from {
+    let placed = !sink
+        .items
+        .iter()
+        .any(|e| e.path == "framing.checksum.covers_from");
+    let summed = d.request.contains(&Part::Checksum) && d.response.contains(&Part::Checksum);
+    if placed && summed && framing.checksum.covers_from != response.checksum.covers_from {
         sink.error(
             "framing.checksum.covers_from",
             format!(

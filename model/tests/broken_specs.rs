@@ -17,6 +17,78 @@ use busspec_model::{load_str, Diagnostics};
 /// Fixture name → every diagnostic it must give, as (path, part of the message).
 /// The number of diagnostics must equal the number of rows.
 const CASES: &[(&str, &[(&str, &str)])] = &[
+    // ---- a layout per direction (made from valid/shdlc, without its examples)
+    (
+        "layout_dir_broadcast_unaddressed_requests",
+        &[("framing.address.broadcast", "requests carry no address (their layout has no `address`): none is a broadcast")],
+    ),
+    (
+        "layout_dir_checksum_one_direction",
+        &[("framing.layout.response", "the response's layout has no `checksum`, the other direction's has: `checksum` in one")],
+    ),
+    (
+        "layout_dir_counts_missing",
+        &[("framing.length.counts", "counts `header`, which the layout does not have")],
+    ),
+    (
+        "layout_dir_covers_from_differs",
+        &[("framing.checksum.covers_from", "the checksum would cover from offset 3 in requests and 4 in responses: a checksum whose")],
+    ),
+    (
+        "layout_dir_covers_from_missing",
+        &[("framing.checksum.covers_from", "the checksum cannot cover from `header`: name a part of the layout before the payload")],
+    ),
+    (
+        "layout_dir_end_order",
+        &[("framing.layout.response", "end bytes before the checksum in one direction and after it in the other is not")],
+    ),
+    (
+        "layout_dir_escaping_by_length",
+        &[("framing.escaping", "escaping without an end byte (frames found by their length field) is not expressible with")],
+    ),
+    (
+        "layout_dir_escaping_insert",
+        &[("framing.escaping", "escaping by insertion is not expressible with a layout per direction (`framing.layout:")],
+    ),
+    (
+        "layout_dir_header_without_section",
+        &[("framing.layout.response", "layout has `header` but `framing.header` is missing")],
+    ),
+    (
+        "layout_dir_second_length",
+        &[("framing.layout.response", "a second `length` is not expressible with a layout per direction (`framing.layout:")],
+    ),
+    (
+        "layout_dir_start_offsets",
+        &[
+            ("framing.checksum.covers_from", "the checksum would cover from offset 1 in requests and 0 in responses: a checksum whose"),
+            ("framing.layout.response", "the start bytes sit at offset 0 in requests and 1 in responses: start bytes at another"),
+        ],
+    ),
+    (
+        "layout_dir_unknown_direction",
+        &[("framing.layout", "unknown field `reply`, expected `request` or `response`")],
+    ),
+    (
+        "layout_dir_with_forms",
+        &[("framing.forms", "a short form of the frame is not expressible with a layout per direction")],
+    ),
+    (
+        "layout_dir_with_long",
+        &[("framing.length.long", "a long length form is not expressible with a layout per direction (`framing.layout:")],
+    ),
+    (
+        "layout_dir_with_preamble",
+        &[("framing.preamble", "a preamble is not expressible with a layout per direction (`framing.layout: {request,")],
+    ),
+    (
+        "layout_dir_with_transform",
+        &[("framing.transform", "a transform of the payload is not expressible with a layout per direction")],
+    ),
+    (
+        "layout_dir_with_truncation",
+        &[("framing.truncation", "payload truncation is not expressible with a layout per direction (`framing.layout:")],
+    ),
     // ---- text up to a terminator (made from valid/text_terminated, without its examples)
     (
         "until_without_length",

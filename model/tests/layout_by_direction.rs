@@ -1,0 +1,164 @@
+//! A layout per direction (`framing.layout: {request: [...], response: [...]}`, Sensirion
+//! SHDLC: a reply carries a state byte that requests lack): each direction's frames are laid
+//! out, decoded, encoded and framed in a stream by its own layout, the header fields belong to
+//! the messages of the direction whose layout has `header`, and docs and diff show each
+//! direction's layout.
+
+#![cfg(feature = "tools")]
+
+mod common;
+use std::path::Path;
+
+use busspec_model::interp::{self, DecodeError, Raw, Value};
+use busspec_model::ir::{Direction, Part};
+use busspec_model::stream::{Event, StreamDecoder};
+
+fn fixture(name: &str) -> busspec_model::Protocol {
+    let path = Path::new(env!("CARGO_MANIFEST_DIR")).join(format!("tests/fixtures/valid/{name}"));
+    busspec_model::load_file(&path).unwrap_or_else(|d| panic!("{d}"))
+}
+
+/// Read measured values (datasheet 5.3.3) and its empty reply.
+const READ: [u8; 6] = [0x7E, 0x00, 0x03, 0x00, 0xFC, 0x7E];
+const EMPTY: [u8; 7] = [0x7E, 0x00, 0x03, 0x00, 0x00, 0xFC, 0x7E];
+
+#[test]
+fn each_direction_is_laid_out_by_its_own_layout() {
+    let p = fixture("shdlc.yaml");
+    assert!(p.framing.layout_by_direction());
+    assert!(!p
+        .framing
+        .layout_of(Direction::Request)
+        .contains(&Part::Header));
+    let (q, r) = (
+        p.framing.head(Direction::Request, 1),
+        p.framing.head(Direction::Response, 1),
+    );
+    assert_eq!((q.code, q.length, q.payload, q.len), (2, Some(3), 4, 6));
+    assert_eq!(
+        (r.code, r.header, r.length, r.payload, r.len),
+        (2, 3, Some(4), 5, 7)
+    );
+    for m in p.framed(Direction::Request) {
+        assert!(m.fields.iter().all(|f| !f.header), "{}", m.name);
+    }
+    for m in p.framed(Direction::Response) {
+        assert_eq!(m.fields[0].name, "state", "{}", m.name);
+        assert!(m.fields[0].header);
+        assert_eq!(m.layout.header, 3);
+    }
+}
+
+#[test]
+fn a_frame_decodes_as_the_direction_whose_layout_it_fits() {
+    let p = fixture("shdlc.yaml");
+    let q = interp::decode(&p, None, None, &READ).unwrap();
+    assert_eq!(p.message(q.message).name, "read_measured_values");
+    let r = interp::decode(&p, None, None, &EMPTY).unwrap();
+    assert_eq!(p.message(r.message).name, "no_new_values");
+    // A request read as a reply: its length byte where a reply's state is, a byte short.
+    let e = interp::decode(&p, Some(Direction::Response), None, &READ).unwrap_err();
+    assert!(
+        matches!(
+            e,
+            DecodeError::Truncated { .. } | DecodeError::LengthMismatch { .. }
+        ),
+        "{e:?}"
+    );
+    // A reply read as a request: its length field (the state, 0) says an empty payload.
+    let e = interp::decode(&p, Some(Direction::Request), None, &EMPTY).unwrap_err();
+    assert!(e.to_string().contains("length field at offset 3"), "{e}");
+}
+
+#[test]
+fn encoding_writes_the_state_in_replies_only() {
+    let p = fixture("shdlc.yaml");
+    let read = p.find("read_measured_values").unwrap();
+    assert_eq!(interp::encode(&p, read, 0, &[]).unwrap(), READ);
+    let empty = p.find("no_new_values").unwrap();
+    let state = [Value {
+        name: "state".into(),
+        raw: Raw::Int(0x43),
+    }];
+    assert_eq!(
+        interp::encode(&p, empty, 0, &state).unwrap(),
+        [0x7E, 0x00, 0x03, 0x43, 0x00, 0xB9, 0x7E]
+    );
+    // A request has no state to give.
+    assert!(interp::encode(&p, read, 0, &state).is_err());
+}
+
+#[test]
+fn a_stream_frames_each_direction_by_its_layout_however_it_is_cut() {
+    let p = fixture("shdlc.yaml");
+    let mut capture = Vec::new();
+    for _ in 0..3 {
+        capture.extend_from_slice(&READ);
+        capture.extend_from_slice(&EMPTY);
+    }
+    let run = |chunks: &[&[u8]]| {
+        let mut d = StreamDecoder::new(&p, None);
+        let mut seen = Vec::new();
+        for c in chunks {
+            seen.extend(d.push(c));
+        }
+        seen.extend(d.flush());
+        seen.into_iter()
+            .filter_map(|e| match e {
+                Event::Frame { offset, frame, .. } => {
+                    Some((offset, p.message(frame.message).name.clone()))
+                }
+                _ => None,
+            })
+            .collect::<Vec<_>>()
+    };
+    let whole = run(&[&capture]);
+    let names: Vec<&str> = whole.iter().map(|(_, n)| n.as_str()).collect();
+    assert_eq!(
+        names,
+        ["read_measured_values", "no_new_values"].repeat(3),
+        "{whole:?}"
+    );
+    for cut in 0..capture.len() {
+        let (a, b) = capture.split_at(cut);
+        assert_eq!(run(&[a, b]), whole, "cut at {cut}");
+    }
+}
+
+#[test]
+fn docs_show_each_directions_layout_and_diff_each_change() {
+    let p = fixture("shdlc.yaml");
+    let docs = busspec_model::docs::render(&p, "shdlc.yaml");
+    assert!(
+        docs.contains("Requests:\n\n| Part | Bytes | Content |"),
+        "{docs}"
+    );
+    assert!(
+        docs.contains("Responses:\n\n| Part | Bytes | Content |"),
+        "{docs}"
+    );
+    assert!(
+        docs.contains("| header | 1 | header fields every response carries: `state` (1) |"),
+        "{docs}"
+    );
+    let (_, new) = common::revisions(
+        "shdlc",
+        &[(
+            "response: [start, address, code, header, length, payload, checksum, end]",
+            "response: [start, address, code, length, header, payload, checksum, end]",
+        )],
+    );
+    let changes = busspec_model::diff::diff(&p, &new);
+    let layout: Vec<_> = changes
+        .iter()
+        .filter(|c| c.path.starts_with("framing.layout"))
+        .collect();
+    assert_eq!(layout.len(), 1, "{changes:?}");
+    assert_eq!(layout[0].path, "framing.layout.response");
+    assert_eq!(layout[0].kind, "framing_changed");
+    assert_eq!(
+        layout[0].text,
+        "response frame layout: [start, address, code, header, length, payload, checksum, end] → [start, address, code, length, header, payload, checksum, end]"
+    );
+    assert!(busspec_model::diff::diff(&p, &p).is_empty());
+}
