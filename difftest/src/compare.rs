@@ -419,6 +419,11 @@ impl<'p, P: Protocol> Run<'p, P> {
             for _ in 0..4 {
                 let v = random_values(p, &p.commands[c], &mut run.rng, true);
                 let a = run.rng.u8(p.framing.address.min..=p.framing.address.max);
+                let a = if p.framing.has_address_in(Direction::Request) {
+                    a
+                } else {
+                    0
+                };
                 if let Ok(w) = interp::encode(p, r, a, &v) {
                     tries.push(w);
                 }

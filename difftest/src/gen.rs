@@ -243,6 +243,9 @@ enum Own {
     FixedElements = 0xF1ED_E1E5_F1ED_E1E5,
     /// Payload truncation (`framing.truncation`, MAVLink v2): whether a spec tries it.
     Truncation = 0x00FD_00FD_00FD_00FD,
+    /// A layout per direction (`framing.layout: {request, response}`, SHDLC): whether a spec
+    /// tries one, and how the two directions' layouts differ.
+    LayoutByDirection = 0x7E5D_7E5D_7E5D_7E5D,
 }
 
 /// The generator of `what` for the spec of `seed`.
@@ -1196,11 +1199,63 @@ pub fn random_spec(seed: u64) -> String {
             (text, p) = (with, q);
         }
     }
+    // A layout per direction (Sensirion SHDLC's state byte in replies only): tried on a
+    // fraction of the specs, kept where the validator accepts it, so every rule it holds a
+    // layout per direction to is the validator's; drawn by a generator of its own.
+    if let Some(with) = layout_by_direction(seed, &text) {
+        if let Ok(q) = busspec_model::load_str("generated.yaml", &with) {
+            (text, p) = (with, q);
+        }
+    }
     let mut rng = own_rng(seed, Own::Examples);
     match examples(&p, &mut rng) {
         Some(examples) => format!("{text}examples:\n{examples}errata: []\n"),
         None => format!("{text}examples: []\nerrata: []\n"),
     }
+}
+
+/// `text` with its layout given per direction (`Own::LayoutByDirection`), in about one spec
+/// in four whose layout allows it: the header fields in one direction only, the address in one
+/// direction only, or two neighbouring parts before the payload in another order in one
+/// direction. `None` where the spec is not drawn for it or its layout has nothing to vary.
+fn layout_by_direction(seed: u64, text: &str) -> Option<String> {
+    let mut rng = own_rng(seed, Own::LayoutByDirection);
+    if rng.u8(..100) >= 25 {
+        return None;
+    }
+    let line = text.lines().find(|l| l.starts_with("  layout: ["))?;
+    let inner = line.strip_prefix("  layout: [")?.strip_suffix(']')?;
+    let layout: Vec<&str> = inner.split(", ").collect();
+    let payload = layout.iter().position(|p| *p == "payload")?;
+    let mut variants: Vec<Vec<&str>> = Vec::new();
+    for part in ["header", "address"] {
+        if layout.contains(&part) {
+            variants.push(layout.iter().copied().filter(|p| *p != part).collect());
+        }
+    }
+    // Two neighbouring parts before the payload swapped (the start bytes keep their place).
+    for i in 0..payload.saturating_sub(1) {
+        if layout[i] != layout[i + 1] && layout[i] != "start" && layout[i + 1] != "start" {
+            let mut v = layout.clone();
+            v.swap(i, i + 1);
+            variants.push(v);
+        }
+    }
+    if variants.is_empty() {
+        return None;
+    }
+    let other = &variants[rng.usize(..variants.len())];
+    let (request, response) = if rng.bool() {
+        (other, &layout)
+    } else {
+        (&layout, other)
+    };
+    let by_direction = format!(
+        "  layout:\n    request: [{}]\n    response: [{}]",
+        request.join(", "),
+        response.join(", ")
+    );
+    Some(text.replacen(line, &by_direction, 1))
 }
 
 /// Payload truncation's draw for the spec of `seed` (`Own::Truncation`): whether the spec is
@@ -1237,6 +1292,12 @@ fn examples(p: &ir::Protocol, rng: &mut fastrand::Rng) -> Option<String> {
                 let address = match a.default {
                     Some(x) if rng.bool() => x,
                     _ => rng.u8(a.min..=a.max),
+                };
+                // A direction whose layout has no address (a layout per direction): 0.
+                let address = if p.framing.has_address_in(d) {
+                    address
+                } else {
+                    0
                 };
                 let Ok(wire) = interp::encode(p, r, address, &values) else {
                     continue;
@@ -2807,6 +2868,20 @@ pub fn constructs(p: &ir::Protocol) -> Vec<&'static str> {
     add(f.sync.len() == 1, "start byte");
     add(f.sync.len() > 1, "sync sequence");
     add(f.sync_by_direction(), "start bytes by direction");
+    add(f.layout_by_direction(), "layout by direction");
+    add(
+        f.layout_by_direction()
+            && f.has_header(Direction::Request) != f.has_header(Direction::Response),
+        "header in one direction only",
+    );
+    add(
+        f.has_address_in(Direction::Request) != f.has_address_in(Direction::Response),
+        "address in one direction only",
+    );
+    add(
+        f.head(Direction::Request, 1).code != f.head(Direction::Response, 1).code,
+        "code at another offset by direction",
+    );
     let twice = |x: Part| f.layout.iter().filter(|y| **y == x).count() == 2;
     add(twice(Part::Start), "start twice");
     add(twice(Part::Length), "length twice");

@@ -223,6 +223,13 @@ fn main() {
         count("text up to a terminator"),
         count("payload over 255 bytes")
     );
+    println!(
+        "  specs with a layout by direction {} (the header in one direction only {}, the address in one direction only {}, the code at another offset by direction {})",
+        count("layout by direction"),
+        count("header in one direction only"),
+        count("address in one direction only"),
+        count("code at another offset by direction")
+    );
     if !f.signatures.is_empty() {
         println!("disagreements by what differs (count, what):");
         for (sig, n) in &f.signatures {
