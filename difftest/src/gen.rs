@@ -1202,9 +1202,10 @@ pub fn random_spec(seed: u64) -> String {
     // A layout per direction (Sensirion SHDLC's state byte in replies only): tried on a
     // fraction of the specs, kept where the validator accepts it, so every rule it holds a
     // layout per direction to is the validator's; drawn by a generator of its own.
-    if let Some(with) = layout_by_direction(seed, &text) {
+    for with in layout_by_direction(seed, &text) {
         if let Ok(q) = busspec_model::load_str("generated.yaml", &with) {
             (text, p) = (with, q);
+            break;
         }
     }
     let mut rng = own_rng(seed, Own::Examples);
@@ -1215,18 +1216,28 @@ pub fn random_spec(seed: u64) -> String {
 }
 
 /// `text` with its layout given per direction (`Own::LayoutByDirection`), in about one spec
-/// in four whose layout allows it: the header fields in one direction only, the address in one
-/// direction only, or two neighbouring parts before the payload in another order in one
-/// direction. `None` where the spec is not drawn for it or its layout has nothing to vary.
-fn layout_by_direction(seed: u64, text: &str) -> Option<String> {
+/// in three: the header fields in one direction only, the address in one direction only, or
+/// two neighbouring parts before the payload in another order in one direction, each in one
+/// direction drawn, in the order drawn (the caller keeps the first the validator accepts).
+/// None where the spec is not drawn for it or its layout has nothing to vary.
+fn layout_by_direction(seed: u64, text: &str) -> Vec<String> {
     let mut rng = own_rng(seed, Own::LayoutByDirection);
-    if rng.u8(..100) >= 25 {
-        return None;
+    if rng.u8(..100) >= 35 {
+        return Vec::new();
     }
-    let line = text.lines().find(|l| l.starts_with("  layout: ["))?;
-    let inner = line.strip_prefix("  layout: [")?.strip_suffix(']')?;
+    let Some(line) = text.lines().find(|l| l.starts_with("  layout: [")) else {
+        return Vec::new();
+    };
+    let Some(inner) = line
+        .strip_prefix("  layout: [")
+        .and_then(|l| l.strip_suffix(']'))
+    else {
+        return Vec::new();
+    };
     let layout: Vec<&str> = inner.split(", ").collect();
-    let payload = layout.iter().position(|p| *p == "payload")?;
+    let Some(payload) = layout.iter().position(|p| *p == "payload") else {
+        return Vec::new();
+    };
     let mut variants: Vec<Vec<&str>> = Vec::new();
     for part in ["header", "address"] {
         if layout.contains(&part) {
@@ -1241,21 +1252,23 @@ fn layout_by_direction(seed: u64, text: &str) -> Option<String> {
             variants.push(v);
         }
     }
-    if variants.is_empty() {
-        return None;
-    }
-    let other = &variants[rng.usize(..variants.len())];
-    let (request, response) = if rng.bool() {
-        (other, &layout)
-    } else {
-        (&layout, other)
-    };
-    let by_direction = format!(
-        "  layout:\n    request: [{}]\n    response: [{}]",
-        request.join(", "),
-        response.join(", ")
-    );
-    Some(text.replacen(line, &by_direction, 1))
+    rng.shuffle(&mut variants);
+    variants
+        .iter()
+        .map(|other| {
+            let (request, response) = if rng.bool() {
+                (other, &layout)
+            } else {
+                (&layout, other)
+            };
+            let by_direction = format!(
+                "  layout:\n    request: [{}]\n    response: [{}]",
+                request.join(", "),
+                response.join(", ")
+            );
+            text.replacen(line, &by_direction, 1)
+        })
+        .collect()
 }
 
 /// Payload truncation's draw for the spec of `seed` (`Own::Truncation`): whether the spec is
