@@ -956,7 +956,7 @@ fn decode_plain<'p>(
         longest_frame,
         shortest,
         min_code,
-        length_rules: [rule0, rule1],
+        ..
     } = limits;
     if wire.len() > longest_frame {
         return Err(DecodeError::TooLong {
@@ -1000,6 +1000,11 @@ fn decode_plain<'p>(
     check_checksum(p, lookup.map(|l| &l.checksum), wire)?;
     // Where the address sits (or whether frames carry one) differs by direction, each
     // direction the frame may be is checked at its own; it is refused where none agrees.
+    // A direction refused for its address alone is set aside with its refusal: where the
+    // other is refused too, the refusal that got further is reported ([`progress`], the
+    // first direction's on a tie), as the generated stream decoder, which decodes each
+    // direction on its own, reports it.
+    let mut set_aside: Option<(bool, DecodeError)> = None;
     let (sync0, sync1) = if first.address != second.address {
         let (x, y) = (
             check_address(p, first.address, wire),
@@ -1013,12 +1018,65 @@ fn decode_plain<'p>(
                 y?;
                 (false, false)
             }
-            kept => kept,
+            kept => {
+                if let (true, Err(e)) = (sync0, x) {
+                    set_aside = Some((true, e));
+                } else if let (true, Err(e)) = (sync1, y) {
+                    set_aside = Some((false, e));
+                }
+                kept
+            }
         }
     } else {
         check_address(p, first.address, wire)?;
         (sync0, sync1)
     };
+    let decoded = decode_kept(p, limits, lookup, reply_to, wire, spare, (sync0, sync1));
+    match (decoded, set_aside) {
+        (Err(e), Some((true, a))) => Err(if progress(&e) > progress(&a) { e } else { a }),
+        (Err(e), Some((false, a))) => Err(if progress(&a) > progress(&e) { a } else { e }),
+        (decoded, _) => decoded,
+    }
+}
+
+/// How far a frame decoded as one direction got before `e`: the order of the runtime's
+/// `DecodeError::progress` (0, no message of the direction has its code, its length field or
+/// its length; 1, too short; 2, a code whose messages have other lengths or counts; 3, a
+/// message's own refusal).
+fn progress(e: &DecodeError) -> u8 {
+    match e {
+        DecodeError::UnknownCode { .. }
+        | DecodeError::LengthMismatch { .. }
+        | DecodeError::TooLong { .. } => 0,
+        DecodeError::Truncated { .. } => 1,
+        DecodeError::WrongLength { .. }
+        | DecodeError::BadCount { .. }
+        | DecodeError::BadWidth { .. }
+        | DecodeError::NoTerminator { .. }
+        | DecodeError::ByteCount { .. } => 2,
+        _ => 3,
+    }
+}
+
+/// [`decode_plain`] after the checks every frame takes (length, start, end, checksum,
+/// address), of the directions `(sync0, sync1)` still kept.
+fn decode_kept<'p>(
+    p: &'p Protocol,
+    limits: Limits,
+    lookup: Option<&Lookup>,
+    reply_to: (Option<usize>, bool),
+    wire: &[u8],
+    spare: &mut Spare<'p>,
+    (sync0, sync1): (bool, bool),
+) -> Result<Frame<'p>, DecodeError> {
+    let Limits {
+        directions,
+        shortest,
+        min_code,
+        length_rules: [rule0, rule1],
+        ..
+    } = limits;
+    let d0 = directions.first().copied().unwrap_or(Direction::Request);
     // The checksum covers the payload as it travelled; the fields are read with its transform
     // undone (`framing.transform`).
     let plain = p.framing.untransformed(wire);

@@ -162,3 +162,47 @@ fn docs_show_each_directions_layout_and_diff_each_change() {
     );
     assert!(busspec_model::diff::diff(&p, &p).is_empty());
 }
+
+/// The address in requests only: a frame decoded both ways whose address no request may carry
+/// and which no response is either is refused for the reason that got further, the request's
+/// address (the generated stream decoder, which decodes each direction on its own, says the
+/// same), not for the response's unknown code. Found by difftest (spec seed 231965100237822).
+#[test]
+fn a_frame_refused_both_ways_names_the_address_where_it_got_further() {
+    let (_, p) = common::revisions(
+        "shdlc",
+        &[
+            (
+                "response: [start, address, code, header, length, payload, checksum, end]",
+                "response: [start, code, header, length, payload, checksum, end]",
+            ),
+            (", covers_from: address", ""),
+        ],
+    );
+    assert!(p.framing.has_address_in(Direction::Request));
+    assert!(!p.framing.has_address_in(Direction::Response));
+    // 7E, address 5 (a request's) or code 5 (a response's), 03, length 0, the inverted sum.
+    let wire = [0x7E, 0x05, 0x03, 0x00, 0x79, 0x7E];
+    let as_response = interp::decode(&p, Some(Direction::Response), None, &wire).unwrap_err();
+    assert!(
+        matches!(as_response, DecodeError::UnknownCode { .. }),
+        "{as_response:?}"
+    );
+    let e = interp::decode(&p, None, None, &wire).unwrap_err();
+    assert!(
+        matches!(
+            e,
+            DecodeError::BadAddress {
+                offset: 1,
+                found: 5,
+                ..
+            }
+        ),
+        "{e:?}"
+    );
+    // A response's frame of that code decodes, its address 0.
+    let reply = [0x7E, 0x01, 0x00, 0x00, 0x80, 0x7E];
+    let r = interp::decode(&p, None, None, &reply).unwrap();
+    assert_eq!(p.message(r.message).name, "measurement_stopped");
+    assert_eq!(r.address, 0);
+}
