@@ -1033,6 +1033,8 @@ fn decode_plain<'p>(
     };
     let decoded = decode_kept(p, limits, lookup, reply_to, wire, spare, (sync0, sync1));
     match (decoded, set_aside) {
+        // A frame the other direction's messages share is ambiguous, not refused.
+        (Err(e @ DecodeError::Ambiguous { .. }), _) => Err(e),
         (Err(e), Some((true, a))) => Err(if progress(&e) > progress(&a) { e } else { a }),
         (Err(e), Some((false, a))) => Err(if progress(&a) > progress(&e) { a } else { e }),
         (decoded, _) => decoded,
