@@ -127,6 +127,7 @@ fn constant_frame_spec_generates_its_snapshot() {
 #[test]
 fn sum16_complement_spec_generates_its_snapshot() {
     check("model/tests/fixtures/valid/jbd_bms.yaml", "jbd_bms.rs");
+    check("model/tests/fixtures/valid/nextion.yaml", "nextion.rs");
 }
 
 /// The 8-bit Fletcher checksum of UBX-shaped frames, over code, a 16-bit length and payload

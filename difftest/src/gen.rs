@@ -243,6 +243,9 @@ enum Own {
     FixedElements = 0xF1ED_E1E5_F1ED_E1E5,
     /// Payload truncation (`framing.truncation`, MAVLink v2): whether a spec tries it.
     Truncation = 0x00FD_00FD_00FD_00FD,
+    /// Frames only end bytes delimit: whether an eligible spec drops its checksum, its end
+    /// bytes.
+    EndDelimited = 0xFFFF_FF00_FFFF_FF00,
 }
 
 /// The generator of `what` for the spec of `seed`.
@@ -1495,7 +1498,7 @@ fn random_spec_without_examples(seed: u64) -> (String, usize) {
         let at = g.rng.usize(usize::from(has_start)..=last);
         layout.insert(at, "length");
     }
-    let (csum, csum_len) = checksum_yaml(&mut g);
+    let (mut csum, mut csum_len) = checksum_yaml(&mut g);
     layout.push("payload");
     if !csum.is_empty() {
         layout.push("checksum");
@@ -1526,6 +1529,21 @@ fn random_spec_without_examples(seed: u64) -> (String, usize) {
         10..=17 => Escaping::Cobs,
         _ => Escaping::None,
     };
+    // Frames only end bytes delimit (Nextion's `FF FF FF`: no length field, no checksum):
+    // where nothing escapes and no length field counts, one such spec in four loses its
+    // checksum and ends in end bytes, drawn by a generator of its own (every spec drawn
+    // without it is as it was).
+    if escaping == Escaping::None && !has_length && !g.fixed {
+        let mut rng = own_rng(seed, Own::EndDelimited);
+        if rng.u8(..100) < 25 {
+            (csum, csum_len) = (String::new(), 0);
+            layout.retain(|p| *p != "checksum");
+            if end.is_empty() {
+                end = (0..rng.usize(1..=3)).map(|_| rng.u8(..)).collect();
+                layout.push("end");
+            }
+        }
+    }
     // The start bytes or the length field sent twice (FT1.2's and M-Bus's `68 L L 68`),
     // anywhere after the first and before the payload.
     // After the code only where every code has one length (it would move it).
@@ -2670,11 +2688,19 @@ fn random_spec_without_examples(seed: u64) -> (String, usize) {
         .iter()
         .chain(&responses)
         .any(|m| m.fields.iter().any(|f| f.yaml.contains("repeat: {until: ")));
+    // Nor where end bytes alone delimit a list to the end (not expressible yet).
+    let to_end = commands.iter().chain(&responses).any(|m| {
+        m.fields
+            .iter()
+            .any(|f| f.yaml.contains("repeat: {count: end"))
+    });
+    let delimited = !end.is_empty() && csum_len == 0 && !has_length && to_end;
     if escaping == Escaping::None
         && one_code_len
         && (has_length || !counted)
         && !long_form
         && !terminated
+        && !delimited
         && short_form.is_none()
         && !g.fixed
     {
@@ -2844,6 +2870,13 @@ pub fn constructs(p: &ir::Protocol) -> Vec<&'static str> {
     );
     add(!f.end.is_empty(), "end bytes");
     add(f.end_first(), "end bytes before the checksum");
+    add(
+        p.commands
+            .iter()
+            .chain(&p.responses)
+            .any(|m| m.delimited_list(f).is_some()),
+        "a list end bytes alone delimit",
+    );
     add(
         p.commands.iter().any(|m| m.reply == ir::Reply::None),
         "reply none",

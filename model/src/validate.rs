@@ -1980,6 +1980,13 @@ fn transform_lists(framing: &Framing, msgs: &[Message], list: &str, sink: &mut S
                 );
             }
         }
+        // Its end bytes would be looked for among the payload's bytes as they travel.
+        if let Some((f, _)) = m.delimited_list(framing) {
+            sink.error(
+                format!("{list}.{}.fields.{}", m.name, f.name),
+                "a list to the end of a frame that end bytes alone delimit (no length field, no checksum) beside a transform (framing.transform) is not expressible yet",
+            );
+        }
     }
 }
 
