@@ -127,6 +127,8 @@ fn cases() -> Vec<Case> {
         spec("model/tests/fixtures/valid/jbd_bms.yaml"),
         // Frames only end bytes delimit (Nextion): a list ends at the first FF FF FF.
         spec("model/tests/fixtures/valid/nextion.yaml"),
+        // A 24-bit CRC (RTCM 3's CRC-24Q).
+        spec("model/tests/fixtures/valid/rtcm3_frame.yaml"),
         // A short form of the frame (M-Bus) is not compared here yet: the dissector words a
         // short frame's out-of-spec address at its laid-out offset (5, not 2). Its dissector
         // loads and survives random bytes (`every_fixture_dissector_loads_...`).

@@ -128,6 +128,10 @@ fn constant_frame_spec_generates_its_snapshot() {
 fn sum16_complement_spec_generates_its_snapshot() {
     check("model/tests/fixtures/valid/jbd_bms.yaml", "jbd_bms.rs");
     check("model/tests/fixtures/valid/nextion.yaml", "nextion.rs");
+    check(
+        "model/tests/fixtures/valid/rtcm3_frame.yaml",
+        "rtcm3_frame.rs",
+    );
 }
 
 /// The 8-bit Fletcher checksum of UBX-shaped frames, over code, a 16-bit length and payload

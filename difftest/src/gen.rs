@@ -164,6 +164,8 @@ struct G {
     /// Whether a field as drawn becomes a list of a fixed count of it (`Own::FixedElements`):
     /// a generator of its own, so the fields are drawn as they were.
     fixed_elements: fastrand::Rng,
+    /// Whether a 32-bit CRC as drawn becomes a 24-bit one (`Own::Crc24`).
+    crc24: fastrand::Rng,
 }
 
 /// The types a record's field may have: name, bytes, signed.
@@ -246,6 +248,8 @@ enum Own {
     /// Frames only end bytes delimit: whether an eligible spec drops its checksum, its end
     /// bytes.
     EndDelimited = 0xFFFF_FF00_FFFF_FF00,
+    /// A 24-bit CRC (RTCM 3's CRC-24Q) in place of a 32-bit one as drawn.
+    Crc24 = 0x0086_4CFB_0086_4CFB,
 }
 
 /// The generator of `what` for the spec of `seed`.
@@ -1116,18 +1120,27 @@ fn checksum_yaml(g: &mut G) -> (String, usize) {
         ),
         _ => {
             let width: u8 = *g.pick(&[8, 16, 16, 32]);
+            // About two 32-bit CRCs in five become 24-bit ones (a generator of their own).
+            let width = if width == 32 && g.crc24.u8(..100) < 40 {
+                24
+            } else {
+                width
+            };
             let mask = if width == 64 {
                 u64::MAX
             } else {
                 (1u64 << width) - 1
             };
-            let catalogue: [(u8, u64, u64, bool, bool, u64); 6] = [
+            let catalogue: [(u8, u64, u64, bool, bool, u64); 8] = [
                 (8, 0x07, 0, false, false, 0),
                 (8, 0x31, 0, true, true, 0),
                 (16, 0x8005, 0xFFFF, true, true, 0),
                 (16, 0x1021, 0, false, false, 0),
                 (16, 0x8005, 0xFFFF, false, false, 0),
                 (32, 0x04C1_1DB7, 0xFFFF_FFFF, true, true, 0xFFFF_FFFF),
+                // RTCM 3's CRC-24Q (CRC-24/LTE-A) and CRC-24/OPENPGP.
+                (24, 0x86_4CFB, 0, false, false, 0),
+                (24, 0x86_4CFB, 0xB7_04CE, false, false, 0),
             ];
             let params = if g.chance(50) {
                 let c: Vec<_> = catalogue.iter().filter(|c| c.0 == width).collect();
@@ -1363,6 +1376,7 @@ fn random_spec_without_examples(seed: u64) -> (String, usize) {
         sized: false,
         fixed: truncation_draw(seed).0,
         fixed_elements: own_rng(seed, Own::FixedElements),
+        crc24: own_rng(seed, Own::Crc24),
     };
     let mut y = String::new();
     let _ = writeln!(y, "# busspec-difftest random spec, seed {seed}");
@@ -3103,6 +3117,7 @@ pub fn constructs(p: &ir::Protocol) -> Vec<&'static str> {
         ChecksumAlgorithm::Crc(c) => match c.width {
             8 => "crc8",
             16 => "crc16",
+            24 => "crc24",
             _ => "crc32",
         },
     };

@@ -796,7 +796,7 @@ pub struct CrcParams {
 #[derive(Debug, Clone)]
 pub struct Checksum {
     pub algorithm: ChecksumAlgorithm,
-    /// Width in bits: 8, 16 or 32; 0 where the frames carry no checksum.
+    /// Width in bits: 8, 16, 24 (a CRC) or 32; 0 where the frames carry no checksum.
     pub width: u8,
     pub byte_order: ByteOrder,
     pub catalogue: Option<String>,
