@@ -4,7 +4,7 @@
 //! both engines, in busspec-json's tests (json/tests/).
 
 use std::io::Write;
-use std::path::{Path, PathBuf};
+use std::path::Path;
 use std::process::{Command, Output, Stdio};
 
 use busspec_model::ir::Direction;
@@ -549,7 +549,7 @@ fn strip_examples(spec: &str) -> String {
 fn built_in_specs_work_from_any_directory() {
     let scratch = temp_dir("cwd");
     let dir = scratch.path();
-    let out = run_in(&dir, &["decode", "ub2", "AA21 4101 3E1F 0000 6A"], b"");
+    let out = run_in(dir, &["decode", "ub2", "AA21 4101 3E1F 0000 6A"], b"");
     assert_eq!(out.status.code(), Some(0), "{}", text(&out.stderr));
     assert_eq!(text(&out.stdout), format!("{ACTUAL_79_98}\n"));
 }

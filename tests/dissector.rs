@@ -710,7 +710,7 @@ fn tshark_shows_every_packet_as_busspec_decodes_it() {
     let mut failures = Vec::new();
     for case in cases() {
         let p = load(case.file);
-        let c = compare(&p, &case, &dir);
+        let c = compare(&p, &case, dir);
         eprintln!(
             "{:>12}: {} frames, {} fields, {} out of spec, {} bad checksums, {} pairs, {} noise packets compared with tshark",
             p.name, c.frames, c.fields, c.out_of_spec, c.bad_checksum, c.paired, c.noise

@@ -159,7 +159,7 @@ fn a_capture_written_to_pcapng_reads_back_to_the_same_events() {
     let scratch = temp_dir("a_capture_written_to_pcapng_reads_back_to_the_same_events");
     let dir = scratch.path();
     for (p, protocol) in cases() {
-        let (bytes, lines, file) = written(&p, &protocol, &dir);
+        let (bytes, lines, file) = written(&p, &protocol, dir);
         let events: Vec<serde_json::Value> = lines
             .lines()
             .map(|l| serde_json::from_str(l).unwrap())
@@ -280,7 +280,7 @@ fn a_truncated_or_corrupt_pcapng_is_refused_naming_block_and_byte() {
     let scratch = temp_dir("a_truncated_or_corrupt_pcapng_is_refused_naming_block_and_byte");
     let dir = scratch.path();
     let (p, protocol) = cases().swap_remove(0);
-    let (_, lines, file) = written(&p, &protocol, &dir);
+    let (_, lines, file) = written(&p, &protocol, dir);
     let bytes = std::fs::read(&file).unwrap();
     let starts = block_starts(&bytes);
     assert_eq!(*starts.last().unwrap(), bytes.len());
@@ -362,7 +362,7 @@ fn tshark_reads_every_packet() {
     let scratch = temp_dir("tshark_reads_every_packet");
     let dir = scratch.path();
     for (p, protocol) in cases() {
-        let (_, lines, file) = written(&p, &protocol, &dir);
+        let (_, lines, file) = written(&p, &protocol, dir);
         let out = Command::new("tshark")
             .args([
                 "-r",
