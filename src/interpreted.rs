@@ -118,6 +118,11 @@ fn keep_field(message: &str, field: &str) -> &'static FieldDesc {
     k
 }
 
+/// The installed spec's end bytes (`framing.end`), with the life of the process.
+fn end_bytes() -> &'static [u8] {
+    spec().map_or(&[], |p| p.framing.end.as_slice())
+}
+
 fn name_of(c: Cow<'static, str>) -> &'static str {
     match c {
         Cow::Borrowed(s) => s,
@@ -509,6 +514,16 @@ fn decode_error(e: interp::DecodeError) -> DecodeError {
             terminator,
             within,
         },
+        I::EndInside {
+            message,
+            field,
+            offset,
+            ..
+        } => DecodeError::EndInside {
+            field: keep_field(&message, &field),
+            offset,
+            end: end_bytes(),
+        },
         I::BadWidth {
             message,
             field,
@@ -604,6 +619,11 @@ fn encode_error(e: interp::EncodeError) -> EncodeError {
             field: keep(&field),
             index,
             terminator,
+        },
+        I::HoldsEnd { field, offset, .. } => EncodeError::HoldsEnd {
+            field: keep(&field),
+            offset,
+            end: end_bytes(),
         },
         other => EncodeError::OutOfRange {
             field: keep(&other.to_string()),

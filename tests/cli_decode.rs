@@ -4,11 +4,14 @@
 //! both engines, in busspec-json's tests (json/tests/).
 
 use std::io::Write;
-use std::path::{Path, PathBuf};
+use std::path::Path;
 use std::process::{Command, Output, Stdio};
 
 use busspec_model::ir::Direction;
 use busspec_model::{load_file, Protocol};
+
+#[path = "common/cli.rs"]
+mod cli;
 
 fn root() -> &'static Path {
     Path::new(env!("CARGO_MANIFEST_DIR"))
@@ -50,10 +53,9 @@ fn hex(bytes: &[u8]) -> String {
     bytes.iter().map(|b| format!("{b:02X}")).collect()
 }
 
-fn temp_dir(tag: &str) -> PathBuf {
-    let dir = std::env::temp_dir().join(format!("busspec-cli-decode-{}-{tag}", std::process::id()));
-    std::fs::create_dir_all(&dir).unwrap();
-    dir
+/// A scratch directory for `tag`, removed when dropped.
+fn temp_dir(tag: &str) -> tempfile::TempDir {
+    cli::scratch(&format!("cli-decode-{tag}"))
 }
 
 const ACTUAL_79_98: &str = r#"{"protocol":"ub2","direction":"response","address":33,"code":"0x4101","message":"actual_capacitance","fields":{"capacitance":79.98}}"#;
@@ -412,7 +414,8 @@ fn capture(p: &Protocol, noise: &[&[u8]]) -> (Vec<u8>, Vec<String>) {
 
 #[test]
 fn stream_reports_frames_with_offsets_and_skipped_noise() {
-    let dir = temp_dir("stream");
+    let scratch = temp_dir("stream");
+    let dir = scratch.path();
     for (file, noise) in [
         (
             "ub2.yaml",
@@ -490,7 +493,8 @@ fn reply_to_settles_responses_only_the_request_tells_apart() {
 
 #[test]
 fn spec_file_is_loaded_at_run_time() {
-    let dir = temp_dir("spec");
+    let scratch = temp_dir("spec");
+    let dir = scratch.path();
     let good = std::fs::read_to_string(root().join("spec/ub2.yaml")).unwrap();
     // Scale capacitance by 0.1 instead of 0.01: the frame now reads ten times larger. (The
     // examples state values in pF, so their stated values go too.)
@@ -543,8 +547,9 @@ fn strip_examples(spec: &str) -> String {
 
 #[test]
 fn built_in_specs_work_from_any_directory() {
-    let dir = temp_dir("cwd");
-    let out = run_in(&dir, &["decode", "ub2", "AA21 4101 3E1F 0000 6A"], b"");
+    let scratch = temp_dir("cwd");
+    let dir = scratch.path();
+    let out = run_in(dir, &["decode", "ub2", "AA21 4101 3E1F 0000 6A"], b"");
     assert_eq!(out.status.code(), Some(0), "{}", text(&out.stderr));
     assert_eq!(text(&out.stdout), format!("{ACTUAL_79_98}\n"));
 }
@@ -831,7 +836,8 @@ fn a_bad_hex_line_is_named_by_its_number_and_the_rest_still_print() {
 
 #[test]
 fn a_capture_that_cannot_be_read_is_reported_with_what_was_read() {
-    let dir = temp_dir("unreadable");
+    let scratch = temp_dir("unreadable");
+    let dir = scratch.path();
     let out = busspec(&["decode", "ub2", "--stream", dir.to_str().unwrap()]);
     assert_eq!(out.status.code(), Some(1));
     assert!(out.stdout.is_empty());
@@ -862,7 +868,8 @@ fn output_closed_early_ends_the_run_quietly() {
             capture.extend_from_slice(&e.wire);
         }
     }
-    let dir = temp_dir("pipe");
+    let scratch = temp_dir("pipe");
+    let dir = scratch.path();
     let path = dir.join("ub2.bin");
     std::fs::write(&path, &capture).unwrap();
     let mut hex_lines = String::new();
@@ -954,7 +961,8 @@ fn frames_of_other_shapes_decode_and_encode_through_the_cli() {
         "A0 00 00 07 00 01 AF 09",
     ]);
     assert_eq!(out.status.code(), Some(1), "{}", text(&out.stdout));
-    let stream = temp_dir("shapes").join("pelco.bin");
+    let scratch = temp_dir("shapes");
+    let stream = scratch.path().join("pelco.bin");
     let frame = [0xA0, 0x00, 0x00, 0x07, 0x00, 0x01, 0xAF, 0x09];
     let mut capture = frame.to_vec();
     capture.extend([0x55, 0x00]);
@@ -1133,7 +1141,8 @@ fn escaped_frames_decode_encode_and_stream() {
         String::from_utf8(out.stderr).unwrap(),
         "frame 1 (81 DB 41 DB DD 60 28 C0): bad escape at offset 1: 0xDB followed by 0x41\n"
     );
-    let capture = std::env::temp_dir().join(format!("busspec-slip-{}.bin", std::process::id()));
+    let scratch = temp_dir("slip");
+    let capture = scratch.path().join("slip.bin");
     let bytes =
         busspec_model::interp::parse_hex("3344 81DBDCDBDD6028C0 81DB41C0 82B1CAC0").unwrap();
     std::fs::write(&capture, bytes).unwrap();
@@ -1145,7 +1154,6 @@ fn escaped_frames_decode_encode_and_stream() {
         "--stream",
         capture.to_str().unwrap(),
     ]);
-    let _ = std::fs::remove_file(&capture);
     assert!(out.status.success(), "{out:?}");
     let text = String::from_utf8(out.stdout).unwrap();
     let lines: Vec<&str> = text.lines().collect();
@@ -1204,7 +1212,8 @@ fn lists_followed_by_fields_round_trip_through_the_cli() {
         for e in &p.examples {
             cap.extend(&e.wire);
         }
-        let file = temp_dir("lists").join(format!("{name}.bin"));
+        let scratch = temp_dir("lists");
+        let file = scratch.path().join(format!("{name}.bin"));
         std::fs::write(&file, &cap).unwrap();
         let out = busspec(&[
             "decode",
@@ -1445,7 +1454,8 @@ fn frames_with_a_preamble_decode_encode_and_stream() {
         text(&out.stdout).trim_end(),
         format!("FE FE FE FE {frame}").replace(' ', "")
     );
-    let dir = temp_dir("preamble");
+    let scratch = temp_dir("preamble");
+    let dir = scratch.path();
     let cap = dir.join("cap.bin");
     let mut bytes = vec![0x00, 0xFE, 0xFE];
     bytes.extend(busspec_model::interp::parse_hex(frame).unwrap());
@@ -1495,7 +1505,8 @@ fn frames_with_a_transformed_payload_decode_encode_and_stream() {
         text(&out.stdout).trim_end(),
         format!("FE FE FE FE {request}").replace(' ', "")
     );
-    let dir = temp_dir("transform");
+    let scratch = temp_dir("transform");
+    let dir = scratch.path();
     let cap = dir.join("cap.bin");
     let mut bytes = busspec_model::interp::parse_hex(request).unwrap();
     bytes.extend(busspec_model::interp::parse_hex(reply).unwrap());
@@ -1561,7 +1572,8 @@ fn frames_of_both_length_forms_decode_encode_and_stream() {
         text(&out.stderr).trim_end(),
         format!("frame 1 ({needless}): long length field at offset 1 says 5: lengths up to 255 take the short form")
     );
-    let dir = temp_dir("long_length");
+    let scratch = temp_dir("long_length");
+    let dir = scratch.path();
     let cap = dir.join("cap.bin");
     let mut bytes = busspec_model::interp::parse_hex(set_rpm).unwrap();
     bytes.extend(busspec_model::interp::parse_hex(&long).unwrap());

@@ -41,10 +41,9 @@ fn text(b: &[u8]) -> String {
     String::from_utf8_lossy(b).into_owned()
 }
 
-fn temp_dir(test: &str) -> PathBuf {
-    let dir = std::env::temp_dir().join(format!("busspec-dissector-{}-{test}", std::process::id()));
-    std::fs::create_dir_all(&dir).unwrap();
-    dir
+/// A scratch directory for `test`, removed when dropped.
+fn temp_dir(test: &str) -> tempfile::TempDir {
+    cli::scratch(&format!("dissector-{test}"))
 }
 
 /// A protocol to check: how `decode` and `dissector` name it, and its spec file.
@@ -129,6 +128,10 @@ fn cases() -> Vec<Case> {
         // A layout per direction (Sensirion SHDLC): a reply's state byte, which requests lack,
         // and its length field one byte further.
         spec("model/tests/fixtures/valid/shdlc.yaml"),
+        // Frames only end bytes delimit (Nextion): a list ends at the first FF FF FF.
+        spec("model/tests/fixtures/valid/nextion.yaml"),
+        // A 24-bit CRC (RTCM 3's CRC-24Q).
+        spec("model/tests/fixtures/valid/rtcm3_frame.yaml"),
         // A short form of the frame (M-Bus) is not compared here yet: the dissector words a
         // short frame's out-of-spec address at its laid-out offset (5, not 2). Its dissector
         // loads and survives random bytes (`every_fixture_dissector_loads_...`).
@@ -161,11 +164,17 @@ fn derived_units() -> Case {
         }
         out.push(line);
     }
-    let file = std::env::temp_dir().join(format!(
-        "busspec-dissector-{}-units.yaml",
-        std::process::id()
+    // Under cargo's scratch directory for tests, one file whatever the process: written
+    // whole, then renamed over, so a test reading it while another writes it sees all of it.
+    let dir = Path::new(env!("CARGO_TARGET_TMPDIR"));
+    let file = dir.join("busspec-dissector-units.yaml");
+    let part = dir.join(format!(
+        "busspec-dissector-units.{}.{:?}.part",
+        std::process::id(),
+        std::thread::current().id()
     ));
-    std::fs::write(&file, out.join("\n")).unwrap();
+    std::fs::write(&part, out.join("\n")).unwrap();
+    std::fs::rename(&part, &file).unwrap();
     let file: &'static str = Box::leak(file.display().to_string().into_boxed_str());
     let p = load(file);
     Case {
@@ -699,11 +708,12 @@ fn tshark_shows_every_packet_as_busspec_decodes_it() {
     if !cli::tshark_present("the dissector against busspec") {
         return;
     }
-    let dir = temp_dir("every_packet");
+    let scratch = temp_dir("every_packet");
+    let dir = scratch.path();
     let mut failures = Vec::new();
     for case in cases() {
         let p = load(case.file);
-        let c = compare(&p, &case, &dir);
+        let c = compare(&p, &case, dir);
         eprintln!(
             "{:>12}: {} frames, {} fields, {} out of spec, {} bad checksums, {} pairs, {} noise packets compared with tshark",
             p.name, c.frames, c.fields, c.out_of_spec, c.bad_checksum, c.paired, c.noise
@@ -737,7 +747,8 @@ fn every_fixture_dissector_loads_and_survives_random_bytes() {
     if !cli::tshark_present("loading the fixtures' dissectors") {
         return;
     }
-    let dir = temp_dir("fixtures");
+    let scratch = temp_dir("fixtures");
+    let dir = scratch.path();
     let mut files: Vec<PathBuf> = ["model/tests/fixtures/valid", "difftest/fixtures"]
         .iter()
         .flat_map(|d| std::fs::read_dir(root().join(d)).unwrap())
@@ -865,7 +876,8 @@ fn one_file_of_every_protocol_picks_each_capture_by_its_interface() {
     if !cli::tshark_present("the dissector of several protocols") {
         return;
     }
-    let dir = temp_dir("several");
+    let scratch = temp_dir("several");
+    let dir = scratch.path();
     let lua = dir.join("all.lua");
     let out = run(&["dissector", "-o", lua.to_str().unwrap()]);
     assert_eq!(out.status.code(), Some(0), "{}", text(&out.stderr));
@@ -969,7 +981,8 @@ fn the_readme_picture_is_what_tshark_shows() {
     // A read and its reply, a stored-position move with an index past the spec's 0..9 (out of
     // spec, checksum good), the device's refusal, and a reply with a bad checksum.
     const CAPTURE: &str = "AA2140010C AA2141013E1F00006A AA2127000CFE AA21945F AA2141013E1F00006B";
-    let dir = temp_dir("picture");
+    let scratch = temp_dir("picture");
+    let dir = scratch.path();
     let raw = dir.join("ub2.bin");
     let bytes: Vec<u8> = busspec_json::parse_hex(CAPTURE).unwrap();
     std::fs::write(&raw, bytes).unwrap();

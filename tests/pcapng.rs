@@ -43,10 +43,9 @@ fn text(b: &[u8]) -> String {
 }
 
 /// A directory of this test's own: the tests run at once and write files of the same names.
-fn temp_dir(test: &str) -> PathBuf {
-    let dir = std::env::temp_dir().join(format!("busspec-pcapng-{}-{test}", std::process::id()));
-    std::fs::create_dir_all(&dir).unwrap();
-    dir
+/// A scratch directory for `test`, removed when dropped.
+fn temp_dir(test: &str) -> tempfile::TempDir {
+    cli::scratch(&format!("pcapng-{test}"))
 }
 
 /// Every example frame of `p`, in spec order, with noise before every third.
@@ -157,9 +156,10 @@ fn written(p: &Protocol, protocol: &[String], dir: &Path) -> (Vec<u8>, String, P
 
 #[test]
 fn a_capture_written_to_pcapng_reads_back_to_the_same_events() {
-    let dir = temp_dir("a_capture_written_to_pcapng_reads_back_to_the_same_events");
+    let scratch = temp_dir("a_capture_written_to_pcapng_reads_back_to_the_same_events");
+    let dir = scratch.path();
     for (p, protocol) in cases() {
-        let (bytes, lines, file) = written(&p, &protocol, &dir);
+        let (bytes, lines, file) = written(&p, &protocol, dir);
         let events: Vec<serde_json::Value> = lines
             .lines()
             .map(|l| serde_json::from_str(l).unwrap())
@@ -277,9 +277,10 @@ fn block_starts(bytes: &[u8]) -> Vec<usize> {
 
 #[test]
 fn a_truncated_or_corrupt_pcapng_is_refused_naming_block_and_byte() {
-    let dir = temp_dir("a_truncated_or_corrupt_pcapng_is_refused_naming_block_and_byte");
+    let scratch = temp_dir("a_truncated_or_corrupt_pcapng_is_refused_naming_block_and_byte");
+    let dir = scratch.path();
     let (p, protocol) = cases().swap_remove(0);
-    let (_, lines, file) = written(&p, &protocol, &dir);
+    let (_, lines, file) = written(&p, &protocol, dir);
     let bytes = std::fs::read(&file).unwrap();
     let starts = block_starts(&bytes);
     assert_eq!(*starts.last().unwrap(), bytes.len());
@@ -358,9 +359,10 @@ fn tshark_reads_every_packet() {
     if !cli::tshark_present("the check that it reads busspec's pcapng") {
         return;
     }
-    let dir = temp_dir("tshark_reads_every_packet");
+    let scratch = temp_dir("tshark_reads_every_packet");
+    let dir = scratch.path();
     for (p, protocol) in cases() {
-        let (_, lines, file) = written(&p, &protocol, &dir);
+        let (_, lines, file) = written(&p, &protocol, dir);
         let out = Command::new("tshark")
             .args([
                 "-r",

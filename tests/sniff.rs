@@ -5,12 +5,15 @@
 #![cfg(unix)]
 
 use std::io::{BufRead, BufReader, Read, Write};
-use std::path::{Path, PathBuf};
+use std::path::Path;
 use std::process::{Child, Command, Output, Stdio};
 use std::time::Duration;
 
 use busspec_model::{interp, load_file, Protocol};
 use serialport::{SerialPort, TTYPort};
+
+#[path = "common/cli.rs"]
+mod cli;
 
 const BIN: &str = env!("CARGO_BIN_EXE_busspec");
 
@@ -22,10 +25,9 @@ fn modbus() -> Protocol {
     load_file(&root().join("spec/modbus.yaml")).expect("modbus spec loads")
 }
 
-fn temp_dir(test: &str) -> PathBuf {
-    let dir = std::env::temp_dir().join(format!("busspec-sniff-{}-{test}", std::process::id()));
-    std::fs::create_dir_all(&dir).unwrap();
-    dir
+/// A scratch directory for `test`, removed when dropped.
+fn temp_dir(test: &str) -> tempfile::TempDir {
+    cli::scratch(&format!("sniff-{test}"))
 }
 
 /// `body` with its Modbus CRC appended.
@@ -262,7 +264,8 @@ fn silence_settles_frames_the_bytes_alone_split_wrongly() {
     let traps = sent.iter().filter(|s| s.trap).count();
 
     // The byte rule alone, over the same bytes.
-    let dir = temp_dir("silence");
+    let scratch = temp_dir("silence");
+    let dir = scratch.path();
     let raw = dir.join("capture.bin");
     std::fs::write(&raw, &bytes).unwrap();
     let by_bytes = Command::new(BIN)

@@ -45,6 +45,8 @@ include!("snapshots/vesc.rs");
 include!("snapshots/mbus.rs");
 include!("snapshots/jbd_bms.rs");
 include!("snapshots/shdlc.rs");
+include!("snapshots/nextion.rs");
+include!("snapshots/rtcm3_frame.rs");
 
 mod agree;
 
@@ -54,6 +56,7 @@ crate::views!(lists_after::ListsAfter, lists_after, request, response);
 crate::views!(lists_length::ListsLength, lists_length, request, -);
 crate::views!(msp_by_direction::MspByDirection, msp_by_direction, -, response);
 crate::views!(text_counted::TextCounted, text_counted, request, response);
+crate::views!(nextion::Nextion, nextion, request, response);
 crate::views!(
     text_terminated::TextTerminated,
     text_terminated,
@@ -81,6 +84,7 @@ fn fixture_views_agree_with_the_owned_decode() {
     one::<msp_by_direction::MspByDirection>("model/tests/fixtures/valid/msp_by_direction.yaml");
     one::<text_counted::TextCounted>("model/tests/fixtures/valid/text_counted.yaml");
     one::<text_terminated::TextTerminated>("model/tests/fixtures/valid/text_terminated.yaml");
+    one::<nextion::Nextion>("model/tests/fixtures/valid/nextion.yaml");
 }
 
 use busspec_model::ir::{self, Direction};
@@ -537,8 +541,20 @@ fn note(out: &mut Vec<Seen>, e: Seen) {
 /// `cap` through the generated stream decoder of `P`, pushed in pieces of the sizes in `cuts`
 /// (repeated), both directions.
 fn generated_seen<P: Protocol>(cap: &[u8], cuts: &[usize]) -> Vec<Seen> {
-    use busspec_runtime::stream::{Event, StreamDecoder};
-    let mut d = StreamDecoder::<P>::new(None);
+    generated_seen_as::<P>(cap, cuts, None)
+}
+
+/// [`generated_seen`] of the frames of one direction (`None`: both).
+fn generated_seen_as<P: Protocol>(
+    cap: &[u8],
+    cuts: &[usize],
+    direction: Option<Direction>,
+) -> Vec<Seen> {
+    use busspec_runtime::stream::{Direction as D, Event, StreamDecoder};
+    let mut d = StreamDecoder::<P>::new(direction.map(|d| match d {
+        Direction::Request => D::Request,
+        Direction::Response => D::Response,
+    }));
     let mut out = Vec::new();
     let take = |e: Event<P::Request, P::Response>, out: &mut Vec<Seen>| {
         let s = match e {
@@ -578,8 +594,18 @@ fn generated_seen<P: Protocol>(cap: &[u8], cuts: &[usize]) -> Vec<Seen> {
 
 /// `cap` through the interpreter's stream decoder, pushed the same way.
 fn interp_seen(p: &ir::Protocol, cap: &[u8], cuts: &[usize]) -> Vec<Seen> {
+    interp_seen_as(p, cap, cuts, None)
+}
+
+/// [`interp_seen`] of the frames of one direction (`None`: both).
+fn interp_seen_as(
+    p: &ir::Protocol,
+    cap: &[u8],
+    cuts: &[usize],
+    direction: Option<Direction>,
+) -> Vec<Seen> {
     use busspec_model::stream::{Event, StreamDecoder};
-    let mut d = StreamDecoder::new(p, None);
+    let mut d = StreamDecoder::new(p, direction);
     let mut events = Vec::new();
     let mut rest = cap;
     for &n in cuts.iter().cycle() {
@@ -949,6 +975,136 @@ fn layout_by_direction_snapshot_agrees_with_the_interpreter() {
     assert!(t.accepted >= 15 && t.refused > 100, "{t:?}");
     let found = examples_stream_alike::<Shdlc>(&p, 0x5D1C, "read_measured_values");
     assert!(found > 20, "only {found} read_measured_values frames found");
+}
+
+/// End bytes alone delimit Nextion's frames (no start byte, length field or checksum): the
+/// examples replay; a list that holds the end bytes before the frame's own is refused by both
+/// decoders and both encoders in the same words; a fixed-length reply holding them takes its
+/// whole length; both stream decoders end a frame at its first end bytes, on the capture the
+/// longest-first rule once read as one 16-byte instruction and on random captures of the
+/// replies.
+#[test]
+fn end_delimited_snapshot_agrees_with_the_interpreter() {
+    use busspec_model::interp::{self, Raw, Value};
+    use nextion::{Nextion, Request, Response};
+    let file = "model/tests/fixtures/valid/nextion.yaml";
+    replay::<Nextion>(file);
+    let p = fixture(file);
+    // `a`, FF FF FF, `b`, then the frame's own end bytes.
+    let inside = [0x61, 0xFF, 0xFF, 0xFF, 0x62, 0xFF, 0xFF, 0xFF];
+    let g = Request::decode(&inside).map(|_| ());
+    assert_eq!(
+        g.unwrap_err().to_string(),
+        "instruction.text at offset 1: holds the end bytes FF FF FF, which end the frame there"
+    );
+    same_text(
+        g,
+        interp::decode(&p, Some(Direction::Request), None, &inside).map(|_| ()),
+    );
+    // The text ends in FF: with the end bytes, they first appear one byte early.
+    let late = [0x61, 0xFF, 0xFF, 0xFF, 0xFF];
+    same_text(
+        Request::decode(&late).map(|_| ()),
+        interp::decode(&p, Some(Direction::Request), None, &late).map(|_| ()),
+    );
+    assert!(Request::decode(&late).is_err());
+    for text in [&b"a\xFF\xFF\xFFb"[..], b"ab\xFF", b"\xFF\xFF"] {
+        let message = Request::Instruction(nextion::request::Instruction {
+            text: busspec_runtime::codec::Repeated::from_slice(text).unwrap(),
+        });
+        let g = message.encode(0, &mut [0u8; 256]);
+        let values = [Value {
+            name: "text".into(),
+            raw: Raw::Text(text.to_vec()),
+        }];
+        let i = interp::encode(&p, p.find("instruction").unwrap(), 0, &values);
+        let (g, i) = (g.unwrap_err().to_string(), i.unwrap_err().to_string());
+        assert_eq!(g, i);
+        assert!(g.contains("would put the end bytes FF FF FF"), "{g}");
+    }
+    // Numeric data -1: a fixed-length reply takes its whole length.
+    let minus_one = [0x71, 0xFF, 0xFF, 0xFF, 0xFF, 0xFF, 0xFF, 0xFF];
+    assert_eq!(
+        Response::decode(&minus_one).map(|d| d.message),
+        Ok(Response::Number(nextion::response::Number { value: -1 }))
+    );
+    let t = agree::agree::<Nextion>(&p);
+    assert!(t.accepted >= 10 && t.refused > 100, "{t:?}");
+    // The capture the longest-first rule read as one instruction: three replies.
+    let cap = [
+        0x01, 0xFF, 0xFF, 0xFF, 0x71, 0x01, 0x02, 0x00, 0x00, 0xFF, 0xFF, 0xFF, 0x01, 0xFF, 0xFF,
+        0xFF,
+    ];
+    let seen = |cuts: &[usize]| {
+        let want = interp_seen_as(&p, &cap, cuts, Some(Direction::Response));
+        let got = generated_seen_as::<Nextion>(&cap, cuts, Some(Direction::Response));
+        assert_eq!(got, want);
+        got
+    };
+    let whole = seen(&[cap.len()]);
+    let names: Vec<&str> = whole.iter().map(|s| s.0.as_str()).collect();
+    assert_eq!(names, ["success", "number", "success"]);
+    assert_eq!(seen(&[1]), whole);
+    assert_eq!(seen(&[3, 5]), whole);
+    // Both directions: every reply is an instruction's text too, so each frame is
+    // ambiguous, but the frames split alike at the same places.
+    let both = interp_seen(&p, &cap, &[cap.len()]);
+    assert_eq!(generated_seen::<Nextion>(&cap, &[cap.len()]), both);
+    let at: Vec<(u64, u64)> = both.iter().map(|s| (s.1, s.2)).collect();
+    assert_eq!(at, [(0, 4), (4, 8), (12, 4)]);
+    // Random captures of the replies, with noise and cut anywhere.
+    let replies: Vec<Vec<u8>> = p
+        .examples
+        .iter()
+        .filter(|e| p.message(e.message).direction == Direction::Response)
+        .map(|e| e.wire.clone())
+        .collect();
+    let mut rng = agree::Rng(0x4E58);
+    let mut numbers = 0;
+    for _ in 0..200 {
+        let mut cap = Vec::new();
+        for _ in 0..12 {
+            if rng.below(6) == 0 {
+                cap.extend((0..1 + rng.below(4)).map(|_| rng.below(256) as u8));
+            }
+            cap.extend_from_slice(&replies[rng.below(replies.len() as u64) as usize]);
+        }
+        let cuts: Vec<usize> = (0..5).map(|_| 1 + rng.below(12) as usize).collect();
+        let want = interp_seen_as(&p, &cap, &cuts, Some(Direction::Response));
+        let got = generated_seen_as::<Nextion>(&cap, &cuts, Some(Direction::Response));
+        assert_eq!(got, want, "capture {cap:02X?}");
+        numbers += got.iter().filter(|s| s.0 == "number").count();
+    }
+    assert!(numbers > 100, "only {numbers} number frames found");
+}
+
+/// A 24-bit CRC (RTCM 3's CRC-24Q): the examples replay, the catalogue's check value holds in
+/// generated code, a frame with a byte of its CRC changed is refused in both engines' words
+/// (six hex digits), and both engines agree on every frame mutated from the examples and on
+/// captures of them.
+#[test]
+fn crc24_snapshot_agrees_with_the_interpreter() {
+    use rtcm3_frame::{Request, Rtcm3Frame};
+    let file = "model/tests/fixtures/valid/rtcm3_frame.yaml";
+    replay::<Rtcm3Frame>(file);
+    let p = fixture(file);
+    assert_eq!(rtcm3_frame::checksum(b"123456789"), 0xCD_E703);
+    let mut bad = p.examples[1].wire.clone();
+    let last = bad.len() - 1;
+    bad[last] ^= 0x01;
+    let g = Request::decode(&bad).map(|_| ());
+    assert_eq!(
+        g.unwrap_err().to_string(),
+        "checksum mismatch at offset 9: expected 0x09263C, found 0x09263D"
+    );
+    same_text(
+        g,
+        busspec_model::interp::decode(&p, Some(Direction::Request), None, &bad).map(|_| ()),
+    );
+    let t = agree::agree::<Rtcm3Frame>(&p);
+    assert!(t.accepted >= 2 && t.refused > 100, "{t:?}");
+    let found = examples_stream_alike::<Rtcm3Frame>(&p, 0xD300, "antenna");
+    assert!(found > 50, "only {found} antenna frames found");
 }
 
 /// No start byte, no address, no checksum (Maestro's compact protocol): the examples replay,

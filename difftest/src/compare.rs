@@ -173,6 +173,7 @@ fn class(g: &DecodeError) -> &'static str {
         DecodeError::BadEscape { .. } => "bad escape",
         DecodeError::NeedlessLong { .. } => "needless long form",
         DecodeError::NoTerminator { .. } => "no terminator",
+        DecodeError::EndInside { .. } => "end inside",
     }
 }
 
@@ -203,6 +204,7 @@ fn interp_class(i: &InterpRefusal) -> &'static str {
             InterpError::BadEscape { .. } => "bad escape",
             InterpError::NeedlessLong { .. } => "needless long form",
             InterpError::NoTerminator { .. } => "no terminator",
+            InterpError::EndInside { .. } => "end inside",
         },
     }
 }
@@ -240,6 +242,7 @@ fn encode_class(g: &GenEncodeError) -> &'static str {
         GenEncodeError::Encode(EncodeError::BroadcastNotAccepted { .. }) => "broadcast",
         GenEncodeError::Encode(EncodeError::BufferTooSmall { .. }) => "buffer",
         GenEncodeError::Encode(EncodeError::HoldsTerminator { .. }) => "holds its terminator",
+        GenEncodeError::Encode(EncodeError::HoldsEnd { .. }) => "holds the end bytes",
         #[allow(unreachable_patterns)]
         GenEncodeError::Encode(_) => "other",
     }
@@ -262,6 +265,7 @@ fn interp_encode_class(i: &interp::EncodeError) -> &'static str {
         E::Inconsistent { .. } => "inconsistent",
         E::Optional { .. } => "optional",
         E::HoldsTerminator { .. } => "holds its terminator",
+        E::HoldsEnd { .. } => "holds the end bytes",
     }
 }
 

@@ -164,6 +164,8 @@ struct G {
     /// Whether a field as drawn becomes a list of a fixed count of it (`Own::FixedElements`):
     /// a generator of its own, so the fields are drawn as they were.
     fixed_elements: fastrand::Rng,
+    /// Whether a 32-bit CRC as drawn becomes a 24-bit one (`Own::Crc24`).
+    crc24: fastrand::Rng,
 }
 
 /// The types a record's field may have: name, bytes, signed.
@@ -246,6 +248,11 @@ enum Own {
     /// A layout per direction (`framing.layout: {request, response}`, SHDLC): whether a spec
     /// tries one, and how the two directions' layouts differ.
     LayoutByDirection = 0x7E5D_7E5D_7E5D_7E5D,
+    /// Frames only end bytes delimit: whether an eligible spec drops its checksum, its end
+    /// bytes.
+    EndDelimited = 0xFFFF_FF00_FFFF_FF00,
+    /// A 24-bit CRC (RTCM 3's CRC-24Q) in place of a 32-bit one as drawn.
+    Crc24 = 0x0086_4CFB_0086_4CFB,
 }
 
 /// The generator of `what` for the spec of `seed`.
@@ -1116,18 +1123,27 @@ fn checksum_yaml(g: &mut G) -> (String, usize) {
         ),
         _ => {
             let width: u8 = *g.pick(&[8, 16, 16, 32]);
+            // About two 32-bit CRCs in five become 24-bit ones (a generator of their own).
+            let width = if width == 32 && g.crc24.u8(..100) < 40 {
+                24
+            } else {
+                width
+            };
             let mask = if width == 64 {
                 u64::MAX
             } else {
                 (1u64 << width) - 1
             };
-            let catalogue: [(u8, u64, u64, bool, bool, u64); 6] = [
+            let catalogue: [(u8, u64, u64, bool, bool, u64); 8] = [
                 (8, 0x07, 0, false, false, 0),
                 (8, 0x31, 0, true, true, 0),
                 (16, 0x8005, 0xFFFF, true, true, 0),
                 (16, 0x1021, 0, false, false, 0),
                 (16, 0x8005, 0xFFFF, false, false, 0),
                 (32, 0x04C1_1DB7, 0xFFFF_FFFF, true, true, 0xFFFF_FFFF),
+                // RTCM 3's CRC-24Q (CRC-24/LTE-A) and CRC-24/OPENPGP.
+                (24, 0x86_4CFB, 0, false, false, 0),
+                (24, 0x86_4CFB, 0xB7_04CE, false, false, 0),
             ];
             let params = if g.chance(50) {
                 let c: Vec<_> = catalogue.iter().filter(|c| c.0 == width).collect();
@@ -1434,6 +1450,7 @@ fn random_spec_without_examples(seed: u64) -> (String, usize) {
         sized: false,
         fixed: truncation_draw(seed).0,
         fixed_elements: own_rng(seed, Own::FixedElements),
+        crc24: own_rng(seed, Own::Crc24),
     };
     let mut y = String::new();
     let _ = writeln!(y, "# busspec-difftest random spec, seed {seed}");
@@ -1569,7 +1586,7 @@ fn random_spec_without_examples(seed: u64) -> (String, usize) {
         let at = g.rng.usize(usize::from(has_start)..=last);
         layout.insert(at, "length");
     }
-    let (csum, csum_len) = checksum_yaml(&mut g);
+    let (mut csum, mut csum_len) = checksum_yaml(&mut g);
     layout.push("payload");
     if !csum.is_empty() {
         layout.push("checksum");
@@ -1600,6 +1617,21 @@ fn random_spec_without_examples(seed: u64) -> (String, usize) {
         10..=17 => Escaping::Cobs,
         _ => Escaping::None,
     };
+    // Frames only end bytes delimit (Nextion's `FF FF FF`: no length field, no checksum):
+    // where nothing escapes and no length field counts, one such spec in four loses its
+    // checksum and ends in end bytes, drawn by a generator of its own (every spec drawn
+    // without it is as it was).
+    if escaping == Escaping::None && !has_length && !g.fixed {
+        let mut rng = own_rng(seed, Own::EndDelimited);
+        if rng.u8(..100) < 25 {
+            (csum, csum_len) = (String::new(), 0);
+            layout.retain(|p| *p != "checksum");
+            if end.is_empty() {
+                end = (0..rng.usize(1..=3)).map(|_| rng.u8(..)).collect();
+                layout.push("end");
+            }
+        }
+    }
     // The start bytes or the length field sent twice (FT1.2's and M-Bus's `68 L L 68`),
     // anywhere after the first and before the payload.
     // After the code only where every code has one length (it would move it).
@@ -2744,11 +2776,19 @@ fn random_spec_without_examples(seed: u64) -> (String, usize) {
         .iter()
         .chain(&responses)
         .any(|m| m.fields.iter().any(|f| f.yaml.contains("repeat: {until: ")));
+    // Nor where end bytes alone delimit a list to the end (not expressible yet).
+    let to_end = commands.iter().chain(&responses).any(|m| {
+        m.fields
+            .iter()
+            .any(|f| f.yaml.contains("repeat: {count: end"))
+    });
+    let delimited = !end.is_empty() && csum_len == 0 && !has_length && to_end;
     if escaping == Escaping::None
         && one_code_len
         && (has_length || !counted)
         && !long_form
         && !terminated
+        && !delimited
         && short_form.is_none()
         && !g.fixed
     {
@@ -2932,6 +2972,13 @@ pub fn constructs(p: &ir::Protocol) -> Vec<&'static str> {
     );
     add(!f.end.is_empty(), "end bytes");
     add(f.end_first(), "end bytes before the checksum");
+    add(
+        p.commands
+            .iter()
+            .chain(&p.responses)
+            .any(|m| m.delimited_list(f).is_some()),
+        "a list end bytes alone delimit",
+    );
     add(
         p.commands.iter().any(|m| m.reply == ir::Reply::None),
         "reply none",
@@ -3158,6 +3205,7 @@ pub fn constructs(p: &ir::Protocol) -> Vec<&'static str> {
         ChecksumAlgorithm::Crc(c) => match c.width {
             8 => "crc8",
             16 => "crc16",
+            24 => "crc24",
             _ => "crc32",
         },
     };

@@ -383,7 +383,7 @@ fn field(f: &Field, lay: &FrameLayout) -> String {
     o
 }
 
-fn message(m: &Message, index: usize) -> String {
+fn message(m: &Message, index: usize, framing: &Framing) -> String {
     let o = m.layout;
     let mut s = String::new();
     let _ = writeln!(
@@ -422,6 +422,10 @@ fn message(m: &Message, index: usize) -> String {
         lua_bool(broadcast_ok),
         gets.join(", ")
     );
+    if m.delimited_list(framing).is_some() {
+        // End bytes alone delimit the frame: its list to the end never holds them.
+        let _ = writeln!(s, "      delim = {},", bytes(&framing.end));
+    }
     s.push_str("      fields = {\n");
     for f in &m.fields {
         let _ = writeln!(s, "        {},", field(f, &o));
@@ -689,10 +693,10 @@ fn protocol(p: &Protocol) -> String {
     }
     s.push_str("  },\n  messages = {\n");
     for (i, m) in p.commands.iter().enumerate() {
-        s.push_str(&message(m, i));
+        s.push_str(&message(m, i, f));
     }
     for (i, m) in p.responses.iter().enumerate() {
-        s.push_str(&message(m, i));
+        s.push_str(&message(m, i, f));
     }
     s.push_str("  },\n}\n");
     s

@@ -686,6 +686,20 @@ local function shape(m, b, n)
       if w < 1 then w = 1 end
       local count
       if r.count == "to_end" then
+        -- End bytes alone delimit the frame (`m.delim`): from the list's first byte on, the
+        -- first are the frame's own.
+        if m.delim then
+          for k = 0, n - #m.delim - at[i] - 1 do
+            local all = true
+            for j, e in ipairs(m.delim) do
+              if b[at[i] + k + j - 1] ~= e then
+                all = false
+                break
+              end
+            end
+            if all then return nil end
+          end
+        end
         if not r.bit and rest % w ~= 0 then return nil end
         count = r.bit and rest * 8 or floor(rest / w)
       elseif r.count == "until" then

@@ -722,6 +722,27 @@ pub fn render(p: &Protocol, source: &str) -> String {
         );
     }
 
+    let delimited: Vec<&str> = p
+        .commands
+        .iter()
+        .chain(&p.responses)
+        .filter_map(|m| m.delimited_list(f).map(|(l, _)| (m, l)))
+        .map(|(m, _)| m.name.as_str())
+        .collect();
+    if !delimited.is_empty() {
+        let end: Vec<String> = f.end.iter().map(|b| format!("{b:02X}")).collect();
+        let _ = writeln!(
+            o,
+            "End bytes alone delimit a frame (no length field, no checksum): a list to the end of the frame ({}) ends at the first `{}` from its first byte, so it never holds them; decoders refuse a frame whose list does, encoders a list that would, and stream decoders end such a frame there. A fixed-length message takes its whole length, end bytes inside its fields or not.\n",
+            delimited
+                .iter()
+                .map(|n| format!("`{n}`"))
+                .collect::<Vec<_>>()
+                .join(", "),
+            end.join(" ")
+        );
+    }
+
     if let Some(t) = &f.transform {
         let _ = writeln!(
             o,

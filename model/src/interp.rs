@@ -193,6 +193,15 @@ pub enum DecodeError {
         terminator: u8,
         within: usize,
     },
+    /// Where end bytes alone delimit a frame ([`crate::ir::Framing::end_delimited`]), the
+    /// list to the end `field` holds the end bytes `end` at `offset`, before the frame's own:
+    /// a receiver ends the frame there.
+    EndInside {
+        message: String,
+        field: String,
+        offset: usize,
+        end: Vec<u8>,
+    },
     /// A count field says the elements of `list` take `found` bytes; the frame's length gives
     /// them `expected`.
     ByteCount {
@@ -279,6 +288,12 @@ fn hex(bytes: &[u8]) -> String {
         s.push_str(&format!("{b:02X}"));
     }
     s
+}
+
+/// `bytes` in hex, a space between: `FF FF FF`.
+fn hex_spaced(bytes: &[u8]) -> String {
+    let each: Vec<String> = bytes.iter().map(|b| format!("{b:02X}")).collect();
+    each.join(" ")
 }
 
 fn hex_width(v: u64, bits: u8) -> String {
@@ -375,6 +390,11 @@ impl fmt::Display for DecodeError {
                 f,
                 "{message}.{field} at offset {offset}: no terminator 0x{terminator:02X} in the {within} bytes the frame's length leaves it"
             ),
+            DecodeError::EndInside { message, field, offset, end } => write!(
+                f,
+                "{message}.{field} at offset {offset}: holds the end bytes {}, which end the frame there",
+                hex_spaced(end)
+            ),
             DecodeError::ByteCount { message, field, offset, list, expected, found } => write!(
                 f,
                 "invalid value for {message}.{field} at offset {offset}: must be the bytes of {list} ({expected}), found {found}"
@@ -467,6 +487,14 @@ pub enum EncodeError {
         index: usize,
         terminator: u8,
     },
+    /// Where end bytes alone delimit a frame, the list to the end `field` would put the end
+    /// bytes `end` at `offset` of the frame, before its own: a receiver would end the frame
+    /// there.
+    HoldsEnd {
+        field: String,
+        offset: usize,
+        end: Vec<u8>,
+    },
     /// A repeated field's list is longer or shorter than the spec allows.
     WrongCount {
         field: String,
@@ -554,6 +582,11 @@ impl fmt::Display for EncodeError {
             EncodeError::HoldsTerminator { field, index, terminator } => write!(
                 f,
                 "{field} holds its terminator 0x{terminator:02X} (character {index}), which would end it there"
+            ),
+            EncodeError::HoldsEnd { field, offset, end } => write!(
+                f,
+                "{field} would put the end bytes {} at offset {offset}, which would end the frame there",
+                hex_spaced(end)
             ),
             EncodeError::WrongCount { field, min, max, found } => write!(
                 f,
@@ -1753,6 +1786,23 @@ pub fn shape(p: &Protocol, m: &Message, wire: &[u8]) -> Result<Shape, DecodeErro
                     Ok(n)
                 })?,
             Count::ToEnd => {
+                // End bytes alone delimit the frame: they must first appear where its own sit.
+                if m.delimited_list(&p.framing).is_some() {
+                    let end = &p.framing.end;
+                    let first = wire
+                        .get(at..)
+                        .and_then(|list| list.windows(end.len()).position(|w| w == end.as_slice()));
+                    // Before the frame's own (fields may sit after the list).
+                    let own = wire.len().saturating_sub(end.len());
+                    if let Some(i) = first.filter(|&i| at + i < own) {
+                        return Err(DecodeError::EndInside {
+                            message: m.name.clone(),
+                            field: f.name.clone(),
+                            offset: at + i,
+                            end: end.clone(),
+                        });
+                    }
+                }
                 if !bits && rest % f.width.max(1) != 0 {
                     return Err(bad(format!("whole {}-byte elements", f.width), rest as i64));
                 }
@@ -2968,6 +3018,22 @@ fn encode_values(
     // The payload as it travels (`framing.transform`), then the checksum over it.
     p.framing.transform_in_place(&mut out);
     reseal_from(p, &mut out, 0);
+    // End bytes alone delimit the frame: its list to the end must not show them before its
+    // own (a receiver would end the frame there).
+    if let Some((f, at)) = m.delimited_list(&p.framing) {
+        let end = &p.framing.end;
+        let own = out.len().saturating_sub(end.len());
+        let first = out
+            .get(at..)
+            .and_then(|list| list.windows(end.len()).position(|w| w == end.as_slice()));
+        if let Some(i) = first.filter(|&i| at + i < own) {
+            return Err(EncodeError::HoldsEnd {
+                field: f.name.clone(),
+                offset: at + i,
+                end: end.clone(),
+            });
+        }
+    }
     if m.is_variable() {
         // A count field given a value, or one that follows another, may disagree with the
         // list: what encode writes, decode must accept.

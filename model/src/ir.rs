@@ -486,6 +486,17 @@ impl Framing {
         self.checksum.len() + self.end.len()
     }
 
+    /// Whether end bytes alone delimit a frame: the framing has end bytes and no length
+    /// field, checksum or escaping (Nextion's `FF FF FF`). A receiver can then tell where a
+    /// list to the end of the frame stops only by its end bytes, so such a list ends at the
+    /// first end bytes after its first byte ([`Message::delimited_list`]).
+    pub fn end_delimited(&self) -> bool {
+        !self.end.is_empty()
+            && self.length.is_none()
+            && self.checksum.is_empty()
+            && self.escaping.is_none()
+    }
+
     /// The flag of flag framing (HDLC, KISS): one byte that both opens and closes every
     /// escaped frame (`start` and `end` the same single byte, escaping that keeps it out of
     /// the frame between them). A flag that closes one frame may also open the next, as
@@ -830,7 +841,7 @@ pub struct CrcParams {
 #[derive(Debug, Clone)]
 pub struct Checksum {
     pub algorithm: ChecksumAlgorithm,
-    /// Width in bits: 8, 16 or 32; 0 where the frames carry no checksum.
+    /// Width in bits: 8, 16, 24 (a CRC) or 32; 0 where the frames carry no checksum.
     pub width: u8,
     pub byte_order: ByteOrder,
     pub catalogue: Option<String>,
@@ -1030,6 +1041,16 @@ impl Message {
             .filter_map(|(i, f)| f.repeat.as_ref().map(|r| (i, f, r)))
     }
 
+    /// Where end bytes alone delimit the frame ([`Framing::end_delimited`]), its list to the
+    /// end of the frame and the list's offset in the frame: the list ends at the first end
+    /// bytes from that offset on (a frame whose list holds them earlier is refused, by decode
+    /// and encode alike, and both stream decoders end the frame there).
+    pub fn delimited_list(&self, framing: &Framing) -> Option<(&Field, usize)> {
+        let (f, r) = self.repeat()?;
+        (framing.end_delimited() && r.count == Count::ToEnd && !self.has_optional())
+            .then(|| (f, f.frame_at(&self.layout)))
+    }
+
     /// Whether its one variable part, if any, is a single repeated field ending the payload:
     /// every field keeps a fixed offset. A message with fields after a list, or with several
     /// lists, places each field after a list by the lists before it.
@@ -1159,7 +1180,8 @@ impl Message {
         let Some((f, r)) = self.repeat() else {
             return vec![self.layout.len];
         };
-        if framing.length.is_some() || r.count != Count::ToEnd {
+        // End bytes alone delimit it: the stream decoder finds them in the frame.
+        if framing.length.is_some() || r.count != Count::ToEnd || framing.end_delimited() {
             return Vec::new();
         }
         let step = if f.ty == FieldType::Bit {

@@ -223,7 +223,8 @@ pub(crate) fn relocate(
         | E::ByteCount { offset, .. }
         | E::NotFollowing { offset, .. }
         | E::BadEscape { offset, .. }
-        | E::NeedlessLong { offset, .. } => *offset = o(*offset),
+        | E::NeedlessLong { offset, .. }
+        | E::EndInside { offset, .. } => *offset = o(*offset),
         E::Ambiguous { .. } | E::BroadcastNotAccepted { .. } | E::NotAnAnswer { .. } => {}
     }
     e

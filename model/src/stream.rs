@@ -43,6 +43,13 @@
 //!    bytes consumed, so the decoder never resynchronises inside it. If none, the head byte is
 //!    noise (rule 2).
 //!
+//! A list to the end of a frame that end bytes alone delimit ([`crate::ir::Framing::end_delimited`]:
+//! no length field, no checksum) has one length: up to the first end bytes from the list's
+//! first byte ([`crate::ir::Message::delimited_list`]), waited for while the buffer holds less
+//! than the message's longest frame; none where that is not a whole number of elements within
+//! its bounds. Decoding refuses such a list holding them ([`DecodeError::EndInside`]), so no
+//! longer length could decode either.
+//!
 //! Why longest first: when a short and a long message share a code (a UB2 setter request
 //! `AA 21 43 00 a s cs` and its ACK `AA 21 43 00 cs`), preferring the short one would misread
 //! every request whose first payload byte happens to equal the ACK's checksum — a fixed value
@@ -226,8 +233,11 @@ fn lens_of(p: &Protocol, m: &Message, buf: &[u8]) -> Lens {
     // by the constants that lead its payload too, as by its code
     // (`Message::leading_constants`): wait for them, and none where one differs. One whose
     // elements run to the end without a length field has its lengths listed, as a fixed
-    // message's, by its code alone.
-    let listed = p.framing.length.is_none() && repeat.is_some_and(|(_, r)| r.count == Count::ToEnd);
+    // message's, by its code alone (unless end bytes alone delimit it).
+    // One that end bytes alone delimit is told apart by its leading constants too.
+    let listed = p.framing.length.is_none()
+        && repeat.is_some_and(|(_, r)| r.count == Count::ToEnd)
+        && m.delimited_list(&p.framing).is_none();
     let lead = if listed {
         Vec::new()
     } else {
@@ -317,6 +327,22 @@ fn lens_of(p: &Protocol, m: &Message, buf: &[u8]) -> Lens {
             } else {
                 f.width.max(1)
             };
+            // End bytes alone delimit the frame: it ends at their first appearance from the
+            // list's first byte on, within the longest frame of the message.
+            if let Some((_, at)) = m.delimited_list(&p.framing) {
+                let end = &p.framing.end;
+                let seen = buf.get(at..buf.len().min(m.max_len)).unwrap_or(&[]);
+                // Fields after the list sit between it and the end bytes.
+                let len = |i: usize| at + i + end.len();
+                return match seen.windows(end.len()).position(|w| w == end.as_slice()) {
+                    Some(i) if len(i) >= m.layout.len && (len(i) - m.layout.len) % step == 0 => {
+                        within(len(i) as i64)
+                    }
+                    Some(_) => Lens::Are(Vec::new()),
+                    None if buf.len() >= m.max_len => Lens::Are(Vec::new()),
+                    None => Lens::Need,
+                };
+            }
             Lens::Are(
                 (m.layout.len..=m.max_len)
                     .filter(|l| (l - m.layout.len) % step == 0)

@@ -2194,6 +2194,13 @@ fn transform_lists(framing: &Framing, msgs: &[Message], list: &str, sink: &mut S
                 );
             }
         }
+        // Its end bytes would be looked for among the payload's bytes as they travel.
+        if let Some((f, _)) = m.delimited_list(framing) {
+            sink.error(
+                format!("{list}.{}.fields.{}", m.name, f.name),
+                "a list to the end of a frame that end bytes alone delimit (no length field, no checksum) beside a transform (framing.transform) is not expressible yet",
+            );
+        }
     }
 }
 
@@ -2669,12 +2676,13 @@ fn checksum_params(c: &model::Checksum, byte_order: ByteOrder, sink: &mut Sink) 
     let path = "framing.checksum";
     // Errors found elsewhere before this point must not hide a wrong check value.
     let errors_before = sink.items.len();
-    let width = if matches!(c.width, 8 | 16 | 32) {
+    // 24 bits: a CRC's (RTCM 3's CRC-24Q); every sum has a width of its own, checked below.
+    let width = if matches!(c.width, 8 | 16 | 24 | 32) {
         c.width as u8
     } else {
         sink.error(
             join(path, "width"),
-            format!("checksum width {} is not 8, 16 or 32 bits", c.width),
+            format!("checksum width {} is not 8, 16, 24 or 32 bits", c.width),
         );
         8
     };

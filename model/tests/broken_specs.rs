@@ -403,6 +403,13 @@ const CASES: &[(&str, &[(&str, &str)])] = &[
         "transform_counted_list",
         &[("commands.write.fields.values", "a list counted by a field beside a transform (framing.transform) needs a length field (framing.length), yet")],
     ),
+    (
+        "delimited_with_transform",
+        &[
+            ("commands.instruction.fields.text", "a list to the end of a frame that end bytes alone delimit (no length field, no checksum) beside a transform (framing.transform) is not expressible yet"),
+            ("responses.string.fields.text", "a list to the end of a frame that end bytes alone delimit (no length field, no checksum) beside a transform (framing.transform) is not expressible yet"),
+        ],
+    ),
     // ---- optional fields (made from valid/optional_sensor, without its examples)
     (
         "optional_with_escaping",

@@ -795,6 +795,29 @@ pub enum DecodeError {
         found: i64,
         most: usize,
     },
+    /// Where end bytes alone delimit a frame (no length field, no checksum: Nextion's
+    /// `FF FF FF`), the list to the end `field` holds the end bytes `end` at `offset`, before
+    /// the frame's own: a receiver ends the frame there.
+    EndInside {
+        field: &'static FieldDesc,
+        offset: usize,
+        end: &'static [u8],
+    },
+}
+
+/// `bytes` in hex, a space between: `FF FF FF`.
+struct HexBytes(&'static [u8]);
+
+impl fmt::Display for HexBytes {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        for (i, b) in self.0.iter().enumerate() {
+            if i > 0 {
+                f.write_str(" ")?;
+            }
+            write!(f, "{b:02X}")?;
+        }
+        Ok(())
+    }
 }
 
 /// What is wrong with escaped bytes ([`DecodeError::BadEscape`]), as the interpreter's
@@ -1160,6 +1183,11 @@ impl fmt::Display for DecodeError {
                 f,
                 "{field} at offset {offset}: no terminator 0x{terminator:02X} in the {within} bytes the frame's length leaves it"
             ),
+            DecodeError::EndInside { field, offset, end } => write!(
+                f,
+                "{field} at offset {offset}: holds the end bytes {}, which end the frame there",
+                HexBytes(end)
+            ),
             DecodeError::NeedlessLong {
                 offset,
                 length,
@@ -1227,6 +1255,14 @@ pub enum EncodeError {
         index: usize,
         terminator: u8,
     },
+    /// Where end bytes alone delimit a frame, the list to the end `field` would put the end
+    /// bytes `end` at `offset` of the frame, before its own: a receiver would end the frame
+    /// there.
+    HoldsEnd {
+        field: &'static str,
+        offset: usize,
+        end: &'static [u8],
+    },
 }
 
 impl fmt::Display for EncodeError {
@@ -1290,6 +1326,11 @@ impl fmt::Display for EncodeError {
             } => write!(
                 f,
                 "{field} holds its terminator 0x{terminator:02X} (character {index}), which would end it there"
+            ),
+            EncodeError::HoldsEnd { field, offset, end } => write!(
+                f,
+                "{field} would put the end bytes {} at offset {offset}, which would end the frame there",
+                HexBytes(end)
             ),
         }
     }

@@ -115,6 +115,8 @@ impl Lists {
                 // Records whose width a field gives are a message's only list (validated):
                 // never in `Lists`.
                 CountBy::End | CountBy::EndSized(_) => CountBy::End,
+                // A list end bytes delimit is the only list (validated), maybe before fields.
+                CountBy::Delimited(end) => CountBy::Delimited(end),
                 CountBy::Until(t) => CountBy::Until(t),
                 CountBy::Elements(c) => CountBy::Elements(self.moved(c, &bytes[..k])),
                 CountBy::Bytes(c) => CountBy::Bytes(self.moved(c, &bytes[..k])),
@@ -129,9 +131,12 @@ impl Lists {
                 found,
                 expected,
             };
+            if let Some(e) = r.end_inside(frame) {
+                return Err(e);
+            }
             let count = match r.count {
                 CountBy::Until(t) => r.until(frame, t, rest, last)?,
-                CountBy::End | CountBy::EndSized(_) => {
+                CountBy::End | CountBy::EndSized(_) | CountBy::Delimited(_) => {
                     if !bits && rest % w != 0 {
                         return Err(bad(rest as i64, CountRule::Whole(r.width)));
                     }
@@ -210,7 +215,8 @@ impl Lists {
 
     /// The length of the frame that starts `head`, once every count field has arrived (each
     /// read where the lists before it put it): `None` for a list to the end (the frame's length
-    /// comes from a length field) or while a count field is missing; `Some(0)`, which no frame
+    /// comes from a length field) or while a count field is missing; for a list end bytes
+    /// delimit, its [`RepeatAt::frame_len`]; `Some(0)`, which no frame
     /// has, where a list's count could not hold `min..=max` whole elements.
     pub fn frame_len(&self, head: &[u8]) -> Option<usize> {
         // The validator allows at most 64 lists in a message (`MAX_LISTS`).
@@ -218,6 +224,8 @@ impl Lists {
         let mut total = self.base;
         for (k, r) in self.lists.iter().enumerate().take(64) {
             let (c, by_bytes) = match r.count {
+                // The only list (validated): up to the first end bytes from its first byte.
+                CountBy::Delimited(_) => return r.frame_len(head),
                 CountBy::End | CountBy::EndSized(_) | CountBy::Until(_) => return None,
                 CountBy::Elements(c) => (c, false),
                 CountBy::Bytes(c) => (c, true),

@@ -226,7 +226,8 @@ pub(crate) fn on_shorter(e: DecodeError, extra: usize, o: impl Fn(usize) -> usiz
         | E::BadEscape { offset, .. }
         | E::NeedlessLong { offset, .. }
         | E::BadWidth { offset, .. }
-        | E::NoTerminator { offset, .. } => *offset = o(*offset),
+        | E::NoTerminator { offset, .. }
+        | E::EndInside { offset, .. } => *offset = o(*offset),
         E::Ambiguous { .. } | E::NotAReply { .. } | E::BroadcastNotAccepted { .. } => {}
     }
     e

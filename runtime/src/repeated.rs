@@ -456,6 +456,12 @@ pub struct RepeatAt {
 pub enum CountBy {
     /// As many elements as fit before the checksum.
     End,
+    /// As many elements as fit before these end bytes, where end bytes alone delimit the
+    /// frame (no length field, no checksum: Nextion's `FF FF FF`): the list ends at their
+    /// first appearance from its first byte, so it never holds them ([`RepeatAt::count`]
+    /// refuses a frame whose list does, [`RepeatAt::encode_delimited`] a list that would) and
+    /// a stream decoder ends the frame there ([`RepeatAt::frame_len`]).
+    Delimited(&'static [u8]),
     /// An earlier field holds the number of elements.
     Elements(CountField),
     /// An earlier field holds the number of bytes the elements take.
@@ -594,16 +600,20 @@ impl RepeatAt {
                 });
             }
         }
+        // The end bytes must first appear where the frame's own sit.
+        if let Some(e) = self.end_inside(frame) {
+            return Err(e);
+        }
         let width = self.element_width(frame);
         let whole = width == 0 || extra % width == 0;
         // Bits (width 0) come eight to a byte.
         let mut n = extra.checked_div(width).unwrap_or(extra.saturating_mul(8));
         match self.count {
             CountBy::Until(t) => n = self.until(frame, t, extra, true)?,
-            CountBy::End | CountBy::EndSized(_) if !whole => {
+            CountBy::End | CountBy::Delimited(_) | CountBy::EndSized(_) if !whole => {
                 return Err(bad(extra as i64, CountRule::Whole(width)))
             }
-            CountBy::End | CountBy::EndSized(_) => {}
+            CountBy::End | CountBy::Delimited(_) | CountBy::EndSized(_) => {}
             CountBy::Elements(c) => {
                 // Bits by count: as many as it says, the last byte's padding left out.
                 let v = c.read(frame).unwrap_or(0);
@@ -669,6 +679,87 @@ impl RepeatAt {
         Ok(n)
     }
 
+    /// The length of the frame that starts `head` whose list ends at the first end bytes
+    /// ([`CountBy::Delimited`]): up to them, where they are buffered within the longest frame
+    /// (`Some(0)` where that frame cannot hold a whole number of elements within the bounds);
+    /// `Some(0)` where they are not within the longest frame, `None` while it is not all
+    /// buffered.
+    fn delimited_len(&self, head: &[u8], end: &[u8]) -> Option<usize> {
+        let most = self.base.saturating_add(self.bytes_of(self.max));
+        let seen = head.get(self.at..head.len().min(most)).unwrap_or(&[]);
+        let Some(i) = find(seen, end) else {
+            return (head.len() >= most).then_some(0);
+        };
+        // Fields after the list sit between it and the end bytes.
+        let len = self.at + i + end.len();
+        let Some(bytes) = len.checked_sub(self.base) else {
+            return Some(0);
+        };
+        let width = self.width.max(1);
+        let n = if self.width == 0 {
+            bytes * 8
+        } else {
+            bytes / width
+        };
+        let fits = bytes % width == 0 || self.width == 0;
+        let (lo, hi) = if self.width == 0 {
+            (self.min.div_ceil(8) * 8, self.max.div_ceil(8) * 8)
+        } else {
+            (self.min, self.max)
+        };
+        Some(if fits && (lo..=hi).contains(&n) {
+            len
+        } else {
+            0
+        })
+    }
+
+    /// Where end bytes alone delimit the frame ([`CountBy::Delimited`]): the refusal of
+    /// `frame` (a whole frame of the message) where they appear from the list's first byte on
+    /// before the frame's own. Any other list: none.
+    #[inline]
+    pub(crate) fn end_inside(&self, frame: &[u8]) -> Option<DecodeError> {
+        let CountBy::Delimited(end) = self.count else {
+            return None;
+        };
+        let own = frame.len().checked_sub(end.len())?;
+        let i = frame.get(self.at..).and_then(|from| find(from, end))?;
+        (self.at + i < own).then_some(DecodeError::EndInside {
+            field: self.field,
+            offset: self.at + i,
+            end,
+        })
+    }
+
+    /// Where end bytes alone delimit the frame ([`CountBy::Delimited`]), `frame` (a whole
+    /// frame of the message as encode lays it out, its end bytes not yet written) with its
+    /// list followed by the end bytes must not show them before: [`EncodeError::HoldsEnd`]
+    /// at the first place it does. Any other list: nothing to check.
+    #[inline]
+    pub fn encode_delimited(&self, frame: &[u8]) -> Result<(), EncodeError> {
+        let CountBy::Delimited(end) = self.count else {
+            return Ok(());
+        };
+        let list = frame
+            .get(self.at..frame.len().saturating_sub(end.len()))
+            .unwrap_or(&[]);
+        // The list, then the end bytes: a match that starts in the list is one too early.
+        let at = (0..list.len()).find(|&i| {
+            end.iter().enumerate().all(|(k, e)| {
+                let b = list.get(i + k).or_else(|| end.get(i + k - list.len()));
+                b == Some(e)
+            })
+        });
+        match at {
+            Some(i) => Err(EncodeError::HoldsEnd {
+                field: self.field.name,
+                offset: self.at + i,
+                end,
+            }),
+            None => Ok(()),
+        }
+    }
+
     /// Text up to a terminator ([`CountBy::Until`]) to encode: none of its characters may be
     /// the terminator, which would end it early. Any other list: nothing to check.
     #[inline]
@@ -694,6 +785,7 @@ impl RepeatAt {
     #[inline]
     pub fn frame_len(&self, head: &[u8]) -> Option<usize> {
         let (c, bytes) = match self.count {
+            CountBy::Delimited(end) => return self.delimited_len(head, end),
             CountBy::End | CountBy::EndSized(_) | CountBy::Until(_) => return None,
             CountBy::Elements(c) => (c, false),
             CountBy::Bytes(c) => (c, true),
@@ -829,9 +921,11 @@ impl RepeatAt {
                     (v / w + 1, v / w)
                 }
             }
-            CountBy::Elements(_) | CountBy::End | CountBy::EndSized(_) | CountBy::Until(_) => {
-                (v, v)
-            }
+            CountBy::Elements(_)
+            | CountBy::End
+            | CountBy::Delimited(_)
+            | CountBy::EndSized(_)
+            | CountBy::Until(_) => (v, v),
         }
     }
 
@@ -846,7 +940,7 @@ impl RepeatAt {
         let n = self.count(frame)?;
         let bytes = match self.count {
             // Bits by bytes or to the end: every byte before the checksum.
-            CountBy::End | CountBy::Bytes(_) if self.width == 0 => n / 8,
+            CountBy::End | CountBy::Delimited(_) | CountBy::Bytes(_) if self.width == 0 => n / 8,
             CountBy::EndSized(_) => n * self.element_width(frame),
             // The characters, not their terminator.
             CountBy::Until(_) => n,
@@ -943,7 +1037,7 @@ impl RepeatAt {
             CountBy::Elements(_) => held,
             CountBy::Bytes(_) if self.width == 0 => held.div_ceil(8),
             CountBy::Bytes(_) => held * self.width,
-            CountBy::End | CountBy::EndSized(_) | CountBy::Until(_) => 0,
+            CountBy::End | CountBy::Delimited(_) | CountBy::EndSized(_) | CountBy::Until(_) => 0,
         }
     }
 
@@ -1302,6 +1396,14 @@ pub fn encode_packed_in_range<T: crate::codec::Wire>(
         }
     }
     Ok(())
+}
+
+/// Where `needle` first appears in `hay` (never for an empty needle).
+fn find(hay: &[u8], needle: &[u8]) -> Option<usize> {
+    if needle.is_empty() {
+        return None;
+    }
+    hay.windows(needle.len()).position(|w| w == needle)
 }
 
 #[cfg(test)]

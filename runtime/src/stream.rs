@@ -18,7 +18,9 @@
 //! dropped bytes are reported as one [`Event::Skipped`] (split every [`MAX_SKIPPED_RUN`]
 //! bytes). A candidate's length is fixed by its message (one of
 //! [`Framing::FRAME_LENGTHS`](crate::Framing::FRAME_LENGTHS)) or, for a variable-length message, given by its length or count
-//! field once that is buffered ([`Framing::variable_candidates`](crate::Framing::variable_candidates)); a field that gives a length
+//! field once that is buffered ([`Framing::variable_candidates`](crate::Framing::variable_candidates)), or where end bytes alone delimit
+//! the frame (no length field, no checksum) up to their first appearance from its list's
+//! first byte ([`CountBy::Delimited`](crate::codec::CountBy::Delimited)); a field that gives a length
 //! no frame of the message can have makes it no candidate, so a length that lies drops one
 //! byte and the decoder resynchronises. While a candidate is longer than what is buffered, or
 //! its length or count field has not arrived, the decoder waits. Then every complete candidate

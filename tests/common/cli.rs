@@ -1,5 +1,5 @@
 //! Shared by the tests that run the `busspec` binary against other processes: whether tshark
-//! is here (and must be), and a simulator on a pseudo-terminal.
+//! is here (and must be), a simulator on a pseudo-terminal, and scratch directories.
 
 #![allow(dead_code)]
 
@@ -83,4 +83,13 @@ impl Drop for Sim {
         let _ = self.child.kill();
         let _ = self.child.wait();
     }
+}
+
+/// A directory of the test's own under the system's temporary directory, named
+/// `busspec-{what}-…`, removed with everything in it when dropped, a failing test's too.
+pub fn scratch(what: &str) -> tempfile::TempDir {
+    tempfile::Builder::new()
+        .prefix(&format!("busspec-{what}-"))
+        .tempdir()
+        .expect("a temporary directory")
 }

@@ -450,6 +450,13 @@ pub(super) fn emit_encode_arm(
             }
         }
     }
+    if m.delimited_list(&p.framing).is_some() {
+        // End bytes alone delimit the frame: the list must not show them before its end.
+        match &repeat {
+            Some((_, c, _)) => stmts.push(quote!(#c.encode_delimited(out)?;)),
+            None => stmts.push(quote!(#lc.lists[0].encode_delimited(out)?;)),
+        }
+    }
     let variable = repeat.is_some() || !lists.is_empty() || m.has_optional();
     let end = encode_end(p, quote!(out), variable, head);
     quote! {

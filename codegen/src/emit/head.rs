@@ -410,7 +410,9 @@ pub(super) fn emit_checksum(p: &Protocol) -> TokenStream {
             }
         },
         ChecksumAlgorithm::Crc(k) => {
-            let ty = format_ident!("u{}", c.width);
+            // A 24-bit CRC is computed in a `u32`.
+            let bits = if c.width == 24 { 32 } else { c.width };
+            let ty = format_ident!("u{}", bits);
             let (w, poly, init, refin, refout, xorout, check) = (
                 k.width as usize,
                 k.poly,
@@ -424,7 +426,7 @@ pub(super) fn emit_checksum(p: &Protocol) -> TokenStream {
                 lit_u(
                     v,
                     IntType {
-                        bits: u32::from(c.width),
+                        bits: u32::from(bits),
                         signed: false,
                         float: false,
                     },

@@ -55,6 +55,11 @@ pub(super) fn repeat_at(
             let (c, fixed, most) = (counter(i), usize_lit(fixed), usize_lit(most));
             quote!(rt::CountBy::EndSized(rt::SizedBy { field: #c, fixed: #fixed, most: #most }))
         }
+        Count::ToEnd if m.delimited_list(&ctx.p.framing).is_some() => {
+            // End bytes alone delimit the frame: the list ends at their first appearance.
+            let end = ctx.p.framing.end.iter().map(|b| hex_u8(*b));
+            quote!(rt::CountBy::Delimited(&[#(#end),*]))
+        }
         Count::ToEnd => quote!(rt::CountBy::End),
         Count::Until(t) => {
             let t = Literal::u8_unsuffixed(t);

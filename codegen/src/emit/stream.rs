@@ -649,8 +649,13 @@ pub(super) fn candidate_cell(mask: u128, lengths: &[usize]) -> u16 {
 /// agrees with it (`rt::var_by_length`, `rt::var_by_count`). `start_check` returns early
 /// where the head's start bytes are not the protocol's.
 pub(super) fn emit_variable_candidates(p: &Protocol, start_check: TokenStream) -> TokenStream {
-    let counted =
-        |m: &&Message| m.is_variable() && m.repeats().all(|(_, _, r)| r.count != Count::ToEnd);
+    // A list to the end is framed by its listed lengths, but where end bytes alone delimit
+    // the frame: its length is up to their first appearance (`rt::CountBy::Delimited`).
+    let counted = |m: &&Message| {
+        m.is_variable()
+            && (m.repeats().all(|(_, _, r)| r.count != Count::ToEnd)
+                || m.delimited_list(&p.framing).is_some())
+    };
     let mut any = false;
     let mut per = Vec::new();
     for d in [Direction::Request, Direction::Response] {

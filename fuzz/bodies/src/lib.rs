@@ -358,6 +358,10 @@ fn check_error(e: &DecodeError, len: usize, escaped: bool) {
         DecodeError::NoTerminator { offset, within, .. } => {
             assert!(offset < len && offset + within <= len, "{e}")
         }
+        DecodeError::EndInside { offset, end, .. } => {
+            // Before the frame's own end bytes, which the frame holds after it.
+            assert!(!end.is_empty() && offset + 2 * end.len() <= len, "{e}")
+        }
         DecodeError::BadWidth {
             offset,
             found,
