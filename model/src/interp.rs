@@ -1789,9 +1789,7 @@ pub fn shape(p: &Protocol, m: &Message, wire: &[u8]) -> Result<Shape, DecodeErro
                 // End bytes alone delimit the frame: they must first appear where its own sit.
                 if m.delimited_list(&p.framing).is_some() {
                     let end = &p.framing.end;
-                    let first = wire
-                        .get(at..)
-                        .and_then(|list| list.windows(end.len()).position(|w| w == end.as_slice()));
+                    let first = wire.get(at..).and_then(|list| p.framing.first_end(list));
                     // Before the frame's own (fields may sit after the list).
                     let own = wire.len().saturating_sub(end.len());
                     if let Some(i) = first.filter(|&i| at + i < own) {
@@ -3023,9 +3021,7 @@ fn encode_values(
     if let Some((f, at)) = m.delimited_list(&p.framing) {
         let end = &p.framing.end;
         let own = out.len().saturating_sub(end.len());
-        let first = out
-            .get(at..)
-            .and_then(|list| list.windows(end.len()).position(|w| w == end.as_slice()));
+        let first = out.get(at..).and_then(|list| p.framing.first_end(list));
         if let Some(i) = first.filter(|&i| at + i < own) {
             return Err(EncodeError::HoldsEnd {
                 field: f.name.clone(),

@@ -497,6 +497,17 @@ impl Framing {
             && self.escaping.is_none()
     }
 
+    /// Where the end bytes first appear in `bytes` (never without end bytes): where a frame
+    /// end bytes alone delimit ends ([`Self::end_delimited`]).
+    pub fn first_end(&self, bytes: &[u8]) -> Option<usize> {
+        if self.end.is_empty() {
+            return None;
+        }
+        bytes
+            .windows(self.end.len())
+            .position(|w| w == self.end.as_slice())
+    }
+
     /// The flag of flag framing (HDLC, KISS): one byte that both opens and closes every
     /// escaped frame (`start` and `end` the same single byte, escaping that keeps it out of
     /// the frame between them). A flag that closes one frame may also open the next, as

@@ -334,7 +334,7 @@ fn lens_of(p: &Protocol, m: &Message, buf: &[u8]) -> Lens {
                 let seen = buf.get(at..buf.len().min(m.max_len)).unwrap_or(&[]);
                 // Fields after the list sit between it and the end bytes.
                 let len = |i: usize| at + i + end.len();
-                return match seen.windows(end.len()).position(|w| w == end.as_slice()) {
+                return match p.framing.first_end(seen) {
                     Some(i) if len(i) >= m.layout.len && (len(i) - m.layout.len) % step == 0 => {
                         within(len(i) as i64)
                     }
