@@ -108,6 +108,10 @@ fn cases() -> Vec<Case> {
         // Packed elements (CRSF's 16 × 11-bit channels), least and most significant bit first.
         built_in("crsf", "spec/crsf.yaml"),
         spec("model/tests/fixtures/valid/packed_channels.yaml"),
+        // Records of a fixed count (UBX-shaped fixed blocks), and lists of floats and 64-bit
+        // integers counted by a field (word-swapped floats counted in bytes).
+        spec("model/tests/fixtures/valid/ubx_fixed_blocks.yaml"),
+        spec("model/tests/fixtures/valid/float_lists.yaml"),
         // Repeated records: a list of objects, each field as a field of its own prints.
         spec("model/tests/fixtures/valid/records.yaml"),
         // Records whose width a field gives, and Dynamixel 2.0 built in (its SYNC_WRITE).

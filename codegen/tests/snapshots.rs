@@ -149,6 +149,24 @@ fn fletcher_spec_generates_its_snapshot() {
     check("model/tests/fixtures/valid/ubx_like.yaml", "ubx_like.rs");
 }
 
+/// Records of a fixed count in UBX-shaped frames (`rt::CountBy::Fixed`): three satellite
+/// records followed by a field, two port records followed by a counted list
+/// (`snapshots_compile.rs` compiles it and holds it to the interpreter).
+#[test]
+fn fixed_records_spec_generates_its_snapshot() {
+    check(
+        "model/tests/fixtures/valid/ubx_fixed_blocks.yaml",
+        "ubx_fixed_blocks.rs",
+    );
+}
+
+/// Lists of floats (their words swapped) and 64-bit integers counted by a field
+/// (`snapshots_compile.rs` compiles it and holds it to the interpreter).
+#[test]
+fn float_lists_spec_generates_its_snapshot() {
+    check("model/tests/fixtures/valid/float_lists.yaml", "float_lists.rs");
+}
+
 /// Frames with no start byte, no address and no checksum (Maestro's compact protocol)
 /// (`snapshots_compile.rs` compiles it and holds it to the interpreter).
 #[test]

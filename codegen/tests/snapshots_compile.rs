@@ -47,6 +47,8 @@ include!("snapshots/jbd_bms.rs");
 include!("snapshots/shdlc.rs");
 include!("snapshots/nextion.rs");
 include!("snapshots/rtcm3_frame.rs");
+include!("snapshots/ubx_fixed_blocks.rs");
+include!("snapshots/float_lists.rs");
 
 mod agree;
 
@@ -57,6 +59,13 @@ crate::views!(lists_length::ListsLength, lists_length, request, -);
 crate::views!(msp_by_direction::MspByDirection, msp_by_direction, -, response);
 crate::views!(text_counted::TextCounted, text_counted, request, response);
 crate::views!(nextion::Nextion, nextion, request, response);
+crate::views!(float_lists::FloatLists, float_lists, -, response);
+crate::views!(
+    ubx_fixed_blocks::UbxFixedBlocks,
+    ubx_fixed_blocks,
+    request,
+    -
+);
 crate::views!(
     text_terminated::TextTerminated,
     text_terminated,
@@ -85,6 +94,8 @@ fn fixture_views_agree_with_the_owned_decode() {
     one::<text_counted::TextCounted>("model/tests/fixtures/valid/text_counted.yaml");
     one::<text_terminated::TextTerminated>("model/tests/fixtures/valid/text_terminated.yaml");
     one::<nextion::Nextion>("model/tests/fixtures/valid/nextion.yaml");
+    one::<float_lists::FloatLists>("model/tests/fixtures/valid/float_lists.yaml");
+    one::<ubx_fixed_blocks::UbxFixedBlocks>("model/tests/fixtures/valid/ubx_fixed_blocks.yaml");
 }
 
 use busspec_model::ir::{self, Direction};
@@ -2032,6 +2043,133 @@ fn packed_snapshot_agrees_with_the_interpreter() {
         let cuts: Vec<usize> = (0..6).map(|_| 1 + rng.below(20) as usize).collect();
         assert_eq!(
             generated_seen::<packed_channels::PackedChannels>(&cap, &cuts),
+            interp_seen(&p, &cap, &cuts)
+        );
+    }
+}
+
+/// Records of a fixed count (UBX-shaped fixed blocks): the examples replay; frames mutated
+/// from them decode alike in both engines; a frame one record short is refused by both in the
+/// same words; lists of records of another count are refused by both encoders; streams agree.
+#[test]
+fn fixed_records_snapshot_agrees_with_the_interpreter() {
+    use ubx_fixed_blocks::{response, Response, UbxFixedBlocks};
+    let file = "model/tests/fixtures/valid/ubx_fixed_blocks.yaml";
+    replay::<UbxFixedBlocks>(file);
+    let p = fixture(file);
+    let t = agree::agree::<UbxFixedBlocks>(&p);
+    assert!(t.accepted >= 4 && t.refused > 50, "{t:?}");
+    // The three satellites decoded, then the flags after them.
+    match Response::decode(&p.examples[1].wire).map(|d| d.message) {
+        Ok(Response::SatBlocks(s)) => {
+            assert_eq!(s.blocks.len(), 3);
+            assert_eq!(s.flags, 3);
+            let _: &busspec_runtime::Repeated<response::SatBlocksBlocks, 3> = &s.blocks;
+        }
+        other => panic!("{other:?}"),
+    }
+    // One record short (its length field and checksum made to agree): refused alike.
+    let mut short = p.examples[1].wire.clone();
+    short.drain(10..16);
+    short[4] -= 6;
+    let n = short.len();
+    busspec_model::interp::reseal(&p, &mut short[..n]);
+    let g = Response::decode(&short).map(|_| ());
+    assert_eq!(
+        g.unwrap_err().to_string(),
+        "sat_blocks.blocks at offset 10: expected 2 by the frame's length, found 3"
+    );
+    same_text(
+        g,
+        busspec_model::interp::decode(&p, Some(Direction::Response), None, &short).map(|_| ()),
+    );
+    // Two, three and four records: only three encode, in both engines.
+    let e = &p.examples[1];
+    let decoded = busspec_model::interp::decode(&p, Some(Direction::Response), None, &e.wire)
+        .unwrap();
+    let mut encoded = 0;
+    for n in [0usize, 2, 3, 4] {
+        let values: Vec<_> = decoded
+            .values
+            .iter()
+            .map(|v| {
+                let mut v = v.clone();
+                if let busspec_model::interp::Raw::Records(r) = &mut v.raw {
+                    let one = r[0].clone();
+                    r.resize(n, one);
+                }
+                v
+            })
+            .collect();
+        if agree::encode_alike::<UbxFixedBlocks>(&p, e.message, 0, &values) {
+            encoded += 1;
+        }
+        let i = busspec_model::interp::encode(&p, e.message, 0, &values);
+        match n {
+            3 => assert!(i.is_ok()),
+            _ => assert_eq!(
+                i.unwrap_err().to_string(),
+                format!("blocks takes 3..=3 elements, got {n}")
+            ),
+        }
+    }
+    assert_eq!(encoded, 1);
+    let mut rng = agree::Rng(0xF1ED);
+    let frames: Vec<Vec<u8>> = p.examples.iter().map(|e| e.wire.clone()).collect();
+    for _ in 0..100 {
+        let cap = random_capture(&frames, &mut rng, 12, 5);
+        let cuts: Vec<usize> = (0..6).map(|_| 1 + rng.below(20) as usize).collect();
+        assert_eq!(
+            generated_seen::<UbxFixedBlocks>(&cap, &cuts),
+            interp_seen(&p, &cap, &cuts)
+        );
+    }
+}
+
+/// Lists of floats and 64-bit integers counted by a field: the examples replay (floats with
+/// their words swapped, u64 above `i64::MAX`); frames mutated from them decode alike; an
+/// element outside its float range is refused by both in the same words; streams agree.
+#[test]
+fn float_lists_snapshot_agrees_with_the_interpreter() {
+    use float_lists::{FloatLists, Response};
+    let file = "model/tests/fixtures/valid/float_lists.yaml";
+    replay::<FloatLists>(file);
+    let p = fixture(file);
+    let t = agree::agree::<FloatLists>(&p);
+    assert!(t.accepted >= 6 && t.refused > 50, "{t:?}");
+    match Response::decode(&p.examples[1].wire).map(|d| d.message) {
+        Ok(Response::Floats(f)) => assert_eq!(f.values.as_slice(), &[230.1f32, -0.5, 49.98]),
+        other => panic!("{other:?}"),
+    }
+    match Response::decode(&p.examples[3].wire).map(|d| d.message) {
+        Ok(Response::Counters(c)) => {
+            assert_eq!(c.totals.as_slice(), &[u64::MAX, 1_234_567_890_123]);
+            assert_eq!(c.drifts.as_slice(), &[-9_000_000_000i64, 42]);
+        }
+        other => panic!("{other:?}"),
+    }
+    // The second float made 2000.0 (its words swapped): outside its range, alike.
+    let mut wire = p.examples[1].wire.clone();
+    let b = 2000.0f32.to_be_bytes();
+    wire[7..11].copy_from_slice(&[b[2], b[3], b[0], b[1]]);
+    let n = wire.len();
+    busspec_model::interp::reseal(&p, &mut wire[..n]);
+    let g = Response::decode(&wire).map(|_| ());
+    assert_eq!(
+        g.unwrap_err().to_string(),
+        "floats.values at offset 7 is 2000, outside its range -1000..=1000"
+    );
+    same_text(
+        g,
+        busspec_model::interp::decode(&p, Some(Direction::Response), None, &wire).map(|_| ()),
+    );
+    let mut rng = agree::Rng(0x64F3);
+    let frames: Vec<Vec<u8>> = p.examples.iter().map(|e| e.wire.clone()).collect();
+    for _ in 0..100 {
+        let cap = random_capture(&frames, &mut rng, 12, 5);
+        let cuts: Vec<usize> = (0..6).map(|_| 1 + rng.below(20) as usize).collect();
+        assert_eq!(
+            generated_seen::<FloatLists>(&cap, &cuts),
             interp_seen(&p, &cap, &cuts)
         );
     }

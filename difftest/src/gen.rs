@@ -253,6 +253,11 @@ enum Own {
     EndDelimited = 0xFFFF_FF00_FFFF_FF00,
     /// A 24-bit CRC (RTCM 3's CRC-24Q) in place of a 32-bit one as drawn.
     Crc24 = 0x0086_4CFB_0086_4CFB,
+    /// Records of a fixed count (`type: record`, `repeat: {count: N}`), from records as drawn.
+    FixedRecords = 0xF1ED_2EC0_F1ED_2EC0,
+    /// Lists of floats and 64-bit integers (counted, in bytes, to the end, by the request),
+    /// from lists of integers as drawn.
+    WideLists = 0x64F3_64F3_64F3_64F3,
 }
 
 /// The generator of `what` for the spec of `seed`.
@@ -2252,6 +2257,90 @@ fn random_spec_without_examples(seed: u64) -> (String, usize) {
         }
     }
 
+    // Lists of floats and 64-bit integers (a meter's block of float registers): about 30 % of
+    // the lists of integers of a unit as drawn become lists of u64, i64, f32 or f64 (maybe
+    // word-swapped, maybe with a range), counted as they were. Drawn by a generator of its own.
+    {
+        let mut rng = own_rng(seed, Own::WideLists);
+        for f in commands
+            .iter_mut()
+            .chain(responses.iter_mut())
+            .flat_map(|m| m.fields.iter_mut())
+        {
+            let own = format!("{{name: {}, type: {}, unit: ", f.name, f.ty);
+            let eligible = matches!(f.ty, "u8" | "u16" | "i16" | "u24" | "i32")
+                && f.repeat_tail > 0
+                && f.yaml.starts_with(&own)
+                && !f.yaml.contains("until:")
+                && !fixed_count(f);
+            let Some(at) = f.yaml.find(", repeat: {").filter(|_| eligible) else {
+                continue;
+            };
+            if rng.u8(..100) >= 30 {
+                continue;
+            }
+            let max: usize = f.yaml[at..]
+                .split("max: ")
+                .nth(1)
+                .map(|r| r.chars().take_while(char::is_ascii_digit).collect::<String>())
+                .and_then(|d| d.parse().ok())
+                .unwrap_or(1);
+            let (ty, width) = [("u64", 8), ("i64", 8), ("f32", 4), ("f64", 8)][rng.usize(..4)];
+            let mut y = format!("{{name: {}, type: {ty}, unit: count", f.name);
+            if rng.u8(..100) < 40 {
+                y.push_str(", word_order: swapped");
+            }
+            if rng.u8(..100) < 40 {
+                let r = match ty {
+                    "u64" => {
+                        let a = rng.u64(..4);
+                        format!("{{min: {a}, max: {}}}", a + rng.u64(..100))
+                    }
+                    "i64" => {
+                        let a = rng.i64(-5..4);
+                        format!("{{min: {a}, max: {}}}", a + rng.i64(0..100))
+                    }
+                    _ => {
+                        let a = f64::from(rng.i32(-400..400)) / 4.0;
+                        let b = a + f64::from(rng.i32(0..400)) / 4.0;
+                        format!("{{min: {a:?}, max: {b:?}}}")
+                    }
+                };
+                let _ = write!(y, ", range: {r}");
+            }
+            f.yaml = format!("{y}{}", &f.yaml[at..]);
+            f.ty = ty;
+            f.width = width;
+            f.repeat_tail = (max * width).max(1);
+        }
+    }
+
+    // Records of a fixed count (`repeat: {count: N}`, UBX's fixed blocks): about 40 % of the
+    // records as drawn (not those whose width a field gives, nor those counted by the
+    // request) become exactly 1 to 3 of them; a field that counted them stays, a free number.
+    // Drawn by a generator of its own.
+    {
+        let mut rng = own_rng(seed, Own::FixedRecords);
+        for f in commands
+            .iter_mut()
+            .chain(responses.iter_mut())
+            .flat_map(|m| m.fields.iter_mut())
+        {
+            if f.ty != "record" || f.yaml.contains("bytes:") || f.yaml.contains("request:") {
+                continue;
+            }
+            let Some(at) = f.yaml.find(", repeat: {") else {
+                continue;
+            };
+            if rng.u8(..100) >= 40 {
+                continue;
+            }
+            let n = rng.usize(1..=3);
+            f.yaml = format!("{}, repeat: {{count: {n}}}}}", &f.yaml[..at]);
+            f.repeat_tail = n * f.width;
+        }
+    }
+
     // Payloads longer than 255 bytes (UBX's NAV-SAT, MSP v2's long replies): where frames
     // have a length field, in about half the specs with an eligible list, a list to the end (of numbers, text or
     // records) may hold enough elements to pass 255 bytes, up to 4096, and the length field
@@ -3136,6 +3225,16 @@ pub fn constructs(p: &ir::Protocol) -> Vec<&'static str> {
     add(
         repeats.iter().any(|(_, r)| r.count == Count::ToEnd),
         "repeat to end",
+    );
+    add(
+        msgs.iter()
+            .any(|m| m.repeats().any(|(_, _, r)| matches!(r.count, Count::Fixed(_)))),
+        "records of a fixed count",
+    );
+    add(
+        msgs.iter()
+            .any(|m| m.repeats().any(|(_, f, _)| f.is_wide() && f.packed.is_none())),
+        "list of floats or 64-bit integers",
     );
     add(
         repeats.iter().any(|(f, _)| f.ty == FieldType::Bit),

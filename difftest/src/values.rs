@@ -263,7 +263,12 @@ pub fn random_values(
                     } else {
                         rng.usize(..=bound + 1)
                     };
-                    Raw::List((0..n).map(|_| within(rng, elo, ehi)).collect())
+                    if f.is_wide() {
+                        // Floats and 64-bit integers: each as a field of its type is drawn.
+                        Raw::List((0..n).map(|_| wide(rng, f, strict)).collect())
+                    } else {
+                        Raw::List((0..n).map(|_| within(rng, elo, ehi)).collect())
+                    }
                 } else if f.is_wide() {
                     Raw::Int(wide(rng, f, strict))
                 } else {

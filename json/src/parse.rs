@@ -146,7 +146,7 @@ fn check_fixed(m: &Message, values: &[Value]) -> Result<(), String> {
         let n = values.iter().find(|v| v.name == rf.name)?.raw.elements()?;
         Some(match r.count {
             Count::Bytes(_) => rf.elements_len(n),
-            Count::Elements(_) | Count::ToEnd | Count::Until(_) => n,
+            Count::Elements(_) | Count::ToEnd | Count::Until(_) | Count::Fixed(_) => n,
         } as i64)
     };
     let mut words: Vec<u64> = Vec::with_capacity(m.fields.len());

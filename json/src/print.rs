@@ -379,7 +379,7 @@ pub fn message_line<M: Message>(
         };
         let n = match r.count {
             Count::Bytes(_) => rf.elements_len(len),
-            Count::Elements(_) | Count::ToEnd | Count::Until(_) => len,
+            Count::Elements(_) | Count::ToEnd | Count::Until(_) | Count::Fixed(_) => len,
         };
         Some(Owned::Int(n as i64))
     };

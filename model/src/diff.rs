@@ -432,6 +432,7 @@ fn repeat_shape(m: &Message, f: &Field) -> Option<String> {
         }
         crate::ir::Count::ToEnd => "to the end of the frame".to_owned(),
         crate::ir::Count::Until(t) => format!("up to a terminator 0x{t:02X}"),
+        crate::ir::Count::Fixed(n) => format!("a fixed count of {n}"),
     };
     Some(format!("{count}, {}..={} elements", r.min, r.max))
 }

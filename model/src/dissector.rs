@@ -252,6 +252,8 @@ fn field(f: &Field, lay: &FrameLayout) -> String {
                 pk.elem_width
             );
         }
+        // A list of these counted by a field, in bytes, to the end or by the request.
+        repeat(f, &mut o);
         o.push_str(", bits = {} }");
         return o;
     }
@@ -364,12 +366,20 @@ fn field(f: &Field, lay: &FrameLayout) -> String {
             );
         }
     }
+    repeat(f, &mut o);
+    o.push_str(" }");
+    o
+}
+
+/// A repeated field's `rep` table: how its elements are counted, and its bounds.
+fn repeat(f: &Field, o: &mut String) {
     if let Some(r) = &f.repeat {
         let (count, by) = match r.count {
             Count::Elements(i) => ("elements", i + 1),
             Count::Bytes(i) => ("bytes", i + 1),
             Count::ToEnd => ("to_end", 0),
             Count::Until(t) => ("until", usize::from(t)),
+            Count::Fixed(n) => ("fixed", n),
         };
         let _ = write!(
             o,
@@ -379,8 +389,6 @@ fn field(f: &Field, lay: &FrameLayout) -> String {
             lua_bool(f.ty == FieldType::Bit)
         );
     }
-    o.push_str(" }");
-    o
 }
 
 fn message(m: &Message, index: usize, framing: &Framing) -> String {

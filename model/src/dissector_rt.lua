@@ -580,6 +580,18 @@ local function read_wide_elements(f, b, at)
   return e, out
 end
 
+-- The elements of a repeated field of floats or 64-bit integers from byte `at` up to `stop`:
+-- each as `wide_value` reads it (the field is one element wide), and the byte where it starts.
+local function read_wide_list(f, b, at, stop)
+  local out = {}
+  local k = at
+  while k + f.width <= stop do
+    out[#out + 1] = { w = wide_value(f, b, k), at = k }
+    k = k + f.width
+  end
+  return out
+end
+
 local function read_packed(f, b, at)
   local out, p = {}, f.pk
   if p.whole then
@@ -711,6 +723,11 @@ local function shape(m, b, n)
           end
         end
         if not count then return nil end
+      elseif r.count == "fixed" then
+        -- Records of a fixed count (`r.by` of them): as a count field saying so would.
+        local bytes = elements_len(f, r.by)
+        if (last and bytes ~= rest) or bytes > rest then return nil end
+        count = r.by
       else
         local c = m.fields[r.by]
         local v = read_uint(b, at[r.by], c.width, c.order)
@@ -841,6 +858,14 @@ local function misfit(P, m, b, n, soft)
           if range then soft[#soft + 1] = out_of_range(m, f.name .. "." .. g.name, k + g.offset, v, range) end
         end
         k = k + w
+      end
+    elseif f.rep and f.wide then
+      for _, x in ipairs(read_wide_list(f, b, at, at + lens[i])) do
+        if not wide_within(f, x.w) then
+          soft[#soft + 1] = fmt("%s.%s at offset %d is %s, outside its range %s..=%s", m.name, f.name,
+            x.at, x.w.text, f.wrange[1], f.wrange[2])
+          break
+        end
       end
     elseif f.rep then
       local step = f.rep.bit and 0 or f.width
@@ -1086,12 +1111,21 @@ local function setup(P)
         if f.pk then
           stop = at + f.width
           els = read_packed(f, b, at)
+        elseif f.wide then
+          stop = at + lens[i]
+          els = read_wide_list(f, b, at, stop)
         else
           stop = at + lens[i]
           els = read_elements(f, b, at, stop)
         end
         local vals, raws = {}, {}
-        if f.wide then
+        if f.wide and f.rep then
+          -- Floats and 64-bit integers counted by a field: each printed as busspec prints one.
+          for k, x in ipairs(els) do
+            vals[k] = x.w.json
+            raws[k] = x.w.raw
+          end
+        elseif f.wide then
           -- Floats and 64-bit integers of a fixed count: each printed as busspec prints one.
           local _, ws = read_wide_elements(f, b, at)
           for k, x in ipairs(ws) do

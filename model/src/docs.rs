@@ -33,7 +33,9 @@ fn type_name(f: &Field) -> String {
         None => one,
         Some(r) => {
             let count = match r.count {
-                Count::Elements(_) | Count::Bytes(_) | Count::ToEnd if r.min == r.max => {
+                Count::Elements(_) | Count::Bytes(_) | Count::ToEnd | Count::Fixed(_)
+                    if r.min == r.max =>
+                {
                     r.max.to_string()
                 }
                 _ => format!("{}..={}", r.min, r.max),
@@ -190,13 +192,18 @@ fn field_notes(p: &Protocol, m: &Message, f: &Field) -> String {
             Count::Bytes(i) => format!("as many bytes as `{}` says", m.fields[i].name),
             Count::ToEnd => "to the end of the frame".to_owned(),
             Count::Until(t) => format!("up to a terminator byte 0x{t:02X}, which follows them"),
+            Count::Fixed(_) => "always, no field counts them".to_owned(),
         };
         let bits = if f.ty == FieldType::Bit {
             ", eight to a byte, least significant bit first"
         } else {
             ""
         };
-        notes.push(format!("{}..={} elements, {count}{bits}", r.min, r.max));
+        if let Count::Fixed(n) = r.count {
+            notes.push(format!("{n} elements, {count}"));
+        } else {
+            notes.push(format!("{}..={} elements, {count}{bits}", r.min, r.max));
+        }
         if let Some(rel) = &r.request {
             notes.push(format!(
                 "in a reply, {} elements from the request",

@@ -1806,8 +1806,12 @@ pub fn shape(p: &Protocol, m: &Message, wire: &[u8]) -> Result<Shape, DecodeErro
                 }
                 per_byte(rest)
             }
-            Count::Elements(i) => {
-                let v = count_value(i);
+            Count::Elements(_) | Count::Fixed(_) => {
+                // A fixed count as a count field saying that many would.
+                let v = match r.count {
+                    Count::Elements(i) => count_value(i),
+                    _ => r.max as i64,
+                };
                 let n = usize::try_from(v).unwrap_or(usize::MAX);
                 if last && f.elements_len(n) != rest {
                     return Err(bad(
@@ -2166,7 +2170,7 @@ fn misfit(p: &Protocol, m: &Message, wire: &[u8]) -> Option<Misfit> {
                         found: v,
                         min,
                         max,
-                        kind: NumKind::Int,
+                        kind: f.num_kind(),
                     });
                 }
             }
@@ -2436,7 +2440,8 @@ fn read_elements(f: &Field, bytes: &[u8]) -> Vec<i64> {
     bytes
         .chunks_exact(w)
         .map(|c| {
-            let u = read_uint(c, f.byte_order);
+            // Its words in their order (`word_order`, 32- and 64-bit elements).
+            let u = read_number(f, c);
             if f.signed {
                 sign_extend(u, 8 * w as u32)
             } else {
@@ -2661,7 +2666,7 @@ fn encode_values(
             match r.count {
                 Count::Elements(i) => counts.push((i, recs.len() as i64)),
                 Count::Bytes(i) => counts.push((i, f.elements_len(recs.len()) as i64)),
-                Count::ToEnd | Count::Until(_) => {}
+                Count::ToEnd | Count::Until(_) | Count::Fixed(_) => {}
             }
             records.push((fi, f, recs));
             continue;
@@ -2720,7 +2725,7 @@ fn encode_values(
         match r.count {
             Count::Elements(i) => counts.push((i, list.len() as i64)),
             Count::Bytes(i) => counts.push((i, f.elements_len(list.len()) as i64)),
-            Count::ToEnd | Count::Until(_) => {}
+            Count::ToEnd | Count::Until(_) | Count::Fixed(_) => {}
         }
         lists.push((fi, list));
     }
@@ -2801,7 +2806,7 @@ fn encode_values(
             } else {
                 for (k, &v) in list.iter().enumerate() {
                     let s = at + k * f.width;
-                    write_uint(v as u64, &mut out[s..s + f.width], f.byte_order);
+                    write_number(f, v as u64, &mut out[s..s + f.width]);
                 }
                 if let Some(t) = f.terminator() {
                     out[at + list.len()] = t;
@@ -3177,6 +3182,7 @@ fn reorder(p: &Protocol, m: &Message, text: &[u8], order: ByteOrder) -> Vec<u8> 
                 let fit = f.elements_from(end.saturating_sub(at).saturating_sub(fixed_after));
                 let n = match r.count {
                     Count::ToEnd => fit,
+                    Count::Fixed(n) => n.min(fit),
                     // Characters up to the first terminator (the terminator's byte follows).
                     Count::Until(t) => text
                         .get(at..end)

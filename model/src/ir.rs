@@ -1441,6 +1441,10 @@ pub enum Count {
     /// Characters up to the first terminator byte (this one), which travels after them: text
     /// (`type: ascii`) with `repeat: {until: 0x00}`.
     Until(u8),
+    /// Exactly this many, always (`repeat: {count: 3}` on records, UBX's fixed blocks): no
+    /// field counts them (`min` and `max` are this). A list of a fixed count of numbers is
+    /// packed elements instead ([`Field::fixed_count`]).
+    Fixed(usize),
 }
 
 impl Count {
@@ -1448,7 +1452,7 @@ impl Count {
     pub fn field(&self) -> Option<usize> {
         match *self {
             Count::Elements(i) | Count::Bytes(i) => Some(i),
-            Count::ToEnd | Count::Until(_) => None,
+            Count::ToEnd | Count::Until(_) | Count::Fixed(_) => None,
         }
     }
 }

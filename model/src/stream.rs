@@ -276,31 +276,34 @@ fn lens_of(p: &Protocol, m: &Message, buf: &[u8]) -> Lens {
         return Lens::Are(Vec::new());
     };
     match r.count {
-        Count::Elements(_) | Count::Bytes(_) => {
+        Count::Elements(_) | Count::Bytes(_) | Count::Fixed(_) => {
             // Each list's count field, read where the lists before it put it (a list to the
             // end beside others has a length field: validated).
             let mut tail = 0usize;
             let mut lists: Vec<(usize, usize)> = Vec::new();
             for (li, lf, lr) in m.repeats() {
-                let c = match lr.count {
-                    Count::Elements(c) | Count::Bytes(c) => c,
+                let n = match lr.count {
+                    // Records of a fixed count: that many, no field to read.
+                    Count::Fixed(n) => n,
+                    Count::Elements(c) | Count::Bytes(c) => {
+                        let cf = &m.fields[c];
+                        let shift: usize = lists.iter().filter(|l| l.0 < c).map(|l| l.1).sum();
+                        let at = m
+                            .layout
+                            .payload
+                            .saturating_add(cf.offset)
+                            .saturating_add(shift);
+                        let Some(bytes) = buf.get(at..at.saturating_add(cf.width)) else {
+                            return Lens::Need;
+                        };
+                        let v = interp::read_uint(bytes, cf.byte_order);
+                        usize::try_from(v).unwrap_or(usize::MAX)
+                    }
                     // Text up to a terminator has a length field (validated): not here.
                     Count::ToEnd | Count::Until(_) => continue,
                 };
-                let cf = &m.fields[c];
-                let shift: usize = lists.iter().filter(|l| l.0 < c).map(|l| l.1).sum();
-                let at = m
-                    .layout
-                    .payload
-                    .saturating_add(cf.offset)
-                    .saturating_add(shift);
-                let Some(bytes) = buf.get(at..at.saturating_add(cf.width)) else {
-                    return Lens::Need;
-                };
-                let v = interp::read_uint(bytes, cf.byte_order);
-                let n = usize::try_from(v).unwrap_or(usize::MAX);
                 let len = match lr.count {
-                    Count::Elements(_) => lf.elements_len(n),
+                    Count::Elements(_) | Count::Fixed(_) => lf.elements_len(n),
                     _ => n,
                 };
                 // Several lists, or fields after one: each list's count must fit its own

@@ -3491,7 +3491,7 @@ fn field(
                 "`encoding: bcd` is for unsigned fields of 1 to 4 bytes (u8 u16 u24 u32)",
             );
         }
-        return wide_field(f, p, out, refs, sink);
+        return wide_field(f, p, out, earlier, refs, sink);
     }
     if out.bcd {
         return bcd_field(f, p, out, refs, sink);
@@ -3905,7 +3905,14 @@ fn repeat(
     sink: &mut Sink,
 ) -> Option<Repeat> {
     let of = r.of.unwrap_or(model::CountOf::Elements);
-    let Some(max) = r.max else {
+    // A fixed count reaches here only on records ([`fixed_list`] checked it and took every
+    // other list of a fixed count): exactly that many.
+    let fixed = r
+        .count
+        .parse::<i64>()
+        .ok()
+        .filter(|n| (1..=MAX_PACKED).contains(n));
+    let Some(max) = r.max.or(fixed) else {
         sink.error(
             p,
             "missing field `max` (the most elements a frame may carry; only a fixed count, `count: 4`, needs none)",
@@ -3919,7 +3926,7 @@ fn repeat(
         );
         return None;
     }
-    let min = r.min.unwrap_or(0);
+    let min = r.min.or(fixed).unwrap_or(0);
     if !(0..=max).contains(&min) {
         sink.error(
             join(p, "min"),
@@ -3979,6 +3986,8 @@ fn repeat(
             );
         }
         Count::ToEnd
+    } else if let Some(n) = fixed {
+        Count::Fixed(n as usize)
     } else {
         match earlier.iter().position(|e| e.name == r.count) {
             Some(i) if plain_unsigned(&earlier[i]) => match of {
@@ -4195,13 +4204,23 @@ fn fixed_list(f: &model::Field, p: &str, sink: &mut Sink) -> (model::Field, Opti
     };
     if let Some((k, why)) = refused {
         sink.error(join(&rp, k), why);
+        if f.ty == T::Record {
+            // Checked no further: a byte in its place, lest the record's rules speak too.
+            out.ty = T::U8;
+            out.fields.clear();
+        }
         return (out, None);
     }
-    if matches!(f.ty, T::Record | T::Ascii | T::Bit) {
+    // Records of a fixed count keep their repeat: the repeat machinery with a count no field
+    // gives ([`Count::Fixed`], resolved by [`repeat`]).
+    if f.ty == T::Record {
+        return (f.clone(), None);
+    }
+    if matches!(f.ty, T::Ascii | T::Bit) {
         sink.error(
             join(p, "type"),
             format!(
-                "a list of a fixed count (`count: {n}`) holds numbers (integers of 1 to 8 bytes, floats), each maybe of an enum or a unit; {} elements are not expressible yet (a list counted by a field or to the `end` takes them)",
+                "a list of a fixed count (`count: {n}`) holds numbers (integers of 1 to 8 bytes, floats), each maybe of an enum or a unit, or records; {} elements are not expressible yet (a list counted by a field or to the `end` takes them)",
                 format!("{:?}", f.ty).to_lowercase()
             ),
         );
@@ -4342,8 +4361,16 @@ fn packed_field(
 }
 
 /// A 64-bit integer or float field: a plain number, with a `unit` whose scale is 1 and offset
-/// 0 (the raw value is the physical one), a `range` and a `word_order`; nothing else yet.
-fn wide_field(f: &model::Field, p: &str, mut out: Field, refs: &Refs, sink: &mut Sink) -> Field {
+/// 0 (the raw value is the physical one), a `range` and a `word_order`, maybe repeated (a list
+/// counted by a field, in bytes or to the `end`, each element as such a field); nothing else yet.
+fn wide_field(
+    f: &model::Field,
+    p: &str,
+    mut out: Field,
+    earlier: &[Field],
+    refs: &Refs,
+    sink: &mut Sink,
+) -> Field {
     use model::FieldType as T;
     let what = match f.ty {
         T::F32 | T::F64 => "a float",
@@ -4353,11 +4380,14 @@ fn wide_field(f: &model::Field, p: &str, mut out: Field, refs: &Refs, sink: &mut
         f,
         p,
         &[
-            "value", "enum", "flags", "equals", "special", "bits", "repeat", "follows",
+            "value", "enum", "flags", "equals", "special", "bits", "follows",
         ],
         |k| format!("`{k}` cannot be combined with {what} field (not expressible yet)"),
         sink,
     );
+    if let Some(r) = &f.repeat {
+        out.repeat = repeat(r, f, &join(p, "repeat"), earlier, sink);
+    }
     match &f.unit {
         Some(u) => match refs.units.get(u) {
             Some(i) => {

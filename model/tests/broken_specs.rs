@@ -224,7 +224,23 @@ const CASES: &[(&str, &[(&str, &str)])] = &[
     // ---- lists of a fixed count (made from valid/packed_channels, without its examples)
     (
         "fixed_list_of_bits",
-        &[("commands.calibrate.fields.offsets.type", "a list of a fixed count (`count: 3`) holds numbers (integers of 1 to 8 bytes, floats), each maybe of an enum or a unit; bit elements are not expressible yet (a list counted by a field or to the `end` takes them)")],
+        &[("commands.calibrate.fields.offsets.type", "a list of a fixed count (`count: 3`) holds numbers (integers of 1 to 8 bytes, floats), each maybe of an enum or a unit, or records; bit elements are not expressible yet (a list counted by a field or to the `end` takes them)")],
+    ),
+    (
+        "fixed_records_min",
+        &[("responses.sat_blocks.fields.blocks.repeat.min", "a list of a fixed count of 3 holds 3 elements; `min: 1` says otherwise (leave it out)")],
+    ),
+    (
+        "fixed_records_too_many",
+        &[("responses.sat_blocks.fields.blocks.repeat.count", "a fixed count is 1..=256 elements, not 300")],
+    ),
+    (
+        "fixed_records_sized",
+        &[("responses.sat_blocks.fields.blocks", "a record whose width a field gives runs to the `end` of the frame (count: end); counted records of it are not expressible yet")],
+    ),
+    (
+        "float_list_until",
+        &[("responses.samples.fields.samples.repeat.until", "a terminator ends text (type: ascii); a list of numbers is counted by a field or runs to the `end`")],
     ),
     (
         "fixed_list_with_value",

@@ -118,6 +118,7 @@ impl Lists {
                 // A list end bytes delimit is the only list (validated), maybe before fields.
                 CountBy::Delimited(end) => CountBy::Delimited(end),
                 CountBy::Until(t) => CountBy::Until(t),
+                CountBy::Fixed(v) => CountBy::Fixed(v),
                 CountBy::Elements(c) => CountBy::Elements(self.moved(c, &bytes[..k])),
                 CountBy::Bytes(c) => CountBy::Bytes(self.moved(c, &bytes[..k])),
             };
@@ -151,6 +152,17 @@ impl Lists {
                     }
                     if b > rest {
                         return Err(bad(v as i64, CountRule::AtMost(rest / w)));
+                    }
+                    held
+                }
+                // As a count field saying that many would.
+                CountBy::Fixed(held) => {
+                    let b = r.bytes_of(held);
+                    if last && b != rest {
+                        return Err(bad(held as i64, CountRule::ByLength(rest / w)));
+                    }
+                    if b > rest {
+                        return Err(bad(held as i64, CountRule::AtMost(rest / w)));
                     }
                     held
                 }
@@ -227,6 +239,11 @@ impl Lists {
                 // The only list (validated): up to the first end bytes from its first byte.
                 CountBy::Delimited(_) => return r.frame_len(head),
                 CountBy::End | CountBy::EndSized(_) | CountBy::Until(_) => return None,
+                CountBy::Fixed(v) => {
+                    bytes[k] = r.bytes_of(v);
+                    total += bytes[k];
+                    continue;
+                }
                 CountBy::Elements(c) => (c, false),
                 CountBy::Bytes(c) => (c, true),
             };

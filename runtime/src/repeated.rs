@@ -475,6 +475,9 @@ pub enum CountBy {
     /// leaves it (`repeat: {until: 0x00}`): its characters, then the terminator, which is no
     /// character. Always decoded through [`crate::codec::Lists`]; the frame has a length field.
     Until(u8),
+    /// Exactly this many elements, always (records of a fixed count: `repeat: {count: 3}`):
+    /// no field counts them, and the frame's length must give them.
+    Fixed(usize),
 }
 
 /// The field that gives the bytes of each record's last field ([`CountBy::EndSized`]).
@@ -631,6 +634,12 @@ impl RepeatAt {
                         return Err(bad(v as i64, by_length));
                     }
                 }
+            }
+            // As a count field saying that many would.
+            CountBy::Fixed(v) if self.bytes_of(v) == extra => n = v,
+            CountBy::Fixed(v) => {
+                let by_length = CountRule::ByLength(extra / self.width.max(1));
+                return Err(bad(v as i64, by_length));
             }
             CountBy::Bytes(c) => {
                 let v = c.read(frame).unwrap_or(0);
@@ -794,6 +803,7 @@ impl RepeatAt {
         let (c, bytes) = match self.count {
             CountBy::Delimited(end) => return self.delimited_len(head, end),
             CountBy::End | CountBy::EndSized(_) | CountBy::Until(_) => return None,
+            CountBy::Fixed(v) => return Some(self.base + self.bytes_of(v)),
             CountBy::Elements(c) => (c, false),
             CountBy::Bytes(c) => (c, true),
         };
@@ -932,7 +942,8 @@ impl RepeatAt {
             | CountBy::End
             | CountBy::Delimited(_)
             | CountBy::EndSized(_)
-            | CountBy::Until(_) => (v, v),
+            | CountBy::Until(_)
+            | CountBy::Fixed(_) => (v, v),
         }
     }
 
@@ -972,14 +983,21 @@ impl RepeatAt {
 
     /// The refusal of element `i` of value `found` outside `min..=max`.
     #[inline]
-    pub(crate) fn out_of_range(&self, i: usize, found: i64, min: i64, max: i64) -> DecodeError {
+    pub(crate) fn out_of_range(
+        &self,
+        i: usize,
+        found: i64,
+        min: i64,
+        max: i64,
+        kind: crate::NumKind,
+    ) -> DecodeError {
         DecodeError::OutOfRange {
             field: self.field,
             offset: self.at + i * self.width,
             found,
             min,
             max,
-            kind: crate::NumKind::Int,
+            kind,
         }
     }
 
@@ -1002,6 +1020,19 @@ impl RepeatAt {
         signed: bool,
     ) -> Result<Repeated<T, N>, DecodeError> {
         read_elements(bytes, self.width, le, signed).map_err(|e| self.bad_count(e.found))
+    }
+
+    /// The elements `bytes` holds, each of 32 or 64 bits whose 16-bit words travel swapped
+    /// (`word_order: swapped`), as [`read_words`] reads them; refuses what [`Self::elements`]
+    /// refuses.
+    #[inline]
+    pub fn words<T: Wire + Default, const N: usize>(
+        &self,
+        bytes: &[u8],
+        le: bool,
+        signed: bool,
+    ) -> Result<Repeated<T, N>, DecodeError> {
+        read_words(bytes, self.width, le, signed).map_err(|e| self.bad_count(e.found))
     }
 
     /// The `n` bits `bytes` packs (every bit of every byte where the count is in bytes or to
@@ -1029,8 +1060,8 @@ impl RepeatAt {
     pub fn in_range<T: Wire>(&self, items: &[T], min: i64, max: i64) -> Result<(), DecodeError> {
         for (i, v) in items.iter().enumerate() {
             let found = v.to_i64();
-            if !(min..=max).contains(&found) {
-                return Err(self.out_of_range(i, found, min, max));
+            if !T::within(found, min, max) {
+                return Err(self.out_of_range(i, found, min, max, T::KIND));
             }
         }
         Ok(())
@@ -1044,7 +1075,11 @@ impl RepeatAt {
             CountBy::Elements(_) => held,
             CountBy::Bytes(_) if self.width == 0 => held.div_ceil(8),
             CountBy::Bytes(_) => held * self.width,
-            CountBy::End | CountBy::Delimited(_) | CountBy::EndSized(_) | CountBy::Until(_) => 0,
+            CountBy::End
+            | CountBy::Delimited(_)
+            | CountBy::EndSized(_)
+            | CountBy::Until(_)
+            | CountBy::Fixed(_) => 0,
         }
     }
 
@@ -1120,13 +1155,13 @@ impl RepeatAt {
     ) -> Result<(), EncodeError> {
         for v in items {
             let value = v.to_i64();
-            if !(min..=max).contains(&value) {
+            if !T::within(value, min, max) {
                 return Err(EncodeError::NotInRange {
                     field: self.field.name,
                     value,
                     min,
                     max,
-                    kind: crate::NumKind::Int,
+                    kind: T::KIND,
                 });
             }
         }
@@ -1155,6 +1190,55 @@ pub fn read_elements<T: crate::codec::Wire + Default, const N: usize>(
     }
     r.len = found;
     Ok(r)
+}
+
+/// [`read_elements`] of elements of 32 or 64 bits whose 16-bit words travel swapped
+/// (`word_order: swapped`): each element's bytes put back in its byte order first.
+#[inline]
+pub fn read_words<T: crate::codec::Wire + Default, const N: usize>(
+    bytes: &[u8],
+    width: usize,
+    le: bool,
+    signed: bool,
+) -> Result<Repeated<T, N>, CapacityError> {
+    let found = bytes.len() / width.max(1);
+    if width == 0 || width > 8 || bytes.len() % width != 0 || found > N {
+        return Err(CapacityError { capacity: N, found });
+    }
+    let swapped = width == 4 || width == 8;
+    let mut r = Repeated::<T, N>::new();
+    for (slot, c) in r.items.iter_mut().zip(bytes.chunks_exact(width)) {
+        let mut b = [0u8; 8];
+        for (i, d) in b[..width].iter_mut().enumerate() {
+            let j = if swapped { swap_index(i, width) } else { i };
+            *d = c.get(j).copied().unwrap_or(0);
+        }
+        *slot = T::from_i64(crate::codec::int(&b[..width], le, signed));
+    }
+    r.len = found;
+    Ok(r)
+}
+
+/// [`write_elements`] of elements of 32 or 64 bits whose 16-bit words travel swapped
+/// (`word_order: swapped`), as [`read_words`] reads them; returns the bytes written.
+#[inline]
+pub fn write_words<T: crate::codec::Wire>(
+    items: &[T],
+    width: usize,
+    le: bool,
+    out: &mut [u8],
+) -> usize {
+    let width = width.clamp(1, 8);
+    let swapped = width == 4 || width == 8;
+    for (c, v) in out.chunks_exact_mut(width).zip(items) {
+        let u = v.to_u64();
+        for i in 0..width {
+            let shift = if le { 8 * i } else { 8 * (width - 1 - i) };
+            let j = if swapped { swap_index(i, width) } else { i };
+            c[j] = (u >> shift) as u8;
+        }
+    }
+    items.len() * width
 }
 
 /// Writes `items` as elements of `width` bytes each into `out` (which must hold them), and
@@ -1293,7 +1377,7 @@ pub fn pack<T: crate::codec::Wire>(
 /// The byte of a `width`-byte number whose 16-bit words travel swapped (`word_order: swapped`)
 /// that carries byte `i` of it in its byte order.
 #[inline(always)]
-fn swap_index(i: usize, width: usize) -> usize {
+pub(crate) fn swap_index(i: usize, width: usize) -> usize {
     (width / 2 - 1 - i / 2) * 2 + i % 2
 }
 

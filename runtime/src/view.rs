@@ -18,6 +18,8 @@ pub struct ListView<'a, T> {
     width: usize,
     le: bool,
     signed: bool,
+    /// Elements of 32 or 64 bits whose 16-bit words travel swapped (`word_order: swapped`).
+    swapped: bool,
     elem: PhantomData<T>,
 }
 
@@ -53,7 +55,16 @@ impl<'a, T: Wire + 'a> ListView<'a, T> {
 
     #[inline(always)]
     fn read(&self, c: &[u8]) -> T {
-        let u = crate::codec::uint(c, self.le);
+        let u = if self.swapped && (c.len() == 4 || c.len() == 8) {
+            let n = c.len();
+            let mut b = [0u8; 8];
+            for (i, d) in b[..n].iter_mut().enumerate() {
+                *d = c[crate::repeated::swap_index(i, n)];
+            }
+            crate::codec::uint(&b[..n], self.le)
+        } else {
+            crate::codec::uint(c, self.le)
+        };
         let bits = 8 * self.width as u32;
         let v = if self.signed && bits < 64 {
             ((u << (64 - bits)) as i64) >> (64 - bits)
@@ -194,8 +205,22 @@ impl RepeatAt {
             width,
             le,
             signed,
+            swapped: false,
             elem: PhantomData,
         })
+    }
+
+    /// [`Self::view`] of elements of 32 or 64 bits whose 16-bit words travel swapped
+    /// (`word_order: swapped`): refuses what [`RepeatAt::words`] refuses, with its error.
+    #[inline]
+    pub fn view_words<'a, T: Wire, const N: usize>(
+        &self,
+        bytes: &'a [u8],
+        le: bool,
+        signed: bool,
+    ) -> Result<ListView<'a, T>, DecodeError> {
+        let v = self.view::<T, N>(bytes, le, signed)?;
+        Ok(ListView { swapped: true, ..v })
     }
 
     /// The `n` bits `bytes` packs, lent in place: refuses what [`RepeatAt::bits`] refuses,
@@ -226,8 +251,8 @@ impl RepeatAt {
     ) -> Result<(), DecodeError> {
         for (i, v) in items.iter().enumerate() {
             let found = v.to_i64();
-            if !(min..=max).contains(&found) {
-                return Err(self.out_of_range(i, found, min, max));
+            if !T::within(found, min, max) {
+                return Err(self.out_of_range(i, found, min, max, T::KIND));
             }
         }
         Ok(())

@@ -73,6 +73,10 @@ pub(super) fn repeat_at(
             let c = counter(i);
             quote!(rt::CountBy::Bytes(#c))
         }
+        Count::Fixed(n) => {
+            let n = usize_lit(n);
+            quote!(rt::CountBy::Fixed(#n))
+        }
     };
     let (min, max) = (usize_lit(r.min), usize_lit(r.max));
     quote! {
@@ -292,10 +296,19 @@ pub(super) fn write_list(f: &Field, v: &Ident, at: TokenStream) -> TokenStream {
                 *b = #t;
             }
         }}
+    } else if words_swapped(f) {
+        let (width, le) = (usize_lit(f.width), f.byte_order == ByteOrder::Little);
+        quote!(rt::write_words(#v.as_slice(), #width, #le, &mut out[#at..]);)
     } else {
         let (width, le) = (usize_lit(f.width), f.byte_order == ByteOrder::Little);
         quote!(rt::write_elements(#v.as_slice(), #width, #le, &mut out[#at..]);)
     }
+}
+
+/// Whether repeated field `f`'s elements are 32- or 64-bit numbers whose 16-bit words travel
+/// swapped (`word_order: swapped`): read by `rt::RepeatAt::words`, written by `rt::write_words`.
+fn words_swapped(f: &Field) -> bool {
+    f.word_swapped && matches!(f.width, 4 | 8) && !f.is_record()
 }
 
 /// The value of repeated field `l` of `m` (`None` if it is not one), read from the bytes of
@@ -372,10 +385,13 @@ pub(super) fn decode_repeat(
         } => {
             let (e, max) = (typed.unwrap_or_else(|| elem.ident()), usize_lit(max));
             let (le, signed) = (f.byte_order == ByteOrder::Little, f.signed);
-            if ctx.view.get() {
-                quote!(#c.view::<#e, #max>(#elements, #le, #signed)?)
-            } else {
-                quote!(#c.elements::<#e, #max>(#elements, #le, #signed)?)
+            // 32- and 64-bit elements whose 16-bit words travel swapped (`word_order`).
+            let swapped = words_swapped(f);
+            match (ctx.view.get(), swapped) {
+                (true, false) => quote!(#c.view::<#e, #max>(#elements, #le, #signed)?),
+                (true, true) => quote!(#c.view_words::<#e, #max>(#elements, #le, #signed)?),
+                (false, false) => quote!(#c.elements::<#e, #max>(#elements, #le, #signed)?),
+                (false, true) => quote!(#c.words::<#e, #max>(#elements, #le, #signed)?),
             }
         }
         Kind::BitList { bytes } => {
