@@ -164,7 +164,10 @@ fn fixed_records_spec_generates_its_snapshot() {
 /// (`snapshots_compile.rs` compiles it and holds it to the interpreter).
 #[test]
 fn float_lists_spec_generates_its_snapshot() {
-    check("model/tests/fixtures/valid/float_lists.yaml", "float_lists.rs");
+    check(
+        "model/tests/fixtures/valid/float_lists.yaml",
+        "float_lists.rs",
+    );
 }
 
 /// Frames with no start byte, no address and no checksum (Maestro's compact protocol)

@@ -2282,7 +2282,11 @@ fn random_spec_without_examples(seed: u64) -> (String, usize) {
             let max: usize = f.yaml[at..]
                 .split("max: ")
                 .nth(1)
-                .map(|r| r.chars().take_while(char::is_ascii_digit).collect::<String>())
+                .map(|r| {
+                    r.chars()
+                        .take_while(char::is_ascii_digit)
+                        .collect::<String>()
+                })
                 .and_then(|d| d.parse().ok())
                 .unwrap_or(1);
             let (ty, width) = [("u64", 8), ("i64", 8), ("f32", 4), ("f64", 8)][rng.usize(..4)];
@@ -3227,13 +3231,17 @@ pub fn constructs(p: &ir::Protocol) -> Vec<&'static str> {
         "repeat to end",
     );
     add(
-        msgs.iter()
-            .any(|m| m.repeats().any(|(_, _, r)| matches!(r.count, Count::Fixed(_)))),
+        msgs.iter().any(|m| {
+            m.repeats()
+                .any(|(_, _, r)| matches!(r.count, Count::Fixed(_)))
+        }),
         "records of a fixed count",
     );
     add(
-        msgs.iter()
-            .any(|m| m.repeats().any(|(_, f, _)| f.is_wide() && f.packed.is_none())),
+        msgs.iter().any(|m| {
+            m.repeats()
+                .any(|(_, f, _)| f.is_wide() && f.packed.is_none())
+        }),
         "list of floats or 64-bit integers",
     );
     add(

@@ -4205,9 +4205,15 @@ fn fixed_list(f: &model::Field, p: &str, sink: &mut Sink) -> (model::Field, Opti
     if let Some((k, why)) = refused {
         sink.error(join(&rp, k), why);
         if f.ty == T::Record {
-            // Checked no further: a byte in its place, lest the record's rules speak too.
-            out.ty = T::U8;
-            out.fields.clear();
+            // Checked on as one record, lest the rules of its repeat speak twice.
+            out.repeat = Some(model::Repeat {
+                count: "1".to_owned(),
+                until: None,
+                of: None,
+                min: None,
+                max: None,
+                request: None,
+            });
         }
         return (out, None);
     }

@@ -236,11 +236,14 @@ const CASES: &[(&str, &[(&str, &str)])] = &[
     ),
     (
         "fixed_records_sized",
-        &[("responses.sat_blocks.fields.blocks", "a record whose width a field gives runs to the `end` of the frame (count: end); counted records of it are not expressible yet")],
+        &[("responses.sat_blocks.fields.blocks.fields.azim.bytes", "a record whose width a field gives runs to the `end` of the frame (count: end); counted records of it are not expressible yet")],
     ),
     (
         "float_list_until",
-        &[("responses.samples.fields.samples.repeat.until", "a terminator ends text (type: ascii); a list of numbers is counted by a field or runs to the `end`")],
+        &[
+            ("responses.samples.fields.samples.repeat.until", "text up to a terminator needs a length field (framing.length): a stream decoder reads the frame's length before it can look for the terminator"),
+            ("responses.samples.fields.samples.repeat.until", "a terminator ends text (type: ascii); a list of numbers is counted by a field or runs to the `end`"),
+        ],
     ),
     (
         "fixed_list_with_value",

@@ -58,7 +58,7 @@ fn another_number_of_records_is_refused_both_ways() {
     let err = interp::decode(&p, Some(Direction::Response), None, &short).unwrap_err();
     assert_eq!(
         err.to_string(),
-        "sat_blocks.blocks at offset 10: expected 2 by the frame's length, found 3"
+        "sat_blocks.blocks at offset 10: 3 elements, expected 2 by the frame's length"
     );
     let d = interp::decode(&p, Some(Direction::Response), None, &e.wire).unwrap();
     let mut values = d.values.clone();
@@ -110,7 +110,10 @@ fn docs_show_records_of_a_fixed_count_as_an_array() {
     let md = busspec_model::docs::render(&p, "ubx_fixed_blocks.yaml");
     // A record of 6 bytes, three of them (as `f32[4]` is four floats).
     assert!(md.contains("record[6][3]"), "{md}");
-    assert!(md.contains("3 elements, always, no field counts them"), "{md}");
+    assert!(
+        md.contains("3 elements, always, no field counts them"),
+        "{md}"
+    );
     let p = load("floats", &text("float_lists.yaml"));
     let md = busspec_model::docs::render(&p, "float_lists.yaml");
     assert!(md.contains("f32[0..=8]"), "{md}");
@@ -131,7 +134,12 @@ fn a_changed_count_of_records_is_wire_breaking() {
         .find(|c| c.path == "responses.sat_blocks.fields.blocks")
         .unwrap_or_else(|| panic!("{found:?}"));
     assert_eq!(c.category, Category::WireBreaking);
-    assert!(c.text.contains("a fixed count of 3 → a fixed count of 4"), "{}", c.text);
+    assert!(
+        c.text
+            .contains("a fixed count of 3, 3..=3 elements → a fixed count of 4, 4..=4 elements"),
+        "{}",
+        c.text
+    );
 }
 
 #[test]
@@ -184,5 +192,8 @@ fn float_and_wide_elements_read_as_their_type_both_ways() {
         }
     }
     let err = interp::encode(&p, p.examples[1].message, 1, &values).unwrap_err();
-    assert_eq!(err.to_string(), "values = 1500 is outside its range -1000..=1000");
+    assert_eq!(
+        err.to_string(),
+        "values = 1500.0 is outside its range -1000.0..=1000.0"
+    );
 }

@@ -329,7 +329,10 @@ pub fn agree<P: Protocol>(p: &ir::Protocol) -> Tally {
                     .map(|k| match k % 4 {
                         0 => lo,
                         1 => hi,
-                        _ => lo + rng.below((hi - lo) as u64 + 1) as i64,
+                        // Anywhere between (a 64-bit or float element's: any bits).
+                        _ => lo.wrapping_add(
+                            rng.below((hi.wrapping_sub(lo) as u64).wrapping_add(1)) as i64,
+                        ),
                     })
                     .collect();
                 // Records: each field at the ends of its type or anywhere between.
