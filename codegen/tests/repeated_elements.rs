@@ -90,6 +90,7 @@ fn repeat_at(p: &ir::Protocol, m: &ir::Message) -> rt::RepeatAt {
             ir::Count::Elements(i) => rt::CountBy::Elements(field(i)),
             ir::Count::Bytes(i) => rt::CountBy::Bytes(field(i)),
             ir::Count::Until(t) => rt::CountBy::Until(t),
+            ir::Count::Fixed(n) => rt::CountBy::Fixed(n),
         },
         min: r.min,
         max: r.max,

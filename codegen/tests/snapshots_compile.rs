@@ -2143,7 +2143,10 @@ fn float_lists_snapshot_agrees_with_the_interpreter() {
     }
     match Response::decode(&p.examples[3].wire).map(|d| d.message) {
         Ok(Response::Counters(c)) => {
-            assert_eq!(c.totals.as_slice(), &[987_654_321_987_654_321u64, 1_234_567_890_123]);
+            assert_eq!(
+                c.totals.as_slice(),
+                &[987_654_321_987_654_321u64, 1_234_567_890_123]
+            );
             assert_eq!(c.drifts.as_slice(), &[-9_000_000_000i64, 42]);
         }
         other => panic!("{other:?}"),
