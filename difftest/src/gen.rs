@@ -2257,15 +2257,26 @@ fn random_spec_without_examples(seed: u64) -> (String, usize) {
         }
     }
 
+    // Only in a message whose code no other message of its direction has: messages that share
+    // a code (or have none) are told apart by their lengths (padding drawn from the lists as
+    // they were), which a list that takes other bytes would blur.
+    let own_code = |ms: &[Gm]| -> Vec<bool> {
+        ms.iter()
+            .map(|m| !m.code.is_empty() && ms.iter().filter(|o| o.code == m.code).count() == 1)
+            .collect()
+    };
     // Lists of floats and 64-bit integers (a meter's block of float registers): about 30 % of
     // the lists of integers of a unit as drawn become lists of u64, i64, f32 or f64 (maybe
     // word-swapped, maybe with a range), counted as they were. Drawn by a generator of its own.
     {
         let mut rng = own_rng(seed, Own::WideLists);
+        let (own_c, own_r) = (own_code(&commands), own_code(&responses));
         for f in commands
             .iter_mut()
-            .chain(responses.iter_mut())
-            .flat_map(|m| m.fields.iter_mut())
+            .zip(own_c)
+            .chain(responses.iter_mut().zip(own_r))
+            .filter(|(_, own)| *own)
+            .flat_map(|(m, _)| m.fields.iter_mut())
         {
             let own = format!("{{name: {}, type: {}, unit: ", f.name, f.ty);
             let eligible = matches!(f.ty, "u8" | "u16" | "i16" | "u24" | "i32")
@@ -2325,10 +2336,13 @@ fn random_spec_without_examples(seed: u64) -> (String, usize) {
     // Drawn by a generator of its own.
     {
         let mut rng = own_rng(seed, Own::FixedRecords);
+        let (own_c, own_r) = (own_code(&commands), own_code(&responses));
         for f in commands
             .iter_mut()
-            .chain(responses.iter_mut())
-            .flat_map(|m| m.fields.iter_mut())
+            .zip(own_c)
+            .chain(responses.iter_mut().zip(own_r))
+            .filter(|(_, own)| *own)
+            .flat_map(|(m, _)| m.fields.iter_mut())
         {
             if f.ty != "record" || f.yaml.contains("bytes:") || f.yaml.contains("request:") {
                 continue;
