@@ -2346,7 +2346,9 @@ fn random_spec_without_examples(seed: u64) -> (String, usize) {
         {
             // A record's `ty` is the type drawn for a list (records whose width a field gives:
             // "record"): its YAML says what it is.
-            let record = f.yaml.starts_with(&format!("{{name: {}, type: record,", f.name));
+            let record = f
+                .yaml
+                .starts_with(&format!("{{name: {}, type: record,", f.name));
             if !record || f.yaml.contains("bytes:") || f.yaml.contains("request:") {
                 continue;
             }
