@@ -16,6 +16,10 @@ pub struct Engine {
     generated: bool,
     /// Prints decoded frames ([`Self::decode_into`]).
     printer: Printer,
+    /// The bytes the request's checksum covers, where the frames decoded are replies to a
+    /// request given whole (`--request`): a reply's checksum may take them in
+    /// (`checksum_over_request`).
+    covered: Option<Vec<u8>>,
 }
 
 /// Loads the spec a built-in protocol was generated from.
@@ -32,6 +36,7 @@ struct Decode<'a> {
     spec: &'a Spec,
     direction: Option<Direction>,
     reply_to: Option<usize>,
+    covered: Option<&'a [u8]>,
     wire: &'a [u8],
 }
 
@@ -49,10 +54,11 @@ impl ProtocolVisitor for DecodeInto<'_> {
             spec,
             direction,
             reply_to,
+            covered,
             wire,
         } = self.decode;
         let (out, printer) = (self.out, self.printer);
-        match busspec_json::decode_typed::<P>(spec, direction, reply_to, wire)? {
+        match busspec_json::decode_typed_with::<P>(spec, direction, reply_to, covered, wire)? {
             busspec_json::Typed::Request(d) => {
                 printer.message(out, spec, Direction::Request, d.address, &d.message, None)
             }
@@ -144,6 +150,7 @@ impl Engine {
                 printer: Printer::new(&spec),
                 spec,
                 generated: true,
+                covered: None,
             })
         })
     }
@@ -154,7 +161,15 @@ impl Engine {
             printer: Printer::new(&spec),
             spec,
             generated: false,
+            covered: None,
         }
+    }
+
+    /// Decodes the frames that follow as replies to the request frame `request` (as it
+    /// travelled): the checksum of a reply that takes in its request's bytes is checked over
+    /// them.
+    pub fn set_request(&mut self, request: &[u8]) {
+        self.covered = self.spec.framing.checksum_span(request).map(<[u8]>::to_vec);
     }
 
     /// Decodes one frame and writes its JSON line to `out`, ended by `\n`; `reply_to` is a
@@ -167,7 +182,13 @@ impl Engine {
         out: &mut Vec<u8>,
     ) -> Result<(), String> {
         if !self.generated {
-            let frame = busspec_json::decode_frame(&self.spec, direction, reply_to, wire)?;
+            let frame = busspec_json::decode_frame_with(
+                &self.spec,
+                direction,
+                reply_to,
+                self.covered.as_deref(),
+                wire,
+            )?;
             self.printer.frame(out, &self.spec, &frame, None);
             return Ok(());
         }
@@ -176,6 +197,7 @@ impl Engine {
                 spec: &self.spec,
                 direction,
                 reply_to,
+                covered: self.covered.as_deref(),
                 wire,
             },
             printer: &mut self.printer,

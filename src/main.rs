@@ -746,9 +746,15 @@ fn decode(args: DecodeArgs) -> Result<(), String> {
             direction = Some(Direction::Response);
             reply_to = Some(frame.message.index);
             // Owned: `engine` is borrowed mutably below, while the request is still needed.
-            Some(frame.into_owned())
+            Some((
+                frame.into_owned(),
+                busspec_json::parse_hex(text).unwrap_or_default(),
+            ))
         }
     };
+    if let Some((_, wire)) = &request {
+        engine.set_request(wire);
+    }
     let mut out = Out::new(std::io::stdout().lock());
     if let Some(file) = &args.stream {
         if args.pcapng.as_deref() == Some(Path::new("-")) {
@@ -780,8 +786,8 @@ fn decode(args: DecodeArgs) -> Result<(), String> {
     for (i, text) in args.frames.iter().enumerate() {
         let wire = busspec_json::parse_hex(text);
         let result = wire.as_ref().map_err(String::clone).and_then(|wire| {
-            if let Some(req) = &request {
-                busspec_model::interp::decode_reply(&engine.spec, req, wire)
+            if let Some((req, req_wire)) = &request {
+                busspec_model::interp::decode_reply_with(&engine.spec, req, Some(req_wire), wire)
                     .map_err(|e| e.to_string())?;
             }
             if args.lenient {

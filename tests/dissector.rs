@@ -132,6 +132,8 @@ fn cases() -> Vec<Case> {
         spec("model/tests/fixtures/valid/nextion.yaml"),
         // A 24-bit CRC (RTCM 3's CRC-24Q).
         spec("model/tests/fixtures/valid/rtcm3_frame.yaml"),
+        // A reply whose checksum takes in its request's bytes (Pelco D's general response).
+        spec("model/tests/fixtures/valid/pelco_d_replies.yaml"),
         // A short form of the frame (M-Bus) is not compared here yet: the dissector words a
         // short frame's out-of-spec address at its laid-out offset (5, not 2). Its dissector
         // loads and survives random bytes (`every_fixture_dissector_loads_...`).

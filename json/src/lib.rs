@@ -41,7 +41,7 @@ use busspec_runtime::{Decoded, EncodeError, Message, Protocol};
 
 pub use busspec_model::ir::Protocol as Spec;
 pub use busspec_runtime::FieldValue;
-pub use decode::{decode_frame, decode_typed, request_for};
+pub use decode::{decode_frame, decode_frame_with, decode_typed, decode_typed_with, request_for};
 pub use lines::Printer;
 pub use parse::{parse_line, Parsed};
 pub use print::{

@@ -876,9 +876,10 @@ pub fn render(p: &Protocol, source: &str) -> String {
                         Some(or) => format!(" Its code is the request's with 0x{or:02X} set."),
                         None => String::new(),
                     },
-                    match m.checksum_extra {
-                        Some(x) => format!(" Checksum extra byte {x} (0x{x:02X})."),
-                        None => String::new(),
+                    match (m.checksum_extra, m.over_request) {
+                        (Some(x), _) => format!(" Checksum extra byte {x} (0x{x:02X})."),
+                        (None, Some(from)) => format!(" Its checksum takes in its request's bytes: those the request's checksum covers, then its own from offset {from}; it is checked only with the request."),
+                        (None, None) => String::new(),
                     },
                     if m.needs_request {
                         " Shares its code and length with other responses: decode it together with the request it answers."

@@ -373,6 +373,10 @@ struct Core<C: Protocol> {
     requests: u64,
     responses: u64,
     last_request: Option<C::Request>,
+    /// The bytes that request's checksum covers (the first `span_len` of `span`), where a
+    /// reply's checksum may take them in ([`Framing::OVER_REQUEST`]).
+    span: C::Span,
+    span_len: usize,
     default_request: Option<C::Request>,
     noise_at: u64,
     noise_len: u64,
@@ -432,6 +436,8 @@ impl<C: Protocol> StreamDecoder<C> {
                     u64::MAX
                 },
                 last_request: None,
+                span: C::EMPTY_SPAN,
+                span_len: 0,
                 default_request: None,
                 noise_at: 0,
                 noise_len: 0,
@@ -748,9 +754,15 @@ impl<C: Protocol> Core<C> {
             None
         };
         let found = match (as_request, as_response) {
-            (Some(frame), None) => {
-                self.last_request = Some(frame.message);
-                Found::Request(frame)
+            (Some(request), None) => {
+                self.last_request = Some(request.message);
+                if C::OVER_REQUEST {
+                    let span = C::request_span(frame);
+                    let room = self.span.as_mut();
+                    self.span_len = span.len().min(room.len());
+                    room[..self.span_len].copy_from_slice(&span[..self.span_len]);
+                }
+                Found::Request(request)
             }
             (None, Some(Ok(frame))) => {
                 self.last_request = None;
@@ -784,6 +796,19 @@ impl<C: Protocol> Core<C> {
     /// differ in a constant unless only the request tells them apart).
     #[inline(always)]
     fn response(&self, frame: &[u8]) -> Result<Decoded<C::Response>, DecodeError> {
+        if C::OVER_REQUEST {
+            // The request's bytes where a request came before; a default request has none.
+            let covered = self
+                .last_request
+                .map(|_| &self.span.as_ref()[..self.span_len]);
+            if let Some(r) = self.last_request.as_ref().or(self.default_request.as_ref()) {
+                return match C::decode_response_over(frame, Some(r), covered) {
+                    Ok(d) => Ok(d),
+                    Err(_) => Self::not_the_reply(frame),
+                };
+            }
+            return C::decode_response_for(frame, None);
+        }
         if let Some(r) = self.last_request.as_ref().or(self.default_request.as_ref()) {
             return match C::decode_response_for(frame, Some(r)) {
                 Ok(d) => Ok(d),
@@ -897,6 +922,11 @@ impl<C: Protocol> Core<C> {
                     }
                 }
             };
+        }
+        // A reply whose checksum takes in its request's bytes needs them kept: the full
+        // rule's case.
+        if C::OVER_REQUEST {
+            slow!()
         }
         // A frame after preamble bytes takes them into its event: the full rule's case.
         if let Some(pre) = C::PREAMBLE {

@@ -352,7 +352,8 @@ fn check_error(e: &DecodeError, len: usize, escaped: bool) {
         | DecodeError::NotBcd { offset, .. }
         | DecodeError::NotFollowing { offset, .. }
         | DecodeError::ByteCount { offset, .. }
-        | DecodeError::BadEscape { offset, .. } => {
+        | DecodeError::BadEscape { offset, .. }
+        | DecodeError::NeedsRequest { offset, .. } => {
             assert!(offset < len, "{e}")
         }
         DecodeError::NoTerminator { offset, within, .. } => {
