@@ -72,6 +72,7 @@ impl ProtocolVisitor for DecodeInto<'_> {
 struct Encode<'a> {
     spec: &'a Spec,
     line: &'a str,
+    request: Option<&'a [u8]>,
 }
 
 impl ProtocolVisitor for Encode<'_> {
@@ -79,7 +80,7 @@ impl ProtocolVisitor for Encode<'_> {
     fn visit<P: Protocol>(self) -> Self::Output {
         busspec_json::parse_line(self.spec, self.line)?
             .to_typed::<P>(self.spec)?
-            .encode()
+            .encode_reply(self.request)
             .map_err(|e| e.to_string())
     }
 }
@@ -261,10 +262,17 @@ impl Engine {
 
     /// Encodes one JSON line to wire bytes.
     pub fn encode(&self, line: &str) -> Result<Vec<u8>, String> {
+        self.encode_reply(line, None)
+    }
+
+    /// Encodes one JSON line to wire bytes as the reply to the request frame `request`,
+    /// where given: the checksum of a reply that takes in its request's bytes
+    /// (`checksum_over_request`) over them.
+    pub fn encode_reply(&self, line: &str, request: Option<&[u8]>) -> Result<Vec<u8>, String> {
         if self.generated {
-            encode_built_in(&self.spec, line)
+            encode_typed(&self.spec, line, request)
         } else {
-            busspec_json::parse_line(&self.spec, line)?.encode(&self.spec)
+            busspec_json::parse_line(&self.spec, line)?.encode_reply(&self.spec, request)
         }
     }
 
@@ -296,9 +304,23 @@ impl Engine {
 
 /// Encodes one JSON line of a built-in protocol (`spec`, as [`Engine::built_in`] loads it)
 /// with its generated codec.
+#[cfg(test)]
 pub fn encode_built_in(spec: &Spec, line: &str) -> Result<Vec<u8>, String> {
-    with_protocol(&spec.name, Encode { spec, line })
-        .unwrap_or_else(|| Err(not_built_in(&spec.name)))
+    encode_typed(spec, line, None)
+}
+
+/// One JSON line of a built-in protocol encoded with its generated codec, as the reply to the
+/// request frame `request` where given.
+fn encode_typed(spec: &Spec, line: &str, request: Option<&[u8]>) -> Result<Vec<u8>, String> {
+    with_protocol(
+        &spec.name,
+        Encode {
+            spec,
+            line,
+            request,
+        },
+    )
+    .unwrap_or_else(|| Err(not_built_in(&spec.name)))
 }
 
 /// The spec of the built-in protocol called `name`.

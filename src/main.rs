@@ -426,6 +426,10 @@ struct EncodeArgs {
     /// Load the spec from this file instead of the built-in one.
     #[arg(long, value_name = "FILE")]
     spec: Option<PathBuf>,
+    /// The request frame (hex) the replies answer: a reply whose checksum takes in its
+    /// request's bytes (`checksum_over_request`) is encoded over them.
+    #[arg(long, value_name = "HEX")]
+    request: Option<String>,
 }
 
 #[derive(Clone, Copy, ValueEnum)]
@@ -1094,13 +1098,22 @@ impl Feed<'_, '_> {
 
 fn encode(args: EncodeArgs) -> Result<(), String> {
     let engine = protocol("encode", &args.protocol, args.spec.as_deref())?;
+    let request = args.request.as_deref().map(|text| {
+        busspec_json::parse_hex(text)
+            .and_then(|wire| {
+                busspec_model::interp::decode(&engine.spec, Some(Direction::Request), None, &wire)
+                    .map_err(|e| e.to_string())?;
+                Ok(wire)
+            })
+            .unwrap_or_else(|e| usage_error("encode", format!("--request {text}: {e}")))
+    });
     let mut out = Out::new(std::io::stdout().lock());
     let failed = stdin_lines(&mut out, |number, text, out| {
         if text.trim().is_empty() {
             return Ok(());
         }
         let wire = engine
-            .encode(text.trim())
+            .encode_reply(text.trim(), request.as_deref())
             .map_err(|reason| format!("line {number}: {reason}"))?;
         out.line(&frames::hex(&wire))
     })?;

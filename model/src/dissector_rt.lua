@@ -1482,7 +1482,7 @@ local function setup(P)
     -- The checksum: over the bytes it covers, up to itself.
     local ck = P.checksum
     local ck_good, ck_at, ck_found, ck_expected = true, nil, nil, nil
-    local chosen_name = 
+    local chosen_name = ""
     local ck_tvb = tvb
     if wire_ck then
       -- Computed on the escaped bytes (`computed: escaped`): as they carry it.

@@ -369,7 +369,14 @@ fn examples_of(out: &mut String, p: &Protocol, r: MessageRef) {
             .collect();
         let mut note = Vec::new();
         if let Some(c) = e.reply_to {
-            note.push(format!("reply to `{}`", p.commands[c].name));
+            match &e.request {
+                Some(w) => note.push(format!(
+                    "reply to `{}` `{}`",
+                    p.commands[c].name,
+                    crate::interp::format_hex(w)
+                )),
+                None => note.push(format!("reply to `{}`", p.commands[c].name)),
+            }
         }
         if let Some(x) = e.erratum {
             note.push(format!(

@@ -945,7 +945,7 @@ impl Lookup {
     /// [`Self::decode_paired`] in `spare`'s memory: the frame's values built in
     /// [`Spare::values`] (taken from it only when a frame decodes), for a caller that gives
     /// back the frames it is done with, and the decode's own lists kept there.
-    /// `covered`: the bytes the request's checksum covers ([`Framing::checksum_span`] of its
+    /// `covered`: the bytes the request's checksum covers ([`crate::ir::Framing::checksum_span`] of its
     /// frame), which the checksum of a reply that takes them in runs over first.
     pub fn decode_paired_reusing<'p>(
         &self,
@@ -990,7 +990,7 @@ pub fn decode<'p>(
     decode_with(p, direction, reply_to, None, wire)
 }
 
-/// [`decode`] with the bytes the request's checksum covers (`covered`, [`Framing::checksum_span`]
+/// [`decode`] with the bytes the request's checksum covers (`covered`, [`crate::ir::Framing::checksum_span`]
 /// of its frame): the checksum of a reply that takes in its request's bytes
 /// (`checksum_over_request`) runs over them first; without them such a reply is refused
 /// ([`DecodeError::NeedsRequest`]).
@@ -1478,7 +1478,7 @@ pub fn decode_as<'p>(
 }
 
 /// [`decode_as`] of a reply with the bytes its request's checksum covers (`covered`,
-/// [`Framing::checksum_span`]): the checksum of a reply that takes them in runs over them
+/// [`crate::ir::Framing::checksum_span`]): the checksum of a reply that takes them in runs over them
 /// first ([`DecodeError::NeedsRequest`] without them).
 pub fn decode_as_reply<'p>(
     p: &'p Protocol,
@@ -2712,7 +2712,7 @@ pub fn encode(
 }
 
 /// [`encode`] of a reply with the bytes its request's checksum covers (`covered`,
-/// [`Framing::checksum_span`] of the request's frame): the checksum of a reply that takes
+/// [`crate::ir::Framing::checksum_span`] of the request's frame): the checksum of a reply that takes
 /// them in runs over them first (`checksum_over_request`); without them such a reply is
 /// refused ([`EncodeError::NeedsRequest`]). Other messages ignore them.
 #[cfg(feature = "tools")]

@@ -156,7 +156,9 @@ pub trait Protocol: Framing + Copy + Debug + Default + Send + Sync + 'static {
     /// Whether `response` is a refusal: the spec marks it `kind: nak`.
     fn is_nak(response: &Self::Response) -> bool;
     /// Whether `frame` ends in the checksum of the bytes it covers, and nothing else: the
-    /// weakest acceptance test (a frame shorter than a checksum fails it).
+    /// weakest acceptance test (a frame shorter than a checksum fails it). It knows no
+    /// request: a reply whose checksum takes in its request's bytes (`checksum_over_request`)
+    /// is taken over its own bytes alone here, which such a reply fails.
     fn checksum_ok(frame: &[u8]) -> bool;
 }
 

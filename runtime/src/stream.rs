@@ -756,12 +756,7 @@ impl<C: Protocol> Core<C> {
         let found = match (as_request, as_response) {
             (Some(request), None) => {
                 self.last_request = Some(request.message);
-                if C::OVER_REQUEST {
-                    let span = C::request_span(frame);
-                    let room = self.span.as_mut();
-                    self.span_len = span.len().min(room.len());
-                    room[..self.span_len].copy_from_slice(&span[..self.span_len]);
-                }
+                self.keep_span(frame);
                 Found::Request(request)
             }
             (None, Some(Ok(frame))) => {
@@ -797,12 +792,8 @@ impl<C: Protocol> Core<C> {
     #[inline(always)]
     fn response(&self, frame: &[u8]) -> Result<Decoded<C::Response>, DecodeError> {
         if C::OVER_REQUEST {
-            // The request's bytes where a request came before; a default request has none.
-            let covered = self
-                .last_request
-                .map(|_| &self.span.as_ref()[..self.span_len]);
             if let Some(r) = self.last_request.as_ref().or(self.default_request.as_ref()) {
-                return match C::decode_response_over(frame, Some(r), covered) {
+                return match C::decode_response_over(frame, Some(r), self.covered()) {
                     Ok(d) => Ok(d),
                     Err(_) => Self::not_the_reply(frame),
                 };
@@ -816,6 +807,26 @@ impl<C: Protocol> Core<C> {
             };
         }
         C::decode_response_for(frame, None)
+    }
+
+    /// Keeps the bytes request `frame`'s checksum covers, where a reply's checksum may take
+    /// them in ([`Framing::OVER_REQUEST`]; nothing for any other protocol).
+    #[inline(always)]
+    fn keep_span(&mut self, frame: &[u8]) {
+        if C::OVER_REQUEST {
+            let span = C::request_span(frame);
+            let room = self.span.as_mut();
+            self.span_len = span.len().min(room.len());
+            room[..self.span_len].copy_from_slice(&span[..self.span_len]);
+        }
+    }
+
+    /// The bytes the last request's checksum covered, where a request came before (a default
+    /// request has none).
+    #[inline(always)]
+    fn covered(&self) -> Option<&[u8]> {
+        self.last_request
+            .map(|_| &self.span.as_ref()[..self.span_len])
     }
 
     /// `frame` on its own, where it did not decode as the reply: out of line and cold, so
@@ -883,11 +894,18 @@ impl<C: Protocol> Core<C> {
                 let (offset, len) = (self.head, frame.len());
                 if $request {
                     match C::decode_request(frame) {
-                        Ok(frame) => settle!(
-                            Some(frame.message),
-                            len,
-                            Event::Request { offset, len, frame }
-                        ),
+                        Ok(d) => {
+                            self.keep_span(frame);
+                            settle!(
+                                Some(d.message),
+                                len,
+                                Event::Request {
+                                    offset,
+                                    len,
+                                    frame: d
+                                }
+                            )
+                        }
                         Err(e) if breaks_spec(&e) => {
                             slow!()
                         }
@@ -903,10 +921,12 @@ impl<C: Protocol> Core<C> {
                         self.response(frame)
                     } else {
                         match self.last_request.as_ref().or(self.default_request.as_ref()) {
-                            Some(r) => match C::decode_response_for(frame, Some(r)) {
-                                Ok(d) => Ok(d),
-                                Err(_) => slow!(),
-                            },
+                            Some(r) => {
+                                match C::decode_response_over(frame, Some(r), self.covered()) {
+                                    Ok(d) => Ok(d),
+                                    Err(_) => slow!(),
+                                }
+                            }
                             None => C::decode_response_for(frame, None),
                         }
                     };
@@ -925,9 +945,6 @@ impl<C: Protocol> Core<C> {
         }
         // A reply whose checksum takes in its request's bytes needs them kept: the full
         // rule's case.
-        if C::OVER_REQUEST {
-            slow!()
-        }
         // A frame after preamble bytes takes them into its event: the full rule's case.
         if let Some(pre) = C::PREAMBLE {
             if self.preamble_len > 0 && window.first() != Some(&pre.byte) {
@@ -1008,15 +1025,20 @@ impl<C: Protocol> Core<C> {
             let as_request = C::decode_request(frame);
             let as_response = self.response(frame);
             match as_request {
-                Ok(frame) => {
+                Ok(d) => {
                     if let Ok(_) | Err(DecodeError::Ambiguous { .. }) = as_response {
                         let code = both_ways_code(window.get(..len).unwrap_or_default());
                         settle!(None, len, Event::Ambiguous { offset, len, code });
                     }
+                    self.keep_span(frame);
                     settle!(
-                        Some(frame.message),
+                        Some(d.message),
                         len,
-                        Event::Request { offset, len, frame }
+                        Event::Request {
+                            offset,
+                            len,
+                            frame: d
+                        }
                     );
                 }
                 Err(q) => match as_response {
