@@ -80,6 +80,9 @@ pub struct Report {
     pub class_only: usize,
     /// How many of each signature.
     pub signatures: std::collections::BTreeMap<String, usize>,
+    /// Replies whose checksum takes in their request's bytes that both engines accepted,
+    /// decoded as the reply to that request.
+    pub over_request: usize,
 }
 
 /// Disagreements kept per spec: the first of each signature, up to this many.
@@ -345,6 +348,9 @@ fn same_as_view<M: Message + fmt::Debug>(
 pub struct Run<'p, P: Protocol> {
     p: &'p ir::Protocol,
     asks: Vec<Ask<P>>,
+    /// The ask the last random frame, a reply whose checksum takes in its request's bytes,
+    /// was made over.
+    over: Option<usize>,
     rng: fastrand::Rng,
     pub report: Report,
     views: ViewFns<P>,
@@ -407,6 +413,7 @@ impl<'p, P: Protocol> Run<'p, P> {
         let mut run = Run {
             p,
             asks: Vec::new(),
+            over: None,
             rng: fastrand::Rng::with_seed(seed),
             report: Report::default(),
             views: ViewFns::none(),
@@ -452,6 +459,29 @@ impl<'p, P: Protocol> Run<'p, P> {
                         break;
                     }
                 }
+            }
+        }
+        // The requests examples of replies give (a reply whose checksum takes in its
+        // request's bytes names its request's frame): asked too, so such a reply is decoded
+        // as the reply to the request it was made over.
+        for e in &p.examples {
+            let Some(wire) = e.request.clone() else {
+                continue;
+            };
+            if run.asks.iter().any(|a| a.wire == wire) {
+                continue;
+            }
+            let g = caught(|| P::decode_request(&wire))
+                .ok()
+                .and_then(|x| x.ok());
+            let i = interp::decode(p, Some(Direction::Request), None, &wire).ok();
+            if let (Some(g), Some(i)) = (g, i) {
+                run.asks.push(Ask {
+                    command: i.message.index,
+                    wire,
+                    generated: g.message,
+                    interp: i.into_owned(),
+                });
             }
         }
         run
@@ -595,6 +625,14 @@ impl<'p, P: Protocol> Run<'p, P> {
             _ => std::borrow::Cow::Borrowed(frame),
         };
         let frame_back: &[u8] = &back;
+        if let (Said::Accepted(a), Mode::Reply(_)) = (&i, mode) {
+            let over = self
+                .p
+                .responses
+                .iter()
+                .any(|m| m.name == a.name && m.over_request.is_some());
+            self.report.over_request += usize::from(over);
+        }
         let agree = match (&g, &i) {
             (Said::Accepted(a), Said::Accepted(b)) => {
                 a.name == b.name
@@ -855,10 +893,12 @@ impl<'p, P: Protocol> Run<'p, P> {
         let values = random_values(self.p, m, &mut self.rng, strict);
         let a = self.random_address();
         // A reply whose checksum takes in its request's bytes: over a request drawn from
-        // the asks (the reply to it, decoded as such, checks).
+        // the asks (the reply to it, decoded as such, checks: `self.over`).
+        self.over = None;
         let covered = match m.over_request {
             Some(_) if !self.asks.is_empty() => {
                 let k = self.rng.usize(..self.asks.len());
+                self.over = Some(k);
                 self.p.framing.checksum_span(&self.asks[k].wire)
             }
             _ => None,
@@ -928,6 +968,10 @@ impl<'p, P: Protocol> Run<'p, P> {
                 }
             };
             self.decode_all_ways(&input, Some(1));
+            // A reply made over an ask's bytes, as the reply to that ask too.
+            if let Some(k) = self.over.take() {
+                self.decode(&input, Mode::Reply(k));
+            }
         }
         // Encodes: the examples' values, then random ones.
         for e in &p.examples {
