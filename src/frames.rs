@@ -16,6 +16,10 @@ pub struct Engine {
     generated: bool,
     /// Prints decoded frames ([`Self::decode_into`]).
     printer: Printer,
+    /// The bytes the request's checksum covers, where the frames decoded are replies to a
+    /// request given whole (`--request`): a reply's checksum may take them in
+    /// (`checksum_over_request`).
+    covered: Option<Vec<u8>>,
 }
 
 /// Loads the spec a built-in protocol was generated from.
@@ -32,6 +36,7 @@ struct Decode<'a> {
     spec: &'a Spec,
     direction: Option<Direction>,
     reply_to: Option<usize>,
+    covered: Option<&'a [u8]>,
     wire: &'a [u8],
 }
 
@@ -49,10 +54,11 @@ impl ProtocolVisitor for DecodeInto<'_> {
             spec,
             direction,
             reply_to,
+            covered,
             wire,
         } = self.decode;
         let (out, printer) = (self.out, self.printer);
-        match busspec_json::decode_typed::<P>(spec, direction, reply_to, wire)? {
+        match busspec_json::decode_typed_with::<P>(spec, direction, reply_to, covered, wire)? {
             busspec_json::Typed::Request(d) => {
                 printer.message(out, spec, Direction::Request, d.address, &d.message, None)
             }
@@ -66,6 +72,7 @@ impl ProtocolVisitor for DecodeInto<'_> {
 struct Encode<'a> {
     spec: &'a Spec,
     line: &'a str,
+    request: Option<&'a [u8]>,
 }
 
 impl ProtocolVisitor for Encode<'_> {
@@ -73,7 +80,7 @@ impl ProtocolVisitor for Encode<'_> {
     fn visit<P: Protocol>(self) -> Self::Output {
         busspec_json::parse_line(self.spec, self.line)?
             .to_typed::<P>(self.spec)?
-            .encode()
+            .encode_reply(self.request)
             .map_err(|e| e.to_string())
     }
 }
@@ -144,6 +151,7 @@ impl Engine {
                 printer: Printer::new(&spec),
                 spec,
                 generated: true,
+                covered: None,
             })
         })
     }
@@ -154,7 +162,15 @@ impl Engine {
             printer: Printer::new(&spec),
             spec,
             generated: false,
+            covered: None,
         }
+    }
+
+    /// Decodes the frames that follow as replies to the request frame `request` (as it
+    /// travelled): the checksum of a reply that takes in its request's bytes is checked over
+    /// them.
+    pub fn set_request(&mut self, request: &[u8]) {
+        self.covered = self.spec.framing.checksum_span(request).map(<[u8]>::to_vec);
     }
 
     /// Decodes one frame and writes its JSON line to `out`, ended by `\n`; `reply_to` is a
@@ -167,7 +183,13 @@ impl Engine {
         out: &mut Vec<u8>,
     ) -> Result<(), String> {
         if !self.generated {
-            let frame = busspec_json::decode_frame(&self.spec, direction, reply_to, wire)?;
+            let frame = busspec_json::decode_frame_with(
+                &self.spec,
+                direction,
+                reply_to,
+                self.covered.as_deref(),
+                wire,
+            )?;
             self.printer.frame(out, &self.spec, &frame, None);
             return Ok(());
         }
@@ -176,6 +198,7 @@ impl Engine {
                 spec: &self.spec,
                 direction,
                 reply_to,
+                covered: self.covered.as_deref(),
                 wire,
             },
             printer: &mut self.printer,
@@ -239,10 +262,17 @@ impl Engine {
 
     /// Encodes one JSON line to wire bytes.
     pub fn encode(&self, line: &str) -> Result<Vec<u8>, String> {
+        self.encode_reply(line, None)
+    }
+
+    /// Encodes one JSON line to wire bytes as the reply to the request frame `request`,
+    /// where given: the checksum of a reply that takes in its request's bytes
+    /// (`checksum_over_request`) over them.
+    pub fn encode_reply(&self, line: &str, request: Option<&[u8]>) -> Result<Vec<u8>, String> {
         if self.generated {
-            encode_built_in(&self.spec, line)
+            encode_typed(&self.spec, line, request)
         } else {
-            busspec_json::parse_line(&self.spec, line)?.encode(&self.spec)
+            busspec_json::parse_line(&self.spec, line)?.encode_reply(&self.spec, request)
         }
     }
 
@@ -274,9 +304,23 @@ impl Engine {
 
 /// Encodes one JSON line of a built-in protocol (`spec`, as [`Engine::built_in`] loads it)
 /// with its generated codec.
+#[cfg(test)]
 pub fn encode_built_in(spec: &Spec, line: &str) -> Result<Vec<u8>, String> {
-    with_protocol(&spec.name, Encode { spec, line })
-        .unwrap_or_else(|| Err(not_built_in(&spec.name)))
+    encode_typed(spec, line, None)
+}
+
+/// One JSON line of a built-in protocol encoded with its generated codec, as the reply to the
+/// request frame `request` where given.
+fn encode_typed(spec: &Spec, line: &str, request: Option<&[u8]>) -> Result<Vec<u8>, String> {
+    with_protocol(
+        &spec.name,
+        Encode {
+            spec,
+            line,
+            request,
+        },
+    )
+    .unwrap_or_else(|| Err(not_built_in(&spec.name)))
 }
 
 /// The spec of the built-in protocol called `name`.

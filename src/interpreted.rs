@@ -179,7 +179,7 @@ impl<const R: bool> Frame<R> {
         let Some(p) = spec() else {
             return Vec::new();
         };
-        interp::decode_as(p, self.r(), self.wire())
+        interp::decode_as_kept(p, self.r(), self.wire())
             .map(|f| f.values)
             .unwrap_or_default()
     }
@@ -294,8 +294,13 @@ impl<const R: bool> Message for Frame<R> {
             direction: Self::direction(),
             index,
         };
-        let wire = interp::encode(p, r, address, &values).map_err(|_| FieldError::Missing {
-            field: "(the values do not encode)",
+        // A reply whose checksum takes in its request's bytes is kept with its checksum over
+        // its own: [`Protocol::encode_reply`] writes it over the request's, and its
+        // `encode` refuses it.
+        let wire = interp::encode_with(p, r, address, &values, Some(&[])).map_err(|_| {
+            FieldError::Missing {
+                field: "(the values do not encode)",
+            }
         })?;
         Self::from_wire(index, &wire).ok_or(FieldError::UnknownMessage)
     }
@@ -349,6 +354,10 @@ fn decode_error(e: interp::DecodeError) -> DecodeError {
             expected: expected as u32,
             found: found as u32,
             width,
+        },
+        I::NeedsRequest { message, offset } => DecodeError::NeedsRequest {
+            message: keep_message(&message, 0, 0),
+            offset,
         },
         I::UnknownCode {
             offset,
@@ -584,6 +593,9 @@ fn encode_error(e: interp::EncodeError) -> EncodeError {
     use interp::EncodeError as I;
     match e {
         I::BadAddress { address, min, max } => EncodeError::BadAddress { address, min, max },
+        I::NeedsRequest { message } => EncodeError::NeedsRequest {
+            message: keep(&message),
+        },
         I::Unaddressed { address } => EncodeError::Unaddressed { address },
         I::BroadcastNotAccepted { message, address } => EncodeError::BroadcastNotAccepted {
             message: keep_message(&message, 0, 0),
@@ -678,26 +690,74 @@ impl Protocol for Interpreted {
         decoded(f, frame)
     }
 
+    /// As the reply to `request` (a response it gets, whose fields that follow from it do),
+    /// its checksum over the request's bytes where it takes them in: an interpreted request
+    /// keeps its frame.
     fn decode_response_for(
         frame: &[u8],
         request: Option<&Self::Request>,
+    ) -> Result<Decoded<Self::Response>, DecodeError> {
+        let covered = request.map(|q| Self::request_span(q.wire()));
+        Self::decode_response_over(frame, request, covered)
+    }
+
+    fn request_span(request_frame: &[u8]) -> &[u8] {
+        spec()
+            .and_then(|p| p.framing.checksum_span(request_frame))
+            .unwrap_or_default()
+    }
+
+    fn decode_response_over(
+        frame: &[u8],
+        request: Option<&Self::Request>,
+        covered: Option<&[u8]>,
     ) -> Result<Decoded<Self::Response>, DecodeError> {
         let p = spec().ok_or(DecodeError::Truncated {
             needed: 1,
             found: 0,
         })?;
         let f = match request {
-            // As the reply to it: a response it gets, whose fields that follow from it do.
             Some(request) => {
                 let req =
                     interp::decode_as(p, request.r(), request.wire()).map_err(decode_error)?;
-                interp::decode_reply(p, &req, frame).map_err(decode_error)?
+                let f = interp::decode_with(
+                    p,
+                    Some(Direction::Response),
+                    Some(request.r().index),
+                    covered,
+                    frame,
+                )
+                .map_err(decode_error)?;
+                interp::answers(p, &req, &f).map_err(decode_error)?;
+                f
             }
-            None => {
-                interp::decode(p, Some(Direction::Response), None, frame).map_err(decode_error)?
-            }
+            None => interp::decode_with(p, Some(Direction::Response), None, covered, frame)
+                .map_err(decode_error)?,
         };
         decoded(f, frame)
+    }
+
+    fn encode_reply(
+        response: &Self::Response,
+        address: u8,
+        request_frame: &[u8],
+        buf: &mut [u8],
+    ) -> Result<usize, EncodeError> {
+        let Some(p) = spec() else {
+            return Err(EncodeError::OutOfRange { field: "" });
+        };
+        let covered = p.framing.checksum_span(request_frame);
+        let wire = interp::encode_with(p, response.r(), address, &response.values(), covered)
+            .map_err(encode_error)?;
+        let available = buf.len();
+        let out = buf
+            .get_mut(..wire.len())
+            .ok_or(EncodeError::BufferTooSmall {
+                needed: wire.len(),
+                available,
+            })?;
+        out.copy_from_slice(&wire);
+        Ok(wire.len())
     }
 
     fn answers(request: &Self::Request, response: &Self::Response) -> bool {
@@ -706,7 +766,7 @@ impl Protocol for Interpreted {
         };
         match (
             interp::decode_as(p, request.r(), request.wire()),
-            interp::decode_as(p, response.r(), response.wire()),
+            interp::decode_as_kept(p, response.r(), response.wire()),
         ) {
             (Ok(q), Ok(r)) => interp::answers(p, &q, &r).is_ok(),
             _ => false,
@@ -778,6 +838,8 @@ impl Framing for Interpreted {
     const MAX_REQUEST_LEN: usize = CAP;
     const MAX_RESPONSE_LEN: usize = CAP;
     const FRAME_LENGTHS: &'static [usize] = &[];
+    type Span = [u8; 0];
+    const EMPTY_SPAN: [u8; 0] = [];
 
     fn candidates(_head: &[u8]) -> Candidates {
         Candidates::default()

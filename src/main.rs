@@ -426,6 +426,10 @@ struct EncodeArgs {
     /// Load the spec from this file instead of the built-in one.
     #[arg(long, value_name = "FILE")]
     spec: Option<PathBuf>,
+    /// The request frame (hex) the replies answer: a reply whose checksum takes in its
+    /// request's bytes (`checksum_over_request`) is encoded over them.
+    #[arg(long, value_name = "HEX")]
+    request: Option<String>,
 }
 
 #[derive(Clone, Copy, ValueEnum)]
@@ -746,9 +750,15 @@ fn decode(args: DecodeArgs) -> Result<(), String> {
             direction = Some(Direction::Response);
             reply_to = Some(frame.message.index);
             // Owned: `engine` is borrowed mutably below, while the request is still needed.
-            Some(frame.into_owned())
+            Some((
+                frame.into_owned(),
+                busspec_json::parse_hex(text).unwrap_or_default(),
+            ))
         }
     };
+    if let Some((_, wire)) = &request {
+        engine.set_request(wire);
+    }
     let mut out = Out::new(std::io::stdout().lock());
     if let Some(file) = &args.stream {
         if args.pcapng.as_deref() == Some(Path::new("-")) {
@@ -780,8 +790,8 @@ fn decode(args: DecodeArgs) -> Result<(), String> {
     for (i, text) in args.frames.iter().enumerate() {
         let wire = busspec_json::parse_hex(text);
         let result = wire.as_ref().map_err(String::clone).and_then(|wire| {
-            if let Some(req) = &request {
-                busspec_model::interp::decode_reply(&engine.spec, req, wire)
+            if let Some((req, req_wire)) = &request {
+                busspec_model::interp::decode_reply_with(&engine.spec, req, Some(req_wire), wire)
                     .map_err(|e| e.to_string())?;
             }
             if args.lenient {
@@ -1088,13 +1098,22 @@ impl Feed<'_, '_> {
 
 fn encode(args: EncodeArgs) -> Result<(), String> {
     let engine = protocol("encode", &args.protocol, args.spec.as_deref())?;
+    let request = args.request.as_deref().map(|text| {
+        busspec_json::parse_hex(text)
+            .and_then(|wire| {
+                busspec_model::interp::decode(&engine.spec, Some(Direction::Request), None, &wire)
+                    .map_err(|e| e.to_string())?;
+                Ok(wire)
+            })
+            .unwrap_or_else(|e| usage_error("encode", format!("--request {text}: {e}")))
+    });
     let mut out = Out::new(std::io::stdout().lock());
     let failed = stdin_lines(&mut out, |number, text, out| {
         if text.trim().is_empty() {
             return Ok(());
         }
         let wire = engine
-            .encode(text.trim())
+            .encode_reply(text.trim(), request.as_deref())
             .map_err(|reason| format!("line {number}: {reason}"))?;
         out.line(&frames::hex(&wire))
     })?;

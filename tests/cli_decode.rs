@@ -1051,12 +1051,14 @@ fn pelco_d_and_pelco_p_decode_and_encode_as_built_in_protocols() {
         "FF 01 05 06",
     ]);
     assert_eq!(out.status.code(), Some(1), "{}", text(&out.stdout));
+    // The general response's checksum is its request's plus the alarm byte (erratum
+    // pelco-d-e02, as C466M-E and a camera manual print it): 01 00 02 20 00 sum to 23, then 05.
     let out = busspec(&[
         "decode",
         "pelco_d",
         "--request",
         "FF 01 00 02 20 00 23",
-        "FF 01 05 06",
+        "FF 01 05 28",
     ]);
     assert!(out.status.success(), "{}", text(&out.stderr));
     assert!(
@@ -1066,9 +1068,20 @@ fn pelco_d_and_pelco_p_decode_and_encode_as_built_in_protocols() {
         "{}",
         text(&out.stdout)
     );
-
-    // A receiver that sums its reply as the older manuals say (the request's checksum plus the
-    // alarm byte: erratum pelco-d-e02, as a camera manual prints it) is refused.
+    // The reading of its own bytes' sum (01 + 05) is refused, with the checksum it should be.
+    let out = busspec(&[
+        "decode",
+        "pelco_d",
+        "--request",
+        "FF 01 00 02 20 00 23",
+        "FF 01 05 06",
+    ]);
+    assert_eq!(out.status.code(), Some(1), "{}", text(&out.stdout));
+    assert_eq!(
+        text(&out.stderr),
+        "frame 1 (FF 01 05 06): checksum mismatch at offset 3: expected 0x28, found 0x06\n"
+    );
+    // The FLIR manual's reply to Zoom In, checked over the request's bytes.
     let out = busspec(&[
         "decode",
         "pelco_d",
@@ -1076,9 +1089,12 @@ fn pelco_d_and_pelco_p_decode_and_encode_as_built_in_protocols() {
         "FF 01 00 20 00 00 21",
         "FF 01 00 21",
     ]);
+    assert!(out.status.success(), "{}", text(&out.stderr));
+    // Without the request it cannot be checked, and is refused saying so.
+    let out = busspec(&["decode", "pelco_d", "FF 01 00 21"]);
     assert_eq!(out.status.code(), Some(1), "{}", text(&out.stdout));
     assert!(
-        text(&out.stderr).contains("checksum"),
+        text(&out.stderr).contains("takes in its request's bytes"),
         "{}",
         text(&out.stderr)
     );
@@ -1601,4 +1617,75 @@ fn frames_of_both_length_forms_decode_encode_and_stream() {
     );
     assert!(lines[2].starts_with(r#"{"offset":272,"#), "{lines:?}");
     assert!(lines[2].contains(r#""message":"get_values""#), "{lines:?}");
+}
+
+/// A reply whose checksum takes in its request's bytes (`checksum_over_request`, Pelco D's
+/// general response): decoded with `--request`, over its bytes; refused without it, naming
+/// what it needs; refused after another request, with the checksum that request gives.
+#[test]
+fn a_reply_whose_checksum_takes_in_its_request_decodes_with_it() {
+    let spec = [
+        "decode",
+        "--spec",
+        "model/tests/fixtures/valid/pelco_d_replies.yaml",
+        "pelco_d_replies",
+    ];
+    let out = busspec(
+        &[
+            &spec[..],
+            &["--request", "FF 01 00 20 00 00 21", "FF 01 00 21"],
+        ]
+        .concat(),
+    );
+    assert!(out.status.success(), "{}", text(&out.stderr));
+    assert!(
+        text(&out.stdout).contains(r#""message":"general_response""#),
+        "{}",
+        text(&out.stdout)
+    );
+    let out = busspec(&[&spec[..], &["FF 01 00 21"]].concat());
+    assert_eq!(out.status.code(), Some(1));
+    assert_eq!(
+        text(&out.stderr),
+        "frame 1 (FF 01 00 21): general_response's checksum at offset 3 takes in its request's bytes: decode it as the reply to its request\n"
+    );
+    let out = busspec(
+        &[
+            &spec[..],
+            &["--request", "FF 01 00 09 00 01 0B", "FF 01 00 21"],
+        ]
+        .concat(),
+    );
+    assert_eq!(out.status.code(), Some(1));
+    assert_eq!(
+        text(&out.stderr),
+        "frame 1 (FF 01 00 21): checksum mismatch at offset 3: expected 0x0B, found 0x21\n"
+    );
+}
+
+/// `busspec encode --request HEX`: a reply whose checksum takes in its request's bytes is
+/// written over them; without the request it is refused, naming what it needs.
+#[test]
+fn a_reply_whose_checksum_takes_in_its_request_encodes_with_it() {
+    let spec = [
+        "encode",
+        "--spec",
+        "model/tests/fixtures/valid/pelco_d_replies.yaml",
+        "pelco_d_replies",
+    ];
+    let line = r#"{"direction":"response","message":"general_response","address":1,"fields":{"alarms":[]}}"#;
+    let out = busspec_stdin(
+        &[&spec[..], &["--request", "FF 01 00 09 00 01 0B"]].concat(),
+        line,
+    );
+    assert!(out.status.success(), "{}", text(&out.stderr));
+    assert_eq!(text(&out.stdout), "FF01000B\n");
+    let out = busspec_stdin(&spec, line);
+    assert_eq!(out.status.code(), Some(1));
+    assert_eq!(
+        text(&out.stderr),
+        "line 1: general_response's checksum takes in its request's bytes: encode it as the reply to its request\n"
+    );
+    let out = busspec_stdin(&[&spec[..], &["--request", "FF 01"]].concat(), line);
+    assert_eq!(out.status.code(), Some(2), "{}", text(&out.stderr));
 }

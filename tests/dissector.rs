@@ -136,6 +136,8 @@ fn cases() -> Vec<Case> {
         spec("model/tests/fixtures/valid/nextion.yaml"),
         // A 24-bit CRC (RTCM 3's CRC-24Q).
         spec("model/tests/fixtures/valid/rtcm3_frame.yaml"),
+        // A reply whose checksum takes in its request's bytes (Pelco D's general response).
+        spec("model/tests/fixtures/valid/pelco_d_replies.yaml"),
         // A short form of the frame (M-Bus) is not compared here yet: the dissector words a
         // short frame's out-of-spec address at its laid-out offset (5, not 2). Its dissector
         // loads and survives random bytes (`every_fixture_dissector_loads_...`).
@@ -533,6 +535,8 @@ fn compare(p: &Protocol, case: &Case, dir: &Path) -> Counts {
     }
 
     let mut last_request: Option<(usize, u64)> = None;
+    // That request's frame, whose bytes a reply's checksum may take in.
+    let mut last_bytes: Vec<u8> = Vec::new();
     for (i, (e, packet)) in events.iter().zip(&packets).enumerate() {
         let what = format!("{} packet {}: {e:?}\n{packet:#?}", p.name, i + 1);
         let get = |k: &str| e.get(k).map(|v| v.get().to_owned());
@@ -596,7 +600,8 @@ fn compare(p: &Protocol, case: &Case, dir: &Path) -> Counts {
                 };
                 // Strictly where the frame is in spec, with its request where that settles it
                 // (a frame only one message fits is that message whatever came before it).
-                let decoded = interp::decode(p, Some(d), reply_to, &frame_bytes)
+                let covered = reply_to.and_then(|_| p.framing.checksum_span(&last_bytes));
+                let decoded = interp::decode_with(p, Some(d), reply_to, covered, &frame_bytes)
                     .or_else(|_| interp::decode(p, Some(d), None, &frame_bytes))
                     .or_else(|_| {
                         stream::decode_lenient(p, &relaxed, Some(d), reply_to, &frame_bytes)
@@ -643,6 +648,7 @@ fn compare(p: &Protocol, case: &Case, dir: &Path) -> Counts {
                             Direction::Request => Some((r.index, offset)),
                             Direction::Response => None,
                         };
+                        last_bytes = frame_bytes.clone();
                     }
                 }
                 // Pairing and the time between request and response.
@@ -685,7 +691,13 @@ fn compare(p: &Protocol, case: &Case, dir: &Path) -> Counts {
                 );
                 if let Some((_, message)) = bad.iter().find(|(b, _)| *b == frame) {
                     assert_eq!(status, Some("0"), "{what}");
-                    let why = interp::decode(p, None, None, &frame)
+                    // After the first example (a request where the spec has one): a reply's
+                    // checksum that takes in its request's bytes is checked over them.
+                    let covered = p
+                        .examples
+                        .first()
+                        .and_then(|e| p.framing.checksum_span(&e.wire));
+                    let why = interp::decode_with(p, None, None, covered, &frame)
                         .unwrap_err()
                         .to_string();
                     assert!(why.starts_with("checksum mismatch"), "{why}");

@@ -479,6 +479,8 @@ impl busspec_protocols::Framing for Ub2SmallBuffer {
     const MAX_REQUEST_LEN: usize = Ub2::MAX_REQUEST_LEN;
     const MAX_RESPONSE_LEN: usize = Ub2::MAX_RESPONSE_LEN;
     const FRAME_LENGTHS: &'static [usize] = Ub2::FRAME_LENGTHS;
+    type Span = [u8; 0];
+    const EMPTY_SPAN: [u8; 0] = [];
     fn candidates(head: &[u8]) -> busspec_protocols::stream::Candidates {
         Ub2::candidates(head)
     }

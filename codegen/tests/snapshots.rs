@@ -134,6 +134,15 @@ fn sum16_complement_spec_generates_its_snapshot() {
     );
 }
 
+/// A reply whose checksum takes in its request's bytes (`checksum_over_request`).
+#[test]
+fn over_request_spec_generates_its_snapshot() {
+    check(
+        "model/tests/fixtures/valid/pelco_d_replies.yaml",
+        "pelco_d_replies.rs",
+    );
+}
+
 /// A layout per direction (Sensirion SHDLC, the SPS30): replies carry a state byte, a header
 /// field of replies only, that requests lack; byte stuffing of 7E 7D 11 13 and a shared flag
 /// (`snapshots_compile.rs` compiles it and holds it to the interpreter).

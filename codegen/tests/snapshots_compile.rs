@@ -49,6 +49,7 @@ include!("snapshots/nextion.rs");
 include!("snapshots/rtcm3_frame.rs");
 include!("snapshots/ubx_fixed_blocks.rs");
 include!("snapshots/float_lists.rs");
+include!("snapshots/pelco_d_replies.rs");
 
 mod agree;
 
@@ -131,6 +132,13 @@ fn replay<P: Protocol>(file: &str) {
                 let d = P::decode_request(&e.wire).unwrap();
                 assert_eq!(d.message.name(), p.message(e.message).name);
                 d.message.encode(d.address, &mut buf).unwrap()
+            }
+            // A reply whose checksum takes in its request's bytes, with the request's frame.
+            Direction::Response if e.request.is_some() => {
+                let w = e.request.as_deref().unwrap_or_default();
+                let d = P::decode_reply_to(&e.wire, w).unwrap();
+                assert_eq!(d.message.name(), p.message(e.message).name);
+                P::encode_reply(&d.message, d.address, w, &mut buf).unwrap()
             }
             Direction::Response => {
                 let request = e.reply_to.map(|c| {
@@ -1116,6 +1124,82 @@ fn crc24_snapshot_agrees_with_the_interpreter() {
     assert!(t.accepted >= 2 && t.refused > 100, "{t:?}");
     let found = examples_stream_alike::<Rtcm3Frame>(&p, 0xD300, "antenna");
     assert!(found > 50, "only {found} antenna frames found");
+}
+
+/// A reply whose checksum takes in its request's bytes (Pelco D's general response): the
+/// examples replay with their requests' frames, both engines refuse such a reply without them
+/// in the same words, check it over them alike (every frame mutated from the examples, alone
+/// and as the reply to its example request), encode it only over them, and a stream keeps the
+/// bytes of the request before a reply.
+#[test]
+fn over_request_snapshot_agrees_with_the_interpreter() {
+    use busspec_runtime::EncodeError;
+    use pelco_d_replies::{PelcoDReplies, Response, StreamDecoder};
+    let file = "model/tests/fixtures/valid/pelco_d_replies.yaml";
+    replay::<PelcoDReplies>(file);
+    let p = fixture(file);
+    let (zoom, reply) = (
+        [0xFF, 0x01, 0x00, 0x20, 0x00, 0x00, 0x21],
+        [0xFF, 0x01, 0x00, 0x21],
+    );
+    let g = Response::decode(&reply).map(|_| ());
+    assert_eq!(
+        g.unwrap_err().to_string(),
+        "general_response's checksum at offset 3 takes in its request's bytes: decode it as the reply to its request"
+    );
+    same_text(
+        g,
+        busspec_model::interp::decode(&p, Some(Direction::Response), None, &reply).map(|_| ()),
+    );
+    let d = PelcoDReplies::decode_reply_to(&reply, &zoom).unwrap();
+    assert_eq!(d.message.name(), "general_response");
+    let mut buf = [0u8; 16];
+    assert_eq!(
+        d.message.encode(1, &mut buf),
+        Err(EncodeError::NeedsRequest {
+            message: "general_response"
+        })
+    );
+    let aux = [0xFF, 0x01, 0x00, 0x09, 0x00, 0x01, 0x0B];
+    let n = PelcoDReplies::encode_reply(&d.message, 1, &aux, &mut buf).unwrap();
+    assert_eq!(&buf[..n], [0xFF, 0x01, 0x00, 0x0B]);
+    assert!(PelcoDReplies::decode_reply_to(&reply, &aux).is_err());
+    let t = agree::agree::<PelcoDReplies>(&p);
+    assert!(t.accepted >= 8 && t.refused > 20, "{t:?}");
+    // A stream: each reply checked over the request before it, and a reply after the wrong
+    // request, or none, is no frame.
+    let capture = [
+        &zoom[..],
+        &reply,
+        &aux,
+        &[0xFF, 0x01, 0x00, 0x0B],
+        &aux,
+        &reply,
+    ]
+    .concat();
+    let mut s = StreamDecoder::new(None);
+    let mut events: Vec<pelco_d_replies::Event> = s.feed(&capture).collect();
+    events.extend(core::iter::from_fn(|| s.finish()));
+    let names: Vec<&str> = events
+        .iter()
+        .filter_map(|e| match e {
+            pelco_d_replies::Event::Request { frame, .. } => Some(frame.message.name()),
+            pelco_d_replies::Event::Response { frame, .. } => Some(frame.message.name()),
+            _ => None,
+        })
+        .collect();
+    assert_eq!(
+        names,
+        [
+            "ptz",
+            "general_response",
+            "set_auxiliary",
+            "general_response",
+            "set_auxiliary"
+        ]
+    );
+    let found = examples_stream_alike::<PelcoDReplies>(&p, 0x0D00, "general_response");
+    assert!(found > 10, "only {found} general responses found");
 }
 
 /// No start byte, no address, no checksum (Maestro's compact protocol): the examples replay,

@@ -64,6 +64,27 @@ macro_rules! protocol_as {
                 <$codec as busspec_runtime::Protocol>::decode_response_for(frame, request)
             }
             #[inline]
+            fn decode_response_over(
+                frame: &[u8],
+                request: Option<&Self::Request>,
+                covered: Option<&[u8]>,
+            ) -> Result<busspec_runtime::Decoded<Self::Response>, busspec_runtime::DecodeError> {
+                <$codec as busspec_runtime::Protocol>::decode_response_over(frame, request, covered)
+            }
+            #[inline]
+            fn request_span(request_frame: &[u8]) -> &[u8] {
+                <$codec as busspec_runtime::Protocol>::request_span(request_frame)
+            }
+            #[inline]
+            fn encode_reply(
+                response: &Self::Response,
+                address: u8,
+                request_frame: &[u8],
+                buf: &mut [u8],
+            ) -> Result<usize, busspec_runtime::EncodeError> {
+                <$codec as busspec_runtime::Protocol>::encode_reply(response, address, request_frame, buf)
+            }
+            #[inline]
             fn answers(request: &Self::Request, response: &Self::Response) -> bool {
                 <$codec as busspec_runtime::Protocol>::answers(request, response)
             }
@@ -86,6 +107,16 @@ macro_rules! protocol_as {
             const MAX_RESPONSE_LEN: usize = <$codec as busspec_runtime::Framing>::MAX_RESPONSE_LEN;
             const FRAME_LENGTHS: &'static [usize] =
                 <$codec as busspec_runtime::Framing>::FRAME_LENGTHS;
+            const SHARED_FLAG: Option<u8> = <$codec as busspec_runtime::Framing>::SHARED_FLAG;
+            const PREAMBLE: Option<busspec_runtime::Preamble> =
+                <$codec as busspec_runtime::Framing>::PREAMBLE;
+            const TRANSFORM: Option<busspec_runtime::Transform> =
+                <$codec as busspec_runtime::Framing>::TRANSFORM;
+            const LONG: Option<busspec_runtime::LongLength> =
+                <$codec as busspec_runtime::Framing>::LONG;
+            const OVER_REQUEST: bool = <$codec as busspec_runtime::Framing>::OVER_REQUEST;
+            type Span = <$codec as busspec_runtime::Framing>::Span;
+            const EMPTY_SPAN: Self::Span = <$codec as busspec_runtime::Framing>::EMPTY_SPAN;
             #[inline]
             fn candidates(head: &[u8]) -> busspec_runtime::stream::Candidates {
                 <$codec as busspec_runtime::Framing>::candidates(head)

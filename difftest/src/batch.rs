@@ -146,19 +146,22 @@ pub struct Totals {
     pub specs_disagreeing: usize,
     /// Disagreements where both engines refuse, for different reasons.
     pub class_only: usize,
+    /// Replies whose checksum takes in their request's bytes both engines accepted.
+    pub over_request: usize,
 }
 
 impl Totals {
     pub fn line(&self) -> String {
         format!(
-            "totals: specs {} frames {} encodes {} captures {} disagreements {} specs_disagreeing {} class_only {}",
+            "totals: specs {} frames {} encodes {} captures {} disagreements {} specs_disagreeing {} class_only {} over_request {}",
             self.specs,
             self.frames,
             self.encodes,
             self.captures,
             self.disagreements,
             self.specs_disagreeing,
-            self.class_only
+            self.class_only,
+            self.over_request
         )
     }
 
@@ -177,6 +180,7 @@ impl Totals {
             disagreements: get("disagreements")?,
             specs_disagreeing: get("specs_disagreeing")?,
             class_only: get("class_only")?,
+            over_request: get("over_request").unwrap_or(0),
         })
     }
 
@@ -188,6 +192,7 @@ impl Totals {
         self.disagreements += o.disagreements;
         self.specs_disagreeing += o.specs_disagreeing;
         self.class_only += o.class_only;
+        self.over_request += o.over_request;
     }
 }
 
@@ -229,6 +234,7 @@ pub fn main(specs: &[Entry]) {
         t.captures += r.captures;
         t.disagreements += r.disagreements;
         t.class_only += r.class_only;
+        t.over_request += r.over_request;
         for (sig, n) in &r.signatures {
             println!("SIGNATURE {n} {sig}");
         }

@@ -80,6 +80,9 @@ pub struct Report {
     pub class_only: usize,
     /// How many of each signature.
     pub signatures: std::collections::BTreeMap<String, usize>,
+    /// Replies whose checksum takes in their request's bytes that both engines accepted,
+    /// decoded as the reply to that request.
+    pub over_request: usize,
 }
 
 /// Disagreements kept per spec: the first of each signature, up to this many.
@@ -174,6 +177,7 @@ fn class(g: &DecodeError) -> &'static str {
         DecodeError::NeedlessLong { .. } => "needless long form",
         DecodeError::NoTerminator { .. } => "no terminator",
         DecodeError::EndInside { .. } => "end inside",
+        DecodeError::NeedsRequest { .. } => "needs the request",
     }
 }
 
@@ -205,6 +209,7 @@ fn interp_class(i: &InterpRefusal) -> &'static str {
             InterpError::NeedlessLong { .. } => "needless long form",
             InterpError::NoTerminator { .. } => "no terminator",
             InterpError::EndInside { .. } => "end inside",
+            InterpError::NeedsRequest { .. } => "needs the request",
         },
     }
 }
@@ -243,6 +248,7 @@ fn encode_class(g: &GenEncodeError) -> &'static str {
         GenEncodeError::Encode(EncodeError::BufferTooSmall { .. }) => "buffer",
         GenEncodeError::Encode(EncodeError::HoldsTerminator { .. }) => "holds its terminator",
         GenEncodeError::Encode(EncodeError::HoldsEnd { .. }) => "holds the end bytes",
+        GenEncodeError::Encode(EncodeError::NeedsRequest { .. }) => "needs the request",
         #[allow(unreachable_patterns)]
         GenEncodeError::Encode(_) => "other",
     }
@@ -266,6 +272,7 @@ fn interp_encode_class(i: &interp::EncodeError) -> &'static str {
         E::Optional { .. } => "optional",
         E::HoldsTerminator { .. } => "holds its terminator",
         E::HoldsEnd { .. } => "holds the end bytes",
+        E::NeedsRequest { .. } => "needs the request",
     }
 }
 
@@ -341,6 +348,9 @@ fn same_as_view<M: Message + fmt::Debug>(
 pub struct Run<'p, P: Protocol> {
     p: &'p ir::Protocol,
     asks: Vec<Ask<P>>,
+    /// The ask the last random frame, a reply whose checksum takes in its request's bytes,
+    /// was made over.
+    over: Option<usize>,
     rng: fastrand::Rng,
     pub report: Report,
     views: ViewFns<P>,
@@ -403,6 +413,7 @@ impl<'p, P: Protocol> Run<'p, P> {
         let mut run = Run {
             p,
             asks: Vec::new(),
+            over: None,
             rng: fastrand::Rng::with_seed(seed),
             report: Report::default(),
             views: ViewFns::none(),
@@ -450,6 +461,29 @@ impl<'p, P: Protocol> Run<'p, P> {
                 }
             }
         }
+        // The requests examples of replies give (a reply whose checksum takes in its
+        // request's bytes names its request's frame): asked too, so such a reply is decoded
+        // as the reply to the request it was made over.
+        for e in &p.examples {
+            let Some(wire) = e.request.clone() else {
+                continue;
+            };
+            if run.asks.iter().any(|a| a.wire == wire) {
+                continue;
+            }
+            let g = caught(|| P::decode_request(&wire))
+                .ok()
+                .and_then(|x| x.ok());
+            let i = interp::decode(p, Some(Direction::Request), None, &wire).ok();
+            if let (Some(g), Some(i)) = (g, i) {
+                run.asks.push(Ask {
+                    command: i.message.index,
+                    wire,
+                    generated: g.message,
+                    interp: i.into_owned(),
+                });
+            }
+        }
         run
     }
 
@@ -467,32 +501,44 @@ impl<'p, P: Protocol> Run<'p, P> {
                 })
             }
             Mode::Response | Mode::Reply(_) => {
-                let d = match mode {
+                let (d, request) = match mode {
                     Mode::Reply(k) => {
                         let ask = &self.asks[k];
-                        let d = P::decode_reply(frame, &ask.generated).inspect(|d| {
-                            assert!(
-                                P::answers(&ask.generated, &d.message),
-                                "decode_reply gave a response that does not answer"
-                            )
-                        });
+                        // The view has the request's values, not its bytes: as `decode_reply`.
                         same_as_view(
-                            &d,
+                            &P::decode_reply(frame, &ask.generated),
                             self.views.response.map(|v| v(frame, Some(&ask.generated))),
                         );
-                        d
+                        // With the request's bytes, which a reply's checksum may take in.
+                        let covered = P::request_span(&ask.wire);
+                        let d = P::decode_response_over(frame, Some(&ask.generated), Some(covered))
+                            .inspect(|d| {
+                                assert!(
+                                    P::answers(&ask.generated, &d.message),
+                                    "decode_reply gave a response that does not answer"
+                                )
+                            });
+                        (d, Some(&ask.wire))
                     }
                     _ => {
                         let d = P::decode_response(frame);
                         same_as_view(&d, self.views.response.map(|v| v(frame, None)));
-                        d
+                        (d, None)
                     }
                 };
                 d.map(|d| Accepted {
                     name: d.message.name().to_owned(),
                     address: d.address,
                     values: visit_values(|f| d.message.visit(f)),
-                    reencoded: pattern_encode(&d.message, d.address, max),
+                    reencoded: match request {
+                        Some(w) => {
+                            let mut buf = vec![0xA5u8; max];
+                            P::encode_reply(&d.message, d.address, w, &mut buf)
+                                .map(|n| buf[..n].to_vec())
+                                .map_err(|e| e.to_string())
+                        }
+                        None => pattern_encode(&d.message, d.address, max),
+                    },
                 })
             }
         });
@@ -509,7 +555,10 @@ impl<'p, P: Protocol> Run<'p, P> {
             let decoded = match mode {
                 Mode::Request => interp::decode(p, Some(Direction::Request), None, frame),
                 Mode::Response => interp::decode(p, Some(Direction::Response), None, frame),
-                Mode::Reply(k) => interp::decode_reply(p, &self.asks[k].interp, frame),
+                Mode::Reply(k) => {
+                    let ask = &self.asks[k];
+                    interp::decode_reply_with(p, &ask.interp, Some(&ask.wire), frame)
+                }
             };
             let decoded = match (decoded, mode) {
                 (Ok(f), Mode::Reply(k))
@@ -527,8 +576,17 @@ impl<'p, P: Protocol> Run<'p, P> {
                 name: p.message(f.message).name.clone(),
                 address: f.address,
                 values: interp_values(p, &f),
-                reencoded: interp::encode(p, f.message, f.address, &carried_values(p, &f))
-                    .map_err(|e| e.to_string()),
+                reencoded: interp::encode_with(
+                    p,
+                    f.message,
+                    f.address,
+                    &carried_values(p, &f),
+                    match mode {
+                        Mode::Reply(k) => p.framing.checksum_span(&self.asks[k].wire),
+                        _ => None,
+                    },
+                )
+                .map_err(|e| e.to_string()),
             })
         });
         match got {
@@ -567,6 +625,14 @@ impl<'p, P: Protocol> Run<'p, P> {
             _ => std::borrow::Cow::Borrowed(frame),
         };
         let frame_back: &[u8] = &back;
+        if let (Said::Accepted(a), Mode::Reply(_)) = (&i, mode) {
+            let over = self
+                .p
+                .responses
+                .iter()
+                .any(|m| m.name == a.name && m.over_request.is_some());
+            self.report.over_request += usize::from(over);
+        }
         let agree = match (&g, &i) {
             (Said::Accepted(a), Said::Accepted(b)) => {
                 a.name == b.name
@@ -826,7 +892,18 @@ impl<'p, P: Protocol> Run<'p, P> {
         let strict = self.rng.bool();
         let values = random_values(self.p, m, &mut self.rng, strict);
         let a = self.random_address();
-        interp::encode(lenient, r, a, &values).ok()
+        // A reply whose checksum takes in its request's bytes: over a request drawn from
+        // the asks (the reply to it, decoded as such, checks: `self.over`).
+        self.over = None;
+        let covered = match m.over_request {
+            Some(_) if !self.asks.is_empty() => {
+                let k = self.rng.usize(..self.asks.len());
+                self.over = Some(k);
+                self.p.framing.checksum_span(&self.asks[k].wire)
+            }
+            _ => None,
+        };
+        interp::encode_with(lenient, r, a, &values, covered).ok()
     }
 
     /// Runs every comparison.
@@ -891,10 +968,19 @@ impl<'p, P: Protocol> Run<'p, P> {
                 }
             };
             self.decode_all_ways(&input, Some(1));
+            // A reply made over an ask's bytes, as the reply to that ask too.
+            if let Some(k) = self.over.take() {
+                self.decode(&input, Mode::Reply(k));
+            }
         }
         // Encodes: the examples' values, then random ones.
         for e in &p.examples {
-            let decoded = interp::decode(p, Some(e.message.direction), e.reply_to, &e.wire);
+            let covered = e
+                .request
+                .as_deref()
+                .and_then(|w| p.framing.checksum_span(w));
+            let decoded =
+                interp::decode_with(p, Some(e.message.direction), e.reply_to, covered, &e.wire);
             if let Ok(f) = decoded {
                 let values = carried_values(p, &f);
                 self.encode(e.message, f.address, &values);

@@ -10,7 +10,7 @@ use std::fmt::Write as _;
 
 use busspec_model::checksum;
 use busspec_model::interp::{self, Raw};
-use busspec_model::ir::{self, ChecksumAlgorithm, CrcParams, Direction, MessageRef};
+use busspec_model::ir::{self, ChecksumAlgorithm, CrcParams, Direction, MessageRef, Part};
 
 use crate::values::random_values;
 
@@ -258,6 +258,9 @@ enum Own {
     /// Lists of floats and 64-bit integers (counted, in bytes, to the end, by the request),
     /// from lists of integers as drawn.
     WideLists = 0x64F3_64F3_64F3_64F3,
+    /// Replies whose checksum takes in their request's bytes (`checksum_over_request`, Pelco
+    /// D's general response): whether a spec tries them, which replies, from which part.
+    OverRequest = 0x00FF_0121_00FF_0121,
 }
 
 /// The generator of `what` for the spec of `seed`.
@@ -1229,11 +1232,82 @@ pub fn random_spec(seed: u64) -> String {
             break;
         }
     }
+    // Replies whose checksum takes in their request's bytes (Pelco D's general response):
+    // tried on a fraction of the specs with a checksum, kept where the validator accepts
+    // them (every rule it holds them to is the validator's); drawn by a generator of its own.
+    for with in over_request(seed, &text, &p) {
+        if let Ok(q) = busspec_model::load_str("generated.yaml", &with) {
+            (text, p) = (with, q);
+            break;
+        }
+    }
     let mut rng = own_rng(seed, Own::Examples);
     match examples(&p, &mut rng) {
         Some(examples) => format!("{text}examples:\n{examples}errata: []\n"),
         None => format!("{text}examples: []\nerrata: []\n"),
     }
+}
+
+/// `text` with replies whose checksum takes in their request's bytes (`Own::OverRequest`), in
+/// about two specs in five with a checksum: one or two framed replies drawn, each covering
+/// its own bytes from a part of the response's layout before the payload, or from the
+/// payload; the variants in the order tried (the drawn replies, then each reply alone).
+fn over_request(seed: u64, text: &str, p: &ir::Protocol) -> Vec<String> {
+    let mut rng = own_rng(seed, Own::OverRequest);
+    if rng.u8(..100) >= 40 || p.framing.checksum.is_empty() {
+        return Vec::new();
+    }
+    let replies: Vec<&str> = p
+        .framed(Direction::Response)
+        .iter()
+        .map(|m| m.name.as_str())
+        .collect();
+    if replies.is_empty() {
+        return Vec::new();
+    }
+    let parts: Vec<&str> = p
+        .framing
+        .layout_of(Direction::Response)
+        .iter()
+        .take_while(|x| **x != Part::Payload)
+        .filter_map(|x| match x {
+            Part::Start => Some("start"),
+            Part::Address => Some("address"),
+            Part::Length => Some("length"),
+            Part::Header => Some("header"),
+            Part::Code => Some("code"),
+            _ => None,
+        })
+        .chain(["payload", "payload"])
+        .collect();
+    let mut drawn: Vec<(&str, &str)> = Vec::new();
+    for _ in 0..rng.usize(1..=2) {
+        let r = replies[rng.usize(..replies.len())];
+        if drawn.iter().all(|(x, _)| *x != r) {
+            drawn.push((r, parts[rng.usize(..parts.len())]));
+        }
+    }
+    let with = |chosen: &[(&str, &str)]| {
+        let mut t = text.to_owned();
+        for (r, part) in chosen {
+            let line = format!("  - {{name: {r}, ");
+            t = t.replacen(
+                &line,
+                &format!("{line}checksum_over_request: {{covers_from: {part}}}, "),
+                1,
+            );
+        }
+        t
+    };
+    let mut out = vec![with(&drawn)];
+    // Then each reply alone, in an order drawn: the validator refuses a reply that another
+    // message could be by its code and length.
+    let mut alone: Vec<&str> = replies.clone();
+    rng.shuffle(&mut alone);
+    for r in alone {
+        out.push(with(&[(r, parts[rng.usize(..parts.len())])]));
+    }
+    out
 }
 
 /// `text` with its layout given per direction (`Own::LayoutByDirection`), in about one spec
@@ -1333,22 +1407,52 @@ fn examples(p: &ir::Protocol, rng: &mut fastrand::Rng) -> Option<String> {
                 } else {
                     0
                 };
-                let Ok(wire) = interp::encode(p, r, address, &values) else {
-                    continue;
-                };
+                let over = m.over_request.is_some();
                 let reply_to = match d {
                     Direction::Response
-                        if !answering.is_empty() && (m.needs_request || rng.u8(..3) == 0) =>
+                        if !answering.is_empty()
+                            && (m.needs_request || over || rng.u8(..3) == 0) =>
                     {
                         Some(answering[rng.usize(..answering.len())])
                     }
                     _ => None,
                 };
-                match interp::decode(p, Some(d), reply_to, &wire) {
+                // A reply whose checksum takes in its request's bytes: over a frame of the
+                // request it answers, which the example gives.
+                let request = match reply_to {
+                    Some(c) if over => {
+                        let q = MessageRef {
+                            direction: Direction::Request,
+                            index: c,
+                        };
+                        let qv = random_values(p, &p.commands[c], rng, true);
+                        let qa = if p.framing.has_address_in(Direction::Request) {
+                            address.max(a.min)
+                        } else {
+                            0
+                        };
+                        match interp::encode(p, q, qa, &qv) {
+                            Ok(w)
+                                if interp::decode(p, Some(Direction::Request), None, &w)
+                                    .is_ok_and(|f| f.message == q) =>
+                            {
+                                Some(w)
+                            }
+                            _ => continue,
+                        }
+                    }
+                    _ if over => continue,
+                    _ => None,
+                };
+                let covered = request.as_deref().and_then(|w| p.framing.checksum_span(w));
+                let Ok(wire) = interp::encode_with(p, r, address, &values, covered) else {
+                    continue;
+                };
+                match interp::decode_with(p, Some(d), reply_to, covered, &wire) {
                     Ok(f) if f.message == r => {}
                     _ => continue,
                 }
-                if interp::decode_as(p, r, &wire).is_err() {
+                if interp::decode_as_reply(p, r, covered, &wire).is_err() {
                     continue;
                 }
                 kept += 1;
@@ -1361,6 +1465,9 @@ fn examples(p: &ir::Protocol, rng: &mut fastrand::Rng) -> Option<String> {
                 );
                 if let Some(c) = reply_to {
                     let _ = write!(out, ", reply_to: {}", p.commands[c].name);
+                }
+                if let Some(w) = &request {
+                    let _ = write!(out, ", request: \"{}\"", interp::format_hex(w));
                 }
                 let stated = stated_values(p, m, &values);
                 let _ = writeln!(out, ", values: {{{stated}}}}}");
@@ -3340,6 +3447,10 @@ pub fn constructs(p: &ir::Protocol) -> Vec<&'static str> {
     add(
         f.checksum.extra.is_some(),
         "checksum extra byte per message",
+    );
+    add(
+        p.has_over_request(),
+        "a reply's checksum over its request's bytes",
     );
     add(
         f.checksum.len() > 1 && f.checksum.byte_order == ir::ByteOrder::Little,

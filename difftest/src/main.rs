@@ -224,6 +224,11 @@ fn main() {
         count("payload over 255 bytes")
     );
     println!(
+        "  specs with a reply's checksum over its request's bytes {}, such replies both engines accepted {}",
+        count("a reply's checksum over its request's bytes"),
+        t.over_request
+    );
+    println!(
         "  specs with a layout by direction {} (the header in one direction only {}, the address in one direction only {}, the code at another offset by direction {})",
         count("layout by direction"),
         count("header in one direction only"),

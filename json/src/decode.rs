@@ -62,11 +62,24 @@ pub fn decode_frame<'p>(
     reply_to: Option<usize>,
     wire: &[u8],
 ) -> Result<Frame<'p>, String> {
-    match interp::decode(p, direction, None, wire) {
+    decode_frame_with(p, direction, reply_to, None, wire)
+}
+
+/// [`decode_frame`] with the bytes the request's checksum covers (`covered`), which the
+/// checksum of a reply that takes in its request's bytes runs over first
+/// (`checksum_over_request`).
+pub fn decode_frame_with<'p>(
+    p: &'p Spec,
+    direction: Option<Direction>,
+    reply_to: Option<usize>,
+    covered: Option<&[u8]>,
+    wire: &[u8],
+) -> Result<Frame<'p>, String> {
+    match interp::decode_with(p, direction, None, covered, wire) {
         Ok(f) => Ok(f),
         Err(InterpError::Ambiguous { candidates }) => match reply_to {
             None => Err(ambiguous(p, &candidates, None)),
-            Some(cmd) => interp::decode(p, direction, Some(cmd), wire)
+            Some(cmd) => interp::decode_with(p, direction, Some(cmd), covered, wire)
                 .map_err(|_| ambiguous(p, &candidates, Some(cmd))),
         },
         Err(e) => Err(e.to_string()),
@@ -256,6 +269,19 @@ pub fn decode_typed<P: Protocol>(
     reply_to: Option<usize>,
     wire: &[u8],
 ) -> Result<Typed<P>, String> {
+    decode_typed_with::<P>(p, direction, reply_to, None, wire)
+}
+
+/// [`decode_typed`] with the bytes the request's checksum covers (`covered`), which the
+/// checksum of a reply that takes in its request's bytes runs over first
+/// (`checksum_over_request`).
+pub fn decode_typed_with<P: Protocol>(
+    p: &Spec,
+    direction: Option<Direction>,
+    reply_to: Option<usize>,
+    covered: Option<&[u8]>,
+    wire: &[u8],
+) -> Result<Typed<P>, String> {
     let request = match direction {
         Some(Direction::Response) => None,
         _ => match P::decode_request(wire) {
@@ -267,7 +293,7 @@ pub fn decode_typed<P: Protocol>(
     if direction == Some(Direction::Request) {
         return Err(request.map(|e| e.to_string()).unwrap_or_default());
     }
-    let response = match P::decode_response(wire) {
+    let response = match P::decode_response_over(wire, None, covered) {
         Ok(d) => return Ok(Typed::Response(d)),
         Err(DecodeError::Ambiguous { .. }) => {
             let names = candidates::<P>(p, wire);

@@ -41,7 +41,7 @@ use busspec_runtime::{Decoded, EncodeError, Message, Protocol};
 
 pub use busspec_model::ir::Protocol as Spec;
 pub use busspec_runtime::FieldValue;
-pub use decode::{decode_frame, decode_typed, request_for};
+pub use decode::{decode_frame, decode_frame_with, decode_typed, decode_typed_with, request_for};
 pub use lines::Printer;
 pub use parse::{parse_line, Parsed};
 pub use print::{
@@ -113,10 +113,20 @@ impl<P: Protocol> Typed<P> {
 
     /// The frame's bytes, from the generated encoder.
     pub fn encode(&self) -> Result<Vec<u8>, EncodeError> {
+        self.encode_reply(None)
+    }
+
+    /// [`Self::encode`] of a reply to the request frame `request` (as it travelled), where
+    /// given: the checksum of a reply that takes in its request's bytes
+    /// (`checksum_over_request`) over them ([`Protocol::encode_reply`]).
+    pub fn encode_reply(&self, request: Option<&[u8]>) -> Result<Vec<u8>, EncodeError> {
         let mut buf = P::EMPTY_BUFFER;
-        let n = match self {
-            Typed::Request(d) => d.message.encode(d.address, buf.as_mut())?,
-            Typed::Response(d) => d.message.encode(d.address, buf.as_mut())?,
+        let n = match (self, request) {
+            (Typed::Request(d), _) => d.message.encode(d.address, buf.as_mut())?,
+            (Typed::Response(d), None) => d.message.encode(d.address, buf.as_mut())?,
+            (Typed::Response(d), Some(q)) => {
+                P::encode_reply(&d.message, d.address, q, buf.as_mut())?
+            }
         };
         Ok(buf.as_ref()[..n].to_vec())
     }

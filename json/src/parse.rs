@@ -27,7 +27,16 @@ impl Parsed {
     /// The frame's bytes, from the interpreter's encoder: constants and repeated fields filled
     /// in, every value checked against its field's width, the address against the spec's.
     pub fn encode(&self, p: &Spec) -> Result<Vec<u8>, String> {
-        interp::encode(p, self.message, self.address, &self.values).map_err(|e| e.to_string())
+        self.encode_reply(p, None)
+    }
+
+    /// [`Self::encode`] of a reply to the request frame `request` (as it travelled), where
+    /// given: the checksum of a reply that takes in its request's bytes
+    /// (`checksum_over_request`) over them.
+    pub fn encode_reply(&self, p: &Spec, request: Option<&[u8]>) -> Result<Vec<u8>, String> {
+        let covered = request.and_then(|w| p.framing.checksum_span(w));
+        interp::encode_with(p, self.message, self.address, &self.values, covered)
+            .map_err(|e| e.to_string())
     }
 
     /// The frame as a typed message of generated protocol `P` (`p` its spec, from

@@ -3,7 +3,8 @@
 //! `Message::visit`) and the interpreter (frames decoded from the IR at run time).
 
 use busspec_json::{
-    decode_frame, decode_typed, event_line, frame_line, load_spec, parse_line, Spec, TypedStream,
+    decode_frame, decode_frame_with, decode_typed, decode_typed_with, event_line, frame_line,
+    load_spec, parse_line, Spec, TypedStream,
 };
 use busspec_model::stream::StreamDecoder;
 use busspec_protocols::{Protocol, ProtocolVisitor, PROTOCOLS};
@@ -35,9 +36,14 @@ impl ProtocolVisitor for Examples {
                 }
                 _ => None,
             };
-            let frame = decode_frame(&spec, direction, reply_to, &e.wire)
+            // A reply whose checksum takes in its request's bytes, with them.
+            let covered = e
+                .request
+                .as_deref()
+                .and_then(|w| spec.framing.checksum_span(w));
+            let frame = decode_frame_with(&spec, direction, reply_to, covered, &e.wire)
                 .unwrap_or_else(|err| panic!("{at}: interpreter: {err}"));
-            let typed = decode_typed::<P>(&spec, direction, reply_to, &e.wire)
+            let typed = decode_typed_with::<P>(&spec, direction, reply_to, covered, &e.wire)
                 .unwrap_or_else(|err| panic!("{at}: generated: {err}"));
             assert_eq!(
                 frame.message, e.message,
@@ -67,7 +73,7 @@ impl ProtocolVisitor for Examples {
             let parsed = parse_line(&spec, &generated).unwrap_or_else(|err| panic!("{at}: {err}"));
             assert_eq!(parsed.message, e.message, "{at}");
             let again = parsed
-                .encode(&spec)
+                .encode_reply(&spec, e.request.as_deref())
                 .unwrap_or_else(|err| panic!("{at}: interpreter encode: {err}"));
             assert_eq!(
                 again, e.wire,
@@ -81,7 +87,7 @@ impl ProtocolVisitor for Examples {
                 "{at}: the line reads back as another typed message"
             );
             let again = back
-                .encode()
+                .encode_reply(e.request.as_deref())
                 .unwrap_or_else(|err| panic!("{at}: generated encode: {err}"));
             assert_eq!(
                 again, e.wire,

@@ -7,8 +7,8 @@
 //! cut into chunks.
 
 use busspec_json::{
-    decode_frame, decode_typed, event_line, frame_line, load_spec, write_events, Printer, Spec,
-    Typed, TypedStream,
+    decode_frame_with, decode_typed_with, event_line, frame_line, load_spec, write_events, Printer,
+    Spec, Typed, TypedStream,
 };
 use busspec_model::ir::{Direction, Example};
 use busspec_model::stream::StreamDecoder;
@@ -85,7 +85,13 @@ fn example_lines<P: Protocol>(
     let reply_to = m.needs_request.then_some(e.reply_to).flatten();
     // The direction given: a Modbus echo reads both ways.
     let direction = Some(e.message.direction);
-    let typed = decode_typed::<P>(spec, direction, reply_to, &e.wire).expect("decodes");
+    // A reply whose checksum takes in its request's bytes, with them.
+    let covered = e
+        .request
+        .as_deref()
+        .and_then(|w| spec.framing.checksum_span(w));
+    let typed =
+        decode_typed_with::<P>(spec, direction, reply_to, covered, &e.wire).expect("decodes");
     let reference = typed.line(spec, offset).expect("prints");
     let mut out = Vec::new();
     match typed {
@@ -108,7 +114,7 @@ fn example_lines<P: Protocol>(
     }
     .expect("prints");
     assert_eq!(text(&out), format!("{reference}\n"), "{}", m.name);
-    let frame = decode_frame(spec, direction, reply_to, &e.wire).expect("decodes");
+    let frame = decode_frame_with(spec, direction, reply_to, covered, &e.wire).expect("decodes");
     let mut out = Vec::new();
     printer.frame(&mut out, spec, &frame, offset);
     assert_eq!(

@@ -159,6 +159,24 @@ impl<P: Protocol> Protocol for Plain<P> {
     ) -> Result<busspec_runtime::Decoded<Self::Response>, busspec_runtime::DecodeError> {
         P::decode_response_for(frame, request)
     }
+    fn decode_response_over(
+        frame: &[u8],
+        request: Option<&Self::Request>,
+        covered: Option<&[u8]>,
+    ) -> Result<busspec_runtime::Decoded<Self::Response>, busspec_runtime::DecodeError> {
+        P::decode_response_over(frame, request, covered)
+    }
+    fn request_span(request_frame: &[u8]) -> &[u8] {
+        P::request_span(request_frame)
+    }
+    fn encode_reply(
+        response: &Self::Response,
+        address: u8,
+        request_frame: &[u8],
+        buf: &mut [u8],
+    ) -> Result<usize, busspec_runtime::EncodeError> {
+        P::encode_reply(response, address, request_frame, buf)
+    }
     fn answers(request: &Self::Request, response: &Self::Response) -> bool {
         P::answers(request, response)
     }
@@ -179,6 +197,11 @@ impl<P: Protocol> busspec_runtime::Framing for Plain<P> {
     const FRAME_LENGTHS: &'static [usize] = P::FRAME_LENGTHS;
     const SHARED_FLAG: Option<u8> = P::SHARED_FLAG;
     const PREAMBLE: Option<busspec_runtime::Preamble> = P::PREAMBLE;
+    const TRANSFORM: Option<busspec_runtime::Transform> = P::TRANSFORM;
+    const LONG: Option<busspec_runtime::LongLength> = P::LONG;
+    const OVER_REQUEST: bool = P::OVER_REQUEST;
+    type Span = P::Span;
+    const EMPTY_SPAN: Self::Span = P::EMPTY_SPAN;
     fn candidates(head: &[u8]) -> busspec_runtime::stream::Candidates {
         P::candidates(head)
     }

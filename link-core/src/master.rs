@@ -863,7 +863,10 @@ impl<P: Link, const CAP: usize> MasterCore<P, CAP> {
     /// Decodes the received bytes as the reply to the request in flight.
     fn accept(&self) -> Result<(u8, P::Response), Rejection> {
         let request = self.current();
-        let reply = P::decode_reply(self.reply(), &request).map_err(Rejection::Decode)?;
+        // With the request's frame as sent, which a reply's checksum may take in.
+        let covered = P::request_span(self.sent());
+        let reply = P::decode_response_over(self.reply(), Some(&request), Some(covered))
+            .map_err(Rejection::Decode)?;
         let (from, response) = (reply.address, reply.message);
         if self.broadcast {
             if !P::device_addresses().contains(&from) {

@@ -222,7 +222,9 @@ pub fn run_with<P: Link, D: Device + Clone + PartialEq>(
         let expected = reference.on_frame(&sent, t0);
         let expected_response = expected
             .as_deref()
-            .and_then(|f| P::decode_reply(f, &request).ok())
+            .and_then(|f| {
+                P::decode_response_over(f, Some(&request), Some(P::request_span(&sent))).ok()
+            })
             .map(|d| d.message);
         bus.freeze_time(Some(t0));
         received.borrow_mut().clear();

@@ -1333,6 +1333,23 @@ impl<'a> Differ<'a> {
                 ),
             );
         }
+        if m.over_request != x.over_request {
+            let show = |c: Option<usize>| {
+                c.map_or("its own bytes".to_owned(), |from| {
+                    format!("its request's bytes, then its own from offset {from}")
+                })
+            };
+            self.wire(
+                "checksum_over_request_changed",
+                format!("{path}.checksum_over_request"),
+                format!(
+                    "{word} `{}`: checksum over {} → {}",
+                    x.name,
+                    show(m.over_request),
+                    show(x.over_request)
+                ),
+            );
+        }
         if m.code_from_request != x.code_from_request {
             let show = |c: Option<u8>| {
                 c.map_or("its own".to_owned(), |c| {

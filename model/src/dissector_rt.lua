@@ -1516,6 +1516,7 @@ local function setup(P)
     -- The checksum: over the bytes it covers, up to itself.
     local ck = P.checksum
     local ck_good, ck_at, ck_found, ck_expected = true, nil, nil, nil
+    local chosen_name = ""
     local ck_tvb = tvb
     if wire_ck then
       -- Computed on the escaped bytes (`computed: escaped`): as they carry it.
@@ -1528,8 +1529,32 @@ local function setup(P)
       ck_good = (ck_expected == ck_found)
     end
 
+    -- A reply whose checksum takes in its request's bytes (`checksum_over_request`): over
+    -- those of the request before it, then its own from `over`; not checked without one.
+    local ck_unchecked = false
+    local function over_request(m)
+      if not (m.over and ck_at) or wire_ck then return end
+      local cov = rec.prev and rec.prev.cov
+      if not cov then
+        ck_unchecked, ck_good = true, true
+        return
+      end
+      local t, k = {}, 0
+      for _, x in ipairs(cov) do t[k] = x k = k + 1 end
+      for i = m.over, ck_at - 1 do t[k] = b[i] k = k + 1 end
+      ck_expected = ck.fn(t, 0, k)
+      ck_good = (ck_expected == ck_found)
+    end
+
     local function show_checksum()
       if not ck_at then return end
+      if ck_unchecked then
+        local c = root:add(F.checksum, ck_tvb:range(ck_at, ck.len), ck_found)
+        c:append_text(" [" .. ck.name .. ", not checked]")
+        c:add_proto_expert_info(E.checksum, fmt("%s's checksum at offset %d takes in its request's bytes: decode it as the reply to its request",
+          chosen_name, ck_at))
+        return
+      end
       local r = ck_tvb:range(ck_at, ck.len)
       local c = root:add(F.checksum, r, ck_found)
       c:append_text(" [" .. ck.name .. "]")
@@ -1573,12 +1598,19 @@ local function setup(P)
     end
 
     local m = chosen.m
+    chosen_name = m.name
+    over_request(m)
     local address = m.address_at and b[m.address_at] or nil
     if first and ck_good then
       if out_of_spec then
         state.last = nil
       elseif m.dir == "request" then
-        state.last = { num = num, idx = m.idx }
+        -- The bytes its checksum covers, for a reply whose checksum takes them in.
+        local cov = {}
+        if ck_at and ck.len > 0 then
+          for i = ck.covers_from, ck_at - 1 do cov[#cov + 1] = b[i] end
+        end
+        state.last = { num = num, idx = m.idx, cov = cov }
       else
         if prev then
           rec.response_to = prev
@@ -1591,6 +1623,7 @@ local function setup(P)
     local head = fmt("busspec %s: %s %s", P.name, m.dir, m.name)
     if address then head = head .. fmt(", address %d", address) end
     if not ck_good then head = head .. " [bad checksum]" end
+    if ck_unchecked then head = head .. " [checksum not checked]" end
     if out_of_spec then head = head .. " [out of spec]" end
     root:set_text(head)
     local item = root:add(F.message, whole, m.name)
@@ -1630,6 +1663,7 @@ local function setup(P)
     if address then cols = cols .. fmt(" @%d", address) end
     if #info > 0 then cols = cols .. " " .. concat(info, " ") end
     if not ck_good then cols = cols .. " [bad checksum]" end
+    if ck_unchecked then cols = cols .. " [checksum not checked]" end
     if out_of_spec then cols = cols .. " [out of spec]" end
     pinfo.cols.info = cols
     return n

@@ -376,7 +376,14 @@ fn examples_of(out: &mut String, p: &Protocol, r: MessageRef) {
             .collect();
         let mut note = Vec::new();
         if let Some(c) = e.reply_to {
-            note.push(format!("reply to `{}`", p.commands[c].name));
+            match &e.request {
+                Some(w) => note.push(format!(
+                    "reply to `{}` `{}`",
+                    p.commands[c].name,
+                    crate::interp::format_hex(w)
+                )),
+                None => note.push(format!("reply to `{}`", p.commands[c].name)),
+            }
         }
         if let Some(x) = e.erratum {
             note.push(format!(
@@ -883,9 +890,10 @@ pub fn render(p: &Protocol, source: &str) -> String {
                         Some(or) => format!(" Its code is the request's with 0x{or:02X} set."),
                         None => String::new(),
                     },
-                    match m.checksum_extra {
-                        Some(x) => format!(" Checksum extra byte {x} (0x{x:02X})."),
-                        None => String::new(),
+                    match (m.checksum_extra, m.over_request) {
+                        (Some(x), _) => format!(" Checksum extra byte {x} (0x{x:02X})."),
+                        (None, Some(from)) => format!(" Its checksum takes in its request's bytes: those the request's checksum covers, then its own from offset {from}; it is checked only with the request."),
+                        (None, None) => String::new(),
                     },
                     if m.needs_request {
                         " Shares its code and length with other responses: decode it together with the request it answers."

@@ -98,6 +98,9 @@ pub enum DecodeError {
         found: u64,
         width: u8,
     },
+    /// A reply whose checksum (at `offset`) takes in its request's bytes, decoded without
+    /// the request: its checksum cannot be checked (`checksum_over_request`).
+    NeedsRequest { message: String, offset: usize },
     UnknownCode {
         offset: usize,
         code: Vec<u8>,
@@ -319,6 +322,10 @@ impl fmt::Display for DecodeError {
                 hex_width(*expected, *width),
                 hex_width(*found, *width)
             ),
+            DecodeError::NeedsRequest { message, offset } => write!(
+                f,
+                "{message}'s checksum at offset {offset} takes in its request's bytes: decode it as the reply to its request"
+            ),
             DecodeError::UnknownCode {
                 offset,
                 code,
@@ -426,6 +433,11 @@ pub enum EncodeError {
     MissingValue {
         field: String,
     },
+    /// A reply whose checksum takes in its request's bytes, encoded without the request
+    /// (`checksum_over_request`).
+    NeedsRequest {
+        message: String,
+    },
     UnknownValue {
         field: String,
     },
@@ -521,6 +533,10 @@ impl fmt::Display for EncodeError {
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
         match self {
             EncodeError::MissingValue { field } => write!(f, "no value given for field {field}"),
+            EncodeError::NeedsRequest { message } => write!(
+                f,
+                "{message}'s checksum takes in its request's bytes: encode it as the reply to its request"
+            ),
             EncodeError::UnknownValue { field } => write!(
                 f,
                 "value given for {field}, which the message does not have"
@@ -888,6 +904,26 @@ impl Lookup {
             self.limits,
             Some(self),
             (reply_to, false),
+            None,
+            wire,
+            &mut Spare::default(),
+        )
+    }
+
+    /// [`Self::decode`] with the bytes the request's checksum covers ([`decode_with`]).
+    pub fn decode_with<'p>(
+        &self,
+        p: &'p Protocol,
+        reply_to: Option<usize>,
+        covered: Option<&[u8]>,
+        wire: &[u8],
+    ) -> Result<Frame<'p>, DecodeError> {
+        decode_in(
+            p,
+            self.limits,
+            Some(self),
+            (reply_to, false),
+            covered,
             wire,
             &mut Spare::default(),
         )
@@ -903,20 +939,31 @@ impl Lookup {
         request: Option<usize>,
         wire: &[u8],
     ) -> Result<Frame<'p>, DecodeError> {
-        self.decode_paired_reusing(p, request, wire, &mut Spare::default())
+        self.decode_paired_reusing(p, request, None, wire, &mut Spare::default())
     }
 
     /// [`Self::decode_paired`] in `spare`'s memory: the frame's values built in
     /// [`Spare::values`] (taken from it only when a frame decodes), for a caller that gives
     /// back the frames it is done with, and the decode's own lists kept there.
+    /// `covered`: the bytes the request's checksum covers ([`crate::ir::Framing::checksum_span`] of its
+    /// frame), which the checksum of a reply that takes them in runs over first.
     pub fn decode_paired_reusing<'p>(
         &self,
         p: &'p Protocol,
         request: Option<usize>,
+        covered: Option<&[u8]>,
         wire: &[u8],
         spare: &mut Spare<'p>,
     ) -> Result<Frame<'p>, DecodeError> {
-        decode_in(p, self.limits, Some(self), (request, true), wire, spare)
+        decode_in(
+            p,
+            self.limits,
+            Some(self),
+            (request, true),
+            covered,
+            wire,
+            spare,
+        )
     }
 }
 
@@ -940,12 +987,27 @@ pub fn decode<'p>(
     reply_to: Option<usize>,
     wire: &[u8],
 ) -> Result<Frame<'p>, DecodeError> {
+    decode_with(p, direction, reply_to, None, wire)
+}
+
+/// [`decode`] with the bytes the request's checksum covers (`covered`, [`crate::ir::Framing::checksum_span`]
+/// of its frame): the checksum of a reply that takes in its request's bytes
+/// (`checksum_over_request`) runs over them first; without them such a reply is refused
+/// ([`DecodeError::NeedsRequest`]).
+pub fn decode_with<'p>(
+    p: &'p Protocol,
+    direction: Option<Direction>,
+    reply_to: Option<usize>,
+    covered: Option<&[u8]>,
+    wire: &[u8],
+) -> Result<Frame<'p>, DecodeError> {
     let limits = Limits::of(p, direction);
     decode_in(
         p,
         limits,
         None,
         (reply_to, false),
+        covered,
         wire,
         &mut Spare::default(),
     )
@@ -958,6 +1020,7 @@ fn decode_in<'p>(
     limits: Limits,
     lookup: Option<&Lookup>,
     reply_to: (Option<usize>, bool),
+    covered: Option<&[u8]>,
     wire: &[u8],
     spare: &mut Spare<'p>,
 ) -> Result<Frame<'p>, DecodeError> {
@@ -972,7 +1035,8 @@ fn decode_in<'p>(
     let un = escape::unescape(p, wire)?;
     // A frame of either form of a length field the start byte chooses, in the IR's layout.
     let c = crate::long::canonical(p, &un.frame)?;
-    decode_plain(p, limits, lookup, reply_to, &c.frame, spare).map_err(|e| un.locate(c.locate(e)))
+    decode_plain(p, limits, lookup, (reply_to, covered), &c.frame, spare)
+        .map_err(|e| un.locate(c.locate(e)))
 }
 
 /// Decodes an unescaped frame.
@@ -980,7 +1044,7 @@ fn decode_plain<'p>(
     p: &'p Protocol,
     limits: Limits,
     lookup: Option<&Lookup>,
-    reply_to: (Option<usize>, bool),
+    (reply_to, covered): ((Option<usize>, bool), Option<&[u8]>),
     wire: &[u8],
     spare: &mut Spare<'p>,
 ) -> Result<Frame<'p>, DecodeError> {
@@ -1030,7 +1094,11 @@ fn decode_plain<'p>(
         });
     }
     check_end(p, wire)?;
-    check_checksum(p, lookup.map(|l| &l.checksum), wire)?;
+    match p.over_request(directions, wire) {
+        // A reply whose checksum takes in its request's bytes, by its code and length.
+        Some((m, from)) => check_over_request(p, m, from, covered, wire)?,
+        None => check_checksum(p, lookup.map(|l| &l.checksum), wire)?,
+    }
     // Where the address sits (or whether frames carry one) differs by direction, each
     // direction the frame may be is checked at its own; it is refused where none agrees.
     // A direction refused for its address alone is set aside with its refusal: where the
@@ -1406,9 +1474,51 @@ pub fn decode_as<'p>(
     r: MessageRef,
     wire: &[u8],
 ) -> Result<Frame<'p>, DecodeError> {
+    decode_as_in(p, r, Over::Check(None), wire)
+}
+
+/// [`decode_as`] of a reply with the bytes its request's checksum covers (`covered`,
+/// [`crate::ir::Framing::checksum_span`]): the checksum of a reply that takes them in runs over them
+/// first ([`DecodeError::NeedsRequest`] without them).
+pub fn decode_as_reply<'p>(
+    p: &'p Protocol,
+    r: MessageRef,
+    covered: Option<&[u8]>,
+    wire: &[u8],
+) -> Result<Frame<'p>, DecodeError> {
+    decode_as_in(p, r, Over::Check(covered), wire)
+}
+
+/// [`decode_as`] of a frame already decoded as that message, whose checksum, where it takes in
+/// its request's bytes (`checksum_over_request`), was checked with them then: it is not
+/// checked again (every other check is made).
+pub fn decode_as_kept<'p>(
+    p: &'p Protocol,
+    r: MessageRef,
+    wire: &[u8],
+) -> Result<Frame<'p>, DecodeError> {
+    decode_as_in(p, r, Over::Checked, wire)
+}
+
+/// How [`decode_as_unescaped`] takes the checksum of a reply that takes in its request's
+/// bytes.
+#[derive(Clone, Copy)]
+enum Over<'r> {
+    /// Over these bytes of the request's (none: refused, [`DecodeError::NeedsRequest`]).
+    Check(Option<&'r [u8]>),
+    /// Checked before: not again.
+    Checked,
+}
+
+fn decode_as_in<'p>(
+    p: &'p Protocol,
+    r: MessageRef,
+    over: Over,
+    wire: &[u8],
+) -> Result<Frame<'p>, DecodeError> {
     let un = escape::unescape(p, p.framing.after_preamble(wire))?;
     let c = crate::long::canonical(p, &un.frame)?;
-    decode_as_unescaped(p, r, &c.frame).map_err(|e| un.locate(c.locate(e)))
+    decode_as_unescaped(p, r, over, &c.frame).map_err(|e| un.locate(c.locate(e)))
 }
 
 /// A constant whole frame, decoded: no address, no values.
@@ -1424,6 +1534,7 @@ pub fn constant_frame<'p>(message: MessageRef) -> Frame<'p> {
 fn decode_as_unescaped<'p>(
     p: &'p Protocol,
     r: MessageRef,
+    over: Over,
     wire: &[u8],
 ) -> Result<Frame<'p>, DecodeError> {
     let m = p.message(r);
@@ -1470,7 +1581,11 @@ fn decode_as_unescaped<'p>(
         });
     }
     check_end(p, wire)?;
-    check_checksum(p, None, wire)?;
+    match (m.over_request, over) {
+        (Some(from), Over::Check(covered)) => check_over_request(p, m, from, covered, wire)?,
+        (Some(_), Over::Checked) => {}
+        (None, _) => check_checksum(p, None, wire)?,
+    }
     check_address(p, o.address, wire)?;
     let plain = p.framing.untransformed(wire);
     let wire: &[u8] = &plain;
@@ -1505,6 +1620,37 @@ pub(crate) fn check_checksum(
         Some(prepared) if c.extra.is_none() => prepared.compute(covered),
         _ => c.compute(covered),
     };
+    let found = read_uint(&wire[at..at + c.len()], c.byte_order);
+    if expected != found {
+        return Err(DecodeError::ChecksumMismatch {
+            offset: at,
+            expected,
+            found,
+            width: c.width,
+        });
+    }
+    Ok(())
+}
+
+/// Refuses a frame of reply `m`, whose checksum takes in its request's bytes (`covered`, the
+/// bytes the request's checksum covers) and then its own from `from`, where that checksum is
+/// wrong, or where there is no request to check it with.
+fn check_over_request(
+    p: &Protocol,
+    m: &Message,
+    from: usize,
+    covered: Option<&[u8]>,
+    wire: &[u8],
+) -> Result<(), DecodeError> {
+    let c = &p.framing.checksum;
+    let at = p.framing.checksum_at(wire.len());
+    let Some(request) = covered else {
+        return Err(DecodeError::NeedsRequest {
+            message: m.name.clone(),
+            offset: at,
+        });
+    };
+    let expected = c.compute_after(request, wire.get(from..at).unwrap_or(&[]));
     let found = read_uint(&wire[at..at + c.len()], c.byte_order);
     if expected != found {
         return Err(DecodeError::ChecksumMismatch {
@@ -2460,10 +2606,25 @@ pub fn decode_reply<'p>(
     request: &Frame,
     wire: &[u8],
 ) -> Result<Frame<'p>, DecodeError> {
-    let frame = decode(
+    decode_reply_with(p, request, None, wire)
+}
+
+/// [`decode_reply`] with the request's frame as it travelled (`request_wire`), whose bytes
+/// the checksum of a reply that takes them in runs over first (`checksum_over_request`);
+/// without it such a reply is refused ([`DecodeError::NeedsRequest`]).
+#[cfg(feature = "tools")]
+pub fn decode_reply_with<'p>(
+    p: &'p Protocol,
+    request: &Frame,
+    request_wire: Option<&[u8]>,
+    wire: &[u8],
+) -> Result<Frame<'p>, DecodeError> {
+    let covered = request_wire.and_then(|w| p.framing.checksum_span(w));
+    let frame = decode_with(
         p,
         Some(Direction::Response),
         Some(request.message.index),
+        covered,
         wire,
     )?;
     // Its offsets are the IR's layout's: on the frame as it travelled (a long length form).
@@ -2552,6 +2713,21 @@ pub fn encode(
     address: u8,
     values: &[Value],
 ) -> Result<Vec<u8>, EncodeError> {
+    encode_with(p, r, address, values, None)
+}
+
+/// [`encode`] of a reply with the bytes its request's checksum covers (`covered`,
+/// [`crate::ir::Framing::checksum_span`] of the request's frame): the checksum of a reply that takes
+/// them in runs over them first (`checksum_over_request`); without them such a reply is
+/// refused ([`EncodeError::NeedsRequest`]). Other messages ignore them.
+#[cfg(feature = "tools")]
+pub fn encode_with(
+    p: &Protocol,
+    r: MessageRef,
+    address: u8,
+    values: &[Value],
+    covered: Option<&[u8]>,
+) -> Result<Vec<u8>, EncodeError> {
     let m = p.message(r);
     // Counted text (`type: ascii` with `repeat`) is encoded as the list of its bytes.
     if m.fields.iter().any(Field::is_counted_text) {
@@ -2583,9 +2759,9 @@ pub fn encode(
                 }
             }
         }
-        return encode_values(p, r, address, &given);
+        return encode_values(p, r, address, &given, covered);
     }
-    encode_values(p, r, address, values)
+    encode_values(p, r, address, values, covered)
 }
 
 #[cfg(feature = "tools")]
@@ -2594,6 +2770,7 @@ fn encode_values(
     r: MessageRef,
     address: u8,
     values: &[Value],
+    covered: Option<&[u8]>,
 ) -> Result<Vec<u8>, EncodeError> {
     let m = p.message(r);
     // A constant whole frame carries no address: its bytes, whatever address is given.
@@ -3021,6 +3198,16 @@ fn encode_values(
     // The payload as it travels (`framing.transform`), then the checksum over it.
     p.framing.transform_in_place(&mut out);
     reseal_from(p, &mut out, 0);
+    if let Some(from) = m.over_request {
+        let Some(request) = covered else {
+            return Err(EncodeError::NeedsRequest {
+                message: m.name.clone(),
+            });
+        };
+        let (c, at) = (&p.framing.checksum, p.framing.checksum_at(out.len()));
+        let sum = c.compute_after(request, out.get(from..at).unwrap_or(&[]));
+        write_uint(sum, &mut out[at..at + c.len()], c.byte_order);
+    }
     // End bytes alone delimit the frame: its list to the end must not show them before its
     // own (a receiver would end the frame there).
     if let Some((f, at)) = m.delimited_list(&p.framing) {
@@ -3038,8 +3225,10 @@ fn encode_values(
     if m.is_variable() {
         // A count field given a value, or one that follows another, may disagree with the
         // list: what encode writes, decode must accept.
-        decode_as_unescaped(p, r, &out).map_err(|e| EncodeError::Inconsistent {
-            reason: e.to_string(),
+        decode_as_unescaped(p, r, Over::Check(covered), &out).map_err(|e| {
+            EncodeError::Inconsistent {
+                reason: e.to_string(),
+            }
         })?;
     }
     if p.framing.escaping.is_some() {

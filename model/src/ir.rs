@@ -626,6 +626,17 @@ impl Framing {
         len.saturating_sub(self.checksum.len() + after)
     }
 
+    /// The bytes a request frame's checksum covers, as it travelled (after any preamble): what
+    /// the checksum of a reply that takes in its request's bytes runs over first
+    /// ([`Message::over_request`]). `None` for a frame too short to hold a checksum.
+    pub fn checksum_span<'w>(&self, request: &'w [u8]) -> Option<&'w [u8]> {
+        let w = self.after_preamble(request);
+        if w.len() < self.trailer_len() {
+            return None;
+        }
+        w.get(self.checksum.covers_from..self.checksum_at(w.len()))
+    }
+
     /// Where the end bytes of a frame of `len` bytes start.
     pub fn end_at(&self, len: usize) -> usize {
         if self.end_first() {
@@ -899,6 +910,15 @@ impl Checksum {
         }
     }
 
+    /// The checksum of a reply that takes in its request's bytes: over `request` (the bytes
+    /// the request's checksum covers), then over the reply's own `covered` bytes.
+    pub fn compute_after(&self, request: &[u8], covered: &[u8]) -> u64 {
+        let mut all = Vec::with_capacity(request.len() + covered.len());
+        all.extend_from_slice(request);
+        all.extend_from_slice(covered);
+        self.compute(&all)
+    }
+
     /// No checksum: frames whose layout has none.
     pub fn none(byte_order: ByteOrder) -> Checksum {
         Checksum {
@@ -1031,6 +1051,10 @@ pub struct Message {
     /// The byte its checksum takes after the covered bytes (`checksum_extra`), where the
     /// framing's checksum takes one.
     pub checksum_extra: Option<u8>,
+    /// Responses whose checksum takes in their request's bytes (`checksum_over_request`):
+    /// the offset in this message's frame from which it covers its own bytes, after the
+    /// bytes the request's checksum covers ([`Framing::checksum_span`]).
+    pub over_request: Option<usize>,
     /// A constant whole frame (`frame:`, responses only): the message is these bytes and
     /// nothing else, outside the framing (M-Bus's single character `E5`). It has no code,
     /// fields, address or checksum; its `layout.len` and `max_len` are the bytes' length. Such
@@ -1762,6 +1786,9 @@ pub struct Example {
     pub message: MessageRef,
     /// The request a response example answers.
     pub reply_to: Option<usize>,
+    /// That request's frame as it travels, where the example gives it (`request`): the bytes
+    /// a reply's checksum that takes them in runs over first.
+    pub request: Option<Vec<u8>>,
     /// Verbatim from the document, or `None` for a derived example.
     pub printed: Option<String>,
     /// Our own frame text for a derived example.
@@ -1909,6 +1936,26 @@ impl Protocol {
         let all = self.messages(d);
         let constants = all.iter().rev().take_while(|m| m.frame.is_some()).count();
         &all[..all.len() - constants]
+    }
+
+    /// The reply whose checksum takes in its request's bytes that a frame of `wire`'s length
+    /// and code is, among `directions` (validated: no message of another checksum rule
+    /// shares a code and a length with one), and where its checksum takes up its own bytes.
+    pub fn over_request(&self, directions: &[Direction], wire: &[u8]) -> Option<(&Message, usize)> {
+        if !directions.contains(&Direction::Response) {
+            return None;
+        }
+        self.framed(Direction::Response).iter().find_map(|m| {
+            let from = m.over_request?;
+            let fits = (m.layout.len..=m.max_len).contains(&wire.len())
+                && wire.get(m.layout.code..m.layout.code + m.code.len()) == Some(&m.code[..]);
+            fits.then_some((m, from))
+        })
+    }
+
+    /// Whether any reply's checksum takes in its request's bytes.
+    pub fn has_over_request(&self) -> bool {
+        self.responses.iter().any(|m| m.over_request.is_some())
     }
 
     /// The constant whole frames of direction `d` (`frame:`), with their indices in

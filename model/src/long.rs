@@ -210,6 +210,7 @@ pub(crate) fn relocate(
         E::BadStart { offset, .. }
         | E::BadEnd { offset, .. }
         | E::ChecksumMismatch { offset, .. }
+        | E::NeedsRequest { offset, .. }
         | E::UnknownCode { offset, .. }
         | E::ConstantMismatch { offset, .. }
         | E::NotBcd { offset, .. }

@@ -691,6 +691,19 @@ pub struct Response {
     /// As [`Command::checksum_extra`].
     #[serde(default)]
     pub checksum_extra: Option<i64>,
+    /// The reply's checksum takes in its request's bytes: it runs over the bytes the
+    /// request's checksum covers, then over the reply's own from `covers_from` (Pelco D's
+    /// general response: the request's sum plus the alarm byte).
+    #[serde(default)]
+    pub checksum_over_request: Option<OverRequest>,
+}
+
+/// A reply's `checksum_over_request`.
+#[derive(Debug, Clone, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct OverRequest {
+    /// The first part of the reply its checksum covers after the request's bytes.
+    pub covers_from: Part,
 }
 
 #[derive(Debug, Clone, Deserialize)]
@@ -998,6 +1011,10 @@ pub struct Example {
     pub message: String,
     #[serde(default)]
     pub reply_to: Option<String>,
+    /// The request frame a reply example answers (hex, as example text is written), where
+    /// the reply's checksum takes in its request's bytes (`checksum_over_request`).
+    #[serde(default)]
+    pub request: Option<String>,
     #[serde(default)]
     pub printed: Option<String>,
     #[serde(default)]

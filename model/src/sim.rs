@@ -199,7 +199,7 @@ impl Sim {
                 }
                 let f = f.into_owned();
                 let r = p.device.rules[f.message.index].invalid.clone()?;
-                return self.refuse(p, &f, &r);
+                return self.refuse(p, &f, frame, &r);
             }
             Err(_) => return None,
         };
@@ -226,7 +226,7 @@ impl Sim {
                 if !answered {
                     return None;
                 }
-                self.refuse(p, &request, r)
+                self.refuse(p, &request, frame, r)
             }
             Ok(into) => {
                 if !answered {
@@ -240,7 +240,7 @@ impl Sim {
                         raw,
                     })
                     .collect();
-                self.reply(p, &request, reply, given)
+                self.reply(p, &request, frame, reply, given)
             }
         }
     }
@@ -399,7 +399,13 @@ impl Sim {
         }
     }
 
-    fn refuse(&self, p: &Protocol, request: &interp::Frame, r: &Refusal) -> Option<Vec<u8>> {
+    fn refuse(
+        &self,
+        p: &Protocol,
+        request: &interp::Frame,
+        request_wire: &[u8],
+        r: &Refusal,
+    ) -> Option<Vec<u8>> {
         let given = r
             .values
             .iter()
@@ -408,16 +414,18 @@ impl Sim {
                 raw: Raw::Int(*v),
             })
             .collect();
-        self.reply(p, request, r.reply, given)
+        self.reply(p, request, request_wire, r.reply, given)
     }
 
     /// Encodes response `reply` to `request`: the values given, then those of the request's
     /// fields of the same names, then those that follow from the request, then each field's
-    /// first valid value.
+    /// first valid value. `request_wire`: the request's frame, whose bytes a reply's checksum
+    /// may take in (`checksum_over_request`).
     fn reply(
         &self,
         p: &Protocol,
         request: &interp::Frame,
+        request_wire: &[u8],
         reply: usize,
         mut values: Vec<Value>,
     ) -> Option<Vec<u8>> {
@@ -528,7 +536,8 @@ impl Sim {
             direction: Direction::Response,
             index: reply,
         };
-        interp::encode(p, r, address, &values).ok()
+        let covered = p.framing.checksum_span(request_wire);
+        interp::encode_with(p, r, address, &values, covered).ok()
     }
 }
 

@@ -486,6 +486,8 @@ pub struct StreamDecoder<'p> {
     noise_at: u64,
     /// The flag of flag framing ([`crate::ir::Framing::shared_flag`]), if the protocol has one.
     shared_flag: Option<u8>,
+    /// Whether any reply's checksum takes in its request's bytes: the stream keeps them.
+    over_request: bool,
     /// Whether `buf[0]` is the closing flag of the frame just reported, kept as the next
     /// frame's possible opening one: if it opens none, it is dropped without being noise.
     held_flag: bool,
@@ -501,6 +503,9 @@ pub struct StreamDecoder<'p> {
     /// reply holds as many bytes as it asked for), as the generated stream decoder checks
     /// `decode_reply` against the request it keeps; a reply that does not is decoded alone.
     last_frame: Option<Frame<'p>>,
+    /// The bytes that request's checksum covers, which the checksum of a reply that takes in
+    /// its request's bytes runs over first (`checksum_over_request`).
+    last_covered: Vec<u8>,
     default_request: Option<usize>,
     /// The spec with its rules lifted ([`relaxed`]), made at the first out-of-spec frame.
     relaxed: Option<Box<Protocol>>,
@@ -594,6 +599,7 @@ impl<'p> StreamDecoder<'p> {
             noise: Vec::new(),
             noise_at: 0,
             shared_flag: p.framing.shared_flag(),
+            over_request: p.has_over_request(),
             held_flag: false,
             preamble: p
                 .framing
@@ -604,6 +610,7 @@ impl<'p> StreamDecoder<'p> {
             preamble_len: 0,
             last_request: None,
             last_frame: None,
+            last_covered: Vec::new(),
             default_request: None,
             relaxed: None,
             spare_bytes: Vec::new(),
@@ -1177,11 +1184,15 @@ impl<'p> StreamDecoder<'p> {
             (Some([_, responses]), 2) => responses,
             _ => &self.lookup,
         };
-        let mut decoded = lookup.decode_paired_reusing(self.p, request, wire, &mut self.spare);
+        // A default request has no bytes: a reply whose checksum takes in its request's
+        // bytes is not checked against it.
+        let covered = self.last_request.map(|_| &self.last_covered[..]);
+        let mut decoded =
+            lookup.decode_paired_reusing(self.p, request, covered, wire, &mut self.spare);
         if let (Ok(f), Some(q), Some(_)) = (&decoded, &self.last_frame, self.last_request) {
             if f.message.direction == Direction::Response && interp::answers(self.p, q, f).is_err()
             {
-                decoded = lookup.decode_paired_reusing(self.p, None, wire, &mut self.spare);
+                decoded = lookup.decode_paired_reusing(self.p, None, None, wire, &mut self.spare);
             }
         }
         let values = std::mem::take(&mut self.spare.values);
@@ -1210,6 +1221,11 @@ impl<'p> StreamDecoder<'p> {
             Ok(frame) => {
                 self.pair(frame.message);
                 self.last_frame = self.last_request.map(|_| frame.clone());
+                if self.last_request.is_some() && self.over_request {
+                    self.last_covered.clear();
+                    let span = self.p.framing.checksum_span(&bytes).unwrap_or(&[]);
+                    self.last_covered.extend_from_slice(span);
+                }
                 Event::Frame {
                     offset,
                     bytes,

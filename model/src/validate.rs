@@ -365,6 +365,7 @@ fn validate_ordered(spec: &model::Spec, sink: &mut Sink) -> Option<Protocol> {
             code_from_request: None,
             max_len: layout.len + (max_payload - payload_len),
             checksum_extra: None,
+            over_request: None,
             frame: None,
         });
     }
@@ -423,6 +424,7 @@ fn validate_ordered(spec: &model::Spec, sink: &mut Sink) -> Option<Protocol> {
                 code_from_request: None,
                 max_len: len,
                 checksum_extra: None,
+                over_request: None,
                 frame: Some(frame),
             });
             continue;
@@ -468,10 +470,12 @@ fn validate_ordered(spec: &model::Spec, sink: &mut Sink) -> Option<Protocol> {
             code_from_request,
             max_len: layout.len + (max_payload - payload_len),
             checksum_extra: None,
+            over_request: None,
             frame: None,
         });
     }
     checksum_extras(spec, &mut framing, &mut commands, &mut responses, sink);
+    over_requests(spec, &framing, &commands, &mut responses, sink);
     transform_lists(&framing, &commands, "commands", sink);
     transform_lists(&framing, &responses, "responses", sink);
     truncated_messages(&framing, &commands, "commands", sink);
@@ -703,6 +707,125 @@ fn checksum_extras(
             code_at: head.code - framing.checksum.covers_from,
             by_code: by_code.into_iter().map(|(c, x, _)| (c, x)).collect(),
         });
+    }
+}
+
+/// Each response's `checksum_over_request`: where in its frame its checksum takes up its own
+/// bytes after its request's. A frame is known to be such a reply before its checksum is
+/// checked, by its code and length alone (both engines check the checksum before they look
+/// at the fields), so no message of another rule may share a code and a length with it.
+fn over_requests(
+    spec: &model::Spec,
+    framing: &Framing,
+    commands: &[Message],
+    responses: &mut [Message],
+    sink: &mut Sink,
+) {
+    for (r, m) in spec.responses.iter().zip(responses.iter_mut()) {
+        let Some(over) = &r.checksum_over_request else {
+            continue;
+        };
+        if m.frame.is_some() {
+            continue;
+        }
+        let path = format!("responses.{}.checksum_over_request", m.name);
+        let errors = sink.items.len();
+        if framing.checksum.is_empty() {
+            sink.error(
+                &path,
+                "the framing has no checksum to take in the request's bytes",
+            );
+        }
+        for (given, what) in [
+            (framing.escaping.is_some(), "escaping (`framing.escaping`)"),
+            (
+                framing.transform.is_some(),
+                "a transform (`framing.transform`)",
+            ),
+            (
+                framing.long.is_some(),
+                "a long length form (`framing.length.long`)",
+            ),
+            (framing.form.is_some(), "a short form (`framing.forms`)"),
+            (framing.truncation.is_some(), "payload truncation"),
+            (
+                framing.checksum.extra.is_some(),
+                "an extra checksum byte per message",
+            ),
+            (
+                framing.preamble.is_some(),
+                "a preamble (`framing.preamble`)",
+            ),
+        ] {
+            if given {
+                sink.error(
+                    &path,
+                    format!(
+                        "a checksum over the request's bytes is not expressible beside {what} yet"
+                    ),
+                );
+            }
+        }
+        let part = over.covers_from;
+        let o = m.layout;
+        let at = match part {
+            Part::Start => o.start,
+            Part::Address => o.address,
+            Part::Length => o.length,
+            Part::Header => Some(o.header),
+            Part::Code => Some(o.code),
+            Part::Payload => Some(o.payload),
+            Part::Checksum | Part::End => None,
+        };
+        match at {
+            Some(at) if framing.layout_of(Direction::Response).contains(&part) => {
+                if sink.items.len() == errors {
+                    m.over_request = Some(at);
+                }
+            }
+            _ => sink.error(
+                join(&path, "covers_from"),
+                format!(
+                    "the checksum cannot cover from `{}`: name a part of the response's layout before the checksum",
+                    part_name(part)
+                ),
+            ),
+        }
+    }
+    // Told apart by code and length alone from every message of another rule.
+    let apart = |a: &Message, b: &Message| {
+        let overlap = a.layout.len <= b.max_len && b.layout.len <= a.max_len;
+        let coded = !a.code.is_empty()
+            && a.code.len() == b.code.len()
+            && a.layout.code == b.layout.code
+            && a.code != b.code;
+        !overlap || coded || a.frame.is_some() || b.frame.is_some()
+    };
+    for (i, m) in responses.iter().enumerate() {
+        if m.over_request.is_none() {
+            continue;
+        }
+        let others = commands.iter().chain(
+            responses
+                .iter()
+                .enumerate()
+                .filter(|&(j, x)| {
+                    x.over_request != m.over_request && (x.over_request.is_none() || j > i)
+                })
+                .map(|(_, x)| x),
+        );
+        for x in others {
+            if !apart(m, x) {
+                sink.error(
+                    format!("responses.{}.checksum_over_request", m.name),
+                    format!(
+                        "{} can have the same code and length, and its checksum covers other bytes: a reply whose checksum takes in its request's bytes must be told apart by its code and length alone",
+                        x.name
+                    ),
+                );
+                break;
+            }
+        }
     }
 }
 
@@ -2912,6 +3035,7 @@ fn constant_frame(
         ("needs_request", r.needs_request),
         ("code_from_request", r.code_from_request.is_some()),
         ("checksum_extra", r.checksum_extra.is_some()),
+        ("checksum_over_request", r.checksum_over_request.is_some()),
     ] {
         if given {
             sink.error(
@@ -5077,6 +5201,58 @@ fn examples(spec: &model::Spec, p: &Protocol, sink: &mut Sink) -> Vec<Example> {
             // Already reported above; without its request the frame would only add "ambiguous".
             continue;
         }
+        // The request's frame, where a reply's checksum takes in its bytes.
+        let request = match (&e.request, reply_to) {
+            (None, _) if m.over_request.is_some() => {
+                sink.error(
+                    join(&path, "request"),
+                    format!("{at}: the checksum of `{}` takes in its request's bytes: give the request's frame with `request` (and the command with `reply_to`)", m.name),
+                );
+                continue;
+            }
+            (None, _) => None,
+            (Some(_), None) => {
+                sink.error(
+                    join(&path, "request"),
+                    format!("{at}: `request` is the frame of the request a reply example answers (`reply_to`)"),
+                );
+                continue;
+            }
+            (Some(text), Some(c)) => {
+                let wire = match interp::parse_hex(text) {
+                    Ok(w) => w,
+                    Err(err) => {
+                        sink.error(
+                            join(&path, "request"),
+                            format!("{at}: frame text `{text}`: {err}"),
+                        );
+                        continue;
+                    }
+                };
+                match lookups[0].decode(p, None, &wire) {
+                    Ok(f) if f.message.index == c => Some(wire),
+                    Ok(f) => {
+                        sink.error(
+                            join(&path, "request"),
+                            format!(
+                                "{at}: the request decodes as `{}`, not `{}`",
+                                p.message(f.message).name,
+                                p.commands[c].name
+                            ),
+                        );
+                        continue;
+                    }
+                    Err(err) => {
+                        sink.error(
+                            join(&path, "request"),
+                            format!("{at}: the request does not decode: {err}"),
+                        );
+                        continue;
+                    }
+                }
+            }
+        };
+        let covered = request.as_deref().and_then(|w| p.framing.checksum_span(w));
         let erratum = match &e.erratum {
             None => None,
             Some(id) => {
@@ -5132,8 +5308,15 @@ fn examples(spec: &model::Spec, p: &Protocol, sink: &mut Sink) -> Vec<Example> {
             }
         }
         // The printed frame must replay as it stands, or be excused by an erratum and corrected.
-        let printed_check =
-            frame_problems(p, lookup, r, reply_to, source, &values, e.erratum.is_some());
+        let printed_check = frame_problems(
+            p,
+            lookup,
+            r,
+            (reply_to, covered),
+            source,
+            &values,
+            e.erratum.is_some(),
+        );
         let wire = match (printed_check, &e.corrected) {
             (Ok(wire), None) => wire,
             (Ok(_), Some(_)) => {
@@ -5150,7 +5333,7 @@ fn examples(spec: &model::Spec, p: &Protocol, sink: &mut Sink) -> Vec<Example> {
                 continue;
             }
             (Err(_), Some(fixed)) if erratum.is_some() => {
-                match frame_problems(p, lookup, r, reply_to, fixed, &values, true) {
+                match frame_problems(p, lookup, r, (reply_to, covered), fixed, &values, true) {
                     Ok(wire) => wire,
                     Err(problem) => {
                         sink.error(join(&path, "corrected"), format!("{at}: {problem}"));
@@ -5164,6 +5347,7 @@ fn examples(spec: &model::Spec, p: &Protocol, sink: &mut Sink) -> Vec<Example> {
             section: e.section.clone(),
             message: r,
             reply_to,
+            request,
             printed: e.printed.clone(),
             derived: e.derived.clone(),
             comment: e.comment.clone(),
@@ -5182,7 +5366,7 @@ fn frame_problems(
     p: &Protocol,
     lookup: &interp::Lookup,
     r: MessageRef,
-    reply_to: Option<usize>,
+    (reply_to, covered): (Option<usize>, Option<&[u8]>),
     frame_text: &str,
     values: &[(String, StatedValue)],
     excused: bool,
@@ -5213,10 +5397,10 @@ fn frame_problems(
         ));
     }
     let wire = crate::escape::escape_bytes(&p.framing, &interp::printed_to_wire(p, m, &printed));
-    let frame = interp::decode_as(p, r, &wire).map_err(|e| e.to_string())?;
+    let frame = interp::decode_as_reply(p, r, covered, &wire).map_err(|e| e.to_string())?;
     // The frame must also decode on its own, without being told what it is (as a sniffer would),
     // unless only its request can tell it apart.
-    match lookup.decode(p, reply_to, &wire) {
+    match lookup.decode_with(p, reply_to, covered, &wire) {
         Ok(f) if f.message == r => {}
         Ok(f) => {
             return Err(format!(

@@ -429,6 +429,25 @@ const CASES: &[(&str, &[(&str, &str)])] = &[
             ("responses.string.fields.text", "a list to the end of a frame that end bytes alone delimit (no length field, no checksum) beside a transform (framing.transform) is not expressible yet"),
         ],
     ),
+    // ---- a reply's checksum over its request's bytes (made from valid/pelco_d_replies)
+    (
+        "over_request_told_apart",
+        &[
+            ("responses.general_response.checksum_over_request", "busy can have the same code and length, and its checksum covers other bytes: a reply whose checksum takes in its request's bytes must be told apart by its code and length alone"),
+            ("responses.busy", "duplicate code: `general_response` (no code) and `busy` (no code) have the same length and no constant field tells them apart (if only the request can tell them apart, mark both `needs_request: true`)"),
+        ],
+    ),
+    (
+        "over_request_with_escaping",
+        &[("responses.general_response.checksum_over_request", "a checksum over the request's bytes is not expressible beside escaping (`framing.escaping`) yet")],
+    ),
+    (
+        "over_request_example",
+        &[
+            ("examples[1].request", "§5 general_response: the checksum of `general_response` takes in its request's bytes: give the request's frame with `request` (and the command with `reply_to`)"),
+            ("examples[3].request", "§5 general_response: the request decodes as `ptz`, not `set_auxiliary`"),
+        ],
+    ),
     // ---- optional fields (made from valid/optional_sensor, without its examples)
     (
         "optional_with_escaping",

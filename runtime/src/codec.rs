@@ -283,7 +283,7 @@ impl Frame {
 /// The checksum at the end of `frame` (from `at`) and the one computed over the bytes before
 /// it: `(found, expected)`.
 #[inline(always)]
-fn sums(frame: &[u8], at: usize, f: &Frame, checksum: impl FnOnce(&[u8]) -> u32) -> (u32, u32) {
+fn sums<T>(frame: &[u8], at: usize, f: &Frame, checksum: impl FnOnce(&[u8]) -> T) -> (u32, T) {
     let (body, tail) = frame.split_at(at);
     let tail = tail.get(..f.checksum_len).unwrap_or(tail);
     let found = uint(tail, !f.checksum_be) as u32;
@@ -319,6 +319,21 @@ pub fn check_frame(
     f: &Frame,
     checksum: impl FnOnce(&[u8]) -> u32,
 ) -> Result<u8, DecodeError> {
+    check_frame_with(frame, min, max, address_at, f, |b| Ok(checksum(b)))
+}
+
+/// [`check_frame`] with a checksum that may refuse the frame instead of computing it: a reply
+/// whose checksum takes in its request's bytes, decoded without them
+/// ([`DecodeError::NeedsRequest`], in the checksum's place in the order).
+#[inline(always)]
+pub fn check_frame_with(
+    frame: &[u8],
+    min: usize,
+    max: usize,
+    address_at: usize,
+    f: &Frame,
+    checksum: impl FnOnce(&[u8]) -> Result<u32, DecodeError>,
+) -> Result<u8, DecodeError> {
     let len = frame.len();
     if len > max {
         return Err(DecodeError::TooLong { max, found: len });
@@ -345,6 +360,7 @@ pub fn check_frame(
         return Err(e);
     }
     let (found, expected) = sums(frame, at, f, checksum);
+    let expected = expected?;
     if found != expected {
         return Err(DecodeError::ChecksumMismatch {
             offset: at,
@@ -1156,6 +1172,18 @@ fn check_end(frame: &[u8], from: usize, end: &[u8]) -> Option<DecodeError> {
         expected,
         found,
     })
+}
+
+/// The bytes of `frame` its checksum covers, from `from` up to the checksum (as `f` places
+/// it): what the checksum of a reply that takes in its request's bytes runs over first.
+/// Empty for a frame too short to hold its checksum and end bytes.
+#[inline]
+pub fn span<'f>(frame: &'f [u8], from: usize, f: &Frame) -> &'f [u8] {
+    if frame.len() < f.checksum_len + f.end.len() {
+        return &[];
+    }
+    let (at, _) = f.trailer(frame.len());
+    frame.get(from..at).unwrap_or(&[])
 }
 
 /// [`seal`] for a protocol whose frames have end bytes: the end bytes and the checksum of the

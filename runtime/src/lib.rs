@@ -661,6 +661,13 @@ pub enum DecodeError {
         found: u32,
         width: u8,
     },
+    /// A reply whose checksum (at `offset`) takes in its request's bytes, decoded without
+    /// them (`checksum_over_request`): its checksum cannot be checked. Decode it with
+    /// [`crate::Protocol::decode_reply_to`].
+    NeedsRequest {
+        message: &'static MessageDesc,
+        offset: usize,
+    },
     /// No message of this direction has this code: the `len` bytes at `offset`.
     UnknownCommand { offset: usize, code: u32, len: u8 },
     /// No response has this code (a frame decoded as a response only).
@@ -1032,6 +1039,11 @@ impl fmt::Display for DecodeError {
                 f.write_str(", found ")?;
                 hex(f, found, width)
             }
+            DecodeError::NeedsRequest { message, offset } => write!(
+                f,
+                "{}'s checksum at offset {offset} takes in its request's bytes: decode it as the reply to its request",
+                message.name
+            ),
             DecodeError::UnknownCommand { offset, code, len } => {
                 f.write_str("unknown command code ")?;
                 hex(f, code, len)?;
@@ -1218,6 +1230,9 @@ impl core::error::Error for DecodeError {}
 pub enum EncodeError {
     /// The buffer is shorter than the frame; `MAX_FRAME_LEN` of each protocol always suffices.
     BufferTooSmall { needed: usize, available: usize },
+    /// A reply whose checksum takes in its request's bytes, encoded without them
+    /// (`checksum_over_request`): encode it with [`crate::Protocol::encode_reply`].
+    NeedsRequest { message: &'static str },
     /// A typed value does not fit the wire field it goes into.
     OutOfRange { field: &'static str },
     /// A value lies outside the `range` the spec gives its field (and is none of its special
@@ -1277,6 +1292,10 @@ impl fmt::Display for EncodeError {
             EncodeError::OutOfRange { field } => {
                 write!(f, "value of {field} does not fit its wire field")
             }
+            EncodeError::NeedsRequest { message } => write!(
+                f,
+                "{message}'s checksum takes in its request's bytes: encode it as the reply to its request"
+            ),
             EncodeError::NotInRange {
                 field,
                 value,

@@ -212,6 +212,7 @@ pub(crate) fn on_shorter(e: DecodeError, extra: usize, o: impl Fn(usize) -> usiz
         E::BadStart { offset, .. }
         | E::BadEnd { offset, .. }
         | E::ChecksumMismatch { offset, .. }
+        | E::NeedsRequest { offset, .. }
         | E::UnknownCommand { offset, .. }
         | E::UnknownResponse { offset, .. }
         | E::InvalidValue { offset, .. }

@@ -92,6 +92,62 @@ pub trait Protocol: Framing + Copy + Debug + Default + Send + Sync + 'static {
         request: Option<&Self::Request>,
     ) -> Result<Decoded<Self::Response>, DecodeError>;
 
+    /// Decodes `frame` as the reply to the request frame `request_frame` (as it travelled):
+    /// as [`Self::decode_reply`], and the checksum of a reply that takes in its request's
+    /// bytes (`checksum_over_request`: Pelco D's general response) is checked over them,
+    /// where [`Self::decode_reply`] refuses such a reply with
+    /// [`DecodeError::NeedsRequest`]. A `request_frame` that does not decode as a request is
+    /// refused with its own error.
+    #[inline]
+    fn decode_reply_to(
+        frame: &[u8],
+        request_frame: &[u8],
+    ) -> Result<Decoded<Self::Response>, DecodeError> {
+        let request = Self::decode_request(request_frame)?;
+        Self::decode_response_over(
+            frame,
+            Some(&request.message),
+            Some(Self::request_span(request_frame)),
+        )
+    }
+    /// [`Self::decode_response_for`] with the bytes the request's checksum covers
+    /// ([`Self::request_span`]), which the checksum of a reply that takes in its request's
+    /// bytes runs over first; without them such a reply is
+    /// [`DecodeError::NeedsRequest`]. Protocols with no such reply decode as without them.
+    #[doc(hidden)]
+    #[inline]
+    fn decode_response_over(
+        frame: &[u8],
+        request: Option<&Self::Request>,
+        covered: Option<&[u8]>,
+    ) -> Result<Decoded<Self::Response>, DecodeError> {
+        let _ = covered;
+        Self::decode_response_for(frame, request)
+    }
+    /// The bytes of `request_frame` its checksum covers: what the checksum of a reply that
+    /// takes in its request's bytes runs over first. Empty for a protocol with no such reply
+    /// and for a frame too short to hold a checksum.
+    #[inline]
+    fn request_span(request_frame: &[u8]) -> &[u8] {
+        let _ = request_frame;
+        &[]
+    }
+    /// Writes `response` to `address` into `buf` as the reply to the request frame
+    /// `request_frame` (as it travelled), and returns its length: as
+    /// [`Message::encode`], and the checksum of a reply that takes in its request's bytes
+    /// over them, where [`Message::encode`] refuses such a reply with
+    /// [`EncodeError::NeedsRequest`].
+    #[inline]
+    fn encode_reply(
+        response: &Self::Response,
+        address: u8,
+        request_frame: &[u8],
+        buf: &mut [u8],
+    ) -> Result<usize, EncodeError> {
+        let _ = request_frame;
+        response.encode(address, buf)
+    }
+
     /// Whether `response` is one the spec lets `request` get.
     fn answers(request: &Self::Request, response: &Self::Response) -> bool;
     /// What the spec says of `request` beyond its frame: its kind, the broadcast address,
@@ -100,7 +156,9 @@ pub trait Protocol: Framing + Copy + Debug + Default + Send + Sync + 'static {
     /// Whether `response` is a refusal: the spec marks it `kind: nak`.
     fn is_nak(response: &Self::Response) -> bool;
     /// Whether `frame` ends in the checksum of the bytes it covers, and nothing else: the
-    /// weakest acceptance test (a frame shorter than a checksum fails it).
+    /// weakest acceptance test (a frame shorter than a checksum fails it). It knows no
+    /// request: a reply whose checksum takes in its request's bytes (`checksum_over_request`)
+    /// is taken over its own bytes alone here, which such a reply fails.
     fn checksum_ok(frame: &[u8]) -> bool;
 }
 
@@ -235,6 +293,15 @@ pub trait Framing {
     /// lenL`), by which the generated `variable_candidates` frames both forms. `None` (the
     /// default) for every other framing.
     const LONG: Option<crate::LongLength> = None;
+    /// Whether a reply's checksum takes in its request's bytes (`checksum_over_request`):
+    /// the stream decoder then keeps the bytes each request's checksum covers
+    /// ([`Protocol::request_span`]) in a [`Self::Span`] for the reply after it.
+    const OVER_REQUEST: bool = false;
+    /// Room for those bytes: `[u8; MAX_REQUEST_LEN]` where [`Self::OVER_REQUEST`], else
+    /// `[u8; 0]`.
+    type Span: AsRef<[u8]> + AsMut<[u8]> + Copy + core::fmt::Debug;
+    /// An all-zero [`Self::Span`].
+    const EMPTY_SPAN: Self::Span;
 
     /// The messages whose start byte and code agree with `head`, the bytes buffered from a
     /// possible frame start (possibly fewer than a whole frame): the stream decoder's framing

@@ -373,6 +373,10 @@ struct Core<C: Protocol> {
     requests: u64,
     responses: u64,
     last_request: Option<C::Request>,
+    /// The bytes that request's checksum covers (the first `span_len` of `span`), where a
+    /// reply's checksum may take them in ([`Framing::OVER_REQUEST`]).
+    span: C::Span,
+    span_len: usize,
     default_request: Option<C::Request>,
     noise_at: u64,
     noise_len: u64,
@@ -432,6 +436,8 @@ impl<C: Protocol> StreamDecoder<C> {
                     u64::MAX
                 },
                 last_request: None,
+                span: C::EMPTY_SPAN,
+                span_len: 0,
                 default_request: None,
                 noise_at: 0,
                 noise_len: 0,
@@ -748,9 +754,10 @@ impl<C: Protocol> Core<C> {
             None
         };
         let found = match (as_request, as_response) {
-            (Some(frame), None) => {
-                self.last_request = Some(frame.message);
-                Found::Request(frame)
+            (Some(request), None) => {
+                self.last_request = Some(request.message);
+                self.keep_span(frame);
+                Found::Request(request)
             }
             (None, Some(Ok(frame))) => {
                 self.last_request = None;
@@ -784,6 +791,15 @@ impl<C: Protocol> Core<C> {
     /// differ in a constant unless only the request tells them apart).
     #[inline(always)]
     fn response(&self, frame: &[u8]) -> Result<Decoded<C::Response>, DecodeError> {
+        if C::OVER_REQUEST {
+            if let Some(r) = self.last_request.as_ref().or(self.default_request.as_ref()) {
+                return match C::decode_response_over(frame, Some(r), self.covered()) {
+                    Ok(d) => Ok(d),
+                    Err(_) => Self::not_the_reply(frame),
+                };
+            }
+            return C::decode_response_for(frame, None);
+        }
         if let Some(r) = self.last_request.as_ref().or(self.default_request.as_ref()) {
             return match C::decode_response_for(frame, Some(r)) {
                 Ok(d) => Ok(d),
@@ -791,6 +807,26 @@ impl<C: Protocol> Core<C> {
             };
         }
         C::decode_response_for(frame, None)
+    }
+
+    /// Keeps the bytes request `frame`'s checksum covers, where a reply's checksum may take
+    /// them in ([`Framing::OVER_REQUEST`]; nothing for any other protocol).
+    #[inline(always)]
+    fn keep_span(&mut self, frame: &[u8]) {
+        if C::OVER_REQUEST {
+            let span = C::request_span(frame);
+            let room = self.span.as_mut();
+            self.span_len = span.len().min(room.len());
+            room[..self.span_len].copy_from_slice(&span[..self.span_len]);
+        }
+    }
+
+    /// The bytes the last request's checksum covered, where a request came before (a default
+    /// request has none).
+    #[inline(always)]
+    fn covered(&self) -> Option<&[u8]> {
+        self.last_request
+            .map(|_| &self.span.as_ref()[..self.span_len])
     }
 
     /// `frame` on its own, where it did not decode as the reply: out of line and cold, so
@@ -858,11 +894,18 @@ impl<C: Protocol> Core<C> {
                 let (offset, len) = (self.head, frame.len());
                 if $request {
                     match C::decode_request(frame) {
-                        Ok(frame) => settle!(
-                            Some(frame.message),
-                            len,
-                            Event::Request { offset, len, frame }
-                        ),
+                        Ok(d) => {
+                            self.keep_span(frame);
+                            settle!(
+                                Some(d.message),
+                                len,
+                                Event::Request {
+                                    offset,
+                                    len,
+                                    frame: d
+                                }
+                            )
+                        }
                         Err(e) if breaks_spec(&e) => {
                             slow!()
                         }
@@ -878,10 +921,12 @@ impl<C: Protocol> Core<C> {
                         self.response(frame)
                     } else {
                         match self.last_request.as_ref().or(self.default_request.as_ref()) {
-                            Some(r) => match C::decode_response_for(frame, Some(r)) {
-                                Ok(d) => Ok(d),
-                                Err(_) => slow!(),
-                            },
+                            Some(r) => {
+                                match C::decode_response_over(frame, Some(r), self.covered()) {
+                                    Ok(d) => Ok(d),
+                                    Err(_) => slow!(),
+                                }
+                            }
                             None => C::decode_response_for(frame, None),
                         }
                     };
@@ -898,6 +943,8 @@ impl<C: Protocol> Core<C> {
                 }
             };
         }
+        // A reply whose checksum takes in its request's bytes needs them kept: the full
+        // rule's case.
         // A frame after preamble bytes takes them into its event: the full rule's case.
         if let Some(pre) = C::PREAMBLE {
             if self.preamble_len > 0 && window.first() != Some(&pre.byte) {
@@ -978,15 +1025,20 @@ impl<C: Protocol> Core<C> {
             let as_request = C::decode_request(frame);
             let as_response = self.response(frame);
             match as_request {
-                Ok(frame) => {
+                Ok(d) => {
                     if let Ok(_) | Err(DecodeError::Ambiguous { .. }) = as_response {
                         let code = both_ways_code(window.get(..len).unwrap_or_default());
                         settle!(None, len, Event::Ambiguous { offset, len, code });
                     }
+                    self.keep_span(frame);
                     settle!(
-                        Some(frame.message),
+                        Some(d.message),
                         len,
-                        Event::Request { offset, len, frame }
+                        Event::Request {
+                            offset,
+                            len,
+                            frame: d
+                        }
                     );
                 }
                 Err(q) => match as_response {

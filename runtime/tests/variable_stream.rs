@@ -416,6 +416,8 @@ impl Framing for Toy {
     const MAX_RESPONSE_LEN: usize = 11;
     /// Only the fixed-length messages' length: the variable ones come from the length byte.
     const FRAME_LENGTHS: &'static [usize] = &[6];
+    type Span = [u8; 0];
+    const EMPTY_SPAN: [u8; 0] = [];
 
     fn candidates(head: &[u8]) -> Candidates {
         if head.first().is_some_and(|&b| b != 0x7E) {

@@ -244,11 +244,19 @@ pub(super) fn emit_dispatch(ctx: &Ctx, d: Direction, ty: &TokenStream) -> TokenS
         quote!()
     };
     let frame_const = frame_of(p, d);
+    // A reply whose checksum takes in its request's bytes (`checksum_over_request`):
+    // `response_sum` checks it over `covered`, or refuses it without them.
+    let over = replies && p.has_over_request();
+    let check_frame = if over {
+        quote!(let address = rt::check_frame_with(frame, #min_len, #max_len, #addr_at, &#frame_const, |b| response_sum(frame, b, covered))?;)
+    } else {
+        quote!(let address = rt::check_frame(frame, #min_len, #max_len, #addr_at, &#frame_const, #sum)?;)
+    };
     let checks = quote! {
         #constant
         #preamble
         #sync
-        let address = rt::check_frame(frame, #min_len, #max_len, #addr_at, &#frame_const, #sum)?;
+        #check_frame
         #length
         #untransform
         let message = Self::dispatch(frame #request_arg)?;
@@ -403,7 +411,32 @@ pub(super) fn emit_dispatch(ctx: &Ctx, d: Direction, ty: &TokenStream) -> TokenS
     } else {
         (checks, quote!())
     };
+    let (decode_for_body, over_fns) = if over {
+        (
+            quote!(Self::decode_over(frame, request, rt::None)),
+            quote! {
+                /// Decodes a frame as the reply to `request`, whose frame's checksum covered
+                /// `covered` (`busspec_runtime::Protocol::request_span` of it): as
+                /// [`Self::decode_reply`], and the checksum of a reply that takes in its
+                /// request's bytes (`checksum_over_request`) is checked over them, where
+                /// [`Self::decode_reply`] refuses such a reply
+                /// ([`busspec_runtime::DecodeError::NeedsRequest`]).
+                #[inline]
+                pub fn decode_reply_over(frame: #fr, request: &Request, covered: &[u8]) -> rt::Result<Decoded<#ty>, rt::DecodeError> {
+                    Self::decode_over(frame, rt::Some(request), rt::Some(covered))
+                }
+                /// [`Self::decode_for`] with the bytes the request's checksum covered, where
+                /// known.
+                pub(crate) fn decode_over(frame: #fr, request: rt::Option<&Request>, covered: rt::Option<&[u8]>) -> rt::Result<Decoded<#ty>, rt::DecodeError> {
+                    #checks
+                }
+            },
+        )
+    } else {
+        (checks, quote!())
+    };
     if !replies {
+        let checks = decode_for_body;
         return quote! {
             #doc_decode
             pub fn decode(frame: #fr) -> rt::Result<Decoded<#ty>, rt::DecodeError> {
@@ -432,8 +465,9 @@ pub(super) fn emit_dispatch(ctx: &Ctx, d: Direction, ty: &TokenStream) -> TokenS
         /// The one decoder behind [`Self::decode`] (`request` is `None`) and
         /// [`Self::decode_reply`].
         fn decode_for(frame: #fr, request: rt::Option<&Request>) -> rt::Result<Decoded<#ty>, rt::DecodeError> {
-            #checks
+            #decode_for_body
         }
+        #over_fns
         #unescaped_fn
         #dispatch
     }

@@ -387,6 +387,84 @@ pub(super) fn sum_checksum(a: &ChecksumAlgorithm) -> Option<(String, TokenStream
     Some((doc.to_owned(), ty, e))
 }
 
+/// The type [`emit_checksum`]'s `checksum` returns.
+fn checksum_type(p: &Protocol) -> TokenStream {
+    let c = &p.framing.checksum;
+    if let Some((_, ty, _)) = sum_checksum(&c.algorithm) {
+        return quote!(#ty);
+    }
+    match &c.algorithm {
+        ChecksumAlgorithm::Crc(_) => {
+            let ty = format_ident!("u{}", if c.width == 24 { 32 } else { c.width });
+            quote!(#ty)
+        }
+        _ => quote!(u8),
+    }
+}
+
+/// Where a reply's checksum takes in its request's bytes (`checksum_over_request`):
+/// `checksum_after`, the checksum over the request's covered bytes and then the reply's own,
+/// and `over_request`, which reply a frame is by its code and length (as the interpreter's
+/// `Protocol::over_request` finds it). Nothing for other protocols.
+pub(super) fn emit_over_request(p: &Protocol) -> TokenStream {
+    if !p.has_over_request() {
+        return quote!();
+    }
+    let ty = checksum_type(p);
+    let sum = frame_sum(p);
+    let arms = p.framed(Direction::Response).iter().filter_map(|m| {
+        let from = usize_lit(m.over_request?);
+        let (min, max) = (usize_lit(m.layout.len), usize_lit(m.max_len));
+        let (at, end) = (
+            usize_lit(m.layout.code),
+            usize_lit(m.layout.code + m.code.len()),
+        );
+        let code = m.code.iter().map(|b| hex_u8(*b));
+        let desc = super::desc::message_desc(m);
+        Some(quote! {
+            if (#min..=#max).contains(&frame.len()) && frame.get(#at..#end) == rt::Some(&[#(#code),*]) {
+                return rt::Some((#from, #desc));
+            }
+        })
+    });
+    quote! {
+        /// The checksum of a reply that takes in its request's bytes
+        /// (`checksum_over_request`): over `request`, the bytes the request's checksum
+        /// covers, then over the reply's own `bytes`.
+        pub fn checksum_after(request: &[u8], bytes: &[u8]) -> #ty {
+            let mut all = [0u8; MAX_REQUEST_LEN + MAX_RESPONSE_LEN];
+            let q = request.len().min(MAX_REQUEST_LEN);
+            let b = bytes.len().min(MAX_RESPONSE_LEN);
+            all[..q].copy_from_slice(&request[..q]);
+            all[q..q + b].copy_from_slice(&bytes[..b]);
+            checksum(&all[..q + b])
+        }
+        /// The reply whose checksum takes in its request's bytes that a frame of `frame`'s
+        /// length and code is, and where in it its checksum takes up its own bytes; `None`
+        /// for every other frame (no other message shares a code and a length with one).
+        fn over_request(frame: &[u8]) -> rt::Option<(usize, &'static rt::MessageDesc)> {
+            #(#arms)*
+            rt::None
+        }
+        /// The checksum of a response frame, as the frame checks take it
+        /// (`rt::check_frame_with`): over the request's bytes `covered` first where the frame
+        /// is a reply that takes them in, refused without them.
+        #[inline]
+        fn response_sum(frame: &[u8], b: &[u8], covered: rt::Option<&[u8]>) -> rt::Result<u32, rt::DecodeError> {
+            match over_request(frame) {
+                rt::None => {
+                    let own = #sum;
+                    rt::Ok(own(b))
+                }
+                rt::Some((from, message)) => match covered {
+                    rt::Some(q) => rt::Ok(u32::from(checksum_after(q, rt::covered(b, from)))),
+                    rt::None => rt::Err(rt::DecodeError::NeedsRequest { message, offset: b.len() }),
+                },
+            }
+        }
+    }
+}
+
 pub(super) fn emit_checksum(p: &Protocol) -> TokenStream {
     let c = &p.framing.checksum;
     if let Some((doc, ty, e)) = sum_checksum(&c.algorithm) {
@@ -603,6 +681,8 @@ pub(super) fn emit_escaping(p: &Protocol) -> TokenStream {
 /// ends in its checksum (no end bytes after it).
 pub(super) fn checksum_in_arms(p: &Protocol) -> bool {
     matches!(p.framing.checksum.algorithm, ChecksumAlgorithm::Sum8)
+        // A reply's checksum over its request's bytes is sealed after the arms.
+        && !p.has_over_request()
         && p.framing.checksum.covers_from == 0
         && p.framing.end.is_empty()
         // The sum covers the payload as it travels, transformed after the arms write it.

@@ -365,6 +365,55 @@ pub(super) fn emit_messages(ctx: &Ctx, d: Direction) -> TokenStream {
                 #seal
             }
         }
+    } else if d == Direction::Response && p.has_over_request() {
+        // A reply whose checksum takes in its request's bytes (`checksum_over_request`;
+        // escaping, preambles, forms, long lengths, truncation and transforms refused beside
+        // it: validated): written with its checksum over its own bytes, then over the
+        // request's first by `encode_reply_over`; `encode` refuses it.
+        let over_arms = msgs.iter().filter_map(|m| {
+            let (v, from) = (variant(m), usize_lit(m.over_request?));
+            Some(quote!(Self::#v { .. } => rt::Some(#from),))
+        });
+        quote! {
+            ///
+            /// A reply whose checksum takes in its request's bytes is refused
+            /// ([`busspec_runtime::EncodeError::NeedsRequest`]): see [`Self::encode_reply_over`].
+            pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+                let len = self.encode_own(address, buf)?;
+                match self.over_request() {
+                    rt::Some(_) => rt::Err(rt::EncodeError::NeedsRequest { message: self.name() }),
+                    rt::None => rt::Ok(len),
+                }
+            }
+            /// Encodes the frame for `address` into `buf` as the reply to a request whose
+            /// checksum covered `covered` (`busspec_runtime::Protocol::request_span` of its
+            /// frame): as [`Self::encode`], and the checksum of a reply that takes in its
+            /// request's bytes over them.
+            pub fn encode_reply_over(&self, address: u8, covered: &[u8], buf: &mut [u8]) -> rt::EncodeResult {
+                let len = self.encode_own(address, buf)?;
+                if let rt::Some(from) = self.over_request() {
+                    rt::seal_end(buf, len, |b| u32::from(checksum_after(covered, rt::covered(b, from))), &FRAME);
+                }
+                rt::Ok(len)
+            }
+            /// Where this reply's checksum takes up its own bytes after its request's, for a
+            /// reply whose checksum takes them in (`checksum_over_request`).
+            pub const fn over_request(&self) -> rt::Option<usize> {
+                match *self {
+                    #(#over_arms)*
+                    _ => rt::None,
+                }
+            }
+            /// The frame with its checksum over its own bytes alone, into `buf`.
+            fn encode_own(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+                #constant_first
+                rt::encode_address(address, &#frame_const)?;
+                #take_once
+                let len = match *self { #(#encode_arms)* };
+                #transform
+                #seal
+            }
+        }
     } else if p.framing.escaping.is_none() {
         quote! {
             pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {

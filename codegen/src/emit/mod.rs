@@ -179,6 +179,7 @@ fn module_tokens(p: &Protocol, source: &str, spec_path: &str) -> TokenStream {
     let enums = emit_enums(&ctx);
     let flags = emit_flags(&ctx);
     let checksum = emit_checksum(p);
+    let over_request = emit_over_request(p);
     let requests = emit_messages(&ctx, Direction::Request);
     let responses = emit_messages(&ctx, Direction::Response);
     let pairing = emit_pairing(&ctx);
@@ -191,6 +192,7 @@ fn module_tokens(p: &Protocol, source: &str, spec_path: &str) -> TokenStream {
       pub mod #name {
         #header
         #checksum
+        #over_request
         #units
         #enums
         #flags

@@ -276,6 +276,40 @@ pub(super) fn emit_stream(p: &Protocol) -> TokenStream {
     );
     let type_doc = doc(&doc_text);
     let transactions = crate::transactions::transactions(p);
+    // A reply whose checksum takes in its request's bytes (`checksum_over_request`): the
+    // request's covered bytes kept by the stream decoder, decoded and encoded over.
+    let (span, over_fns) = if p.has_over_request() {
+        let from = usize_lit(p.framing.checksum.covers_from);
+        (
+            quote! {
+                const OVER_REQUEST: bool = true;
+                type Span = [u8; MAX_REQUEST_LEN];
+                const EMPTY_SPAN: [u8; MAX_REQUEST_LEN] = [0; MAX_REQUEST_LEN];
+            },
+            quote! {
+                #[inline]
+                fn decode_response_over(frame: &[u8], request: rt::Option<&Request>, covered: rt::Option<&[u8]>) -> rt::Result<Decoded<Response>, rt::DecodeError> {
+                    Response::decode_over(frame, request, covered)
+                }
+                #[inline]
+                fn request_span(request_frame: &[u8]) -> &[u8] {
+                    rt::span(request_frame, #from, &FRAME)
+                }
+                #[inline]
+                fn encode_reply(response: &Response, address: u8, request_frame: &[u8], buf: &mut [u8]) -> rt::Result<usize, rt::EncodeError> {
+                    response.encode_reply_over(address, rt::span(request_frame, #from, &FRAME), buf)
+                }
+            },
+        )
+    } else {
+        (
+            quote! {
+                type Span = [u8; 0];
+                const EMPTY_SPAN: [u8; 0] = [];
+            },
+            quote!(),
+        )
+    };
     let skip_preamble = if p.framing.preamble.is_some() {
         quote!(let frame = PREAMBLE.skip(frame);)
     } else {
@@ -451,6 +485,7 @@ pub(super) fn emit_stream(p: &Protocol) -> TokenStream {
             fn decode_response_for(frame: &[u8], request: rt::Option<&Request>) -> rt::Result<Decoded<Response>, rt::DecodeError> {
                 Response::decode_for(frame, request)
             }
+            #over_fns
             #[inline]
             fn answers(request: &Request, response: &Response) -> bool {
                 response.answers(request)
@@ -468,6 +503,7 @@ pub(super) fn emit_stream(p: &Protocol) -> TokenStream {
             const MAX_REQUEST_LEN: usize = MAX_REQUEST_LEN;
             const MAX_RESPONSE_LEN: usize = MAX_RESPONSE_LEN;
             const FRAME_LENGTHS: &'static [usize] = &[#(#lens),*];
+            #span
             #framing_fns
         }
         /// A streaming decoder for this protocol: see [`busspec_runtime::stream`].

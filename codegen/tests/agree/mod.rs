@@ -64,13 +64,13 @@ fn same<M: Message>(p: &ir::Protocol, g: &M, i: &interp::Frame, wire: &[u8]) {
 }
 
 /// Decodes `wire` with both engines (as the reply to `request` where given: the generated
-/// request and the interpreter's frame of it), asserts they agree on acceptance and values, and
-/// that the generated encoder writes an accepted frame back byte for byte; returns whether it
-/// was accepted.
+/// request, the interpreter's frame of it and its bytes, which a reply's checksum may take
+/// in), asserts they agree on acceptance and values, and that the generated encoder writes an
+/// accepted frame back byte for byte; returns whether it was accepted.
 pub fn check<P: Protocol>(
     p: &ir::Protocol,
     d: Direction,
-    request: Option<(&P::Request, &interp::Frame)>,
+    request: Option<(&P::Request, &interp::Frame, &[u8])>,
     wire: &[u8],
 ) -> bool {
     let mut buf = vec![0xA5u8; P::MAX_FRAME_LEN];
@@ -90,9 +90,12 @@ pub fn check<P: Protocol>(
             written_back(p, &buf[..n], wire);
         }
         Direction::Response => {
-            let g = P::decode_response_for(wire, request.map(|r| r.0));
+            let g = match request {
+                Some((r, _, w)) => P::decode_response_over(wire, Some(r), Some(P::request_span(w))),
+                None => P::decode_response_for(wire, None),
+            };
             let i = match request {
-                Some((_, f)) => interp::decode_reply(p, f, wire),
+                Some((_, f, w)) => interp::decode_reply_with(p, f, Some(w), wire),
                 None => interp::decode(p, Some(d), None, wire),
             };
             assert_eq!(g.is_ok(), i.is_ok(), "{wire:02X?}: {g:?} / {i:?}");
@@ -103,10 +106,13 @@ pub fn check<P: Protocol>(
             assert_eq!(g.address, i.address);
             same(p, &g.message, &i, wire);
             assert_eq!(g.message.frame_len(), unescaped_len(p, wire));
-            if let Some((r, _)) = request {
+            if let Some((r, _, _)) = request {
                 assert!(P::answers(r, &g.message), "{wire:02X?}");
             }
-            let n = g.message.encode(g.address, &mut buf).unwrap();
+            let n = match request {
+                Some((_, _, w)) => P::encode_reply(&g.message, g.address, w, &mut buf).unwrap(),
+                None => g.message.encode(g.address, &mut buf).unwrap(),
+            };
             written_back(p, &buf[..n], wire);
         }
     }
@@ -252,21 +258,27 @@ pub fn agree<P: Protocol>(p: &ir::Protocol) -> Tally {
     for e in &p.examples {
         let d = e.message.direction;
         let request = e.reply_to.and_then(|c| {
-            let w = &p
-                .examples
-                .iter()
-                .find(|x| x.message.direction == Direction::Request && x.message.index == c)?
-                .wire;
+            let w = match &e.request {
+                Some(w) => w,
+                None => {
+                    &p.examples
+                        .iter()
+                        .find(|x| {
+                            x.message.direction == Direction::Request && x.message.index == c
+                        })?
+                        .wire
+                }
+            };
             let g = P::decode_request(w).ok()?.message;
             let i = interp::decode(p, Some(Direction::Request), None, w).ok()?;
-            Some((g, i))
+            Some((g, i, w.clone()))
         });
         let mut frames = vec![e.wire.clone()];
         frames.extend(mutations(p, d, &e.wire));
         for (k, f) in frames.iter().enumerate() {
             let mut ok = check::<P>(p, d, None, f);
-            if let Some((g, i)) = &request {
-                ok |= check::<P>(p, d, Some((g, i)), f);
+            if let Some((g, i, w)) = &request {
+                ok |= check::<P>(p, d, Some((g, i, w)), f);
             }
             if k == 0 {
                 assert!(ok, "{}: example {:02X?} refused", p.name, e.wire);
@@ -283,13 +295,19 @@ pub fn agree<P: Protocol>(p: &ir::Protocol) -> Tally {
         if !m.is_variable() {
             continue;
         }
-        let decoded = interp::decode(p, Some(d), e.reply_to, &e.wire).unwrap();
+        let covered = request.as_ref().and_then(|r| p.framing.checksum_span(&r.2));
+        let decoded = interp::decode_with(p, Some(d), e.reply_to, covered, &e.wire).unwrap();
         let names: Vec<&str> = match d {
             Direction::Request => visited(&P::decode_request(&e.wire).unwrap().message),
             Direction::Response => visited(
-                &P::decode_response_for(&e.wire, request.as_ref().map(|r| &r.0))
-                    .unwrap()
-                    .message,
+                &match &request {
+                    Some((r, _, w)) => {
+                        P::decode_response_over(&e.wire, Some(r), Some(P::request_span(w)))
+                    }
+                    None => P::decode_response_for(&e.wire, None),
+                }
+                .unwrap()
+                .message,
             ),
         }
         .into_iter()

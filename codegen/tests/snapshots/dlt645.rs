@@ -854,6 +854,8 @@ pub mod dlt645 {
         const MAX_REQUEST_LEN: usize = MAX_REQUEST_LEN;
         const MAX_RESPONSE_LEN: usize = MAX_RESPONSE_LEN;
         const FRAME_LENGTHS: &'static [usize] = &[22, 20, 18, 16, 12];
+        type Span = [u8; 0];
+        const EMPTY_SPAN: [u8; 0] = [];
         const PREAMBLE: rt::Option<rt::Preamble> = rt::Some(PREAMBLE);
         const TRANSFORM: rt::Option<rt::Transform> = rt::Some(TRANSFORM);
         #[inline]

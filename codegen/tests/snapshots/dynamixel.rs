@@ -1023,6 +1023,8 @@ pub mod dynamixel {
         const MAX_REQUEST_LEN: usize = MAX_REQUEST_LEN;
         const MAX_RESPONSE_LEN: usize = MAX_RESPONSE_LEN;
         const FRAME_LENGTHS: &'static [usize] = &[8, 6];
+        type Span = [u8; 0];
+        const EMPTY_SPAN: [u8; 0] = [];
         #[inline]
         fn candidates(head: &[u8]) -> rt::Candidates {
             if head.first().is_some_and(|&b| b != 0xFF) {

@@ -869,6 +869,8 @@ pub mod ending {
         const FRAME_LENGTHS: &'static [usize] = &[
             37, 35, 33, 31, 29, 27, 25, 23, 21, 19, 17, 15, 13, 11, 9, 8, 7, 6, 5,
         ];
+        type Span = [u8; 0];
+        const EMPTY_SPAN: [u8; 0] = [];
         #[inline]
         fn candidates(head: &[u8]) -> rt::Candidates {
             if head.first().is_some_and(|&b| b != 0xA5) {

@@ -597,6 +597,8 @@ pub mod hdlc_like {
         const MAX_REQUEST_LEN: usize = MAX_REQUEST_LEN;
         const MAX_RESPONSE_LEN: usize = MAX_RESPONSE_LEN;
         const FRAME_LENGTHS: &'static [usize] = &[];
+        type Span = [u8; 0];
+        const EMPTY_SPAN: [u8; 0] = [];
         const SHARED_FLAG: rt::Option<u8> = rt::Some(0x7E);
         #[inline]
         fn candidates(_head: &[u8]) -> rt::Candidates {

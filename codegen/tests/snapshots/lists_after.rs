@@ -975,6 +975,8 @@ pub mod lists_after {
         const FRAME_LENGTHS: &'static [usize] = &[
             22, 20, 18, 16, 14, 12, 10, 8, 7, 6, 5,
         ];
+        type Span = [u8; 0];
+        const EMPTY_SPAN: [u8; 0] = [];
         #[inline]
         fn candidates(head: &[u8]) -> rt::Candidates {
             if head.first().is_some_and(|&b| b != 0x7E) {

@@ -635,6 +635,8 @@ pub mod mbus {
         const MAX_REQUEST_LEN: usize = MAX_REQUEST_LEN;
         const MAX_RESPONSE_LEN: usize = MAX_RESPONSE_LEN;
         const FRAME_LENGTHS: &'static [usize] = &[1];
+        type Span = [u8; 0];
+        const EMPTY_SPAN: [u8; 0] = [];
         #[inline]
         fn candidates(head: &[u8]) -> rt::Candidates {
             let _ = head;

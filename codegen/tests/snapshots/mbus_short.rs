@@ -469,6 +469,8 @@ pub mod mbus_short {
         const MAX_REQUEST_LEN: usize = MAX_REQUEST_LEN;
         const MAX_RESPONSE_LEN: usize = MAX_RESPONSE_LEN;
         const FRAME_LENGTHS: &'static [usize] = &[5, 1];
+        type Span = [u8; 0];
+        const EMPTY_SPAN: [u8; 0] = [];
         #[inline]
         fn candidates(head: &[u8]) -> rt::Candidates {
             match head.first() {

@@ -716,6 +716,8 @@ pub mod msp_by_direction {
         const MAX_REQUEST_LEN: usize = MAX_REQUEST_LEN;
         const MAX_RESPONSE_LEN: usize = MAX_RESPONSE_LEN;
         const FRAME_LENGTHS: &'static [usize] = &[12, 9, 6];
+        type Span = [u8; 0];
+        const EMPTY_SPAN: [u8; 0] = [];
         #[inline]
         fn candidates(head: &[u8]) -> rt::Candidates {
             let requests_agree = head.first().map_or(true, |&b| b == 0x24)

@@ -110,16 +110,23 @@ pub fn response<P: Protocol>(
 ) -> Result<Decoded, DecodeError> {
     let d = match reply_to {
         None => P::decode_response(frame)?,
-        Some(r) => {
-            let r = P::decode_request(r)
+        Some(w) => {
+            let r = P::decode_request(w)
                 .expect("reply_to is a request frame")
                 .message;
-            let d = P::decode_reply(frame, &r)?;
+            // With the request's bytes, which a reply's checksum may take in.
+            let d = P::decode_reply_to(frame, w)?;
             assert!(
                 P::answers(&r, &d.message),
                 "decode_reply gave a response that does not answer"
             );
-            d
+            return Ok(Decoded::new(
+                d.message.name(),
+                d.address,
+                visit_values(|f| d.message.visit(f)),
+                pattern_buffer::<P>(),
+                |b| P::encode_reply(&d.message, d.address, w, b),
+            ));
         }
     };
     Ok(Decoded::of::<P, _>(&d))
@@ -150,7 +157,7 @@ pub fn agree<P: Protocol>(
     // too (a Modbus echo, a byte count of 2 × quantity), as `decode_reply` does.
     let asked = reply_frame.and_then(|r| interp::decode(p, Some(Direction::Request), None, r).ok());
     let oracle = match (&asked, direction) {
-        (Some(q), Direction::Response) => interp::decode_reply(p, q, frame),
+        (Some(q), Direction::Response) => interp::decode_reply_with(p, q, reply_frame, frame),
         _ => interp::decode(p, Some(direction), reply_to, frame),
     };
     let generated = match direction {
