@@ -792,13 +792,17 @@ impl<C: Protocol> Core<C> {
     #[inline(always)]
     fn response(&self, frame: &[u8]) -> Result<Decoded<C::Response>, DecodeError> {
         if C::OVER_REQUEST {
+            // Not the reply: on its own, its checksum still over the request's bytes (a reply
+            // that checksums over them and breaks a rule of the spec is out of spec, as the
+            // interpreter's stream says).
+            let covered = self.covered();
             if let Some(r) = self.last_request.as_ref().or(self.default_request.as_ref()) {
-                return match C::decode_response_over(frame, Some(r), self.covered()) {
+                return match C::decode_response_over(frame, Some(r), covered) {
                     Ok(d) => Ok(d),
-                    Err(_) => Self::not_the_reply(frame),
+                    Err(_) => C::decode_response_over(frame, None, covered),
                 };
             }
-            return C::decode_response_for(frame, None);
+            return C::decode_response_over(frame, None, covered);
         }
         if let Some(r) = self.last_request.as_ref().or(self.default_request.as_ref()) {
             return match C::decode_response_for(frame, Some(r)) {
