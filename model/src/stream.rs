@@ -1192,7 +1192,8 @@ impl<'p> StreamDecoder<'p> {
         if let (Ok(f), Some(q), Some(_)) = (&decoded, &self.last_frame, self.last_request) {
             if f.message.direction == Direction::Response && interp::answers(self.p, q, f).is_err()
             {
-                decoded = lookup.decode_paired_reusing(self.p, None, None, wire, &mut self.spare);
+                decoded =
+                    lookup.decode_paired_reusing(self.p, None, covered, wire, &mut self.spare);
             }
         }
         let values = std::mem::take(&mut self.spare.values);
