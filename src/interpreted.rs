@@ -720,16 +720,7 @@ impl Protocol for Interpreted {
             Some(request) => {
                 let req =
                     interp::decode_as(p, request.r(), request.wire()).map_err(decode_error)?;
-                let f = interp::decode_with(
-                    p,
-                    Some(Direction::Response),
-                    Some(request.r().index),
-                    covered,
-                    frame,
-                )
-                .map_err(decode_error)?;
-                interp::answers(p, &req, &f).map_err(decode_error)?;
-                f
+                interp::decode_reply_over(p, &req, covered, frame).map_err(decode_error)?
             }
             None => interp::decode_with(p, Some(Direction::Response), None, covered, frame)
                 .map_err(decode_error)?,

@@ -2620,6 +2620,18 @@ pub fn decode_reply_with<'p>(
     wire: &[u8],
 ) -> Result<Frame<'p>, DecodeError> {
     let covered = request_wire.and_then(|w| p.framing.checksum_span(w));
+    decode_reply_over(p, request, covered, wire)
+}
+
+/// [`decode_reply_with`] with the bytes the request's checksum covers (`covered`,
+/// [`crate::ir::Framing::checksum_span`] of its frame) rather than its frame.
+#[cfg(feature = "tools")]
+pub fn decode_reply_over<'p>(
+    p: &'p Protocol,
+    request: &Frame,
+    covered: Option<&[u8]>,
+    wire: &[u8],
+) -> Result<Frame<'p>, DecodeError> {
     let frame = decode_with(
         p,
         Some(Direction::Response),
