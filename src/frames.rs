@@ -170,7 +170,7 @@ impl Engine {
     /// travelled): the checksum of a reply that takes in its request's bytes is checked over
     /// them.
     pub fn set_request(&mut self, request: &[u8]) {
-        self.covered = self.spec.framing.checksum_span(request).map(<[u8]>::to_vec);
+        self.covered = self.spec.checksum_span(request).map(<[u8]>::to_vec);
     }
 
     /// Decodes one frame and writes its JSON line to `out`, ended by `\n`; `reply_to` is a

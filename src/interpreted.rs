@@ -703,7 +703,7 @@ impl Protocol for Interpreted {
 
     fn request_span(request_frame: &[u8]) -> &[u8] {
         spec()
-            .and_then(|p| p.framing.checksum_span(request_frame))
+            .and_then(|p| p.checksum_span(request_frame))
             .unwrap_or_default()
     }
 
@@ -737,7 +737,7 @@ impl Protocol for Interpreted {
         let Some(p) = spec() else {
             return Err(EncodeError::OutOfRange { field: "" });
         };
-        let covered = p.framing.checksum_span(request_frame);
+        let covered = p.checksum_span(request_frame);
         let wire = interp::encode_with(p, response.r(), address, &response.values(), covered)
             .map_err(encode_error)?;
         let available = buf.len();

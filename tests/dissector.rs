@@ -600,7 +600,7 @@ fn compare(p: &Protocol, case: &Case, dir: &Path) -> Counts {
                 };
                 // Strictly where the frame is in spec, with its request where that settles it
                 // (a frame only one message fits is that message whatever came before it).
-                let covered = reply_to.and_then(|_| p.framing.checksum_span(&last_bytes));
+                let covered = reply_to.and_then(|_| p.checksum_span(&last_bytes));
                 let decoded = interp::decode_with(p, Some(d), reply_to, covered, &frame_bytes)
                     .or_else(|_| interp::decode(p, Some(d), None, &frame_bytes))
                     .or_else(|_| {
@@ -693,10 +693,7 @@ fn compare(p: &Protocol, case: &Case, dir: &Path) -> Counts {
                     assert_eq!(status, Some("0"), "{what}");
                     // After the first example (a request where the spec has one): a reply's
                     // checksum that takes in its request's bytes is checked over them.
-                    let covered = p
-                        .examples
-                        .first()
-                        .and_then(|e| p.framing.checksum_span(&e.wire));
+                    let covered = p.examples.first().and_then(|e| p.checksum_span(&e.wire));
                     let why = interp::decode_with(p, None, None, covered, &frame)
                         .unwrap_err()
                         .to_string();

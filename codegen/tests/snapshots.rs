@@ -143,6 +143,14 @@ fn over_request_spec_generates_its_snapshot() {
     );
 }
 
+/// Messages without a checksum (`checksum: none`) beside replies whose checksum takes in
+/// their request's bytes (RoboClaw's packet serial: reads travel without a CRC, their
+/// code-less replies' CRC covers the read's two bytes).
+#[test]
+fn unchecked_spec_generates_its_snapshot() {
+    check("model/tests/fixtures/valid/roboclaw.yaml", "roboclaw.rs");
+}
+
 /// A layout per direction (Sensirion SHDLC, the SPS30): replies carry a state byte, a header
 /// field of replies only, that requests lack; byte stuffing of 7E 7D 11 13 and a shared flag
 /// (`snapshots_compile.rs` compiles it and holds it to the interpreter).

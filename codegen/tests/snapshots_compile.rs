@@ -50,6 +50,7 @@ include!("snapshots/rtcm3_frame.rs");
 include!("snapshots/ubx_fixed_blocks.rs");
 include!("snapshots/float_lists.rs");
 include!("snapshots/pelco_d_replies.rs");
+include!("snapshots/roboclaw.rs");
 
 mod agree;
 
@@ -1200,6 +1201,76 @@ fn over_request_snapshot_agrees_with_the_interpreter() {
     );
     let found = examples_stream_alike::<PelcoDReplies>(&p, 0x0D00, "general_response");
     assert!(found > 10, "only {found} general responses found");
+}
+
+/// Messages without a checksum (RoboClaw: reads travel as address and command alone, a
+/// write's acknowledgement is the single byte FF) beside replies whose CRC takes in the
+/// read's bytes: the examples replay, a read and the acknowledgement decode and encode
+/// without a checksum, a read with bytes after it is refused in both engines' words, a reply
+/// is checked over the read before it, and both engines agree on every frame mutated from the
+/// examples (alone and as the reply to their request) and on captures of them.
+#[test]
+fn unchecked_snapshot_agrees_with_the_interpreter() {
+    use roboclaw::{Request, Response, Roboclaw, StreamDecoder};
+    let file = "model/tests/fixtures/valid/roboclaw.yaml";
+    replay::<Roboclaw>(file);
+    let p = fixture(file);
+    let read = [0x80, 0x18];
+    let d = Request::decode(&read).unwrap();
+    assert_eq!(d.address, 0x80);
+    assert_eq!(
+        d.message,
+        Request::ReadMainBattery(roboclaw::request::ReadMainBattery)
+    );
+    let mut buf = [0u8; 16];
+    assert_eq!(d.message.encode(0x80, &mut buf), Ok(2));
+    assert_eq!(buf[..2], read);
+    let ack = Response::decode(&[0xFF]).unwrap();
+    assert_eq!(ack.message.encode(0, &mut buf), Ok(1));
+    assert_eq!(buf[0], 0xFF);
+    // A read followed by a CRC of its own is no read: refused alike.
+    for bad in [&[0x80, 0x18, 0x1D, 0x2B][..], &[0x80, 0x18, 0x00], &[0x80]] {
+        let g = Request::decode(bad).map(|_| ());
+        assert!(g.is_err(), "{bad:02X?}");
+        same_text(
+            g,
+            busspec_model::interp::decode(&p, Some(Direction::Request), None, bad).map(|_| ()),
+        );
+    }
+    let reply = [0x00, 0xF1, 0xC8, 0xC4];
+    let d = Roboclaw::decode_reply_to(&reply, &read).unwrap();
+    assert_eq!(d.message.name(), "main_battery");
+    assert!(Roboclaw::decode_reply_to(&reply, &[0x80, 0x19]).is_err());
+    let n = Roboclaw::encode_reply(&d.message, 0, &read, &mut buf).unwrap();
+    assert_eq!(buf[..n], reply);
+    let t = agree::agree::<Roboclaw>(&p);
+    assert!(t.accepted >= 10 && t.refused > 50, "{t:?}");
+    // A master's stream: each reply checked over the read before it.
+    let forward = [0x80, 0x00, 0x40, 0x73, 0x9E];
+    let capture = [&read[..], &reply, &forward, &[0xFF], &read, &reply].concat();
+    let mut s = StreamDecoder::new(None);
+    let mut events: Vec<roboclaw::Event> = s.feed(&capture).collect();
+    events.extend(core::iter::from_fn(|| s.finish()));
+    let names: Vec<&str> = events
+        .iter()
+        .filter_map(|e| match e {
+            roboclaw::Event::Request { frame, .. } => Some(frame.message.name()),
+            roboclaw::Event::Response { frame, .. } => Some(frame.message.name()),
+            _ => None,
+        })
+        .collect();
+    assert_eq!(
+        names,
+        [
+            "read_main_battery",
+            "main_battery",
+            "drive_forward_m1",
+            "ack",
+            "read_main_battery",
+            "main_battery"
+        ],
+        "{events:?}"
+    );
 }
 
 /// No start byte, no address, no checksum (Maestro's compact protocol): the examples replay,

@@ -582,7 +582,7 @@ impl<'p, P: Protocol> Run<'p, P> {
                     f.address,
                     &carried_values(p, &f),
                     match mode {
-                        Mode::Reply(k) => p.framing.checksum_span(&self.asks[k].wire),
+                        Mode::Reply(k) => p.checksum_span(&self.asks[k].wire),
                         _ => None,
                     },
                 )
@@ -899,7 +899,7 @@ impl<'p, P: Protocol> Run<'p, P> {
             Some(_) if !self.asks.is_empty() => {
                 let k = self.rng.usize(..self.asks.len());
                 self.over = Some(k);
-                self.p.framing.checksum_span(&self.asks[k].wire)
+                self.p.checksum_span(&self.asks[k].wire)
             }
             _ => None,
         };
@@ -975,10 +975,7 @@ impl<'p, P: Protocol> Run<'p, P> {
         }
         // Encodes: the examples' values, then random ones.
         for e in &p.examples {
-            let covered = e
-                .request
-                .as_deref()
-                .and_then(|w| p.framing.checksum_span(w));
+            let covered = e.request.as_deref().and_then(|w| p.checksum_span(w));
             let decoded =
                 interp::decode_with(p, Some(e.message.direction), e.reply_to, covered, &e.wire);
             if let Ok(f) = decoded {

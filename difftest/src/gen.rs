@@ -1444,7 +1444,7 @@ fn examples(p: &ir::Protocol, rng: &mut fastrand::Rng) -> Option<String> {
                     _ if over => continue,
                     _ => None,
                 };
-                let covered = request.as_deref().and_then(|w| p.framing.checksum_span(w));
+                let covered = request.as_deref().and_then(|w| p.checksum_span(w));
                 let Ok(wire) = interp::encode_with(p, r, address, &values, covered) else {
                     continue;
                 };

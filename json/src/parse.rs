@@ -34,7 +34,7 @@ impl Parsed {
     /// given: the checksum of a reply that takes in its request's bytes
     /// (`checksum_over_request`) over them.
     pub fn encode_reply(&self, p: &Spec, request: Option<&[u8]>) -> Result<Vec<u8>, String> {
-        let covered = request.and_then(|w| p.framing.checksum_span(w));
+        let covered = request.and_then(|w| p.checksum_span(w));
         interp::encode_with(p, self.message, self.address, &self.values, covered)
             .map_err(|e| e.to_string())
     }

@@ -37,10 +37,7 @@ impl ProtocolVisitor for Examples {
                 _ => None,
             };
             // A reply whose checksum takes in its request's bytes, with them.
-            let covered = e
-                .request
-                .as_deref()
-                .and_then(|w| spec.framing.checksum_span(w));
+            let covered = e.request.as_deref().and_then(|w| spec.checksum_span(w));
             let frame = decode_frame_with(&spec, direction, reply_to, covered, &e.wire)
                 .unwrap_or_else(|err| panic!("{at}: interpreter: {err}"));
             let typed = decode_typed_with::<P>(&spec, direction, reply_to, covered, &e.wire)

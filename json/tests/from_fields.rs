@@ -108,10 +108,7 @@ impl ProtocolVisitor for Property {
             // A reply whose checksum takes in its request's bytes, with them; its mutations
             // (resealed over its own bytes below) are held to the interpreter elsewhere
             // (codegen's `agree`, busspec-difftest).
-            let covered = e
-                .request
-                .as_deref()
-                .and_then(|w| spec.framing.checksum_span(w));
+            let covered = e.request.as_deref().and_then(|w| spec.checksum_span(w));
             let typed = decode_typed_with::<P>(&spec, direction, reply_to, covered, &e.wire)
                 .unwrap_or_else(|err| panic!("{at}: {err}"));
             round_trip_typed(&typed, &at);

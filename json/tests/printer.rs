@@ -86,10 +86,7 @@ fn example_lines<P: Protocol>(
     // The direction given: a Modbus echo reads both ways.
     let direction = Some(e.message.direction);
     // A reply whose checksum takes in its request's bytes, with them.
-    let covered = e
-        .request
-        .as_deref()
-        .and_then(|w| spec.framing.checksum_span(w));
+    let covered = e.request.as_deref().and_then(|w| spec.checksum_span(w));
     let typed =
         decode_typed_with::<P>(spec, direction, reply_to, covered, &e.wire).expect("decodes");
     let reference = typed.line(spec, offset).expect("prints");

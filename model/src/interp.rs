@@ -756,6 +756,9 @@ struct Limits {
     directions: &'static [Direction],
     longest_frame: usize,
     shortest: usize,
+    /// The shortest frame with a checksum: a frame no message without one
+    /// (`checksum: none`) is must be this long.
+    shortest_checked: usize,
     min_code: usize,
     /// The length field of each direction decoded (in the order of `directions`), where the
     /// framing has one.
@@ -780,6 +783,13 @@ impl Limits {
             shortest: directions
                 .iter()
                 .flat_map(|d| p.framed(*d))
+                .map(Message::min_len)
+                .min()
+                .unwrap_or(0),
+            shortest_checked: directions
+                .iter()
+                .flat_map(|d| p.framed(*d))
+                .filter(|m| !m.unchecked)
                 .map(Message::min_len)
                 .min()
                 .unwrap_or(0),
@@ -945,7 +955,7 @@ impl Lookup {
     /// [`Self::decode_paired`] in `spare`'s memory: the frame's values built in
     /// [`Spare::values`] (taken from it only when a frame decodes), for a caller that gives
     /// back the frames it is done with, and the decode's own lists kept there.
-    /// `covered`: the bytes the request's checksum covers ([`crate::ir::Framing::checksum_span`] of its
+    /// `covered`: the bytes the request's checksum covers ([`crate::ir::Protocol::checksum_span`] of its
     /// frame), which the checksum of a reply that takes them in runs over first.
     pub fn decode_paired_reusing<'p>(
         &self,
@@ -990,7 +1000,7 @@ pub fn decode<'p>(
     decode_with(p, direction, reply_to, None, wire)
 }
 
-/// [`decode`] with the bytes the request's checksum covers (`covered`, [`crate::ir::Framing::checksum_span`]
+/// [`decode`] with the bytes the request's checksum covers (`covered`, [`crate::ir::Protocol::checksum_span`]
 /// of its frame): the checksum of a reply that takes in its request's bytes
 /// (`checksum_over_request`) runs over them first; without them such a reply is refused
 /// ([`DecodeError::NeedsRequest`]).
@@ -1051,7 +1061,7 @@ fn decode_plain<'p>(
     let Limits {
         directions,
         longest_frame,
-        shortest,
+        shortest_checked,
         min_code,
         ..
     } = limits;
@@ -1087,58 +1097,128 @@ fn decode_plain<'p>(
             (true, true)
         }
     };
-    if wire.len() < shortest.max(first.len.min(second.len)) {
+    // A message without a checksum (`checksum: none`), by its code and length: it has none
+    // to check, and may be shorter than any frame with one.
+    let unchecked = p.unchecked(directions, wire).is_some();
+    if !unchecked && wire.len() < shortest_checked.max(first.len.min(second.len)) {
         return Err(DecodeError::Truncated {
-            needed: shortest,
+            needed: shortest_checked,
             found: wire.len(),
         });
     }
     check_end(p, wire)?;
-    match p.over_request(directions, wire) {
+    // A direction refused for its checksum or address alone is set aside with its refusal:
+    // where the other is refused too, the refusal that got further is reported
+    // ([`progress`], the first direction's on a tie), as the generated stream decoder, which
+    // decodes each direction on its own, reports it.
+    let mut set_aside: Option<(bool, DecodeError)> = None;
+    let (sync0, sync1) = match p.over_request(directions, wire) {
+        _ if unchecked => (sync0, sync1),
+        // A reply whose checksum takes in its request's bytes, by its code and length, whose
+        // code and length a request may have too (RoboClaw's code-less replies): decoded both
+        // ways, each direction is checked by its own rule.
+        Some((m, from)) if directions.len() == 2 && p.request_fits(wire) => {
+            let over = check_over_request(p, m, from, covered, wire);
+            let own = check_checksum(p, lookup.map(|l| &l.checksum), wire);
+            let (x, y) = if directions[0] == Direction::Response {
+                (over, own)
+            } else {
+                (own, over)
+            };
+            set_aside_refused(sync0, sync1, x, y, &mut set_aside)?
+        }
         // A reply whose checksum takes in its request's bytes, by its code and length.
-        Some((m, from)) => check_over_request(p, m, from, covered, wire)?,
-        None => check_checksum(p, lookup.map(|l| &l.checksum), wire)?,
-    }
+        Some((m, from)) => {
+            check_over_request(p, m, from, covered, wire)?;
+            (sync0, sync1)
+        }
+        None => {
+            check_checksum(p, lookup.map(|l| &l.checksum), wire)?;
+            (sync0, sync1)
+        }
+    };
     // Where the address sits (or whether frames carry one) differs by direction, each
     // direction the frame may be is checked at its own; it is refused where none agrees.
-    // A direction refused for its address alone is set aside with its refusal: where the
-    // other is refused too, the refusal that got further is reported ([`progress`], the
-    // first direction's on a tie), as the generated stream decoder, which decodes each
-    // direction on its own, reports it.
-    let mut set_aside: Option<(bool, DecodeError)> = None;
-    let (sync0, sync1) = if first.address != second.address {
+    let (sync0, sync1) = if first.address != second.address && set_aside.is_none() {
         let (x, y) = (
             check_address(p, first.address, wire),
             check_address(p, second.address, wire),
         );
-        match (sync0 && x.is_ok(), sync1 && y.is_ok()) {
-            (false, false) => {
-                if sync0 {
-                    x?;
-                }
-                y?;
-                (false, false)
-            }
-            kept => {
-                if let (true, Err(e)) = (sync0, x) {
-                    set_aside = Some((true, e));
-                } else if let (true, Err(e)) = (sync1, y) {
-                    set_aside = Some((false, e));
-                }
-                kept
-            }
+        set_aside_refused(sync0, sync1, x, y, &mut set_aside)?
+    } else if first.address != second.address {
+        // One direction is set aside for its checksum: the other's address decides.
+        let (kept, at) = if sync0 {
+            (true, first.address)
+        } else {
+            (false, second.address)
+        };
+        if let Err(e) = check_address(p, at, wire) {
+            let Some((first_set_aside, a)) = set_aside.take() else {
+                return Err(e);
+            };
+            // Both refused: the refusal that got further, the first direction's on a tie.
+            let (e0, e1) = if first_set_aside { (a, e) } else { (e, a) };
+            return Err(if progress(&e1) > progress(&e0) {
+                e1
+            } else {
+                e0
+            });
         }
+        (sync0 && kept, sync1 && !kept)
     } else {
-        check_address(p, first.address, wire)?;
+        if let Err(e) = check_address(p, first.address, wire) {
+            // The first direction set aside for its checksum got as far: its refusal.
+            return Err(match set_aside.take() {
+                Some((true, a)) if progress(&a) >= progress(&e) => a,
+                _ => e,
+            });
+        }
         (sync0, sync1)
     };
-    let decoded = decode_kept(p, limits, lookup, reply_to, wire, spare, (sync0, sync1));
+    let decoded = decode_kept(
+        p,
+        limits,
+        lookup,
+        reply_to,
+        wire,
+        spare,
+        (sync0, sync1, unchecked),
+    );
     match (decoded, set_aside) {
         // A frame the other direction's messages share is ambiguous, not refused.
         (Err(e @ DecodeError::Ambiguous { .. }), _) => Err(e),
         (Err(e), Some((true, a))) => Err(if progress(&e) > progress(&a) { e } else { a }),
         (Err(e), Some((false, a))) => Err(if progress(&a) > progress(&e) { a } else { e }),
         (decoded, _) => decoded,
+    }
+}
+
+/// The directions `(sync0, sync1)` still kept after a check made for each (`x` the first's,
+/// `y` the second's): a kept direction refused is set aside with its refusal (where none is
+/// yet); where both are refused, the first kept one's refusal.
+fn set_aside_refused(
+    sync0: bool,
+    sync1: bool,
+    x: Result<(), DecodeError>,
+    y: Result<(), DecodeError>,
+    set_aside: &mut Option<(bool, DecodeError)>,
+) -> Result<(bool, bool), DecodeError> {
+    match (sync0 && x.is_ok(), sync1 && y.is_ok()) {
+        (false, false) => {
+            if sync0 {
+                x?;
+            }
+            y?;
+            Ok((false, false))
+        }
+        kept => {
+            if let (true, Err(e)) = (sync0, x) {
+                *set_aside = Some((true, e));
+            } else if let (true, Err(e)) = (sync1, y) {
+                *set_aside = Some((false, e));
+            }
+            Ok(kept)
+        }
     }
 }
 
@@ -1170,7 +1250,7 @@ fn decode_kept<'p>(
     reply_to: (Option<usize>, bool),
     wire: &[u8],
     spare: &mut Spare<'p>,
-    (sync0, sync1): (bool, bool),
+    (sync0, sync1, unchecked): (bool, bool, bool),
 ) -> Result<Frame<'p>, DecodeError> {
     let Limits {
         directions,
@@ -1211,7 +1291,12 @@ fn decode_kept<'p>(
         }
     };
 
-    let clen = p.framing.trailer_len();
+    // A frame without a checksum (`checksum: none`) has its code up to its end.
+    let clen = if unchecked {
+        0
+    } else {
+        p.framing.trailer_len()
+    };
     let code_fits = |r: &MessageRef| {
         let m = p.message(*r);
         let o = m.layout;
@@ -1283,7 +1368,7 @@ fn decode_kept<'p>(
             .flat_map(|d| p.framing.direction(*d).code_lengths.iter().copied())
             .max()
             .unwrap_or(1);
-        let end = (o.code + longest).min(wire.len().saturating_sub(p.framing.trailer_len()));
+        let end = (o.code + longest).min(wire.len().saturating_sub(clen));
         let code = wire.get(o.code..end.max(o.code)).unwrap_or(&[]).to_vec();
         return Err(DecodeError::UnknownCode {
             offset: o.code,
@@ -1478,7 +1563,7 @@ pub fn decode_as<'p>(
 }
 
 /// [`decode_as`] of a reply with the bytes its request's checksum covers (`covered`,
-/// [`crate::ir::Framing::checksum_span`]): the checksum of a reply that takes them in runs over them
+/// [`crate::ir::Protocol::checksum_span`]): the checksum of a reply that takes them in runs over them
 /// first ([`DecodeError::NeedsRequest`] without them).
 pub fn decode_as_reply<'p>(
     p: &'p Protocol,
@@ -1582,6 +1667,7 @@ fn decode_as_unescaped<'p>(
     }
     check_end(p, wire)?;
     match (m.over_request, over) {
+        _ if m.unchecked => {}
         (Some(from), Over::Check(covered)) => check_over_request(p, m, from, covered, wire)?,
         (Some(_), Over::Checked) => {}
         (None, _) => check_checksum(p, None, wire)?,
@@ -1670,6 +1756,12 @@ fn check_over_request(
 /// travels: one with the short start byte covered from where its checksum starts in the short
 /// form.
 pub fn reseal(p: &Protocol, frame: &mut [u8]) {
+    // A frame without a checksum (`checksum: none`) has none to write.
+    if p.unchecked(&[Direction::Request, Direction::Response], frame)
+        .is_some()
+    {
+        return;
+    }
     // A short frame (`framing.forms`): covered from where its checksum starts in it.
     if let Some(f) = p
         .framing
@@ -2261,8 +2353,18 @@ fn fields_of<'p>(p: &Protocol, m: &'p Message, wire: &[u8]) -> Result<Vec<Value<
 
 /// A variable message's payload runs to the checksum.
 fn payload_of<'w>(p: &Protocol, m: &Message, wire: &'w [u8]) -> &'w [u8] {
-    let end = wire.len().saturating_sub(p.framing.trailer_len());
+    let end = wire.len().saturating_sub(trailer_of(p, m));
     wire.get(m.layout.payload..end).unwrap_or(&[])
+}
+
+/// The bytes after message `m`'s payload: the framing's checksum and end bytes, none where
+/// it travels without a checksum (`checksum: none`, validated without end bytes).
+pub fn trailer_of(p: &Protocol, m: &Message) -> usize {
+    if m.unchecked {
+        0
+    } else {
+        p.framing.trailer_len()
+    }
 }
 
 /// The first thing in the frame's fields that does not fit message `m`, if any: broadcast,
@@ -2619,12 +2721,12 @@ pub fn decode_reply_with<'p>(
     request_wire: Option<&[u8]>,
     wire: &[u8],
 ) -> Result<Frame<'p>, DecodeError> {
-    let covered = request_wire.and_then(|w| p.framing.checksum_span(w));
+    let covered = request_wire.and_then(|w| p.checksum_span(w));
     decode_reply_over(p, request, covered, wire)
 }
 
 /// [`decode_reply_with`] with the bytes the request's checksum covers (`covered`,
-/// [`crate::ir::Framing::checksum_span`] of its frame) rather than its frame.
+/// [`crate::ir::Protocol::checksum_span`] of its frame) rather than its frame.
 #[cfg(feature = "tools")]
 pub fn decode_reply_over<'p>(
     p: &'p Protocol,
@@ -2729,7 +2831,7 @@ pub fn encode(
 }
 
 /// [`encode`] of a reply with the bytes its request's checksum covers (`covered`,
-/// [`crate::ir::Framing::checksum_span`] of the request's frame): the checksum of a reply that takes
+/// [`crate::ir::Protocol::checksum_span`] of the request's frame): the checksum of a reply that takes
 /// them in runs over them first (`checksum_over_request`); without them such a reply is
 /// refused ([`EncodeError::NeedsRequest`]). Other messages ignore them.
 #[cfg(feature = "tools")]
@@ -3209,7 +3311,9 @@ fn encode_values(
     }
     // The payload as it travels (`framing.transform`), then the checksum over it.
     p.framing.transform_in_place(&mut out);
-    reseal_from(p, &mut out, 0);
+    if !m.unchecked {
+        reseal_from(p, &mut out, 0);
+    }
     if let Some(from) = m.over_request {
         let Some(request) = covered else {
             return Err(EncodeError::NeedsRequest {
@@ -3345,7 +3449,7 @@ fn reorder(p: &Protocol, m: &Message, text: &[u8], order: ByteOrder) -> Vec<u8> 
     let text = &*p.framing.untransformed(text);
     let o = m.layout;
     let flip = |order: ByteOrder| order != p.printed_byte_order;
-    let end = wire.len().saturating_sub(p.framing.trailer_len());
+    let end = wire.len().saturating_sub(trailer_of(p, m));
     // Fields in wire order, each list's elements counted as decode counts them: by its count
     // field, already reordered, or to what the fixed fields after it leave.
     let mut shifts: Vec<usize> = Vec::with_capacity(m.fields.len());
@@ -3435,7 +3539,7 @@ fn reorder(p: &Protocol, m: &Message, text: &[u8], order: ByteOrder) -> Vec<u8> 
     }
     let c = &p.framing.checksum;
     let at = p.framing.checksum_at(wire.len());
-    if c.len() > 1 && flip(c.byte_order) {
+    if c.len() > 1 && flip(c.byte_order) && !m.unchecked {
         if let Some(s) = wire.get_mut(at..at + c.len()) {
             s.reverse();
         }

@@ -626,10 +626,10 @@ impl Framing {
         len.saturating_sub(self.checksum.len() + after)
     }
 
-    /// The bytes a request frame's checksum covers, as it travelled (after any preamble): what
-    /// the checksum of a reply that takes in its request's bytes runs over first
-    /// ([`Message::over_request`]). `None` for a frame too short to hold a checksum.
-    pub fn checksum_span<'w>(&self, request: &'w [u8]) -> Option<&'w [u8]> {
+    /// The bytes a request frame with a checksum covers, as it travelled (after any
+    /// preamble); [`Protocol::checksum_span`] of any request. `None` for a frame too short to
+    /// hold a checksum.
+    fn checksum_span_of<'w>(&self, request: &'w [u8]) -> Option<&'w [u8]> {
         let w = self.after_preamble(request);
         if w.len() < self.trailer_len() {
             return None;
@@ -1053,8 +1053,13 @@ pub struct Message {
     pub checksum_extra: Option<u8>,
     /// Responses whose checksum takes in their request's bytes (`checksum_over_request`):
     /// the offset in this message's frame from which it covers its own bytes, after the
-    /// bytes the request's checksum covers ([`Framing::checksum_span`]).
+    /// bytes the request's checksum covers ([`Protocol::checksum_span`]).
     pub over_request: Option<usize>,
+    /// Whether its frames travel without the framing's checksum (`checksum: none`): its
+    /// `layout` ends where the checksum would begin (`layout.checksum == layout.len`), and
+    /// no engine computes or checks one. Such a message has one length and is found by its
+    /// code and length before any checksum is checked ([`Protocol::unchecked`]).
+    pub unchecked: bool,
     /// A constant whole frame (`frame:`, responses only): the message is these bytes and
     /// nothing else, outside the framing (M-Bus's single character `E5`). It has no code,
     /// fields, address or checksum; its `layout.len` and `max_len` are the bytes' length. Such
@@ -1950,6 +1955,48 @@ impl Protocol {
             let fits = (m.layout.len..=m.max_len).contains(&wire.len())
                 && wire.get(m.layout.code..m.layout.code + m.code.len()) == Some(&m.code[..]);
             fits.then_some((m, from))
+        })
+    }
+
+    /// The message without a checksum (`checksum: none`) that a frame of `wire`'s length and
+    /// code is, among `directions` (validated: no message with a checksum can have its code
+    /// and length).
+    pub fn unchecked(&self, directions: &[Direction], wire: &[u8]) -> Option<&Message> {
+        directions.iter().find_map(|&d| {
+            self.framed(d).iter().find(|m| {
+                m.unchecked
+                    && wire.len() == m.layout.len
+                    && wire.get(m.layout.code..m.layout.code + m.code.len()) == Some(&m.code[..])
+            })
+        })
+    }
+
+    /// Whether any message travels without the framing's checksum (`checksum: none`).
+    pub fn has_unchecked(&self) -> bool {
+        self.commands
+            .iter()
+            .chain(&self.responses)
+            .any(|m| m.unchecked)
+    }
+
+    /// The bytes a request's checksum covers, which a reply whose checksum takes in its
+    /// request's bytes (`checksum_over_request`) takes first: from the checksum's first
+    /// covered part to the checksum, or to the frame's end where the request travels without
+    /// one (`checksum: none`). `None` for a frame shorter than the framing's trailer.
+    pub fn checksum_span<'w>(&self, request: &'w [u8]) -> Option<&'w [u8]> {
+        let w = self.framing.after_preamble(request);
+        if self.unchecked(&[Direction::Request], w).is_some() {
+            return w.get(self.framing.checksum.covers_from..);
+        }
+        self.framing.checksum_span_of(request)
+    }
+
+    /// Whether a request could be a frame of `wire`'s length and code: some request's code
+    /// sits where that request's layout puts it, and its lengths take `wire`'s.
+    pub fn request_fits(&self, wire: &[u8]) -> bool {
+        self.framed(Direction::Request).iter().any(|m| {
+            (m.min_len()..=m.max_len).contains(&wire.len())
+                && wire.get(m.layout.code..m.layout.code + m.code.len()) == Some(&m.code[..])
         })
     }
 

@@ -662,6 +662,18 @@ pub struct Command {
     /// `framing.checksum.extra` is `per_message`.
     #[serde(default)]
     pub checksum_extra: Option<i64>,
+    /// `checksum: none`: this command's frames travel without the framing's checksum.
+    #[serde(default)]
+    pub checksum: Option<MessageChecksum>,
+}
+
+/// A message's own `checksum:` (`none`: its frames travel without the framing's checksum,
+/// as RoboClaw's read commands are sent as address and command alone).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum MessageChecksum {
+    /// No checksum: the frame ends where the framing's checksum would begin.
+    None,
 }
 
 #[derive(Debug, Clone, Deserialize)]
@@ -696,6 +708,9 @@ pub struct Response {
     /// general response: the request's sum plus the alarm byte).
     #[serde(default)]
     pub checksum_over_request: Option<OverRequest>,
+    /// As [`Command::checksum`].
+    #[serde(default)]
+    pub checksum: Option<MessageChecksum>,
 }
 
 /// A reply's `checksum_over_request`.

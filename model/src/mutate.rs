@@ -43,7 +43,12 @@ pub fn fix_length(p: &Protocol, d: Direction, frame: &mut [u8]) {
 /// cut and lengthened by one to three bytes before its checksum (its length field kept, or
 /// made to agree), each with its checksum as it was and recomputed.
 pub fn mutations(p: &Protocol, d: Direction, wire: &[u8]) -> Vec<Vec<u8>> {
-    let clen = p.framing.trailer_len();
+    // A frame without a checksum (`checksum: none`) is cut and lengthened at its end.
+    let clen = if p.unchecked(&[d], wire).is_some() {
+        0
+    } else {
+        p.framing.trailer_len()
+    };
     let mut out = Vec::new();
     for i in 0..wire.len() {
         for f in [|b: u8| b ^ 0x01, |b: u8| b ^ 0x80, |_| 0x00, |_| 0xFF] {

@@ -536,7 +536,7 @@ impl Sim {
             direction: Direction::Response,
             index: reply,
         };
-        let covered = p.framing.checksum_span(request_wire);
+        let covered = p.checksum_span(request_wire);
         interp::encode_with(p, r, address, &values, covered).ok()
     }
 }

@@ -1224,7 +1224,7 @@ impl<'p> StreamDecoder<'p> {
                 self.last_frame = self.last_request.map(|_| frame.clone());
                 if self.last_request.is_some() && self.over_request {
                     self.last_covered.clear();
-                    let span = self.p.framing.checksum_span(&bytes).unwrap_or(&[]);
+                    let span = self.p.checksum_span(&bytes).unwrap_or(&[]);
                     self.last_covered.extend_from_slice(span);
                 }
                 Event::Frame {

@@ -366,6 +366,7 @@ fn validate_ordered(spec: &model::Spec, sink: &mut Sink) -> Option<Protocol> {
             max_len: layout.len + (max_payload - payload_len),
             checksum_extra: None,
             over_request: None,
+            unchecked: false,
             frame: None,
         });
     }
@@ -425,6 +426,7 @@ fn validate_ordered(spec: &model::Spec, sink: &mut Sink) -> Option<Protocol> {
                 max_len: len,
                 checksum_extra: None,
                 over_request: None,
+                unchecked: false,
                 frame: Some(frame),
             });
             continue;
@@ -471,11 +473,13 @@ fn validate_ordered(spec: &model::Spec, sink: &mut Sink) -> Option<Protocol> {
             max_len: layout.len + (max_payload - payload_len),
             checksum_extra: None,
             over_request: None,
+            unchecked: false,
             frame: None,
         });
     }
     checksum_extras(spec, &mut framing, &mut commands, &mut responses, sink);
-    over_requests(spec, &framing, &commands, &mut responses, sink);
+    unchecked_messages(spec, &framing, &mut commands, &mut responses, sink);
+    over_requests(spec, &framing, &mut responses, sink);
     transform_lists(&framing, &commands, "commands", sink);
     transform_lists(&framing, &responses, "responses", sink);
     truncated_messages(&framing, &commands, "commands", sink);
@@ -710,14 +714,123 @@ fn checksum_extras(
     }
 }
 
+/// Messages that travel without the framing's checksum (`checksum: none`): their layout ends
+/// where the checksum would begin. Each has one length and is told apart from every message
+/// with a checksum by its code and length alone, which is how both engines find it before any
+/// checksum is checked.
+fn unchecked_messages(
+    spec: &model::Spec,
+    framing: &Framing,
+    commands: &mut [Message],
+    responses: &mut [Message],
+    sink: &mut Sink,
+) {
+    let clen = framing.checksum.len();
+    let given = spec
+        .commands
+        .iter()
+        .map(|c| (c.checksum, c.checksum_extra.is_some(), false, false))
+        .zip(commands.iter_mut().map(|m| ("commands", m)))
+        .chain(
+            spec.responses
+                .iter()
+                .map(|r| {
+                    (
+                        r.checksum,
+                        r.checksum_extra.is_some(),
+                        r.checksum_over_request.is_some(),
+                        r.frame.is_some(),
+                    )
+                })
+                .zip(responses.iter_mut().map(|m| ("responses", m))),
+        );
+    for ((checksum, extra, over, constant), (list, m)) in given {
+        if checksum.is_none() || constant {
+            continue;
+        }
+        let path = format!("{list}.{}.checksum", m.name);
+        let errors = sink.items.len();
+        if framing.checksum.is_empty() {
+            sink.error(&path, "the framing has no checksum to leave out");
+        }
+        for (given, what) in [
+            (framing.escaping.is_some(), "escaping (`framing.escaping`)"),
+            (
+                framing.transform.is_some(),
+                "a transform (`framing.transform`)",
+            ),
+            (
+                framing.length.is_some(),
+                "a length field (`framing.length`)",
+            ),
+            (
+                framing.long.is_some(),
+                "a long length form (`framing.length.long`)",
+            ),
+            (framing.form.is_some(), "a short form (`framing.forms`)"),
+            (framing.truncation.is_some(), "payload truncation"),
+            (!framing.end.is_empty(), "end bytes (`framing.end`)"),
+            (
+                framing.preamble.is_some(),
+                "a preamble (`framing.preamble`)",
+            ),
+            (extra, "its own `checksum_extra`"),
+            (over, "`checksum_over_request`"),
+        ] {
+            if given {
+                sink.error(
+                    &path,
+                    format!("a message without a checksum is not expressible beside {what} yet"),
+                );
+            }
+        }
+        if m.max_len != m.layout.len {
+            sink.error(
+                &path,
+                "a message without a checksum has one length yet: it takes no repeated or optional field",
+            );
+        }
+        if sink.items.len() == errors {
+            m.unchecked = true;
+            m.layout.len -= clen;
+            m.max_len -= clen;
+        }
+    }
+    // Told apart by code and length alone from every message with a checksum.
+    let all: Vec<&Message> = commands.iter().chain(responses.iter()).collect();
+    for m in all.iter().filter(|m| m.unchecked) {
+        let clash = all.iter().find(|x| {
+            let overlap = x.layout.len <= m.layout.len && m.layout.len <= x.max_len;
+            let coded = !m.code.is_empty()
+                && m.code.len() == x.code.len()
+                && m.layout.code == x.layout.code
+                && m.code != x.code;
+            !x.unchecked && x.frame.is_none() && overlap && !coded
+        });
+        if let Some(x) = clash {
+            let list = match m.direction {
+                Direction::Request => "commands",
+                Direction::Response => "responses",
+            };
+            sink.error(
+                format!("{list}.{}.checksum", m.name),
+                format!(
+                    "{} can have the same code and length, and carries a checksum: a message without one must be told apart by its code and length alone",
+                    x.name
+                ),
+            );
+        }
+    }
+}
+
 /// Each response's `checksum_over_request`: where in its frame its checksum takes up its own
 /// bytes after its request's. A frame is known to be such a reply before its checksum is
 /// checked, by its code and length alone (both engines check the checksum before they look
-/// at the fields), so no message of another rule may share a code and a length with it.
+/// at the fields), so no other response of another rule may share a code and a length with
+/// it; a request may, its own checksum checked for the request's reading.
 fn over_requests(
     spec: &model::Spec,
     framing: &Framing,
-    commands: &[Message],
     responses: &mut [Message],
     sink: &mut Sink,
 ) {
@@ -805,15 +918,15 @@ fn over_requests(
         if m.over_request.is_none() {
             continue;
         }
-        let others = commands.iter().chain(
-            responses
-                .iter()
-                .enumerate()
-                .filter(|&(j, x)| {
-                    x.over_request != m.over_request && (x.over_request.is_none() || j > i)
-                })
-                .map(|(_, x)| x),
-        );
+        // Requests may share it: decoded both ways, each direction is checked by its own
+        // rule (a request's checksum, the reply's over its request).
+        let others = responses
+            .iter()
+            .enumerate()
+            .filter(|&(j, x)| {
+                x.over_request != m.over_request && (x.over_request.is_none() || j > i)
+            })
+            .map(|(_, x)| x);
         for x in others {
             if !apart(m, x) {
                 sink.error(
@@ -3036,6 +3149,7 @@ fn constant_frame(
         ("code_from_request", r.code_from_request.is_some()),
         ("checksum_extra", r.checksum_extra.is_some()),
         ("checksum_over_request", r.checksum_over_request.is_some()),
+        ("checksum", r.checksum.is_some()),
     ] {
         if given {
             sink.error(
@@ -5252,7 +5366,7 @@ fn examples(spec: &model::Spec, p: &Protocol, sink: &mut Sink) -> Vec<Example> {
                 }
             }
         };
-        let covered = request.as_deref().and_then(|w| p.framing.checksum_span(w));
+        let covered = request.as_deref().and_then(|w| p.checksum_span(w));
         let erratum = match &e.erratum {
             None => None,
             Some(id) => {

@@ -46,7 +46,7 @@ fn the_reply_covers_its_own_bytes_from_the_payload_after_the_request_s() {
     assert_eq!(r.over_request, Some(2));
     assert!(p.has_over_request());
     assert_eq!(
-        p.framing.checksum_span(&ZOOM_IN),
+        p.checksum_span(&ZOOM_IN),
         Some(&[0x01, 0x00, 0x20, 0x00, 0x00][..])
     );
     // The extended response keeps its own sum.
@@ -127,12 +127,12 @@ fn encoding_the_reply_needs_the_request_s_bytes() {
             message: "general_response".into()
         }
     );
-    let covered = p.framing.checksum_span(&ZOOM_IN);
+    let covered = p.checksum_span(&ZOOM_IN);
     assert_eq!(
         interp::encode_with(&p, r, 1, &values, covered).unwrap(),
         ZOOM_REPLY
     );
-    let covered = p.framing.checksum_span(&AUX_ON);
+    let covered = p.checksum_span(&AUX_ON);
     assert_eq!(
         interp::encode_with(&p, r, 1, &values, covered).unwrap(),
         [0xFF, 0x01, 0x00, 0x0B]

@@ -60,13 +60,27 @@ pub(super) fn emit_dispatch(ctx: &Ctx, d: Direction, ty: &TokenStream) -> TokenS
         .unwrap_or(1);
     // Constant whole frames (`frame:`) are recognised before the framing is checked.
     let msgs = p.framed(d);
-    let clen = p.framing.trailer_len();
-    let min_len = msgs.iter().map(|m| len_range(m).0).min().unwrap_or(0);
+    // Messages without a checksum (`checksum: none`, one code length in their direction:
+    // validated) are told by their code and length before the frame checks, which then leave
+    // the checksum out; every other frame is at least as long as the shortest with one.
+    let unchecked = msgs.iter().any(|m| m.unchecked);
+    let clen = if unchecked {
+        0
+    } else {
+        p.framing.trailer_len()
+    };
+    let min_len = msgs
+        .iter()
+        .filter(|m| !m.unchecked)
+        .map(|m| len_range(m).0)
+        .min()
+        .unwrap_or(0);
     let max_len = msgs.iter().map(|m| m.max_len).max().unwrap_or(0);
     let code_at = |l: usize| p.framing.head(d, l).code;
     let replies = d == Direction::Response;
     let first_code_at = usize_lit(code_at(1));
     let unknown = {
+        let clen = p.framing.trailer_len();
         let (clen, longest_code) = (usize_lit(clen), usize_lit(longest_code));
         quote!(rt::Err(rt::unknown_code(frame, #first_code_at, #longest_code, #clen, #replies)))
     };
@@ -248,9 +262,24 @@ pub(super) fn emit_dispatch(ctx: &Ctx, d: Direction, ty: &TokenStream) -> TokenS
     // `response_sum` checks it over `covered`, or refuses it without them.
     let over = replies && p.has_over_request();
     let check_frame = if over {
-        quote!(let address = rt::check_frame_with(frame, #min_len, #max_len, #addr_at, &#frame_const, |b| response_sum(frame, b, covered))?;)
+        quote!(rt::check_frame_with(frame, #min_len, #max_len, #addr_at, &#frame_const, |b| response_sum(frame, b, covered))?)
     } else {
-        quote!(let address = rt::check_frame(frame, #min_len, #max_len, #addr_at, &#frame_const, #sum)?;)
+        quote!(rt::check_frame(frame, #min_len, #max_len, #addr_at, &#frame_const, #sum)?)
+    };
+    let check_frame = if unchecked {
+        let (is, frame_const) = (
+            super::head::unchecked_fn(d),
+            super::head::unchecked_frame(p, d),
+        );
+        quote! {
+            let address = if #is(frame) {
+                rt::check_frame(frame, frame.len(), #max_len, #addr_at, &#frame_const, |_| 0)?
+            } else {
+                #check_frame
+            };
+        }
+    } else {
+        quote!(let address = #check_frame;)
     };
     let checks = quote! {
         #constant

@@ -203,10 +203,10 @@ pub(super) fn emit_encode_arm(
         if checksum_in_arms(p) {
             // The frame taken, then sealed: two short lines rather than one nested call.
             let end = encode_end(p, quote!(out), false, head);
-            return quote!(#pattern => { #(#stmts)* let out = #take; #end });
+            return sealed(m, pattern, quote!(#(#stmts)* let out = #take;), end);
         }
         let (check, end) = (stmts, encode_end(p, take, false, head));
-        return quote!(#pattern => { #(#check)* #end });
+        return sealed(m, pattern, quote!(#(#check)*), end);
     }
     stmts.push(quote!(let out = #take;));
     if let (Some(rule), Some(_)) = (p.framing.length_rule(m.direction), &repeat) {
@@ -459,11 +459,16 @@ pub(super) fn emit_encode_arm(
     }
     let variable = repeat.is_some() || !lists.is_empty() || m.has_optional();
     let end = encode_end(p, quote!(out), variable, head);
-    quote! {
-        #pattern => {
-            #(#stmts)*
-            #end
-        }
+    sealed(m, pattern, quote!(#(#stmts)*), end)
+}
+
+/// An encoder arm of `pattern`: `stmts`, then `end`, the frame's length, its value; a message
+/// without a checksum (`checksum: none`) returns it, past the seal after the arms.
+fn sealed(m: &Message, pattern: &TokenStream, stmts: TokenStream, end: TokenStream) -> TokenStream {
+    if m.unchecked {
+        quote!(#pattern => { #stmts return rt::Ok(#end); })
+    } else {
+        quote!(#pattern => { #stmts #end })
     }
 }
 

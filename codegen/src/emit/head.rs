@@ -402,6 +402,77 @@ fn checksum_type(p: &Protocol) -> TokenStream {
     }
 }
 
+/// The name of the function that tells a frame of direction `d` without a checksum
+/// (`checksum: none`) by its code and length ([`emit_unchecked`]).
+pub(super) fn unchecked_fn(d: Direction) -> proc_macro2::Ident {
+    match d {
+        Direction::Request => format_ident!("unchecked_request"),
+        Direction::Response => format_ident!("unchecked_response"),
+    }
+}
+
+/// Messages that travel without a checksum (`checksum: none`): per direction with any, a
+/// function that tells such a frame by its code and length, as the interpreter's
+/// `Protocol::unchecked` does, and `UNCHECKED`, the frame checks without the checksum.
+/// Nothing for other protocols.
+pub(super) fn emit_unchecked(p: &Protocol) -> TokenStream {
+    if !p.has_unchecked() {
+        return quote!();
+    }
+    let dirs: Vec<Direction> = [Direction::Request, Direction::Response]
+        .into_iter()
+        .filter(|&d| p.framed(d).iter().any(|m| m.unchecked))
+        .collect();
+    let fns = dirs.iter().map(|&d| {
+        let tests = p.framed(d).iter().filter(|m| m.unchecked).map(|m| {
+            let len = usize_lit(m.layout.len);
+            if m.code.is_empty() {
+                return quote!(frame.len() == #len);
+            }
+            let (at, end) = (
+                usize_lit(m.layout.code),
+                usize_lit(m.layout.code + m.code.len()),
+            );
+            let code = m.code.iter().map(|b| hex_u8(*b));
+            quote!((frame.len() == #len && frame.get(#at..#end) == rt::Some(&[#(#code),*])))
+        });
+        let name = unchecked_fn(d);
+        let body = quote!(#(#tests)||*);
+        let doc = doc(&format!(
+            "Whether `frame` is a {} that travels without a checksum (`checksum: none`), by its code and length.",
+            match d {
+                Direction::Request => "request",
+                Direction::Response => "response",
+            }
+        ));
+        quote! {
+            #doc
+            #[inline]
+            fn #name(frame: &[u8]) -> bool {
+                #body
+            }
+        }
+    });
+    let mut frames: Vec<TokenStream> = dirs
+        .iter()
+        .map(|&d| {
+            let (name, frame) = (unchecked_frame(p, d), frame_of(p, d));
+            quote!(const #name: rt::Frame = rt::Frame { checksum_len: 0, ..#frame };)
+        })
+        .collect();
+    frames.dedup_by(|a, b| a.to_string() == b.to_string());
+    quote! {
+        #(#fns)*
+        #(#frames)*
+    }
+}
+
+/// The frame checks of direction `d` without the checksum, for its messages that travel
+/// without one.
+pub(super) fn unchecked_frame(p: &Protocol, d: Direction) -> proc_macro2::Ident {
+    format_ident!("UNCHECKED_{}", frame_of(p, d).to_string())
+}
+
 /// Where a reply's checksum takes in its request's bytes (`checksum_over_request`):
 /// `checksum_after`, the checksum over the request's covered bytes and then the reply's own,
 /// and `over_request`, which reply a frame is by its code and length (as the interpreter's
@@ -683,6 +754,8 @@ pub(super) fn checksum_in_arms(p: &Protocol) -> bool {
     matches!(p.framing.checksum.algorithm, ChecksumAlgorithm::Sum8)
         // A reply's checksum over its request's bytes is sealed after the arms.
         && !p.has_over_request()
+        // So is every frame's, where a message travels without one.
+        && !p.has_unchecked()
         && p.framing.checksum.covers_from == 0
         && p.framing.end.is_empty()
         // The sum covers the payload as it travels, transformed after the arms write it.

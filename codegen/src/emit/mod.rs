@@ -180,6 +180,7 @@ fn module_tokens(p: &Protocol, source: &str, spec_path: &str) -> TokenStream {
     let flags = emit_flags(&ctx);
     let checksum = emit_checksum(p);
     let over_request = emit_over_request(p);
+    let unchecked = emit_unchecked(p);
     let requests = emit_messages(&ctx, Direction::Request);
     let responses = emit_messages(&ctx, Direction::Response);
     let pairing = emit_pairing(&ctx);
@@ -193,6 +194,7 @@ fn module_tokens(p: &Protocol, source: &str, spec_path: &str) -> TokenStream {
         #header
         #checksum
         #over_request
+        #unchecked
         #units
         #enums
         #flags

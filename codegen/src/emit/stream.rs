@@ -280,6 +280,19 @@ pub(super) fn emit_stream(p: &Protocol) -> TokenStream {
     // request's covered bytes kept by the stream decoder, decoded and encoded over.
     let (span, over_fns) = if p.has_over_request() {
         let from = usize_lit(p.framing.checksum.covers_from);
+        // A request without a checksum (`checksum: none`): its bytes from where the
+        // checksum would cover to its end.
+        let span_of = if p.framed(Direction::Request).iter().any(|m| m.unchecked) {
+            let is = super::head::unchecked_fn(Direction::Request);
+            quote! {
+                if #is(request_frame) {
+                    return request_frame.get(#from..).unwrap_or(&[]);
+                }
+                rt::span(request_frame, #from, &FRAME)
+            }
+        } else {
+            quote!(rt::span(request_frame, #from, &FRAME))
+        };
         (
             quote! {
                 const OVER_REQUEST: bool = true;
@@ -293,11 +306,11 @@ pub(super) fn emit_stream(p: &Protocol) -> TokenStream {
                 }
                 #[inline]
                 fn request_span(request_frame: &[u8]) -> &[u8] {
-                    rt::span(request_frame, #from, &FRAME)
+                    #span_of
                 }
                 #[inline]
                 fn encode_reply(response: &Response, address: u8, request_frame: &[u8], buf: &mut [u8]) -> rt::Result<usize, rt::EncodeError> {
-                    response.encode_reply_over(address, rt::span(request_frame, #from, &FRAME), buf)
+                    response.encode_reply_over(address, Self::request_span(request_frame), buf)
                 }
             },
         )
@@ -335,9 +348,18 @@ pub(super) fn emit_stream(p: &Protocol) -> TokenStream {
             }
         }
     } else if p.framing.escaping.is_none() {
+        // Frames that travel without a checksum (`checksum: none`) have none to fail.
+        let unchecked = [Direction::Request, Direction::Response]
+            .into_iter()
+            .filter(|&d| p.framed(d).iter().any(|m| m.unchecked))
+            .map(|d| {
+                let is = super::head::unchecked_fn(d);
+                quote!(if #is(frame) { return true; })
+            });
         quote! {
             fn checksum_ok(frame: &[u8]) -> bool {
                 #skip_preamble
+                #(#unchecked)*
                 match frame.len().checked_sub(#ck_len) {
                     rt::Some(n) if n > 0 => rt::check_sum(frame, n, &FRAME, #sum),
                     _ => false,

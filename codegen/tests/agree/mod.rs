@@ -295,7 +295,7 @@ pub fn agree<P: Protocol>(p: &ir::Protocol) -> Tally {
         if !m.is_variable() {
             continue;
         }
-        let covered = request.as_ref().and_then(|r| p.framing.checksum_span(&r.2));
+        let covered = request.as_ref().and_then(|r| p.checksum_span(&r.2));
         let decoded = interp::decode_with(p, Some(d), e.reply_to, covered, &e.wire).unwrap();
         let names: Vec<&str> = match d {
             Direction::Request => visited(&P::decode_request(&e.wire).unwrap().message),

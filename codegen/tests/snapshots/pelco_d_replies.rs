@@ -889,7 +889,7 @@ pub mod pelco_d_replies {
             request_frame: &[u8],
             buf: &mut [u8],
         ) -> rt::Result<usize, rt::EncodeError> {
-            response.encode_reply_over(address, rt::span(request_frame, 1, &FRAME), buf)
+            response.encode_reply_over(address, Self::request_span(request_frame), buf)
         }
         #[inline]
         fn answers(request: &Request, response: &Response) -> bool {
