@@ -138,6 +138,9 @@ fn cases() -> Vec<Case> {
         spec("model/tests/fixtures/valid/rtcm3_frame.yaml"),
         // A reply whose checksum takes in its request's bytes (Pelco D's general response).
         spec("model/tests/fixtures/valid/pelco_d_replies.yaml"),
+        // Messages without a checksum beside replies whose CRC takes in the read's bytes
+        // (RoboClaw).
+        spec("model/tests/fixtures/valid/roboclaw.yaml"),
         // A short form of the frame (M-Bus) is not compared here yet: the dissector words a
         // short frame's out-of-spec address at its laid-out offset (5, not 2). Its dissector
         // loads and survives random bytes (`every_fixture_dissector_loads_...`).
@@ -290,7 +293,7 @@ fn capture(p: &Protocol) -> (Vec<u8>, Vec<(Vec<u8>, String)>) {
     let mut rng = fastrand::Rng::with_seed(p.examples.len() as u64);
     for e in &p.examples {
         let m = p.message(e.message);
-        let end = e.wire.len().saturating_sub(p.framing.trailer_len());
+        let end = e.wire.len().saturating_sub(interp::trailer_of(p, m));
         if end <= m.layout.payload {
             continue;
         }
@@ -303,7 +306,7 @@ fn capture(p: &Protocol) -> (Vec<u8>, Vec<(Vec<u8>, String)>) {
         };
         for _ in 0..rounds {
             let mut w = plain(p, &e.wire);
-            let end = w.len().saturating_sub(p.framing.trailer_len());
+            let end = w.len().saturating_sub(interp::trailer_of(p, m));
             w[m.layout.payload..end]
                 .iter_mut()
                 .for_each(|b| *b = rng.u8(..));
@@ -314,12 +317,11 @@ fn capture(p: &Protocol) -> (Vec<u8>, Vec<(Vec<u8>, String)>) {
     }
     let mut bad = Vec::new();
     if !p.framing.checksum.is_empty() {
-        // A constant whole frame has no checksum to change.
-        for e in p
-            .examples
-            .iter()
-            .filter(|e| p.message(e.message).frame.is_none())
-        {
+        // A constant whole frame has no checksum to change, nor a message without one.
+        for e in p.examples.iter().filter(|e| {
+            let m = p.message(e.message);
+            m.frame.is_none() && !m.unchecked
+        }) {
             // The checksum changed where the spec computes it: before escaping, or on the
             // bytes as they travel.
             let escaped = p
@@ -576,8 +578,9 @@ fn compare(p: &Protocol, case: &Case, dir: &Path) -> Counts {
                     Some(p.message(r).section.as_str()),
                     "{what}"
                 );
-                // A constant whole frame (M-Bus's E5) has no checksum to show.
-                if p.message(r).frame.is_some() {
+                // A constant whole frame (M-Bus's E5) has no checksum to show, nor a message
+                // that travels without one (RoboClaw's reads).
+                if p.message(r).frame.is_some() || p.message(r).unchecked {
                     assert_eq!(one(packet, &key("checksum.status")), None, "{what}");
                 } else if !p.framing.checksum.is_empty() {
                     assert_eq!(one(packet, &key("checksum.status")), Some("1"), "{what}");

@@ -1333,6 +1333,19 @@ impl<'a> Differ<'a> {
                 ),
             );
         }
+        if m.unchecked != x.unchecked {
+            let show = |u: bool| if u { "none" } else { "the framing's" };
+            self.wire(
+                "checksum_none_changed",
+                format!("{path}.checksum"),
+                format!(
+                    "{word} `{}`: checksum {} → {}",
+                    x.name,
+                    show(m.unchecked),
+                    show(x.unchecked)
+                ),
+            );
+        }
         if m.over_request != x.over_request {
             let show = |c: Option<usize>| {
                 c.map_or("its own bytes".to_owned(), |from| {

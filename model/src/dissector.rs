@@ -434,6 +434,10 @@ fn message(m: &Message, index: usize, framing: &Framing) -> String {
         // End bytes alone delimit the frame: its list to the end never holds them.
         let _ = writeln!(s, "      delim = {},", bytes(&framing.end));
     }
+    if m.unchecked {
+        // It travels without a checksum (`checksum: none`).
+        s.push_str("      unchecked = true,\n");
+    }
     if let Some(from) = m.over_request {
         // Its checksum takes in the request's bytes, then its own from `over`.
         let _ = writeln!(s, "      over = {from},");

@@ -776,6 +776,13 @@ local function checksum_at(P, n)
   return n - P.checksum.len - #P.ends
 end
 
+-- The bytes after message m's payload: none for a message without a checksum
+-- (`checksum: none`, validated without end bytes).
+local function trailer_of(P, m)
+  if m.unchecked then return 0 end
+  return P.trailer
+end
+
 -- Whether the frame has message m's shape: start, code, end bytes, length field and length.
 local function structural(P, m, b, n)
   if n < m.len or n > m.max_len then return false end
@@ -789,7 +796,7 @@ local function structural(P, m, b, n)
       end
     end
   end
-  if m.code_at + #m.code + P.trailer > n then return false end
+  if m.code_at + #m.code + trailer_of(P, m) > n then return false end
   for i, c in ipairs(m.code) do
     if b[m.code_at + i - 1] ~= c then return false end
   end
@@ -840,7 +847,7 @@ local function misfit(P, m, b, n, soft)
     local code = (#m.code == 0) and " (no code)" or (" (code " .. m.code_hex .. ")")
     soft[#soft + 1] = fmt("%s%s does not accept the broadcast address 0x%02X", m.name, code, address)
   end
-  local pend = n - P.trailer
+  local pend = n - trailer_of(P, m)
   local pos, lens = places(m, b, n, pend)
   for i, f in ipairs(m.fields) do
     local at = pos[i]
@@ -1074,7 +1081,7 @@ local function setup(P)
   proto.init = reset
 
   local function show_leaves(m, b, n, tvb, node)
-    local pend = n - P.trailer
+    local pend = n - trailer_of(P, m)
     local pos, lens = places(m, b, n, pend)
     local info = {}
     for i, f in ipairs(m.fields) do
@@ -1522,7 +1529,9 @@ local function setup(P)
       -- Computed on the escaped bytes (`computed: escaped`): as they carry it.
       ck_at, ck_expected, ck_found, ck_tvb = wire_ck.at, wire_ck.expected, wire_ck.found, wire_ck.tvb
       ck_good = (ck_expected == ck_found)
-    elseif ck.len > 0 and not constant then
+    elseif ck.len > 0 and not constant and not pool[1].m.unchecked then
+      -- (A message without a checksum, `checksum: none`, is told apart from every message
+      -- with one by its code and length: it has none to check.)
       ck_at = checksum_at(P, n)
       ck_expected = ck.fn(b, ck.covers_from, ck_at)
       ck_found = read_uint(b, ck_at, ck.len, ck.order)
@@ -1591,6 +1600,12 @@ local function setup(P)
       root:set_text(fmt("busspec %s: ambiguous frame: %s", P.name, text))
       root:add(F.ambiguous, whole, text)
       root:add_proto_expert_info(E.ambiguous, "ambiguous frame: could be " .. text .. "; decode it together with the request it answers")
+      -- Replies of one code and length whose checksum takes in their request's bytes take
+      -- them in at one offset (validated): checked over them as any one of them.
+      if pool[1].m.over then
+        chosen_name = pool[1].m.name
+        over_request(pool[1].m)
+      end
       show_checksum()
       if first and ck_good then state.last = nil end
       pinfo.cols.info = "ambiguous: " .. text
@@ -1607,8 +1622,9 @@ local function setup(P)
       elseif m.dir == "request" then
         -- The bytes its checksum covers, for a reply whose checksum takes them in.
         local cov = {}
-        if ck_at and ck.len > 0 then
-          for i = ck.covers_from, ck_at - 1 do cov[#cov + 1] = b[i] end
+        if ck.len > 0 then
+          -- To the checksum, or to the frame's end where the request has none.
+          for i = ck.covers_from, (ck_at or n) - 1 do cov[#cov + 1] = b[i] end
         end
         state.last = { num = num, idx = m.idx, cov = cov }
       else

@@ -891,6 +891,7 @@ pub fn render(p: &Protocol, source: &str) -> String {
                         None => String::new(),
                     },
                     match (m.checksum_extra, m.over_request) {
+                        _ if m.unchecked => " It travels without a checksum: it is told by its code and length alone.".to_owned(),
                         (Some(x), _) => format!(" Checksum extra byte {x} (0x{x:02X})."),
                         (None, Some(from)) => format!(" Its checksum takes in its request's bytes: those the request's checksum covers, then its own from offset {from}; it is checked only with the request."),
                         (None, None) => String::new(),

@@ -790,6 +790,12 @@ fn unchecked_messages(
                 "a message without a checksum has one length yet: it takes no repeated or optional field",
             );
         }
+        if framing.direction(m.direction).code_lengths.len() > 1 {
+            sink.error(
+                &path,
+                "a message without a checksum beside several code lengths in its direction is not expressible yet",
+            );
+        }
         if sink.items.len() == errors {
             m.unchecked = true;
             m.layout.len -= clen;

@@ -429,6 +429,23 @@ const CASES: &[(&str, &[(&str, &str)])] = &[
             ("responses.string.fields.text", "a list to the end of a frame that end bytes alone delimit (no length field, no checksum) beside a transform (framing.transform) is not expressible yet"),
         ],
     ),
+    // ---- messages without a checksum (made from valid/roboclaw)
+    (
+        "unchecked_told_apart",
+        &[
+            ("responses.status.checksum", "reset_encoders can have the same code and length, and carries a checksum: a message without one must be told apart by its code and length alone"),
+            ("responses.main_battery.checksum_over_request", "status can have the same code and length, and its checksum covers other bytes"),
+            ("responses.logic_battery.checksum_over_request", "status can have the same code and length, and its checksum covers other bytes"),
+            ("responses.temperature.checksum_over_request", "status can have the same code and length, and its checksum covers other bytes"),
+        ],
+    ),
+    (
+        "unchecked_beside",
+        &[
+            ("commands.read_status.checksum", "a message without a checksum has one length yet: it takes no repeated or optional field"),
+            ("responses.status.checksum", "a message without a checksum is not expressible beside `checksum_over_request` yet"),
+        ],
+    ),
     // ---- a reply's checksum over its request's bytes (made from valid/pelco_d_replies)
     (
         "over_request_told_apart",
