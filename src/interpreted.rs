@@ -676,6 +676,7 @@ impl Protocol for Interpreted {
         device_addresses: 0..=255,
         broadcast_address: None,
         host_address: None,
+        replies_addressed: true,
         transactions: Transactions::UNDECLARED,
     };
     const MAX_FRAME_LEN: usize = CAP;
@@ -814,8 +815,13 @@ impl Protocol for Interpreted {
         let Some(p) = spec() else {
             return false;
         };
-        // As the generated check: at least one byte before the checksum and end bytes, and
-        // those what the bytes before them give.
+        // As the generated check: a frame without a checksum (`checksum: none`) has none to
+        // fail; any other, at least one byte before the checksum and end bytes, and those
+        // what the bytes before them give.
+        let both = [Direction::Request, Direction::Response];
+        if p.unchecked(&both, frame).is_some() {
+            return true;
+        }
         if frame.len() <= p.framing.trailer_len() {
             return false;
         }
@@ -869,6 +875,10 @@ impl Link for Interpreted {
 
     fn broadcast_address() -> Option<u8> {
         spec().and_then(|p| p.framing.address.broadcast)
+    }
+
+    fn replies_addressed() -> bool {
+        spec().map_or(true, |p| p.framing.has_address_in(Direction::Response))
     }
 
     fn request_gap(baud: u32, character_bits: u32) -> Duration {

@@ -382,6 +382,62 @@ fn talk_speaks_a_spec_read_at_run_time() {
     );
 }
 
+/// RoboClaw's packet serial (`model/tests/fixtures/valid/roboclaw.yaml`), simulated and
+/// talked to by its spec alone: a read travels without a CRC and its reply, which carries no
+/// address, has one over the read's bytes; a write is acknowledged with FF. Before replies
+/// without an address were known to the simulator and the master, the simulator stayed
+/// silent, then the master refused every reply as "from address 0x00".
+#[test]
+fn talk_and_sim_speak_a_spec_whose_replies_carry_no_address() {
+    let file = "model/tests/fixtures/valid/roboclaw.yaml";
+    let sim = Sim::start(&["roboclaw", "--spec", file, "--address", "0x80"]);
+    let talk = |args: &[&str]| {
+        let mut all = vec![
+            "talk",
+            "--port",
+            &sim.path,
+            "--spec",
+            file,
+            "roboclaw",
+            "--address",
+            "0x80",
+        ];
+        all.extend_from_slice(args);
+        run(&all)
+    };
+    for (args, reply) in [
+        (&["read_main_battery"][..], "main_battery"),
+        (&["read_encoder_m1"][..], "encoder_m1"),
+        (&["drive_forward_m1", "speed=64"][..], "ack"),
+        (&["speed_m1", "speed=-1000"][..], "ack"),
+    ] {
+        let out = talk(args);
+        assert!(out.status.success(), "{args:?}: {}", text(&out.stderr));
+        let line: serde_json::Value = serde_json::from_slice(&out.stdout).unwrap();
+        assert_eq!(line["message"], reply, "{args:?}");
+    }
+    // Nobody at another address: no reply, though replies carry none.
+    let out = run(&[
+        "talk",
+        "--port",
+        &sim.path,
+        "--spec",
+        file,
+        "roboclaw",
+        "--address",
+        "0x81",
+        "--timeout",
+        "100",
+        "read_status",
+    ]);
+    assert_eq!(out.status.code(), Some(1));
+    assert!(
+        text(&out.stderr).contains("no reply"),
+        "{}",
+        text(&out.stderr)
+    );
+}
+
 #[test]
 fn talk_by_spec_reads_back_what_it_wrote_to_a_modbus_device() {
     let sim = Sim::start(&["modbus", "--address", "9"]);

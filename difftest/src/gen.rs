@@ -261,6 +261,9 @@ enum Own {
     /// Replies whose checksum takes in their request's bytes (`checksum_over_request`, Pelco
     /// D's general response): whether a spec tries them, which replies, from which part.
     OverRequest = 0x00FF_0121_00FF_0121,
+    /// Messages without a checksum (`checksum: none`, RoboClaw's reads): whether a spec tries
+    /// them, and which messages.
+    Unchecked = 0x8010_8010_8010_8010,
 }
 
 /// The generator of `what` for the spec of `seed`.
@@ -1241,6 +1244,15 @@ pub fn random_spec(seed: u64) -> String {
             break;
         }
     }
+    // Messages without a checksum (RoboClaw's reads, its acknowledgement): tried on a
+    // fraction of the specs with a checksum, kept where the validator accepts them; drawn by
+    // a generator of its own.
+    for with in unchecked(seed, &text, &p) {
+        if let Ok(q) = busspec_model::load_str("generated.yaml", &with) {
+            (text, p) = (with, q);
+            break;
+        }
+    }
     let mut rng = own_rng(seed, Own::Examples);
     match examples(&p, &mut rng) {
         Some(examples) => format!("{text}examples:\n{examples}errata: []\n"),
@@ -1307,6 +1319,47 @@ fn over_request(seed: u64, text: &str, p: &ir::Protocol) -> Vec<String> {
     for r in alone {
         out.push(with(&[(r, parts[rng.usize(..parts.len())])]));
     }
+    out
+}
+
+/// `text` with messages that travel without a checksum (`Own::Unchecked`), in about one spec
+/// in three with a checksum: one to three framed messages of one length drawn from either
+/// direction; the variants in the order tried (the drawn messages, then each alone, in an
+/// order drawn: the validator refuses one that a message with a checksum could be by its code
+/// and length).
+fn unchecked(seed: u64, text: &str, p: &ir::Protocol) -> Vec<String> {
+    let mut rng = own_rng(seed, Own::Unchecked);
+    if rng.u8(..100) >= 33 || p.framing.checksum.is_empty() {
+        return Vec::new();
+    }
+    let names: Vec<&str> = [Direction::Request, Direction::Response]
+        .into_iter()
+        .flat_map(|d| p.framed(d))
+        .filter(|m| !m.is_variable() && m.over_request.is_none())
+        .map(|m| m.name.as_str())
+        .collect();
+    if names.is_empty() {
+        return Vec::new();
+    }
+    let mut drawn: Vec<&str> = Vec::new();
+    for _ in 0..rng.usize(1..=3) {
+        let m = names[rng.usize(..names.len())];
+        if !drawn.contains(&m) {
+            drawn.push(m);
+        }
+    }
+    let with = |chosen: &[&str]| {
+        let mut t = text.to_owned();
+        for m in chosen {
+            let line = format!("  - {{name: {m}, ");
+            t = t.replacen(&line, &format!("{line}checksum: none, "), 1);
+        }
+        t
+    };
+    let mut out = vec![with(&drawn)];
+    let mut alone = names.clone();
+    rng.shuffle(&mut alone);
+    out.extend(alone.into_iter().map(|m| with(&[m])));
     out
 }
 
@@ -3451,6 +3504,21 @@ pub fn constructs(p: &ir::Protocol) -> Vec<&'static str> {
     add(
         p.has_over_request(),
         "a reply's checksum over its request's bytes",
+    );
+    add(p.has_unchecked(), "a message without a checksum");
+    add(
+        p.has_over_request()
+            && p.framed(Direction::Response).iter().any(|m| {
+                m.over_request.is_some()
+                    && p.framed(Direction::Request).iter().any(|c| {
+                        c.min_len() <= m.max_len
+                            && m.min_len() <= c.max_len
+                            && (m.code.is_empty()
+                                || c.code.is_empty()
+                                || m.code.len() != c.code.len())
+                    })
+            }),
+        "a reply's checksum over its request's bytes beside requests of its length",
     );
     add(
         f.checksum.len() > 1 && f.checksum.byte_order == ir::ByteOrder::Little,

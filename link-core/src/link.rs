@@ -246,6 +246,12 @@ pub trait Link: Protocol {
     fn broadcast_address() -> Option<u8> {
         Self::BUS.broadcast_address
     }
+
+    /// Whether replies carry the device's address (`Bus::replies_addressed`): where they do
+    /// not, a reply is taken as from the device asked.
+    fn replies_addressed() -> bool {
+        Self::BUS.replies_addressed
+    }
     /// The quiet time between two requests on a line of `baud` and `character_bits`
     /// ([`inter_request_gap`] by default).
     fn request_gap(baud: u32, character_bits: u32) -> Duration {

@@ -868,6 +868,10 @@ impl<P: Link, const CAP: usize> MasterCore<P, CAP> {
         let reply = P::decode_response_over(self.reply(), Some(&request), Some(covered))
             .map_err(Rejection::Decode)?;
         let (from, response) = (reply.address, reply.message);
+        // Replies without an address (RoboClaw's): from the device asked.
+        if !P::replies_addressed() {
+            return Ok((self.address, response));
+        }
         if self.broadcast {
             if !P::device_addresses().contains(&from) {
                 return Err(Rejection::NotDevice { from });

@@ -786,13 +786,7 @@ impl Limits {
                 .map(Message::min_len)
                 .min()
                 .unwrap_or(0),
-            shortest_checked: directions
-                .iter()
-                .flat_map(|d| p.framed(*d))
-                .filter(|m| !m.unchecked)
-                .map(Message::min_len)
-                .min()
-                .unwrap_or(0),
+            shortest_checked: shortest_checked(p, directions),
             min_code: directions
                 .iter()
                 .flat_map(|d| p.framing.direction(*d).code_lengths.iter().copied())
@@ -804,6 +798,34 @@ impl Limits {
             ],
         }
     }
+}
+
+/// The shortest frame with a checksum of `directions`: where every message of them travels
+/// without one (`checksum: none`), the shortest head of a frame with one (its parts before
+/// the payload, the checksum and the end bytes), as the generated frame checks take it.
+fn shortest_checked(p: &Protocol, directions: &[Direction]) -> usize {
+    let checked = directions
+        .iter()
+        .flat_map(|d| p.framed(*d))
+        .filter(|m| !m.unchecked)
+        .map(Message::min_len)
+        .min();
+    checked.unwrap_or_else(|| {
+        let unchecked = directions
+            .iter()
+            .flat_map(|d| p.framed(*d))
+            .next()
+            .is_some();
+        directions
+            .iter()
+            .filter(|_| unchecked)
+            .map(|&d| {
+                let code = p.framing.direction(d).code_lengths.iter().min();
+                p.framing.head(d, code.copied().unwrap_or(0)).len
+            })
+            .min()
+            .unwrap_or(0)
+    })
 }
 
 /// [`decode`] with everything it derives from the spec computed once, for decoding many

@@ -527,7 +527,9 @@ impl Sim {
                 raw,
             });
         }
-        let address = if p.framing.has_address() {
+        // A reply carries the device's address where replies carry one (with a layout per
+        // direction, requests alone may: RoboClaw's replies have none).
+        let address = if p.framing.has_address_in(Direction::Response) {
             self.address
         } else {
             0

@@ -373,6 +373,10 @@ pub struct Bus {
     /// The host's own address, if the spec gives one: a frame may carry it besides the device
     /// range and the broadcast address.
     pub host_address: Option<u8>,
+    /// Whether replies carry the device's address (with a layout per direction, requests
+    /// alone may: RoboClaw's replies carry none, and a master takes them as from the device
+    /// it asked).
+    pub replies_addressed: bool,
     /// What a bus master needs that the spec declares in its `transactions:` section
     /// ([`Transactions::UNDECLARED`] for a spec without one).
     pub transactions: Transactions,

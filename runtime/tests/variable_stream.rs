@@ -300,6 +300,7 @@ impl Protocol for Toy {
         device_addresses: 1..=16,
         broadcast_address: None,
         host_address: None,
+        replies_addressed: true,
         transactions: Transactions::UNDECLARED,
     };
     const MAX_FRAME_LEN: usize = 11;

@@ -22,7 +22,7 @@
 set -euo pipefail
 cd "$(dirname "${BASH_SOURCE[0]}")/../.."
 venv=target/reference-venv
-pins=(pymodbus==3.16.1 dynamixel-sdk==4.1.0 pyserial==3.5 pyptzcontroller==0.1.2 crsf-parser==0.3.2 construct==2.10.68 construct-typing==0.5.6 pymavlink==2.4.50 fastcrc==0.5.0 lxml==6.1.3 pyvesc==1.0.5 PythonCRC==1.21)
+pins=(pymodbus==3.16.1 dynamixel-sdk==4.1.0 pyserial==3.5 pyptzcontroller==0.1.2 crsf-parser==0.3.2 construct==2.10.68 construct-typing==0.5.6 pymavlink==2.4.50 fastcrc==0.5.0 lxml==6.1.3 pyvesc==1.0.5 PythonCRC==1.21 tcr-roboclaw==0.1.5)
 # Rebuilt unless exactly the pinned versions are there (dynamixel-sdk alone pulls any pyserial).
 if [ ! -x "$venv/bin/python" ] || ! "$venv/bin/python" -c '
 import importlib.metadata as m, sys
@@ -32,12 +32,13 @@ sys.exit(any(m.version(p) != v for p, v in (a.split("==") for a in sys.argv[1:])
   python3 -m venv "$venv"
   "$venv/bin/pip" install --quiet --disable-pip-version-check "${pins[@]}"
 fi
-"$venv/bin/python" -c 'import importlib.metadata as m; print("pymodbus", m.version("pymodbus"), "/ dynamixel-sdk", m.version("dynamixel-sdk"), "/ pyserial", m.version("pyserial"), "/ pyptzcontroller", m.version("pyptzcontroller"), "/ crsf-parser", m.version("crsf-parser"), "/ construct", m.version("construct"), "/ pymavlink", m.version("pymavlink"), "/ pyvesc", m.version("pyvesc"), "/ PythonCRC", m.version("PythonCRC"))'
+"$venv/bin/python" -c 'import importlib.metadata as m; print("pymodbus", m.version("pymodbus"), "/ dynamixel-sdk", m.version("dynamixel-sdk"), "/ pyserial", m.version("pyserial"), "/ pyptzcontroller", m.version("pyptzcontroller"), "/ crsf-parser", m.version("crsf-parser"), "/ construct", m.version("construct"), "/ pymavlink", m.version("pymavlink"), "/ pyvesc", m.version("pyvesc"), "/ PythonCRC", m.version("PythonCRC"), "/ tcr-roboclaw", m.version("tcr-roboclaw"))'
 cargo build --locked --quiet --bin busspec
 BUSSPEC=target/debug/busspec "$venv/bin/python" tests/reference/check.py
 BUSSPEC=target/debug/busspec "$venv/bin/python" tests/reference/mavlink_v1_check.py
 BUSSPEC=target/debug/busspec "$venv/bin/python" tests/reference/mavlink_v2_check.py
 BUSSPEC=target/debug/busspec "$venv/bin/python" tests/reference/vesc_check.py
+BUSSPEC=target/debug/busspec "$venv/bin/python" tests/reference/roboclaw_check.py 100
 # Bounded twice: each talk call and the script time out on their own; this is the last resort.
 BUSSPEC=target/debug/busspec timeout 600 "$venv/bin/python" tests/reference/live_modbus.py
 BUSSPEC=target/debug/busspec timeout 600 "$venv/bin/python" tests/reference/live_sim_modbus.py

@@ -69,12 +69,18 @@ pub(super) fn emit_dispatch(ctx: &Ctx, d: Direction, ty: &TokenStream) -> TokenS
     } else {
         p.framing.trailer_len()
     };
+    // A direction of messages without a checksum alone: the shortest head of a frame with
+    // one (the interpreter's `shortest_checked`).
+    let head_len = || {
+        let code = p.framing.direction(d).code_lengths.iter().min();
+        p.framing.head(d, code.copied().unwrap_or(0)).len
+    };
     let min_len = msgs
         .iter()
         .filter(|m| !m.unchecked)
         .map(|m| len_range(m).0)
         .min()
-        .unwrap_or(0);
+        .unwrap_or_else(|| if msgs.is_empty() { 0 } else { head_len() });
     let max_len = msgs.iter().map(|m| m.max_len).max().unwrap_or(0);
     let code_at = |l: usize| p.framing.head(d, l).code;
     let replies = d == Direction::Response;
@@ -535,16 +541,20 @@ pub(super) fn length_args(p: &Protocol, rule: LengthRule) -> TokenStream {
     quote!(#at, #width, #le, #grows, #k)
 }
 
-/// Whether `m` shares code and length with another `needs_request` message of `group` (its
-/// code group), so that only the request can tell them apart.
+/// Whether `m` needs the request (`needs_request`) and shares code and length with another
+/// message of `group` (its code group): decoded as the reply to a request that does not get
+/// it, it is set aside.
 pub(super) fn is_ambiguous(m: &Message, group: &[&Message]) -> bool {
     let (lo, hi) = len_range(m);
+    // Decoded as the reply to a request that does not get it, such a message is set aside
+    // wherever another of its group could have its length (the interpreter's rule), not only
+    // beside another that needs the request.
     m.needs_request
         && group
             .iter()
             .filter(|o| {
                 let (a, b) = len_range(o);
-                o.needs_request && a <= hi && lo <= b
+                a <= hi && lo <= b
             })
             .count()
             > 1

@@ -276,6 +276,7 @@ pub(super) fn emit_stream(p: &Protocol) -> TokenStream {
     );
     let type_doc = doc(&doc_text);
     let transactions = crate::transactions::transactions(p);
+    let replies_addressed = p.framing.has_address_in(Direction::Response);
     // A reply whose checksum takes in its request's bytes (`checksum_over_request`): the
     // request's covered bytes kept by the stream decoder, decoded and encoded over.
     let (span, over_fns) = if p.has_over_request() {
@@ -495,6 +496,7 @@ pub(super) fn emit_stream(p: &Protocol) -> TokenStream {
                 device_addresses: DEVICE_ADDRESSES,
                 broadcast_address: BROADCAST_ADDRESS,
                 host_address: HOST_ADDRESS,
+                replies_addressed: #replies_addressed,
                 transactions: #transactions,
             };
             const MAX_FRAME_LEN: usize = MAX_FRAME_LEN;

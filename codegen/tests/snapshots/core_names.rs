@@ -725,6 +725,7 @@ pub mod clash {
             device_addresses: DEVICE_ADDRESSES,
             broadcast_address: BROADCAST_ADDRESS,
             host_address: HOST_ADDRESS,
+            replies_addressed: true,
             transactions: rt::Transactions::UNDECLARED,
         };
         const MAX_FRAME_LEN: usize = MAX_FRAME_LEN;

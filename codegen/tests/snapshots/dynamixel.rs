@@ -971,6 +971,7 @@ pub mod dynamixel {
             device_addresses: DEVICE_ADDRESSES,
             broadcast_address: BROADCAST_ADDRESS,
             host_address: HOST_ADDRESS,
+            replies_addressed: true,
             transactions: rt::Transactions {
                 response_timeout_us: rt::None,
                 turnaround_us: rt::Some(500u32),

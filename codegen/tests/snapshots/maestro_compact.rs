@@ -530,6 +530,7 @@ pub mod maestro_compact {
             device_addresses: DEVICE_ADDRESSES,
             broadcast_address: BROADCAST_ADDRESS,
             host_address: HOST_ADDRESS,
+            replies_addressed: false,
             transactions: rt::Transactions::UNDECLARED,
         };
         const MAX_FRAME_LEN: usize = MAX_FRAME_LEN;

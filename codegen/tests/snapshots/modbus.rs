@@ -2517,6 +2517,7 @@ pub mod modbus {
             device_addresses: DEVICE_ADDRESSES,
             broadcast_address: BROADCAST_ADDRESS,
             host_address: HOST_ADDRESS,
+            replies_addressed: true,
             transactions: rt::Transactions {
                 response_timeout_us: rt::Some(1000000u32),
                 turnaround_us: rt::Some(100000u32),

@@ -3798,6 +3798,7 @@ pub mod sd {
             device_addresses: DEVICE_ADDRESSES,
             broadcast_address: BROADCAST_ADDRESS,
             host_address: HOST_ADDRESS,
+            replies_addressed: true,
             transactions: rt::Transactions {
                 response_timeout_us: rt::None,
                 turnaround_us: rt::None,

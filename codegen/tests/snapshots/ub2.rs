@@ -2661,6 +2661,7 @@ pub mod ub2 {
             device_addresses: DEVICE_ADDRESSES,
             broadcast_address: BROADCAST_ADDRESS,
             host_address: HOST_ADDRESS,
+            replies_addressed: true,
             transactions: rt::Transactions {
                 response_timeout_us: rt::None,
                 turnaround_us: rt::None,
