@@ -339,6 +339,33 @@ pub trait Framing {
         let _ = head;
         VarLens::NONE
     }
+
+    /// Whether `frame` decodes as a request: [`Protocol::decode_request`]'s answer without
+    /// its value (`Ok(())` where it decodes, else the same error). The stream decoder asks it
+    /// where a frame may be either direction, and the answer alone settles it wherever it
+    /// decodes both ways (ambiguous); generated code answers through its borrowed view where
+    /// the direction has one, which checks all the owned decoder checks and copies no list.
+    #[inline]
+    fn request_decodes(frame: &[u8]) -> Result<(), DecodeError>
+    where
+        Self: Protocol,
+    {
+        Self::decode_request(frame).map(|_| ())
+    }
+
+    /// [`Protocol::decode_response_over`]'s answer without its value, as
+    /// [`Self::request_decodes`] gives [`Protocol::decode_request`]'s.
+    #[inline]
+    fn response_decodes(
+        frame: &[u8],
+        request: Option<&<Self as Protocol>::Request>,
+        covered: Option<&[u8]>,
+    ) -> Result<(), DecodeError>
+    where
+        Self: Protocol,
+    {
+        Self::decode_response_over(frame, request, covered).map(|_| ())
+    }
 }
 
 /// Where a protocol's code came from ([`Protocol::SOURCE`]).

@@ -813,6 +813,25 @@ impl<C: Protocol> Core<C> {
         C::decode_response_for(frame, None)
     }
 
+    /// Whether [`Self::response`] decodes `frame` (`Ok(())`, else the same error), by the
+    /// same route, without the value
+    /// ([`Framing::response_decodes`](crate::Framing::response_decodes)).
+    #[inline(always)]
+    fn response_decodes(&self, frame: &[u8]) -> Result<(), DecodeError> {
+        let covered = if C::OVER_REQUEST {
+            self.covered()
+        } else {
+            None
+        };
+        if let Some(r) = self.last_request.as_ref().or(self.default_request.as_ref()) {
+            return match C::response_decodes(frame, Some(r), covered) {
+                Ok(()) => Ok(()),
+                Err(_) => C::response_decodes(frame, None, covered),
+            };
+        }
+        C::response_decodes(frame, None, covered)
+    }
+
     /// Keeps the bytes request `frame`'s checksum covers, where a reply's checksum may take
     /// them in ([`Framing::OVER_REQUEST`]; nothing for any other protocol).
     #[inline(always)]
@@ -1021,31 +1040,38 @@ impl<C: Protocol> Core<C> {
             }
             // Both directions at one length (a Modbus echo, a Dynamixel instruction that also
             // reads as a status packet): `try_frame`'s decision, each event written where it
-            // is made.
+            // is made. Whether each direction decodes is asked first, without the value
+            // (`Framing::request_decodes`, `response_decodes`: a view's check, no list
+            // copied), which settles a frame that decodes both ways; the value is decoded
+            // only for the one direction that decodes.
             let Some(frame) = window.get(..len) else {
                 slow!()
             };
             let offset = self.head;
-            let as_request = C::decode_request(frame);
-            let as_response = self.response(frame);
-            match as_request {
-                Ok(d) => {
-                    if let Ok(_) | Err(DecodeError::Ambiguous { .. }) = as_response {
-                        let code = both_ways_code(window.get(..len).unwrap_or_default());
+            match C::request_decodes(frame) {
+                Ok(()) => match self.response_decodes(frame) {
+                    Ok(()) | Err(DecodeError::Ambiguous { .. }) => {
+                        let code = both_ways_code(frame);
                         settle!(None, len, Event::Ambiguous { offset, len, code });
                     }
-                    self.keep_span(frame);
-                    settle!(
-                        Some(d.message),
-                        len,
-                        Event::Request {
-                            offset,
-                            len,
-                            frame: d
+                    Err(_) => match C::decode_request(frame) {
+                        Ok(d) => {
+                            self.keep_span(frame);
+                            settle!(
+                                Some(d.message),
+                                len,
+                                Event::Request {
+                                    offset,
+                                    len,
+                                    frame: d
+                                }
+                            );
                         }
-                    );
-                }
-                Err(q) => match as_response {
+                        // Never: the check and the decoding agree.
+                        Err(_) => slow!(),
+                    },
+                },
+                Err(q) => match self.response(frame) {
                     Ok(frame) => settle!(None, len, Event::Response { offset, len, frame }),
                     Err(DecodeError::Ambiguous { code, .. }) => {
                         settle!(None, len, Event::Ambiguous { offset, len, code })

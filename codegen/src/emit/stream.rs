@@ -310,6 +310,37 @@ pub(super) fn emit_stream(p: &Protocol) -> TokenStream {
             quote!(),
         )
     };
+    // Whether a frame decodes, without its value, through the direction's borrowed view where
+    // it has one (no list copied): what the stream decoder asks of a frame that may be either
+    // direction. Without a view, the trait's default (the owned decoder).
+    let request_decodes = if no_view(p, Direction::Request).is_none() {
+        quote! {
+            #[inline]
+            fn request_decodes(frame: &[u8]) -> rt::Result<(), rt::DecodeError> {
+                RequestView::decode(frame).map(|_| ())
+            }
+        }
+    } else {
+        quote!()
+    };
+    let response_decodes = if no_view(p, Direction::Response).is_some() {
+        quote!()
+    } else if p.has_over_request() {
+        quote! {
+            #[inline]
+            fn response_decodes(frame: &[u8], request: rt::Option<&Request>, covered: rt::Option<&[u8]>) -> rt::Result<(), rt::DecodeError> {
+                ResponseView::decode_over(frame, request, covered).map(|_| ())
+            }
+        }
+    } else {
+        quote! {
+            #[inline]
+            fn response_decodes(frame: &[u8], request: rt::Option<&Request>, _covered: rt::Option<&[u8]>) -> rt::Result<(), rt::DecodeError> {
+                ResponseView::decode_for(frame, request).map(|_| ())
+            }
+        }
+    };
+    let view_fns = quote!(#request_decodes #response_decodes);
     let skip_preamble = if p.framing.preamble.is_some() {
         quote!(let frame = PREAMBLE.skip(frame);)
     } else {
@@ -505,6 +536,7 @@ pub(super) fn emit_stream(p: &Protocol) -> TokenStream {
             const FRAME_LENGTHS: &'static [usize] = &[#(#lens),*];
             #span
             #framing_fns
+            #view_fns
         }
         /// A streaming decoder for this protocol: see [`busspec_runtime::stream`].
         pub type StreamDecoder = ::busspec_runtime::stream::StreamDecoder<#ty>;

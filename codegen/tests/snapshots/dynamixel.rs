@@ -1131,6 +1131,18 @@ pub mod dynamixel {
                 ),
             }
         }
+        #[inline]
+        fn request_decodes(frame: &[u8]) -> rt::Result<(), rt::DecodeError> {
+            RequestView::decode(frame).map(|_| ())
+        }
+        #[inline]
+        fn response_decodes(
+            frame: &[u8],
+            request: rt::Option<&Request>,
+            _covered: rt::Option<&[u8]>,
+        ) -> rt::Result<(), rt::DecodeError> {
+            ResponseView::decode_for(frame, request).map(|_| ())
+        }
     }
     /// A streaming decoder for this protocol: see [`busspec_runtime::stream`].
     pub type StreamDecoder = ::busspec_runtime::stream::StreamDecoder<Dynamixel>;

@@ -712,6 +712,10 @@ pub mod rtcm3_frame {
                 responses: rt::VarLen::NONE,
             }
         }
+        #[inline]
+        fn request_decodes(frame: &[u8]) -> rt::Result<(), rt::DecodeError> {
+            RequestView::decode(frame).map(|_| ())
+        }
     }
     /// A streaming decoder for this protocol: see [`busspec_runtime::stream`].
     pub type StreamDecoder = ::busspec_runtime::stream::StreamDecoder<Rtcm3Frame>;

@@ -1121,6 +1121,10 @@ pub mod ubx_fixed_blocks {
                 ),
             }
         }
+        #[inline]
+        fn request_decodes(frame: &[u8]) -> rt::Result<(), rt::DecodeError> {
+            RequestView::decode(frame).map(|_| ())
+        }
     }
     /// A streaming decoder for this protocol: see [`busspec_runtime::stream`].
     pub type StreamDecoder = ::busspec_runtime::stream::StreamDecoder<UbxFixedBlocks>;
