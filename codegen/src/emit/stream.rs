@@ -340,7 +340,25 @@ pub(super) fn emit_stream(p: &Protocol) -> TokenStream {
             }
         }
     };
+    let views =
+        if no_view(p, Direction::Request).is_none() || no_view(p, Direction::Response).is_none() {
+            quote!(
+                const VIEWS: bool = true;
+            )
+        } else {
+            quote!()
+        };
     let view_fns = quote!(#request_decodes #response_decodes);
+    // No response only its request tells apart, and none whose checksum takes in its
+    // request's bytes: a response decodes as the reply to any request as on its own, so the
+    // stream decoder need not pair it (`Framing::REPLY_BY_REQUEST`, `true` by default).
+    let by_request = if p.has_over_request() || p.responses.iter().any(|m| m.needs_request) {
+        quote!()
+    } else {
+        quote!(
+            const REPLY_BY_REQUEST: bool = false;
+        )
+    };
     let skip_preamble = if p.framing.preamble.is_some() {
         quote!(let frame = PREAMBLE.skip(frame);)
     } else {
@@ -535,6 +553,8 @@ pub(super) fn emit_stream(p: &Protocol) -> TokenStream {
             const MAX_RESPONSE_LEN: usize = MAX_RESPONSE_LEN;
             const FRAME_LENGTHS: &'static [usize] = &[#(#lens),*];
             #span
+            #by_request
+            #views
             #framing_fns
             #view_fns
         }

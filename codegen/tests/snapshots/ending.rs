@@ -871,6 +871,8 @@ pub mod ending {
         ];
         type Span = [u8; 0];
         const EMPTY_SPAN: [u8; 0] = [];
+        const REPLY_BY_REQUEST: bool = false;
+        const VIEWS: bool = true;
         #[inline]
         fn candidates(head: &[u8]) -> rt::Candidates {
             if head.first().is_some_and(|&b| b != 0xA5) {

@@ -1191,6 +1191,7 @@ pub mod jbd_bms {
         const FRAME_LENGTHS: &'static [usize] = &[7];
         type Span = [u8; 0];
         const EMPTY_SPAN: [u8; 0] = [];
+        const VIEWS: bool = true;
         #[inline]
         fn candidates(head: &[u8]) -> rt::Candidates {
             if head.first().is_some_and(|&b| b != 0xDD) {

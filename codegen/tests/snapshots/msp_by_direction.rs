@@ -718,6 +718,8 @@ pub mod msp_by_direction {
         const FRAME_LENGTHS: &'static [usize] = &[12, 9, 6];
         type Span = [u8; 0];
         const EMPTY_SPAN: [u8; 0] = [];
+        const REPLY_BY_REQUEST: bool = false;
+        const VIEWS: bool = true;
         #[inline]
         fn candidates(head: &[u8]) -> rt::Candidates {
             let requests_agree = head.first().map_or(true, |&b| b == 0x24)

@@ -1012,6 +1012,8 @@ pub mod text_terminated {
         const FRAME_LENGTHS: &'static [usize] = &[5, 4];
         type Span = [u8; 0];
         const EMPTY_SPAN: [u8; 0] = [];
+        const REPLY_BY_REQUEST: bool = false;
+        const VIEWS: bool = true;
         #[inline]
         fn candidates(head: &[u8]) -> rt::Candidates {
             if head.first().is_some_and(|&b| b != 0xC8) {
