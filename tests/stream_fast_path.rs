@@ -398,3 +398,67 @@ fn every_head_of_captures_fast_path_is_the_rule() {
     run::<Crsf>(27);
     run::<Dynamixel2>(28);
 }
+
+/// Where a protocol's generated `Framing::REPLY_BY_REQUEST` is `false` (the stream decoder then
+/// keeps no request and decodes every response on its own), its claim: a frame that decodes
+/// as the reply to a request decodes on its own to the same, and none is ambiguous on its own.
+/// Every request of the spec's examples against the examples and random frames of both
+/// directions. Where it is `true`, some response needs its request (or its request's bytes).
+#[test]
+fn a_reply_decodes_as_on_its_own_where_no_response_needs_its_request() {
+    fn run<P: Protocol>(seed: u64) -> bool {
+        let p = spec::<P>();
+        let by_request = <P as busspec_protocols::Framing>::REPLY_BY_REQUEST;
+        assert_eq!(
+            by_request,
+            p.responses
+                .iter()
+                .any(|m| m.needs_request || m.over_request.is_some()),
+            "{}",
+            P::NAME
+        );
+        if by_request {
+            return false;
+        }
+        let requests: Vec<P::Request> = p
+            .examples
+            .iter()
+            .filter_map(|e| P::decode_request(&e.wire).ok().map(|d| d.message))
+            .collect();
+        assert!(!requests.is_empty(), "{}", P::NAME);
+        let mut rng = fastrand::Rng::with_seed(seed);
+        let mut frames: Vec<Vec<u8>> = p.examples.iter().map(|e| e.wire.clone()).collect();
+        frames.extend((0..20_000).map(|_| random_input(&p, &mut rng)));
+        let mut paired = 0;
+        for f in &frames {
+            let alone = P::decode_response(f);
+            assert!(
+                !matches!(alone, Err(busspec_protocols::DecodeError::Ambiguous { .. })),
+                "{}: {f:02X?}",
+                P::NAME
+            );
+            for q in &requests {
+                if let Ok(d) = P::decode_reply(f, q) {
+                    assert_eq!(Ok(d), alone, "{}: {f:02X?} after {q:?}", P::NAME);
+                    paired += 1;
+                }
+            }
+        }
+        assert!(paired > 0, "{}", P::NAME);
+        true
+    }
+    let unpaired = [
+        run::<Ub2>(31),
+        run::<Sd>(32),
+        run::<Modbus>(33),
+        run::<Dynamixel>(34),
+        run::<PelcoD>(35),
+        run::<PelcoP>(36),
+        run::<Crsf>(37),
+        run::<Dynamixel2>(38),
+    ];
+    // UB2, Modbus, Dynamixel 1.0 among them; SD (replies only the request tells apart) and
+    // Pelco D (a reply's checksum over its request's bytes) not.
+    assert_eq!(unpaired.iter().filter(|&&u| u).count(), 5, "{unpaired:?}");
+    assert!(unpaired[0] && !unpaired[1] && unpaired[2] && unpaired[3] && !unpaired[4]);
+}

@@ -827,7 +827,22 @@ pub fn var_by_length(head: &[u8], shapes: &[(Fixed, usize, usize)], field: Lengt
 /// not buffered yet.
 #[inline(always)]
 pub fn var_by_count(head: &[u8], shapes: &[(Fixed, RepeatAt)]) -> VarLen {
-    first_agreeing(head, shapes, |r| r.frame_len(head))
+    // Written out rather than through `first_agreeing`: its closure was not inlined, so
+    // every head paid a call and a count read generic over the repeat (Modbus: 62
+    // instructions where a count field agreed); inlined, each shape's constants fold.
+    let mut wait = false;
+    for (fixed, r) in shapes {
+        match fixed.agrees(head) {
+            Some(true) => return VarLen::of(r.frame_len_inline(head)),
+            Some(false) => {}
+            None => wait = true,
+        }
+    }
+    if wait {
+        VarLen::NEED_MORE
+    } else {
+        VarLen::NONE
+    }
 }
 
 /// How a variable-length message counted by fields gives its frame's length: one repeated

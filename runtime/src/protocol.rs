@@ -297,6 +297,13 @@ pub trait Framing {
     /// the stream decoder then keeps the bytes each request's checksum covers
     /// ([`Protocol::request_span`]) in a [`Self::Span`] for the reply after it.
     const OVER_REQUEST: bool = false;
+    /// Whether a response's decoding may depend on the request before it: some response only
+    /// its request tells apart from another (`needs_request`), or [`Self::OVER_REQUEST`].
+    /// Where not (`false`, generated for such a protocol), a frame decodes as the reply to any
+    /// request exactly as it decodes on its own, or is refused as the reply and decodes on its
+    /// own all the same, so the stream decoder neither keeps the last request nor asks it.
+    /// `true` (the default) pairs every response.
+    const REPLY_BY_REQUEST: bool = true;
     /// Room for those bytes: `[u8; MAX_REQUEST_LEN]` where [`Self::OVER_REQUEST`], else
     /// `[u8; 0]`.
     type Span: AsRef<[u8]> + AsMut<[u8]> + Copy + core::fmt::Debug;
@@ -338,6 +345,40 @@ pub trait Framing {
     fn variable_candidates(head: &[u8]) -> VarLens {
         let _ = head;
         VarLens::NONE
+    }
+
+    /// Whether [`Self::request_decodes`] or [`Self::response_decodes`] answers through a
+    /// borrowed view (generated where a direction has one), cheaper than the owned decoding:
+    /// the stream decoder then asks them first of a frame that may be either direction, and
+    /// decodes the value only of the one direction that decodes. `false` by default: each
+    /// direction decoded once.
+    const VIEWS: bool = false;
+
+    /// Whether `frame` decodes as a request: [`Protocol::decode_request`]'s answer without
+    /// its value (`Ok(())` where it decodes, else the same error). The stream decoder asks it
+    /// where a frame may be either direction, and the answer alone settles it wherever it
+    /// decodes both ways (ambiguous); generated code answers through its borrowed view where
+    /// the direction has one, which checks all the owned decoder checks and copies no list.
+    #[inline]
+    fn request_decodes(frame: &[u8]) -> Result<(), DecodeError>
+    where
+        Self: Protocol,
+    {
+        Self::decode_request(frame).map(|_| ())
+    }
+
+    /// [`Protocol::decode_response_over`]'s answer without its value, as
+    /// [`Self::request_decodes`] gives [`Protocol::decode_request`]'s.
+    #[inline]
+    fn response_decodes(
+        frame: &[u8],
+        request: Option<&<Self as Protocol>::Request>,
+        covered: Option<&[u8]>,
+    ) -> Result<(), DecodeError>
+    where
+        Self: Protocol,
+    {
+        Self::decode_response_over(frame, request, covered).map(|_| ())
     }
 }
 

@@ -504,7 +504,7 @@ pub struct CountField {
 
 impl CountField {
     /// Its value in `frame` (`None` if the frame does not reach it).
-    #[inline]
+    #[inline(always)]
     pub fn read(&self, frame: &[u8]) -> Option<u64> {
         let b = frame.get(self.at..self.at + self.width)?;
         Some(crate::codec::uint(b, self.le))
@@ -800,6 +800,13 @@ impl RepeatAt {
     /// no frame has: the stream decoder then drops a byte and resynchronises.
     #[inline]
     pub fn frame_len(&self, head: &[u8]) -> Option<usize> {
+        self.frame_len_inline(head)
+    }
+
+    /// [`Self::frame_len`], always inlined: where the repeat is a constant (the generated
+    /// `variable_candidates`), its arithmetic folds.
+    #[inline(always)]
+    pub(crate) fn frame_len_inline(&self, head: &[u8]) -> Option<usize> {
         let (c, bytes) = match self.count {
             CountBy::Delimited(end) => return self.delimited_len(head, end),
             CountBy::End | CountBy::EndSized(_) | CountBy::Until(_) => return None,

@@ -755,7 +755,7 @@ impl<C: Protocol> Core<C> {
         };
         let found = match (as_request, as_response) {
             (Some(request), None) => {
-                self.last_request = Some(request.message);
+                self.remember(Some(request.message));
                 self.keep_span(frame);
                 Found::Request(request)
             }
@@ -804,13 +804,75 @@ impl<C: Protocol> Core<C> {
             }
             return C::decode_response_over(frame, None, covered);
         }
-        if let Some(r) = self.last_request.as_ref().or(self.default_request.as_ref()) {
+        // Where the reply to any request decodes as on its own (`Framing::REPLY_BY_REQUEST`),
+        // no request is kept, and a default one is not asked.
+        let paired = if C::REPLY_BY_REQUEST {
+            self.last_request.as_ref().or(self.default_request.as_ref())
+        } else {
+            None
+        };
+        if let Some(r) = paired {
             return match C::decode_response_for(frame, Some(r)) {
                 Ok(d) => Ok(d),
                 Err(_) => Self::not_the_reply(frame),
             };
         }
         C::decode_response_for(frame, None)
+    }
+
+    /// Whether [`Self::response`] decodes `frame` (`Ok(())`, else the same error), by the
+    /// same route, without the value
+    /// ([`Framing::response_decodes`](crate::Framing::response_decodes)).
+    #[inline(always)]
+    fn response_decodes(&self, frame: &[u8]) -> Result<(), DecodeError> {
+        if !C::REPLY_BY_REQUEST && !C::OVER_REQUEST {
+            return C::response_decodes(frame, None, None);
+        }
+        let covered = if C::OVER_REQUEST {
+            self.covered()
+        } else {
+            None
+        };
+        if let Some(r) = self.last_request.as_ref().or(self.default_request.as_ref()) {
+            return match C::response_decodes(frame, Some(r), covered) {
+                Ok(()) => Ok(()),
+                Err(_) => C::response_decodes(frame, None, covered),
+            };
+        }
+        C::response_decodes(frame, None, covered)
+    }
+
+    /// The request the next response pairs with, after a frame (`None` after any but a
+    /// request); not kept where no response's decoding depends on it
+    /// ([`Framing::REPLY_BY_REQUEST`](crate::Framing::REPLY_BY_REQUEST)), which saves copying
+    /// every request (Modbus: a request is 250 bytes).
+    #[inline(always)]
+    fn remember(&mut self, request: Option<C::Request>) {
+        if C::REPLY_BY_REQUEST || C::OVER_REQUEST {
+            self.last_request = request;
+        }
+    }
+
+    /// Whether `frame`, of both directions' candidates at one length, decodes as a request
+    /// (`Ok`, else the request's error) and then also as a response ([`Self::response`]
+    /// decodes it or finds it ambiguous: `Ok(true)`, a frame ambiguous both ways), asked
+    /// without the values ([`Framing::request_decodes`](crate::Framing::request_decodes),
+    /// [`Self::response_decodes`]).
+    #[inline(always)]
+    fn decodes_both_ways(&self, frame: &[u8]) -> Result<bool, DecodeError> {
+        C::request_decodes(frame)?;
+        Ok(matches!(
+            self.response_decodes(frame),
+            Ok(()) | Err(DecodeError::Ambiguous { .. })
+        ))
+    }
+
+    /// [`Self::decodes_both_ways`] out of line, where no view answers (the checks are the
+    /// owned decoders): UB2's loop compiled worse with them in it (156.0 -> 157.9
+    /// instructions a frame).
+    #[inline(never)]
+    fn decodes_both_ways_apart(&self, frame: &[u8]) -> Result<bool, DecodeError> {
+        self.decodes_both_ways(frame)
     }
 
     /// Keeps the bytes request `frame`'s checksum covers, where a reply's checksum may take
@@ -878,7 +940,7 @@ impl<C: Protocol> Core<C> {
         // head past it, its event handed to `emit`.
         macro_rules! settle {
             ($last:expr, $len:expr, $event:expr) => {{
-                self.last_request = $last;
+                self.remember($last);
                 self.pass(window, $len);
                 return emit(self, acc, $event);
             }};
@@ -921,7 +983,7 @@ impl<C: Protocol> Core<C> {
                     // decoding. Where one frame length is the route (SD: 129.1 -> 127.6
                     // instructions a frame); UB2's route compiles worse with it (148.4 ->
                     // 153.3), so there the frame is decoded on its own out of line.
-                    let reply = if !$defer {
+                    let reply = if !$defer || !(C::REPLY_BY_REQUEST || C::OVER_REQUEST) {
                         self.response(frame)
                     } else {
                         match self.last_request.as_ref().or(self.default_request.as_ref()) {
@@ -1021,31 +1083,41 @@ impl<C: Protocol> Core<C> {
             }
             // Both directions at one length (a Modbus echo, a Dynamixel instruction that also
             // reads as a status packet): `try_frame`'s decision, each event written where it
-            // is made.
+            // is made. Whether each direction decodes is asked first, without the value
+            // (`Framing::request_decodes`, `response_decodes`: a view's check, no list
+            // copied), which settles a frame that decodes both ways; the value is decoded
+            // only for the one direction that decodes.
             let Some(frame) = window.get(..len) else {
                 slow!()
             };
             let offset = self.head;
-            let as_request = C::decode_request(frame);
-            let as_response = self.response(frame);
-            match as_request {
-                Ok(d) => {
-                    if let Ok(_) | Err(DecodeError::Ambiguous { .. }) = as_response {
-                        let code = both_ways_code(window.get(..len).unwrap_or_default());
-                        settle!(None, len, Event::Ambiguous { offset, len, code });
-                    }
-                    self.keep_span(frame);
-                    settle!(
-                        Some(d.message),
-                        len,
-                        Event::Request {
-                            offset,
-                            len,
-                            frame: d
-                        }
-                    );
+            let both = if C::VIEWS {
+                self.decodes_both_ways(frame)
+            } else {
+                self.decodes_both_ways_apart(frame)
+            };
+            match both {
+                Ok(true) => {
+                    let code = both_ways_code(frame);
+                    settle!(None, len, Event::Ambiguous { offset, len, code });
                 }
-                Err(q) => match as_response {
+                Ok(false) => match C::decode_request(frame) {
+                    Ok(d) => {
+                        self.keep_span(frame);
+                        settle!(
+                            Some(d.message),
+                            len,
+                            Event::Request {
+                                offset,
+                                len,
+                                frame: d
+                            }
+                        );
+                    }
+                    // Never: the check and the decoding agree.
+                    Err(_) => slow!(),
+                },
+                Err(q) => match self.response(frame) {
                     Ok(frame) => settle!(None, len, Event::Response { offset, len, frame }),
                     Err(DecodeError::Ambiguous { code, .. }) => {
                         settle!(None, len, Event::Ambiguous { offset, len, code })

@@ -324,6 +324,55 @@ pub(super) fn emit_stream(p: &Protocol) -> TokenStream {
             quote!(),
         )
     };
+    // Whether a frame decodes, without its value, through the direction's borrowed view where
+    // it has one (no list copied): what the stream decoder asks of a frame that may be either
+    // direction. Without a view, the trait's default (the owned decoder).
+    let request_decodes = if no_view(p, Direction::Request).is_none() {
+        quote! {
+            #[inline]
+            fn request_decodes(frame: &[u8]) -> rt::Result<(), rt::DecodeError> {
+                RequestView::decode(frame).map(|_| ())
+            }
+        }
+    } else {
+        quote!()
+    };
+    let response_decodes = if no_view(p, Direction::Response).is_some() {
+        quote!()
+    } else if p.has_over_request() {
+        quote! {
+            #[inline]
+            fn response_decodes(frame: &[u8], request: rt::Option<&Request>, covered: rt::Option<&[u8]>) -> rt::Result<(), rt::DecodeError> {
+                ResponseView::decode_over(frame, request, covered).map(|_| ())
+            }
+        }
+    } else {
+        quote! {
+            #[inline]
+            fn response_decodes(frame: &[u8], request: rt::Option<&Request>, _covered: rt::Option<&[u8]>) -> rt::Result<(), rt::DecodeError> {
+                ResponseView::decode_for(frame, request).map(|_| ())
+            }
+        }
+    };
+    let views =
+        if no_view(p, Direction::Request).is_none() || no_view(p, Direction::Response).is_none() {
+            quote!(
+                const VIEWS: bool = true;
+            )
+        } else {
+            quote!()
+        };
+    let view_fns = quote!(#request_decodes #response_decodes);
+    // No response only its request tells apart, and none whose checksum takes in its
+    // request's bytes: a response decodes as the reply to any request as on its own, so the
+    // stream decoder need not pair it (`Framing::REPLY_BY_REQUEST`, `true` by default).
+    let by_request = if p.has_over_request() || p.responses.iter().any(|m| m.needs_request) {
+        quote!()
+    } else {
+        quote!(
+            const REPLY_BY_REQUEST: bool = false;
+        )
+    };
     let skip_preamble = if p.framing.preamble.is_some() {
         quote!(let frame = PREAMBLE.skip(frame);)
     } else {
@@ -528,7 +577,10 @@ pub(super) fn emit_stream(p: &Protocol) -> TokenStream {
             const MAX_RESPONSE_LEN: usize = MAX_RESPONSE_LEN;
             const FRAME_LENGTHS: &'static [usize] = &[#(#lens),*];
             #span
+            #by_request
+            #views
             #framing_fns
+            #view_fns
         }
         /// A streaming decoder for this protocol: see [`busspec_runtime::stream`].
         pub type StreamDecoder = ::busspec_runtime::stream::StreamDecoder<#ty>;

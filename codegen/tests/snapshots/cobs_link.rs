@@ -629,6 +629,7 @@ pub mod cobs_link {
         const FRAME_LENGTHS: &'static [usize] = &[];
         type Span = [u8; 0];
         const EMPTY_SPAN: [u8; 0] = [];
+        const REPLY_BY_REQUEST: bool = false;
         #[inline]
         fn candidates(_head: &[u8]) -> rt::Candidates {
             rt::Candidates {

@@ -656,6 +656,7 @@ pub mod crc_extra {
         const FRAME_LENGTHS: &'static [usize] = &[19, 14, 11];
         type Span = [u8; 0];
         const EMPTY_SPAN: [u8; 0] = [];
+        const REPLY_BY_REQUEST: bool = false;
         #[inline]
         fn candidates(head: &[u8]) -> rt::Candidates {
             if head.first().is_some_and(|&b| b != 0xFE) {

@@ -857,6 +857,7 @@ pub mod dlt645 {
         const FRAME_LENGTHS: &'static [usize] = &[22, 20, 18, 16, 12];
         type Span = [u8; 0];
         const EMPTY_SPAN: [u8; 0] = [];
+        const REPLY_BY_REQUEST: bool = false;
         const PREAMBLE: rt::Option<rt::Preamble> = rt::Some(PREAMBLE);
         const TRANSFORM: rt::Option<rt::Transform> = rt::Some(TRANSFORM);
         #[inline]

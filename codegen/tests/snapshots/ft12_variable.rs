@@ -537,6 +537,7 @@ pub mod ft12_variable {
         const FRAME_LENGTHS: &'static [usize] = &[27, 9];
         type Span = [u8; 0];
         const EMPTY_SPAN: [u8; 0] = [];
+        const REPLY_BY_REQUEST: bool = false;
         #[inline]
         fn candidates(head: &[u8]) -> rt::Candidates {
             if head.first().is_some_and(|&b| b != 0x68) {

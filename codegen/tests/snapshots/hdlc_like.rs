@@ -600,6 +600,7 @@ pub mod hdlc_like {
         const FRAME_LENGTHS: &'static [usize] = &[];
         type Span = [u8; 0];
         const EMPTY_SPAN: [u8; 0] = [];
+        const REPLY_BY_REQUEST: bool = false;
         const SHARED_FLAG: rt::Option<u8> = rt::Some(0x7E);
         #[inline]
         fn candidates(_head: &[u8]) -> rt::Candidates {

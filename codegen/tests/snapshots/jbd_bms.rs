@@ -1192,6 +1192,7 @@ pub mod jbd_bms {
         const FRAME_LENGTHS: &'static [usize] = &[7];
         type Span = [u8; 0];
         const EMPTY_SPAN: [u8; 0] = [];
+        const VIEWS: bool = true;
         #[inline]
         fn candidates(head: &[u8]) -> rt::Candidates {
             if head.first().is_some_and(|&b| b != 0xDD) {
@@ -1266,6 +1267,14 @@ pub mod jbd_bms {
                     },
                 ),
             }
+        }
+        #[inline]
+        fn response_decodes(
+            frame: &[u8],
+            request: rt::Option<&Request>,
+            _covered: rt::Option<&[u8]>,
+        ) -> rt::Result<(), rt::DecodeError> {
+            ResponseView::decode_for(frame, request).map(|_| ())
         }
     }
     /// A streaming decoder for this protocol: see [`busspec_runtime::stream`].

@@ -978,6 +978,8 @@ pub mod lists_after {
         ];
         type Span = [u8; 0];
         const EMPTY_SPAN: [u8; 0] = [];
+        const REPLY_BY_REQUEST: bool = false;
+        const VIEWS: bool = true;
         #[inline]
         fn candidates(head: &[u8]) -> rt::Candidates {
             if head.first().is_some_and(|&b| b != 0x7E) {
@@ -1032,6 +1034,18 @@ pub mod lists_after {
                 ),
                 responses: rt::VarLen::NONE,
             }
+        }
+        #[inline]
+        fn request_decodes(frame: &[u8]) -> rt::Result<(), rt::DecodeError> {
+            RequestView::decode(frame).map(|_| ())
+        }
+        #[inline]
+        fn response_decodes(
+            frame: &[u8],
+            request: rt::Option<&Request>,
+            _covered: rt::Option<&[u8]>,
+        ) -> rt::Result<(), rt::DecodeError> {
+            ResponseView::decode_for(frame, request).map(|_| ())
         }
     }
     /// A streaming decoder for this protocol: see [`busspec_runtime::stream`].

@@ -783,6 +783,8 @@ pub mod lists_length {
         const FRAME_LENGTHS: &'static [usize] = &[6];
         type Span = [u8; 0];
         const EMPTY_SPAN: [u8; 0] = [];
+        const REPLY_BY_REQUEST: bool = false;
+        const VIEWS: bool = true;
         #[inline]
         fn candidates(head: &[u8]) -> rt::Candidates {
             if head.first().is_some_and(|&b| b != 0xC5) {
@@ -847,6 +849,10 @@ pub mod lists_length {
                 ),
                 responses: rt::VarLen::NONE,
             }
+        }
+        #[inline]
+        fn request_decodes(frame: &[u8]) -> rt::Result<(), rt::DecodeError> {
+            RequestView::decode(frame).map(|_| ())
         }
     }
     /// A streaming decoder for this protocol: see [`busspec_runtime::stream`].

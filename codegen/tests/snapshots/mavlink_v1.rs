@@ -928,6 +928,7 @@ pub mod mavlink_v1 {
         const FRAME_LENGTHS: &'static [usize] = &[39, 36, 22, 17, 14];
         type Span = [u8; 0];
         const EMPTY_SPAN: [u8; 0] = [];
+        const REPLY_BY_REQUEST: bool = false;
         #[inline]
         fn candidates(head: &[u8]) -> rt::Candidates {
             if head.first().is_some_and(|&b| b != 0xFE) {

@@ -638,6 +638,7 @@ pub mod mbus {
         const FRAME_LENGTHS: &'static [usize] = &[1];
         type Span = [u8; 0];
         const EMPTY_SPAN: [u8; 0] = [];
+        const REPLY_BY_REQUEST: bool = false;
         #[inline]
         fn candidates(head: &[u8]) -> rt::Candidates {
             let _ = head;

@@ -472,6 +472,7 @@ pub mod mbus_short {
         const FRAME_LENGTHS: &'static [usize] = &[5, 1];
         type Span = [u8; 0];
         const EMPTY_SPAN: [u8; 0] = [];
+        const REPLY_BY_REQUEST: bool = false;
         #[inline]
         fn candidates(head: &[u8]) -> rt::Candidates {
             match head.first() {

@@ -719,6 +719,8 @@ pub mod msp_by_direction {
         const FRAME_LENGTHS: &'static [usize] = &[12, 9, 6];
         type Span = [u8; 0];
         const EMPTY_SPAN: [u8; 0] = [];
+        const REPLY_BY_REQUEST: bool = false;
+        const VIEWS: bool = true;
         #[inline]
         fn candidates(head: &[u8]) -> rt::Candidates {
             let requests_agree = head.first().map_or(true, |&b| b == 0x24)
@@ -792,6 +794,14 @@ pub mod msp_by_direction {
                     rt::VarLen::NONE
                 },
             }
+        }
+        #[inline]
+        fn response_decodes(
+            frame: &[u8],
+            request: rt::Option<&Request>,
+            _covered: rt::Option<&[u8]>,
+        ) -> rt::Result<(), rt::DecodeError> {
+            ResponseView::decode_for(frame, request).map(|_| ())
         }
     }
     /// A streaming decoder for this protocol: see [`busspec_runtime::stream`].

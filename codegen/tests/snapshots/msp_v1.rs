@@ -613,6 +613,7 @@ pub mod msp_v1 {
         const FRAME_LENGTHS: &'static [usize] = &[12, 9, 6];
         type Span = [u8; 0];
         const EMPTY_SPAN: [u8; 0] = [];
+        const REPLY_BY_REQUEST: bool = false;
         #[inline]
         fn candidates(head: &[u8]) -> rt::Candidates {
             if head.first().is_some_and(|&b| b != 0x24) {

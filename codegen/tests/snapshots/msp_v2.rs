@@ -596,6 +596,7 @@ pub mod msp_v2 {
         const FRAME_LENGTHS: &'static [usize] = &[13, 12, 9];
         type Span = [u8; 0];
         const EMPTY_SPAN: [u8; 0] = [];
+        const REPLY_BY_REQUEST: bool = false;
         #[inline]
         fn candidates(head: &[u8]) -> rt::Candidates {
             let requests_agree = head.first().map_or(true, |&b| b == 0x24)

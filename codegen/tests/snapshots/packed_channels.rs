@@ -975,6 +975,7 @@ pub mod packed_channels {
         const FRAME_LENGTHS: &'static [usize] = &[40, 12, 11, 7];
         type Span = [u8; 0];
         const EMPTY_SPAN: [u8; 0] = [];
+        const REPLY_BY_REQUEST: bool = false;
         #[inline]
         fn candidates(head: &[u8]) -> rt::Candidates {
             if head.first().is_some_and(|&b| b != 0xC8) {

@@ -610,6 +610,7 @@ pub mod pelco_p {
         const FRAME_LENGTHS: &'static [usize] = &[8];
         type Span = [u8; 0];
         const EMPTY_SPAN: [u8; 0] = [];
+        const REPLY_BY_REQUEST: bool = false;
         #[inline]
         fn candidates(head: &[u8]) -> rt::Candidates {
             if head.first().is_some_and(|&b| b != 0xA0) {

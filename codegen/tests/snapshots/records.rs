@@ -1067,6 +1067,7 @@ pub mod records {
         const FRAME_LENGTHS: &'static [usize] = &[28, 24, 20, 16, 12, 8, 5, 4];
         type Span = [u8; 0];
         const EMPTY_SPAN: [u8; 0] = [];
+        const REPLY_BY_REQUEST: bool = false;
         #[inline]
         fn candidates(head: &[u8]) -> rt::Candidates {
             if head.first().is_some_and(|&b| b != 0x7E) {

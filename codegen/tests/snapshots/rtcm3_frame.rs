@@ -648,6 +648,8 @@ pub mod rtcm3_frame {
         const FRAME_LENGTHS: &'static [usize] = &[];
         type Span = [u8; 0];
         const EMPTY_SPAN: [u8; 0] = [];
+        const REPLY_BY_REQUEST: bool = false;
+        const VIEWS: bool = true;
         #[inline]
         fn candidates(head: &[u8]) -> rt::Candidates {
             if head.first().is_some_and(|&b| b != 0xD3) {
@@ -712,6 +714,10 @@ pub mod rtcm3_frame {
                 ),
                 responses: rt::VarLen::NONE,
             }
+        }
+        #[inline]
+        fn request_decodes(frame: &[u8]) -> rt::Result<(), rt::DecodeError> {
+            RequestView::decode(frame).map(|_| ())
         }
     }
     /// A streaming decoder for this protocol: see [`busspec_runtime::stream`].

@@ -457,6 +457,7 @@ pub mod sync_after_code {
         const FRAME_LENGTHS: &'static [usize] = &[7, 6];
         type Span = [u8; 0];
         const EMPTY_SPAN: [u8; 0] = [];
+        const REPLY_BY_REQUEST: bool = false;
         #[inline]
         fn candidates(head: &[u8]) -> rt::Candidates {
             if head.first().is_some_and(|&b| b != 0x7E) {

@@ -618,6 +618,7 @@ pub mod telemetry_le {
         const FRAME_LENGTHS: &'static [usize] = &[41, 21, 5];
         type Span = [u8; 0];
         const EMPTY_SPAN: [u8; 0] = [];
+        const REPLY_BY_REQUEST: bool = false;
         #[inline]
         fn candidates(head: &[u8]) -> rt::Candidates {
             if head.first().is_some_and(|&b| b != 0xA5) {

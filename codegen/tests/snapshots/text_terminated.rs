@@ -1013,6 +1013,8 @@ pub mod text_terminated {
         const FRAME_LENGTHS: &'static [usize] = &[5, 4];
         type Span = [u8; 0];
         const EMPTY_SPAN: [u8; 0] = [];
+        const REPLY_BY_REQUEST: bool = false;
+        const VIEWS: bool = true;
         #[inline]
         fn candidates(head: &[u8]) -> rt::Candidates {
             if head.first().is_some_and(|&b| b != 0xC8) {
@@ -1099,6 +1101,18 @@ pub mod text_terminated {
                     },
                 ),
             }
+        }
+        #[inline]
+        fn request_decodes(frame: &[u8]) -> rt::Result<(), rt::DecodeError> {
+            RequestView::decode(frame).map(|_| ())
+        }
+        #[inline]
+        fn response_decodes(
+            frame: &[u8],
+            request: rt::Option<&Request>,
+            _covered: rt::Option<&[u8]>,
+        ) -> rt::Result<(), rt::DecodeError> {
+            ResponseView::decode_for(frame, request).map(|_| ())
         }
     }
     /// A streaming decoder for this protocol: see [`busspec_runtime::stream`].

@@ -2715,6 +2715,7 @@ pub mod ub2 {
         const FRAME_LENGTHS: &'static [usize] = &[16, 13, 10, 9, 8, 7, 6, 5, 4];
         type Span = [u8; 0];
         const EMPTY_SPAN: [u8; 0] = [];
+        const REPLY_BY_REQUEST: bool = false;
         #[inline]
         fn candidates(head: &[u8]) -> rt::Candidates {
             if head.first().is_some_and(|&b| b != 0xAA) {

@@ -1038,6 +1038,8 @@ pub mod ubx_fixed_blocks {
         const FRAME_LENGTHS: &'static [usize] = &[10, 8];
         type Span = [u8; 0];
         const EMPTY_SPAN: [u8; 0] = [];
+        const REPLY_BY_REQUEST: bool = false;
+        const VIEWS: bool = true;
         #[inline]
         fn candidates(head: &[u8]) -> rt::Candidates {
             if head.first().is_some_and(|&b| b != 0xB5) {
@@ -1121,6 +1123,10 @@ pub mod ubx_fixed_blocks {
                     },
                 ),
             }
+        }
+        #[inline]
+        fn request_decodes(frame: &[u8]) -> rt::Result<(), rt::DecodeError> {
+            RequestView::decode(frame).map(|_| ())
         }
     }
     /// A streaming decoder for this protocol: see [`busspec_runtime::stream`].

@@ -911,6 +911,7 @@ pub mod ubx_like {
         const FRAME_LENGTHS: &'static [usize] = &[14, 10, 8];
         type Span = [u8; 0];
         const EMPTY_SPAN: [u8; 0] = [];
+        const REPLY_BY_REQUEST: bool = false;
         #[inline]
         fn candidates(head: &[u8]) -> rt::Candidates {
             if head.first().is_some_and(|&b| b != 0xB5) {

@@ -574,6 +574,7 @@ pub mod unaddressed {
         const FRAME_LENGTHS: &'static [usize] = &[9, 7, 5];
         type Span = [u8; 0];
         const EMPTY_SPAN: [u8; 0] = [];
+        const REPLY_BY_REQUEST: bool = false;
         #[inline]
         fn candidates(head: &[u8]) -> rt::Candidates {
             if head.first().is_some_and(|&b| b != 0xA5) {

@@ -1361,6 +1361,7 @@ pub mod vesc {
         const FRAME_LENGTHS: &'static [usize] = &[];
         type Span = [u8; 0];
         const EMPTY_SPAN: [u8; 0] = [];
+        const REPLY_BY_REQUEST: bool = false;
         const LONG: rt::Option<rt::LongLength> = rt::Some(LONG);
         #[inline]
         fn candidates(_head: &[u8]) -> rt::Candidates {

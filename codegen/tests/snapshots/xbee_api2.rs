@@ -1028,6 +1028,7 @@ pub mod xbee_api2 {
         const FRAME_LENGTHS: &'static [usize] = &[];
         type Span = [u8; 0];
         const EMPTY_SPAN: [u8; 0] = [];
+        const REPLY_BY_REQUEST: bool = false;
         #[inline]
         fn candidates(_head: &[u8]) -> rt::Candidates {
             rt::Candidates {
