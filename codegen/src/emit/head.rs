@@ -434,7 +434,7 @@ pub(super) fn emit_unchecked(p: &Protocol) -> TokenStream {
                 usize_lit(m.layout.code + m.code.len()),
             );
             let code = m.code.iter().map(|b| hex_u8(*b));
-            quote!((frame.len() == #len && frame.get(#at..#end) == rt::Some(&[#(#code),*])))
+            quote!(frame.len() == #len && frame.get(#at..#end) == rt::Some(&[#(#code),*]))
         });
         let name = unchecked_fn(d);
         let body = quote!(#(#tests)||*);

@@ -158,13 +158,13 @@ pub mod roboclaw {
     /// Whether `frame` is a request that travels without a checksum (`checksum: none`), by its code and length.
     #[inline]
     fn unchecked_request(frame: &[u8]) -> bool {
-        (frame.len() == 2 && frame.get(1..2) == rt::Some(&[0x10]))
-            || (frame.len() == 2 && frame.get(1..2) == rt::Some(&[0x12]))
-            || (frame.len() == 2 && frame.get(1..2) == rt::Some(&[0x18]))
-            || (frame.len() == 2 && frame.get(1..2) == rt::Some(&[0x19]))
-            || (frame.len() == 2 && frame.get(1..2) == rt::Some(&[0x31]))
-            || (frame.len() == 2 && frame.get(1..2) == rt::Some(&[0x52]))
-            || (frame.len() == 2 && frame.get(1..2) == rt::Some(&[0x5A]))
+        frame.len() == 2 && frame.get(1..2) == rt::Some(&[0x10])
+            || frame.len() == 2 && frame.get(1..2) == rt::Some(&[0x12])
+            || frame.len() == 2 && frame.get(1..2) == rt::Some(&[0x18])
+            || frame.len() == 2 && frame.get(1..2) == rt::Some(&[0x19])
+            || frame.len() == 2 && frame.get(1..2) == rt::Some(&[0x31])
+            || frame.len() == 2 && frame.get(1..2) == rt::Some(&[0x52])
+            || frame.len() == 2 && frame.get(1..2) == rt::Some(&[0x5A])
     }
     /// Whether `frame` is a response that travels without a checksum (`checksum: none`), by its code and length.
     #[inline]
