@@ -714,6 +714,18 @@ fn checksum_extras(
     }
 }
 
+/// Whether frames of `a` and `b` are told apart by code and length alone, before any
+/// checksum is checked: their lengths cannot meet, their codes differ where both sit, or one is
+/// a constant whole frame.
+fn told_apart(a: &Message, b: &Message) -> bool {
+    let overlap = a.layout.len <= b.max_len && b.layout.len <= a.max_len;
+    let coded = !a.code.is_empty()
+        && a.code.len() == b.code.len()
+        && a.layout.code == b.layout.code
+        && a.code != b.code;
+    !overlap || coded || a.frame.is_some() || b.frame.is_some()
+}
+
 /// Messages that travel without the framing's checksum (`checksum: none`): their layout ends
 /// where the checksum would begin. Each has one length and is told apart from every message
 /// with a checksum by its code and length alone, which is how both engines find it before any
@@ -805,14 +817,7 @@ fn unchecked_messages(
     // Told apart by code and length alone from every message with a checksum.
     let all: Vec<&Message> = commands.iter().chain(responses.iter()).collect();
     for m in all.iter().filter(|m| m.unchecked) {
-        let clash = all.iter().find(|x| {
-            let overlap = x.layout.len <= m.layout.len && m.layout.len <= x.max_len;
-            let coded = !m.code.is_empty()
-                && m.code.len() == x.code.len()
-                && m.layout.code == x.layout.code
-                && m.code != x.code;
-            !x.unchecked && x.frame.is_none() && overlap && !coded
-        });
+        let clash = all.iter().find(|x| !x.unchecked && !told_apart(m, x));
         if let Some(x) = clash {
             let list = match m.direction {
                 Direction::Request => "commands",
@@ -912,14 +917,7 @@ fn over_requests(
         }
     }
     // Told apart by code and length alone from every message of another rule.
-    let apart = |a: &Message, b: &Message| {
-        let overlap = a.layout.len <= b.max_len && b.layout.len <= a.max_len;
-        let coded = !a.code.is_empty()
-            && a.code.len() == b.code.len()
-            && a.layout.code == b.layout.code
-            && a.code != b.code;
-        !overlap || coded || a.frame.is_some() || b.frame.is_some()
-    };
+    let apart = told_apart;
     for (i, m) in responses.iter().enumerate() {
         if m.over_request.is_none() {
             continue;
