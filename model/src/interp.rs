@@ -772,21 +772,26 @@ impl Limits {
             Some(Direction::Response) => &[Direction::Response],
             None => &[Direction::Request, Direction::Response],
         };
+        // One pass over the messages: the longest and shortest frames, and the shortest with
+        // a checksum (the same where every message has one).
+        let (mut longest_frame, mut shortest, mut checked) = (0, usize::MAX, usize::MAX);
+        for m in directions.iter().flat_map(|d| p.framed(*d)) {
+            let min = m.min_len();
+            longest_frame = longest_frame.max(m.max_len);
+            shortest = shortest.min(min);
+            if !m.unchecked {
+                checked = checked.min(min);
+            }
+        }
         Limits {
             directions,
-            longest_frame: directions
-                .iter()
-                .flat_map(|d| p.framed(*d))
-                .map(|m| m.max_len)
-                .max()
-                .unwrap_or(0),
-            shortest: directions
-                .iter()
-                .flat_map(|d| p.framed(*d))
-                .map(Message::min_len)
-                .min()
-                .unwrap_or(0),
-            shortest_checked: shortest_checked(p, directions),
+            longest_frame,
+            shortest: if shortest == usize::MAX { 0 } else { shortest },
+            shortest_checked: if checked == usize::MAX {
+                shortest_checked(p, directions)
+            } else {
+                checked
+            },
             min_code: directions
                 .iter()
                 .flat_map(|d| p.framing.direction(*d).code_lengths.iter().copied())
