@@ -1,5 +1,7 @@
 use super::*;
 
+/// A direction's enum (`Request` or `Response`) and its impls, each message's struct (pushed
+/// to `ctx.structs`, emitted in the direction's module), the lists' and records' descriptors.
 pub(super) fn emit_messages(ctx: &Ctx, d: Direction) -> TokenStream {
     let p = ctx.p;
     let (ty, what) = direction_names(d);
@@ -29,49 +31,10 @@ pub(super) fn emit_messages(ctx: &Ctx, d: Direction) -> TokenStream {
     for (i, m) in msgs.iter().enumerate() {
         let v = variant(m);
         let ls = leaves(m);
-        let fields = ls.iter().map(|l| {
-            let n = ident(l.name);
-            let t = ctx.rust_type(l);
-            let mut d = leaf_doc(p, l);
-            // An optional field: `None` where its condition does not hold.
-            let t = match l.field.present.as_ref().filter(|_| l.bits.is_none()) {
-                Some(c) => {
-                    d.push_str(&format!(
-                        " On the wire only when {}; `None` where it is not.",
-                        condition_text(m, c)
-                    ));
-                    quote!(rt::Option<#t>)
-                }
-                None => t,
-            };
-            let d = doc(d.trim());
-            let t = in_parent(t);
-            quote!(#d pub #n: #t)
-        });
-        let size = match len_range(m) {
-            (lo, hi) if lo == hi => format!("{lo} bytes"),
-            (lo, hi) => format!("{lo} to {hi} bytes"),
-        };
-        let d_of = m.direction;
-        let d = match &m.frame {
-            Some(bytes) => doc(&format!(
-                "§{} {} (constant frame `{}`, {size}). {}",
-                m.section,
-                m.title,
-                hex_spaced(bytes),
-                m.doc
-            )),
-            None => doc(&format!(
-                "§{} {} (code `{}`, {size}). {}",
-                m.section,
-                m.title,
-                m.code_hex(),
-                m.doc
-            )),
-        };
-        let dm = direction_module(d_of);
+        let dm = direction_module(m.direction);
         variants.push(quote!(#v(#dm::#v)));
-        structs.push(message_struct(ctx, m, &ls, d, fields.collect()));
+        let (doc, fields) = (message_doc(m), struct_fields(ctx, m, &ls));
+        structs.push(message_struct(ctx, m, &ls, doc, fields));
         let name = &m.name;
         let code = m.code.iter().map(|b| hex_u8(*b));
         let len = p.frame_len(m);
@@ -89,77 +52,8 @@ pub(super) fn emit_messages(ctx: &Ctx, d: Direction) -> TokenStream {
             continue;
         }
         encode_arms.push(emit_encode_arm(ctx, m, &pattern, &ls, one_len.is_some()));
-        if m.has_optional() {
-            // The frame as long as the optional fields given make it.
-            let c = optional_const(m);
-            let given = m.optionals().map(|(_, f, _)| {
-                let n = ident(&f.name);
-                quote!(m.#n.is_some())
-            });
-            len_arms.push(quote!(Self::#v(m) => #c.frame_len(&[#(#given),*])));
-        } else if has_lists(m) {
-            let c = lists_const(m);
-            let sum = m.repeats().enumerate().map(|(k, (_, f, _))| {
-                let (n, k) = (ident(&f.name), usize_lit(k));
-                quote!(#c.lists[#k].bytes_of(m.#n.len()))
-            });
-            len_arms.push(quote!(Self::#v(m) => #c.base #(+ #sum)*));
-        } else if let Some((f, _)) = m.repeat() {
-            let (n, c) = (ident(&f.name), repeat_const(m));
-            let sized = sized_record(m, f).and_then(|(wf, fixed, _)| {
-                let wl = ls
-                    .iter()
-                    .find(|l| std::ptr::eq(l.field, wf) && l.bits.is_none())?;
-                let wn = ident(wl.name);
-                Some((raw_of(ctx, wl, &quote!(m.#wn))?.1, fixed))
-            });
-            match sized {
-                Some((raw, fixed)) => {
-                    // Each record as wide as its width field says.
-                    let fixed = usize_lit(fixed);
-                    len_arms.push(
-                        quote!(Self::#v(m) => #c.base + m.#n.len() * (#fixed + (#raw) as usize)),
-                    );
-                }
-                None => len_arms.push(quote!(Self::#v(m) => #c.base + #c.bytes_of(m.#n.len()))),
-            }
-        }
-        // Each field read where the struct holds it (`self.quantity`), an optional one where
-        // it is present.
-        let visits: Vec<TokenStream> = ls
-            .iter()
-            .map(|l| {
-                let (n, f) = (l.name, ident(l.name));
-                let optional = l.field.present.is_some() && l.bits.is_none();
-                let v = if optional {
-                    let l = local(l.name);
-                    quote!(#l)
-                } else {
-                    quote!(self.#f)
-                };
-                let value = match ctx.kind(l) {
-                    Kind::Int(t) if t.float => quote!(rt::Int(rt::raw(#v))),
-                    Kind::Int(_) | Kind::Bool => quote!(rt::Int(#v as i64)),
-                    Kind::Unit { .. } | Kind::Enum { .. } | Kind::Flags { .. } => {
-                        quote!(rt::Int(#v.raw() as i64))
-                    }
-                    Kind::Text(_) => quote!(rt::Text(&#v[..])),
-                    Kind::List { text: true, .. } => quote!(rt::Text(#v.as_slice())),
-                    Kind::List { typed: Some(_), .. } => quote!(rt::List(#v.table())),
-                    // 64-bit and float elements (a list of a fixed count): by their raw values.
-                    Kind::List { elem, .. } if elem.float || elem.bits == 64 => {
-                        quote!(rt::List(#v.table()))
-                    }
-                    Kind::List { .. } | Kind::BitList { .. } => quote!(rt::List(#v.elements())),
-                    Kind::Records { .. } => quote!(rt::Records(#v.records())),
-                };
-                if optional {
-                    quote!(if let rt::Some(#v) = self.#f { f(#n, #value) })
-                } else {
-                    quote!(f(#n, #value))
-                }
-            })
-            .collect();
+        len_arms.extend(len_arm(ctx, m, &ls));
+        let visits = visits(ctx, &ls);
         let visit = match visits.as_slice() {
             // Nothing to visit: the enum's `visit` passes it by.
             [] => quote!(),
@@ -215,24 +109,7 @@ pub(super) fn emit_messages(ctx: &Ctx, d: Direction) -> TokenStream {
     } else {
         quote!()
     };
-    let seal = if checksum_in_arms(p) {
-        quote!(rt::Ok(len))
-    } else {
-        let n = usize_lit(p.framing.checksum.len());
-        let be = p.framing.checksum.byte_order == ByteOrder::Big;
-        let sum = frame_sum(p);
-        if p.framing.end.is_empty() {
-            quote! {
-                rt::seal(buf, len, #sum, #n, #be);
-                rt::Ok(len)
-            }
-        } else {
-            quote! {
-                rt::seal_end(buf, len, #sum, &FRAME);
-                rt::Ok(len)
-            }
-        }
-    };
+    let seal = encode_seal(p);
     // A float has no `Eq` or `Hash`: a direction with a float field derives `PartialEq`
     // alone (every other direction, and every spec without floats, keeps both).
     let derives = if ctx
@@ -245,227 +122,18 @@ pub(super) fn emit_messages(ctx: &Ctx, d: Direction) -> TokenStream {
     } else {
         quote!(#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)])
     };
-    // Constant whole frames (`frame:`): their bytes, whatever the address, before any check
-    // of a framed frame; `constant` recognises them before `decode` checks the framing.
-    let (constant_first, constant_fns) = if constant_arms.is_empty() {
-        (quote!(), quote!())
-    } else {
-        let recognise = msgs.iter().filter_map(|m| {
-            let bytes = m.frame.as_ref()?.iter().map(|b| hex_u8(*b));
-            let (v, dm) = (variant(m), direction_module(m.direction));
-            Some(quote!([#(#bytes),*] => rt::Some(Self::#v(#dm::#v)),))
-        });
-        (
-            quote! {
-                if let rt::Some(frame) = self.constant_frame() {
-                    return rt::put_frame(buf, frame);
-                }
-            },
-            quote! {
-                /// The bytes of a constant whole frame (`frame:` in the spec), `None` for a
-                /// framed message.
-                pub const fn constant_frame(&self) -> rt::Option<&'static [u8]> {
-                    match *self {
-                        #(#constant_arms)*
-                        _ => rt::None,
-                    }
-                }
-                /// The constant whole frame `frame` is, byte for byte, if any.
-                #[inline]
-                fn constant(frame: &[u8]) -> rt::Option<Self> {
-                    match frame {
-                        #(#recognise)*
-                        _ => rt::None,
-                    }
-                }
-            },
-        )
+    let (constant_first, constant_fns) = constant_fns(msgs, &constant_arms);
+    // Every encoder lays the frame out alike: its address checked, each message's arm, the
+    // transform and the seal; what differs is what comes before and after.
+    let laid_out = quote! {
+        rt::encode_address(address, &#frame_const)?;
+        #take_once
+        let len = match *self { #(#encode_arms)* };
+        #transform
+        #seal
     };
-    let encode_fn = if p.framing.preamble.is_some() {
-        // Escaping and constant frames are refused beside a preamble (validated).
-        quote! {
-            ///
-            /// The preamble's wake-up bytes come first (`framing.preamble`); `buf` of
-            /// `MAX_FRAME_LEN` bytes holds any frame with them.
-            pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
-                let n = PREAMBLE.put(buf)?;
-                let len = self.encode_frame(address, &mut buf[n..])?;
-                rt::Ok(n + len)
-            }
-            /// The frame after the preamble, into `buf`.
-            fn encode_frame(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
-                rt::encode_address(address, &#frame_const)?;
-                #take_once
-                let len = match *self { #(#encode_arms)* };
-                #transform
-                #seal
-            }
-        }
-    } else if p.framing.truncation.is_some() {
-        // Payload truncation (`framing.truncation`; escaping, preambles, transforms, forms
-        // and constant frames are refused beside it: validated): the frame laid out with its
-        // whole payload, then its trailing zeros stripped.
-        let sum = super::head::frame_sum(p);
-        quote! {
-            ///
-            /// The payload's trailing zero bytes are stripped (one byte kept), the length field
-            /// and checksum rewritten (`framing.truncation`).
-            pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
-                let len = self.encode_laid_out(address, buf)?;
-                rt::Ok(TRUNCATION.travel(buf, len, &FRAME, #sum))
-            }
-            /// The frame laid out with its whole payload, into `buf`.
-            fn encode_laid_out(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
-                rt::encode_address(address, &#frame_const)?;
-                #take_once
-                let len = match *self { #(#encode_arms)* };
-                #transform
-                #seal
-            }
-        }
-    } else if p.framing.long.is_some() || p.framing.form.is_some() {
-        // A length field whose width the start byte chooses (`framing.length.long`; escaping,
-        // preambles and constant frames are refused beside it: validated): laid out in the
-        // long form's width, then sent in the form the length needs. A short form of the
-        // frame (`framing.forms`: escaping and preambles refused beside it) likewise: laid out
-        // in the framing's own layout, then sent short where the payload is empty; a constant
-        // whole frame beside it is its bytes, whatever the address.
-        let (lay, travels) = if p.framing.form.is_some() {
-            (
-                quote!(FORM),
-                quote! {
-                    /// The frame travels short where its payload is empty, else in the
-                    /// framing's own layout (`framing.forms`); `buf` of `MAX_FRAME_LEN` bytes
-                    /// holds any.
-                },
-            )
-        } else {
-            (
-                quote!(LONG),
-                quote! {
-                    /// The frame travels short where its length fits the short length field, else long
-                    /// (`framing.length.long`); `buf` of `MAX_FRAME_LEN` bytes holds any.
-                },
-            )
-        };
-        quote! {
-            ///
-            #travels
-            pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
-                #constant_first
-                let len = self.encode_laid_out(address, buf)?;
-                rt::Ok(#lay.travel(buf, len))
-            }
-            /// The frame laid out in the long form's width, into `buf`.
-            fn encode_laid_out(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
-                rt::encode_address(address, &#frame_const)?;
-                #take_once
-                let len = match *self { #(#encode_arms)* };
-                #transform
-                #seal
-            }
-        }
-    } else if d == Direction::Response && p.has_over_request() {
-        // A reply whose checksum takes in its request's bytes (`checksum_over_request`;
-        // escaping, preambles, forms, long lengths, truncation and transforms refused beside
-        // it: validated): written with its checksum over its own bytes, then over the
-        // request's first by `encode_reply_over`; `encode` refuses it.
-        let over_arms = msgs.iter().filter_map(|m| {
-            let (v, from) = (variant(m), usize_lit(m.over_request?));
-            Some(quote!(Self::#v { .. } => rt::Some(#from),))
-        });
-        quote! {
-            ///
-            /// A reply whose checksum takes in its request's bytes is refused
-            /// ([`busspec_runtime::EncodeError::NeedsRequest`]): see [`Self::encode_reply_over`].
-            pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
-                let len = self.encode_own(address, buf)?;
-                match self.over_request() {
-                    rt::Some(_) => rt::Err(rt::EncodeError::NeedsRequest { message: self.name() }),
-                    rt::None => rt::Ok(len),
-                }
-            }
-            /// Encodes the frame for `address` into `buf` as the reply to a request whose
-            /// checksum covered `covered` (`busspec_runtime::Protocol::request_span` of its
-            /// frame): as [`Self::encode`], and the checksum of a reply that takes in its
-            /// request's bytes over them.
-            pub fn encode_reply_over(&self, address: u8, covered: &[u8], buf: &mut [u8]) -> rt::EncodeResult {
-                let len = self.encode_own(address, buf)?;
-                if let rt::Some(from) = self.over_request() {
-                    rt::seal_end(buf, len, |b| u32::from(checksum_after(covered, rt::covered(b, from))), &FRAME);
-                }
-                rt::Ok(len)
-            }
-            /// Where this reply's checksum takes up its own bytes after its request's, for a
-            /// reply whose checksum takes them in (`checksum_over_request`).
-            pub const fn over_request(&self) -> rt::Option<usize> {
-                match *self {
-                    #(#over_arms)*
-                    _ => rt::None,
-                }
-            }
-            /// The frame with its checksum over its own bytes alone, into `buf`.
-            fn encode_own(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
-                #constant_first
-                rt::encode_address(address, &#frame_const)?;
-                #take_once
-                let len = match *self { #(#encode_arms)* };
-                #transform
-                #seal
-            }
-        }
-    } else if p.framing.escaping.is_none() {
-        quote! {
-            pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
-                #constant_first
-                rt::encode_address(address, &#frame_const)?;
-                #take_once
-                let len = match *self { #(#encode_arms)* };
-                #transform
-                #seal
-            }
-        }
-    } else {
-        let sum = frame_sum(p);
-        quote! {
-            ///
-            /// The frame is written escaped (`framing.escaping`); `buf` of `MAX_FRAME_LEN`
-            /// bytes holds any.
-            pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
-                let mut plain = [0u8; UNESCAPED_LEN];
-                let len = self.encode_unescaped(address, &mut plain)?;
-                rt::escape_frame(&ESCAPING, &plain[..len], buf, #sum)
-            }
-            /// The frame before escaping, into `buf`.
-            fn encode_unescaped(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
-                rt::encode_address(address, &#frame_const)?;
-                #take_once
-                let len = match *self { #(#encode_arms)* };
-                #transform
-                #seal
-            }
-        }
-    };
-    // `arbitrary`'s derive refuses an enum without variants (a protocol whose commands get no
-    // reply has no responses): such a type has no value to make.
-    let (derive_arbitrary, no_arbitrary) = if msgs.is_empty() {
-        (
-            quote!(),
-            quote! {
-                #[cfg(feature = "arbitrary")]
-                impl<'a> ::arbitrary::Arbitrary<'a> for #ty {
-                    fn arbitrary(_: &mut ::arbitrary::Unstructured<'a>) -> ::arbitrary::Result<Self> {
-                        rt::Err(::arbitrary::Error::IncorrectFormat)
-                    }
-                }
-            },
-        )
-    } else {
-        (
-            quote!(#[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]),
-            quote!(),
-        )
-    };
+    let encode_fn = encode_fn(p, d, msgs, &laid_out, &constant_first);
+    let (derive_arbitrary, no_arbitrary) = arbitrary_derive(&ty, msgs);
     ctx.structs.borrow_mut().push((d, quote!(#(#structs)*)));
     quote! {
         #repeats
@@ -541,6 +209,375 @@ pub(super) fn emit_messages(ctx: &Ctx, d: Direction) -> TokenStream {
             }
         }
         #command_info
+    }
+}
+
+/// The fields of message `m`'s struct, each with its doc: an optional one an `Option`.
+fn struct_fields(ctx: &Ctx, m: &Message, ls: &[Leaf]) -> Vec<TokenStream> {
+    let p = ctx.p;
+    ls.iter()
+        .map(|l| {
+            let n = ident(l.name);
+            let t = ctx.rust_type(l);
+            let mut d = leaf_doc(p, l);
+            // An optional field: `None` where its condition does not hold.
+            let t = match l.field.present.as_ref().filter(|_| l.bits.is_none()) {
+                Some(c) => {
+                    d.push_str(&format!(
+                        " On the wire only when {}; `None` where it is not.",
+                        condition_text(m, c)
+                    ));
+                    quote!(rt::Option<#t>)
+                }
+                None => t,
+            };
+            let d = doc(d.trim());
+            let t = in_parent(t);
+            quote!(#d pub #n: #t)
+        })
+        .collect()
+}
+
+/// The doc of message `m`'s struct: its section, title, code or constant frame, and length.
+fn message_doc(m: &Message) -> TokenStream {
+    let size = match len_range(m) {
+        (lo, hi) if lo == hi => format!("{lo} bytes"),
+        (lo, hi) => format!("{lo} to {hi} bytes"),
+    };
+    match &m.frame {
+        Some(bytes) => doc(&format!(
+            "§{} {} (constant frame `{}`, {size}). {}",
+            m.section,
+            m.title,
+            hex_spaced(bytes),
+            m.doc
+        )),
+        None => doc(&format!(
+            "§{} {} (code `{}`, {size}). {}",
+            m.section,
+            m.title,
+            m.code_hex(),
+            m.doc
+        )),
+    }
+}
+
+/// `frame_len`'s arm for message `m` where its length varies (optional fields, lists).
+fn len_arm(ctx: &Ctx, m: &Message, ls: &[Leaf]) -> Option<TokenStream> {
+    let v = variant(m);
+    let len = if m.has_optional() {
+        // The frame as long as the optional fields given make it.
+        let c = optional_const(m);
+        let given = m.optionals().map(|(_, f, _)| {
+            let n = ident(&f.name);
+            quote!(m.#n.is_some())
+        });
+        quote!(#c.frame_len(&[#(#given),*]))
+    } else if has_lists(m) {
+        let c = lists_const(m);
+        let sum = m.repeats().enumerate().map(|(k, (_, f, _))| {
+            let (n, k) = (ident(&f.name), usize_lit(k));
+            quote!(#c.lists[#k].bytes_of(m.#n.len()))
+        });
+        quote!(#c.base #(+ #sum)*)
+    } else {
+        let (f, _) = m.repeat()?;
+        let (n, c) = (ident(&f.name), repeat_const(m));
+        let sized = sized_record(m, f).and_then(|(wf, fixed, _)| {
+            let wl = ls
+                .iter()
+                .find(|l| std::ptr::eq(l.field, wf) && l.bits.is_none())?;
+            let wn = ident(wl.name);
+            Some((raw_of(ctx, wl, &quote!(m.#wn))?.1, fixed))
+        });
+        match sized {
+            Some((raw, fixed)) => {
+                // Each record as wide as its width field says.
+                let fixed = usize_lit(fixed);
+                quote!(#c.base + m.#n.len() * (#fixed + (#raw) as usize))
+            }
+            None => quote!(#c.base + #c.bytes_of(m.#n.len())),
+        }
+    };
+    Some(quote!(Self::#v(m) => #len))
+}
+
+/// `visit`'s calls for each leaf of a message.
+fn visits(ctx: &Ctx, ls: &[Leaf]) -> Vec<TokenStream> {
+    // Each field read where the struct holds it (`self.quantity`), an optional one where
+    // it is present.
+    ls.iter()
+        .map(|l| {
+            let (n, f) = (l.name, ident(l.name));
+            let optional = l.field.present.is_some() && l.bits.is_none();
+            let v = if optional {
+                let l = local(l.name);
+                quote!(#l)
+            } else {
+                quote!(self.#f)
+            };
+            let value = match ctx.kind(l) {
+                Kind::Int(t) if t.float => quote!(rt::Int(rt::raw(#v))),
+                Kind::Int(_) | Kind::Bool => quote!(rt::Int(#v as i64)),
+                Kind::Unit { .. } | Kind::Enum { .. } | Kind::Flags { .. } => {
+                    quote!(rt::Int(#v.raw() as i64))
+                }
+                Kind::Text(_) => quote!(rt::Text(&#v[..])),
+                Kind::List { text: true, .. } => quote!(rt::Text(#v.as_slice())),
+                Kind::List { typed: Some(_), .. } => quote!(rt::List(#v.table())),
+                // 64-bit and float elements (a list of a fixed count): by their raw values.
+                Kind::List { elem, .. } if elem.float || elem.bits == 64 => {
+                    quote!(rt::List(#v.table()))
+                }
+                Kind::List { .. } | Kind::BitList { .. } => quote!(rt::List(#v.elements())),
+                Kind::Records { .. } => quote!(rt::Records(#v.records())),
+            };
+            if optional {
+                quote!(if let rt::Some(#v) = self.#f { f(#n, #value) })
+            } else {
+                quote!(f(#n, #value))
+            }
+        })
+        .collect()
+}
+
+/// The end of every encoder: the checksum (and end bytes) written after the arms, or the
+/// arms' length where they write it.
+fn encode_seal(p: &Protocol) -> TokenStream {
+    if checksum_in_arms(p) {
+        quote!(rt::Ok(len))
+    } else {
+        let n = usize_lit(p.framing.checksum.len());
+        let be = p.framing.checksum.byte_order == ByteOrder::Big;
+        let sum = frame_sum(p);
+        if p.framing.end.is_empty() {
+            quote! {
+                rt::seal(buf, len, #sum, #n, #be);
+                rt::Ok(len)
+            }
+        } else {
+            quote! {
+                rt::seal_end(buf, len, #sum, &FRAME);
+                rt::Ok(len)
+            }
+        }
+    }
+}
+
+/// Constant whole frames (`frame:`): their bytes, whatever the address, before any check
+/// of a framed frame; `constant` recognises them before `decode` checks the framing. The
+/// encoder's first lines and the functions, or nothing without such a frame.
+fn constant_fns(msgs: &[Message], constant_arms: &[TokenStream]) -> (TokenStream, TokenStream) {
+    if constant_arms.is_empty() {
+        (quote!(), quote!())
+    } else {
+        let recognise = msgs.iter().filter_map(|m| {
+            let bytes = m.frame.as_ref()?.iter().map(|b| hex_u8(*b));
+            let (v, dm) = (variant(m), direction_module(m.direction));
+            Some(quote!([#(#bytes),*] => rt::Some(Self::#v(#dm::#v)),))
+        });
+        (
+            quote! {
+                if let rt::Some(frame) = self.constant_frame() {
+                    return rt::put_frame(buf, frame);
+                }
+            },
+            quote! {
+                /// The bytes of a constant whole frame (`frame:` in the spec), `None` for a
+                /// framed message.
+                pub const fn constant_frame(&self) -> rt::Option<&'static [u8]> {
+                    match *self {
+                        #(#constant_arms)*
+                        _ => rt::None,
+                    }
+                }
+                /// The constant whole frame `frame` is, byte for byte, if any.
+                #[inline]
+                fn constant(frame: &[u8]) -> rt::Option<Self> {
+                    match frame {
+                        #(#recognise)*
+                        _ => rt::None,
+                    }
+                }
+            },
+        )
+    }
+}
+
+/// The direction's `encode` (and what it calls), around the frame `laid_out` writes: the
+/// preamble, truncation, the long or short form, a reply over its request's bytes, escaping.
+fn encode_fn(
+    p: &Protocol,
+    d: Direction,
+    msgs: &[Message],
+    laid_out: &TokenStream,
+    constant_first: &TokenStream,
+) -> TokenStream {
+    if p.framing.preamble.is_some() {
+        // Escaping and constant frames are refused beside a preamble (validated).
+        quote! {
+            ///
+            /// The preamble's wake-up bytes come first (`framing.preamble`); `buf` of
+            /// `MAX_FRAME_LEN` bytes holds any frame with them.
+            pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+                let n = PREAMBLE.put(buf)?;
+                let len = self.encode_frame(address, &mut buf[n..])?;
+                rt::Ok(n + len)
+            }
+            /// The frame after the preamble, into `buf`.
+            fn encode_frame(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+                #laid_out
+            }
+        }
+    } else if p.framing.truncation.is_some() {
+        // Payload truncation (`framing.truncation`; escaping, preambles, transforms, forms
+        // and constant frames are refused beside it: validated): the frame laid out with its
+        // whole payload, then its trailing zeros stripped.
+        let sum = super::head::frame_sum(p);
+        quote! {
+            ///
+            /// The payload's trailing zero bytes are stripped (one byte kept), the length field
+            /// and checksum rewritten (`framing.truncation`).
+            pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+                let len = self.encode_laid_out(address, buf)?;
+                rt::Ok(TRUNCATION.travel(buf, len, &FRAME, #sum))
+            }
+            /// The frame laid out with its whole payload, into `buf`.
+            fn encode_laid_out(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+                #laid_out
+            }
+        }
+    } else if p.framing.long.is_some() || p.framing.form.is_some() {
+        // A length field whose width the start byte chooses (`framing.length.long`; escaping,
+        // preambles and constant frames are refused beside it: validated): laid out in the
+        // long form's width, then sent in the form the length needs. A short form of the
+        // frame (`framing.forms`: escaping and preambles refused beside it) likewise: laid out
+        // in the framing's own layout, then sent short where the payload is empty; a constant
+        // whole frame beside it is its bytes, whatever the address.
+        let (lay, travels) = if p.framing.form.is_some() {
+            (
+                quote!(FORM),
+                quote! {
+                    /// The frame travels short where its payload is empty, else in the
+                    /// framing's own layout (`framing.forms`); `buf` of `MAX_FRAME_LEN` bytes
+                    /// holds any.
+                },
+            )
+        } else {
+            (
+                quote!(LONG),
+                quote! {
+                    /// The frame travels short where its length fits the short length field, else long
+                    /// (`framing.length.long`); `buf` of `MAX_FRAME_LEN` bytes holds any.
+                },
+            )
+        };
+        quote! {
+            ///
+            #travels
+            pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+                #constant_first
+                let len = self.encode_laid_out(address, buf)?;
+                rt::Ok(#lay.travel(buf, len))
+            }
+            /// The frame laid out in the long form's width, into `buf`.
+            fn encode_laid_out(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+                #laid_out
+            }
+        }
+    } else if d == Direction::Response && p.has_over_request() {
+        // A reply whose checksum takes in its request's bytes (`checksum_over_request`;
+        // escaping, preambles, forms, long lengths, truncation and transforms refused beside
+        // it: validated): written with its checksum over its own bytes, then over the
+        // request's first by `encode_reply_over`; `encode` refuses it.
+        let over_arms = msgs.iter().filter_map(|m| {
+            let (v, from) = (variant(m), usize_lit(m.over_request?));
+            Some(quote!(Self::#v { .. } => rt::Some(#from),))
+        });
+        quote! {
+            ///
+            /// A reply whose checksum takes in its request's bytes is refused
+            /// ([`busspec_runtime::EncodeError::NeedsRequest`]): see [`Self::encode_reply_over`].
+            pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+                let len = self.encode_own(address, buf)?;
+                match self.over_request() {
+                    rt::Some(_) => rt::Err(rt::EncodeError::NeedsRequest { message: self.name() }),
+                    rt::None => rt::Ok(len),
+                }
+            }
+            /// Encodes the frame for `address` into `buf` as the reply to a request whose
+            /// checksum covered `covered` (`busspec_runtime::Protocol::request_span` of its
+            /// frame): as [`Self::encode`], and the checksum of a reply that takes in its
+            /// request's bytes over them.
+            pub fn encode_reply_over(&self, address: u8, covered: &[u8], buf: &mut [u8]) -> rt::EncodeResult {
+                let len = self.encode_own(address, buf)?;
+                if let rt::Some(from) = self.over_request() {
+                    rt::seal_end(buf, len, |b| u32::from(checksum_after(covered, rt::covered(b, from))), &FRAME);
+                }
+                rt::Ok(len)
+            }
+            /// Where this reply's checksum takes up its own bytes after its request's, for a
+            /// reply whose checksum takes them in (`checksum_over_request`).
+            pub const fn over_request(&self) -> rt::Option<usize> {
+                match *self {
+                    #(#over_arms)*
+                    _ => rt::None,
+                }
+            }
+            /// The frame with its checksum over its own bytes alone, into `buf`.
+            fn encode_own(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+                #constant_first
+                #laid_out
+            }
+        }
+    } else if p.framing.escaping.is_none() {
+        quote! {
+            pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+                #constant_first
+                #laid_out
+            }
+        }
+    } else {
+        let sum = frame_sum(p);
+        quote! {
+            ///
+            /// The frame is written escaped (`framing.escaping`); `buf` of `MAX_FRAME_LEN`
+            /// bytes holds any.
+            pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+                let mut plain = [0u8; UNESCAPED_LEN];
+                let len = self.encode_unescaped(address, &mut plain)?;
+                rt::escape_frame(&ESCAPING, &plain[..len], buf, #sum)
+            }
+            /// The frame before escaping, into `buf`.
+            fn encode_unescaped(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+                #laid_out
+            }
+        }
+    }
+}
+
+/// The `arbitrary` derive of a direction's enum, or an impl that makes no value where it has
+/// no variant.
+fn arbitrary_derive(ty: &Ident, msgs: &[Message]) -> (TokenStream, TokenStream) {
+    // `arbitrary`'s derive refuses an enum without variants (a protocol whose commands get no
+    // reply has no responses): such a type has no value to make.
+    if msgs.is_empty() {
+        (
+            quote!(),
+            quote! {
+                #[cfg(feature = "arbitrary")]
+                impl<'a> ::arbitrary::Arbitrary<'a> for #ty {
+                    fn arbitrary(_: &mut ::arbitrary::Unstructured<'a>) -> ::arbitrary::Result<Self> {
+                        rt::Err(::arbitrary::Error::IncorrectFormat)
+                    }
+                }
+            },
+        )
+    } else {
+        (
+            quote!(#[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]),
+            quote!(),
+        )
     }
 }
 
