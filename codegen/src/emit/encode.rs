@@ -43,28 +43,7 @@ pub(super) fn emit_encode_arm(
         let (desc, b) = (message_desc(m), hex_u8(b));
         stmts.push(quote!(rt::encode_broadcast(address, #b, #desc)?;));
     }
-    for l in ls {
-        if let (Some(_), Some((lo, hi)), None) = (l.field.packed, l.field.range, l.bits) {
-            let (name, v, lo, hi) = (l.name, local(l.name), i64_lit(lo), i64_lit(hi));
-            stmts.push(quote!(rt::encode_packed_in_range(#name, #v.as_slice(), #lo, #hi)?;));
-            continue;
-        }
-        let Some((raw_t, raw)) = raw_of(ctx, l, &local(l.name)) else {
-            continue;
-        };
-        let Some((range_fn, range)) = leaf_range(l.field, l.bits, raw_t.limits()) else {
-            continue;
-        };
-        let name = l.name;
-        let range_fn = format_ident!("encode_{}", range_fn);
-        if l.field.present.is_some() && l.bits.is_none() {
-            // An optional field, where a value is given.
-            let v = local(l.name);
-            stmts.push(quote!(if let rt::Some(#v) = #v { rt::#range_fn(#name, #raw, #range)?; }));
-            continue;
-        }
-        stmts.push(quote!(rt::#range_fn(#name, #raw, #range)?;));
-    }
+    stmts.extend(range_checks(ctx, ls));
     let repeat = m
         .repeat()
         .filter(|_| !has_lists(m))
@@ -86,13 +65,7 @@ pub(super) fn emit_encode_arm(
         .collect();
     for ((k, _, f, v), b) in lists.iter().zip(&list_bytes) {
         let k = usize_lit(*k);
-        // A 24-bit element, or one of the spec's types (whose raw type may be wider than the
-        // field), must fit its wire field.
-        let limits = (f.ty != FieldType::Bit
-            && !f.is_record()
-            && (f.width == 3 || ctx.element_type(f).is_some()))
-        .then(|| wire_type(f).limits());
-        if let Some((lo, hi)) = f.range.or(limits) {
+        if let Some((lo, hi)) = element_range(ctx, f) {
             let (lo, hi) = (i64_lit(lo), i64_lit(hi));
             stmts.push(quote!(#lc.lists[#k].encode_in_range(#v.as_slice(), #lo, #hi)?;));
         }
@@ -110,13 +83,9 @@ pub(super) fn emit_encode_arm(
             .map(|(k, _, _, v)| (usize_lit(*k), v.clone()))
     };
     if let Some((f, c, v)) = &repeat {
-        // Each element within the spec's range (a 24-bit one within its wire field too), then
-        // the count within its bounds, which gives the frame's length.
-        let limits = (f.ty != FieldType::Bit
-            && !f.is_record()
-            && (f.width == 3 || ctx.element_type(f).is_some()))
-        .then(|| wire_type(f).limits());
-        if let Some((lo, hi)) = f.range.or(limits) {
+        // Each element within its range, then the count within its bounds, which gives the
+        // frame's length.
+        if let Some((lo, hi)) = element_range(ctx, f) {
             let (lo, hi) = (i64_lit(lo), i64_lit(hi));
             stmts.push(quote!(#c.encode_in_range(#v.as_slice(), #lo, #hi)?;));
         }
@@ -139,46 +108,10 @@ pub(super) fn emit_encode_arm(
     // write per contiguous run. A field an optional field's condition reads gets a name too.
     let mut named = repeated(m);
     named.extend(m.optionals().map(|(_, _, c)| c.field));
-    let mut known: Vec<Option<TokenStream>> = vec![None; o.checksum];
-    // The same bytes' values, but the address's.
-    let mut consts: Vec<u8> = vec![0; o.checksum];
-    let mut set = |at: usize, b: u8| {
-        consts[at] = b;
-        known[at] = Some(hex_u8(b));
-    };
-    for at in o.starts() {
-        for (i, s) in p.framing.sync_of(m.direction).iter().enumerate() {
-            set(at + i, *s);
-        }
-    }
-    if let (Some(l), false) = (&p.framing.length, m.is_variable()) {
-        let v = p.framing.length_value(l, m.code.len(), m.payload_len);
-        for at in o.lengths() {
-            for (i, b) in constant_bytes(v as u64, l.width, p.byte_order)
-                .into_iter()
-                .enumerate()
-            {
-                set(at + i, b);
-            }
-        }
-    }
-    for (i, b) in m.code.iter().enumerate() {
-        set(o.code + i, *b);
-    }
-    for (fi, f) in m.fields.iter().enumerate() {
-        if let (Some(c), false) = (f.constant, named.contains(&fi)) {
-            let bytes = constant_bytes(c, f.width, f.byte_order);
-            for (i, b) in bytes.into_iter().enumerate() {
-                set(f.frame_at(&o) + i, b);
-            }
-        }
-    }
-    if let Some(at) = o.address {
-        known[at] = Some(quote!(address));
-    }
+    let (known, consts) = known_bytes(p, m, &named);
     // The run from the first byte is written as the frame is taken from `buf`.
     let first: Vec<TokenStream> = known.iter().map_while(Clone::clone).collect();
-    let mut i = first.len();
+    let i = first.len();
     // Its sum, for a sum-8 sealed in the arm: the generator adds the constants.
     let k = consts[..i].iter().fold(0u8, |a, b| a.wrapping_add(*b));
     let head = (i, o.address.is_some_and(|a| a < i).then_some(k));
@@ -209,30 +142,11 @@ pub(super) fn emit_encode_arm(
         return sealed(m, pattern, quote!(#(#check)*), end);
     }
     stmts.push(quote!(let out = #take;));
-    if let (Some(rule), Some(_)) = (p.framing.length_rule(m.direction), &repeat) {
+    if repeat.is_some() {
         // The length field of a frame of variable length, from its length.
-        for r in length_copies(rule) {
-            let args = length_args(p, r);
-            stmts.push(quote!(rt::put_length(out, #args)?;));
-        }
+        stmts.extend(put_lengths(p, m.direction));
     }
-    while i < known.len() {
-        let run: Vec<TokenStream> = known[i..].iter().map_while(Clone::clone).collect();
-        match run.as_slice() {
-            [] => i += 1,
-            [b] => {
-                let at = usize_lit(i);
-                stmts.push(quote!(out[#at] = #b;));
-                i += 1;
-            }
-            bytes => {
-                let (from, to) = (usize_lit(i), usize_lit(i + bytes.len()));
-                let from = if i == 0 { quote!() } else { quote!(#from) };
-                stmts.push(quote!(out[#from..#to].copy_from_slice(&[#(#bytes),*]);));
-                i += bytes.len();
-            }
-        }
-    }
+    stmts.extend(known_runs(&known, i));
     let counter = m.count_field();
     for (fi, f) in m.fields.iter().enumerate() {
         // An optional field sits where it does when every optional field is present.
@@ -311,77 +225,14 @@ pub(super) fn emit_encode_arm(
             let (lo, hi) = (i64_lit(lo), i64_lit(hi));
             quote!(rt::fits(#name, #lc.lists[#k].count_value(#v.len()) as u64, #lo, #hi)? as #w)
         } else if !f.bits.is_empty() {
-            let mut parts = Vec::new();
-            for b in &f.bits {
-                let lsb = u32::from(b.lsb);
-                let part = match b.constant {
-                    Some(0) => continue,
-                    Some(c) => hex_lit(c),
-                    None => {
-                        let Some(leaf) = ls.iter().find(|l| l.name == b.name) else {
-                            continue;
-                        };
-                        let v = to_wire(ctx, leaf, &local(&b.name), Some(unsigned));
-                        if lsb + u32::from(b.width()) >= wt.rust_bits()
-                            || matches!(ctx.kind(leaf), Kind::Bool)
-                        {
-                            // Parenthesized below where it is shifted or or-ed with others.
-                            v
-                        } else {
-                            let (v, mask) = (paren(v), hex_lit((1u64 << b.width()) - 1));
-                            quote!(#v & #mask)
-                        }
-                    }
-                };
-                parts.push(if lsb == 0 {
-                    part
-                } else {
-                    let (lsb, part) = (Literal::u32_unsuffixed(lsb), paren(part));
-                    quote!(#part << #lsb)
-                });
-            }
-            match parts.as_slice() {
-                [] => quote!(0),
-                [one] => one.clone(),
-                many => {
-                    let many = many.iter().cloned().map(paren);
-                    quote!(#(#many)|*)
-                }
-            }
+            bits_value(ctx, f, ls, wt, unsigned)
         } else {
             let Some(leaf) = ls.iter().find(|l| l.bits.is_none() && l.name == f.name) else {
                 continue;
             };
             to_wire(ctx, leaf, &local(&f.name), None)
         };
-        let conv = to_bytes(f.byte_order);
-        let bcd = f.bcd;
-        let wt_ident = wt.ident();
-        let put = |v: TokenStream| {
-            // A BCD field's digits (its value is in range, checked above).
-            let v = if bcd {
-                let v = paren(v);
-                quote!(rt::to_bcd(#v as u64) as #wt_ident)
-            } else {
-                v
-            };
-            if f.width == 1 && !wt.signed {
-                quote!(out[#at] = #v;)
-            } else if f.width == 3 {
-                let le = f.byte_order == ByteOrder::Little;
-                let v = paren(v);
-                quote!(out[#at..#end].copy_from_slice(&rt::bytes24(#v as u32, #le));)
-            } else if f.word_swapped {
-                // The number's bytes in the field's byte order, its 16-bit words swapped.
-                let v = paren(v);
-                let idx =
-                    (0..f.width).map(|i| usize_lit(busspec_model::number::swap_index(i, f.width)));
-                quote!({ let b = #v.#conv(); out[#at..#end].copy_from_slice(&[#(b[#idx]),*]); })
-            } else {
-                let v = paren(v);
-                quote!(out[#at..#end].copy_from_slice(&#v.#conv());)
-            }
-        };
+        let put = |v: TokenStream| put_field(f, wt, full, v);
         let agrees = match (&repeat, follows_field(f)) {
             (Some((_, c, v)), Some(_)) if counter == Some(fi) => Some((quote!(#c), v.clone())),
             (None, Some(_)) => list_counted(fi).map(|(k, v)| (quote!(#lc.lists[#k]), v)),
@@ -429,12 +280,7 @@ pub(super) fn emit_encode_arm(
             let at = quote!(#at #(+ #before)*);
             stmts.push(write_list(f, v, at));
         }
-        if let Some(rule) = p.framing.length_rule(m.direction) {
-            for r in length_copies(rule) {
-                let args = length_args(p, r);
-                stmts.push(quote!(rt::put_length(out, #args)?;));
-            }
-        }
+        stmts.extend(put_lengths(p, m.direction));
     }
     if m.has_optional() {
         let c = optional_const(m);
@@ -443,12 +289,7 @@ pub(super) fn emit_encode_arm(
             quote!(#v.is_some())
         });
         stmts.push(quote!(let out = #c.pack(&compact, &[#(#given),*], buf)?;));
-        if let Some(rule) = p.framing.length_rule(m.direction) {
-            for r in length_copies(rule) {
-                let args = length_args(p, r);
-                stmts.push(quote!(rt::put_length(out, #args)?;));
-            }
-        }
+        stmts.extend(put_lengths(p, m.direction));
     }
     if m.delimited_list(&p.framing).is_some() {
         // End bytes alone delimit the frame: the list must not show them before its end.
@@ -460,6 +301,201 @@ pub(super) fn emit_encode_arm(
     let variable = repeat.is_some() || !lists.is_empty() || m.has_optional();
     let end = encode_end(p, quote!(out), variable, head);
     sealed(m, pattern, quote!(#(#stmts)*), end)
+}
+
+/// Each field's value within its range (the spec's, or its wire type's where the Rust type
+/// is wider), a packed list's elements too; an optional field where a value is given.
+fn range_checks(ctx: &Ctx, ls: &[Leaf]) -> Vec<TokenStream> {
+    let mut checks = Vec::new();
+    for l in ls {
+        if let (Some(_), Some((lo, hi)), None) = (l.field.packed, l.field.range, l.bits) {
+            let (name, v, lo, hi) = (l.name, local(l.name), i64_lit(lo), i64_lit(hi));
+            checks.push(quote!(rt::encode_packed_in_range(#name, #v.as_slice(), #lo, #hi)?;));
+            continue;
+        }
+        let Some((raw_t, raw)) = raw_of(ctx, l, &local(l.name)) else {
+            continue;
+        };
+        let Some((range_fn, range)) = leaf_range(l.field, l.bits, raw_t.limits()) else {
+            continue;
+        };
+        let name = l.name;
+        let range_fn = format_ident!("encode_{}", range_fn);
+        if l.field.present.is_some() && l.bits.is_none() {
+            // An optional field, where a value is given.
+            let v = local(l.name);
+            checks.push(quote!(if let rt::Some(#v) = #v { rt::#range_fn(#name, #raw, #range)?; }));
+            continue;
+        }
+        checks.push(quote!(rt::#range_fn(#name, #raw, #range)?;));
+    }
+    checks
+}
+
+/// The bytes of message `m`'s frame known without a field value (start bytes, the length of a
+/// frame of one length, the code, constant fields but those in `named`) and the address's
+/// place, up to the checksum; beside them the same bytes' values, 0 for the address.
+fn known_bytes(p: &Protocol, m: &Message, named: &[usize]) -> (Vec<Option<TokenStream>>, Vec<u8>) {
+    let o = m.layout;
+    let mut known: Vec<Option<TokenStream>> = vec![None; o.checksum];
+    // The same bytes' values, but the address's.
+    let mut consts: Vec<u8> = vec![0; o.checksum];
+    let mut set = |at: usize, b: u8| {
+        consts[at] = b;
+        known[at] = Some(hex_u8(b));
+    };
+    for at in o.starts() {
+        for (i, s) in p.framing.sync_of(m.direction).iter().enumerate() {
+            set(at + i, *s);
+        }
+    }
+    if let (Some(l), false) = (&p.framing.length, m.is_variable()) {
+        let v = p.framing.length_value(l, m.code.len(), m.payload_len);
+        for at in o.lengths() {
+            for (i, b) in constant_bytes(v as u64, l.width, p.byte_order)
+                .into_iter()
+                .enumerate()
+            {
+                set(at + i, b);
+            }
+        }
+    }
+    for (i, b) in m.code.iter().enumerate() {
+        set(o.code + i, *b);
+    }
+    for (fi, f) in m.fields.iter().enumerate() {
+        if let (Some(c), false) = (f.constant, named.contains(&fi)) {
+            let bytes = constant_bytes(c, f.width, f.byte_order);
+            for (i, b) in bytes.into_iter().enumerate() {
+                set(f.frame_at(&o) + i, b);
+            }
+        }
+    }
+    if let Some(at) = o.address {
+        known[at] = Some(quote!(address));
+    }
+    (known, consts)
+}
+
+/// The value of a field of sub-fields (`bits`): each sub-field's wire value masked and
+/// shifted into place, or-ed with the others; constant sub-fields as their literals.
+fn bits_value(ctx: &Ctx, f: &Field, ls: &[Leaf], wt: IntType, unsigned: IntType) -> TokenStream {
+    let mut parts = Vec::new();
+    for b in &f.bits {
+        let lsb = u32::from(b.lsb);
+        let part = match b.constant {
+            Some(0) => continue,
+            Some(c) => hex_lit(c),
+            None => {
+                let Some(leaf) = ls.iter().find(|l| l.name == b.name) else {
+                    continue;
+                };
+                let v = to_wire(ctx, leaf, &local(&b.name), Some(unsigned));
+                if lsb + u32::from(b.width()) >= wt.rust_bits()
+                    || matches!(ctx.kind(leaf), Kind::Bool)
+                {
+                    // Parenthesized below where it is shifted or or-ed with others.
+                    v
+                } else {
+                    let (v, mask) = (paren(v), hex_lit((1u64 << b.width()) - 1));
+                    quote!(#v & #mask)
+                }
+            }
+        };
+        parts.push(if lsb == 0 {
+            part
+        } else {
+            let (lsb, part) = (Literal::u32_unsuffixed(lsb), paren(part));
+            quote!(#part << #lsb)
+        });
+    }
+    match parts.as_slice() {
+        [] => quote!(0),
+        [one] => one.clone(),
+        many => {
+            let many = many.iter().cloned().map(paren);
+            quote!(#(#many)|*)
+        }
+    }
+}
+
+/// Writes value `v` of field `f` (wire type `wt`) at offset `at` of `out`: a byte, 24 bits,
+/// word-swapped registers, BCD digits, or the number's bytes in the field's byte order.
+fn put_field(f: &Field, wt: IntType, at: usize, v: TokenStream) -> TokenStream {
+    let (end, at) = (usize_lit(at + f.width), usize_lit(at));
+    let conv = to_bytes(f.byte_order);
+    let wt_ident = wt.ident();
+    // A BCD field's digits (its value is in range, checked above).
+    let v = if f.bcd {
+        let v = paren(v);
+        quote!(rt::to_bcd(#v as u64) as #wt_ident)
+    } else {
+        v
+    };
+    if f.width == 1 && !wt.signed {
+        quote!(out[#at] = #v;)
+    } else if f.width == 3 {
+        let le = f.byte_order == ByteOrder::Little;
+        let v = paren(v);
+        quote!(out[#at..#end].copy_from_slice(&rt::bytes24(#v as u32, #le));)
+    } else if f.word_swapped {
+        // The number's bytes in the field's byte order, its 16-bit words swapped.
+        let v = paren(v);
+        let idx = (0..f.width).map(|i| usize_lit(busspec_model::number::swap_index(i, f.width)));
+        quote!({ let b = #v.#conv(); out[#at..#end].copy_from_slice(&[#(b[#idx]),*]); })
+    } else {
+        let v = paren(v);
+        quote!(out[#at..#end].copy_from_slice(&#v.#conv());)
+    }
+}
+
+/// Writes the length field (each copy of it) of a frame of direction `d` from its length,
+/// where the framing has one.
+fn put_lengths(p: &Protocol, d: Direction) -> Vec<TokenStream> {
+    let Some(rule) = p.framing.length_rule(d) else {
+        return Vec::new();
+    };
+    length_copies(rule)
+        .into_iter()
+        .map(|r| {
+            let args = length_args(p, r);
+            quote!(rt::put_length(out, #args)?;)
+        })
+        .collect()
+}
+
+/// The elements' range of a list field `f`: the spec's, else its wire field's where the
+/// element's Rust type is wider (a 24-bit element, one of the spec's types); `None` where the
+/// type bounds it.
+fn element_range(ctx: &Ctx, f: &Field) -> Option<(i64, i64)> {
+    let limits = (f.ty != FieldType::Bit
+        && !f.is_record()
+        && (f.width == 3 || ctx.element_type(f).is_some()))
+    .then(|| wire_type(f).limits());
+    f.range.or(limits)
+}
+
+/// The writes of the known bytes from offset `i` on, one a contiguous run.
+fn known_runs(known: &[Option<TokenStream>], mut i: usize) -> Vec<TokenStream> {
+    let mut writes = Vec::new();
+    while i < known.len() {
+        let run: Vec<TokenStream> = known[i..].iter().map_while(Clone::clone).collect();
+        match run.as_slice() {
+            [] => i += 1,
+            [b] => {
+                let at = usize_lit(i);
+                writes.push(quote!(out[#at] = #b;));
+                i += 1;
+            }
+            bytes => {
+                let (from, to) = (usize_lit(i), usize_lit(i + bytes.len()));
+                let from = if i == 0 { quote!() } else { quote!(#from) };
+                writes.push(quote!(out[#from..#to].copy_from_slice(&[#(#bytes),*]);));
+                i += bytes.len();
+            }
+        }
+    }
+    writes
 }
 
 /// An encoder arm of `pattern`: `stmts`, then `end`, the frame's length, its value; a message
