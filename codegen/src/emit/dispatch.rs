@@ -97,66 +97,7 @@ pub(super) fn emit_dispatch(ctx: &Ctx, d: Direction, ty: &TokenStream) -> TokenS
     let codeless: Vec<&Message> = msgs.iter().filter(|m| m.code.is_empty()).collect();
     let mixed = !codeless.is_empty() && codeless.len() < msgs.len();
     let by_code = messages_by_code(msgs);
-    // One match per code length, shortest first; non-empty codes are prefix-free within a
-    // direction (validated). The last is the function's value, or with code-less messages
-    // beside coded ones, theirs is.
-    let mut lens: Vec<usize> = msgs
-        .iter()
-        .map(|m| m.code.len())
-        .filter(|&l| !mixed || l > 0)
-        .collect();
-    lens.sort_unstable();
-    lens.dedup();
-    let mut body = Vec::new();
-    for (li, &l) in lens.iter().enumerate() {
-        let last = li + 1 == lens.len() && !mixed;
-        let at = code_at(l);
-        let codes = by_code.iter().filter(|(code, _)| code.len() == l);
-        let arms = codes.map(|(code, group)| {
-            let mut group = group.clone();
-            if mixed {
-                group.extend(&codeless);
-            }
-            let lit = hex_code(code);
-            let arm = emit_group(ctx, &group, replies, mixed);
-            if last {
-                quote!(#lit => #arm,)
-            } else {
-                quote!(#lit => return #arm,)
-            }
-        });
-        let need = at + l + clen;
-        let (at, l) = (usize_lit(at), usize_lit(l));
-        if !last {
-            let need = usize_lit(need);
-            body.push(quote! {
-                if frame.len() >= #need {
-                    match rt::code(frame, #at, #l) {
-                        #(#arms)*
-                        _ => {}
-                    }
-                }
-            });
-            continue;
-        }
-        if need > min_len {
-            let need = usize_lit(need);
-            body.push(quote! {
-                if frame.len() < #need {
-                    return #unknown;
-                }
-            });
-        }
-        body.push(quote! {
-            match rt::code(frame, #at, #l) {
-                #(#arms)*
-                _ => #unknown,
-            }
-        });
-    }
-    if mixed {
-        body.push(emit_group(ctx, &codeless, replies, true));
-    }
+    let body = code_matches(ctx, d, &by_code, &codeless, min_len, clen, &unknown);
     let addr_at = usize_lit(address_at(p, d));
     let (min_len, max_len) = (usize_lit(min_len), usize_lit(max_len));
     let mask = reply_mask(p);
@@ -188,52 +129,8 @@ pub(super) fn emit_dispatch(ctx: &Ctx, d: Direction, ty: &TokenStream) -> TokenS
         quote!()
     };
     let sum = frame_sum(p);
-    // A sync sequence's first byte is `FRAME.start`'s; the others are checked first. Start
-    // bytes that differ by direction, or come twice, are all checked here (`FRAME.start` is
-    // `None`), in the order the interpreter checks them.
-    let by_direction = starts_by_direction(p);
-    // The direction's own layout: a second start after the code sits after its one length.
-    let code_len = p
-        .framing
-        .direction(d)
-        .code_lengths
-        .first()
-        .copied()
-        .unwrap_or(0);
-    let head = p.framing.head(d, code_len);
-    let sync = match (head.start, p.framing.sync_of(d)) {
-        (Some(_), sync)
-            if sync.len() > 1
-                || ((by_direction || head.start_again.is_some()) && !sync.is_empty()) =>
-        {
-            let checks = head.starts().map(|at| {
-                let at = usize_lit(at);
-                let bytes = sync.iter().map(|b| hex_u8(*b));
-                quote!(rt::check_sync(frame, #max_len, #at, &[#(#bytes),*])?;)
-            });
-            quote!(#(#checks)*)
-        }
-        _ => quote!(),
-    };
-    // A reply the request does not get is refused once decoded, then one whose fields do
-    // not follow the request's: the interpreter's order.
-    let follows = if has_follows_request(p) {
-        quote!(message.follows_request(request)?;)
-    } else {
-        quote!()
-    };
-    let answered = if replies {
-        quote! {
-            if let rt::Some(request) = request {
-                if request.replies() >> message.index() & 1 == 0 {
-                    return rt::Err(rt::not_a_reply(message.name(), request.name()));
-                }
-                #follows
-            }
-        }
-    } else {
-        quote!()
-    };
+    let sync = sync_checks(p, d, &max_len);
+    let answered = answered(p, replies);
     let length = length_check(p, d);
     let constant = if p.constants(d).next().is_some() {
         quote! {
@@ -337,33 +234,13 @@ pub(super) fn emit_dispatch(ctx: &Ctx, d: Direction, ty: &TokenStream) -> TokenS
                 return rt::Err(rt::DecodeError::TooLong { max: #max, found: un.len });
             };
         };
-        if replies {
-            (
-                quote! {
-                    #unescape
-                    Self::decode_for_unescaped(plain, request).map_err(|e| un.locate(e))
-                },
-                quote! {
-                    /// [`Self::decode_for`] of the frame unescaped.
-                    fn decode_for_unescaped(frame: &[u8], request: rt::Option<&Request>) -> rt::Result<Decoded<#ty>, rt::DecodeError> {
-                        #checks
-                    }
-                },
-            )
-        } else {
-            (
-                quote! {
-                    #unescape
-                    Self::decode_unescaped(plain).map_err(|e| un.locate(e))
-                },
-                quote! {
-                    /// [`Self::decode`] of the frame unescaped.
-                    fn decode_unescaped(frame: &[u8]) -> rt::Result<Decoded<#ty>, rt::DecodeError> {
-                        #checks
-                    }
-                },
-            )
-        }
+        let own = Own {
+            suffix: "unescaped",
+            doc: "unescaped",
+            frame: quote!(plain),
+            locate: quote!(.map_err(|e| un.locate(e))),
+        };
+        own.decoder(replies, ty, unescape, &checks)
     } else if p.framing.truncation.is_some() {
         // Payload truncation (`framing.truncation`): a truncated frame padded into a copy
         // with its whole payload, checked as any frame by a function of its own; its errors
@@ -374,33 +251,13 @@ pub(super) fn emit_dispatch(ctx: &Ctx, d: Direction, ty: &TokenStream) -> TokenS
             let mut laid = [0u8; #max];
             let laid = TRUNCATION.lay_out(frame, &mut laid, &FRAME, #sum)?;
         };
-        if replies {
-            (
-                quote! {
-                    #lay_out
-                    Self::decode_for_laid_out(laid, request)
-                },
-                quote! {
-                    /// [`Self::decode_for`] of the frame with its whole payload.
-                    fn decode_for_laid_out(frame: &[u8], request: rt::Option<&Request>) -> rt::Result<Decoded<#ty>, rt::DecodeError> {
-                        #checks
-                    }
-                },
-            )
-        } else {
-            (
-                quote! {
-                    #lay_out
-                    Self::decode_laid_out(laid)
-                },
-                quote! {
-                    /// [`Self::decode`] of the frame with its whole payload.
-                    fn decode_laid_out(frame: &[u8]) -> rt::Result<Decoded<#ty>, rt::DecodeError> {
-                        #checks
-                    }
-                },
-            )
-        }
+        let own = Own {
+            suffix: "laid_out",
+            doc: "with its whole payload",
+            frame: quote!(laid),
+            locate: quote!(),
+        };
+        own.decoder(replies, ty, lay_out, &checks)
     } else if p.framing.long.is_some() || p.framing.form.is_some() {
         let lay = if p.framing.form.is_some() {
             quote!(FORM)
@@ -416,33 +273,13 @@ pub(super) fn emit_dispatch(ctx: &Ctx, d: Direction, ty: &TokenStream) -> TokenS
             let mut laid = [0u8; #max];
             let (laid, short) = #lay.lay_out(frame, &mut laid)?;
         };
-        if replies {
-            (
-                quote! {
-                    #lay_out
-                    Self::decode_for_laid_out(laid, request).map_err(|e| #lay.locate(e, short))
-                },
-                quote! {
-                    /// [`Self::decode_for`] of the frame laid out in the long form's width.
-                    fn decode_for_laid_out(frame: &[u8], request: rt::Option<&Request>) -> rt::Result<Decoded<#ty>, rt::DecodeError> {
-                        #checks
-                    }
-                },
-            )
-        } else {
-            (
-                quote! {
-                    #lay_out
-                    Self::decode_laid_out(laid).map_err(|e| #lay.locate(e, short))
-                },
-                quote! {
-                    /// [`Self::decode`] of the frame laid out in the long form's width.
-                    fn decode_laid_out(frame: &[u8]) -> rt::Result<Decoded<#ty>, rt::DecodeError> {
-                        #checks
-                    }
-                },
-            )
-        }
+        let own = Own {
+            suffix: "laid_out",
+            doc: "laid out in the long form's width",
+            frame: quote!(laid),
+            locate: quote!(.map_err(|e| #lay.locate(e, short))),
+        };
+        own.decoder(replies, ty, lay_out, &checks)
     } else {
         (checks, quote!())
     };
@@ -506,6 +343,188 @@ pub(super) fn emit_dispatch(ctx: &Ctx, d: Direction, ty: &TokenStream) -> TokenS
         #unescaped_fn
         #dispatch
     }
+}
+
+/// A sync sequence's first byte is `FRAME.start`'s; the others are checked first. Start
+/// bytes that differ by direction, or come twice, are all checked here (`FRAME.start` is
+/// `None`), in the order the interpreter checks them.
+fn sync_checks(p: &Protocol, d: Direction, max_len: &Literal) -> TokenStream {
+    let by_direction = starts_by_direction(p);
+    // The direction's own layout: a second start after the code sits after its one length.
+    let code_len = p
+        .framing
+        .direction(d)
+        .code_lengths
+        .first()
+        .copied()
+        .unwrap_or(0);
+    let head = p.framing.head(d, code_len);
+    match (head.start, p.framing.sync_of(d)) {
+        (Some(_), sync)
+            if sync.len() > 1
+                || ((by_direction || head.start_again.is_some()) && !sync.is_empty()) =>
+        {
+            let checks = head.starts().map(|at| {
+                let at = usize_lit(at);
+                let bytes = sync.iter().map(|b| hex_u8(*b));
+                quote!(rt::check_sync(frame, #max_len, #at, &[#(#bytes),*])?;)
+            });
+            quote!(#(#checks)*)
+        }
+        _ => quote!(),
+    }
+}
+
+/// A reply the request does not get is refused once decoded, then one whose fields do
+/// not follow the request's: the interpreter's order.
+fn answered(p: &Protocol, replies: bool) -> TokenStream {
+    let follows = if has_follows_request(p) {
+        quote!(message.follows_request(request)?;)
+    } else {
+        quote!()
+    };
+    if replies {
+        quote! {
+            if let rt::Some(request) = request {
+                if request.replies() >> message.index() & 1 == 0 {
+                    return rt::Err(rt::not_a_reply(message.name(), request.name()));
+                }
+                #follows
+            }
+        }
+    } else {
+        quote!()
+    }
+}
+
+/// A frame made into another before its checks (unescaped, padded to its whole payload, laid
+/// out in the long form's width): checked as any frame by a function of its own,
+/// `decode_SUFFIX` (`decode_for_SUFFIX` for replies), its errors placed back by `locate`.
+struct Own {
+    suffix: &'static str,
+    doc: &'static str,
+    /// The frame the checks take.
+    frame: TokenStream,
+    /// What the errors of the checks go through (nothing where they keep their offsets).
+    locate: TokenStream,
+}
+
+impl Own {
+    /// The decoder's body (`before`, then the call) and the function of the checks.
+    fn decoder(
+        &self,
+        replies: bool,
+        ty: &TokenStream,
+        before: TokenStream,
+        checks: &TokenStream,
+    ) -> (TokenStream, TokenStream) {
+        let (frame, locate) = (&self.frame, &self.locate);
+        let (outer, name, param, arg) = if replies {
+            (
+                "decode_for",
+                format_ident!("decode_for_{}", self.suffix),
+                quote!(, request: rt::Option<&Request>),
+                quote!(, request),
+            )
+        } else {
+            (
+                "decode",
+                format_ident!("decode_{}", self.suffix),
+                quote!(),
+                quote!(),
+            )
+        };
+        let doc = format!(" [`Self::{outer}`] of the frame {}.", self.doc);
+        (
+            quote! {
+                #before
+                Self::#name(#frame #arg)#locate
+            },
+            quote! {
+                #[doc = #doc]
+                fn #name(frame: &[u8] #param) -> rt::Result<Decoded<#ty>, rt::DecodeError> {
+                    #checks
+                }
+            },
+        )
+    }
+}
+
+/// One match per code length, shortest first; non-empty codes are prefix-free within a
+/// direction (validated). The last is the function's value, or with code-less messages
+/// beside coded ones, theirs is.
+fn code_matches(
+    ctx: &Ctx,
+    d: Direction,
+    by_code: &[(&[u8], Vec<&Message>)],
+    codeless: &[&Message],
+    min_len: usize,
+    clen: usize,
+    unknown: &TokenStream,
+) -> Vec<TokenStream> {
+    let p = ctx.p;
+    let msgs = p.framed(d);
+    let mixed = !codeless.is_empty() && codeless.len() < msgs.len();
+    let replies = d == Direction::Response;
+    let code_at = |l: usize| p.framing.head(d, l).code;
+    let mut lens: Vec<usize> = msgs
+        .iter()
+        .map(|m| m.code.len())
+        .filter(|&l| !mixed || l > 0)
+        .collect();
+    lens.sort_unstable();
+    lens.dedup();
+    let mut body = Vec::new();
+    for (li, &l) in lens.iter().enumerate() {
+        let last = li + 1 == lens.len() && !mixed;
+        let at = code_at(l);
+        let codes = by_code.iter().filter(|(code, _)| code.len() == l);
+        let arms = codes.map(|(code, group)| {
+            let mut group = group.clone();
+            if mixed {
+                group.extend(codeless);
+            }
+            let lit = hex_code(code);
+            let arm = emit_group(ctx, &group, replies, mixed);
+            if last {
+                quote!(#lit => #arm,)
+            } else {
+                quote!(#lit => return #arm,)
+            }
+        });
+        let need = at + l + clen;
+        let (at, l) = (usize_lit(at), usize_lit(l));
+        if !last {
+            let need = usize_lit(need);
+            body.push(quote! {
+                if frame.len() >= #need {
+                    match rt::code(frame, #at, #l) {
+                        #(#arms)*
+                        _ => {}
+                    }
+                }
+            });
+            continue;
+        }
+        if need > min_len {
+            let need = usize_lit(need);
+            body.push(quote! {
+                if frame.len() < #need {
+                    return #unknown;
+                }
+            });
+        }
+        body.push(quote! {
+            match rt::code(frame, #at, #l) {
+                #(#arms)*
+                _ => #unknown,
+            }
+        });
+    }
+    if mixed {
+        body.push(emit_group(ctx, codeless, replies, true));
+    }
+    body
 }
 
 /// The check of the length field of a frame of direction `d`, where the framing has one: it
