@@ -1,9 +1,5 @@
 use super::*;
 
-/// The stream decoder's view of the protocol: every distinct frame length (longest first) and a
-/// `candidates` function that narrows them by start byte and code, one `match` arm per code and
-/// per code prefix. Not by address: a frame from an address the spec does not allow is still a
-/// frame, which the stream decoder reports as out of spec (strict decoding says why).
 /// Each start byte of `sync` from offset `at`: the head's byte where it sits (`None` past the
 /// head), and its value.
 fn sync_bytes(at: usize, sync: &[u8]) -> impl Iterator<Item = (TokenStream, TokenStream)> + '_ {
@@ -12,48 +8,14 @@ fn sync_bytes(at: usize, sync: &[u8]) -> impl Iterator<Item = (TokenStream, Toke
         .map(move |(i, s)| (head_byte(at + i), hex_u8(*s)))
 }
 
+/// The protocol's type (its `rt::Protocol` impl: `protocol.rs`) and the stream decoder's view
+/// of it, `rt::Framing`: every distinct frame length (longest first) and a `candidates`
+/// function that narrows them by start byte and code, one `match` arm per code and per code
+/// prefix. Not by address: a frame from an address the spec does not allow is still a frame,
+/// which the stream decoder reports as out of spec (strict decoding says why).
 pub(super) fn emit_stream(p: &Protocol) -> TokenStream {
-    // A variable-length message whose length or count field gives its length lists none
-    // (`variable_candidates` reads it); a repeat to the end without a length field lists
-    // every length.
-    let mut lengths: Vec<usize> = [Direction::Request, Direction::Response]
-        .iter()
-        .flat_map(|d| {
-            p.messages(*d)
-                .iter()
-                .flat_map(|m| m.listed_lengths(&p.framing))
-        })
-        .collect();
-    lengths.sort_unstable_by(|a, b| b.cmp(a));
-    lengths.dedup();
-    // A short form of the frame (`framing.forms`): framed messages are framed by their start
-    // byte and length field (`variable_candidates`); only constant whole frames are listed.
-    // Payload truncation (`framing.truncation`): every frame by its length field alone.
-    if p.framing.truncation.is_some() {
-        lengths.clear();
-    }
-    if p.framing.form.is_some() {
-        lengths.clear();
-        for d in [Direction::Request, Direction::Response] {
-            lengths.extend(p.constants(d).map(|(_, f)| f.len()));
-        }
-        lengths.sort_unstable_by(|a, b| b.cmp(a));
-        lengths.dedup();
-    }
-    // Shapes: (code, mask) where the mask has bit i (requests) or 64 + i (responses) for
-    // LENGTHS[i]. The validator keeps distinct lengths to at most 64.
-    let mut shapes: Vec<(&[u8], u128)> = Vec::new();
-    for (d, shift) in [(Direction::Request, 0u32), (Direction::Response, 64)] {
-        for m in p.framed(d) {
-            let mask = m.listed_lengths(&p.framing).iter().fold(0u128, |a, len| {
-                let i = lengths.iter().position(|l| l == len).unwrap_or(0) as u32;
-                a | 1u128 << (i + shift)
-            });
-            if mask != 0 {
-                shapes.push((&m.code, mask));
-            }
-        }
-    }
+    let lengths = frame_lengths(p);
+    let shapes = length_shapes(p, &lengths);
     let first = p.framing.head(Direction::Request, 1);
     let code_at = first.code;
     // Start bytes that differ by direction say which direction's messages the head may start.
@@ -91,17 +53,7 @@ pub(super) fn emit_stream(p: &Protocol) -> TokenStream {
     // Constant whole frames (`frame:`): a head that begins with one's first byte (never a
     // start byte: validated) has those frames for candidates, each of its length, and no
     // framed one; the fast path's table asks `candidates` there.
-    let mut firsts: Vec<(u8, u128)> = Vec::new();
-    for (d, shift) in [(Direction::Request, 0u32), (Direction::Response, 64)] {
-        for (_, f) in p.constants(d) {
-            let i = lengths.iter().position(|l| *l == f.len()).unwrap_or(0) as u32;
-            let bit = 1u128 << (i + shift);
-            match firsts.iter_mut().find(|(b, _)| Some(b) == f.first()) {
-                Some((_, m)) => *m |= bit,
-                None => firsts.push((f.first().copied().unwrap_or(0), bit)),
-            }
-        }
-    }
+    let firsts = constant_firsts(p, &lengths);
     let constant_check = |each: &dyn Fn(u128) -> TokenStream| {
         if firsts.is_empty() {
             return quote!();
@@ -141,123 +93,23 @@ pub(super) fn emit_stream(p: &Protocol) -> TokenStream {
         }));
         quote!(#constants_in_mask #framed)
     };
-    let depth = shapes.iter().map(|s| s.0.len()).max().unwrap_or(1);
-    let mut arms = Vec::new();
-    flat_trie(&shapes, 0, depth, &mut Vec::new(), 0, &mut arms);
-    // Where a code-less message matches any code byte, the trie ends in a wildcard arm already.
-    let open = arms
-        .last()
-        .is_some_and(|(pat, _)| pat.iter().all(|t| t.to_string() == "_"));
-    let other = if open { quote!() } else { quote!(_ => 0,) };
-    let arms: Vec<TokenStream> = arms
-        .into_iter()
-        .map(|(pat, mask)| {
-            let mask = mask_lit(mask);
-            let pat = if pat.len() == 1 {
-                pat.into_iter().collect::<TokenStream>()
-            } else {
-                quote!((#(#pat),*))
-            };
-            quote!(#pat => #mask,)
-        })
-        .collect();
-    // The mask of the code bytes at `code_at`.
-    let mask_at = |code_at: usize| {
-        let bytes: Vec<TokenStream> = (0..depth).map(|i| head_byte(code_at + i)).collect();
-        let scrutinee = if depth == 1 {
-            quote!(#(#bytes)*)
-        } else {
-            quote!((#(#bytes),*))
-        };
-        // One code byte: the masks by table, a class per byte and the distinct masks (SD: three),
-        // where the `match` compiled to a jump table (SD's stream: 132.6 instructions a frame
-        // with it, 131.4 with the table and the one-length route of `Core::fast_with`).
-        let mask = if depth == 1 {
-            let all = shapes.iter().fold(0u128, |a, s| a | s.1);
-            let mut masks: Vec<Vec<u128>> = Vec::new();
-            let class: Vec<u8> = (0..=255u8)
-                .map(|b| {
-                    let m = shapes
-                        .iter()
-                        .filter(|s| s.0.first().map_or(true, |&c| c == b))
-                        .fold(0u128, |a, s| a | s.1);
-                    index_of(&mut masks, vec![m])
-                })
-                .collect();
-            // One table, the classes then the masks (16 bytes each, low first), so one base
-            // address. Up to 16 masks, a class is its mask's offset and the table is padded past
-            // the largest, so the index is neither scaled nor checked (SD: 127.6 -> 125.6
-            // instructions a frame); more, the class is masked to a power of two.
-            let size = masks.len().next_power_of_two();
-            let (mut table, index) = if size <= 16 {
-                let offsets = class.iter().map(|c| 16 * c).collect();
-                (offsets, quote!(TABLE[b as usize] as usize))
-            } else {
-                let last = usize_lit(size - 1);
-                (class, quote!(16 * (TABLE[b as usize] as usize & #last)))
-            };
-            for m in masks.iter().map(|m| m[0]) {
-                table.extend_from_slice(&m.to_le_bytes());
-            }
-            let end = if size <= 16 {
-                256 + 256 + 16
-            } else {
-                256 + 16 * size
-            };
-            table.resize(end, 0);
-            let (n, table) = (usize_lit(table.len()), Literal::byte_string(&table));
-            let (all, byte) = (mask_lit(all), &bytes[0]);
-            quote! {
-                static TABLE: [u8; #n] = *#table;
-                let mask = match #byte {
-                    rt::Some(&b) => {
-                        let i = 256 + #index;
-                        let mut m = [0; 16];
-                        m.copy_from_slice(&TABLE[i..i + 16]);
-                        u128::from_le_bytes(m)
-                    }
-                    rt::None => #all,
-                };
-            }
-        } else {
-            quote! {
-                let mask: u128 = match #scrutinee {
-                    #(#arms)*
-                    #other
-                };
-            }
-        };
-        mask
-    };
-    // A layout per direction with the code at another offset in each: a request's candidates
-    // by the bytes where a request's code sits, a response's by a response's.
-    let response_code_at = p.framing.head(Direction::Response, 1).code;
-    let mask = if response_code_at == code_at {
-        mask_at(code_at)
-    } else {
-        let (requests, responses) = (mask_at(code_at), mask_at(response_code_at));
-        quote! {
-            let mask: u128 = ({ #requests mask } & (u64::MAX as u128))
-                | ({ #responses mask } & !(u64::MAX as u128));
-        }
-    };
+    let mask = candidates_mask(p, &shapes, code_at);
     let lens = lengths.iter().map(|l| usize_lit(*l));
     let ty = type_ident(&p.name);
-    let naks: Vec<TokenStream> = p
-        .responses
-        .iter()
-        .filter(|r| matches!(r.kind, MessageKind::Response(ResponseKind::Nak)))
-        .map(|r| any_of(&ident("Response"), r))
-        .collect();
-    let is_nak = if naks.is_empty() {
-        quote!(false)
+    let protocol = super::protocol::emit_protocol_impl(p);
+    // A reply whose checksum takes in its request's bytes (`checksum_over_request`): the
+    // request's covered bytes kept by the stream decoder.
+    let span = if p.has_over_request() {
+        quote! {
+            const OVER_REQUEST: bool = true;
+            type Span = [u8; MAX_REQUEST_LEN];
+            const EMPTY_SPAN: [u8; MAX_REQUEST_LEN] = [0; MAX_REQUEST_LEN];
+        }
     } else {
-        quote!(matches!(response, #(#naks)|*))
-    };
-    let nak_param = if naks.is_empty() {
-        quote!(_response)
-    } else {
-        quote!(response)
+        quote! {
+            type Span = [u8; 0];
+            const EMPTY_SPAN: [u8; 0] = [];
+        }
     };
     let by_sync = if by_direction && first.start.is_some() {
         quote! {
@@ -268,101 +120,7 @@ pub(super) fn emit_stream(p: &Protocol) -> TokenStream {
     } else {
         quote!()
     };
-    let ck_len = usize_lit(p.framing.trailer_len());
-    let sum = frame_sum(p);
-    let doc_text = format!(
-        "The {} protocol as a type: implements [`busspec_runtime::Protocol`], so code generic over protocols works with it.",
-        p.name
-    );
-    let type_doc = doc(&doc_text);
-    let transactions = crate::transactions::transactions(p);
-    let replies_addressed = p.framing.has_address_in(Direction::Response);
-    // A reply whose checksum takes in its request's bytes (`checksum_over_request`): the
-    // request's covered bytes kept by the stream decoder, decoded and encoded over.
-    let (span, over_fns) = if p.has_over_request() {
-        let from = usize_lit(p.framing.checksum.covers_from);
-        // A request without a checksum (`checksum: none`): its bytes from where the
-        // checksum would cover to its end.
-        let span_of = if p.framed(Direction::Request).iter().any(|m| m.unchecked) {
-            let is = super::head::unchecked_fn(Direction::Request);
-            quote! {
-                if #is(request_frame) {
-                    return request_frame.get(#from..).unwrap_or(&[]);
-                }
-                rt::span(request_frame, #from, &FRAME)
-            }
-        } else {
-            quote!(rt::span(request_frame, #from, &FRAME))
-        };
-        (
-            quote! {
-                const OVER_REQUEST: bool = true;
-                type Span = [u8; MAX_REQUEST_LEN];
-                const EMPTY_SPAN: [u8; MAX_REQUEST_LEN] = [0; MAX_REQUEST_LEN];
-            },
-            quote! {
-                #[inline]
-                fn decode_response_over(frame: &[u8], request: rt::Option<&Request>, covered: rt::Option<&[u8]>) -> rt::Result<Decoded<Response>, rt::DecodeError> {
-                    Response::decode_over(frame, request, covered)
-                }
-                #[inline]
-                fn request_span(request_frame: &[u8]) -> &[u8] {
-                    #span_of
-                }
-                #[inline]
-                fn encode_reply(response: &Response, address: u8, request_frame: &[u8], buf: &mut [u8]) -> rt::Result<usize, rt::EncodeError> {
-                    response.encode_reply_over(address, Self::request_span(request_frame), buf)
-                }
-            },
-        )
-    } else {
-        (
-            quote! {
-                type Span = [u8; 0];
-                const EMPTY_SPAN: [u8; 0] = [];
-            },
-            quote!(),
-        )
-    };
-    // Whether a frame decodes, without its value, through the direction's borrowed view where
-    // it has one (no list copied): what the stream decoder asks of a frame that may be either
-    // direction. Without a view, the trait's default (the owned decoder).
-    let request_decodes = if no_view(p, Direction::Request).is_none() {
-        quote! {
-            #[inline]
-            fn request_decodes(frame: &[u8]) -> rt::Result<(), rt::DecodeError> {
-                RequestView::decode(frame).map(|_| ())
-            }
-        }
-    } else {
-        quote!()
-    };
-    let response_decodes = if no_view(p, Direction::Response).is_some() {
-        quote!()
-    } else if p.has_over_request() {
-        quote! {
-            #[inline]
-            fn response_decodes(frame: &[u8], request: rt::Option<&Request>, covered: rt::Option<&[u8]>) -> rt::Result<(), rt::DecodeError> {
-                ResponseView::decode_over(frame, request, covered).map(|_| ())
-            }
-        }
-    } else {
-        quote! {
-            #[inline]
-            fn response_decodes(frame: &[u8], request: rt::Option<&Request>, _covered: rt::Option<&[u8]>) -> rt::Result<(), rt::DecodeError> {
-                ResponseView::decode_for(frame, request).map(|_| ())
-            }
-        }
-    };
-    let views =
-        if no_view(p, Direction::Request).is_none() || no_view(p, Direction::Response).is_none() {
-            quote!(
-                const VIEWS: bool = true;
-            )
-        } else {
-            quote!()
-        };
-    let view_fns = quote!(#request_decodes #response_decodes);
+    let (views, view_fns) = view_checks(p);
     // No response only its request tells apart, and none whose checksum takes in its
     // request's bytes: a response decodes as the reply to any request as on its own, so the
     // stream decoder need not pair it (`Framing::REPLY_BY_REQUEST`, `true` by default).
@@ -372,67 +130,6 @@ pub(super) fn emit_stream(p: &Protocol) -> TokenStream {
         quote!(
             const REPLY_BY_REQUEST: bool = false;
         )
-    };
-    let skip_preamble = if p.framing.preamble.is_some() {
-        quote!(let frame = PREAMBLE.skip(frame);)
-    } else {
-        quote!()
-    };
-    let lay = if p.framing.form.is_some() {
-        quote!(FORM)
-    } else {
-        quote!(LONG)
-    };
-    let checksum_ok = if p.framing.long.is_some() || p.framing.form.is_some() {
-        // Laid out in the long form's width (`framing.length.long`) before the check.
-        quote! {
-            fn checksum_ok(frame: &[u8]) -> bool {
-                let mut laid = [0u8; MAX_FRAME_LEN];
-                let rt::Ok((frame, _)) = #lay.lay_out(frame, &mut laid) else {
-                    return false;
-                };
-                match frame.len().checked_sub(#ck_len) {
-                    rt::Some(n) if n > 0 => rt::check_sum(frame, n, &FRAME, #sum),
-                    _ => false,
-                }
-            }
-        }
-    } else if p.framing.escaping.is_none() {
-        // Frames that travel without a checksum (`checksum: none`) have none to fail.
-        let unchecked = [Direction::Request, Direction::Response]
-            .into_iter()
-            .filter(|&d| p.framed(d).iter().any(|m| m.unchecked))
-            .map(|d| {
-                let is = super::head::unchecked_fn(d);
-                quote!(if #is(frame) { return true; })
-            });
-        quote! {
-            fn checksum_ok(frame: &[u8]) -> bool {
-                #skip_preamble
-                #(#unchecked)*
-                match frame.len().checked_sub(#ck_len) {
-                    rt::Some(n) if n > 0 => rt::check_sum(frame, n, &FRAME, #sum),
-                    _ => false,
-                }
-            }
-        }
-    } else {
-        quote! {
-            fn checksum_ok(frame: &[u8]) -> bool {
-                let mut plain = [0u8; UNESCAPED_LEN];
-                let un = match rt::unescape_frame(&ESCAPING, frame, &mut plain, #sum) {
-                    rt::Ok(un) => un,
-                    rt::Err(_) => return false,
-                };
-                let rt::Some(frame) = plain.get(..un.len) else {
-                    return false;
-                };
-                match frame.len().checked_sub(#ck_len) {
-                    rt::Some(n) if n > 0 => rt::check_sum(frame, n, &FRAME, #sum),
-                    _ => false,
-                }
-            }
-        }
     };
     let framing_fns = if p.framing.truncation.is_some() {
         // Payload truncation (`framing.truncation`): every frame is framed by its length
@@ -524,54 +221,7 @@ pub(super) fn emit_stream(p: &Protocol) -> TokenStream {
         lens.collect()
     };
     quote! {
-        #type_doc
-        #[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
-        pub struct #ty;
-        impl rt::Protocol for #ty {
-            type Request = Request;
-            type Response = Response;
-            type Buffer = [u8; MAX_FRAME_LEN];
-            const NAME: &'static str = PROTOCOL;
-            const SOURCE: rt::Source = rt::Source {
-                document: DOCUMENT,
-                revision: DOCUMENT_REVISION,
-                spec_sha256: SPEC_SHA256,
-                spec_yaml: SPEC_YAML,
-            };
-            const BUS: rt::Bus = rt::Bus {
-                baud: BAUD,
-                inter_frame_gap_ms: INTER_FRAME_GAP_MS,
-                max_frames_per_s: MAX_FRAMES_PER_S,
-                device_addresses: DEVICE_ADDRESSES,
-                broadcast_address: BROADCAST_ADDRESS,
-                host_address: HOST_ADDRESS,
-                replies_addressed: #replies_addressed,
-                transactions: #transactions,
-            };
-            const MAX_FRAME_LEN: usize = MAX_FRAME_LEN;
-            const EMPTY_BUFFER: [u8; MAX_FRAME_LEN] = [0; MAX_FRAME_LEN];
-            #[inline]
-            fn decode_request(frame: &[u8]) -> rt::Result<Decoded<Request>, rt::DecodeError> {
-                Request::decode(frame)
-            }
-            #[inline]
-            fn decode_response_for(frame: &[u8], request: rt::Option<&Request>) -> rt::Result<Decoded<Response>, rt::DecodeError> {
-                Response::decode_for(frame, request)
-            }
-            #over_fns
-            #[inline]
-            fn answers(request: &Request, response: &Response) -> bool {
-                response.answers(request)
-            }
-            #[inline]
-            fn command(request: &Request) -> rt::Command {
-                request.command()
-            }
-            fn is_nak(#nak_param: &Response) -> bool {
-                #is_nak
-            }
-            #checksum_ok
-        }
+        #protocol
         impl rt::Framing for #ty {
             const MAX_REQUEST_LEN: usize = MAX_REQUEST_LEN;
             const MAX_RESPONSE_LEN: usize = MAX_RESPONSE_LEN;
@@ -587,6 +237,221 @@ pub(super) fn emit_stream(p: &Protocol) -> TokenStream {
         /// What [`StreamDecoder`] finds in a stream.
         pub type Event = ::busspec_runtime::stream::Event<Request, Response>;
     }
+}
+
+/// Every distinct frame length the stream decoder lists, longest first (`FRAME_LENGTHS`).
+/// A variable-length message whose length or count field gives its length lists none
+/// (`variable_candidates` reads it); a repeat to the end without a length field lists every
+/// length.
+fn frame_lengths(p: &Protocol) -> Vec<usize> {
+    let mut lengths: Vec<usize> = [Direction::Request, Direction::Response]
+        .iter()
+        .flat_map(|d| {
+            p.messages(*d)
+                .iter()
+                .flat_map(|m| m.listed_lengths(&p.framing))
+        })
+        .collect();
+    lengths.sort_unstable_by(|a, b| b.cmp(a));
+    lengths.dedup();
+    // A short form of the frame (`framing.forms`): framed messages are framed by their start
+    // byte and length field (`variable_candidates`); only constant whole frames are listed.
+    // Payload truncation (`framing.truncation`): every frame by its length field alone.
+    if p.framing.truncation.is_some() {
+        lengths.clear();
+    }
+    if p.framing.form.is_some() {
+        lengths.clear();
+        for d in [Direction::Request, Direction::Response] {
+            lengths.extend(p.constants(d).map(|(_, f)| f.len()));
+        }
+        lengths.sort_unstable_by(|a, b| b.cmp(a));
+        lengths.dedup();
+    }
+    lengths
+}
+
+/// Shapes: (code, mask) where the mask has bit i (requests) or 64 + i (responses) for
+/// `lengths[i]`, one a framed message. The validator keeps distinct lengths to at most 64.
+fn length_shapes<'p>(p: &'p Protocol, lengths: &[usize]) -> Vec<(&'p [u8], u128)> {
+    let mut shapes: Vec<(&[u8], u128)> = Vec::new();
+    for (d, shift) in [(Direction::Request, 0u32), (Direction::Response, 64)] {
+        for m in p.framed(d) {
+            let mask = m.listed_lengths(&p.framing).iter().fold(0u128, |a, len| {
+                let i = lengths.iter().position(|l| l == len).unwrap_or(0) as u32;
+                a | 1u128 << (i + shift)
+            });
+            if mask != 0 {
+                shapes.push((&m.code, mask));
+            }
+        }
+    }
+    shapes
+}
+
+/// The first byte of each constant whole frame (`frame:`), and the mask of the lengths of the
+/// constant frames that begin with it.
+fn constant_firsts(p: &Protocol, lengths: &[usize]) -> Vec<(u8, u128)> {
+    let mut firsts: Vec<(u8, u128)> = Vec::new();
+    for (d, shift) in [(Direction::Request, 0u32), (Direction::Response, 64)] {
+        for (_, f) in p.constants(d) {
+            let i = lengths.iter().position(|l| *l == f.len()).unwrap_or(0) as u32;
+            let bit = 1u128 << (i + shift);
+            match firsts.iter_mut().find(|(b, _)| Some(b) == f.first()) {
+                Some((_, m)) => *m |= bit,
+                None => firsts.push((f.first().copied().unwrap_or(0), bit)),
+            }
+        }
+    }
+    firsts
+}
+
+/// The mask of `candidates` (`let mask: u128`): the lengths the code bytes at `code_at` allow,
+/// by table for one code byte, by a `match` over a trie of the codes for more.
+fn candidates_mask(p: &Protocol, shapes: &[(&[u8], u128)], code_at: usize) -> TokenStream {
+    let depth = shapes.iter().map(|s| s.0.len()).max().unwrap_or(1);
+    let mut arms = Vec::new();
+    flat_trie(shapes, 0, depth, &mut Vec::new(), 0, &mut arms);
+    // Where a code-less message matches any code byte, the trie ends in a wildcard arm already.
+    let open = arms
+        .last()
+        .is_some_and(|(pat, _)| pat.iter().all(|t| t.to_string() == "_"));
+    let other = if open { quote!() } else { quote!(_ => 0,) };
+    let arms: Vec<TokenStream> = arms
+        .into_iter()
+        .map(|(pat, mask)| {
+            let mask = mask_lit(mask);
+            let pat = if pat.len() == 1 {
+                pat.into_iter().collect::<TokenStream>()
+            } else {
+                quote!((#(#pat),*))
+            };
+            quote!(#pat => #mask,)
+        })
+        .collect();
+    // The mask of the code bytes at `code_at`.
+    let mask_at = |code_at: usize| {
+        let bytes: Vec<TokenStream> = (0..depth).map(|i| head_byte(code_at + i)).collect();
+        let scrutinee = if depth == 1 {
+            quote!(#(#bytes)*)
+        } else {
+            quote!((#(#bytes),*))
+        };
+        // One code byte: the masks by table, a class per byte and the distinct masks (SD: three),
+        // where the `match` compiled to a jump table (SD's stream: 132.6 instructions a frame
+        // with it, 131.4 with the table and the one-length route of `Core::fast_with`).
+        let mask = if depth == 1 {
+            let all = shapes.iter().fold(0u128, |a, s| a | s.1);
+            let mut masks: Vec<Vec<u128>> = Vec::new();
+            let class: Vec<u8> = (0..=255u8)
+                .map(|b| {
+                    let m = shapes
+                        .iter()
+                        .filter(|s| s.0.first().map_or(true, |&c| c == b))
+                        .fold(0u128, |a, s| a | s.1);
+                    index_of(&mut masks, vec![m])
+                })
+                .collect();
+            // One table, the classes then the masks (16 bytes each, low first), so one base
+            // address. Up to 16 masks, a class is its mask's offset and the table is padded past
+            // the largest, so the index is neither scaled nor checked (SD: 127.6 -> 125.6
+            // instructions a frame); more, the class is masked to a power of two.
+            let size = masks.len().next_power_of_two();
+            let (mut table, index) = if size <= 16 {
+                let offsets = class.iter().map(|c| 16 * c).collect();
+                (offsets, quote!(TABLE[b as usize] as usize))
+            } else {
+                let last = usize_lit(size - 1);
+                (class, quote!(16 * (TABLE[b as usize] as usize & #last)))
+            };
+            for m in masks.iter().map(|m| m[0]) {
+                table.extend_from_slice(&m.to_le_bytes());
+            }
+            let end = if size <= 16 {
+                256 + 256 + 16
+            } else {
+                256 + 16 * size
+            };
+            table.resize(end, 0);
+            let (n, table) = (usize_lit(table.len()), Literal::byte_string(&table));
+            let (all, byte) = (mask_lit(all), &bytes[0]);
+            quote! {
+                static TABLE: [u8; #n] = *#table;
+                let mask = match #byte {
+                    rt::Some(&b) => {
+                        let i = 256 + #index;
+                        let mut m = [0; 16];
+                        m.copy_from_slice(&TABLE[i..i + 16]);
+                        u128::from_le_bytes(m)
+                    }
+                    rt::None => #all,
+                };
+            }
+        } else {
+            quote! {
+                let mask: u128 = match #scrutinee {
+                    #(#arms)*
+                    #other
+                };
+            }
+        };
+        mask
+    };
+    // A layout per direction with the code at another offset in each: a request's candidates
+    // by the bytes where a request's code sits, a response's by a response's.
+    let response_code_at = p.framing.head(Direction::Response, 1).code;
+    if response_code_at == code_at {
+        mask_at(code_at)
+    } else {
+        let (requests, responses) = (mask_at(code_at), mask_at(response_code_at));
+        quote! {
+            let mask: u128 = ({ #requests mask } & (u64::MAX as u128))
+                | ({ #responses mask } & !(u64::MAX as u128));
+        }
+    }
+}
+
+/// Whether a frame decodes, without its value, through the direction's borrowed view where
+/// it has one (no list copied): what the stream decoder asks of a frame that may be either
+/// direction. Without a view, the trait's default (the owned decoder).
+/// Returns `Framing::VIEWS` where a direction has a view, and the functions.
+fn view_checks(p: &Protocol) -> (TokenStream, TokenStream) {
+    let request_decodes = if no_view(p, Direction::Request).is_none() {
+        quote! {
+            #[inline]
+            fn request_decodes(frame: &[u8]) -> rt::Result<(), rt::DecodeError> {
+                RequestView::decode(frame).map(|_| ())
+            }
+        }
+    } else {
+        quote!()
+    };
+    let response_decodes = if no_view(p, Direction::Response).is_some() {
+        quote!()
+    } else if p.has_over_request() {
+        quote! {
+            #[inline]
+            fn response_decodes(frame: &[u8], request: rt::Option<&Request>, covered: rt::Option<&[u8]>) -> rt::Result<(), rt::DecodeError> {
+                ResponseView::decode_over(frame, request, covered).map(|_| ())
+            }
+        }
+    } else {
+        quote! {
+            #[inline]
+            fn response_decodes(frame: &[u8], request: rt::Option<&Request>, _covered: rt::Option<&[u8]>) -> rt::Result<(), rt::DecodeError> {
+                ResponseView::decode_for(frame, request).map(|_| ())
+            }
+        }
+    };
+    let views =
+        if no_view(p, Direction::Request).is_none() || no_view(p, Direction::Response).is_none() {
+            quote!(
+                const VIEWS: bool = true;
+            )
+        } else {
+            quote!()
+        };
+    (views, quote!(#request_decodes #response_decodes))
 }
 
 /// `candidate`, where the code is one or two bytes, there is more than one frame length and no
