@@ -13,168 +13,11 @@ pub(super) fn emit_header(p: &Protocol, source: &str, spec_path: &str) -> TokenS
     let max = max_req.max(max_resp);
     let (max_req, max_resp, max) = (usize_lit(max_req), usize_lit(max_resp), usize_lit(max));
     let escaping = emit_escaping(p);
-    let preamble = p.framing.preamble.as_ref().map(|pre| {
-        let (byte, send, max) = (hex_u8(pre.byte), pre.send, pre.max);
-        quote! {
-            /// The wake-up bytes sent before every frame (`framing.preamble`): `send` of
-            /// them are written, 0 to `max` taken.
-            pub const PREAMBLE: rt::Preamble = rt::Preamble { byte: #byte, send: #send, max: #max };
-        }
-    });
-    let transform = p.framing.transform.as_ref().map(|t| {
-        let kind = match t.kind {
-            TransformKind::Add(k) => {
-                let k = hex_u8(k);
-                quote!(rt::Transform::Add(#k))
-            }
-            TransformKind::Xor(k) => {
-                let k = hex_u8(k);
-                quote!(rt::Transform::Xor(#k))
-            }
-        };
-        quote! {
-            /// The per-byte transform of every payload byte as it travels
-            /// (`framing.transform`): undone before fields are read, done before the checksum
-            /// is computed.
-            pub const TRANSFORM: rt::Transform = #kind;
-        }
-    });
-    let rules = [Direction::Request, Direction::Response].map(|d| {
-        match (
-            p.framing.length_rule(d).filter(|r| r.grows),
-            p.frame_len_bounds(d),
-        ) {
-            (Some(r), Some((lo, hi))) => {
-                let k = Literal::i64_unsuffixed(r.k);
-                let (lo, hi) = (usize_lit(lo.max(r.head_len)), usize_lit(hi));
-                quote!(rt::Some((#k, #lo, #hi)))
-            }
-            _ => quote!(rt::None),
-        }
-    });
-    let form = p.framing.form.as_ref().map(|f| {
-        let (start, long_start) = (hex_u8(f.start), hex_u8(f.long_start));
-        let (start_at, at) = (usize_lit(f.start_at), usize_lit(f.at));
-        let fill = f.fill.iter().map(|b| hex_u8(*b));
-        let (length_at, width) = (usize_lit(f.length_at), usize_lit(f.width));
-        let le = p.byte_order == ByteOrder::Little;
-        let most = Literal::i64_unsuffixed(f.most);
-        let laid_len = usize_lit(f.laid_len);
-        let [rq, rs] = rules.clone();
-        quote! {
-            /// The short form of the frame (`framing.forms`): frames starting with its start
-            /// byte lack the parts it drops and carry an empty payload. Decoding lays every
-            /// frame out in the framing's own layout; encoding sends a frame with an empty
-            /// payload short.
-            pub const FORM: rt::ShortForm = rt::ShortForm {
-                start: #start,
-                long_start: #long_start,
-                start_at: #start_at,
-                at: #at,
-                fill: &[#(#fill),*],
-                length_at: #length_at,
-                width: #width,
-                le: #le,
-                most: #most,
-                laid_len: #laid_len,
-                rules: [#rq, #rs],
-            };
-        }
-    });
-    let long = p.framing.long.as_ref().map(|l| {
-        let (start, short_start) = (hex_u8(l.start), hex_u8(l.short_start));
-        let (start_at, length_at) = (usize_lit(l.start_at), usize_lit(l.length_at));
-        let (short_width, width) = (usize_lit(l.short_width), usize_lit(l.width));
-        let le = p.byte_order == ByteOrder::Little;
-        let rules = [Direction::Request, Direction::Response].map(|d| {
-            match (
-                p.framing.length_rule(d).filter(|r| r.grows),
-                p.frame_len_bounds(d),
-            ) {
-                (Some(r), Some((lo, hi))) => {
-                    let k = Literal::i64_unsuffixed(r.k);
-                    let (lo, hi) = (usize_lit(lo.max(r.head_len)), usize_lit(hi));
-                    quote!(rt::Some((#k, #lo, #hi)))
-                }
-                _ => quote!(rt::None),
-            }
-        });
-        let [rq, rs] = rules;
-        quote! {
-            /// The long form of the length field (`framing.length.long`): frames starting with
-            /// its start byte carry the wider length field. Decoding lays every frame out in
-            /// its width; encoding sends the long form only where the length does not fit the
-            /// short one.
-            pub const LONG: rt::LongLength = rt::LongLength {
-                start: #start,
-                short_start: #short_start,
-                start_at: #start_at,
-                length_at: #length_at,
-                short_width: #short_width,
-                width: #width,
-                le: #le,
-                rules: [#rq, #rs],
-            };
-        }
-    });
-    let truncation = p.framing.truncation.map(|_| {
-        let code_len = p.framing.request.code_lengths.first().copied().unwrap_or(0);
-        let head = p.framing.head(Direction::Request, code_len);
-        let rule = p.framing.length_rule(Direction::Request);
-        let start_at = match head.start {
-            Some(at) => {
-                let at = usize_lit(at);
-                quote!(rt::Some(#at))
-            }
-            None => quote!(rt::None),
-        };
-        let sync = p.framing.sync.iter().map(|b| hex_u8(*b));
-        let response_sync = p.framing.response_sync.iter().map(|b| hex_u8(*b));
-        let length_at = usize_lit(head.length.unwrap_or(0));
-        let width = usize_lit(p.framing.length.as_ref().map_or(1, |l| l.width));
-        let le = p.byte_order == ByteOrder::Little;
-        let k = Literal::i64_unsuffixed(rule.map_or(0, |r| r.k));
-        let (code_at, code_len_lit, payload_at) = (
-            usize_lit(head.code),
-            usize_lit(code_len),
-            usize_lit(head.payload),
-        );
-        // Each code once, its payload's length and the directions that have it.
-        let mut codes: Vec<(u32, usize, u8)> = Vec::new();
-        for (d, bit) in [(Direction::Request, 1u8), (Direction::Response, 2)] {
-            for m in p.framed(d) {
-                let code = m.code.iter().fold(0u32, |a, b| a << 8 | u32::from(*b));
-                match codes.iter_mut().find(|(c, _, _)| *c == code) {
-                    Some((_, _, dirs)) => *dirs |= bit,
-                    None => codes.push((code, m.payload_len, bit)),
-                }
-            }
-        }
-        let entries = codes.iter().map(|(c, n, d)| {
-            let c = hex_lit(u64::from(*c));
-            let n = usize_lit(*n);
-            let d = Literal::u8_unsuffixed(*d);
-            quote!((#c, #n, #d))
-        });
-        quote! {
-            /// Payload truncation (`framing.truncation: trailing_zeros`): a payload's trailing
-            /// zero bytes are stripped as it travels (one byte kept); decoding pads it with
-            /// zeros up to its message's length.
-            pub const TRUNCATION: rt::Truncation = rt::Truncation {
-                start_at: #start_at,
-                sync: &[#(#sync),*],
-                response_sync: &[#(#response_sync),*],
-                length_at: #length_at,
-                width: #width,
-                le: #le,
-                k: #k,
-                code_at: #code_at,
-                code_len: #code_len_lit,
-                payload_at: #payload_at,
-                payloads: &[#(#entries),*],
-            };
-        }
-    });
+    let preamble = preamble_const(p);
+    let transform = transform_const(p);
+    let form = form_const(p);
+    let long = long_const(p);
+    let truncation = truncation_const(p);
     let inner = inner_doc(&format!(
         "{} (`{}`).\n\nGenerated from `{source}`, transcribed from *{title}*, revision {revision} ({date}).\nNumbers travel {} on the wire.\n{}",
         p.title,
@@ -309,6 +152,180 @@ pub(super) fn emit_header(p: &Protocol, source: &str, spec_path: &str) -> TokenS
         #form
         #truncation
     }
+}
+
+/// `PREAMBLE`, where the framing has wake-up bytes.
+fn preamble_const(p: &Protocol) -> Option<TokenStream> {
+    p.framing.preamble.as_ref().map(|pre| {
+        let (byte, send, max) = (hex_u8(pre.byte), pre.send, pre.max);
+        quote! {
+            /// The wake-up bytes sent before every frame (`framing.preamble`): `send` of
+            /// them are written, 0 to `max` taken.
+            pub const PREAMBLE: rt::Preamble = rt::Preamble { byte: #byte, send: #send, max: #max };
+        }
+    })
+}
+
+/// `TRANSFORM`, where the payload travels transformed.
+fn transform_const(p: &Protocol) -> Option<TokenStream> {
+    p.framing.transform.as_ref().map(|t| {
+        let kind = match t.kind {
+            TransformKind::Add(k) => {
+                let k = hex_u8(k);
+                quote!(rt::Transform::Add(#k))
+            }
+            TransformKind::Xor(k) => {
+                let k = hex_u8(k);
+                quote!(rt::Transform::Xor(#k))
+            }
+        };
+        quote! {
+            /// The per-byte transform of every payload byte as it travels
+            /// (`framing.transform`): undone before fields are read, done before the checksum
+            /// is computed.
+            pub const TRANSFORM: rt::Transform = #kind;
+        }
+    })
+}
+
+/// Each direction's length rule as the runtime's forms take it: `(k, shortest, longest)`
+/// where the length field grows with the frame.
+fn length_rules(p: &Protocol) -> [TokenStream; 2] {
+    [Direction::Request, Direction::Response].map(|d| {
+        match (
+            p.framing.length_rule(d).filter(|r| r.grows),
+            p.frame_len_bounds(d),
+        ) {
+            (Some(r), Some((lo, hi))) => {
+                let k = Literal::i64_unsuffixed(r.k);
+                let (lo, hi) = (usize_lit(lo.max(r.head_len)), usize_lit(hi));
+                quote!(rt::Some((#k, #lo, #hi)))
+            }
+            _ => quote!(rt::None),
+        }
+    })
+}
+
+/// `FORM`, where the frame has a short form (`framing.forms`).
+fn form_const(p: &Protocol) -> Option<TokenStream> {
+    p.framing.form.as_ref().map(|f| {
+        let (start, long_start) = (hex_u8(f.start), hex_u8(f.long_start));
+        let (start_at, at) = (usize_lit(f.start_at), usize_lit(f.at));
+        let fill = f.fill.iter().map(|b| hex_u8(*b));
+        let (length_at, width) = (usize_lit(f.length_at), usize_lit(f.width));
+        let le = p.byte_order == ByteOrder::Little;
+        let most = Literal::i64_unsuffixed(f.most);
+        let laid_len = usize_lit(f.laid_len);
+        let [rq, rs] = length_rules(p);
+        quote! {
+            /// The short form of the frame (`framing.forms`): frames starting with its start
+            /// byte lack the parts it drops and carry an empty payload. Decoding lays every
+            /// frame out in the framing's own layout; encoding sends a frame with an empty
+            /// payload short.
+            pub const FORM: rt::ShortForm = rt::ShortForm {
+                start: #start,
+                long_start: #long_start,
+                start_at: #start_at,
+                at: #at,
+                fill: &[#(#fill),*],
+                length_at: #length_at,
+                width: #width,
+                le: #le,
+                most: #most,
+                laid_len: #laid_len,
+                rules: [#rq, #rs],
+            };
+        }
+    })
+}
+
+/// `LONG`, where the start byte chooses the length field's width (`framing.length.long`).
+fn long_const(p: &Protocol) -> Option<TokenStream> {
+    p.framing.long.as_ref().map(|l| {
+        let (start, short_start) = (hex_u8(l.start), hex_u8(l.short_start));
+        let (start_at, length_at) = (usize_lit(l.start_at), usize_lit(l.length_at));
+        let (short_width, width) = (usize_lit(l.short_width), usize_lit(l.width));
+        let le = p.byte_order == ByteOrder::Little;
+        let [rq, rs] = length_rules(p);
+        quote! {
+            /// The long form of the length field (`framing.length.long`): frames starting with
+            /// its start byte carry the wider length field. Decoding lays every frame out in
+            /// its width; encoding sends the long form only where the length does not fit the
+            /// short one.
+            pub const LONG: rt::LongLength = rt::LongLength {
+                start: #start,
+                short_start: #short_start,
+                start_at: #start_at,
+                length_at: #length_at,
+                short_width: #short_width,
+                width: #width,
+                le: #le,
+                rules: [#rq, #rs],
+            };
+        }
+    })
+}
+
+/// `TRUNCATION`, where payloads travel without their trailing zeros.
+fn truncation_const(p: &Protocol) -> Option<TokenStream> {
+    p.framing.truncation.map(|_| {
+        let code_len = p.framing.request.code_lengths.first().copied().unwrap_or(0);
+        let head = p.framing.head(Direction::Request, code_len);
+        let rule = p.framing.length_rule(Direction::Request);
+        let start_at = match head.start {
+            Some(at) => {
+                let at = usize_lit(at);
+                quote!(rt::Some(#at))
+            }
+            None => quote!(rt::None),
+        };
+        let sync = p.framing.sync.iter().map(|b| hex_u8(*b));
+        let response_sync = p.framing.response_sync.iter().map(|b| hex_u8(*b));
+        let length_at = usize_lit(head.length.unwrap_or(0));
+        let width = usize_lit(p.framing.length.as_ref().map_or(1, |l| l.width));
+        let le = p.byte_order == ByteOrder::Little;
+        let k = Literal::i64_unsuffixed(rule.map_or(0, |r| r.k));
+        let (code_at, code_len_lit, payload_at) = (
+            usize_lit(head.code),
+            usize_lit(code_len),
+            usize_lit(head.payload),
+        );
+        // Each code once, its payload's length and the directions that have it.
+        let mut codes: Vec<(u32, usize, u8)> = Vec::new();
+        for (d, bit) in [(Direction::Request, 1u8), (Direction::Response, 2)] {
+            for m in p.framed(d) {
+                let code = m.code.iter().fold(0u32, |a, b| a << 8 | u32::from(*b));
+                match codes.iter_mut().find(|(c, _, _)| *c == code) {
+                    Some((_, _, dirs)) => *dirs |= bit,
+                    None => codes.push((code, m.payload_len, bit)),
+                }
+            }
+        }
+        let entries = codes.iter().map(|(c, n, d)| {
+            let c = hex_lit(u64::from(*c));
+            let n = usize_lit(*n);
+            let d = Literal::u8_unsuffixed(*d);
+            quote!((#c, #n, #d))
+        });
+        quote! {
+            /// Payload truncation (`framing.truncation: trailing_zeros`): a payload's trailing
+            /// zero bytes are stripped as it travels (one byte kept); decoding pads it with
+            /// zeros up to its message's length.
+            pub const TRUNCATION: rt::Truncation = rt::Truncation {
+                start_at: #start_at,
+                sync: &[#(#sync),*],
+                response_sync: &[#(#response_sync),*],
+                length_at: #length_at,
+                width: #width,
+                le: #le,
+                k: #k,
+                code_at: #code_at,
+                code_len: #code_len_lit,
+                payload_at: #payload_at,
+                payloads: &[#(#entries),*],
+            };
+        }
+    })
 }
 
 /// Whether each direction's decode checks its own start bytes where its layout puts them
