@@ -1,5 +1,177 @@
 use super::*;
 
+/// An optional field `fi` (a plain number, the `k`th optional one), read from the frame laid
+/// out as if every optional field were present (`rt::Optionals::split`) where it is present,
+/// checked against its range there: its statement into `stmts`, its value's name and local.
+fn decode_optional(
+    ctx: &Ctx,
+    m: &Message,
+    fi: usize,
+    k: usize,
+    stmts: &mut Vec<TokenStream>,
+) -> Option<(Ident, TokenStream)> {
+    let (o, f) = (m.layout, &m.fields[fi]);
+    let (name, n) = (&f.name, format_ident!("field_{}", fi));
+    let ls = leaves(m);
+    let read = read_wire(f, f.frame_at(&o) - f.offset + full_shift(m, fi));
+    let wt = wire_type(f);
+    let (w, k, v) = (wt.ident(), usize_lit(k), local(name));
+    let mut inner = Vec::new();
+    let wire = match leaf_range(f, None, wt.limits()) {
+        Some((range_fn, range)) => {
+            inner.push(quote!(let #n: #w = #read;));
+            let fd = ctx.field_desc(m, name);
+            inner.push(quote!(rt::#range_fn(#fd, s.at(#k), #n, #range)?;));
+            quote!(#n)
+        }
+        None => read,
+    };
+    if let Some(leaf) = ls.iter().find(|l| l.bits.is_none() && l.name == f.name) {
+        let value = from_wire(ctx, leaf, Some(wt), wire);
+        stmts.push(quote! {
+            let #v = if s.has(#k) {
+                #(#inner)*
+                rt::Some(#value)
+            } else {
+                rt::None
+            };
+        });
+        return Some((ident(name), quote!(#v)));
+    }
+    None
+}
+
+/// A list of packed elements (`packed`) at `at`: its padding bits checked 0, its elements
+/// unpacked (or read whole, of other types) and checked within the field's range; its local.
+fn decode_packed(
+    ctx: &Ctx,
+    m: &Message,
+    f: &Field,
+    pk: &Packed,
+    at: &TokenStream,
+    stmts: &mut Vec<TokenStream>,
+) -> TokenStream {
+    let (o, name) = (m.layout, &f.name);
+    let read_at = usize_lit(f.frame_at(&o));
+    let e = wire_type(f).ident();
+    let (count, bits, lsb) = (
+        usize_lit(pk.count),
+        usize_lit(pk.bits as usize),
+        pk.lsb_first,
+    );
+    let end = usize_lit(f.frame_at(&o) + f.width);
+    let last = usize_lit(f.width - 1);
+    let v = local(name);
+    let bytes = quote!(&frame[#read_at..#end]);
+    let fd = ctx.field_desc(m, name);
+    stmts.push(
+        quote!(rt::equal(#fd, #at + #last, rt::packed_padding(#bytes, #count, #bits, #lsb), 0)?;),
+    );
+    // Elements typed by their enum or unit where they have one.
+    let e = match ctx.element_type(f) {
+        Some(t) => quote!(#t),
+        None => quote!(#e),
+    };
+    if fixed_elements(f) {
+        // A list of a fixed count of other elements than unsigned ones of 1, 2 or 4
+        // bytes: each whole, in its byte and word order.
+        let width = usize_lit(pk.elem_width);
+        let (le, swapped, signed) = (f.byte_order == ByteOrder::Little, f.word_swapped, f.signed);
+        stmts.push(quote!(let #v = rt::fixed_elements::<#e, #count>(#bytes, #width, #le, #swapped, #signed);));
+    } else {
+        stmts.push(quote!(let #v = rt::unpack::<#e, #count>(#bytes, #bits, #lsb);));
+    }
+    if let Some((lo, hi)) = f.range {
+        let (lo, hi) = (i64_lit(lo), i64_lit(hi));
+        let fd = ctx.field_desc(m, name);
+        stmts.push(quote!(rt::packed_in_range(#fd, #at, #bits, #v.as_slice(), #lo, #hi)?;));
+    }
+    quote!(#v)
+}
+
+/// The sub-fields (`bits`) of field `f`, whose wire value is `wire`, at `at`: each shifted
+/// and masked out (sign-extended where signed), a constant one checked, the others checked
+/// within their range; their values.
+fn decode_bits(
+    ctx: &Ctx,
+    m: &Message,
+    f: &Field,
+    wire: &TokenStream,
+    at: &TokenStream,
+    stmts: &mut Vec<TokenStream>,
+) -> Vec<(Ident, TokenStream)> {
+    let ls = leaves(m);
+    let wt = wire_type(f);
+    let unsigned = IntType {
+        bits: wt.bits,
+        signed: false,
+        float: false,
+    };
+    let mut values = Vec::new();
+    let ut = unsigned.ident();
+    // The wire value as unsigned bits.
+    let bits = if wt.signed {
+        quote!(#wire as #ut)
+    } else {
+        wire.clone()
+    };
+    for b in &f.bits {
+        let lsb = u32::from(b.lsb);
+        let width = u32::from(b.width());
+        let mask = hex_lit((1u64 << width) - 1);
+        let bt = bits_type(b);
+        let btid = bt.ident();
+        let shifted = if lsb == 0 {
+            bits.clone()
+        } else {
+            let (lsb, bits) = (Literal::u32_unsuffixed(lsb), paren(bits.clone()));
+            quote!(#bits >> #lsb)
+        };
+        let field = if lsb + width >= wt.rust_bits() {
+            shifted
+        } else {
+            let shifted = paren(shifted);
+            quote!(#shifted & #mask)
+        };
+        let field_p = paren(field.clone());
+        let extract = if b.signed {
+            let shift = Literal::u32_unsuffixed(bt.bits - width);
+            let ubt = IntType {
+                bits: bt.bits,
+                signed: false,
+                float: false,
+            }
+            .ident();
+            quote!(((#field_p as #ubt) << #shift) as #btid >> #shift)
+        } else {
+            quote!(#field_p as #btid)
+        };
+        let bname = &b.name;
+        match b.constant {
+            Some(c) => {
+                let l = hex_lit(c);
+                let fd = ctx.field_desc(m, bname);
+                stmts.push(quote!(rt::equal(#fd, #at, #field, #l)?;));
+            }
+            None => {
+                let limits = raw_limits(u32::from(b.width()), b.signed);
+                if let Some((range_fn, range)) = leaf_range(f, Some(b), limits) {
+                    let fd = ctx.field_desc(m, bname);
+                    stmts.push(quote!(rt::#range_fn(#fd, #at, #extract, #range)?;));
+                }
+                if let Some(leaf) = ls.iter().find(|l| l.name == b.name) {
+                    let value = match ctx.kind(leaf) {
+                        Kind::Bool => quote!(#field_p != 0),
+                        _ => from_wire(ctx, leaf, Some(bt), extract),
+                    };
+                    values.push((ident(&b.name), value));
+                }
+            }
+        }
+    }
+    values
+}
+
 /// Decoding one message from `frame`, a fixed-size array of exactly its length whose checksum
 /// is verified: the statements that check its constants, repeated fields, ranges and
 /// broadcast rule, and the expression building it.
@@ -34,71 +206,14 @@ pub(super) fn decode_body(ctx: &Ctx, m: &Message) -> (Vec<TokenStream>, TokenStr
         };
         let name = &f.name;
         if let (Some(_), Some(k)) = (&f.present, optional_index(m, fi)) {
-            // An optional field (a plain number): read from the frame laid out as if every
-            // optional field were present (`rt::Optionals::split`), where it is present.
-            let read = read_wire(f, f.frame_at(&o) - f.offset + full_shift(m, fi));
-            let wt = wire_type(f);
-            let (w, k, v) = (wt.ident(), usize_lit(k), local(name));
-            let mut inner = Vec::new();
-            let wire = match leaf_range(f, None, wt.limits()) {
-                Some((range_fn, range)) => {
-                    inner.push(quote!(let #n: #w = #read;));
-                    let fd = ctx.field_desc(m, name);
-                    inner.push(quote!(rt::#range_fn(#fd, s.at(#k), #n, #range)?;));
-                    quote!(#n)
-                }
-                None => read,
-            };
-            if let Some(leaf) = ls.iter().find(|l| l.bits.is_none() && l.name == f.name) {
-                let value = from_wire(ctx, leaf, Some(wt), wire);
-                stmts.push(quote! {
-                    let #v = if s.has(#k) {
-                        #(#inner)*
-                        rt::Some(#value)
-                    } else {
-                        rt::None
-                    };
-                });
-                values.push((ident(name), quote!(#v)));
-            }
+            // An optional field (a plain number): where it is present.
+            values.extend(decode_optional(ctx, m, fi, k, &mut stmts));
             wires.push(quote!());
             continue;
         }
         if let Some(pk) = &f.packed {
             // Packed elements: the padding bits 0, then each element within its range.
-            let e = wire_type(f).ident();
-            let (count, bits, lsb) = (
-                usize_lit(pk.count),
-                usize_lit(pk.bits as usize),
-                pk.lsb_first,
-            );
-            let end = usize_lit(f.frame_at(&o) + f.width);
-            let last = usize_lit(f.width - 1);
-            let v = local(name);
-            let bytes = quote!(&frame[#read_at..#end]);
-            let fd = ctx.field_desc(m, name);
-            stmts.push(quote!(rt::equal(#fd, #at + #last, rt::packed_padding(#bytes, #count, #bits, #lsb), 0)?;));
-            // Elements typed by their enum or unit where they have one.
-            let e = match ctx.element_type(f) {
-                Some(t) => quote!(#t),
-                None => quote!(#e),
-            };
-            if fixed_elements(f) {
-                // A list of a fixed count of other elements than unsigned ones of 1, 2 or 4
-                // bytes: each whole, in its byte and word order.
-                let width = usize_lit(pk.elem_width);
-                let (le, swapped, signed) =
-                    (f.byte_order == ByteOrder::Little, f.word_swapped, f.signed);
-                stmts.push(quote!(let #v = rt::fixed_elements::<#e, #count>(#bytes, #width, #le, #swapped, #signed);));
-            } else {
-                stmts.push(quote!(let #v = rt::unpack::<#e, #count>(#bytes, #bits, #lsb);));
-            }
-            if let Some((lo, hi)) = f.range {
-                let (lo, hi) = (i64_lit(lo), i64_lit(hi));
-                let fd = ctx.field_desc(m, name);
-                stmts.push(quote!(rt::packed_in_range(#fd, #at, #bits, #v.as_slice(), #lo, #hi)?;));
-            }
-            values.push((ident(name), quote!(#v)));
+            values.push((ident(name), decode_packed(ctx, m, f, pk, &at, &mut stmts)));
             wires.push(quote!());
             continue;
         }
@@ -197,67 +312,7 @@ pub(super) fn decode_body(ctx: &Ctx, m: &Message) -> (Vec<TokenStream>, TokenStr
             }
             continue;
         }
-        let ut = unsigned.ident();
-        // The wire value as unsigned bits.
-        let bits = if wt.signed {
-            quote!(#wire as #ut)
-        } else {
-            wire.clone()
-        };
-        for b in &f.bits {
-            let lsb = u32::from(b.lsb);
-            let width = u32::from(b.width());
-            let mask = hex_lit((1u64 << width) - 1);
-            let bt = bits_type(b);
-            let btid = bt.ident();
-            let shifted = if lsb == 0 {
-                bits.clone()
-            } else {
-                let (lsb, bits) = (Literal::u32_unsuffixed(lsb), paren(bits.clone()));
-                quote!(#bits >> #lsb)
-            };
-            let field = if lsb + width >= wt.rust_bits() {
-                shifted
-            } else {
-                let shifted = paren(shifted);
-                quote!(#shifted & #mask)
-            };
-            let field_p = paren(field.clone());
-            let extract = if b.signed {
-                let shift = Literal::u32_unsuffixed(bt.bits - width);
-                let ubt = IntType {
-                    bits: bt.bits,
-                    signed: false,
-                    float: false,
-                }
-                .ident();
-                quote!(((#field_p as #ubt) << #shift) as #btid >> #shift)
-            } else {
-                quote!(#field_p as #btid)
-            };
-            let bname = &b.name;
-            match b.constant {
-                Some(c) => {
-                    let l = hex_lit(c);
-                    let fd = ctx.field_desc(m, bname);
-                    stmts.push(quote!(rt::equal(#fd, #at, #field, #l)?;));
-                }
-                None => {
-                    let limits = raw_limits(u32::from(b.width()), b.signed);
-                    if let Some((range_fn, range)) = leaf_range(f, Some(b), limits) {
-                        let fd = ctx.field_desc(m, bname);
-                        stmts.push(quote!(rt::#range_fn(#fd, #at, #extract, #range)?;));
-                    }
-                    if let Some(leaf) = ls.iter().find(|l| l.name == b.name) {
-                        let value = match ctx.kind(leaf) {
-                            Kind::Bool => quote!(#field_p != 0),
-                            _ => from_wire(ctx, leaf, Some(bt), extract),
-                        };
-                        values.push((ident(&b.name), value));
-                    }
-                }
-            }
-        }
+        values.extend(decode_bits(ctx, m, f, &wire, &at, &mut stmts));
     }
     let fields = values.iter().map(|(n, v)| quote!(#n: #v));
     let dm = direction_module(m.direction);
