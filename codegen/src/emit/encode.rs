@@ -169,19 +169,7 @@ pub(super) fn emit_encode_arm(
             continue;
         }
         if let Some(pk) = &f.packed {
-            let (name, n) = (&f.name, local(&f.name));
-            let (count, bits, lsb) = (
-                usize_lit(pk.count),
-                usize_lit(pk.bits as usize),
-                pk.lsb_first,
-            );
-            if super::ctx::fixed_elements(f) {
-                let width = usize_lit(pk.elem_width);
-                let (le, swapped) = (f.byte_order == ByteOrder::Little, f.word_swapped);
-                stmts.push(quote!(rt::write_fixed(#name, #n.as_slice(), #count, #width, #le, #swapped, &mut out[#at..#end])?;));
-            } else {
-                stmts.push(quote!(rt::pack(#name, #n.as_slice(), #count, #bits, #lsb, &mut out[#at..#end])?;));
-            }
+            stmts.push(write_packed(f, pk, full));
             continue;
         }
         if f.is_ascii() {
@@ -206,24 +194,12 @@ pub(super) fn emit_encode_arm(
             let n = format_ident!("field_{}", other);
             quote!(#n)
         } else if let Some((other, rel)) = follows_field(f) {
-            let (n, name, args) = (
-                format_ident!("field_{}", other),
-                &f.name,
-                relation_args(rel),
-            );
-            let (lo, hi) = wt.limits();
-            let (lo, hi) = (i64_lit(lo), i64_lit(hi));
-            quote!(rt::fits(#name, rt::follows(#n as i64, #args), #lo, #hi)? as #w)
+            let (n, args) = (format_ident!("field_{}", other), relation_args(rel));
+            fits(f, wt, quote!(rt::follows(#n as i64, #args)))
         } else if let (true, Some((_, c, v))) = (counter == Some(fi), &repeat) {
-            let name = &f.name;
-            let (lo, hi) = wt.limits();
-            let (lo, hi) = (i64_lit(lo), i64_lit(hi));
-            quote!(rt::fits(#name, #c.count_value(#v.len()) as u64, #lo, #hi)? as #w)
+            fits(f, wt, quote!(#c.count_value(#v.len()) as u64))
         } else if let Some((k, v)) = list_counted(fi) {
-            let name = &f.name;
-            let (lo, hi) = wt.limits();
-            let (lo, hi) = (i64_lit(lo), i64_lit(hi));
-            quote!(rt::fits(#name, #lc.lists[#k].count_value(#v.len()) as u64, #lo, #hi)? as #w)
+            fits(f, wt, quote!(#lc.lists[#k].count_value(#v.len()) as u64))
         } else if !f.bits.is_empty() {
             bits_value(ctx, f, ls, wt, unsigned)
         } else {
@@ -240,20 +216,8 @@ pub(super) fn emit_encode_arm(
         };
         if let Some(c) = &f.present {
             // Written where a value is given, which must be exactly where its condition holds.
-            let (name, v) = (&f.name, local(&f.name));
-            let cond = format_ident!("field_{}", c.field);
-            let on = match c.when {
-                PresentWhen::Bit(b) => {
-                    let mask = hex_lit(1u64 << b);
-                    quote!(#cond & #mask != 0)
-                }
-                PresentWhen::Equals(x) => {
-                    let x = Literal::u64_unsuffixed(x as u64);
-                    quote!(#cond == #x)
-                }
-            };
-            let words = condition_text(m, c);
-            stmts.push(quote!(rt::presence(#name, #on, #v.is_some(), #words)?;));
+            let v = local(&f.name);
+            stmts.push(presence_check(m, f, c));
             let put = put(value);
             stmts.push(quote!(if let rt::Some(#v) = #v { #put }));
         } else if named.contains(&fi)
@@ -301,6 +265,52 @@ pub(super) fn emit_encode_arm(
     let variable = repeat.is_some() || !lists.is_empty() || m.has_optional();
     let end = encode_end(p, quote!(out), variable, head);
     sealed(m, pattern, quote!(#(#stmts)*), end)
+}
+
+/// Writes the packed elements (`packed`) of field `f` at offset `at`: each in its bits, or
+/// whole in its byte and word order where they are not unsigned of 1, 2 or 4 bytes.
+fn write_packed(f: &Field, pk: &Packed, at: usize) -> TokenStream {
+    let (end, at) = (usize_lit(at + f.width), usize_lit(at));
+    let (name, n) = (&f.name, local(&f.name));
+    let (count, bits, lsb) = (
+        usize_lit(pk.count),
+        usize_lit(pk.bits as usize),
+        pk.lsb_first,
+    );
+    if super::ctx::fixed_elements(f) {
+        let width = usize_lit(pk.elem_width);
+        let (le, swapped) = (f.byte_order == ByteOrder::Little, f.word_swapped);
+        quote!(rt::write_fixed(#name, #n.as_slice(), #count, #width, #le, #swapped, &mut out[#at..#end])?;)
+    } else {
+        quote!(rt::pack(#name, #n.as_slice(), #count, #bits, #lsb, &mut out[#at..#end])?;)
+    }
+}
+
+/// Value `v` of field `f` computed from another (a relation, a list's count), refused where
+/// it does not fit the field's wire type `wt`, as that type.
+fn fits(f: &Field, wt: IntType, v: TokenStream) -> TokenStream {
+    let (name, w) = (&f.name, wt.ident());
+    let (lo, hi) = wt.limits();
+    let (lo, hi) = (i64_lit(lo), i64_lit(hi));
+    quote!(rt::fits(#name, #v, #lo, #hi)? as #w)
+}
+
+/// The check that optional field `f` is given exactly where its condition `c` holds.
+fn presence_check(m: &Message, f: &Field, c: &Presence) -> TokenStream {
+    let (name, v) = (&f.name, local(&f.name));
+    let cond = format_ident!("field_{}", c.field);
+    let on = match c.when {
+        PresentWhen::Bit(b) => {
+            let mask = hex_lit(1u64 << b);
+            quote!(#cond & #mask != 0)
+        }
+        PresentWhen::Equals(x) => {
+            let x = Literal::u64_unsuffixed(x as u64);
+            quote!(#cond == #x)
+        }
+    };
+    let words = condition_text(m, c);
+    quote!(rt::presence(#name, #on, #v.is_some(), #words)?;)
 }
 
 /// Each field's value within its range (the spec's, or its wire type's where the Rust type
