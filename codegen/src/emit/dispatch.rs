@@ -98,7 +98,6 @@ pub(super) fn emit_dispatch(ctx: &Ctx, d: Direction, ty: &TokenStream) -> TokenS
     let mixed = !codeless.is_empty() && codeless.len() < msgs.len();
     let by_code = messages_by_code(msgs);
     let body = code_matches(ctx, d, &by_code, &codeless, min_len, clen, &unknown);
-    let addr_at = usize_lit(address_at(p, d));
     let (min_len, max_len) = (usize_lit(min_len), usize_lit(max_len));
     let mask = reply_mask(p);
     // The groups `dispatch` tries (`rt::Group`, several messages of one code): the request
@@ -128,7 +127,6 @@ pub(super) fn emit_dispatch(ctx: &Ctx, d: Direction, ty: &TokenStream) -> TokenS
     } else {
         quote!()
     };
-    let sum = frame_sum(p);
     let sync = sync_checks(p, d, &max_len);
     let answered = answered(p, replies);
     let length = length_check(p, d);
@@ -160,30 +158,9 @@ pub(super) fn emit_dispatch(ctx: &Ctx, d: Direction, ty: &TokenStream) -> TokenS
     } else {
         quote!()
     };
-    let frame_const = frame_of(p, d);
-    // A reply whose checksum takes in its request's bytes (`checksum_over_request`):
-    // `response_sum` checks it over `covered`, or refuses it without them.
+    let check_frame = frame_check(p, d, &min_len, &max_len);
+    // A reply whose checksum takes in its request's bytes (`checksum_over_request`).
     let over = replies && p.has_over_request();
-    let check_frame = if over {
-        quote!(rt::check_frame_with(frame, #min_len, #max_len, #addr_at, &#frame_const, |b| response_sum(frame, b, covered))?)
-    } else {
-        quote!(rt::check_frame(frame, #min_len, #max_len, #addr_at, &#frame_const, #sum)?)
-    };
-    let check_frame = if unchecked {
-        let (is, frame_const) = (
-            super::head::unchecked_fn(d),
-            super::head::unchecked_frame(p, d),
-        );
-        quote! {
-            let address = if #is(frame) {
-                rt::check_frame(frame, frame.len(), #max_len, #addr_at, &#frame_const, |_| 0)?
-            } else {
-                #check_frame
-            };
-        }
-    } else {
-        quote!(let address = #check_frame;)
-    };
     let checks = quote! {
         #constant
         #preamble
@@ -525,6 +502,40 @@ fn code_matches(
         body.push(emit_group(ctx, codeless, replies, true));
     }
     body
+}
+
+/// The checks every frame of direction `d` passes (length, address, checksum, end bytes),
+/// which give its address: `let address = …;`. A message without a checksum is checked without
+/// one, found by its code and length first.
+fn frame_check(p: &Protocol, d: Direction, min_len: &Literal, max_len: &Literal) -> TokenStream {
+    let unchecked = p.framed(d).iter().any(|m| m.unchecked);
+    let replies = d == Direction::Response;
+    let addr_at = usize_lit(address_at(p, d));
+    let sum = frame_sum(p);
+    let frame_const = frame_of(p, d);
+    // A reply whose checksum takes in its request's bytes (`checksum_over_request`):
+    // `response_sum` checks it over `covered`, or refuses it without them.
+    let over = replies && p.has_over_request();
+    let check_frame = if over {
+        quote!(rt::check_frame_with(frame, #min_len, #max_len, #addr_at, &#frame_const, |b| response_sum(frame, b, covered))?)
+    } else {
+        quote!(rt::check_frame(frame, #min_len, #max_len, #addr_at, &#frame_const, #sum)?)
+    };
+    if unchecked {
+        let (is, frame_const) = (
+            super::head::unchecked_fn(d),
+            super::head::unchecked_frame(p, d),
+        );
+        quote! {
+            let address = if #is(frame) {
+                rt::check_frame(frame, frame.len(), #max_len, #addr_at, &#frame_const, |_| 0)?
+            } else {
+                #check_frame
+            };
+        }
+    } else {
+        quote!(let address = #check_frame;)
+    }
 }
 
 /// The check of the length field of a frame of direction `d`, where the framing has one: it
