@@ -24,7 +24,7 @@ use busspec_runtime::stream::Candidates;
 use busspec_runtime::{
     Broadcast, Bus, Command, CommandKind, CountRule, DecodeError, Decoded, Elements, EncodeError,
     EscapeFault, FieldDesc, FieldError, FieldValue, Framing, Message, MessageDesc, MessageNames,
-    NumKind, Protocol, Reply, Source, Transactions,
+    NumKind, Protocol, Reply, RequestMessage, ResponseMessage, Source, Transactions,
 };
 
 /// The most bytes a frame of a spec read at run time may take.
@@ -680,7 +680,6 @@ impl Protocol for Interpreted {
         transactions: Transactions::UNDECLARED,
     };
     const MAX_FRAME_LEN: usize = CAP;
-    const EMPTY_BUFFER: [u8; CAP] = [0; CAP];
 
     fn decode_request(frame: &[u8]) -> Result<Decoded<Self::Request>, DecodeError> {
         let p = spec().ok_or(DecodeError::Truncated {
@@ -690,83 +689,11 @@ impl Protocol for Interpreted {
         let f = interp::decode(p, Some(Direction::Request), None, frame).map_err(decode_error)?;
         decoded(f, frame)
     }
+}
 
-    /// As the reply to `request` (a response it gets, whose fields that follow from it do),
-    /// its checksum over the request's bytes where it takes them in: an interpreted request
-    /// keeps its frame.
-    fn decode_response_for(
-        frame: &[u8],
-        request: Option<&Self::Request>,
-    ) -> Result<Decoded<Self::Response>, DecodeError> {
-        let covered = request.map(|q| Self::request_span(q.wire()));
-        Self::decode_response_over(frame, request, covered)
-    }
-
-    fn request_span(request_frame: &[u8]) -> &[u8] {
-        spec()
-            .and_then(|p| p.checksum_span(request_frame))
-            .unwrap_or_default()
-    }
-
-    fn decode_response_over(
-        frame: &[u8],
-        request: Option<&Self::Request>,
-        covered: Option<&[u8]>,
-    ) -> Result<Decoded<Self::Response>, DecodeError> {
-        let p = spec().ok_or(DecodeError::Truncated {
-            needed: 1,
-            found: 0,
-        })?;
-        let f = match request {
-            Some(request) => {
-                let req =
-                    interp::decode_as(p, request.r(), request.wire()).map_err(decode_error)?;
-                interp::decode_reply_over(p, &req, covered, frame).map_err(decode_error)?
-            }
-            None => interp::decode_with(p, Some(Direction::Response), None, covered, frame)
-                .map_err(decode_error)?,
-        };
-        decoded(f, frame)
-    }
-
-    fn encode_reply(
-        response: &Self::Response,
-        address: u8,
-        request_frame: &[u8],
-        buf: &mut [u8],
-    ) -> Result<usize, EncodeError> {
-        let Some(p) = spec() else {
-            return Err(EncodeError::OutOfRange { field: "" });
-        };
-        let covered = p.checksum_span(request_frame);
-        let wire = interp::encode_with(p, response.r(), address, &response.values(), covered)
-            .map_err(encode_error)?;
-        let available = buf.len();
-        let out = buf
-            .get_mut(..wire.len())
-            .ok_or(EncodeError::BufferTooSmall {
-                needed: wire.len(),
-                available,
-            })?;
-        out.copy_from_slice(&wire);
-        Ok(wire.len())
-    }
-
-    fn answers(request: &Self::Request, response: &Self::Response) -> bool {
-        let Some(p) = spec() else {
-            return false;
-        };
-        match (
-            interp::decode_as(p, request.r(), request.wire()),
-            interp::decode_as_kept(p, response.r(), response.wire()),
-        ) {
-            (Ok(q), Ok(r)) => interp::answers(p, &q, &r).is_ok(),
-            _ => false,
-        }
-    }
-
-    fn command(request: &Self::Request) -> Command {
-        let m = request.message();
+impl RequestMessage for Frame<false> {
+    fn command(&self) -> Command {
+        let m = self.message();
         let kind = match m.map(|m| &m.kind) {
             Some(MessageKind::Command(k)) => match *k {
                 busspec_model::ir::CommandKind::Movement => CommandKind::Movement,
@@ -804,12 +731,95 @@ impl Protocol for Interpreted {
         }
     }
 
-    fn is_nak(response: &Self::Response) -> bool {
+    fn covered(frame: &[u8]) -> &[u8] {
+        spec()
+            .and_then(|p| p.checksum_span(frame))
+            .unwrap_or_default()
+    }
+}
+
+impl ResponseMessage<Frame<false>> for Frame<true> {
+    fn answers(&self, request: &Frame<false>) -> bool {
+        let Some(p) = spec() else {
+            return false;
+        };
+        match (
+            interp::decode_as(p, request.r(), request.wire()),
+            interp::decode_as_kept(p, self.r(), self.wire()),
+        ) {
+            (Ok(q), Ok(r)) => interp::answers(p, &q, &r).is_ok(),
+            _ => false,
+        }
+    }
+
+    fn is_nak(&self) -> bool {
         matches!(
-            response.message().map(|m| &m.kind),
+            self.message().map(|m| &m.kind),
             Some(&MessageKind::Response(busspec_model::ir::ResponseKind::Nak))
         )
     }
+
+    /// As the reply to `request` (a response it gets, whose fields that follow from it do),
+    /// its checksum over the request's bytes where it takes them in: an interpreted request
+    /// keeps its frame.
+    fn decode_as_reply(
+        frame: &[u8],
+        request: Option<&Frame<false>>,
+    ) -> Result<Decoded<Self>, DecodeError> {
+        let covered = request.map(|q| Frame::<false>::covered(q.wire()));
+        Self::decode_as_reply_over(frame, request, covered)
+    }
+
+    fn decode_as_reply_over(
+        frame: &[u8],
+        request: Option<&Frame<false>>,
+        covered: Option<&[u8]>,
+    ) -> Result<Decoded<Self>, DecodeError> {
+        let p = spec().ok_or(DecodeError::Truncated {
+            needed: 1,
+            found: 0,
+        })?;
+        let f = match request {
+            Some(request) => {
+                let req =
+                    interp::decode_as(p, request.r(), request.wire()).map_err(decode_error)?;
+                interp::decode_reply_over(p, &req, covered, frame).map_err(decode_error)?
+            }
+            None => interp::decode_with(p, Some(Direction::Response), None, covered, frame)
+                .map_err(decode_error)?,
+        };
+        decoded(f, frame)
+    }
+
+    fn encode_reply_over(
+        &self,
+        address: u8,
+        covered: &[u8],
+        buf: &mut [u8],
+    ) -> Result<usize, EncodeError> {
+        let Some(p) = spec() else {
+            return Err(EncodeError::OutOfRange { field: "" });
+        };
+        let wire = interp::encode_with(p, self.r(), address, &self.values(), Some(covered))
+            .map_err(encode_error)?;
+        let available = buf.len();
+        let out = buf
+            .get_mut(..wire.len())
+            .ok_or(EncodeError::BufferTooSmall {
+                needed: wire.len(),
+                available,
+            })?;
+        out.copy_from_slice(&wire);
+        Ok(wire.len())
+    }
+}
+
+impl Framing for Interpreted {
+    const MAX_REQUEST_LEN: usize = CAP;
+    const MAX_RESPONSE_LEN: usize = CAP;
+    const FRAME_LENGTHS: &'static [usize] = &[];
+    type Span = [u8; 0];
+    const EMPTY_SPAN: [u8; 0] = [];
 
     fn checksum_ok(frame: &[u8]) -> bool {
         let Some(p) = spec() else {
@@ -829,14 +839,6 @@ impl Protocol for Interpreted {
         interp::reseal(p, &mut copy);
         copy == frame
     }
-}
-
-impl Framing for Interpreted {
-    const MAX_REQUEST_LEN: usize = CAP;
-    const MAX_RESPONSE_LEN: usize = CAP;
-    const FRAME_LENGTHS: &'static [usize] = &[];
-    type Span = [u8; 0];
-    const EMPTY_SPAN: [u8; 0] = [];
 
     fn candidates(_head: &[u8]) -> Candidates {
         Candidates::default()

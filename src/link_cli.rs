@@ -18,7 +18,7 @@ use busspec_link::soak::SoakConfig;
 use busspec_link::{Link, Master, Message, Protocol, SerialTransport, SystemClock, Transport};
 use busspec_model::ir::Direction;
 use busspec_model::Protocol as Spec;
-use busspec_protocols::{sd, ub2, CommandKind};
+use busspec_protocols::{sd, ub2, CommandKind, FrameBuffer, RequestMessage};
 
 use crate::{frames, spec_sim, svg};
 
@@ -382,7 +382,7 @@ fn typed<P: Protocol>(spec: &Spec, o: &TalkOptions) -> Result<P::Request, String
 /// written.
 fn checked<P: Protocol>(spec: &Spec, o: &TalkOptions) -> Result<P::Request, String> {
     let request = typed::<P>(spec, o)?;
-    let mut buf = P::EMPTY_BUFFER;
+    let mut buf = P::Buffer::ZERO;
     request
         .encode(o.address, buf.as_mut())
         .map_err(|e| format!("{}: {e}", o.command))?;
@@ -486,7 +486,7 @@ fn check_byte_order<P: Link, T: Transport, C: Clock>(
     address: u8,
     request: &P::Request,
 ) -> Result<(), String> {
-    if P::command(request).kind != CommandKind::Movement {
+    if request.command().kind != CommandKind::Movement {
         return Ok(());
     }
     if let Some(check) = m.check_byte_order(address, request).map_err(link_error)? {

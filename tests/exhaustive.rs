@@ -9,7 +9,9 @@ use busspec_model::interp::{self, Raw, Value};
 use busspec_model::ir::{Direction, MessageKind, MessageRef, Protocol, ResponseKind};
 use busspec_protocols::sd::{self, Sd};
 use busspec_protocols::ub2::{self, Ub2};
-use busspec_protocols::{Message, Protocol as Generated};
+use busspec_protocols::{
+    FrameBuffer, Message, Protocol as Generated, RequestMessage, ResponseMessage,
+};
 use common::{all_messages, fix_checksum, random_frame, spec};
 
 /// A frame that decodes as message `r`: its first example, else a random frame of its shape
@@ -191,8 +193,8 @@ fn naks_at_every_address<P: Generated>() -> usize {
         for address in p.framing.address.min..=p.framing.address.max {
             let frame = interp::encode(&p, r, address, &base.values).unwrap();
             let d = P::decode_response(&frame).unwrap();
-            assert!(P::is_nak(&d.message), "{}", d.message.name());
-            let mut buf = P::EMPTY_BUFFER;
+            assert!(d.message.is_nak(), "{}", d.message.name());
+            let mut buf = P::Buffer::ZERO;
             let n = d.message.encode(address, buf.as_mut()).unwrap();
             assert_eq!(
                 (d.message.name(), d.address),
@@ -248,7 +250,7 @@ fn pairing_matrix<P: Generated>() {
                         d.message.name(),
                         p.commands[i].name
                     );
-                    assert!(P::answers(request, &d.message));
+                    assert!(d.message.answers(request));
                     assert_eq!(
                         k == j,
                         listed,
@@ -268,7 +270,7 @@ fn pairing_matrix<P: Generated>() {
             }
             if let Ok(d) = P::decode_response(&frame) {
                 assert_eq!(
-                    P::answers(request, &d.message),
+                    d.message.answers(request),
                     listed,
                     "answers({}, {})",
                     p.responses[j].name,
@@ -313,15 +315,15 @@ fn command_info<P: Generated>() {
             K::Getter => CommandKind::Getter,
             K::Reset => CommandKind::Reset,
         };
-        assert_eq!(P::command(&q).kind, want, "{}", c.name);
-        let b = P::command(&q).broadcast;
+        assert_eq!(q.command().kind, want, "{}", c.name);
+        let b = q.command().broadcast;
         let (accepted, answered) = c
             .broadcast
             .as_ref()
             .map_or((false, false), |b| (b.accepted, b.answered));
         assert_eq!((b.accepted, b.answered), (accepted, answered), "{}", c.name);
         assert_eq!(
-            P::command(&q).may_retry,
+            q.command().may_retry,
             p.transactions.retry_safe(c),
             "{}",
             c.name

@@ -449,29 +449,10 @@ impl busspec_protocols::Protocol for Ub2SmallBuffer {
     const SOURCE: busspec_protocols::Source = Ub2::SOURCE;
     const BUS: busspec_protocols::Bus = Ub2::BUS;
     const MAX_FRAME_LEN: usize = Ub2::MAX_FRAME_LEN;
-    const EMPTY_BUFFER: [u8; 4] = [0; 4];
     fn decode_request(
         frame: &[u8],
     ) -> Result<busspec_protocols::Decoded<Self::Request>, busspec_protocols::DecodeError> {
         Ub2::decode_request(frame)
-    }
-    fn decode_response_for(
-        frame: &[u8],
-        request: Option<&Self::Request>,
-    ) -> Result<busspec_protocols::Decoded<Self::Response>, busspec_protocols::DecodeError> {
-        Ub2::decode_response_for(frame, request)
-    }
-    fn answers(request: &Self::Request, response: &Self::Response) -> bool {
-        Ub2::answers(request, response)
-    }
-    fn command(request: &Self::Request) -> busspec_protocols::Command {
-        Ub2::command(request)
-    }
-    fn is_nak(response: &Self::Response) -> bool {
-        Ub2::is_nak(response)
-    }
-    fn checksum_ok(frame: &[u8]) -> bool {
-        Ub2::checksum_ok(frame)
     }
 }
 
@@ -483,6 +464,9 @@ impl busspec_protocols::Framing for Ub2SmallBuffer {
     const EMPTY_SPAN: [u8; 0] = [];
     fn candidates(head: &[u8]) -> busspec_protocols::stream::Candidates {
         Ub2::candidates(head)
+    }
+    fn checksum_ok(frame: &[u8]) -> bool {
+        Ub2::checksum_ok(frame)
     }
 }
 

@@ -16,7 +16,9 @@
 
 use busspec_model::interp::{self, Raw, Value};
 use busspec_model::ir::{self, Direction, Leaf, Message, MessageRef};
-use busspec_protocols::{sd, ub2, DecodeError, EncodeError, FieldValue, Message as _, Protocol};
+use busspec_protocols::{
+    sd, ub2, DecodeError, EncodeError, FieldValue, Framing, Message as _, Protocol, ResponseMessage,
+};
 use serde::de::DeserializeOwned;
 use serde::Serialize;
 
@@ -199,7 +201,7 @@ where
             }),
             Direction::Response => {
                 let by = &self.requests[asker(&self.p, r.index)];
-                P::decode_response_for(frame, Some(by)).map(|d| {
+                P::Response::decode_as_reply(frame, Some(by)).map(|d| {
                     (
                         d.message.name().to_owned(),
                         d.address,
@@ -246,7 +248,7 @@ where
             }
             Direction::Response => {
                 let by = &self.requests[asker(&self.p, r.index)];
-                let d = P::decode_response_for(frame, Some(by)).ok()?;
+                let d = P::Response::decode_as_reply(frame, Some(by)).ok()?;
                 d.message.encode(d.address, &mut buf)
             }
         };
@@ -286,7 +288,7 @@ where
             Direction::Response => {
                 let by = &self.requests[asker(&self.p, r.index)];
                 let m = patched(
-                    &P::decode_response_for(&base, Some(by)).ok()?.message,
+                    &P::Response::decode_as_reply(&base, Some(by)).ok()?.message,
                     field,
                 )?;
                 m.encode(address, &mut buf)

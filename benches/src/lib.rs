@@ -22,7 +22,7 @@ use busspec_model::interp;
 use busspec_model::ir::{Direction, Protocol};
 use busspec_protocols::sd::{self, Sd};
 use busspec_protocols::ub2::{self, Ub2};
-use busspec_protocols::{Decoded, Message as _};
+use busspec_protocols::{Decoded, Message as _, ResponseMessage};
 use mixed::Mixed;
 
 /// One decoder/encoder of one protocol.
@@ -77,7 +77,7 @@ impl<P: busspec_protocols::Protocol> Contender for Generated<P> {
         frame: &[u8],
         request: Option<&Self::Request>,
     ) -> Result<Self::Response, Self::DecodeError> {
-        P::decode_response_for(frame, request.map(|r| &r.message))
+        P::Response::decode_as_reply(frame, request.map(|r| &r.message))
     }
     #[inline]
     fn encode_request(

@@ -101,7 +101,7 @@ fn fixture_views_agree_with_the_owned_decode() {
 }
 
 use busspec_model::ir::{self, Direction};
-use busspec_runtime::{Framing, Message, Protocol};
+use busspec_runtime::{Framing, Message, Protocol, ResponseMessage};
 
 /// `name`, a path from the repository's root.
 fn fixture(name: &str) -> ir::Protocol {
@@ -151,7 +151,7 @@ fn replay<P: Protocol>(file: &str) {
                         .wire;
                     P::decode_request(w).unwrap().message
                 });
-                let d = P::decode_response_for(&e.wire, request.as_ref()).unwrap();
+                let d = P::Response::decode_as_reply(&e.wire, request.as_ref()).unwrap();
                 assert_eq!(d.message.name(), p.message(e.message).name);
                 d.message.encode(d.address, &mut buf).unwrap()
             }
@@ -1313,10 +1313,7 @@ fn pelco_p_snapshot_agrees_with_the_interpreter() {
         Request::GoToPreset(pelco_p::request::GoToPreset { preset: 1 })
     );
     assert_eq!(d.message.command().reply, busspec_runtime::Reply::None);
-    assert_eq!(
-        PelcoP::command(&d.message).reply,
-        busspec_runtime::Reply::None
-    );
+    assert_eq!(d.message.command().reply, busspec_runtime::Reply::None);
     let mut etx = go_to;
     etx[6] = 0xAE;
     let g = Request::decode(&etx).map(|_| ());

@@ -48,57 +48,12 @@ macro_rules! protocol_as {
             const SOURCE: busspec_runtime::Source = <$codec as busspec_runtime::Protocol>::SOURCE;
             const BUS: busspec_runtime::Bus = <$codec as busspec_runtime::Protocol>::BUS;
             const MAX_FRAME_LEN: usize = <$codec as busspec_runtime::Protocol>::MAX_FRAME_LEN;
-            const EMPTY_BUFFER: Self::Buffer = <$codec as busspec_runtime::Protocol>::EMPTY_BUFFER;
 
             #[inline]
             fn decode_request(
                 frame: &[u8],
             ) -> Result<busspec_runtime::Decoded<Self::Request>, busspec_runtime::DecodeError> {
                 <$codec as busspec_runtime::Protocol>::decode_request(frame)
-            }
-            #[inline]
-            fn decode_response_for(
-                frame: &[u8],
-                request: Option<&Self::Request>,
-            ) -> Result<busspec_runtime::Decoded<Self::Response>, busspec_runtime::DecodeError> {
-                <$codec as busspec_runtime::Protocol>::decode_response_for(frame, request)
-            }
-            #[inline]
-            fn decode_response_over(
-                frame: &[u8],
-                request: Option<&Self::Request>,
-                covered: Option<&[u8]>,
-            ) -> Result<busspec_runtime::Decoded<Self::Response>, busspec_runtime::DecodeError> {
-                <$codec as busspec_runtime::Protocol>::decode_response_over(frame, request, covered)
-            }
-            #[inline]
-            fn request_span(request_frame: &[u8]) -> &[u8] {
-                <$codec as busspec_runtime::Protocol>::request_span(request_frame)
-            }
-            #[inline]
-            fn encode_reply(
-                response: &Self::Response,
-                address: u8,
-                request_frame: &[u8],
-                buf: &mut [u8],
-            ) -> Result<usize, busspec_runtime::EncodeError> {
-                <$codec as busspec_runtime::Protocol>::encode_reply(response, address, request_frame, buf)
-            }
-            #[inline]
-            fn answers(request: &Self::Request, response: &Self::Response) -> bool {
-                <$codec as busspec_runtime::Protocol>::answers(request, response)
-            }
-            #[inline]
-            fn command(request: &Self::Request) -> busspec_runtime::Command {
-                <$codec as busspec_runtime::Protocol>::command(request)
-            }
-            #[inline]
-            fn is_nak(response: &Self::Response) -> bool {
-                <$codec as busspec_runtime::Protocol>::is_nak(response)
-            }
-            #[inline]
-            fn checksum_ok(frame: &[u8]) -> bool {
-                <$codec as busspec_runtime::Protocol>::checksum_ok(frame)
             }
         }
 
@@ -128,6 +83,10 @@ macro_rules! protocol_as {
             #[inline]
             fn variable_candidates(head: &[u8]) -> busspec_runtime::stream::VarLens {
                 <$codec as busspec_runtime::Framing>::variable_candidates(head)
+            }
+            #[inline]
+            fn checksum_ok(frame: &[u8]) -> bool {
+                <$codec as busspec_runtime::Framing>::checksum_ok(frame)
             }
         }
     };

@@ -13,8 +13,6 @@ use busspec_link_core::link::Link;
 use busspec_link_core::link::{text, ByteOrderCheck};
 #[cfg(feature = "ub2")]
 use busspec_runtime::CommandKind;
-#[cfg(feature = "ub2")]
-use busspec_runtime::Protocol;
 
 #[cfg(feature = "ub2")]
 use busspec_protocols::ub2;
@@ -65,7 +63,7 @@ impl Link for crate::Ub2 {
         matches!(
             response,
             ub2::Response::NakLimitReached(ub2::response::NakLimitReached)
-        ) && Self::command(request).kind == CommandKind::Movement
+        ) && request.command().kind == CommandKind::Movement
     }
 
     /// The factory limits (§6.16, §6.17): every capacitor has them, they travel as `u32` of
@@ -108,7 +106,7 @@ impl Link for crate::Ub2 {
 
     /// A reset, and a new slave address (§5.3): the device answers elsewhere from then on.
     fn forgets_byte_order_checks(r: &ub2::Request) -> bool {
-        matches!(r, ub2::Request::SetSlaveAddress(_)) || Self::command(r).kind == CommandKind::Reset
+        matches!(r, ub2::Request::SetSlaveAddress(_)) || r.command().kind == CommandKind::Reset
     }
 }
 
@@ -156,7 +154,7 @@ impl Link for crate::Sd {
 mod tests {
     use super::*;
     use crate::{Sd, Ub2};
-    use busspec_runtime::Broadcast;
+    use busspec_runtime::{Broadcast, ResponseMessage};
     use core::time::Duration;
 
     #[test]
@@ -164,13 +162,12 @@ mod tests {
         let go = ub2::Request::GoToCapacitance(ub2::request::GoToCapacitance {
             target: ub2::Capacitance(15000),
         });
-        assert_eq!(Ub2::command(&go).kind, CommandKind::Movement);
+        assert_eq!(go.command().kind, CommandKind::Movement);
         assert!(!Ub2::retry_safe(&go));
         assert_eq!(
-            Ub2::command(&ub2::Request::GetActualCapacitance(
-                ub2::request::GetActualCapacitance
-            ))
-            .kind,
+            ub2::Request::GetActualCapacitance(ub2::request::GetActualCapacitance)
+                .command()
+                .kind,
             CommandKind::Getter
         );
         assert!(Ub2::retry_safe(&ub2::Request::GetActualCapacitance(
@@ -183,20 +180,19 @@ mod tests {
             freshness: 0,
             position: sd::Angle(0),
         });
-        assert_eq!(Sd::command(&sp).kind, CommandKind::Movement);
+        assert_eq!(sp.command().kind, CommandKind::Movement);
         assert_eq!(
-            Sd::command(&sp).broadcast,
+            sp.command().broadcast,
             Broadcast {
                 accepted: true,
                 answered: false
             }
         );
         assert!(
-            Sd::command(&sd::Request::ReadActualPosition(
-                sd::request::ReadActualPosition
-            ))
-            .broadcast
-            .answered
+            sd::Request::ReadActualPosition(sd::request::ReadActualPosition)
+                .command()
+                .broadcast
+                .answered
         );
         assert!(!Sd::retry_safe(&sd::Request::ResetStallEventCounter(
             sd::request::ResetStallEventCounter
@@ -218,7 +214,7 @@ mod tests {
             R::NakLimitReached(ub2::response::NakLimitReached),
             R::NakIndexOutOfRange(ub2::response::NakIndexOutOfRange),
         ];
-        assert!(naks.iter().all(Ub2::is_nak));
+        assert!(naks.iter().all(|r| r.is_nak()));
         assert_eq!(naks[3].code(), &[0x93]);
         let movement = Q::GoToCapacitance(ub2::request::GoToCapacitance {
             target: ub2::Capacitance(15000),
@@ -226,16 +222,10 @@ mod tests {
         let limit = Q::SetLowerCustomerLimit(ub2::request::SetLowerCustomerLimit {
             limit: ub2::Capacitance(1),
         });
-        assert_eq!(Ub2::command(&limit).kind, CommandKind::Setter);
+        assert_eq!(limit.command().kind, CommandKind::Setter);
         // The spec lets both get 0x93.
-        assert!(Ub2::answers(
-            &movement,
-            &R::NakLimitReached(ub2::response::NakLimitReached)
-        ));
-        assert!(Ub2::answers(
-            &limit,
-            &R::NakLimitReached(ub2::response::NakLimitReached)
-        ));
+        assert!(R::NakLimitReached(ub2::response::NakLimitReached).answers(&movement));
+        assert!(R::NakLimitReached(ub2::response::NakLimitReached).answers(&limit));
         // To the movement it is the answer (the cap runs to the limit), to the setter a refusal.
         assert!(Ub2::nak_approves(
             &movement,
@@ -265,9 +255,7 @@ mod tests {
             &movement,
             &R::MovementStarted(ub2::response::MovementStarted)
         ));
-        assert!(!Ub2::is_nak(&R::MovementStarted(
-            ub2::response::MovementStarted
-        )));
+        assert!(!R::MovementStarted(ub2::response::MovementStarted).is_nak());
         // The only checksum NAK is 0x92.
         assert!(naks.iter().all(|r| Ub2::is_checksum_nak(r)
             == (*r == R::NakChecksumError(ub2::response::NakChecksumError))));

@@ -34,7 +34,7 @@ pub fn ub2_completion_check(trigger: &ub2::Request) -> Option<ub2::Request> {
     let mut frame = [0xAA, address, code[0], 0x01, 0];
     frame[4] = ub2::checksum(&frame[..4]);
     match Ub2::decode_request(&frame) {
-        Ok(d) if Ub2::command(&d.message).kind == CommandKind::CompletionCheck => Some(d.message),
+        Ok(d) if d.message.command().kind == CommandKind::CompletionCheck => Some(d.message),
         _ => None,
     }
 }

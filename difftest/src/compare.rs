@@ -23,7 +23,10 @@ use busspec_model::interp::{self, DecodeError as InterpError, Raw, Value};
 use busspec_model::ir::{self, Count, Direction, MessageRef};
 use busspec_model::mutate::{after_preamble, mutations, reseal};
 use busspec_runtime::stream::Direction as StreamDirection;
-use busspec_runtime::{DecodeError, Elements, EncodeError, FieldValue, Message, Protocol};
+use busspec_runtime::{
+    DecodeError, Elements, EncodeError, FieldValue, Message, Protocol, RequestMessage,
+    ResponseMessage,
+};
 
 use crate::values::random_values;
 
@@ -510,14 +513,18 @@ impl<'p, P: Protocol> Run<'p, P> {
                             self.views.response.map(|v| v(frame, Some(&ask.generated))),
                         );
                         // With the request's bytes, which a reply's checksum may take in.
-                        let covered = P::request_span(&ask.wire);
-                        let d = P::decode_response_over(frame, Some(&ask.generated), Some(covered))
-                            .inspect(|d| {
-                                assert!(
-                                    P::answers(&ask.generated, &d.message),
-                                    "decode_reply gave a response that does not answer"
-                                )
-                            });
+                        let covered = P::Request::covered(&ask.wire);
+                        let d = P::Response::decode_as_reply_over(
+                            frame,
+                            Some(&ask.generated),
+                            Some(covered),
+                        )
+                        .inspect(|d| {
+                            assert!(
+                                d.message.answers(&ask.generated),
+                                "decode_reply gave a response that does not answer"
+                            )
+                        });
                         (d, Some(&ask.wire))
                     }
                     _ => {

@@ -40,8 +40,8 @@ extern crate std;
 pub use busspec_runtime::Framing;
 pub use busspec_runtime::{
     stream, Broadcast, Bus, Command, CommandKind, CountRule, DecodeError, Decoded, Elements,
-    EncodeError, FieldDesc, FieldValue, Message, MessageDesc, MessageNames, NumKind, Protocol,
-    ProtocolVisitor, Repeated, Source,
+    EncodeError, FieldDesc, FieldValue, FrameBuffer, Message, MessageDesc, MessageNames, NumKind,
+    Protocol, ProtocolVisitor, Repeated, RequestMessage, ResponseMessage, Source,
 };
 
 include!(concat!(env!("OUT_DIR"), "/protocols.rs"));

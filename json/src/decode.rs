@@ -3,7 +3,7 @@
 
 use busspec_model::interp::{self, DecodeError as InterpError, Frame};
 use busspec_model::ir::Direction;
-use busspec_runtime::{DecodeError, Decoded, FieldValue, Message, Protocol};
+use busspec_runtime::{DecodeError, Decoded, FieldValue, Message, Protocol, ResponseMessage};
 
 use crate::{Spec, Typed};
 
@@ -293,7 +293,7 @@ pub fn decode_typed_with<P: Protocol>(
     if direction == Some(Direction::Request) {
         return Err(request.map(|e| e.to_string()).unwrap_or_default());
     }
-    let response = match P::decode_response_over(wire, None, covered) {
+    let response = match P::Response::decode_as_reply_over(wire, None, covered) {
         Ok(d) => return Ok(Typed::Response(d)),
         Err(DecodeError::Ambiguous { .. }) => {
             let names = candidates::<P>(p, wire);

@@ -37,7 +37,7 @@ mod print;
 mod stream;
 
 use busspec_model::ir::Direction;
-use busspec_runtime::{Decoded, EncodeError, Message, Protocol};
+use busspec_runtime::{Decoded, EncodeError, FrameBuffer, Message, Protocol};
 
 pub use busspec_model::ir::Protocol as Spec;
 pub use busspec_runtime::FieldValue;
@@ -120,7 +120,7 @@ impl<P: Protocol> Typed<P> {
     /// given: the checksum of a reply that takes in its request's bytes
     /// (`checksum_over_request`) over them ([`Protocol::encode_reply`]).
     pub fn encode_reply(&self, request: Option<&[u8]>) -> Result<Vec<u8>, EncodeError> {
-        let mut buf = P::EMPTY_BUFFER;
+        let mut buf = P::Buffer::ZERO;
         let n = match (self, request) {
             (Typed::Request(d), _) => d.message.encode(d.address, buf.as_mut())?,
             (Typed::Response(d), None) => d.message.encode(d.address, buf.as_mut())?,

@@ -4,7 +4,7 @@
 //! messages do not carry (a byte count that counts a list, a byte count following a quantity)
 //! included. The generated code is `busspec-protocols`' built-in `modbus` and `dynamixel`.
 
-use busspec_protocols::{dynamixel, modbus};
+use busspec_protocols::{dynamixel, modbus, ResponseMessage};
 
 use busspec_json::{frame_line, message_line};
 use busspec_model::interp;
@@ -25,7 +25,7 @@ fn same_lines<P: Protocol>(file: &str) -> usize {
                 message_line(&p, Direction::Request, d.address, &d.message, None)
             }
             Direction::Response => {
-                let d = P::decode_response_for(&e.wire, None).unwrap();
+                let d = P::Response::decode_as_reply(&e.wire, None).unwrap();
                 message_line(&p, Direction::Response, d.address, &d.message, None)
             }
         }
@@ -63,7 +63,7 @@ fn lines_parse_back<P: Protocol>(file: &str, count_field: &str) -> usize {
                 assert_eq!(Ok(d), P::decode_request(&e.wire), "{line}")
             }
             busspec_json::Typed::Response(d) => {
-                assert_eq!(Ok(d), P::decode_response_for(&e.wire, None), "{line}")
+                assert_eq!(Ok(d), P::Response::decode_as_reply(&e.wire, None), "{line}")
             }
         }
         let key = format!("\"{count_field}\":");

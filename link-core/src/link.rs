@@ -13,7 +13,7 @@
 use core::fmt::Write;
 use core::time::Duration;
 
-use busspec_runtime::{CommandKind, Protocol};
+use busspec_runtime::{CommandKind, Protocol, RequestMessage, ResponseMessage};
 
 /// The quiet time between two requests of protocol `P` on a line of `baud` and
 /// `character_bits` a character: the longest of the document's gap between frames
@@ -147,47 +147,10 @@ impl<P: Protocol> Protocol for Plain<P> {
     const SOURCE: busspec_runtime::Source = P::SOURCE;
     const BUS: busspec_runtime::Bus = P::BUS;
     const MAX_FRAME_LEN: usize = P::MAX_FRAME_LEN;
-    const EMPTY_BUFFER: Self::Buffer = P::EMPTY_BUFFER;
     fn decode_request(
         frame: &[u8],
     ) -> Result<busspec_runtime::Decoded<Self::Request>, busspec_runtime::DecodeError> {
         P::decode_request(frame)
-    }
-    fn decode_response_for(
-        frame: &[u8],
-        request: Option<&Self::Request>,
-    ) -> Result<busspec_runtime::Decoded<Self::Response>, busspec_runtime::DecodeError> {
-        P::decode_response_for(frame, request)
-    }
-    fn decode_response_over(
-        frame: &[u8],
-        request: Option<&Self::Request>,
-        covered: Option<&[u8]>,
-    ) -> Result<busspec_runtime::Decoded<Self::Response>, busspec_runtime::DecodeError> {
-        P::decode_response_over(frame, request, covered)
-    }
-    fn request_span(request_frame: &[u8]) -> &[u8] {
-        P::request_span(request_frame)
-    }
-    fn encode_reply(
-        response: &Self::Response,
-        address: u8,
-        request_frame: &[u8],
-        buf: &mut [u8],
-    ) -> Result<usize, busspec_runtime::EncodeError> {
-        P::encode_reply(response, address, request_frame, buf)
-    }
-    fn answers(request: &Self::Request, response: &Self::Response) -> bool {
-        P::answers(request, response)
-    }
-    fn command(request: &Self::Request) -> busspec_runtime::Command {
-        P::command(request)
-    }
-    fn is_nak(response: &Self::Response) -> bool {
-        P::is_nak(response)
-    }
-    fn checksum_ok(frame: &[u8]) -> bool {
-        P::checksum_ok(frame)
     }
 }
 
@@ -210,6 +173,9 @@ impl<P: Protocol> busspec_runtime::Framing for Plain<P> {
     }
     fn variable_candidates(head: &[u8]) -> busspec_runtime::stream::VarLens {
         P::variable_candidates(head)
+    }
+    fn checksum_ok(frame: &[u8]) -> bool {
+        P::checksum_ok(frame)
     }
 }
 
@@ -263,7 +229,7 @@ pub trait Link: Protocol {
     /// its `transactions.retry`, by default by kind). A protocol's rules may add commands the
     /// spec cannot tell about.
     fn retry_safe(r: &Self::Request) -> bool {
-        Self::command(r).may_retry
+        r.command().may_retry
     }
 
     /// The address the reply to `r`, sent to `address`, comes from.
@@ -277,17 +243,17 @@ pub trait Link: Protocol {
         false
     }
 
-    /// Whether `response`, which the spec marks `kind: nak` ([`Protocol::is_nak`]), means to
+    /// Whether `response`, which the spec marks `kind: nak` ([`busspec_runtime::ResponseMessage::is_nak`]), means to
     /// `request` that the command was carried out after all. The one place the master reads a
     /// NAK differently from the spec; `false` unless a protocol says otherwise.
     fn nak_approves(_request: &Self::Request, _response: &Self::Response) -> bool {
         false
     }
 
-    /// Whether `response` refuses `request`: a NAK the spec declares ([`Protocol::is_nak`])
+    /// Whether `response` refuses `request`: a NAK the spec declares ([`busspec_runtime::ResponseMessage::is_nak`])
     /// that does not, to this request, approve it ([`Link::nak_approves`]).
     fn is_refusal(request: &Self::Request, response: &Self::Response) -> bool {
-        Self::is_nak(response) && !Self::nak_approves(request, response)
+        response.is_nak() && !Self::nak_approves(request, response)
     }
 
     /// How many values the freshness counter takes: the master counts modulo this, from 0
@@ -325,6 +291,6 @@ pub trait Link: Protocol {
     /// a reset, or a command that moves a device to another address (another device may then
     /// answer where a checked one did). A reset by default.
     fn forgets_byte_order_checks(r: &Self::Request) -> bool {
-        Self::command(r).kind == CommandKind::Reset
+        r.command().kind == CommandKind::Reset
     }
 }

@@ -36,7 +36,10 @@
 use core::fmt;
 use core::time::Duration;
 
-use busspec_runtime::{DecodeError, EncodeError, Message, Reply as ReplyRule};
+use busspec_runtime::{
+    DecodeError, EncodeError, FrameBuffer, Message, Reply as ReplyRule, RequestMessage,
+    ResponseMessage,
+};
 
 use crate::line::{DriverEnable, Line};
 use crate::link::{ByteOrderCheck, Link};
@@ -377,7 +380,7 @@ impl<P: Link, const CAP: usize> MasterCore<P, CAP> {
             reply_optional: false,
             allowed: 1,
             attempt: 0,
-            frame: P::EMPTY_BUFFER,
+            frame: P::Buffer::ZERO,
             frame_len: 0,
             rx: [0; CAP],
             rx_len: 0,
@@ -604,9 +607,9 @@ impl<P: Link, const CAP: usize> MasterCore<P, CAP> {
         self.broadcast = broadcast;
         // A command the spec says gets no reply is done once sent, like a broadcast nobody
         // answers; one whose reply is optional is done when none comes.
-        let rule = P::command(&request).reply;
+        let rule = request.command().reply;
         self.expects_reply =
-            rule != ReplyRule::None && (!broadcast || P::command(&request).broadcast.answered);
+            rule != ReplyRule::None && (!broadcast || request.command().broadcast.answered);
         self.reply_optional = rule == ReplyRule::Optional;
         self.allowed = if P::retry_safe(&request) {
             self.timing.attempts.max(1)
@@ -621,7 +624,7 @@ impl<P: Link, const CAP: usize> MasterCore<P, CAP> {
 
     fn check_address(request: &P::Request, address: u8) -> Result<bool, AddressProblem> {
         if Some(address) == P::broadcast_address() {
-            return if P::command(request).broadcast.accepted {
+            return if request.command().broadcast.accepted {
                 Ok(true)
             } else {
                 Err(AddressProblem::NoBroadcast)
@@ -864,8 +867,8 @@ impl<P: Link, const CAP: usize> MasterCore<P, CAP> {
     fn accept(&self) -> Result<(u8, P::Response), Rejection> {
         let request = self.current();
         // With the request's frame as sent, which a reply's checksum may take in.
-        let covered = P::request_span(self.sent());
-        let reply = P::decode_response_over(self.reply(), Some(&request), Some(covered))
+        let covered = P::Request::covered(self.sent());
+        let reply = P::Response::decode_as_reply_over(self.reply(), Some(&request), Some(covered))
             .map_err(Rejection::Decode)?;
         let (from, response) = (reply.address, reply.message);
         // Replies without an address (RoboClaw's): from the device asked.

@@ -37,7 +37,7 @@ use std::fmt;
 use std::rc::Rc;
 use std::time::Duration;
 
-use busspec_runtime::{Message, Reply};
+use busspec_runtime::{Message, Reply, RequestMessage, ResponseMessage};
 
 use crate::clock::{Clock, SimClock};
 use crate::fault::{FaultConfig, FaultCounts, Faulty};
@@ -223,7 +223,12 @@ pub fn run_with<P: Link, D: Device + Clone + PartialEq>(
         let expected_response = expected
             .as_deref()
             .and_then(|f| {
-                P::decode_response_over(f, Some(&request), Some(P::request_span(&sent))).ok()
+                P::Response::decode_as_reply_over(
+                    f,
+                    Some(&request),
+                    Some(P::Request::covered(&sent)),
+                )
+                .ok()
             })
             .map(|d| d.message);
         bus.freeze_time(Some(t0));
@@ -258,7 +263,7 @@ pub fn run_with<P: Link, D: Device + Clone + PartialEq>(
             }
             // Nothing came back, as the spec allows for this request: what was lost, the
             // protocol does not let a master see.
-            Ok(ex) if ex.response.is_none() && P::command(&request).reply != Reply::Required => {
+            Ok(ex) if ex.response.is_none() && request.command().reply != Reply::Required => {
                 report.unseen += 1;
             }
             Ok(ex) => {

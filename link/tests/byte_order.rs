@@ -182,11 +182,7 @@ fn an_msb_first_device_is_not_moved() {
     assert_eq!(frames.len(), 2 * 5);
     for f in frames.iter() {
         let q = Ub2::decode_request(f).unwrap().message;
-        assert_ne!(
-            Ub2::command(&q).kind,
-            CommandKind::Movement,
-            "{q:?} was sent"
-        );
+        assert_ne!(q.command().kind, CommandKind::Movement, "{q:?} was sent");
     }
     assert!(names(&frames)
         .iter()

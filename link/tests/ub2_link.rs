@@ -14,7 +14,7 @@ use busspec_link::master::{LinkError, Progress, TraceEvent};
 use busspec_link::sim::{BusConfig, SimBus};
 use busspec_link::{Master, SimClock};
 use busspec_protocols::ub2::{self, request, response, Capacitance, Request, Response};
-use busspec_protocols::Protocol as _;
+use busspec_protocols::Framing as _;
 
 type Bus = SimBus<Ub2Sim>;
 

@@ -36,7 +36,7 @@ pub use crate::{
     crc, desc, field, field_int, field_text, round, sum8, Ascii, Broadcast, Bus, Command,
     CommandKind, DecodeError, Decoded, Elements, EncodeError, FieldDesc, FieldError, FieldValue,
     Framing, Message, MessageDesc, NumKind, Preamble, Protocol, Record, RecordList, Repeated,
-    Reply, Source, Transactions, Transform,
+    Reply, RequestMessage, ResponseMessage, Source, Transactions, Transform,
 };
 pub use crate::{BitsView, ListView};
 

@@ -41,7 +41,10 @@ mod view;
 pub use forms::ShortForm;
 #[doc(hidden)]
 pub use long::LongLength;
-pub use protocol::{Bus, Command, Message, Protocol, ProtocolVisitor, Source, Transactions};
+pub use protocol::{
+    Bus, Command, FrameBuffer, Message, Protocol, ProtocolVisitor, RequestMessage, ResponseMessage,
+    Source, Transactions,
+};
 #[doc(hidden)]
 pub use protocol::{Framing, Preamble, Transform};
 pub use repeated::{Bits, CapacityError, Element, Repeated};

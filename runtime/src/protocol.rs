@@ -41,20 +41,90 @@ pub trait Message: Copy + Debug + PartialEq + Send + Sync + 'static {
     ) -> Result<Self, FieldError>;
 }
 
+/// A protocol's `Request` type: what the spec says of each command beyond its frame.
+pub trait RequestMessage: Message {
+    /// What the spec says of this request beyond its frame: its kind, the broadcast address,
+    /// its reply, whether a master may send it again.
+    fn command(&self) -> Command;
+    /// The bytes of the request frame `frame` (as it travelled) its checksum covers: what the
+    /// checksum of a reply that takes in its request's bytes (`checksum_over_request`) runs
+    /// over first. Empty for a protocol with no such reply and for a frame too short to hold a
+    /// checksum.
+    #[inline]
+    fn covered(frame: &[u8]) -> &[u8] {
+        let _ = frame;
+        &[]
+    }
+}
+
+/// A protocol's `Response` type, the reply to requests of type `Q`: which requests it
+/// answers, whether it is a refusal, and its decoding as the reply to a request.
+pub trait ResponseMessage<Q>: Message {
+    /// Whether the spec lets `request` get this response.
+    fn answers(&self, request: &Q) -> bool;
+    /// Whether this response is a refusal: the spec marks it `kind: nak`.
+    fn is_nak(&self) -> bool;
+    /// Decodes `frame` as a response, the reply to `request` where one is given (only the
+    /// responses it may get); a response only its request tells apart is
+    /// [`DecodeError::Ambiguous`] without one. What [`Protocol::decode_response`] and
+    /// [`Protocol::decode_reply`] call, and the stream decoder.
+    fn decode_as_reply(frame: &[u8], request: Option<&Q>) -> Result<Decoded<Self>, DecodeError>;
+    /// [`Self::decode_as_reply`] with the bytes the request's checksum covers
+    /// ([`RequestMessage::covered`]), which the checksum of a reply that takes in its
+    /// request's bytes runs over first; without them such a reply is
+    /// [`DecodeError::NeedsRequest`]. Protocols with no such reply decode as without them.
+    #[inline]
+    fn decode_as_reply_over(
+        frame: &[u8],
+        request: Option<&Q>,
+        covered: Option<&[u8]>,
+    ) -> Result<Decoded<Self>, DecodeError> {
+        let _ = covered;
+        Self::decode_as_reply(frame, request)
+    }
+    /// Writes this response to `address` into `buf` as the reply to a request whose checksum
+    /// covered `covered`: as [`Message::encode`], and the checksum of a reply that takes in
+    /// its request's bytes over them.
+    #[inline]
+    fn encode_reply_over(
+        &self,
+        address: u8,
+        covered: &[u8],
+        buf: &mut [u8],
+    ) -> Result<usize, EncodeError> {
+        let _ = covered;
+        self.encode(address, buf)
+    }
+}
+
+/// A frame buffer: `[u8; N]` for any `N`, with its all-zero value ([`Protocol::Buffer`]).
+pub trait FrameBuffer: AsRef<[u8]> + AsMut<[u8]> + Copy + Debug {
+    /// The all-zero buffer.
+    const ZERO: Self;
+}
+
+impl<const N: usize> FrameBuffer for [u8; N] {
+    const ZERO: Self = [0; N];
+}
+
 /// A protocol generated from a busspec spec: its types, where it came from, its bus, and its
 /// codec.
 ///
 /// Implemented by the unit type each generated module declares. All methods are associated
-/// functions (no `self`): a protocol is a type, not a value. What the stream decoder asks of a
-/// protocol (frame lengths and the candidates a head leaves) is [`Framing`], a supertrait no
-/// user needs to name.
+/// functions (no `self`): a protocol is a type, not a value. Its face is what a user calls:
+/// the two message types and a buffer, four constants, the decoders and the reply's encoder.
+/// What the spec says of a message beyond its frame is the message's own
+/// ([`RequestMessage::command`], [`ResponseMessage::answers`], [`ResponseMessage::is_nak`]);
+/// what the stream decoder asks of a protocol (frame lengths, the candidates a head leaves,
+/// the checksum test) is [`Framing`], a supertrait no user needs to name.
 pub trait Protocol: Framing + Copy + Debug + Default + Send + Sync + 'static {
     /// Master to device.
-    type Request: Message;
+    type Request: RequestMessage;
     /// Device to master.
-    type Response: Message;
-    /// A buffer of exactly [`Self::MAX_FRAME_LEN`] bytes (`[u8; MAX_FRAME_LEN]`).
-    type Buffer: AsRef<[u8]> + AsMut<[u8]> + Copy + Debug;
+    type Response: ResponseMessage<Self::Request>;
+    /// A buffer of exactly [`Self::MAX_FRAME_LEN`] bytes (`[u8; MAX_FRAME_LEN]`;
+    /// [`FrameBuffer::ZERO`] is the empty one).
+    type Buffer: FrameBuffer;
 
     /// The protocol's name in the spec (`ub2`).
     const NAME: &'static str;
@@ -65,8 +135,6 @@ pub trait Protocol: Framing + Copy + Debug + Default + Send + Sync + 'static {
     const BUS: Bus;
     /// The longest frame in either direction: a buffer this long holds any frame.
     const MAX_FRAME_LEN: usize;
-    /// An all-zero [`Self::Buffer`].
-    const EMPTY_BUFFER: Self::Buffer;
 
     /// Decodes a request frame.
     fn decode_request(frame: &[u8]) -> Result<Decoded<Self::Request>, DecodeError>;
@@ -74,7 +142,7 @@ pub trait Protocol: Framing + Copy + Debug + Default + Send + Sync + 'static {
     /// [`DecodeError::Ambiguous`].
     #[inline]
     fn decode_response(frame: &[u8]) -> Result<Decoded<Self::Response>, DecodeError> {
-        Self::decode_response_for(frame, None)
+        Self::Response::decode_as_reply(frame, None)
     }
     /// Decodes a frame as the reply to `request`: only the responses `request` may get.
     #[inline]
@@ -82,16 +150,8 @@ pub trait Protocol: Framing + Copy + Debug + Default + Send + Sync + 'static {
         frame: &[u8],
         request: &Self::Request,
     ) -> Result<Decoded<Self::Response>, DecodeError> {
-        Self::decode_response_for(frame, Some(request))
+        Self::Response::decode_as_reply(frame, Some(request))
     }
-    /// [`Self::decode_response`] without a request, [`Self::decode_reply`] with one: what
-    /// the generated code implements, and the stream decoder calls.
-    #[doc(hidden)]
-    fn decode_response_for(
-        frame: &[u8],
-        request: Option<&Self::Request>,
-    ) -> Result<Decoded<Self::Response>, DecodeError>;
-
     /// Decodes `frame` as the reply to the request frame `request_frame` (as it travelled):
     /// as [`Self::decode_reply`], and the checksum of a reply that takes in its request's
     /// bytes (`checksum_over_request`: Pelco D's general response) is checked over them,
@@ -104,33 +164,11 @@ pub trait Protocol: Framing + Copy + Debug + Default + Send + Sync + 'static {
         request_frame: &[u8],
     ) -> Result<Decoded<Self::Response>, DecodeError> {
         let request = Self::decode_request(request_frame)?;
-        Self::decode_response_over(
+        Self::Response::decode_as_reply_over(
             frame,
             Some(&request.message),
-            Some(Self::request_span(request_frame)),
+            Some(Self::Request::covered(request_frame)),
         )
-    }
-    /// [`Self::decode_response_for`] with the bytes the request's checksum covers
-    /// ([`Self::request_span`]), which the checksum of a reply that takes in its request's
-    /// bytes runs over first; without them such a reply is
-    /// [`DecodeError::NeedsRequest`]. Protocols with no such reply decode as without them.
-    #[doc(hidden)]
-    #[inline]
-    fn decode_response_over(
-        frame: &[u8],
-        request: Option<&Self::Request>,
-        covered: Option<&[u8]>,
-    ) -> Result<Decoded<Self::Response>, DecodeError> {
-        let _ = covered;
-        Self::decode_response_for(frame, request)
-    }
-    /// The bytes of `request_frame` its checksum covers: what the checksum of a reply that
-    /// takes in its request's bytes runs over first. Empty for a protocol with no such reply
-    /// and for a frame too short to hold a checksum.
-    #[inline]
-    fn request_span(request_frame: &[u8]) -> &[u8] {
-        let _ = request_frame;
-        &[]
     }
     /// Writes `response` to `address` into `buf` as the reply to the request frame
     /// `request_frame` (as it travelled), and returns its length: as
@@ -144,22 +182,8 @@ pub trait Protocol: Framing + Copy + Debug + Default + Send + Sync + 'static {
         request_frame: &[u8],
         buf: &mut [u8],
     ) -> Result<usize, EncodeError> {
-        let _ = request_frame;
-        response.encode(address, buf)
+        response.encode_reply_over(address, Self::Request::covered(request_frame), buf)
     }
-
-    /// Whether `response` is one the spec lets `request` get.
-    fn answers(request: &Self::Request, response: &Self::Response) -> bool;
-    /// What the spec says of `request` beyond its frame: its kind, the broadcast address,
-    /// its reply, whether a master may send it again.
-    fn command(request: &Self::Request) -> Command;
-    /// Whether `response` is a refusal: the spec marks it `kind: nak`.
-    fn is_nak(response: &Self::Response) -> bool;
-    /// Whether `frame` ends in the checksum of the bytes it covers, and nothing else: the
-    /// weakest acceptance test (a frame shorter than a checksum fails it). It knows no
-    /// request: a reply whose checksum takes in its request's bytes (`checksum_over_request`)
-    /// is taken over its own bytes alone here, which such a reply fails.
-    fn checksum_ok(frame: &[u8]) -> bool;
 }
 
 /// A preamble of wake-up bytes (`framing.preamble`): `send` copies of `byte` are written
@@ -295,7 +319,7 @@ pub trait Framing {
     const LONG: Option<crate::LongLength> = None;
     /// Whether a reply's checksum takes in its request's bytes (`checksum_over_request`):
     /// the stream decoder then keeps the bytes each request's checksum covers
-    /// ([`Protocol::request_span`]) in a [`Self::Span`] for the reply after it.
+    /// ([`RequestMessage::covered`]) in a [`Self::Span`] for the reply after it.
     const OVER_REQUEST: bool = false;
     /// Whether a response's decoding may depend on the request before it: some response only
     /// its request tells apart from another (`needs_request`), or [`Self::OVER_REQUEST`].
@@ -367,7 +391,7 @@ pub trait Framing {
         Self::decode_request(frame).map(|_| ())
     }
 
-    /// [`Protocol::decode_response_over`]'s answer without its value, as
+    /// [`ResponseMessage::decode_as_reply_over`]'s answer without its value, as
     /// [`Self::request_decodes`] gives [`Protocol::decode_request`]'s.
     #[inline]
     fn response_decodes(
@@ -378,8 +402,14 @@ pub trait Framing {
     where
         Self: Protocol,
     {
-        Self::decode_response_over(frame, request, covered).map(|_| ())
+        <Self as Protocol>::Response::decode_as_reply_over(frame, request, covered).map(|_| ())
     }
+
+    /// Whether `frame` ends in the checksum of the bytes it covers, and nothing else: the
+    /// weakest acceptance test (a frame shorter than a checksum fails it). It knows no
+    /// request: a reply whose checksum takes in its request's bytes (`checksum_over_request`)
+    /// is taken over its own bytes alone here, which such a reply fails.
+    fn checksum_ok(frame: &[u8]) -> bool;
 }
 
 /// Where a protocol's code came from ([`Protocol::SOURCE`]).
@@ -423,7 +453,7 @@ pub struct Bus {
     pub transactions: Transactions,
 }
 
-/// What a spec says of one command beyond its frame ([`Protocol::command`]).
+/// What a spec says of one command beyond its frame ([`RequestMessage::command`]).
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub struct Command {
     /// What the command does, as the spec classifies it.

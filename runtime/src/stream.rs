@@ -58,7 +58,7 @@
 //! Decisions depend only on the bytes, never on how they were cut into chunks, as long as
 //! `finish` is called only at the end.
 
-use crate::{DecodeError, Decoded, Protocol};
+use crate::{DecodeError, Decoded, FrameBuffer, Protocol, RequestMessage, ResponseMessage};
 
 /// Consecutive noise bytes beyond this many are reported in more than one [`Event::Skipped`].
 pub const MAX_SKIPPED_RUN: u64 = 256;
@@ -421,7 +421,7 @@ impl<C: Protocol> StreamDecoder<C> {
     /// (`None`: a sniffer on a shared bus).
     pub fn new(direction: Option<Direction>) -> Self {
         StreamDecoder {
-            buf: C::EMPTY_BUFFER,
+            buf: <C::Buffer as FrameBuffer>::ZERO,
             len: 0,
             core: Core {
                 head: 0,
@@ -797,12 +797,12 @@ impl<C: Protocol> Core<C> {
             // interpreter's stream says).
             let covered = self.covered();
             if let Some(r) = self.last_request.as_ref().or(self.default_request.as_ref()) {
-                return match C::decode_response_over(frame, Some(r), covered) {
+                return match C::Response::decode_as_reply_over(frame, Some(r), covered) {
                     Ok(d) => Ok(d),
-                    Err(_) => C::decode_response_over(frame, None, covered),
+                    Err(_) => C::Response::decode_as_reply_over(frame, None, covered),
                 };
             }
-            return C::decode_response_over(frame, None, covered);
+            return C::Response::decode_as_reply_over(frame, None, covered);
         }
         // Where the reply to any request decodes as on its own (`Framing::REPLY_BY_REQUEST`),
         // no request is kept, and a default one is not asked.
@@ -812,12 +812,12 @@ impl<C: Protocol> Core<C> {
             None
         };
         if let Some(r) = paired {
-            return match C::decode_response_for(frame, Some(r)) {
+            return match C::Response::decode_as_reply(frame, Some(r)) {
                 Ok(d) => Ok(d),
                 Err(_) => Self::not_the_reply(frame),
             };
         }
-        C::decode_response_for(frame, None)
+        C::Response::decode_as_reply(frame, None)
     }
 
     /// Whether [`Self::response`] decodes `frame` (`Ok(())`, else the same error), by the
@@ -880,7 +880,7 @@ impl<C: Protocol> Core<C> {
     #[inline(always)]
     fn keep_span(&mut self, frame: &[u8]) {
         if C::OVER_REQUEST {
-            let span = C::request_span(frame);
+            let span = C::Request::covered(frame);
             let room = self.span.as_mut();
             self.span_len = span.len().min(room.len());
             room[..self.span_len].copy_from_slice(&span[..self.span_len]);
@@ -902,7 +902,7 @@ impl<C: Protocol> Core<C> {
     #[cold]
     #[inline(never)]
     fn not_the_reply(frame: &[u8]) -> Result<Decoded<C::Response>, DecodeError> {
-        C::decode_response_for(frame, None)
+        C::Response::decode_as_reply(frame, None)
     }
 
     /// The framing rule at the head of a whole window (`window.len()` the buffer's capacity,
@@ -988,12 +988,16 @@ impl<C: Protocol> Core<C> {
                     } else {
                         match self.last_request.as_ref().or(self.default_request.as_ref()) {
                             Some(r) => {
-                                match C::decode_response_over(frame, Some(r), self.covered()) {
+                                match C::Response::decode_as_reply_over(
+                                    frame,
+                                    Some(r),
+                                    self.covered(),
+                                ) {
                                     Ok(d) => Ok(d),
                                     Err(_) => slow!(),
                                 }
                             }
-                            None => C::decode_response_for(frame, None),
+                            None => C::Response::decode_as_reply(frame, None),
                         }
                     };
                     match reply {

@@ -19,7 +19,8 @@ use busspec_runtime::codec::{LengthField, VarLen, VarLens};
 use busspec_runtime::stream::{Candidates, Event, StreamDecoder};
 use busspec_runtime::{
     Broadcast, Bus, Command, CommandKind, DecodeError, Decoded, EncodeError, FieldDesc, FieldError,
-    FieldValue, Framing, Message, MessageDesc, Protocol, Repeated, Reply, Source, Transactions,
+    FieldValue, Framing, Message, MessageDesc, Protocol, Repeated, Reply, RequestMessage,
+    ResponseMessage, Source, Transactions,
 };
 
 const SPEC: &str = r#"
@@ -304,7 +305,6 @@ impl Protocol for Toy {
         transactions: Transactions::UNDECLARED,
     };
     const MAX_FRAME_LEN: usize = 11;
-    const EMPTY_BUFFER: [u8; 11] = [0; 11];
 
     fn decode_request(frame: &[u8]) -> Result<Decoded<Req>, DecodeError> {
         let code = check(frame)?;
@@ -348,11 +348,37 @@ impl Protocol for Toy {
             message,
         })
     }
+}
 
-    fn decode_response_for(
-        frame: &[u8],
-        _request: Option<&Req>,
-    ) -> Result<Decoded<Resp>, DecodeError> {
+impl RequestMessage for Req {
+    fn command(&self) -> Command {
+        let kind = match self {
+            Req::Read { .. } => CommandKind::Getter,
+            Req::Write { .. } => CommandKind::Setter,
+        };
+        Command {
+            kind,
+            broadcast: Broadcast {
+                accepted: false,
+                answered: false,
+            },
+            reply: Reply::Required,
+            may_retry: kind.safe_to_repeat(),
+        }
+    }
+}
+
+impl ResponseMessage<Req> for Resp {
+    fn answers(&self, request: &Req) -> bool {
+        matches!(
+            (request, self),
+            (Req::Read { .. }, Resp::Data { .. }) | (Req::Write { .. }, Resp::Ack { .. })
+        )
+    }
+    fn is_nak(&self) -> bool {
+        false
+    }
+    fn decode_as_reply(frame: &[u8], _request: Option<&Req>) -> Result<Decoded<Resp>, DecodeError> {
         let code = check(frame)?;
         let message = match (code, frame.len()) {
             (0x81, 6..) => Resp::Data {
@@ -381,35 +407,6 @@ impl Protocol for Toy {
             message,
         })
     }
-
-    fn answers(request: &Req, response: &Resp) -> bool {
-        matches!(
-            (request, response),
-            (Req::Read { .. }, Resp::Data { .. }) | (Req::Write { .. }, Resp::Ack { .. })
-        )
-    }
-    fn command(request: &Req) -> Command {
-        let kind = match request {
-            Req::Read { .. } => CommandKind::Getter,
-            Req::Write { .. } => CommandKind::Setter,
-        };
-        Command {
-            kind,
-            broadcast: Broadcast {
-                accepted: false,
-                answered: false,
-            },
-            reply: Reply::Required,
-            may_retry: kind.safe_to_repeat(),
-        }
-    }
-    fn is_nak(_response: &Resp) -> bool {
-        false
-    }
-    fn checksum_ok(frame: &[u8]) -> bool {
-        frame.len() > 1
-            && busspec_runtime::sum8(&frame[..frame.len() - 1]) == frame[frame.len() - 1]
-    }
 }
 
 impl Framing for Toy {
@@ -419,6 +416,11 @@ impl Framing for Toy {
     const FRAME_LENGTHS: &'static [usize] = &[6];
     type Span = [u8; 0];
     const EMPTY_SPAN: [u8; 0] = [];
+
+    fn checksum_ok(frame: &[u8]) -> bool {
+        frame.len() > 1
+            && busspec_runtime::sum8(&frame[..frame.len() - 1]) == frame[frame.len() - 1]
+    }
 
     fn candidates(head: &[u8]) -> Candidates {
         if head.first().is_some_and(|&b| b != 0x7E) {

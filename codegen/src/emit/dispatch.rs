@@ -265,7 +265,7 @@ pub(super) fn emit_dispatch(ctx: &Ctx, d: Direction, ty: &TokenStream) -> TokenS
             quote!(Self::decode_over(frame, request, rt::None)),
             quote! {
                 /// Decodes a frame as the reply to `request`, whose frame's checksum covered
-                /// `covered` (`busspec_runtime::Protocol::request_span` of it): as
+                /// `covered` (`busspec_runtime::RequestMessage::covered` of it): as
                 /// [`Self::decode_reply`], and the checksum of a reply that takes in its
                 /// request's bytes (`checksum_over_request`) is checked over them, where
                 /// [`Self::decode_reply`] refuses such a reply

@@ -506,7 +506,7 @@ fn encode_fn(
                 }
             }
             /// Encodes the frame for `address` into `buf` as the reply to a request whose
-            /// checksum covered `covered` (`busspec_runtime::Protocol::request_span` of its
+            /// checksum covered `covered` (`busspec_runtime::RequestMessage::covered` of its
             /// frame): as [`Self::encode`], and the checksum of a reply that takes in its
             /// request's bytes over them.
             pub fn encode_reply_over(&self, address: u8, covered: &[u8], buf: &mut [u8]) -> rt::EncodeResult {

@@ -13,8 +13,9 @@
 //!   `encode` and `decode` the arms of one message; `lists` where repeated fields sit and how
 //!   they are split; `records` the struct of each repeated record;
 //! - `dispatch`: code → message, the decode entry point;
-//! - `stream`: the stream decoder's tables and the `Protocol` impl;
-//! - `protocol`: pairing (`COMMANDS`, `follows_request`);
+//! - `stream`: the stream decoder's tables (`rt::Framing`);
+//! - `protocol`: the `Protocol` impl, what the message types say beyond their frames
+//!   (`rt::RequestMessage`, `rt::ResponseMessage`) and pairing (`COMMANDS`, `follows_request`);
 //! - `view`: the borrowed views (`RequestView<'a>`/`ResponseView<'a>`: the decoders again,
 //!   each list lent as `rt::ListView`/`rt::BitsView`), where `view::no_view` finds none missing;
 //! - `desc`: each message struct's `impl` with its descriptors (`DESC`, the `rt::MessageDesc`
@@ -22,7 +23,7 @@
 //!   the refusals point at, and the `request` and `response` modules with the structs;
 //! - `ctx` and `tokens`: what the others share (the IR walked as leaves, typed literals, docs).
 //!
-//! Shape (kept lean so a firmware engineer can read it, about 30–40 lines per message):
+//! Shape (kept lean so a firmware engineer can read it):
 //! - each module imports `::busspec_runtime::codec as rt` once and names everything from core
 //!   and the runtime through it (`rt::Some`, `rt::Result`, `rt::DecodeError`): a lowercase
 //!   module name no spec name can take, since spec names become `CamelCase` types, variants

@@ -284,8 +284,10 @@ pub(super) fn emit_follows_request(ctx: &Ctx) -> Option<TokenStream> {
     })
 }
 
-/// The protocol's unit type and its `rt::Protocol` impl: where it came from, its bus, its
-/// decoders and encoders by direction, its NAKs and the checksum test.
+/// The protocol's unit type and its `rt::Protocol` impl (where it came from, its bus, its
+/// decoders), and what its message types say beyond their frames: `rt::RequestMessage` for
+/// `Request`, `rt::ResponseMessage` for `Response` (which requests a response answers, its
+/// NAKs, its decoding as a reply).
 pub(super) fn emit_protocol_impl(p: &Protocol) -> TokenStream {
     let ty = type_ident(&p.name);
     let naks: Vec<TokenStream> = p
@@ -297,12 +299,7 @@ pub(super) fn emit_protocol_impl(p: &Protocol) -> TokenStream {
     let is_nak = if naks.is_empty() {
         quote!(false)
     } else {
-        quote!(matches!(response, #(#naks)|*))
-    };
-    let nak_param = if naks.is_empty() {
-        quote!(_response)
-    } else {
-        quote!(response)
+        quote!(matches!(self, #(#naks)|*))
     };
     let doc_text = format!(
         "The {} protocol as a type: implements [`busspec_runtime::Protocol`], so code generic over protocols works with it.",
@@ -313,95 +310,101 @@ pub(super) fn emit_protocol_impl(p: &Protocol) -> TokenStream {
     let replies_addressed = p.framing.has_address_in(Direction::Response);
     // A reply whose checksum takes in its request's bytes (`checksum_over_request`): decoded
     // and encoded over its request's covered bytes.
-    let over_fns = if p.has_over_request() {
+    let (covered, over_fns) = if p.has_over_request() {
         let from = usize_lit(p.framing.checksum.covers_from);
         // A request without a checksum (`checksum: none`): its bytes from where the
         // checksum would cover to its end.
         let span_of = if p.framed(Direction::Request).iter().any(|m| m.unchecked) {
             let is = super::head::unchecked_fn(Direction::Request);
             quote! {
-                if #is(request_frame) {
-                    return request_frame.get(#from..).unwrap_or(&[]);
+                if #is(frame) {
+                    return frame.get(#from..).unwrap_or(&[]);
                 }
-                rt::span(request_frame, #from, &FRAME)
+                rt::span(frame, #from, &FRAME)
             }
         } else {
-            quote!(rt::span(request_frame, #from, &FRAME))
+            quote!(rt::span(frame, #from, &FRAME))
         };
-        quote! {
+        (
+            quote! {
                 #[inline]
-                fn decode_response_over(frame: &[u8], request: rt::Option<&Request>, covered: rt::Option<&[u8]>) -> rt::Result<Decoded<Response>, rt::DecodeError> {
+                fn covered(frame: &[u8]) -> &[u8] {
+                    #span_of
+                }
+            },
+            quote! {
+                #[inline]
+                fn decode_as_reply_over(frame: &[u8], request: rt::Option<&Request>, covered: rt::Option<&[u8]>) -> rt::Result<Decoded<Response>, rt::DecodeError> {
                     Response::decode_over(frame, request, covered)
                 }
                 #[inline]
-                fn request_span(request_frame: &[u8]) -> &[u8] {
-                    #span_of
+                fn encode_reply_over(&self, address: u8, covered: &[u8], buf: &mut [u8]) -> rt::Result<usize, rt::EncodeError> {
+                    Response::encode_reply_over(self, address, covered, buf)
                 }
-                #[inline]
-                fn encode_reply(response: &Response, address: u8, request_frame: &[u8], buf: &mut [u8]) -> rt::Result<usize, rt::EncodeError> {
-                    response.encode_reply_over(address, Self::request_span(request_frame), buf)
-                }
-        }
+            },
+        )
     } else {
-        quote!()
+        (quote!(), quote!())
     };
-    let checksum_ok = checksum_ok_fn(p);
     quote! {
-    #type_doc
-    #[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
-    pub struct #ty;
-    impl rt::Protocol for #ty {
-        type Request = Request;
-        type Response = Response;
-        type Buffer = [u8; MAX_FRAME_LEN];
-        const NAME: &'static str = PROTOCOL;
-        const SOURCE: rt::Source = rt::Source {
-            document: DOCUMENT,
-            revision: DOCUMENT_REVISION,
-            spec_sha256: SPEC_SHA256,
-            spec_yaml: SPEC_YAML,
-        };
-        const BUS: rt::Bus = rt::Bus {
-            baud: BAUD,
-            inter_frame_gap_ms: INTER_FRAME_GAP_MS,
-            max_frames_per_s: MAX_FRAMES_PER_S,
-            device_addresses: DEVICE_ADDRESSES,
-            broadcast_address: BROADCAST_ADDRESS,
-            host_address: HOST_ADDRESS,
-            replies_addressed: #replies_addressed,
-            transactions: #transactions,
-        };
-        const MAX_FRAME_LEN: usize = MAX_FRAME_LEN;
-        const EMPTY_BUFFER: [u8; MAX_FRAME_LEN] = [0; MAX_FRAME_LEN];
-        #[inline]
-        fn decode_request(frame: &[u8]) -> rt::Result<Decoded<Request>, rt::DecodeError> {
-            Request::decode(frame)
+        #type_doc
+        #[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+        pub struct #ty;
+        impl rt::Protocol for #ty {
+            type Request = Request;
+            type Response = Response;
+            type Buffer = [u8; MAX_FRAME_LEN];
+            const NAME: &'static str = PROTOCOL;
+            const SOURCE: rt::Source = rt::Source {
+                document: DOCUMENT,
+                revision: DOCUMENT_REVISION,
+                spec_sha256: SPEC_SHA256,
+                spec_yaml: SPEC_YAML,
+            };
+            const BUS: rt::Bus = rt::Bus {
+                baud: BAUD,
+                inter_frame_gap_ms: INTER_FRAME_GAP_MS,
+                max_frames_per_s: MAX_FRAMES_PER_S,
+                device_addresses: DEVICE_ADDRESSES,
+                broadcast_address: BROADCAST_ADDRESS,
+                host_address: HOST_ADDRESS,
+                replies_addressed: #replies_addressed,
+                transactions: #transactions,
+            };
+            const MAX_FRAME_LEN: usize = MAX_FRAME_LEN;
+            #[inline]
+            fn decode_request(frame: &[u8]) -> rt::Result<Decoded<Request>, rt::DecodeError> {
+                Request::decode(frame)
+            }
         }
-        #[inline]
-        fn decode_response_for(frame: &[u8], request: rt::Option<&Request>) -> rt::Result<Decoded<Response>, rt::DecodeError> {
-            Response::decode_for(frame, request)
+        impl rt::RequestMessage for Request {
+            #[inline]
+            fn command(&self) -> rt::Command {
+                Request::command(self)
+            }
+            #covered
         }
-        #over_fns
-        #[inline]
-        fn answers(request: &Request, response: &Response) -> bool {
-            response.answers(request)
+        impl rt::ResponseMessage<Request> for Response {
+            #[inline]
+            fn answers(&self, request: &Request) -> bool {
+                Response::answers(self, request)
+            }
+            fn is_nak(&self) -> bool {
+                #is_nak
+            }
+            #[inline]
+            fn decode_as_reply(frame: &[u8], request: rt::Option<&Request>) -> rt::Result<Decoded<Response>, rt::DecodeError> {
+                Response::decode_for(frame, request)
+            }
+            #over_fns
         }
-        #[inline]
-        fn command(request: &Request) -> rt::Command {
-            request.command()
-        }
-        fn is_nak(#nak_param: &Response) -> bool {
-            #is_nak
-        }
-        #checksum_ok
-    }
     }
 }
 
-/// `Protocol::checksum_ok`: whether a frame ends in the checksum of the bytes it covers, laid
+/// `Framing::checksum_ok`: whether a frame ends in the checksum of the bytes it covers, laid
 /// out in the long form's width or unescaped first where the framing says so; a message
 /// without a checksum passes.
-fn checksum_ok_fn(p: &Protocol) -> TokenStream {
+pub(super) fn checksum_ok_fn(p: &Protocol) -> TokenStream {
     let ck_len = usize_lit(p.framing.trailer_len());
     let sum = frame_sum(p);
     let skip_preamble = if p.framing.preamble.is_some() {

@@ -97,6 +97,7 @@ pub(super) fn emit_stream(p: &Protocol) -> TokenStream {
     let lens = lengths.iter().map(|l| usize_lit(*l));
     let ty = type_ident(&p.name);
     let protocol = super::protocol::emit_protocol_impl(p);
+    let checksum_ok = super::protocol::checksum_ok_fn(p);
     // A reply whose checksum takes in its request's bytes (`checksum_over_request`): the
     // request's covered bytes kept by the stream decoder.
     let span = if p.has_over_request() {
@@ -231,6 +232,7 @@ pub(super) fn emit_stream(p: &Protocol) -> TokenStream {
             #views
             #framing_fns
             #view_fns
+            #checksum_ok
         }
         /// A streaming decoder for this protocol: see [`busspec_runtime::stream`].
         pub type StreamDecoder = ::busspec_runtime::stream::StreamDecoder<#ty>;

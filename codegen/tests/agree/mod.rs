@@ -9,7 +9,7 @@
 
 use busspec_model::interp::{self, Raw, Value};
 use busspec_model::ir::{self, Direction, MessageRef};
-use busspec_runtime::{Elements, FieldValue, Message, Protocol};
+use busspec_runtime::{Elements, FieldValue, Message, Protocol, RequestMessage, ResponseMessage};
 
 /// `name`, a path from the repository's root.
 pub fn fixture(name: &str) -> ir::Protocol {
@@ -91,8 +91,10 @@ pub fn check<P: Protocol>(
         }
         Direction::Response => {
             let g = match request {
-                Some((r, _, w)) => P::decode_response_over(wire, Some(r), Some(P::request_span(w))),
-                None => P::decode_response_for(wire, None),
+                Some((r, _, w)) => {
+                    P::Response::decode_as_reply_over(wire, Some(r), Some(P::Request::covered(w)))
+                }
+                None => P::Response::decode_as_reply(wire, None),
             };
             let i = match request {
                 Some((_, f, w)) => interp::decode_reply_with(p, f, Some(w), wire),
@@ -107,7 +109,7 @@ pub fn check<P: Protocol>(
             same(p, &g.message, &i, wire);
             assert_eq!(g.message.frame_len(), unescaped_len(p, wire));
             if let Some((r, _, _)) = request {
-                assert!(P::answers(r, &g.message), "{wire:02X?}");
+                assert!(g.message.answers(r), "{wire:02X?}");
             }
             let n = match request {
                 Some((_, _, w)) => P::encode_reply(&g.message, g.address, w, &mut buf).unwrap(),
@@ -301,10 +303,12 @@ pub fn agree<P: Protocol>(p: &ir::Protocol) -> Tally {
             Direction::Request => visited(&P::decode_request(&e.wire).unwrap().message),
             Direction::Response => visited(
                 &match &request {
-                    Some((r, _, w)) => {
-                        P::decode_response_over(&e.wire, Some(r), Some(P::request_span(w)))
-                    }
-                    None => P::decode_response_for(&e.wire, None),
+                    Some((r, _, w)) => P::Response::decode_as_reply_over(
+                        &e.wire,
+                        Some(r),
+                        Some(P::Request::covered(w)),
+                    ),
+                    None => P::Response::decode_as_reply(&e.wire, None),
                 }
                 .unwrap()
                 .message,
@@ -483,7 +487,7 @@ pub fn view_agrees<P: Views>(
         }
         Direction::Response => {
             let v = P::view_response(wire, request)?;
-            let o = P::decode_response_for(wire, request);
+            let o = P::Response::decode_as_reply(wire, request);
             match (&v, &o) {
                 (Ok((a, n, m)), Ok(g)) => {
                     // Raw values as `visit` gives them: a NaN is its bits.

@@ -1147,43 +1147,33 @@ pub mod jbd_bms {
             transactions: rt::Transactions::UNDECLARED,
         };
         const MAX_FRAME_LEN: usize = MAX_FRAME_LEN;
-        const EMPTY_BUFFER: [u8; MAX_FRAME_LEN] = [0; MAX_FRAME_LEN];
         #[inline]
         fn decode_request(
             frame: &[u8],
         ) -> rt::Result<Decoded<Request>, rt::DecodeError> {
             Request::decode(frame)
         }
+    }
+    impl rt::RequestMessage for Request {
         #[inline]
-        fn decode_response_for(
+        fn command(&self) -> rt::Command {
+            Request::command(self)
+        }
+    }
+    impl rt::ResponseMessage<Request> for Response {
+        #[inline]
+        fn answers(&self, request: &Request) -> bool {
+            Response::answers(self, request)
+        }
+        fn is_nak(&self) -> bool {
+            matches!(self, Response::Error(_))
+        }
+        #[inline]
+        fn decode_as_reply(
             frame: &[u8],
             request: rt::Option<&Request>,
         ) -> rt::Result<Decoded<Response>, rt::DecodeError> {
             Response::decode_for(frame, request)
-        }
-        #[inline]
-        fn answers(request: &Request, response: &Response) -> bool {
-            response.answers(request)
-        }
-        #[inline]
-        fn command(request: &Request) -> rt::Command {
-            request.command()
-        }
-        fn is_nak(response: &Response) -> bool {
-            matches!(response, Response::Error(_))
-        }
-        fn checksum_ok(frame: &[u8]) -> bool {
-            match frame.len().checked_sub(3) {
-                rt::Some(n) if n > 0 => {
-                    rt::check_sum(
-                        frame,
-                        n,
-                        &FRAME,
-                        |b| u32::from(checksum(rt::covered(b, 2))),
-                    )
-                }
-                _ => false,
-            }
         }
     }
     impl rt::Framing for JbdBms {
@@ -1275,6 +1265,19 @@ pub mod jbd_bms {
             _covered: rt::Option<&[u8]>,
         ) -> rt::Result<(), rt::DecodeError> {
             ResponseView::decode_for(frame, request).map(|_| ())
+        }
+        fn checksum_ok(frame: &[u8]) -> bool {
+            match frame.len().checked_sub(3) {
+                rt::Some(n) if n > 0 => {
+                    rt::check_sum(
+                        frame,
+                        n,
+                        &FRAME,
+                        |b| u32::from(checksum(rt::covered(b, 2))),
+                    )
+                }
+                _ => false,
+            }
         }
     }
     /// A streaming decoder for this protocol: see [`busspec_runtime::stream`].

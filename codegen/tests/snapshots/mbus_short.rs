@@ -427,43 +427,33 @@ pub mod mbus_short {
             transactions: rt::Transactions::UNDECLARED,
         };
         const MAX_FRAME_LEN: usize = MAX_FRAME_LEN;
-        const EMPTY_BUFFER: [u8; MAX_FRAME_LEN] = [0; MAX_FRAME_LEN];
         #[inline]
         fn decode_request(
             frame: &[u8],
         ) -> rt::Result<Decoded<Request>, rt::DecodeError> {
             Request::decode(frame)
         }
+    }
+    impl rt::RequestMessage for Request {
         #[inline]
-        fn decode_response_for(
+        fn command(&self) -> rt::Command {
+            Request::command(self)
+        }
+    }
+    impl rt::ResponseMessage<Request> for Response {
+        #[inline]
+        fn answers(&self, request: &Request) -> bool {
+            Response::answers(self, request)
+        }
+        fn is_nak(&self) -> bool {
+            false
+        }
+        #[inline]
+        fn decode_as_reply(
             frame: &[u8],
             request: rt::Option<&Request>,
         ) -> rt::Result<Decoded<Response>, rt::DecodeError> {
             Response::decode_for(frame, request)
-        }
-        #[inline]
-        fn answers(request: &Request, response: &Response) -> bool {
-            response.answers(request)
-        }
-        #[inline]
-        fn command(request: &Request) -> rt::Command {
-            request.command()
-        }
-        fn is_nak(_response: &Response) -> bool {
-            false
-        }
-        fn checksum_ok(frame: &[u8]) -> bool {
-            match frame.len().checked_sub(2) {
-                rt::Some(n) if n > 0 => {
-                    rt::check_sum(
-                        frame,
-                        n,
-                        &FRAME,
-                        |b| u32::from(checksum(rt::covered(b, 1))),
-                    )
-                }
-                _ => false,
-            }
         }
     }
     impl rt::Framing for MbusShort {
@@ -521,6 +511,19 @@ pub mod mbus_short {
                     rt::Candidate(u16::from_le_bytes([CELLS[i], CELLS[i + 1]]))
                 }
                 rt::None => rt::Candidate::MANY,
+            }
+        }
+        fn checksum_ok(frame: &[u8]) -> bool {
+            match frame.len().checked_sub(2) {
+                rt::Some(n) if n > 0 => {
+                    rt::check_sum(
+                        frame,
+                        n,
+                        &FRAME,
+                        |b| u32::from(checksum(rt::covered(b, 1))),
+                    )
+                }
+                _ => false,
             }
         }
     }

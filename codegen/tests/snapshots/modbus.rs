@@ -2527,31 +2527,27 @@ pub mod modbus {
             },
         };
         const MAX_FRAME_LEN: usize = MAX_FRAME_LEN;
-        const EMPTY_BUFFER: [u8; MAX_FRAME_LEN] = [0; MAX_FRAME_LEN];
         #[inline]
         fn decode_request(
             frame: &[u8],
         ) -> rt::Result<Decoded<Request>, rt::DecodeError> {
             Request::decode(frame)
         }
+    }
+    impl rt::RequestMessage for Request {
         #[inline]
-        fn decode_response_for(
-            frame: &[u8],
-            request: rt::Option<&Request>,
-        ) -> rt::Result<Decoded<Response>, rt::DecodeError> {
-            Response::decode_for(frame, request)
+        fn command(&self) -> rt::Command {
+            Request::command(self)
         }
+    }
+    impl rt::ResponseMessage<Request> for Response {
         #[inline]
-        fn answers(request: &Request, response: &Response) -> bool {
-            response.answers(request)
+        fn answers(&self, request: &Request) -> bool {
+            Response::answers(self, request)
         }
-        #[inline]
-        fn command(request: &Request) -> rt::Command {
-            request.command()
-        }
-        fn is_nak(response: &Response) -> bool {
+        fn is_nak(&self) -> bool {
             matches!(
-                response, Response::ReadCoilsException(_) |
+                self, Response::ReadCoilsException(_) |
                 Response::ReadDiscreteInputsException(_) |
                 Response::ReadHoldingRegistersException(_) |
                 Response::ReadInputRegistersException(_) |
@@ -2561,13 +2557,12 @@ pub mod modbus {
                 Response::WriteMultipleRegistersException(_)
             )
         }
-        fn checksum_ok(frame: &[u8]) -> bool {
-            match frame.len().checked_sub(2) {
-                rt::Some(n) if n > 0 => {
-                    rt::check_sum(frame, n, &FRAME, |b| u32::from(checksum(b)))
-                }
-                _ => false,
-            }
+        #[inline]
+        fn decode_as_reply(
+            frame: &[u8],
+            request: rt::Option<&Request>,
+        ) -> rt::Result<Decoded<Response>, rt::DecodeError> {
+            Response::decode_for(frame, request)
         }
     }
     impl rt::Framing for Modbus {
@@ -2675,6 +2670,14 @@ pub mod modbus {
             _covered: rt::Option<&[u8]>,
         ) -> rt::Result<(), rt::DecodeError> {
             ResponseView::decode_for(frame, request).map(|_| ())
+        }
+        fn checksum_ok(frame: &[u8]) -> bool {
+            match frame.len().checked_sub(2) {
+                rt::Some(n) if n > 0 => {
+                    rt::check_sum(frame, n, &FRAME, |b| u32::from(checksum(b)))
+                }
+                _ => false,
+            }
         }
     }
     /// A streaming decoder for this protocol: see [`busspec_runtime::stream`].

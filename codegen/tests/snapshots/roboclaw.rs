@@ -912,7 +912,7 @@ pub mod roboclaw {
             }
         }
         /// Encodes the frame for `address` into `buf` as the reply to a request whose
-        /// checksum covered `covered` (`busspec_runtime::Protocol::request_span` of its
+        /// checksum covered `covered` (`busspec_runtime::RequestMessage::covered` of its
         /// frame): as [`Self::encode`], and the checksum of a reply that takes in its
         /// request's bytes over them.
         pub fn encode_reply_over(
@@ -1030,7 +1030,7 @@ pub mod roboclaw {
             Self::decode_over(frame, request, rt::None)
         }
         /// Decodes a frame as the reply to `request`, whose frame's checksum covered
-        /// `covered` (`busspec_runtime::Protocol::request_span` of it): as
+        /// `covered` (`busspec_runtime::RequestMessage::covered` of it): as
         /// [`Self::decode_reply`], and the checksum of a reply that takes in its
         /// request's bytes (`checksum_over_request`) is checked over them, where
         /// [`Self::decode_reply`] refuses such a reply
@@ -1312,22 +1312,43 @@ pub mod roboclaw {
             transactions: rt::Transactions::UNDECLARED,
         };
         const MAX_FRAME_LEN: usize = MAX_FRAME_LEN;
-        const EMPTY_BUFFER: [u8; MAX_FRAME_LEN] = [0; MAX_FRAME_LEN];
         #[inline]
         fn decode_request(
             frame: &[u8],
         ) -> rt::Result<Decoded<Request>, rt::DecodeError> {
             Request::decode(frame)
         }
+    }
+    impl rt::RequestMessage for Request {
         #[inline]
-        fn decode_response_for(
+        fn command(&self) -> rt::Command {
+            Request::command(self)
+        }
+        #[inline]
+        fn covered(frame: &[u8]) -> &[u8] {
+            if unchecked_request(frame) {
+                return frame.get(0..).unwrap_or(&[]);
+            }
+            rt::span(frame, 0, &FRAME)
+        }
+    }
+    impl rt::ResponseMessage<Request> for Response {
+        #[inline]
+        fn answers(&self, request: &Request) -> bool {
+            Response::answers(self, request)
+        }
+        fn is_nak(&self) -> bool {
+            false
+        }
+        #[inline]
+        fn decode_as_reply(
             frame: &[u8],
             request: rt::Option<&Request>,
         ) -> rt::Result<Decoded<Response>, rt::DecodeError> {
             Response::decode_for(frame, request)
         }
         #[inline]
-        fn decode_response_over(
+        fn decode_as_reply_over(
             frame: &[u8],
             request: rt::Option<&Request>,
             covered: rt::Option<&[u8]>,
@@ -1335,45 +1356,13 @@ pub mod roboclaw {
             Response::decode_over(frame, request, covered)
         }
         #[inline]
-        fn request_span(request_frame: &[u8]) -> &[u8] {
-            if unchecked_request(request_frame) {
-                return request_frame.get(0..).unwrap_or(&[]);
-            }
-            rt::span(request_frame, 0, &FRAME)
-        }
-        #[inline]
-        fn encode_reply(
-            response: &Response,
+        fn encode_reply_over(
+            &self,
             address: u8,
-            request_frame: &[u8],
+            covered: &[u8],
             buf: &mut [u8],
         ) -> rt::Result<usize, rt::EncodeError> {
-            response.encode_reply_over(address, Self::request_span(request_frame), buf)
-        }
-        #[inline]
-        fn answers(request: &Request, response: &Response) -> bool {
-            response.answers(request)
-        }
-        #[inline]
-        fn command(request: &Request) -> rt::Command {
-            request.command()
-        }
-        fn is_nak(_response: &Response) -> bool {
-            false
-        }
-        fn checksum_ok(frame: &[u8]) -> bool {
-            if unchecked_request(frame) {
-                return true;
-            }
-            if unchecked_response(frame) {
-                return true;
-            }
-            match frame.len().checked_sub(2) {
-                rt::Some(n) if n > 0 => {
-                    rt::check_sum(frame, n, &FRAME, |b| u32::from(checksum(b)))
-                }
-                _ => false,
-            }
+            Response::encode_reply_over(self, address, covered, buf)
         }
     }
     impl rt::Framing for Roboclaw {
@@ -1414,6 +1403,20 @@ pub mod roboclaw {
             rt::Candidates {
                 requests: mask as u64,
                 responses: (mask >> 64) as u64,
+            }
+        }
+        fn checksum_ok(frame: &[u8]) -> bool {
+            if unchecked_request(frame) {
+                return true;
+            }
+            if unchecked_response(frame) {
+                return true;
+            }
+            match frame.len().checked_sub(2) {
+                rt::Some(n) if n > 0 => {
+                    rt::check_sum(frame, n, &FRAME, |b| u32::from(checksum(b)))
+                }
+                _ => false,
             }
         }
     }

@@ -618,30 +618,52 @@ pub mod slip_sensor {
             transactions: rt::Transactions::UNDECLARED,
         };
         const MAX_FRAME_LEN: usize = MAX_FRAME_LEN;
-        const EMPTY_BUFFER: [u8; MAX_FRAME_LEN] = [0; MAX_FRAME_LEN];
         #[inline]
         fn decode_request(
             frame: &[u8],
         ) -> rt::Result<Decoded<Request>, rt::DecodeError> {
             Request::decode(frame)
         }
+    }
+    impl rt::RequestMessage for Request {
         #[inline]
-        fn decode_response_for(
+        fn command(&self) -> rt::Command {
+            Request::command(self)
+        }
+    }
+    impl rt::ResponseMessage<Request> for Response {
+        #[inline]
+        fn answers(&self, request: &Request) -> bool {
+            Response::answers(self, request)
+        }
+        fn is_nak(&self) -> bool {
+            false
+        }
+        #[inline]
+        fn decode_as_reply(
             frame: &[u8],
             request: rt::Option<&Request>,
         ) -> rt::Result<Decoded<Response>, rt::DecodeError> {
             Response::decode_for(frame, request)
         }
+    }
+    impl rt::Framing for SlipSensor {
+        const MAX_REQUEST_LEN: usize = MAX_REQUEST_LEN;
+        const MAX_RESPONSE_LEN: usize = MAX_RESPONSE_LEN;
+        const FRAME_LENGTHS: &'static [usize] = &[];
+        type Span = [u8; 0];
+        const EMPTY_SPAN: [u8; 0] = [];
+        const REPLY_BY_REQUEST: bool = false;
         #[inline]
-        fn answers(request: &Request, response: &Response) -> bool {
-            response.answers(request)
+        fn candidates(_head: &[u8]) -> rt::Candidates {
+            rt::Candidates {
+                requests: 0,
+                responses: 0,
+            }
         }
         #[inline]
-        fn command(request: &Request) -> rt::Command {
-            request.command()
-        }
-        fn is_nak(_response: &Response) -> bool {
-            false
+        fn variable_candidates(head: &[u8]) -> rt::VarLens {
+            rt::escaped_lens(&ESCAPING, head, MAX_FRAME_LEN)
         }
         fn checksum_ok(frame: &[u8]) -> bool {
             let mut plain = [0u8; UNESCAPED_LEN];
@@ -663,25 +685,6 @@ pub mod slip_sensor {
                 }
                 _ => false,
             }
-        }
-    }
-    impl rt::Framing for SlipSensor {
-        const MAX_REQUEST_LEN: usize = MAX_REQUEST_LEN;
-        const MAX_RESPONSE_LEN: usize = MAX_RESPONSE_LEN;
-        const FRAME_LENGTHS: &'static [usize] = &[];
-        type Span = [u8; 0];
-        const EMPTY_SPAN: [u8; 0] = [];
-        const REPLY_BY_REQUEST: bool = false;
-        #[inline]
-        fn candidates(_head: &[u8]) -> rt::Candidates {
-            rt::Candidates {
-                requests: 0,
-                responses: 0,
-            }
-        }
-        #[inline]
-        fn variable_candidates(head: &[u8]) -> rt::VarLens {
-            rt::escaped_lens(&ESCAPING, head, MAX_FRAME_LEN)
         }
     }
     /// A streaming decoder for this protocol: see [`busspec_runtime::stream`].

@@ -516,7 +516,7 @@ impl Device for SdSim {
         if !broadcast && to != self.id {
             return None;
         }
-        let rules = Sd::command(&request).broadcast;
+        let rules = request.command().broadcast;
         if broadcast && !rules.accepted {
             return None;
         }

@@ -24,7 +24,7 @@ use std::time::Duration;
 use busspec_protocols::ub2::{
     self, response, BaudRateIndex, Capacitance, ModeOfOperation, Request, Response, Ub2,
 };
-use busspec_protocols::{DecodeError, Protocol};
+use busspec_protocols::{DecodeError, Framing, Protocol};
 
 use busspec_link::sim::{reply, swap_numbers, Device};
 

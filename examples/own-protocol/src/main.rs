@@ -41,7 +41,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     println!(
         "request  {:02X?} {heat:?} (broadcast, answered: {})",
         &buf[..n],
-        Thermo::command(&heat).broadcast.answered
+        heat.command().broadcast.answered
     );
 
     // A value that does not fit its wire field (the set point travels as a u16) is refused

@@ -4,7 +4,8 @@
 
 use busspec_runtime::stream::{Direction, Event, StreamDecoder};
 use busspec_runtime::{
-    Ascii, CommandKind, DecodeError, FieldValue, Message, Protocol, ProtocolVisitor,
+    Ascii, CommandKind, DecodeError, FieldValue, FrameBuffer, Message, Protocol, ProtocolVisitor,
+    ResponseMessage,
 };
 use own_protocol::thermo::{
     DeciCelsius, Humidity, Mode, NakReason, Request, Response, StatusBits, Thermo, MAX_FRAME_LEN,
@@ -37,13 +38,20 @@ const RESPONSES: usize = 5;
 /// Every request, each field over its whole spec range (`set_mode`'s mode is limited to the
 /// four listed modes; responses carry `Unknown` modes too).
 fn requests() -> Vec<Request> {
-    let mut all = vec![Request::ReadTemperature(own_protocol::thermo::request::ReadTemperature), Request::ReadStatus(own_protocol::thermo::request::ReadStatus)];
-    all.extend((50..=350).map(|raw| Request::SetSetpoint(own_protocol::thermo::request::SetSetpoint {
-        setpoint: DeciCelsius::from_raw(raw),
-    })));
-    all.extend((0..=3u8).map(|raw| Request::SetMode(own_protocol::thermo::request::SetMode {
-        mode: Mode::from_raw(raw),
-    })));
+    let mut all = vec![
+        Request::ReadTemperature(own_protocol::thermo::request::ReadTemperature),
+        Request::ReadStatus(own_protocol::thermo::request::ReadStatus),
+    ];
+    all.extend((50..=350).map(|raw| {
+        Request::SetSetpoint(own_protocol::thermo::request::SetSetpoint {
+            setpoint: DeciCelsius::from_raw(raw),
+        })
+    }));
+    all.extend((0..=3u8).map(|raw| {
+        Request::SetMode(own_protocol::thermo::request::SetMode {
+            mode: Mode::from_raw(raw),
+        })
+    }));
     all
 }
 
@@ -73,15 +81,19 @@ fn values_outside_a_range_are_refused() {
 fn responses() -> Vec<Response> {
     let mut all = Vec::new();
     for measured in (-32768..=32767).step_by(97).chain([-32768, -1, 0, 32767]) {
-        all.push(Response::Temperature(own_protocol::thermo::response::Temperature {
-            measured: DeciCelsius::from_raw(measured),
-            setpoint: DeciCelsius::from_raw(measured + 32768),
-            humidity: Humidity::from_raw((measured & 0xFF) as u8 % 201),
-        }));
+        all.push(Response::Temperature(
+            own_protocol::thermo::response::Temperature {
+                measured: DeciCelsius::from_raw(measured),
+                setpoint: DeciCelsius::from_raw(measured + 32768),
+                humidity: Humidity::from_raw((measured & 0xFF) as u8 % 201),
+            },
+        ));
     }
-    all.extend((0..=65535).step_by(13).map(|raw| Response::SetpointAck(own_protocol::thermo::response::SetpointAck {
-        setpoint: DeciCelsius::from_raw(raw),
-    })));
+    all.extend((0..=65535).step_by(13).map(|raw| {
+        Response::SetpointAck(own_protocol::thermo::response::SetpointAck {
+            setpoint: DeciCelsius::from_raw(raw),
+        })
+    }));
     for raw in 0..=255u8 {
         all.push(Response::ModeAck(own_protocol::thermo::response::ModeAck {
             mode: Mode::from_raw(raw),
@@ -167,7 +179,11 @@ fn documented_frames_decode_as_documented() {
     let status = [
         0xA5, 0x01, 0xB0, 0x01, 0x01, 0x31, 0x2E, 0x32, 0x30, 0xFA, 0x30,
     ];
-    let reply = Response::decode_reply(&status, &Request::ReadStatus(own_protocol::thermo::request::ReadStatus)).unwrap();
+    let reply = Response::decode_reply(
+        &status,
+        &Request::ReadStatus(own_protocol::thermo::request::ReadStatus),
+    )
+    .unwrap();
     assert_eq!(
         reply.message,
         Response::Status(own_protocol::thermo::response::Status {
@@ -189,10 +205,13 @@ fn documented_frames_decode_as_documented() {
             reason: NakReason::OutOfRange
         })
     );
-    assert!(Thermo::is_nak(&reply.message));
+    assert!(reply.message.is_nak());
     // ... but is no answer to a read.
     assert_eq!(
-        Response::decode_reply(&nak, &Request::ReadTemperature(own_protocol::thermo::request::ReadTemperature)),
+        Response::decode_reply(
+            &nak,
+            &Request::ReadTemperature(own_protocol::thermo::request::ReadTemperature)
+        ),
         Err(DecodeError::NotAReply {
             message: "nak",
             request: "read_temperature"
@@ -211,7 +230,7 @@ fn documented_frames_decode_as_documented() {
 /// What a transport, a logger or a test harness written once for every protocol does: it knows
 /// nothing of thermostats, only the trait.
 fn exercise<P: Protocol>(requests: &[P::Request], responses: &[P::Response]) -> usize {
-    let mut buf = P::EMPTY_BUFFER;
+    let mut buf = P::Buffer::ZERO;
     let mut capture = vec![0x00]; // noise first
     let mut frames = 0;
     for request in requests {
@@ -225,7 +244,7 @@ fn exercise<P: Protocol>(requests: &[P::Request], responses: &[P::Response]) -> 
         assert_eq!(decoded.message, *request);
         capture.extend_from_slice(frame);
         frames += 1;
-        for response in responses.iter().filter(|r| P::answers(request, r)) {
+        for response in responses.iter().filter(|r| r.answers(request)) {
             let n = response.encode(address, buf.as_mut()).unwrap();
             let frame = &buf.as_ref()[..n];
             assert!(n <= P::MAX_RESPONSE_LEN && P::checksum_ok(frame));
@@ -237,7 +256,7 @@ fn exercise<P: Protocol>(requests: &[P::Request], responses: &[P::Response]) -> 
             // Send it after its request, then the request again for the next reply.
             capture.extend_from_slice(frame);
             capture.extend_from_slice(&{
-                let mut b = P::EMPTY_BUFFER;
+                let mut b = P::Buffer::ZERO;
                 let m = request.encode(address, b.as_mut()).unwrap();
                 b.as_ref()[..m].to_vec()
             });
@@ -339,11 +358,14 @@ fn the_protocol_constants_are_the_spec() {
     }
     assert_eq!(Thermo::SOURCE.spec_sha256.len(), 64);
     let heat = Request::SetMode(own_protocol::thermo::request::SetMode { mode: Mode::Heat });
-    assert_eq!(Thermo::command(&heat).kind, CommandKind::Setter);
+    assert_eq!(heat.command().kind, CommandKind::Setter);
+    assert!(heat.command().broadcast.accepted && !heat.command().broadcast.answered);
     assert!(
-        Thermo::command(&heat).broadcast.accepted && !Thermo::command(&heat).broadcast.answered
+        !Request::ReadStatus(own_protocol::thermo::request::ReadStatus)
+            .command()
+            .broadcast
+            .accepted
     );
-    assert!(!Thermo::command(&Request::ReadStatus(own_protocol::thermo::request::ReadStatus)).broadcast.accepted);
     let mut fields = Vec::new();
     heat.visit(|name, value| fields.push((name, value == FieldValue::Int(1))));
     assert_eq!(fields, [("mode", true)]);

@@ -52,7 +52,10 @@ use busspec_model::ir::Direction;
 use busspec_protocols::stream::{
     breaks_spec, Direction as StreamDirection, Event, StreamDecoder, MAX_SKIPPED_RUN,
 };
-use busspec_protocols::{DecodeError, Decoded, EncodeError, Message, Protocol, ProtocolVisitor};
+use busspec_protocols::{
+    DecodeError, Decoded, EncodeError, Message, Protocol, ProtocolVisitor, RequestMessage,
+    ResponseMessage,
+};
 
 use crate::events::Seen;
 use crate::oracle::{agree, visit_values};
@@ -496,7 +499,7 @@ pub fn decode<P: Protocol>(data: &[u8]) {
     for (_, r) in example_requests::<P>() {
         match P::decode_reply(data, r) {
             Ok(d) => {
-                assert!(P::answers(r, &d.message), "{d:?} does not answer {r:?}");
+                assert!(d.message.answers(r), "{d:?} does not answer {r:?}");
                 // A reply decodes alone too, unless only its request can tell it.
                 match alone {
                     Ok(a) => assert_eq!(a, d),
@@ -509,7 +512,7 @@ pub fn decode<P: Protocol>(data: &[u8]) {
                 check_error(&e, data.len(), escapes::<P>());
                 if let Ok(a) = alone {
                     assert!(
-                        !P::answers(r, &a.message),
+                        !a.message.answers(r),
                         "{a:?} answers {r:?}, but decode_reply says {e}"
                     );
                 }
@@ -927,7 +930,7 @@ fn response_roundtrip<P: Protocol>(d: &Decoded<P::Response>) {
             // Refused: as the reply to every example request it answers, refused alike.
             let p = spec::<P>();
             for (c, r) in example_requests::<P>() {
-                if P::answers(r, &d.message) {
+                if d.message.answers(r) {
                     match P::decode_reply(&frame, r) {
                         Ok(back) => panic!(
                             "{d:?} refused ({why:?}), but {} decodes as the reply to {r:?}: {back:?}",
@@ -962,7 +965,7 @@ fn response_roundtrip<P: Protocol>(d: &Decoded<P::Response>) {
     };
     let mut answered = false;
     for (c, r) in example_requests::<P>() {
-        if P::answers(r, &d.message) {
+        if d.message.answers(r) {
             answered = true;
             assert_eq!(
                 P::decode_reply(&frame, r),
@@ -1116,8 +1119,11 @@ fn check_events<P: Protocol>(
                     let n = P::encode_reply(&frame.message, frame.address, request, buf.as_mut())
                         .unwrap_or_else(|e| panic!("{frame:?} does not encode: {e}"));
                     assert_eq!(&buf.as_ref()[..n], bytes, "{frame:?} is not its bytes");
-                    let covered = Some(P::request_span(request));
-                    assert_eq!(P::decode_response_over(bytes, None, covered), Ok(frame));
+                    let covered = Some(P::Request::covered(request));
+                    assert_eq!(
+                        P::Response::decode_as_reply_over(bytes, None, covered),
+                        Ok(frame)
+                    );
                     request = &[];
                     continue;
                 }
@@ -1151,7 +1157,7 @@ fn check_events<P: Protocol>(
                 // It checksums (a reply whose checksum takes in its request's bytes: over
                 // those of the request before it), and strict decoding refuses it for a rule
                 // of the spec: that reason, in a direction the decoder decodes.
-                let covered = Some(P::request_span(request));
+                let covered = Some(P::Request::covered(request));
                 let over = !request.is_empty()
                     && P::decode_response(bytes)
                         .is_err_and(|e| matches!(e, DecodeError::NeedsRequest { .. }));
@@ -1165,7 +1171,9 @@ fn check_events<P: Protocol>(
                     && P::decode_request(bytes) == Err(reason);
                 let as_response = direction != Some(StreamDirection::Request)
                     && (P::decode_response(bytes) == Err(reason)
-                        || (over && P::decode_response_over(bytes, None, covered) == Err(reason)));
+                        || (over
+                            && P::Response::decode_as_reply_over(bytes, None, covered)
+                                == Err(reason)));
                 assert!(
                     as_request || as_response,
                     "out of spec for {reason}: {}",

@@ -4,7 +4,7 @@
 
 use busspec_model::interp::{self, Frame, Raw};
 use busspec_model::ir::{Direction, Protocol as Spec};
-use busspec_protocols::{DecodeError, FieldValue, Message, Protocol};
+use busspec_protocols::{DecodeError, FieldValue, FrameBuffer, Message, Protocol, ResponseMessage};
 
 /// One decoded field: name and raw wire value.
 pub type Values = Vec<(String, Raw)>;
@@ -54,7 +54,7 @@ impl Decoded {
 
 /// A buffer of `P`'s longest frame, every byte 0xA5: a byte an encoder forgets to write shows.
 pub fn pattern_buffer<P: Protocol>() -> P::Buffer {
-    let mut buf = P::EMPTY_BUFFER;
+    let mut buf = P::Buffer::ZERO;
     buf.as_mut().fill(0xA5);
     buf
 }
@@ -117,7 +117,7 @@ pub fn response<P: Protocol>(
             // With the request's bytes, which a reply's checksum may take in.
             let d = P::decode_reply_to(frame, w)?;
             assert!(
-                P::answers(&r, &d.message),
+                d.message.answers(&r),
                 "decode_reply gave a response that does not answer"
             );
             return Ok(Decoded::new(
