@@ -787,10 +787,12 @@ impl Limits {
             directions,
             longest_frame,
             shortest: if shortest == usize::MAX { 0 } else { shortest },
-            shortest_checked: if checked == usize::MAX {
-                shortest_checked(p, directions)
-            } else {
-                checked
+            shortest_checked: match (checked, shortest) {
+                // No message at all.
+                (usize::MAX, usize::MAX) => 0,
+                // Every message without a checksum.
+                (usize::MAX, _) => shortest_head(p, directions),
+                (checked, _) => checked,
             },
             min_code: directions
                 .iter()
@@ -805,32 +807,18 @@ impl Limits {
     }
 }
 
-/// The shortest frame with a checksum of `directions`: where every message of them travels
-/// without one (`checksum: none`), the shortest head of a frame with one (its parts before
-/// the payload, the checksum and the end bytes), as the generated frame checks take it.
-fn shortest_checked(p: &Protocol, directions: &[Direction]) -> usize {
-    let checked = directions
+/// The shortest head of a frame with a checksum of `directions` (its parts before the payload,
+/// the checksum and the end bytes), as the generated frame checks take it: the shortest frame
+/// with a checksum where every message of them travels without one (`checksum: none`).
+fn shortest_head(p: &Protocol, directions: &[Direction]) -> usize {
+    directions
         .iter()
-        .flat_map(|d| p.framed(*d))
-        .filter(|m| !m.unchecked)
-        .map(Message::min_len)
-        .min();
-    checked.unwrap_or_else(|| {
-        let unchecked = directions
-            .iter()
-            .flat_map(|d| p.framed(*d))
-            .next()
-            .is_some();
-        directions
-            .iter()
-            .filter(|_| unchecked)
-            .map(|&d| {
-                let code = p.framing.direction(d).code_lengths.iter().min();
-                p.framing.head(d, code.copied().unwrap_or(0)).len
-            })
-            .min()
-            .unwrap_or(0)
-    })
+        .map(|&d| {
+            let code = p.framing.direction(d).code_lengths.iter().min();
+            p.framing.head(d, code.copied().unwrap_or(0)).len
+        })
+        .min()
+        .unwrap_or(0)
 }
 
 /// [`decode`] with everything it derives from the spec computed once, for decoding many
