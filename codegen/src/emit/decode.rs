@@ -6,13 +6,13 @@ use super::*;
 fn decode_optional(
     ctx: &Ctx,
     m: &Message,
+    ls: &[Leaf],
     fi: usize,
     k: usize,
     stmts: &mut Vec<TokenStream>,
 ) -> Option<(Ident, TokenStream)> {
     let (o, f) = (m.layout, &m.fields[fi]);
     let (name, n) = (&f.name, format_ident!("field_{}", fi));
-    let ls = leaves(m);
     let read = read_wire(f, f.frame_at(&o) - f.offset + full_shift(m, fi));
     let wt = wire_type(f);
     let (w, k, v) = (wt.ident(), usize_lit(k), local(name));
@@ -95,12 +95,12 @@ fn decode_packed(
 fn decode_bits(
     ctx: &Ctx,
     m: &Message,
+    ls: &[Leaf],
     f: &Field,
     wire: &TokenStream,
     at: &TokenStream,
     stmts: &mut Vec<TokenStream>,
 ) -> Vec<(Ident, TokenStream)> {
-    let ls = leaves(m);
     let wt = wire_type(f);
     let unsigned = IntType {
         bits: wt.bits,
@@ -207,7 +207,7 @@ pub(super) fn decode_body(ctx: &Ctx, m: &Message) -> (Vec<TokenStream>, TokenStr
         let name = &f.name;
         if let (Some(_), Some(k)) = (&f.present, optional_index(m, fi)) {
             // An optional field (a plain number): where it is present.
-            values.extend(decode_optional(ctx, m, fi, k, &mut stmts));
+            values.extend(decode_optional(ctx, m, ls, fi, k, &mut stmts));
             wires.push(quote!());
             continue;
         }
@@ -312,7 +312,7 @@ pub(super) fn decode_body(ctx: &Ctx, m: &Message) -> (Vec<TokenStream>, TokenStr
             }
             continue;
         }
-        values.extend(decode_bits(ctx, m, f, &wire, &at, &mut stmts));
+        values.extend(decode_bits(ctx, m, ls, f, &wire, &at, &mut stmts));
     }
     let fields = values.iter().map(|(n, v)| quote!(#n: #v));
     let dm = direction_module(m.direction);
