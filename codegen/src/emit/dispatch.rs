@@ -70,7 +70,7 @@ pub(super) fn emit_dispatch(ctx: &Ctx, d: Direction, ty: &TokenStream) -> TokenS
         p.framing.trailer_len()
     };
     // A direction of messages without a checksum alone: the shortest head of a frame with
-    // one (the interpreter's `shortest_checked`).
+    // one (the interpreter's `shortest_head`).
     let head_len = || {
         let code = p.framing.direction(d).code_lengths.iter().min();
         p.framing.head(d, code.copied().unwrap_or(0)).len
