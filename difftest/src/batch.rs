@@ -70,13 +70,32 @@ fn views_glue(name: &str, ty: &str, code: &str) -> (String, String) {
     )
 }
 
+/// How the batch crate is built.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Profile {
+    /// In a target dir of its own, its dependencies optimised: they compile once (minutes on a
+    /// fresh machine), then every round compares quickly.
+    Optimised,
+    /// In the workspace's target dir with the workspace's (default) dev profile, so it reuses
+    /// the dependencies building the workspace compiled; comparing is slower.
+    Workspace,
+}
+
 /// Writes the batch crate into `dir` for `specs` (seed, protocol name, emitted module), so
 /// that `cargo build` there builds one binary comparing them all. Files are rewritten only
-/// when they change.
-pub fn write(dir: &Path, specs: &[(u64, String, String)]) -> std::io::Result<()> {
+/// when they change; `profile` says how it is built.
+pub fn write(dir: &Path, specs: &[(u64, String, String)], profile: Profile) -> std::io::Result<()> {
     let repo = repository();
     let src = dir.join("src");
     std::fs::create_dir_all(src.join("gen"))?;
+    let profile = match profile {
+        Profile::Optimised => {
+            "\n# The dependencies compile once, optimised; the batch's own code, new every round, quickly.\n\
+             [profile.dev]\ndebug = false\nincremental = false\n[profile.dev.package.\"*\"]\nopt-level = 2\n"
+        }
+        // The workspace's dev profile, unchanged, so its compiled dependencies are reused.
+        Profile::Workspace => "",
+    };
     let manifest = format!(
         r#"# Written by busspec-difftest: a batch of random specs, compiled together.
 [package]
@@ -90,14 +109,7 @@ publish = false
 [dependencies]
 busspec-difftest = {{ path = "{repo}/difftest" }}
 busspec-runtime = {{ path = "{repo}/runtime" }}
-
-# The dependencies compile once, optimised; the batch's own code, new every round, quickly.
-[profile.dev]
-debug = false
-incremental = false
-[profile.dev.package."*"]
-opt-level = 2
-
+{profile}
 # Generated derives sit behind features named `serde` and `arbitrary`, which the batch has not.
 [lints.rust]
 unexpected_cfgs = {{ level = "allow" }}

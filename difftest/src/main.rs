@@ -3,7 +3,7 @@
 //!
 //! ```text
 //! cargo run -p busspec-difftest -- [--seed N|random] [--specs N] [--seconds T] [--out DIR]
-//!     [--found DIR] [--budget FRAMES,ENCODES,CAPTURES] [--spec-seed S]... [--print S]
+//!     [--workspace-target] [--found DIR] [--budget FRAMES,ENCODES,CAPTURES] [--spec-seed S]... [--print S]
 //! ```
 
 use std::collections::BTreeMap;
@@ -21,6 +21,11 @@ const USAGE: &str = "usage: busspec-difftest [--seed N|random] [--specs N] [--se
   --seconds T       keep starting rounds until T seconds have passed (default 0: one round)
   --out DIR         where the batch crate and its target dir go
                     (default: $CARGO_TARGET_DIR/difftest, else target/difftest)
+  --workspace-target
+                    build the batch crate in the workspace's target dir, unoptimised
+                    (the dev profile): it reuses what building the workspace compiled,
+                    where by default its dependencies compile once more, optimised, under
+                    --out (minutes on a fresh machine; comparing is faster after)
   --found DIR       where reproductions go (default: difftest/found)
   --budget F,E,C    per spec: random frames, encodes per message, captures (default 400,24,12)
   --spec-seed S     compare exactly the spec of seed S (repeatable), one round
@@ -35,6 +40,8 @@ struct Args {
     specs: usize,
     seconds: u64,
     out: PathBuf,
+    /// Build in the workspace's target dir, in its dev profile, instead of under `out`.
+    workspace_target: Option<PathBuf>,
     found: PathBuf,
     budget: Option<String>,
     spec_seeds: Vec<u64>,
@@ -67,6 +74,7 @@ fn parse_args() -> Args {
         specs: 24,
         seconds: 0,
         out: target.join("difftest"),
+        workspace_target: None,
         found: batch::repository().join("difftest").join("found"),
         budget: None,
         spec_seeds: Vec::new(),
@@ -103,6 +111,11 @@ fn parse_args() -> Args {
                 Some("fail") => a.error_class_warn = false,
                 _ => fail("--error-class takes `warn` or `fail`"),
             },
+            "--workspace-target" => {
+                a.workspace_target = Some(target.clone());
+                i += 1;
+                continue;
+            }
             "--generate-only" => {
                 a.generate_only = true;
                 i += 1;
@@ -350,14 +363,21 @@ fn run_round(args: &Args, dir: &std::path::Path, round: u64, seeds: &[u64], f: &
     if modules.is_empty() || args.generate_only {
         return;
     }
-    if let Err(e) = batch::write(dir, &modules) {
+    let profile = match args.workspace_target {
+        Some(_) => batch::Profile::Workspace,
+        None => batch::Profile::Optimised,
+    };
+    if let Err(e) = batch::write(dir, &modules, profile) {
         fail(&format!(
             "writing the batch crate in {}: {e}",
             dir.display()
         ));
     }
     let t1 = Instant::now();
-    let target = args.out.join("target");
+    let target = args
+        .workspace_target
+        .clone()
+        .unwrap_or_else(|| args.out.join("target"));
     let status = Command::new(std::env::var_os("CARGO").unwrap_or_else(|| "cargo".into()))
         .args(["build", "--offline", "--quiet", "--manifest-path"])
         .arg(dir.join("Cargo.toml"))
