@@ -1401,22 +1401,50 @@ fn layout_by_direction(seed: u64, text: &str) -> Vec<String> {
         }
     }
     rng.shuffle(&mut variants);
-    variants
-        .iter()
-        .map(|other| {
-            let (request, response) = if rng.bool() {
-                (other, &layout)
-            } else {
-                (&layout, other)
+    // The checksum's line, where it has one: each variant is tried first with a part per
+    // direction to cover from (`covers_from: {request, response}`, JBD's BMS), in half the
+    // specs with a checksum, a part before the payload of each direction's layout, drawn.
+    let checksum = text
+        .lines()
+        .find(|l| l.starts_with("  checksum: {") && l.ends_with('}'))
+        .filter(|_| rng.bool());
+    let mut out = Vec::new();
+    for other in &variants {
+        let (request, response) = if rng.bool() {
+            (other, &layout)
+        } else {
+            (&layout, other)
+        };
+        let by_direction = format!(
+            "  layout:\n    request: [{}]\n    response: [{}]",
+            request.join(", "),
+            response.join(", ")
+        );
+        let plain = text.replacen(line, &by_direction, 1);
+        if let Some(cs) = checksum {
+            let before = |l: &[&str]| -> Vec<String> {
+                l.iter()
+                    .take_while(|p| **p != "payload")
+                    .map(|p| (*p).to_owned())
+                    .collect()
             };
-            let by_direction = format!(
-                "  layout:\n    request: [{}]\n    response: [{}]",
-                request.join(", "),
-                response.join(", ")
-            );
-            text.replacen(line, &by_direction, 1)
-        })
-        .collect()
+            let (rq, rs) = (before(request), before(response));
+            let body = match cs.find(", covers_from: ") {
+                Some(i) => &cs[..i],
+                None => cs.strip_suffix('}').unwrap_or(cs),
+            };
+            for _ in 0..3 {
+                if rq.is_empty() || rs.is_empty() {
+                    break;
+                }
+                let (a, b) = (&rq[rng.usize(..rq.len())], &rs[rng.usize(..rs.len())]);
+                let with = format!("{body}, covers_from: {{request: {a}, response: {b}}}}}");
+                out.push(plain.replacen(cs, &with, 1));
+            }
+        }
+        out.push(plain);
+    }
+    out
 }
 
 /// Payload truncation's draw for the spec of `seed` (`Own::Truncation`): whether the spec is
@@ -3194,6 +3222,10 @@ pub fn constructs(p: &ir::Protocol) -> Vec<&'static str> {
     add(f.sync.len() > 1, "sync sequence");
     add(f.sync_by_direction(), "start bytes by direction");
     add(f.layout_by_direction(), "layout by direction");
+    add(
+        f.checksum.covers_by_direction(),
+        "checksum covering from another offset by direction",
+    );
     add(
         f.layout_by_direction()
             && f.has_header(Direction::Request) != f.has_header(Direction::Response),

@@ -836,6 +836,20 @@ impl<'a> Differ<'a> {
                 format!("checksum covers from offset {ocf} → {ncf}"),
             );
         }
+        // A response's, where each direction's checksum covers from its own byte
+        // (`covers_from: {request, response}`): unchanged with the request's where neither
+        // protocol's differs by direction.
+        let (orf, nrf) = (
+            oc.response_covers_from as i64 - oc.covers_from as i64 + ocf as i64,
+            nc.response_covers_from as i64 - nc.covers_from as i64 + ncf as i64,
+        );
+        if orf != nrf && (oc.covers_by_direction() || nc.covers_by_direction()) {
+            self.wire(
+                "checksum_changed",
+                "framing.checksum.covers_from.response",
+                format!("a response's checksum covers from offset {orf} → {nrf}"),
+            );
+        }
         // The byte order of a one-byte checksum means nothing on the wire.
         let order_changed = oc.byte_order != nc.byte_order && oc.width.max(nc.width) > 8;
         if oc.algorithm != nc.algorithm || oc.width != nc.width || order_changed {

@@ -619,18 +619,22 @@ pub fn render(p: &Protocol, source: &str) -> String {
                             .join(", ")
                     ),
                 ),
-                Part::Checksum => (
-                    "checksum".to_owned(),
-                    f.checksum.len().to_string(),
-                    if f.checksum.covers_from == 0 {
-                        "over every byte before it".to_owned()
-                    } else {
-                        format!(
-                            "over the bytes from offset {} up to it",
-                            f.checksum.covers_from
-                        )
-                    },
-                ),
+                Part::Checksum => {
+                    // Each direction's table its own first covered byte.
+                    let from = match title {
+                        Some("Responses") => f.checksum.covers_from_of(Direction::Response),
+                        _ => f.checksum.covers_from,
+                    };
+                    (
+                        "checksum".to_owned(),
+                        f.checksum.len().to_string(),
+                        if from == 0 {
+                            "over every byte before it".to_owned()
+                        } else {
+                            format!("over the bytes from offset {from} up to it")
+                        },
+                    )
+                }
                 Part::End => (
                     "end".to_owned(),
                     f.end.len().to_string(),

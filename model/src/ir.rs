@@ -868,9 +868,14 @@ pub struct Checksum {
     pub byte_order: ByteOrder,
     pub catalogue: Option<String>,
     pub check: u64,
-    /// Offset of the first byte the checksum covers (it covers every byte from there up to
-    /// itself): 0 unless the spec says `covers_from`.
+    /// Offset of the first byte a request's checksum covers (it covers every byte from there
+    /// up to itself): 0 unless the spec says `covers_from`.
     pub covers_from: usize,
+    /// The same for a response: [`Self::covers_from`] unless a layout per direction puts the
+    /// first covered byte elsewhere (`covers_from: {request: code, response: header}`, JBD's
+    /// BMS; SHDLC's length field at offset 3 in requests, 4 in replies); see
+    /// [`Self::covers_from_of`].
+    pub response_covers_from: usize,
     /// A byte of each message's own the checksum takes after the bytes it covers (MAVLink's
     /// CRC_EXTRA), found by the code the covered bytes hold.
     pub extra: Option<ChecksumExtra>,
@@ -928,8 +933,22 @@ impl Checksum {
             catalogue: None,
             check: 0,
             covers_from: 0,
+            response_covers_from: 0,
             extra: None,
         }
+    }
+
+    /// Offset of the first byte a frame of direction `d`'s checksum covers.
+    pub fn covers_from_of(&self, d: Direction) -> usize {
+        match d {
+            Direction::Request => self.covers_from,
+            Direction::Response => self.response_covers_from,
+        }
+    }
+
+    /// Whether a request's checksum covers from another offset than a response's.
+    pub fn covers_by_direction(&self) -> bool {
+        self.covers_from != self.response_covers_from
     }
 
     /// Bytes the checksum takes in the frame.

@@ -529,13 +529,59 @@ pub struct Checksum {
     #[serde(default)]
     pub mask: Option<i64>,
     /// The first part of the frame the checksum covers (default: the first part); it covers
-    /// every byte from there up to itself.
+    /// every byte from there up to itself. With a layout per direction, a part per direction
+    /// (`{request: code, response: header}`, JBD's BMS).
     #[serde(default)]
-    pub covers_from: Option<Part>,
+    pub covers_from: Option<CoversFrom>,
     /// A byte of each message's own the checksum takes after the bytes it covers (MAVLink's
     /// CRC_EXTRA): `per_message`, each message giving its `checksum_extra`.
     #[serde(default)]
     pub extra: Option<ChecksumExtra>,
+}
+
+/// `framing.checksum.covers_from`: the part the checksum of every frame covers from, or (a
+/// layout per direction) the part of each direction's.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum CoversFrom {
+    Same(Part),
+    ByDirection(DirectionPart),
+}
+
+/// `framing.checksum.covers_from: {request: ..., response: ...}`.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct DirectionPart {
+    pub request: Part,
+    pub response: Part,
+}
+
+impl CoversFrom {
+    /// The part a direction's checksum covers from.
+    pub fn of(&self, request: bool) -> Part {
+        match self {
+            CoversFrom::Same(p) => *p,
+            CoversFrom::ByDirection(d) if request => d.request,
+            CoversFrom::ByDirection(d) => d.response,
+        }
+    }
+}
+
+/// A mapping is a part per direction (so a misspelt key is named), anything else the part of
+/// both.
+impl<'de> Deserialize<'de> for CoversFrom {
+    fn deserialize<D: Deserializer<'de>>(d: D) -> Result<Self, D::Error> {
+        use serde::de::Error;
+        let v = serde_yaml::Value::deserialize(d)?;
+        if v.is_mapping() {
+            DirectionPart::deserialize(v)
+                .map(CoversFrom::ByDirection)
+                .map_err(D::Error::custom)
+        } else {
+            Part::deserialize(v)
+                .map(CoversFrom::Same)
+                .map_err(D::Error::custom)
+        }
+    }
 }
 
 /// Where a checksum's extra byte comes from (`framing.checksum.extra`).

@@ -670,6 +670,12 @@ fn checksum_extras(
             format!("the extra byte is found by the code, so every message needs a code of one length; code_lengths give {lens:?}"),
         ),
     }
+    if framing.checksum.covers_by_direction() {
+        sink.error(
+            path,
+            "the checksum covers from another offset in each direction: an extra byte per message is not expressible with it yet",
+        );
+    }
     if code_at < framing.checksum.covers_from {
         sink.error(
             path,
@@ -1343,11 +1349,31 @@ fn framing_by_direction(
         if lacks(Part::End) {
             own.end = None;
         }
+        // A part per direction (`covers_from: {request, response}`): each direction's own,
+        // its errors located at the direction's key.
+        let by_direction = match own.checksum.as_mut() {
+            Some(c) => match c.covers_from {
+                Some(model::CoversFrom::ByDirection(parts)) => {
+                    let part = if name == "request" {
+                        parts.request
+                    } else {
+                        parts.response
+                    };
+                    c.covers_from = Some(model::CoversFrom::Same(part));
+                    true
+                }
+                _ => false,
+            },
+            None => false,
+        };
         let mut errors = Sink::default();
         out.push(framing_plain(&own, byte_order, refs, &mut errors));
         for e in errors.items {
             let path = match e.path.strip_prefix("framing.layout") {
                 Some(rest) => format!("framing.layout.{name}{rest}"),
+                None if by_direction && e.path == "framing.checksum.covers_from" => {
+                    format!("framing.checksum.covers_from.{name}")
+                }
                 None => e.path,
             };
             if !sink
@@ -1361,22 +1387,10 @@ fn framing_by_direction(
     }
     let response = out.pop().expect("two framings");
     let mut framing = out.pop().expect("two framings");
-    let placed = !sink
-        .items
-        .iter()
-        .any(|e| e.path == "framing.checksum.covers_from");
-    let summed = d.request.contains(&Part::Checksum) && d.response.contains(&Part::Checksum);
-    if placed && summed && framing.checksum.covers_from != response.checksum.covers_from {
-        sink.error(
-            "framing.checksum.covers_from",
-            format!(
-                "the checksum would cover from offset {} in requests and {} in responses: {}",
-                framing.checksum.covers_from,
-                response.checksum.covers_from,
-                not_yet("a checksum whose first covered byte differs by direction")
-            ),
-        );
-    }
+    // Each direction's checksum covers from its own first covered byte (a checksum computed
+    // on the escaped bytes, which takes one `covers_from`, comes only with escaping by
+    // insertion: refused above).
+    framing.checksum.response_covers_from = response.checksum.covers_from;
     let (rq, rs) = (framing.heads[0].start, response.heads[0].start);
     if rq != rs {
         sink.error(
@@ -1847,7 +1861,18 @@ fn framing_plain(
             }
         }
     }
-    if let Some(part) = f.checksum.as_ref().and_then(|c| c.covers_from) {
+    let covers_from = match f.checksum.as_ref().and_then(|c| c.covers_from) {
+        Some(model::CoversFrom::ByDirection(_)) => {
+            sink.error(
+                "framing.checksum.covers_from",
+                "a part per direction (`{request: ..., response: ...}`) needs a layout per direction (`framing.layout: {request: [...], response: [...]}`): with one layout, name one part",
+            );
+            None
+        }
+        Some(model::CoversFrom::Same(part)) => Some(part),
+        None => None,
+    };
+    if let Some(part) = covers_from {
         // A part after the code sits after as many bytes as the code has: one offset only
         // where every code has one length.
         let pos = |p: Part| f.layout.iter().position(|x| *x == p);
@@ -1870,7 +1895,11 @@ fn framing_plain(
             Part::Payload | Part::Checksum | Part::End => None,
         };
         match at {
-            Some(at) if f.layout.contains(&part) => framing.checksum.covers_from = at,
+            Some(at) if f.layout.contains(&part) => {
+                // Both directions' (a layout per direction joins each direction's own).
+                framing.checksum.covers_from = at;
+                framing.checksum.response_covers_from = at;
+            }
             _ => sink.error(
                 "framing.checksum.covers_from",
                 format!("the checksum cannot cover from `{}`: name a part of the layout before the payload", part_name(part)),
@@ -3070,6 +3099,7 @@ fn checksum_params(c: &model::Checksum, byte_order: ByteOrder, sink: &mut Sink) 
         catalogue: c.catalogue.clone(),
         check,
         covers_from: 0,
+        response_covers_from: 0,
         extra: None,
     }
 }
