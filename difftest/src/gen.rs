@@ -1408,6 +1408,14 @@ fn layout_by_direction(seed: u64, text: &str) -> Vec<String> {
         .lines()
         .find(|l| l.starts_with("  checksum: {") && l.ends_with('}'))
         .filter(|_| rng.bool());
+    // The header fields' line, where both directions' layouts keep `header`: each variant is
+    // tried first with header fields per direction (`header: {request, response}`, JBD's
+    // BMS), in half the specs with header fields: the response's renamed, all of them or
+    // the first alone.
+    let header = text
+        .lines()
+        .find(|l| l.starts_with("  header: [") && l.ends_with(']'))
+        .filter(|_| rng.bool());
     let mut out = Vec::new();
     for other in &variants {
         let (request, response) = if rng.bool() {
@@ -1421,28 +1429,69 @@ fn layout_by_direction(seed: u64, text: &str) -> Vec<String> {
             response.join(", ")
         );
         let plain = text.replacen(line, &by_direction, 1);
-        if let Some(cs) = checksum {
-            let before = |l: &[&str]| -> Vec<String> {
-                l.iter()
-                    .take_while(|p| **p != "payload")
-                    .map(|p| (*p).to_owned())
-                    .collect()
+        let mut bases = Vec::new();
+        if let Some(h) =
+            header.filter(|_| request.contains(&"header") && response.contains(&"header"))
+        {
+            let inner = &h["  header: [".len()..h.len() - 1];
+            let renamed: Vec<String> = flow_items(inner)
+                .iter()
+                .map(|i| i.replace("name: ", "name: r_"))
+                .collect();
+            let theirs = if renamed.len() < 2 || rng.bool() {
+                renamed.join(", ")
+            } else {
+                renamed[0].clone()
             };
-            let (rq, rs) = (before(request), before(response));
-            let body = match cs.find(", covers_from: ") {
-                Some(i) => &cs[..i],
-                None => cs.strip_suffix('}').unwrap_or(cs),
-            };
-            for _ in 0..3 {
-                if rq.is_empty() || rs.is_empty() {
-                    break;
-                }
-                let (a, b) = (&rq[rng.usize(..rq.len())], &rs[rng.usize(..rs.len())]);
-                let with = format!("{body}, covers_from: {{request: {a}, response: {b}}}}}");
-                out.push(plain.replacen(cs, &with, 1));
-            }
+            let per = format!("  header:\n    request: [{inner}]\n    response: [{theirs}]");
+            bases.push(plain.replacen(h, &per, 1));
         }
-        out.push(plain);
+        bases.push(plain);
+        for base in bases {
+            if let Some(cs) = checksum {
+                let before = |l: &[&str]| -> Vec<String> {
+                    l.iter()
+                        .take_while(|p| **p != "payload")
+                        .map(|p| (*p).to_owned())
+                        .collect()
+                };
+                let (rq, rs) = (before(request), before(response));
+                let body = match cs.find(", covers_from: ") {
+                    Some(i) => &cs[..i],
+                    None => cs.strip_suffix('}').unwrap_or(cs),
+                };
+                for _ in 0..3 {
+                    if rq.is_empty() || rs.is_empty() {
+                        break;
+                    }
+                    let (a, b) = (&rq[rng.usize(..rq.len())], &rs[rng.usize(..rs.len())]);
+                    let with = format!("{body}, covers_from: {{request: {a}, response: {b}}}}}");
+                    out.push(base.replacen(cs, &with, 1));
+                }
+            }
+            out.push(base);
+        }
+    }
+    out
+}
+
+/// The items of a YAML flow sequence's inside (`{a: 1, b: [2, 3]}, {c: 4}`), each as written:
+/// split at the commas outside brackets and braces.
+fn flow_items(inner: &str) -> Vec<String> {
+    let (mut out, mut depth, mut from) = (Vec::new(), 0i32, 0usize);
+    for (i, c) in inner.char_indices() {
+        match c {
+            '{' | '[' => depth += 1,
+            '}' | ']' => depth -= 1,
+            ',' if depth == 0 => {
+                out.push(inner[from..i].trim().to_owned());
+                from = i + 1;
+            }
+            _ => {}
+        }
+    }
+    if !inner[from..].trim().is_empty() {
+        out.push(inner[from..].trim().to_owned());
     }
     out
 }
@@ -3226,6 +3275,7 @@ pub fn constructs(p: &ir::Protocol) -> Vec<&'static str> {
         f.checksum.covers_by_direction(),
         "checksum covering from another offset by direction",
     );
+    add(f.header_by_direction(), "header fields by direction");
     add(
         f.layout_by_direction()
             && f.has_header(Direction::Request) != f.has_header(Direction::Response),

@@ -1221,10 +1221,24 @@ impl<'a> Differ<'a> {
     /// The header fields every message carries (`framing.header`), once for all messages: one
     /// removed, added, moved, widened or re-signed changes every frame; a changed unit, range,
     /// enum or flag set changes what the values mean.
+    ///
+    /// Where either protocol's header fields differ by direction (`framing.header: {request,
+    /// response}`), each direction's are compared, at `framing.header.request.<name>` and
+    /// `framing.header.response.<name>`.
     fn header(&mut self) {
-        let (o, n) = (&self.old.framing.header, &self.new.framing.header);
+        let (of, nf) = (&self.old.framing, &self.new.framing);
+        if !of.header_by_direction() && !nf.header_by_direction() {
+            return self.header_of(Direction::Request, "framing.header");
+        }
+        self.header_of(Direction::Request, "framing.header.request");
+        self.header_of(Direction::Response, "framing.header.response");
+    }
+
+    /// [`Self::header`] of direction `d`'s header fields, at `at.<name>`.
+    fn header_of(&mut self, d: Direction, at: &str) {
+        let (o, n) = (self.old.framing.header_of(d), self.new.framing.header_of(d));
         for f in o {
-            let path = format!("framing.header.{}", f.name);
+            let path = format!("{at}.{}", f.name);
             let Some(g) = n.iter().find(|g| g.name == f.name) else {
                 self.wire(
                     "header_field_removed",
@@ -1288,7 +1302,7 @@ impl<'a> Differ<'a> {
         for g in n.iter().filter(|g| !o.iter().any(|f| f.name == g.name)) {
             self.wire(
                 "header_field_added",
-                format!("framing.header.{}", g.name),
+                format!("{at}.{}", g.name),
                 format!(
                     "header field `{}` ({} at header + {}) added",
                     g.name,

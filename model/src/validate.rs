@@ -345,7 +345,14 @@ fn validate_ordered(spec: &model::Spec, sink: &mut Sink) -> Option<Protocol> {
         }
         check_section(&c.section, &path, sink);
         let layout = frame_layout(&framing, Direction::Request, code.len(), payload_len);
-        check_length_fits(&framing, &path, code.len(), max_payload, sink);
+        check_length_fits(
+            &framing,
+            Direction::Request,
+            &path,
+            code.len(),
+            max_payload,
+            sink,
+        );
         commands.push(Message {
             name: c.name.clone(),
             title: c.title.clone(),
@@ -452,7 +459,14 @@ fn validate_ordered(spec: &model::Spec, sink: &mut Sink) -> Option<Protocol> {
         let code_from_request = code_from_request(r, &code, &answers, &commands, &path, sink);
         check_request_fields(&fields, &answers, &commands, &path, sink);
         let layout = frame_layout(&framing, Direction::Response, code.len(), payload_len);
-        check_length_fits(&framing, &path, code.len(), max_payload, sink);
+        check_length_fits(
+            &framing,
+            Direction::Response,
+            &path,
+            code.len(),
+            max_payload,
+            sink,
+        );
         responses.push(Message {
             name: r.name.clone(),
             title: r.title.clone(),
@@ -1031,6 +1045,7 @@ fn check_request_fields(
 /// A length field must be able to hold the longest frame's count.
 fn check_length_fits(
     framing: &Framing,
+    d: Direction,
     path: &str,
     code_len: usize,
     max_payload: usize,
@@ -1039,7 +1054,7 @@ fn check_length_fits(
     let Some(l) = &framing.length else {
         return;
     };
-    let most = framing.length_value(l, code_len, max_payload);
+    let most = framing.length_value_of(d, l, code_len, max_payload);
     let limit = (1i64 << (8 * l.width)) - 1;
     if most < 0 || most > limit {
         sink.error(
@@ -1336,6 +1351,22 @@ fn framing_by_direction(
         if lacks(Part::Header) {
             own.header = None;
         }
+        // Header fields per direction (`header: {request, response}`): each direction's own,
+        // its errors located at the direction's key; none for a direction whose layout has
+        // no `header` and whose list is empty.
+        let header_by_direction = match &f.header {
+            Some(model::Header::ByDirection(h)) => {
+                let fields = if name == "request" {
+                    h.request.clone()
+                } else {
+                    h.response.clone()
+                };
+                own.header = (!fields.is_empty() || list.contains(&Part::Header))
+                    .then_some(model::Header::Same(fields));
+                true
+            }
+            _ => false,
+        };
         // Refused above where one direction lacks it: not reported again.
         if lacks(Part::Start) {
             own.start = None;
@@ -1373,6 +1404,11 @@ fn framing_by_direction(
                 Some(rest) => format!("framing.layout.{name}{rest}"),
                 None if by_direction && e.path == "framing.checksum.covers_from" => {
                     format!("framing.checksum.covers_from.{name}")
+                }
+                None if header_by_direction
+                    && (e.path == "framing.header" || e.path.starts_with("framing.header.")) =>
+                {
+                    format!("framing.header.{name}{}", &e.path["framing.header".len()..])
                 }
                 None => e.path,
             };
@@ -1412,9 +1448,17 @@ fn framing_by_direction(
             );
         }
     }
-    if framing.header.is_empty() {
-        framing.header = response.header;
+    // Each direction's header fields: with one list, the list of both (a direction whose
+    // layout has no `header` carries none all the same: `Framing::has_header`).
+    let by_direction = matches!(f.header, Some(model::Header::ByDirection(_)));
+    if framing.header.is_empty() && !by_direction {
+        framing.header = response.header.clone();
     }
+    framing.response_header = if by_direction || !response.header.is_empty() {
+        response.header
+    } else {
+        framing.header.clone()
+    };
     framing.response_layout = response.layout;
     framing.response_heads = response.heads;
     framing
@@ -1821,6 +1865,7 @@ fn framing_plain(
         response_heads: Vec::new(),
         escaping: None,
         header: header_fields(f, byte_order, refs, sink),
+        response_header: Vec::new(),
         preamble: None,
         transform: None,
         long: None,
@@ -1831,6 +1876,7 @@ fn framing_plain(
         .map(|l| frame_layout(&framing, Direction::Request, l, 0))
         .collect();
     framing.response_heads = framing.heads.clone();
+    framing.response_header = framing.header.clone();
     if let Some(e) = &f.escaping {
         framing.escaping = escaping(e, &framing, sink);
     }
@@ -2753,14 +2799,24 @@ fn header_fields(
 ) -> Vec<Field> {
     use model::FieldType as T;
     let in_layout = f.layout.iter().filter(|p| **p == Part::Header).count();
-    let Some(fields) = &f.header else {
-        if in_layout > 0 {
+    let fields = match &f.header {
+        Some(model::Header::Same(fields)) => fields,
+        Some(model::Header::ByDirection(_)) => {
             sink.error(
-                "framing.layout",
-                "layout has `header` but `framing.header` is missing",
+                "framing.header",
+                "header fields per direction (`{request: [...], response: [...]}`) need a layout per direction (`framing.layout: {request: [...], response: [...]}`): with one layout, give one list",
             );
+            return Vec::new();
         }
-        return Vec::new();
+        None => {
+            if in_layout > 0 {
+                sink.error(
+                    "framing.layout",
+                    "layout has `header` but `framing.header` is missing",
+                );
+            }
+            return Vec::new();
+        }
     };
     let path = "framing.header";
     match in_layout {
@@ -2933,7 +2989,7 @@ fn frame_layout(
             Part::End => at += framing.end.len(),
             Part::Header => {
                 o.header = at;
-                at += framing.header_len();
+                at += framing.header_len_of(d);
             }
         }
     }
@@ -3220,7 +3276,7 @@ fn constant_frame(
             "a constant frame is not expressible with a preamble (framing.preamble), yet",
         );
     }
-    if !framing.header.is_empty() {
+    if !framing.header.is_empty() || !framing.response_header.is_empty() {
         sink.error(
             &fpath,
             "a constant frame is not expressible with header fields (framing.header), yet: every message carries them",
@@ -3288,7 +3344,7 @@ fn message_body(
     // Field and sub-field names share one name space per message: they are the keys of its values.
     // The header fields' values (each whole, or its sub-fields) are named in every message.
     let headers: &[Field] = if framing.has_header(direction) {
-        &framing.header
+        framing.header_of(direction)
     } else {
         &[]
     };

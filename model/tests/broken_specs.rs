@@ -31,6 +31,10 @@ const CASES: &[(&str, &[(&str, &str)])] = &[
         &[("framing.length.counts", "counts `header`, which the layout does not have")],
     ),
     (
+        "layout_dir_header_direction_lacks",
+        &[("framing.header.response", "`framing.header` needs a `header` part in the layout, where its fields sit")],
+    ),
+    (
         "layout_dir_covers_from_direction_lacks",
         &[("framing.checksum.covers_from.request", "the checksum cannot cover from `header`: name a part of the layout before the payload")],
     ),
@@ -730,6 +734,10 @@ const CASES: &[(&str, &[(&str, &str)])] = &[
         &[("framing.escaping", "COBS frames end in the end byte 0x00 (`end: 0x00`, the last part of the layout)")],
     ),
     // ---- checksum coverage from a part after codes of two lengths (made from valid/msp_v1.yaml)
+    (
+        "header_by_direction_one_layout",
+        &[("framing.header", "header fields per direction (`{request: [...], response: [...]}`) need a layout per direction")],
+    ),
     (
         "covers_from_by_direction_one_layout",
         &[("framing.checksum.covers_from", "a part per direction (`{request: ..., response: ...}`) needs a layout per direction")],
