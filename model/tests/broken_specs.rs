@@ -31,6 +31,10 @@ const CASES: &[(&str, &[(&str, &str)])] = &[
         &[("framing.length.counts", "counts `header`, which the layout does not have")],
     ),
     (
+        "layout_dir_extra_covers_from_differs",
+        &[("framing.checksum.extra", "the checksum covers from another offset in each direction: an extra byte per message is not")],
+    ),
+    (
         "layout_dir_header_direction_lacks",
         &[("framing.header.response", "`framing.header` needs a `header` part in the layout, where its fields sit")],
     ),
