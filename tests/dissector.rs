@@ -230,7 +230,7 @@ fn out_of_spec(p: &Protocol, wire: &[u8], r: busspec_model::ir::MessageRef) -> V
             at = m.layout.payload + sh.at(m, i);
         }
         interp::write_uint(v as u64, &mut w[at..at + f.width], f.byte_order);
-        interp::reseal(p, &mut w);
+        interp::reseal_as(p, r.direction, &mut w);
         frames.push(sent(p, w));
         break;
     }
@@ -239,7 +239,7 @@ fn out_of_spec(p: &Protocol, wire: &[u8], r: busspec_model::ir::MessageRef) -> V
         if let Some(a) = bad {
             let mut w = laid(p, wire);
             w[at] = a;
-            interp::reseal(p, &mut w);
+            interp::reseal_as(p, r.direction, &mut w);
             frames.push(sent(p, w));
         }
     }

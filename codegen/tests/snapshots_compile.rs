@@ -933,17 +933,22 @@ fn fletcher_snapshot_agrees_with_the_interpreter() {
     assert!(found > 50, "only {found} ack frames found");
 }
 
-/// The 16-bit sum negated (JBD's battery management protocol): the examples replay (the
-/// protocol document's request and reply among them), a frame whose checksum is the sum
-/// itself rather than its negation is refused in both engines' words, and both agree on every
+/// The 16-bit sum negated (JBD's battery management protocol), a layout, header fields and a
+/// checksum's first covered part per direction: the examples replay (the protocol document's
+/// request and reply among them), a request's state leads its register and a reply's status
+/// follows its register, both checksums cover from offset 2 (a request's register, a reply's
+/// status); a frame whose checksum is the sum itself rather than its negation, or a reply's
+/// checksum over its register too, is refused in both engines' words, and both agree on every
 /// frame mutated from the examples and on captures of them.
 #[test]
 fn sum16_complement_snapshot_agrees_with_the_interpreter() {
-    use jbd_bms::{JbdBms, Request};
+    use jbd_bms::{JbdBms, Request, Response};
     let file = "model/tests/fixtures/valid/jbd_bms.yaml";
     replay::<JbdBms>(file);
     let p = fixture(file);
     assert_eq!(jbd_bms::checksum(&[0x03, 0x00]), 0xFFFD);
+    let c = &p.framing.checksum;
+    assert_eq!((c.covers_from, c.response_covers_from), (2, 2));
     // DD A5 03 00 with the plain sum 00 03 where the negated one FF FD belongs.
     let plain = [0xDD, 0xA5, 0x03, 0x00, 0x00, 0x03, 0x77];
     let g = Request::decode(&plain).map(|_| ());
@@ -952,6 +957,25 @@ fn sum16_complement_snapshot_agrees_with_the_interpreter() {
         "checksum mismatch at offset 4: expected 0xFFFD, found 0x0003"
     );
     let i = busspec_model::interp::decode(&p, Some(Direction::Request), None, &plain);
+    same_text(g, i.map(|_| ()));
+    // The error reply to register 03: its status 80 after the register.
+    let error = [0xDD, 0x03, 0x80, 0x00, 0xFF, 0x80, 0x77];
+    match Response::decode(&error).map(|d| d.message) {
+        Ok(Response::BasicInfoError(r)) => assert_eq!(r.status, jbd_bms::Status::Error),
+        other => panic!("decoded as {other:?}"),
+    }
+    match Request::decode(&[0xDD, 0xA5, 0x04, 0x00, 0xFF, 0xFC, 0x77]).map(|d| d.message) {
+        Ok(Request::ReadCellVoltages(r)) => assert_eq!(r.state, jbd_bms::State::Read),
+        other => panic!("decoded as {other:?}"),
+    }
+    // Its checksum over the register too (!(03 + 80 + 00) + 1): refused alike.
+    let over_register = [0xDD, 0x03, 0x80, 0x00, 0xFF, 0x7D, 0x77];
+    let g = Response::decode(&over_register).map(|_| ());
+    assert_eq!(
+        g.unwrap_err().to_string(),
+        "checksum mismatch at offset 4: expected 0xFF80, found 0xFF7D"
+    );
+    let i = busspec_model::interp::decode(&p, Some(Direction::Response), None, &over_register);
     same_text(g, i.map(|_| ()));
     let t = agree::agree::<JbdBms>(&p);
     assert!(t.accepted >= 7 && t.refused > 100, "{t:?}");

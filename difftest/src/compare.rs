@@ -21,7 +21,7 @@ use busspec_fuzz_bodies::oracle::{interp_values, visit_values, Values};
 use busspec_fuzz_bodies::{seen, stream_events};
 use busspec_model::interp::{self, DecodeError as InterpError, Raw, Value};
 use busspec_model::ir::{self, Count, Direction, MessageRef};
-use busspec_model::mutate::{after_preamble, mutations, reseal};
+use busspec_model::mutate::{after_preamble, mutations, reseal_as};
 use busspec_runtime::stream::Direction as StreamDirection;
 use busspec_runtime::{
     DecodeError, Elements, EncodeError, FieldValue, Message, Protocol, RequestMessage,
@@ -955,7 +955,13 @@ impl<'p, P: Protocol> Run<'p, P> {
                     let n = self.rng.usize(..=max);
                     let mut f: Vec<u8> = (0..n).map(|_| self.rng.u8(..)).collect();
                     if self.rng.bool() {
-                        reseal(p, &mut f);
+                        // Each direction's checksum, where they cover from other bytes.
+                        let d = if k % 2 == 0 {
+                            Direction::Request
+                        } else {
+                            Direction::Response
+                        };
+                        reseal_as(p, d, &mut f);
                     }
                     f
                 }
@@ -1091,7 +1097,7 @@ fn lie_about_count(p: &ir::Protocol, r: MessageRef, frame: &mut [u8], rng: &mut 
         }
     }
     if rng.u8(..4) != 0 {
-        reseal(p, frame);
+        reseal_as(p, r.direction, frame);
     }
 }
 

@@ -1401,22 +1401,99 @@ fn layout_by_direction(seed: u64, text: &str) -> Vec<String> {
         }
     }
     rng.shuffle(&mut variants);
-    variants
-        .iter()
-        .map(|other| {
-            let (request, response) = if rng.bool() {
-                (other, &layout)
+    // The checksum's line, where it has one: each variant is tried first with a part per
+    // direction to cover from (`covers_from: {request, response}`, JBD's BMS), in half the
+    // specs with a checksum, a part before the payload of each direction's layout, drawn.
+    let checksum = text
+        .lines()
+        .find(|l| l.starts_with("  checksum: {") && l.ends_with('}'))
+        .filter(|_| rng.bool());
+    // The header fields' line, where both directions' layouts keep `header`: each variant is
+    // tried first with header fields per direction (`header: {request, response}`, JBD's
+    // BMS), in half the specs with header fields: the response's renamed, all of them or
+    // the first alone.
+    let header = text
+        .lines()
+        .find(|l| l.starts_with("  header: [") && l.ends_with(']'))
+        .filter(|_| rng.bool());
+    let mut out = Vec::new();
+    for other in &variants {
+        let (request, response) = if rng.bool() {
+            (other, &layout)
+        } else {
+            (&layout, other)
+        };
+        let by_direction = format!(
+            "  layout:\n    request: [{}]\n    response: [{}]",
+            request.join(", "),
+            response.join(", ")
+        );
+        let plain = text.replacen(line, &by_direction, 1);
+        let mut bases = Vec::new();
+        if let Some(h) =
+            header.filter(|_| request.contains(&"header") && response.contains(&"header"))
+        {
+            let inner = &h["  header: [".len()..h.len() - 1];
+            let renamed: Vec<String> = flow_items(inner)
+                .iter()
+                .map(|i| i.replace("name: ", "name: r_"))
+                .collect();
+            let theirs = if renamed.len() < 2 || rng.bool() {
+                renamed.join(", ")
             } else {
-                (&layout, other)
+                renamed[0].clone()
             };
-            let by_direction = format!(
-                "  layout:\n    request: [{}]\n    response: [{}]",
-                request.join(", "),
-                response.join(", ")
-            );
-            text.replacen(line, &by_direction, 1)
-        })
-        .collect()
+            let per = format!("  header:\n    request: [{inner}]\n    response: [{theirs}]");
+            bases.push(plain.replacen(h, &per, 1));
+        }
+        bases.push(plain);
+        for base in bases {
+            if let Some(cs) = checksum {
+                let before = |l: &[&str]| -> Vec<String> {
+                    l.iter()
+                        .take_while(|p| **p != "payload")
+                        .map(|p| (*p).to_owned())
+                        .collect()
+                };
+                let (rq, rs) = (before(request), before(response));
+                let body = match cs.find(", covers_from: ") {
+                    Some(i) => &cs[..i],
+                    None => cs.strip_suffix('}').unwrap_or(cs),
+                };
+                for _ in 0..3 {
+                    if rq.is_empty() || rs.is_empty() {
+                        break;
+                    }
+                    let (a, b) = (&rq[rng.usize(..rq.len())], &rs[rng.usize(..rs.len())]);
+                    let with = format!("{body}, covers_from: {{request: {a}, response: {b}}}}}");
+                    out.push(base.replacen(cs, &with, 1));
+                }
+            }
+            out.push(base);
+        }
+    }
+    out
+}
+
+/// The items of a YAML flow sequence's inside (`{a: 1, b: [2, 3]}, {c: 4}`), each as written:
+/// split at the commas outside brackets and braces.
+fn flow_items(inner: &str) -> Vec<String> {
+    let (mut out, mut depth, mut from) = (Vec::new(), 0i32, 0usize);
+    for (i, c) in inner.char_indices() {
+        match c {
+            '{' | '[' => depth += 1,
+            '}' | ']' => depth -= 1,
+            ',' if depth == 0 => {
+                out.push(inner[from..i].trim().to_owned());
+                from = i + 1;
+            }
+            _ => {}
+        }
+    }
+    if !inner[from..].trim().is_empty() {
+        out.push(inner[from..].trim().to_owned());
+    }
+    out
 }
 
 /// Payload truncation's draw for the spec of `seed` (`Own::Truncation`): whether the spec is
@@ -3194,6 +3271,11 @@ pub fn constructs(p: &ir::Protocol) -> Vec<&'static str> {
     add(f.sync.len() > 1, "sync sequence");
     add(f.sync_by_direction(), "start bytes by direction");
     add(f.layout_by_direction(), "layout by direction");
+    add(
+        f.checksum.covers_by_direction(),
+        "checksum covering from another offset by direction",
+    );
+    add(f.header_by_direction(), "header fields by direction");
     add(
         f.layout_by_direction()
             && f.has_header(Direction::Request) != f.has_header(Direction::Response),

@@ -836,6 +836,20 @@ impl<'a> Differ<'a> {
                 format!("checksum covers from offset {ocf} → {ncf}"),
             );
         }
+        // A response's, where each direction's checksum covers from its own byte
+        // (`covers_from: {request, response}`): unchanged with the request's where neither
+        // protocol's differs by direction.
+        let (orf, nrf) = (
+            oc.response_covers_from as i64 - oc.covers_from as i64 + ocf as i64,
+            nc.response_covers_from as i64 - nc.covers_from as i64 + ncf as i64,
+        );
+        if orf != nrf && (oc.covers_by_direction() || nc.covers_by_direction()) {
+            self.wire(
+                "checksum_changed",
+                "framing.checksum.covers_from.response",
+                format!("a response's checksum covers from offset {orf} → {nrf}"),
+            );
+        }
         // The byte order of a one-byte checksum means nothing on the wire.
         let order_changed = oc.byte_order != nc.byte_order && oc.width.max(nc.width) > 8;
         if oc.algorithm != nc.algorithm || oc.width != nc.width || order_changed {
@@ -1207,10 +1221,24 @@ impl<'a> Differ<'a> {
     /// The header fields every message carries (`framing.header`), once for all messages: one
     /// removed, added, moved, widened or re-signed changes every frame; a changed unit, range,
     /// enum or flag set changes what the values mean.
+    ///
+    /// Where either protocol's header fields differ by direction (`framing.header: {request,
+    /// response}`), each direction's are compared, at `framing.header.request.<name>` and
+    /// `framing.header.response.<name>`.
     fn header(&mut self) {
-        let (o, n) = (&self.old.framing.header, &self.new.framing.header);
+        let (of, nf) = (&self.old.framing, &self.new.framing);
+        if !of.header_by_direction() && !nf.header_by_direction() {
+            return self.header_of(Direction::Request, "framing.header");
+        }
+        self.header_of(Direction::Request, "framing.header.request");
+        self.header_of(Direction::Response, "framing.header.response");
+    }
+
+    /// [`Self::header`] of direction `d`'s header fields, at `at.<name>`.
+    fn header_of(&mut self, d: Direction, at: &str) {
+        let (o, n) = (self.old.framing.header_of(d), self.new.framing.header_of(d));
         for f in o {
-            let path = format!("framing.header.{}", f.name);
+            let path = format!("{at}.{}", f.name);
             let Some(g) = n.iter().find(|g| g.name == f.name) else {
                 self.wire(
                     "header_field_removed",
@@ -1274,7 +1302,7 @@ impl<'a> Differ<'a> {
         for g in n.iter().filter(|g| !o.iter().any(|f| f.name == g.name)) {
             self.wire(
                 "header_field_added",
-                format!("framing.header.{}", g.name),
+                format!("{at}.{}", g.name),
                 format!(
                     "header field `{}` ({} at header + {}) added",
                     g.name,

@@ -670,12 +670,18 @@ fn protocol(p: &Protocol) -> String {
     };
     let _ = writeln!(
         s,
-        "  checksum = {{ name = {}, width = {}, len = {}, order = {}, covers_from = {}, check = {},\n    plain = {plain},\n    fn = {} }},",
+        "  checksum = {{ name = {}, width = {}, len = {}, order = {}, covers_from = {}{}, check = {},\n    plain = {plain},\n    fn = {} }},",
         lua_str(&c.algorithm.name()),
         c.width,
         c.len(),
         order(c.byte_order),
         c.covers_from,
+        // Where each direction's checksum covers from its own byte: the response's.
+        if c.covers_by_direction() {
+            format!(", response_covers_from = {}", c.response_covers_from)
+        } else {
+            String::new()
+        },
         c.check,
         if c.extra.is_some() { with_extra } else { "nil".to_owned() }
     );

@@ -1533,8 +1533,21 @@ local function setup(P)
       -- (A message without a checksum, `checksum: none`, is told apart from every message
       -- with one by its code and length: it has none to check.)
       ck_at = checksum_at(P, n)
-      ck_expected = ck.fn(b, ck.covers_from, ck_at)
       ck_found = read_uint(b, ck_at, ck.len, ck.order)
+      -- Each direction's checksum covers from its own byte (`covers_from: {request,
+      -- response}`): the messages whose direction's checksum holds are kept, where any.
+      local function ck_from(dir)
+        if dir == "response" and ck.response_covers_from then return ck.response_covers_from end
+        return ck.covers_from
+      end
+      if ck.response_covers_from then
+        local kept = {}
+        for _, c in ipairs(pool) do
+          if ck.fn(b, ck_from(c.m.dir), ck_at) == ck_found then kept[#kept + 1] = c end
+        end
+        if #kept > 0 then pool = kept end
+      end
+      ck_expected = ck.fn(b, ck_from(pool[1].m.dir), ck_at)
       ck_good = (ck_expected == ck_found)
     end
 

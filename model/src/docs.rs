@@ -520,6 +520,11 @@ pub fn render(p: &Protocol, source: &str) -> String {
             Some(_) => "every response",
             None => "every message",
         };
+        // The direction of the table (a request's where one table shows both).
+        let table_dir = match title {
+            Some("Responses") => Direction::Response,
+            _ => Direction::Request,
+        };
         o.push_str("| Part | Bytes | Content |\n|---|---|---|\n");
         for part in layout {
             let row = match part {
@@ -609,28 +614,29 @@ pub fn render(p: &Protocol, source: &str) -> String {
                 ),
                 Part::Header => (
                     "header".to_owned(),
-                    f.header_len().to_string(),
+                    f.header_len_of(table_dir).to_string(),
                     format!(
                         "header fields {every} carries: {}",
-                        f.header
+                        f.header_of(table_dir)
                             .iter()
                             .map(|h| format!("`{}` ({})", h.name, h.width))
                             .collect::<Vec<_>>()
                             .join(", ")
                     ),
                 ),
-                Part::Checksum => (
-                    "checksum".to_owned(),
-                    f.checksum.len().to_string(),
-                    if f.checksum.covers_from == 0 {
-                        "over every byte before it".to_owned()
-                    } else {
-                        format!(
-                            "over the bytes from offset {} up to it",
-                            f.checksum.covers_from
-                        )
-                    },
-                ),
+                Part::Checksum => {
+                    // Each direction's table its own first covered byte.
+                    let from = f.checksum.covers_from_of(table_dir);
+                    (
+                        "checksum".to_owned(),
+                        f.checksum.len().to_string(),
+                        if from == 0 {
+                            "over every byte before it".to_owned()
+                        } else {
+                            format!("over the bytes from offset {from} up to it")
+                        },
+                    )
+                }
                 Part::End => (
                     "end".to_owned(),
                     f.end.len().to_string(),

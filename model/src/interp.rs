@@ -1134,7 +1134,7 @@ fn decode_plain<'p>(
         // ways, each direction is checked by its own rule.
         Some((m, from)) if directions.len() == 2 && p.request_fits(wire) => {
             let over = check_over_request(p, m, from, covered, wire);
-            let own = check_checksum(p, lookup.map(|l| &l.checksum), wire);
+            let own = check_checksum(p, Direction::Request, lookup.map(|l| &l.checksum), wire);
             let (x, y) = if directions[0] == Direction::Response {
                 (over, own)
             } else {
@@ -1147,8 +1147,18 @@ fn decode_plain<'p>(
             check_over_request(p, m, from, covered, wire)?;
             (sync0, sync1)
         }
+        // Each direction's checksum covers from its own first byte (`covers_from: {request,
+        // response}`): decoded both ways, each direction is checked at its own.
+        None if directions.len() == 2 && p.framing.checksum.covers_by_direction() => {
+            let prepared = lookup.map(|l| &l.checksum);
+            let (x, y) = (
+                check_checksum(p, directions[0], prepared, wire),
+                check_checksum(p, directions[1], prepared, wire),
+            );
+            set_aside_refused(sync0, sync1, x, y, &mut set_aside)?
+        }
         None => {
-            check_checksum(p, lookup.map(|l| &l.checksum), wire)?;
+            check_checksum(p, d0, lookup.map(|l| &l.checksum), wire)?;
             (sync0, sync1)
         }
     };
@@ -1685,7 +1695,7 @@ fn decode_as_unescaped<'p>(
         _ if m.unchecked => {}
         (Some(from), Over::Check(covered)) => check_over_request(p, m, from, covered, wire)?,
         (Some(_), Over::Checked) => {}
-        (None, _) => check_checksum(p, None, wire)?,
+        (None, _) => check_checksum(p, m.direction, None, wire)?,
     }
     check_address(p, o.address, wire)?;
     let plain = p.framing.untransformed(wire);
@@ -1700,10 +1710,12 @@ fn decode_as_unescaped<'p>(
     })
 }
 
-/// Refuses a frame whose checksum is wrong; `prepared` is the protocol's checksum made once
-/// (else it is computed from its parameters).
+/// Refuses a frame of direction `d` whose checksum is wrong (over the bytes from where that
+/// direction's checksum covers from); `prepared` is the protocol's checksum made once (else it
+/// is computed from its parameters).
 pub(crate) fn check_checksum(
     p: &Protocol,
+    d: Direction,
     prepared: Option<&checksum::Prepared>,
     wire: &[u8],
 ) -> Result<(), DecodeError> {
@@ -1715,7 +1727,7 @@ pub(crate) fn check_checksum(
         });
     }
     let at = p.framing.checksum_at(wire.len());
-    let covered = wire.get(c.covers_from..at).unwrap_or(&[]);
+    let covered = wire.get(c.covers_from_of(d)..at).unwrap_or(&[]);
     // The prepared tables know no extra byte.
     let expected = match prepared {
         Some(prepared) if c.extra.is_none() => prepared.compute(covered),
@@ -1769,8 +1781,15 @@ fn check_over_request(
 ///
 /// A frame of a length field the start byte chooses (`framing.length.long`) is taken as it
 /// travels: one with the short start byte covered from where its checksum starts in the short
-/// form.
+/// form. Where each direction's checksum covers from its own byte (`covers_from: {request,
+/// response}`), a request's: [`reseal_as`] says the direction.
 pub fn reseal(p: &Protocol, frame: &mut [u8]) {
+    reseal_as(p, Direction::Request, frame);
+}
+
+/// [`reseal`] of a frame of direction `d`: its checksum over the bytes from where that
+/// direction's checksum covers from.
+pub fn reseal_as(p: &Protocol, d: Direction, frame: &mut [u8]) {
     // A frame without a checksum (`checksum: none`) has none to write.
     if p.unchecked(&[Direction::Request, Direction::Response], frame)
         .is_some()
@@ -1784,25 +1803,25 @@ pub fn reseal(p: &Protocol, frame: &mut [u8]) {
         .as_ref()
         .filter(|_| crate::forms::is_short(p, frame))
     {
-        return reseal_from(p, frame, f.extra());
+        return reseal_from(p, d, frame, f.extra());
     }
     let short = p
         .framing
         .long
         .filter(|l| frame.get(l.start_at) == Some(&l.short_start));
-    reseal_from(p, frame, short.map_or(0, |l| l.extra()));
+    reseal_from(p, d, frame, short.map_or(0, |l| l.extra()));
 }
 
-/// [`reseal`] of a frame whose checksum covers from `back` bytes before where the IR's layout
-/// says (0: a frame as the IR lays it out).
-fn reseal_from(p: &Protocol, frame: &mut [u8], back: usize) {
+/// [`reseal_as`] of a frame whose checksum covers from `back` bytes before where the IR's
+/// layout says (0: a frame as the IR lays it out).
+fn reseal_from(p: &Protocol, d: Direction, frame: &mut [u8], back: usize) {
     let (c, f) = (&p.framing.checksum, &p.framing);
     if frame.len() < f.trailer_len() {
         return;
     }
     let (at, end) = (f.checksum_at(frame.len()), f.end_at(frame.len()));
     frame[end..end + f.end.len()].copy_from_slice(&f.end);
-    let from = c.covers_from.saturating_sub(back);
+    let from = c.covers_from_of(d).saturating_sub(back);
     let sum = c.compute(frame.get(from..at).unwrap_or(&[]));
     write_uint(sum, &mut frame[at..at + c.len()], c.byte_order);
 }
@@ -3327,7 +3346,7 @@ fn encode_values(
     // The payload as it travels (`framing.transform`), then the checksum over it.
     p.framing.transform_in_place(&mut out);
     if !m.unchecked {
-        reseal_from(p, &mut out, 0);
+        reseal_from(p, m.direction, &mut out, 0);
     }
     if let Some(from) = m.over_request {
         let Some(request) = covered else {

@@ -103,6 +103,9 @@ pub struct Framing {
     /// layout's `header` part; every message's `fields` begin with copies of them (with a
     /// layout per direction, every message of a direction whose layout has `header`).
     pub header: Vec<Field>,
+    /// The header fields of a response: [`Self::header`] unless they are given per direction
+    /// (`framing.header: {request, response}`, JBD's BMS); see [`Self::header_of`].
+    pub response_header: Vec<Field>,
     /// Wake-up bytes before every frame (`framing.preamble`), outside the frame: no offset,
     /// length or checksum of the IR counts them.
     pub preamble: Option<Preamble>,
@@ -465,7 +468,28 @@ impl Framing {
 
     /// Whether frames of direction `d` carry the header fields (its layout has `header`).
     pub fn has_header(&self, d: Direction) -> bool {
-        !self.header.is_empty() && self.layout_of(d).contains(&Part::Header)
+        !self.header_of(d).is_empty() && self.layout_of(d).contains(&Part::Header)
+    }
+
+    /// The header fields of a frame of direction `d` (where its layout has `header`: see
+    /// [`Self::has_header`]).
+    pub fn header_of(&self, d: Direction) -> &[Field] {
+        match d {
+            Direction::Request => &self.header,
+            Direction::Response => &self.response_header,
+        }
+    }
+
+    /// Whether the header fields differ by direction (`framing.header: {request, response}`,
+    /// each direction's layout with `header`): their names, types or places.
+    pub fn header_by_direction(&self) -> bool {
+        let key = |f: &Field| (f.name.clone(), f.width, f.signed, f.offset);
+        self.header.len() != self.response_header.len()
+            || self
+                .header
+                .iter()
+                .zip(&self.response_header)
+                .any(|(a, b)| key(a) != key(b) || a.bits.len() != b.bits.len())
     }
 
     /// The start bytes of a frame of direction `d`.
@@ -646,9 +670,16 @@ impl Framing {
         }
     }
 
-    /// Bytes of the header fields every frame carries (0 without `framing.header`).
+    /// Bytes of the header fields a request carries (0 without `framing.header`); see
+    /// [`Self::header_len_of`].
     pub fn header_len(&self) -> usize {
-        self.header.iter().map(|f| f.width).sum()
+        self.header_len_of(Direction::Request)
+    }
+
+    /// Bytes of the header fields a frame of direction `d` carries where its layout has
+    /// `header`.
+    pub fn header_len_of(&self, d: Direction) -> usize {
+        self.header_of(d).iter().map(|f| f.width).sum()
     }
 
     /// Whether frames carry an address (the layout has `address`; with a layout per
@@ -673,7 +704,7 @@ impl Framing {
                 Part::Length => self.length.as_ref().map_or(0, |l| l.width),
                 Part::Checksum => self.checksum.len(),
                 Part::End => self.end.len(),
-                Part::Header => self.header_len(),
+                Part::Header => self.header_len_of(d),
                 Part::Code | Part::Payload => 0,
             })
             .sum()
@@ -689,7 +720,7 @@ impl Framing {
         let code_len = self.direction(d).code_lengths.first().copied().unwrap_or(0);
         let head = self.head(d, code_len);
         let at = head.length?;
-        let base = self.length_value(l, code_len, 0);
+        let base = self.length_value_of(d, l, code_len, 0);
         let grows = l.counts.contains(&Part::Payload);
         Some(LengthRule {
             at,
@@ -705,6 +736,18 @@ impl Framing {
     /// part it counts (each time the layout holds it), plus its adjustment. With a layout per
     /// direction every part it counts is in both (validated), once each.
     pub fn length_value(&self, l: &LengthField, code_len: usize, payload: usize) -> i64 {
+        self.length_value_of(Direction::Request, l, code_len, payload)
+    }
+
+    /// [`Self::length_value`] of a frame of direction `d`: its own header fields counted
+    /// where they differ by direction (`framing.header: {request, response}`).
+    pub fn length_value_of(
+        &self,
+        d: Direction,
+        l: &LengthField,
+        code_len: usize,
+        payload: usize,
+    ) -> i64 {
         let bytes: usize = l
             .counts
             .iter()
@@ -719,7 +762,7 @@ impl Framing {
                         Part::Payload => payload,
                         Part::Checksum => self.checksum.len(),
                         Part::End => self.end.len(),
-                        Part::Header => self.header_len(),
+                        Part::Header => self.header_len_of(d),
                     }
             })
             .sum();
@@ -868,9 +911,14 @@ pub struct Checksum {
     pub byte_order: ByteOrder,
     pub catalogue: Option<String>,
     pub check: u64,
-    /// Offset of the first byte the checksum covers (it covers every byte from there up to
-    /// itself): 0 unless the spec says `covers_from`.
+    /// Offset of the first byte a request's checksum covers (it covers every byte from there
+    /// up to itself): 0 unless the spec says `covers_from`.
     pub covers_from: usize,
+    /// The same for a response: [`Self::covers_from`] unless a layout per direction puts the
+    /// first covered byte elsewhere (`covers_from: {request: code, response: header}`, JBD's
+    /// BMS; SHDLC's length field at offset 3 in requests, 4 in replies); see
+    /// [`Self::covers_from_of`].
+    pub response_covers_from: usize,
     /// A byte of each message's own the checksum takes after the bytes it covers (MAVLink's
     /// CRC_EXTRA), found by the code the covered bytes hold.
     pub extra: Option<ChecksumExtra>,
@@ -928,8 +976,22 @@ impl Checksum {
             catalogue: None,
             check: 0,
             covers_from: 0,
+            response_covers_from: 0,
             extra: None,
         }
+    }
+
+    /// Offset of the first byte a frame of direction `d`'s checksum covers.
+    pub fn covers_from_of(&self, d: Direction) -> usize {
+        match d {
+            Direction::Request => self.covers_from,
+            Direction::Response => self.response_covers_from,
+        }
+    }
+
+    /// Whether a request's checksum covers from another offset than a response's.
+    pub fn covers_by_direction(&self) -> bool {
+        self.covers_from != self.response_covers_from
     }
 
     /// Bytes the checksum takes in the frame.

@@ -333,9 +333,11 @@ pub struct Framing {
     #[serde(default)]
     pub escaping: Option<Escaping>,
     /// Fields every message carries, where the layout's `header` part places them (MAVLink's
-    /// sequence, system and component bytes); required iff the layout has `header`.
+    /// sequence, system and component bytes); required iff the layout has `header`. With a
+    /// layout per direction, a list per direction (`{request: [...], response: [...]}`, JBD's
+    /// BMS: a request's state, a reply's status).
     #[serde(default)]
-    pub header: Option<Vec<Field>>,
+    pub header: Option<Header>,
     /// Wake-up bytes sent before every frame (DL/T 645's `FE FE FE FE`), optional.
     #[serde(default)]
     pub preamble: Option<Preamble>,
@@ -529,13 +531,116 @@ pub struct Checksum {
     #[serde(default)]
     pub mask: Option<i64>,
     /// The first part of the frame the checksum covers (default: the first part); it covers
-    /// every byte from there up to itself.
+    /// every byte from there up to itself. With a layout per direction, a part per direction
+    /// (`{request: code, response: header}`, JBD's BMS).
     #[serde(default)]
-    pub covers_from: Option<Part>,
+    pub covers_from: Option<CoversFrom>,
     /// A byte of each message's own the checksum takes after the bytes it covers (MAVLink's
     /// CRC_EXTRA): `per_message`, each message giving its `checksum_extra`.
     #[serde(default)]
     pub extra: Option<ChecksumExtra>,
+}
+
+/// `framing.header`: the header fields of every direction whose layout has `header`, or (a
+/// layout per direction) the fields of each direction.
+#[derive(Debug, Clone)]
+pub enum Header {
+    Same(Vec<Field>),
+    ByDirection(DirectionHeader),
+}
+
+/// `framing.header: {request: [...], response: [...]}`.
+#[derive(Debug, Clone, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct DirectionHeader {
+    pub request: Vec<Field>,
+    pub response: Vec<Field>,
+}
+
+/// A mapping is the fields per direction (so a misspelt key is named), a list the fields of
+/// both; read through the deserializer's own sequence and map, so an error inside a field
+/// keeps its path.
+impl<'de> Deserialize<'de> for Header {
+    fn deserialize<D: Deserializer<'de>>(d: D) -> Result<Self, D::Error> {
+        struct V;
+        impl<'de> serde::de::Visitor<'de> for V {
+            type Value = Header;
+            fn expecting(&self, f: &mut std::fmt::Formatter) -> std::fmt::Result {
+                f.write_str("a list of header fields, or `{request: [...], response: [...]}`")
+            }
+            fn visit_seq<A: serde::de::SeqAccess<'de>>(
+                self,
+                mut seq: A,
+            ) -> Result<Header, A::Error> {
+                let mut out = Vec::new();
+                while let Some(f) = seq.next_element::<Field>()? {
+                    out.push(f);
+                }
+                Ok(Header::Same(out))
+            }
+            fn visit_map<A: serde::de::MapAccess<'de>>(self, map: A) -> Result<Header, A::Error> {
+                DirectionHeader::deserialize(serde::de::value::MapAccessDeserializer::new(map))
+                    .map(Header::ByDirection)
+            }
+        }
+        d.deserialize_any(V)
+    }
+}
+
+impl Header {
+    /// The header fields of a direction (the one list where it is given once).
+    pub fn of(&self, request: bool) -> &Vec<Field> {
+        match self {
+            Header::Same(l) => l,
+            Header::ByDirection(d) if request => &d.request,
+            Header::ByDirection(d) => &d.response,
+        }
+    }
+}
+
+/// `framing.checksum.covers_from`: the part the checksum of every frame covers from, or (a
+/// layout per direction) the part of each direction's.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum CoversFrom {
+    Same(Part),
+    ByDirection(DirectionPart),
+}
+
+/// `framing.checksum.covers_from: {request: ..., response: ...}`.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct DirectionPart {
+    pub request: Part,
+    pub response: Part,
+}
+
+impl CoversFrom {
+    /// The part a direction's checksum covers from.
+    pub fn of(&self, request: bool) -> Part {
+        match self {
+            CoversFrom::Same(p) => *p,
+            CoversFrom::ByDirection(d) if request => d.request,
+            CoversFrom::ByDirection(d) => d.response,
+        }
+    }
+}
+
+/// A mapping is a part per direction (so a misspelt key is named), anything else the part of
+/// both.
+impl<'de> Deserialize<'de> for CoversFrom {
+    fn deserialize<D: Deserializer<'de>>(d: D) -> Result<Self, D::Error> {
+        use serde::de::Error;
+        let v = serde_yaml::Value::deserialize(d)?;
+        if v.is_mapping() {
+            DirectionPart::deserialize(v)
+                .map(CoversFrom::ByDirection)
+                .map_err(D::Error::custom)
+        } else {
+            Part::deserialize(v)
+                .map(CoversFrom::Same)
+                .map_err(D::Error::custom)
+        }
+    }
 }
 
 /// Where a checksum's extra byte comes from (`framing.checksum.extra`).

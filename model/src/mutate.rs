@@ -7,9 +7,15 @@
 use crate::interp;
 use crate::ir::{Direction, Protocol};
 
-/// `frame` with its checksum recomputed over what it covers (and its end bytes).
+/// `frame` with its checksum recomputed over what it covers (and its end bytes); a
+/// request's, where each direction's checksum covers from its own byte ([`reseal_as`]).
 pub fn reseal(p: &Protocol, frame: &mut [u8]) {
     interp::reseal(p, after_preamble(p, frame));
+}
+
+/// [`reseal`] of a frame of direction `d`: its checksum over what that direction's covers.
+pub fn reseal_as(p: &Protocol, d: Direction, frame: &mut [u8]) {
+    interp::reseal_as(p, d, after_preamble(p, frame));
 }
 
 /// `frame` after its preamble bytes: where the frame's offsets count from.
@@ -59,7 +65,7 @@ pub fn mutations(p: &Protocol, d: Direction, wire: &[u8]) -> Vec<Vec<u8>> {
             }
             out.push(m.clone());
             if i + clen < wire.len() {
-                reseal(p, &mut m);
+                reseal_as(p, d, &mut m);
                 out.push(m);
             }
         }
@@ -78,10 +84,10 @@ pub fn mutations(p: &Protocol, d: Direction, wire: &[u8]) -> Vec<Vec<u8>> {
         variants.push(long);
         for v in variants {
             let mut sealed = v.clone();
-            reseal(p, &mut sealed);
+            reseal_as(p, d, &mut sealed);
             let mut agreed = v.clone();
             fix_length(p, d, &mut agreed);
-            reseal(p, &mut agreed);
+            reseal_as(p, d, &mut agreed);
             out.extend([v, sealed, agreed]);
         }
     }

@@ -81,7 +81,7 @@ pub fn canonical(p: &Protocol, wire: &[u8]) -> Result<Option<Vec<u8>>, DecodeErr
     if n == 0 || n >= full {
         return Ok(None);
     }
-    crate::interp::check_checksum(p, None, wire)?;
+    crate::interp::check_checksum(p, crate::ir::Direction::Request, None, wire)?;
     let mut out = Vec::with_capacity(payload_at + full + trailer);
     out.extend_from_slice(&wire[..payload_at + n]);
     out.resize(payload_at + full + trailer, 0);

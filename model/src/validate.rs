@@ -345,7 +345,14 @@ fn validate_ordered(spec: &model::Spec, sink: &mut Sink) -> Option<Protocol> {
         }
         check_section(&c.section, &path, sink);
         let layout = frame_layout(&framing, Direction::Request, code.len(), payload_len);
-        check_length_fits(&framing, &path, code.len(), max_payload, sink);
+        check_length_fits(
+            &framing,
+            Direction::Request,
+            &path,
+            code.len(),
+            max_payload,
+            sink,
+        );
         commands.push(Message {
             name: c.name.clone(),
             title: c.title.clone(),
@@ -452,7 +459,14 @@ fn validate_ordered(spec: &model::Spec, sink: &mut Sink) -> Option<Protocol> {
         let code_from_request = code_from_request(r, &code, &answers, &commands, &path, sink);
         check_request_fields(&fields, &answers, &commands, &path, sink);
         let layout = frame_layout(&framing, Direction::Response, code.len(), payload_len);
-        check_length_fits(&framing, &path, code.len(), max_payload, sink);
+        check_length_fits(
+            &framing,
+            Direction::Response,
+            &path,
+            code.len(),
+            max_payload,
+            sink,
+        );
         responses.push(Message {
             name: r.name.clone(),
             title: r.title.clone(),
@@ -669,6 +683,12 @@ fn checksum_extras(
             path,
             format!("the extra byte is found by the code, so every message needs a code of one length; code_lengths give {lens:?}"),
         ),
+    }
+    if framing.checksum.covers_by_direction() {
+        sink.error(
+            path,
+            "the checksum covers from another offset in each direction: an extra byte per message is not expressible with it yet",
+        );
     }
     if code_at < framing.checksum.covers_from {
         sink.error(
@@ -1025,6 +1045,7 @@ fn check_request_fields(
 /// A length field must be able to hold the longest frame's count.
 fn check_length_fits(
     framing: &Framing,
+    d: Direction,
     path: &str,
     code_len: usize,
     max_payload: usize,
@@ -1033,7 +1054,7 @@ fn check_length_fits(
     let Some(l) = &framing.length else {
         return;
     };
-    let most = framing.length_value(l, code_len, max_payload);
+    let most = framing.length_value_of(d, l, code_len, max_payload);
     let limit = (1i64 << (8 * l.width)) - 1;
     if most < 0 || most > limit {
         sink.error(
@@ -1330,6 +1351,22 @@ fn framing_by_direction(
         if lacks(Part::Header) {
             own.header = None;
         }
+        // Header fields per direction (`header: {request, response}`): each direction's own,
+        // its errors located at the direction's key; none for a direction whose layout has
+        // no `header` and whose list is empty.
+        let header_by_direction = match &f.header {
+            Some(model::Header::ByDirection(h)) => {
+                let fields = if name == "request" {
+                    h.request.clone()
+                } else {
+                    h.response.clone()
+                };
+                own.header = (!fields.is_empty() || list.contains(&Part::Header))
+                    .then_some(model::Header::Same(fields));
+                true
+            }
+            _ => false,
+        };
         // Refused above where one direction lacks it: not reported again.
         if lacks(Part::Start) {
             own.start = None;
@@ -1343,11 +1380,36 @@ fn framing_by_direction(
         if lacks(Part::End) {
             own.end = None;
         }
+        // A part per direction (`covers_from: {request, response}`): each direction's own,
+        // its errors located at the direction's key.
+        let by_direction = match own.checksum.as_mut() {
+            Some(c) => match c.covers_from {
+                Some(model::CoversFrom::ByDirection(parts)) => {
+                    let part = if name == "request" {
+                        parts.request
+                    } else {
+                        parts.response
+                    };
+                    c.covers_from = Some(model::CoversFrom::Same(part));
+                    true
+                }
+                _ => false,
+            },
+            None => false,
+        };
         let mut errors = Sink::default();
         out.push(framing_plain(&own, byte_order, refs, &mut errors));
         for e in errors.items {
             let path = match e.path.strip_prefix("framing.layout") {
                 Some(rest) => format!("framing.layout.{name}{rest}"),
+                None if by_direction && e.path == "framing.checksum.covers_from" => {
+                    format!("framing.checksum.covers_from.{name}")
+                }
+                None if header_by_direction
+                    && (e.path == "framing.header" || e.path.starts_with("framing.header.")) =>
+                {
+                    format!("framing.header.{name}{}", &e.path["framing.header".len()..])
+                }
                 None => e.path,
             };
             if !sink
@@ -1361,22 +1423,10 @@ fn framing_by_direction(
     }
     let response = out.pop().expect("two framings");
     let mut framing = out.pop().expect("two framings");
-    let placed = !sink
-        .items
-        .iter()
-        .any(|e| e.path == "framing.checksum.covers_from");
-    let summed = d.request.contains(&Part::Checksum) && d.response.contains(&Part::Checksum);
-    if placed && summed && framing.checksum.covers_from != response.checksum.covers_from {
-        sink.error(
-            "framing.checksum.covers_from",
-            format!(
-                "the checksum would cover from offset {} in requests and {} in responses: {}",
-                framing.checksum.covers_from,
-                response.checksum.covers_from,
-                not_yet("a checksum whose first covered byte differs by direction")
-            ),
-        );
-    }
+    // Each direction's checksum covers from its own first covered byte (a checksum computed
+    // on the escaped bytes, which takes one `covers_from`, comes only with escaping by
+    // insertion: refused above).
+    framing.checksum.response_covers_from = response.checksum.covers_from;
     let (rq, rs) = (framing.heads[0].start, response.heads[0].start);
     if rq != rs {
         sink.error(
@@ -1398,9 +1448,17 @@ fn framing_by_direction(
             );
         }
     }
-    if framing.header.is_empty() {
-        framing.header = response.header;
+    // Each direction's header fields: with one list, the list of both (a direction whose
+    // layout has no `header` carries none all the same: `Framing::has_header`).
+    let by_direction = matches!(f.header, Some(model::Header::ByDirection(_)));
+    if framing.header.is_empty() && !by_direction {
+        framing.header = response.header.clone();
     }
+    framing.response_header = if by_direction || !response.header.is_empty() {
+        response.header
+    } else {
+        framing.header.clone()
+    };
     framing.response_layout = response.layout;
     framing.response_heads = response.heads;
     framing
@@ -1807,6 +1865,7 @@ fn framing_plain(
         response_heads: Vec::new(),
         escaping: None,
         header: header_fields(f, byte_order, refs, sink),
+        response_header: Vec::new(),
         preamble: None,
         transform: None,
         long: None,
@@ -1817,6 +1876,7 @@ fn framing_plain(
         .map(|l| frame_layout(&framing, Direction::Request, l, 0))
         .collect();
     framing.response_heads = framing.heads.clone();
+    framing.response_header = framing.header.clone();
     if let Some(e) = &f.escaping {
         framing.escaping = escaping(e, &framing, sink);
     }
@@ -1847,7 +1907,18 @@ fn framing_plain(
             }
         }
     }
-    if let Some(part) = f.checksum.as_ref().and_then(|c| c.covers_from) {
+    let covers_from = match f.checksum.as_ref().and_then(|c| c.covers_from) {
+        Some(model::CoversFrom::ByDirection(_)) => {
+            sink.error(
+                "framing.checksum.covers_from",
+                "a part per direction (`{request: ..., response: ...}`) needs a layout per direction (`framing.layout: {request: [...], response: [...]}`): with one layout, name one part",
+            );
+            None
+        }
+        Some(model::CoversFrom::Same(part)) => Some(part),
+        None => None,
+    };
+    if let Some(part) = covers_from {
         // A part after the code sits after as many bytes as the code has: one offset only
         // where every code has one length.
         let pos = |p: Part| f.layout.iter().position(|x| *x == p);
@@ -1870,7 +1941,11 @@ fn framing_plain(
             Part::Payload | Part::Checksum | Part::End => None,
         };
         match at {
-            Some(at) if f.layout.contains(&part) => framing.checksum.covers_from = at,
+            Some(at) if f.layout.contains(&part) => {
+                // Both directions' (a layout per direction joins each direction's own).
+                framing.checksum.covers_from = at;
+                framing.checksum.response_covers_from = at;
+            }
             _ => sink.error(
                 "framing.checksum.covers_from",
                 format!("the checksum cannot cover from `{}`: name a part of the layout before the payload", part_name(part)),
@@ -2724,14 +2799,24 @@ fn header_fields(
 ) -> Vec<Field> {
     use model::FieldType as T;
     let in_layout = f.layout.iter().filter(|p| **p == Part::Header).count();
-    let Some(fields) = &f.header else {
-        if in_layout > 0 {
+    let fields = match &f.header {
+        Some(model::Header::Same(fields)) => fields,
+        Some(model::Header::ByDirection(_)) => {
             sink.error(
-                "framing.layout",
-                "layout has `header` but `framing.header` is missing",
+                "framing.header",
+                "header fields per direction (`{request: [...], response: [...]}`) need a layout per direction (`framing.layout: {request: [...], response: [...]}`): with one layout, give one list",
             );
+            return Vec::new();
         }
-        return Vec::new();
+        None => {
+            if in_layout > 0 {
+                sink.error(
+                    "framing.layout",
+                    "layout has `header` but `framing.header` is missing",
+                );
+            }
+            return Vec::new();
+        }
     };
     let path = "framing.header";
     match in_layout {
@@ -2904,7 +2989,7 @@ fn frame_layout(
             Part::End => at += framing.end.len(),
             Part::Header => {
                 o.header = at;
-                at += framing.header_len();
+                at += framing.header_len_of(d);
             }
         }
     }
@@ -3070,6 +3155,7 @@ fn checksum_params(c: &model::Checksum, byte_order: ByteOrder, sink: &mut Sink) 
         catalogue: c.catalogue.clone(),
         check,
         covers_from: 0,
+        response_covers_from: 0,
         extra: None,
     }
 }
@@ -3190,7 +3276,7 @@ fn constant_frame(
             "a constant frame is not expressible with a preamble (framing.preamble), yet",
         );
     }
-    if !framing.header.is_empty() {
+    if !framing.header.is_empty() || !framing.response_header.is_empty() {
         sink.error(
             &fpath,
             "a constant frame is not expressible with header fields (framing.header), yet: every message carries them",
@@ -3258,7 +3344,7 @@ fn message_body(
     // Field and sub-field names share one name space per message: they are the keys of its values.
     // The header fields' values (each whole, or its sub-fields) are named in every message.
     let headers: &[Field] = if framing.has_header(direction) {
-        &framing.header
+        framing.header_of(direction)
     } else {
         &[]
     };

@@ -31,9 +31,18 @@ const CASES: &[(&str, &[(&str, &str)])] = &[
         &[("framing.length.counts", "counts `header`, which the layout does not have")],
     ),
     (
-        "layout_dir_covers_from_differs",
-        &[("framing.checksum.covers_from", "the checksum would cover from offset 3 in requests and 4 in responses: a checksum whose")],
+        "layout_dir_extra_covers_from_differs",
+        &[("framing.checksum.extra", "the checksum covers from another offset in each direction: an extra byte per message is not")],
     ),
+    (
+        "layout_dir_header_direction_lacks",
+        &[("framing.header.response", "`framing.header` needs a `header` part in the layout, where its fields sit")],
+    ),
+    (
+        "layout_dir_covers_from_direction_lacks",
+        &[("framing.checksum.covers_from.request", "the checksum cannot cover from `header`: name a part of the layout before the payload")],
+    ),
+
     (
         "layout_dir_covers_from_missing",
         &[("framing.checksum.covers_from", "the checksum cannot cover from `header`: name a part of the layout before the payload")],
@@ -60,10 +69,7 @@ const CASES: &[(&str, &[(&str, &str)])] = &[
     ),
     (
         "layout_dir_start_offsets",
-        &[
-            ("framing.checksum.covers_from", "the checksum would cover from offset 1 in requests and 0 in responses: a checksum whose"),
-            ("framing.layout.response", "the start bytes sit at offset 0 in requests and 1 in responses: start bytes at another"),
-        ],
+        &[("framing.layout.response", "the start bytes sit at offset 0 in requests and 1 in responses: start bytes at another")],
     ),
     (
         "layout_dir_unknown_direction",
@@ -732,6 +738,14 @@ const CASES: &[(&str, &[(&str, &str)])] = &[
         &[("framing.escaping", "COBS frames end in the end byte 0x00 (`end: 0x00`, the last part of the layout)")],
     ),
     // ---- checksum coverage from a part after codes of two lengths (made from valid/msp_v1.yaml)
+    (
+        "header_by_direction_one_layout",
+        &[("framing.header", "header fields per direction (`{request: [...], response: [...]}`) need a layout per direction")],
+    ),
+    (
+        "covers_from_by_direction_one_layout",
+        &[("framing.checksum.covers_from", "a part per direction (`{request: ..., response: ...}`) needs a layout per direction")],
+    ),
     (
         "covers_from_after_codes_of_two_lengths",
         &[("framing.checksum.covers_from", "the checksum cannot cover from `length`: it comes after the code, whose lengths [1, 2] would move it")],

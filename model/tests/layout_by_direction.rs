@@ -225,3 +225,217 @@ fn a_frame_ambiguous_one_way_and_refused_the_other_is_ambiguous() {
     let e = interp::decode(&p, None, None, &wire).unwrap_err();
     assert!(matches!(e, DecodeError::Ambiguous { .. }), "{e:?}");
 }
+
+/// SHDLC with its checksum covering from `covers_from` (in place of the address): the spec
+/// without its examples, whose checksums cover from the address.
+fn covering_from(covers_from: &str) -> busspec_model::Protocol {
+    common::revisions(
+        "shdlc",
+        &[(
+            "covers_from: address",
+            &format!("covers_from: {covers_from}"),
+        )],
+    )
+    .1
+}
+
+/// The checksum covering from the length field, at offset 3 in a request and 4 in a reply
+/// (once refused): each direction's frames are checked, sealed and decoded over their own
+/// bytes, a frame decoded both ways is each direction's where its own checksum holds, and
+/// the interpreter's stream frames them alike.
+#[test]
+fn each_directions_checksum_covers_from_where_its_layout_puts_the_part() {
+    let p = covering_from("length");
+    let c = &p.framing.checksum;
+    assert_eq!((c.covers_from, c.response_covers_from), (3, 4));
+    assert!(c.covers_by_direction());
+    let read = p.find("read_measured_values").unwrap();
+    // Over the length field alone: !0x00.
+    let q = interp::encode(&p, read, 0, &[]).unwrap();
+    assert_eq!(q, [0x7E, 0x00, 0x03, 0x00, 0xFF, 0x7E]);
+    let empty = p.find("no_new_values").unwrap();
+    let state = [Value {
+        name: "state".into(),
+        raw: Raw::Int(0x43),
+    }];
+    // Over the length field alone, not the state before it: !0x00.
+    let r = interp::encode(&p, empty, 0, &state).unwrap();
+    assert_eq!(r, [0x7E, 0x00, 0x03, 0x43, 0x00, 0xFF, 0x7E]);
+    assert_eq!(
+        p.message(interp::decode(&p, None, None, &q).unwrap().message)
+            .name,
+        "read_measured_values"
+    );
+    assert_eq!(
+        p.message(interp::decode(&p, None, None, &r).unwrap().message)
+            .name,
+        "no_new_values"
+    );
+    // The reply sealed over the state too (as a checksum from offset 3 would be): refused.
+    let mut wrong = r.clone();
+    wrong[5] = !(0x43u8);
+    let e = interp::decode(&p, Some(Direction::Response), None, &wrong).unwrap_err();
+    assert_eq!(
+        e.to_string(),
+        "checksum mismatch at offset 5: expected 0xFF, found 0xBC"
+    );
+    // Resealed as a response, it decodes again; as a request, it does not.
+    let mut sealed = wrong.clone();
+    interp::reseal_as(&p, Direction::Response, &mut sealed);
+    assert_eq!(sealed, r);
+    interp::reseal_as(&p, Direction::Request, &mut wrong);
+    assert_eq!(wrong[5], 0xBC);
+    let mut capture = Vec::new();
+    for _ in 0..3 {
+        capture.extend_from_slice(&q);
+        capture.extend_from_slice(&r);
+    }
+    let mut d = StreamDecoder::new(&p, None);
+    let mut names = Vec::new();
+    for e in d.push(&capture).into_iter().chain(d.flush()) {
+        if let Event::Frame { frame, .. } = e {
+            names.push(p.message(frame.message).name.clone());
+        }
+    }
+    assert_eq!(names, ["read_measured_values", "no_new_values"].repeat(3));
+}
+
+/// `covers_from: {request: PART, response: PART}`: each direction's checksum from its own
+/// part (a request's from its code at offset 2, a reply's from its state at 3); docs say
+/// each, and diff calls a changed part of either direction wire-breaking.
+#[test]
+fn covers_from_takes_a_part_per_direction() {
+    let p = covering_from("{request: code, response: header}");
+    let c = &p.framing.checksum;
+    assert_eq!((c.covers_from, c.response_covers_from), (2, 3));
+    let read = p.find("read_measured_values").unwrap();
+    assert_eq!(
+        interp::encode(&p, read, 0, &[]).unwrap(),
+        [0x7E, 0x00, 0x03, 0x00, 0xFC, 0x7E]
+    );
+    let empty = p.find("no_new_values").unwrap();
+    let state = [Value {
+        name: "state".into(),
+        raw: Raw::Int(0x43),
+    }];
+    let r = interp::encode(&p, empty, 0, &state).unwrap();
+    assert_eq!(r, [0x7E, 0x00, 0x03, 0x43, 0x00, 0xBC, 0x7E]);
+    assert_eq!(
+        p.message(interp::decode(&p, None, None, &r).unwrap().message)
+            .name,
+        "no_new_values"
+    );
+    let docs = busspec_model::docs::render(&p, "shdlc.yaml");
+    assert!(
+        docs.contains("| checksum | 1 | over the bytes from offset 2 up to it |"),
+        "{docs}"
+    );
+    assert!(
+        docs.contains("| checksum | 1 | over the bytes from offset 3 up to it |"),
+        "{docs}"
+    );
+    let same = covering_from("{request: code, response: header}");
+    assert!(busspec_model::diff::diff(&p, &same).is_empty());
+    for other in ["{request: code, response: length}", "code"] {
+        let changes = busspec_model::diff::diff(&p, &covering_from(other));
+        assert_eq!(changes.len(), 1, "{other}: {changes:?}");
+        assert_eq!(changes[0].path, "framing.checksum.covers_from.response");
+        assert_eq!(changes[0].kind, "checksum_changed");
+        assert_eq!(
+            changes[0].category,
+            busspec_model::diff::Category::WireBreaking,
+            "{changes:?}"
+        );
+    }
+    let changes =
+        busspec_model::diff::diff(&p, &covering_from("{request: address, response: header}"));
+    assert_eq!(changes.len(), 1, "{changes:?}");
+    assert_eq!(changes[0].path, "framing.checksum.covers_from");
+}
+
+/// Header fields per direction (`framing.header: {request, response}`, JBD's BMS): a
+/// request's state leads every request's fields, a reply's status every reply's, each at its
+/// direction's `header` part; the checksum covers from a part per direction (a request's
+/// register, a reply's status, both at offset 2); docs show each direction's, and diff calls a
+/// changed header field of either direction wire-breaking at its direction's path.
+#[test]
+fn header_fields_lead_their_own_directions_messages() {
+    let p = fixture("jbd_bms.yaml");
+    let f = &p.framing;
+    assert!(f.header_by_direction());
+    let names =
+        |d: Direction| -> Vec<String> { f.header_of(d).iter().map(|h| h.name.clone()).collect() };
+    assert_eq!(names(Direction::Request), ["state"]);
+    assert_eq!(names(Direction::Response), ["status"]);
+    let (q, r) = (
+        f.head(Direction::Request, 1),
+        f.head(Direction::Response, 1),
+    );
+    assert_eq!((q.header, q.code, q.length, q.payload), (1, 2, Some(3), 4));
+    assert_eq!((r.code, r.header, r.length, r.payload), (1, 2, Some(3), 4));
+    for m in p.framed(Direction::Request) {
+        assert_eq!(m.fields[0].name, "state", "{}", m.name);
+    }
+    for m in p.framed(Direction::Response) {
+        assert_eq!(m.fields[0].name, "status", "{}", m.name);
+        assert!(m.fields.iter().skip(1).all(|f| !f.header), "{}", m.name);
+    }
+    // The document's request, and a reply told apart by its register alone.
+    let read = interp::decode(&p, None, None, &[0xDD, 0xA5, 0x03, 0x00, 0xFF, 0xFD, 0x77]).unwrap();
+    assert_eq!(p.message(read.message).name, "read_basic_info");
+    let error = interp::decode(&p, None, None, &[0xDD, 0x05, 0x80, 0x00, 0xFF, 0x80, 0x77]);
+    assert_eq!(p.message(error.unwrap().message).name, "version_error");
+    let docs = busspec_model::docs::render(&p, "jbd_bms.yaml");
+    assert!(
+        docs.contains("| header | 1 | header fields every request carries: `state` (1) |"),
+        "{docs}"
+    );
+    assert!(
+        docs.contains("| header | 1 | header fields every response carries: `status` (1) |"),
+        "{docs}"
+    );
+    let (_, new) = common::revisions(
+        "jbd_bms",
+        &[("{name: status, type: u8", "{name: outcome, type: u8")],
+    );
+    let changes = busspec_model::diff::diff(&p, &new);
+    let header: Vec<_> = changes
+        .iter()
+        .filter(|c| c.path.starts_with("framing.header"))
+        .map(|c| (c.path.as_str(), c.kind, c.category))
+        .collect();
+    use busspec_model::diff::Category::WireBreaking;
+    assert_eq!(
+        header,
+        [
+            (
+                "framing.header.response.status",
+                "header_field_removed",
+                WireBreaking
+            ),
+            (
+                "framing.header.response.outcome",
+                "header_field_added",
+                WireBreaking
+            ),
+        ],
+        "{changes:?}"
+    );
+    let (_, wider) = common::revisions(
+        "jbd_bms",
+        &[(
+            "{name: state, type: u8, enum: state",
+            "{name: state, type: u16, unit: count",
+        )],
+    );
+    let changes = busspec_model::diff::diff(&p, &wider);
+    assert!(
+        changes
+            .iter()
+            .any(|c| c.path == "framing.header.request.state"
+                && c.kind == "header_field_changed"
+                && c.category == WireBreaking),
+        "{changes:?}"
+    );
+    assert!(busspec_model::diff::diff(&p, &p).is_empty());
+}

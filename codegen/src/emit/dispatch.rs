@@ -202,7 +202,7 @@ pub(super) fn emit_dispatch(ctx: &Ctx, d: Direction, ty: &TokenStream) -> TokenS
     // Escaped frames (`framing.escaping`): unescaped into a buffer of the longest frame, then
     // checked as any frame by a function of its own.
     let (checks, unescaped_fn) = if p.framing.escaping.is_some() {
-        let sum = frame_sum(p);
+        let sum = frame_sum(p, d);
         let max = usize_lit(p.max_frame_len(d));
         let unescape = quote! {
             let mut plain = [0u8; UNESCAPED_LEN];
@@ -223,7 +223,7 @@ pub(super) fn emit_dispatch(ctx: &Ctx, d: Direction, ty: &TokenStream) -> TokenS
         // with its whole payload, checked as any frame by a function of its own; its errors
         // keep their offsets.
         let max = usize_lit(p.max_frame_len(d));
-        let sum = super::head::frame_sum(p);
+        let sum = super::head::frame_sum(p, d);
         let lay_out = quote! {
             let mut laid = [0u8; #max];
             let laid = TRUNCATION.lay_out(frame, &mut laid, &FRAME, #sum)?;
@@ -511,7 +511,7 @@ fn frame_check(p: &Protocol, d: Direction, min_len: &Literal, max_len: &Literal)
     let unchecked = p.framed(d).iter().any(|m| m.unchecked);
     let replies = d == Direction::Response;
     let addr_at = usize_lit(address_at(p, d));
-    let sum = frame_sum(p);
+    let sum = frame_sum(p, d);
     let frame_const = frame_of(p, d);
     // A reply whose checksum takes in its request's bytes (`checksum_over_request`):
     // `response_sum` checks it over `covered`, or refuses it without them.

@@ -360,7 +360,9 @@ fn known_bytes(p: &Protocol, m: &Message, named: &[usize]) -> (Vec<Option<TokenS
         }
     }
     if let (Some(l), false) = (&p.framing.length, m.is_variable()) {
-        let v = p.framing.length_value(l, m.code.len(), m.payload_len);
+        let v = p
+            .framing
+            .length_value_of(m.direction, l, m.code.len(), m.payload_len);
         for at in o.lengths() {
             for (i, b) in constant_bytes(v as u64, l.width, p.byte_order)
                 .into_iter()

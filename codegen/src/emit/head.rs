@@ -499,7 +499,7 @@ pub(super) fn emit_over_request(p: &Protocol) -> TokenStream {
         return quote!();
     }
     let ty = checksum_type(p);
-    let sum = frame_sum(p);
+    let sum = frame_sum(p, Direction::Response);
     let arms = p.framed(Direction::Response).iter().filter_map(|m| {
         let from = usize_lit(m.over_request?);
         let (min, max) = (usize_lit(m.layout.len), usize_lit(m.max_len));
@@ -774,15 +774,18 @@ pub(super) fn checksum_in_arms(p: &Protocol) -> bool {
         // So is every frame's, where a message travels without one.
         && !p.has_unchecked()
         && p.framing.checksum.covers_from == 0
+        && p.framing.checksum.response_covers_from == 0
         && p.framing.end.is_empty()
         // The sum covers the payload as it travels, transformed after the arms write it.
         && p.framing.transform.is_none()
 }
 
-/// The checksum of a frame's bytes before it, as the runtime's frame checks take it: over the
-/// bytes from `covers_from` on where the checksum skips the first (Dynamixel's sync bytes).
-pub(super) fn frame_sum(p: &Protocol) -> TokenStream {
-    match p.framing.checksum.covers_from {
+/// The checksum of a frame of direction `d`'s bytes before it, as the runtime's frame checks
+/// take it: over the bytes from `covers_from` on where the checksum skips the first
+/// (Dynamixel's sync bytes), each direction's own where they differ (`covers_from: {request,
+/// response}`).
+pub(super) fn frame_sum(p: &Protocol, d: Direction) -> TokenStream {
+    match p.framing.checksum.covers_from_of(d) {
         0 => quote!(|b| u32::from(checksum(b))),
         from => {
             let from = usize_lit(from);

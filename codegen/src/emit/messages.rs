@@ -109,7 +109,7 @@ pub(super) fn emit_messages(ctx: &Ctx, d: Direction) -> TokenStream {
     } else {
         quote!()
     };
-    let seal = encode_seal(p);
+    let seal = encode_seal(p, d);
     // A float has no `Eq` or `Hash`: a direction with a float field derives `PartialEq`
     // alone (every other direction, and every spec without floats, keeps both).
     let derives = if ctx
@@ -343,13 +343,13 @@ fn visits(ctx: &Ctx, ls: &[Leaf]) -> Vec<TokenStream> {
 
 /// The end of every encoder: the checksum (and end bytes) written after the arms, or the
 /// arms' length where they write it.
-fn encode_seal(p: &Protocol) -> TokenStream {
+fn encode_seal(p: &Protocol, d: Direction) -> TokenStream {
     if checksum_in_arms(p) {
         quote!(rt::Ok(len))
     } else {
         let n = usize_lit(p.framing.checksum.len());
         let be = p.framing.checksum.byte_order == ByteOrder::Big;
-        let sum = frame_sum(p);
+        let sum = frame_sum(p, d);
         if p.framing.end.is_empty() {
             quote! {
                 rt::seal(buf, len, #sum, #n, #be);
@@ -433,7 +433,7 @@ fn encode_fn(
         // Payload truncation (`framing.truncation`; escaping, preambles, transforms, forms
         // and constant frames are refused beside it: validated): the frame laid out with its
         // whole payload, then its trailing zeros stripped.
-        let sum = super::head::frame_sum(p);
+        let sum = super::head::frame_sum(p, d);
         quote! {
             ///
             /// The payload's trailing zero bytes are stripped (one byte kept), the length field
@@ -538,7 +538,7 @@ fn encode_fn(
             }
         }
     } else {
-        let sum = frame_sum(p);
+        let sum = frame_sum(p, d);
         quote! {
             ///
             /// The frame is written escaped (`framing.escaping`); `buf` of `MAX_FRAME_LEN`

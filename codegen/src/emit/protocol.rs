@@ -404,9 +404,18 @@ pub(super) fn emit_protocol_impl(p: &Protocol) -> TokenStream {
 /// `Framing::checksum_ok`: whether a frame ends in the checksum of the bytes it covers, laid
 /// out in the long form's width or unescaped first where the framing says so; a message
 /// without a checksum passes.
+///
+/// Where each direction's checksum covers from its own byte (`covers_from: {request,
+/// response}`), a frame passes whose checksum is either direction's.
 pub(super) fn checksum_ok_fn(p: &Protocol) -> TokenStream {
     let ck_len = usize_lit(p.framing.trailer_len());
-    let sum = frame_sum(p);
+    let sum = frame_sum(p, Direction::Request);
+    let check = if p.framing.checksum.covers_by_direction() {
+        let rs = frame_sum(p, Direction::Response);
+        quote!(rt::check_sum(frame, n, &FRAME, #sum) || rt::check_sum(frame, n, &FRAME, #rs))
+    } else {
+        quote!(rt::check_sum(frame, n, &FRAME, #sum))
+    };
     let skip_preamble = if p.framing.preamble.is_some() {
         quote!(let frame = PREAMBLE.skip(frame);)
     } else {
@@ -426,7 +435,7 @@ pub(super) fn checksum_ok_fn(p: &Protocol) -> TokenStream {
                     return false;
                 };
                 match frame.len().checked_sub(#ck_len) {
-                    rt::Some(n) if n > 0 => rt::check_sum(frame, n, &FRAME, #sum),
+                    rt::Some(n) if n > 0 => #check,
                     _ => false,
                 }
             }
@@ -445,7 +454,7 @@ pub(super) fn checksum_ok_fn(p: &Protocol) -> TokenStream {
                 #skip_preamble
                 #(#unchecked)*
                 match frame.len().checked_sub(#ck_len) {
-                    rt::Some(n) if n > 0 => rt::check_sum(frame, n, &FRAME, #sum),
+                    rt::Some(n) if n > 0 => #check,
                     _ => false,
                 }
             }
@@ -462,7 +471,7 @@ pub(super) fn checksum_ok_fn(p: &Protocol) -> TokenStream {
                     return false;
                 };
                 match frame.len().checked_sub(#ck_len) {
-                    rt::Some(n) if n > 0 => rt::check_sum(frame, n, &FRAME, #sum),
+                    rt::Some(n) if n > 0 => #check,
                     _ => false,
                 }
             }

@@ -167,7 +167,7 @@ fn same_words(
     false
 }
 
-pub use busspec_model::mutate::{fix_length, mutations, reseal};
+pub use busspec_model::mutate::{fix_length, mutations, reseal, reseal_as};
 
 /// A small deterministic generator (xorshift), so failures replay.
 pub struct Rng(pub u64);
@@ -553,7 +553,7 @@ pub fn views_agree<P: Views>(p: &ir::Protocol, random: usize) -> (usize, usize) 
                 fix_length(p, d, &mut f);
             }
             if rng.below(4) != 0 {
-                reseal(p, &mut f);
+                reseal_as(p, d, &mut f);
             }
             frames.push(f);
         }

@@ -26,7 +26,7 @@ pub mod jbd_bms {
     /// The document's date.
     pub const DOCUMENT_DATE: &str = "2026-11-27";
     /// SHA-256 of the spec file this module was generated from, lowercase hex (`sha256sum`).
-    pub const SPEC_SHA256: &str = "e82b67d1fb80031bab7df72c1c5f491c628b0f1f6c0a2dbdc1b5767be0be6198";
+    pub const SPEC_SHA256: &str = "217c69774ad260a42967fc59aa16abb1907629e51d9e25df02a58bf4fbef8f80";
     /// The spec's text, exactly as this module was generated from it.
     pub const SPEC_YAML: &str = include_str!(
         "../../../model/tests/fixtures/valid/jbd_bms.yaml"
@@ -53,7 +53,7 @@ pub mod jbd_bms {
     use ::busspec_runtime::codec as rt;
     /// What every frame shares, for the runtime's frame checks.
     const FRAME: rt::Frame = rt::Frame {
-        start: rt::Some((0, 0xDD)),
+        start: rt::None,
         addressed: false,
         devices: (0x00, 0x00),
         broadcast: BROADCAST_ADDRESS,
@@ -245,6 +245,110 @@ pub mod jbd_bms {
             self.0 as u64
         }
     }
+    /// A request's state byte, before its register.
+    ///
+    /// Open: a value this revision does not list decodes as `Unknown(raw)` and re-encodes unchanged.
+    #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+    #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
+    pub enum State {
+        /// Read the register (165)
+        Read,
+        /// Write the register (90)
+        Write,
+        /// A value this revision of the document does not list.
+        Unknown(u8),
+    }
+    /// Not derived: an arbitrary value goes through `from_raw`, so `Unknown` never holds
+    /// a listed value (which would encode as that value and decode as its variant).
+    #[cfg(feature = "arbitrary")]
+    impl<'a> ::arbitrary::Arbitrary<'a> for State {
+        fn arbitrary(
+            u: &mut ::arbitrary::Unstructured<'a>,
+        ) -> ::arbitrary::Result<Self> {
+            rt::Ok(Self::from_raw(<u8 as ::arbitrary::Arbitrary<'a>>::arbitrary(u)?))
+        }
+        fn size_hint(depth: usize) -> (usize, rt::Option<usize>) {
+            <u8 as ::arbitrary::Arbitrary<'a>>::size_hint(depth)
+        }
+    }
+    impl State {
+        /// From a raw wire value; never fails.
+        pub const fn from_raw(raw: u8) -> Self {
+            match raw {
+                0xA5u8 => Self::Read,
+                0x5Au8 => Self::Write,
+                other => Self::Unknown(other),
+            }
+        }
+        /// The raw wire value.
+        pub const fn raw(self) -> u8 {
+            match self {
+                Self::Read => 0xA5u8,
+                Self::Write => 0x5Au8,
+                Self::Unknown(raw) => raw,
+            }
+        }
+        /// The spec's name of this value, `None` for `Unknown`.
+        pub const fn name(self) -> rt::Option<&'static str> {
+            match self {
+                Self::Read => rt::Some("read"),
+                Self::Write => rt::Some("write"),
+                Self::Unknown(_) => rt::None,
+            }
+        }
+    }
+    /// A reply's status byte, after the register it answers.
+    ///
+    /// Open: a value this revision does not list decodes as `Unknown(raw)` and re-encodes unchanged.
+    #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+    #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
+    pub enum Status {
+        /// The register was read or written (0)
+        Ok,
+        /// The register was not read or written (128)
+        Error,
+        /// A value this revision of the document does not list.
+        Unknown(u8),
+    }
+    /// Not derived: an arbitrary value goes through `from_raw`, so `Unknown` never holds
+    /// a listed value (which would encode as that value and decode as its variant).
+    #[cfg(feature = "arbitrary")]
+    impl<'a> ::arbitrary::Arbitrary<'a> for Status {
+        fn arbitrary(
+            u: &mut ::arbitrary::Unstructured<'a>,
+        ) -> ::arbitrary::Result<Self> {
+            rt::Ok(Self::from_raw(<u8 as ::arbitrary::Arbitrary<'a>>::arbitrary(u)?))
+        }
+        fn size_hint(depth: usize) -> (usize, rt::Option<usize>) {
+            <u8 as ::arbitrary::Arbitrary<'a>>::size_hint(depth)
+        }
+    }
+    impl Status {
+        /// From a raw wire value; never fails.
+        pub const fn from_raw(raw: u8) -> Self {
+            match raw {
+                0x0u8 => Self::Ok,
+                0x80u8 => Self::Error,
+                other => Self::Unknown(other),
+            }
+        }
+        /// The raw wire value.
+        pub const fn raw(self) -> u8 {
+            match self {
+                Self::Ok => 0x0u8,
+                Self::Error => 0x80u8,
+                Self::Unknown(raw) => raw,
+            }
+        }
+        /// The spec's name of this value, `None` for `Unknown`.
+        pub const fn name(self) -> rt::Option<&'static str> {
+            match self {
+                Self::Ok => rt::Some("ok"),
+                Self::Error => rt::Some("error"),
+                Self::Unknown(_) => rt::None,
+            }
+        }
+    }
     ///A request (command), host to device.
     #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
     #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
@@ -298,28 +402,22 @@ pub mod jbd_bms {
             rt::encode_address(address, &FRAME)?;
             let out = rt::frame_mut::<7>(buf, &[])?;
             let len = match *self {
-                Self::ReadBasicInfo(
-                    request::ReadBasicInfo { state_or_register: v_state_or_register },
-                ) => {
+                Self::ReadBasicInfo(request::ReadBasicInfo { state: v_state }) => {
                     let out = rt::head(out, &[0xDD]);
                     out[2..4].copy_from_slice(&[0x03, 0x00]);
-                    out[1] = v_state_or_register;
+                    out[1] = v_state.raw();
                     out.len()
                 }
-                Self::ReadCellVoltages(
-                    request::ReadCellVoltages { state_or_register: v_state_or_register },
-                ) => {
+                Self::ReadCellVoltages(request::ReadCellVoltages { state: v_state }) => {
                     let out = rt::head(out, &[0xDD]);
                     out[2..4].copy_from_slice(&[0x04, 0x00]);
-                    out[1] = v_state_or_register;
+                    out[1] = v_state.raw();
                     out.len()
                 }
-                Self::ReadVersion(
-                    request::ReadVersion { state_or_register: v_state_or_register },
-                ) => {
+                Self::ReadVersion(request::ReadVersion { state: v_state }) => {
                     let out = rt::head(out, &[0xDD]);
                     out[2..4].copy_from_slice(&[0x05, 0x00]);
-                    out[1] = v_state_or_register;
+                    out[1] = v_state.raw();
                     out.len()
                 }
             };
@@ -330,6 +428,7 @@ pub mod jbd_bms {
         /// checksum and address, then its code, constants, repeated fields, the ranges the
         /// spec gives its fields and the command's broadcast rule.
         pub fn decode(frame: &[u8]) -> rt::Result<Decoded<Request>, rt::DecodeError> {
+            rt::check_sync(frame, 7, 0, &[0xDD])?;
             let address = rt::check_frame(
                 frame,
                 7,
@@ -350,7 +449,7 @@ pub mod jbd_bms {
                     let frame = rt::fixed::<7>(frame, &request::ReadBasicInfo::DESC)?;
                     rt::Ok(
                         Self::ReadBasicInfo(request::ReadBasicInfo {
-                            state_or_register: frame[1],
+                            state: State::from_raw(frame[1]),
                         }),
                     )
                 }
@@ -358,7 +457,7 @@ pub mod jbd_bms {
                     let frame = rt::fixed::<7>(frame, &request::ReadCellVoltages::DESC)?;
                     rt::Ok(
                         Self::ReadCellVoltages(request::ReadCellVoltages {
-                            state_or_register: frame[1],
+                            state: State::from_raw(frame[1]),
                         }),
                     )
                 }
@@ -366,7 +465,7 @@ pub mod jbd_bms {
                     let frame = rt::fixed::<7>(frame, &request::ReadVersion::DESC)?;
                     rt::Ok(
                         Self::ReadVersion(request::ReadVersion {
-                            state_or_register: frame[1],
+                            state: State::from_raw(frame[1]),
                         }),
                     )
                 }
@@ -383,17 +482,17 @@ pub mod jbd_bms {
             let message = match name {
                 "read_basic_info" => {
                     Self::ReadBasicInfo(request::ReadBasicInfo {
-                        state_or_register: rt::get(&mut field, "state_or_register")?,
+                        state: State::from_raw(rt::get(&mut field, "state")?),
                     })
                 }
                 "read_cell_voltages" => {
                     Self::ReadCellVoltages(request::ReadCellVoltages {
-                        state_or_register: rt::get(&mut field, "state_or_register")?,
+                        state: State::from_raw(rt::get(&mut field, "state")?),
                     })
                 }
                 "read_version" => {
                     Self::ReadVersion(request::ReadVersion {
-                        state_or_register: rt::get(&mut field, "state_or_register")?,
+                        state: State::from_raw(rt::get(&mut field, "state")?),
                     })
                 }
                 _ => return rt::Err(rt::FieldError::UnknownMessage),
@@ -435,8 +534,8 @@ pub mod jbd_bms {
         /// responses it may get (bit `i`: row `i` of `Response::MESSAGES`), in spec order.
         const COMMANDS: [(rt::CommandKind, bool, bool, u64); 3] = [
             (rt::Getter, false, false, 0x9),
-            (rt::Getter, false, false, 0xa),
-            (rt::Getter, false, false, 0xc),
+            (rt::Getter, false, false, 0x12),
+            (rt::Getter, false, false, 0x24),
         ];
         /// What the spec says of the command beyond its frame: its kind, the broadcast
         /// address, its reply, whether a master may send it again.
@@ -501,15 +600,19 @@ pub mod jbd_bms {
         BasicInfo(response::BasicInfo),
         CellVoltages(response::CellVoltages),
         Version(response::Version),
-        Error(response::Error),
+        BasicInfoError(response::BasicInfoError),
+        CellVoltagesError(response::CellVoltagesError),
+        VersionError(response::VersionError),
     }
     impl Response {
         /// Each message's spec name, code and frame length, in spec order.
-        const MESSAGES: [(&'static str, &'static [u8], usize); 4] = [
-            ("basic_info", &[0x00], 30),
-            ("cell_voltages", &[0x00], 7),
-            ("version", &[0x00], 7),
-            ("error", &[0x80], 7),
+        const MESSAGES: [(&'static str, &'static [u8], usize); 6] = [
+            ("basic_info", &[0x03], 30),
+            ("cell_voltages", &[0x04], 7),
+            ("version", &[0x05], 7),
+            ("basic_info_error", &[0x03], 7),
+            ("cell_voltages_error", &[0x04], 7),
+            ("version_error", &[0x05], 7),
         ];
         /// This message's row in [`Self::MESSAGES`].
         const fn index(&self) -> usize {
@@ -517,7 +620,9 @@ pub mod jbd_bms {
                 Self::BasicInfo(_) => 0,
                 Self::CellVoltages(_) => 1,
                 Self::Version(_) => 2,
-                Self::Error(_) => 3,
+                Self::BasicInfoError(_) => 3,
+                Self::CellVoltagesError(_) => 4,
+                Self::VersionError(_) => 5,
             }
         }
         /// The spec's snake_case name of this message.
@@ -552,7 +657,9 @@ pub mod jbd_bms {
                 Self::BasicInfo(m) => m.visit(f),
                 Self::CellVoltages(m) => m.visit(f),
                 Self::Version(m) => m.visit(f),
-                Self::Error(m) => m.visit(f),
+                Self::BasicInfoError(m) => m.visit(f),
+                Self::CellVoltagesError(m) => m.visit(f),
+                Self::VersionError(m) => m.visit(f),
             }
         }
         /// Encodes the frame for `address` into `buf`; returns the frame length. Refuses what
@@ -563,7 +670,7 @@ pub mod jbd_bms {
             let len = match *self {
                 Self::BasicInfo(
                     response::BasicInfo {
-                        state_or_register: v_state_or_register,
+                        status: v_status,
                         total_voltage: v_total_voltage,
                         current: v_current,
                         remaining_capacity: v_remaining_capacity,
@@ -584,10 +691,9 @@ pub mod jbd_bms {
                     REPEAT_BASIC_INFO
                         .encode_in_range(v_temperatures.as_slice(), 0, 65535)?;
                     let frame_len = REPEAT_BASIC_INFO.encode_len(v_temperatures.len())?;
-                    let out = rt::frame_mut_len(buf, frame_len, &[0xDD])?;
+                    let out = rt::frame_mut_len(buf, frame_len, &[0xDD, 0x03])?;
                     rt::put_length(out, 3, 1, false, true, -7)?;
-                    out[2] = 0x00;
-                    out[1] = v_state_or_register;
+                    out[2] = v_status.raw();
                     out[4..6].copy_from_slice(&v_total_voltage.raw().to_be_bytes());
                     out[6..8].copy_from_slice(&v_current.raw().to_be_bytes());
                     out[8..10]
@@ -618,16 +724,15 @@ pub mod jbd_bms {
                 }
                 Self::CellVoltages(
                     response::CellVoltages {
-                        state_or_register: v_state_or_register,
+                        status: v_status,
                         cell_voltages: v_cell_voltages,
                     },
                 ) => {
                     let frame_len = REPEAT_CELL_VOLTAGES
                         .encode_len(v_cell_voltages.len())?;
-                    let out = rt::frame_mut_len(buf, frame_len, &[0xDD])?;
+                    let out = rt::frame_mut_len(buf, frame_len, &[0xDD, 0x04])?;
                     rt::put_length(out, 3, 1, false, true, -7)?;
-                    out[2] = 0x00;
-                    out[1] = v_state_or_register;
+                    out[2] = v_status.raw();
                     rt::write_elements(
                         v_cell_voltages.as_slice(),
                         2,
@@ -637,25 +742,33 @@ pub mod jbd_bms {
                     out.len()
                 }
                 Self::Version(
-                    response::Version {
-                        state_or_register: v_state_or_register,
-                        version: v_version,
-                    },
+                    response::Version { status: v_status, version: v_version },
                 ) => {
                     let frame_len = REPEAT_VERSION.encode_len(v_version.len())?;
-                    let out = rt::frame_mut_len(buf, frame_len, &[0xDD])?;
+                    let out = rt::frame_mut_len(buf, frame_len, &[0xDD, 0x05])?;
                     rt::put_length(out, 3, 1, false, true, -7)?;
-                    out[2] = 0x00;
-                    out[1] = v_state_or_register;
+                    out[2] = v_status.raw();
                     rt::write_elements(v_version.as_slice(), 1, false, &mut out[4..]);
                     out.len()
                 }
-                Self::Error(
-                    response::Error { state_or_register: v_state_or_register },
+                Self::BasicInfoError(response::BasicInfoError { status: v_status }) => {
+                    let out = rt::frame_mut::<7>(buf, &[0xDD, 0x03])?;
+                    out[3] = 0x00;
+                    out[2] = v_status.raw();
+                    out.len()
+                }
+                Self::CellVoltagesError(
+                    response::CellVoltagesError { status: v_status },
                 ) => {
-                    let out = rt::frame_mut::<7>(buf, &[0xDD])?;
-                    out[2..4].copy_from_slice(&[0x80, 0x00]);
-                    out[1] = v_state_or_register;
+                    let out = rt::frame_mut::<7>(buf, &[0xDD, 0x04])?;
+                    out[3] = 0x00;
+                    out[2] = v_status.raw();
+                    out.len()
+                }
+                Self::VersionError(response::VersionError { status: v_status }) => {
+                    let out = rt::frame_mut::<7>(buf, &[0xDD, 0x05])?;
+                    out[3] = 0x00;
+                    out[2] = v_status.raw();
                     out.len()
                 }
             };
@@ -688,6 +801,7 @@ pub mod jbd_bms {
             frame: &[u8],
             request: rt::Option<&Request>,
         ) -> rt::Result<Decoded<Response>, rt::DecodeError> {
+            rt::check_sync(frame, 71, 0, &[0xDD])?;
             let address = rt::check_frame(
                 frame,
                 7,
@@ -711,13 +825,10 @@ pub mod jbd_bms {
             frame: &[u8],
             request: rt::Option<&Request>,
         ) -> rt::DecodeResult<Self> {
-            let asked: u64 = request.map_or(!0, Request::replies);
-            match rt::code(frame, 2, 1) {
-                0x00 => {
-                    let mut g = rt::Group::new(frame, 0x00, request.map(Request::name));
-                    g.ambiguous_split(
-                        asked & 1 != 0,
-                        &response::BasicInfo::DESC,
+            match rt::code(frame, 1, 1) {
+                0x03 => {
+                    let mut g = rt::Group::new(frame, 0x03, request.map(Request::name));
+                    g.attempt_split(
                         &REPEAT_BASIC_INFO,
                         |frame: &[u8; 27], elements: &[u8], _: usize| {
                             rt::in_range(
@@ -729,7 +840,7 @@ pub mod jbd_bms {
                             )?;
                             rt::Ok(
                                 Self::BasicInfo(response::BasicInfo {
-                                    state_or_register: frame[1],
+                                    status: Status::from_raw(frame[2]),
                                     total_voltage: Centivolts::from_raw(
                                         u16::from_be_bytes([frame[4], frame[5]]),
                                     ),
@@ -757,45 +868,62 @@ pub mod jbd_bms {
                             )
                         },
                     );
-                    g.ambiguous_split(
-                        asked >> 1 & 1 != 0,
-                        &response::CellVoltages::DESC,
+                    g.attempt(|frame: &[u8; 7]| {
+                        rt::Ok(
+                            Self::BasicInfoError(response::BasicInfoError {
+                                status: Status::from_raw(frame[2]),
+                            }),
+                        )
+                    });
+                    g.end(&response::BasicInfo::DESC)
+                }
+                0x04 => {
+                    let mut g = rt::Group::new(frame, 0x04, request.map(Request::name));
+                    g.attempt_split(
                         &REPEAT_CELL_VOLTAGES,
                         |frame: &[u8; 4], elements: &[u8], _: usize| {
                             rt::Ok(
                                 Self::CellVoltages(response::CellVoltages {
-                                    state_or_register: frame[1],
+                                    status: Status::from_raw(frame[2]),
                                     cell_voltages: REPEAT_CELL_VOLTAGES
                                         .elements::<u16, 32>(elements, false, false)?,
                                 }),
                             )
                         },
                     );
-                    g.ambiguous_split(
-                        asked >> 2 & 1 != 0,
-                        &response::Version::DESC,
+                    g.attempt(|frame: &[u8; 7]| {
+                        rt::Ok(
+                            Self::CellVoltagesError(response::CellVoltagesError {
+                                status: Status::from_raw(frame[2]),
+                            }),
+                        )
+                    });
+                    g.end(&response::CellVoltages::DESC)
+                }
+                0x05 => {
+                    let mut g = rt::Group::new(frame, 0x05, request.map(Request::name));
+                    g.attempt_split(
                         &REPEAT_VERSION,
                         |frame: &[u8; 4], elements: &[u8], _: usize| {
                             rt::Ok(
                                 Self::Version(response::Version {
-                                    state_or_register: frame[1],
+                                    status: Status::from_raw(frame[2]),
                                     version: REPEAT_VERSION
                                         .elements::<u8, 32>(elements, false, false)?,
                                 }),
                             )
                         },
                     );
-                    g.end(&response::BasicInfo::DESC)
+                    g.attempt(|frame: &[u8; 7]| {
+                        rt::Ok(
+                            Self::VersionError(response::VersionError {
+                                status: Status::from_raw(frame[2]),
+                            }),
+                        )
+                    });
+                    g.end(&response::Version::DESC)
                 }
-                0x80 => {
-                    let frame = rt::fixed::<7>(frame, &response::Error::DESC)?;
-                    rt::Ok(
-                        Self::Error(response::Error {
-                            state_or_register: frame[1],
-                        }),
-                    )
-                }
-                _ => rt::Err(rt::unknown_code(frame, 2, 1, 3, true)),
+                _ => rt::Err(rt::unknown_code(frame, 1, 1, 3, true)),
             }
         }
         /// The message called `name` in the spec, from each field's raw wire value by its spec
@@ -808,7 +936,7 @@ pub mod jbd_bms {
             let message = match name {
                 "basic_info" => {
                     Self::BasicInfo(response::BasicInfo {
-                        state_or_register: rt::get(&mut field, "state_or_register")?,
+                        status: Status::from_raw(rt::get(&mut field, "status")?),
                         total_voltage: Centivolts::from_raw(
                             rt::get(&mut field, "total_voltage")?,
                         ),
@@ -836,7 +964,7 @@ pub mod jbd_bms {
                 }
                 "cell_voltages" => {
                     Self::CellVoltages(response::CellVoltages {
-                        state_or_register: rt::get(&mut field, "state_or_register")?,
+                        status: Status::from_raw(rt::get(&mut field, "status")?),
                         cell_voltages: rt::list::<
                             u16,
                             32,
@@ -845,13 +973,23 @@ pub mod jbd_bms {
                 }
                 "version" => {
                     Self::Version(response::Version {
-                        state_or_register: rt::get(&mut field, "state_or_register")?,
+                        status: Status::from_raw(rt::get(&mut field, "status")?),
                         version: rt::list_text::<32>(&mut field, "version")?,
                     })
                 }
-                "error" => {
-                    Self::Error(response::Error {
-                        state_or_register: rt::get(&mut field, "state_or_register")?,
+                "basic_info_error" => {
+                    Self::BasicInfoError(response::BasicInfoError {
+                        status: Status::from_raw(rt::get(&mut field, "status")?),
+                    })
+                }
+                "cell_voltages_error" => {
+                    Self::CellVoltagesError(response::CellVoltagesError {
+                        status: Status::from_raw(rt::get(&mut field, "status")?),
+                    })
+                }
+                "version_error" => {
+                    Self::VersionError(response::VersionError {
+                        status: Status::from_raw(rt::get(&mut field, "status")?),
                     })
                 }
                 _ => return rt::Err(rt::FieldError::UnknownMessage),
@@ -899,7 +1037,7 @@ pub mod jbd_bms {
     pub enum ResponseView<'a> {
         /// [`response::BasicInfo`], read from the frame.
         BasicInfo {
-            state_or_register: u8,
+            status: Status,
             total_voltage: Centivolts,
             current: Centiamps,
             remaining_capacity: CentiampHours,
@@ -916,11 +1054,15 @@ pub mod jbd_bms {
             temperatures: rt::ListView<'a, DeciKelvin>,
         },
         /// [`response::CellVoltages`], read from the frame.
-        CellVoltages { state_or_register: u8, cell_voltages: rt::ListView<'a, u16> },
+        CellVoltages { status: Status, cell_voltages: rt::ListView<'a, u16> },
         /// [`response::Version`], read from the frame.
-        Version { state_or_register: u8, version: rt::ListView<'a, u8> },
-        /// [`response::Error`], read from the frame.
-        Error { state_or_register: u8 },
+        Version { status: Status, version: rt::ListView<'a, u8> },
+        /// [`response::BasicInfoError`], read from the frame.
+        BasicInfoError { status: Status },
+        /// [`response::CellVoltagesError`], read from the frame.
+        CellVoltagesError { status: Status },
+        /// [`response::VersionError`], read from the frame.
+        VersionError { status: Status },
     }
     impl<'a> ResponseView<'a> {
         /// Decodes one whole frame: refuses one longer than the longest, checks its start byte,
@@ -949,6 +1091,7 @@ pub mod jbd_bms {
             frame: &'a [u8],
             request: rt::Option<&Request>,
         ) -> rt::Result<Decoded<Self>, rt::DecodeError> {
+            rt::check_sync(frame, 71, 0, &[0xDD])?;
             let address = rt::check_frame(
                 frame,
                 7,
@@ -972,13 +1115,10 @@ pub mod jbd_bms {
             frame: &'a [u8],
             request: rt::Option<&Request>,
         ) -> rt::DecodeResult<Self> {
-            let asked: u64 = request.map_or(!0, Request::replies);
-            match rt::code(frame, 2, 1) {
-                0x00 => {
-                    let mut g = rt::Group::new(frame, 0x00, request.map(Request::name));
-                    g.ambiguous_split(
-                        asked & 1 != 0,
-                        &response::BasicInfo::DESC,
+            match rt::code(frame, 1, 1) {
+                0x03 => {
+                    let mut g = rt::Group::new(frame, 0x03, request.map(Request::name));
+                    g.attempt_split(
                         &REPEAT_BASIC_INFO,
                         |frame: &'a [u8; 27], elements: &'a [u8], _: usize| {
                             rt::in_range(
@@ -989,7 +1129,7 @@ pub mod jbd_bms {
                                 100,
                             )?;
                             rt::Ok(Self::BasicInfo {
-                                state_or_register: frame[1],
+                                status: Status::from_raw(frame[2]),
                                 total_voltage: Centivolts::from_raw(
                                     u16::from_be_bytes([frame[4], frame[5]]),
                                 ),
@@ -1016,39 +1156,52 @@ pub mod jbd_bms {
                             })
                         },
                     );
-                    g.ambiguous_split(
-                        asked >> 1 & 1 != 0,
-                        &response::CellVoltages::DESC,
+                    g.attempt(|frame: &[u8; 7]| {
+                        rt::Ok(Self::BasicInfoError {
+                            status: Status::from_raw(frame[2]),
+                        })
+                    });
+                    g.end(&response::BasicInfo::DESC)
+                }
+                0x04 => {
+                    let mut g = rt::Group::new(frame, 0x04, request.map(Request::name));
+                    g.attempt_split(
                         &REPEAT_CELL_VOLTAGES,
                         |frame: &'a [u8; 4], elements: &'a [u8], _: usize| {
                             rt::Ok(Self::CellVoltages {
-                                state_or_register: frame[1],
+                                status: Status::from_raw(frame[2]),
                                 cell_voltages: REPEAT_CELL_VOLTAGES
                                     .view::<u16, 32>(elements, false, false)?,
                             })
                         },
                     );
-                    g.ambiguous_split(
-                        asked >> 2 & 1 != 0,
-                        &response::Version::DESC,
+                    g.attempt(|frame: &[u8; 7]| {
+                        rt::Ok(Self::CellVoltagesError {
+                            status: Status::from_raw(frame[2]),
+                        })
+                    });
+                    g.end(&response::CellVoltages::DESC)
+                }
+                0x05 => {
+                    let mut g = rt::Group::new(frame, 0x05, request.map(Request::name));
+                    g.attempt_split(
                         &REPEAT_VERSION,
                         |frame: &'a [u8; 4], elements: &'a [u8], _: usize| {
                             rt::Ok(Self::Version {
-                                state_or_register: frame[1],
+                                status: Status::from_raw(frame[2]),
                                 version: REPEAT_VERSION
                                     .view::<u8, 32>(elements, false, false)?,
                             })
                         },
                     );
-                    g.end(&response::BasicInfo::DESC)
+                    g.attempt(|frame: &[u8; 7]| {
+                        rt::Ok(Self::VersionError {
+                            status: Status::from_raw(frame[2]),
+                        })
+                    });
+                    g.end(&response::Version::DESC)
                 }
-                0x80 => {
-                    let frame = rt::fixed::<7>(frame, &response::Error::DESC)?;
-                    rt::Ok(Self::Error {
-                        state_or_register: frame[1],
-                    })
-                }
-                _ => rt::Err(rt::unknown_code(frame, 2, 1, 3, true)),
+                _ => rt::Err(rt::unknown_code(frame, 1, 1, 3, true)),
             }
         }
         /// This message's row in the owned type's `MESSAGES`.
@@ -1057,7 +1210,9 @@ pub mod jbd_bms {
                 Self::BasicInfo { .. } => 0,
                 Self::CellVoltages { .. } => 1,
                 Self::Version { .. } => 2,
-                Self::Error { .. } => 3,
+                Self::BasicInfoError { .. } => 3,
+                Self::CellVoltagesError { .. } => 4,
+                Self::VersionError { .. } => 5,
             }
         }
         /// The spec's snake_case name of this message.
@@ -1068,7 +1223,7 @@ pub mod jbd_bms {
         pub fn to_owned(self) -> Response {
             match self {
                 Self::BasicInfo {
-                    state_or_register,
+                    status,
                     total_voltage,
                     current,
                     remaining_capacity,
@@ -1085,7 +1240,7 @@ pub mod jbd_bms {
                     temperatures,
                 } => {
                     Response::BasicInfo(response::BasicInfo {
-                        state_or_register,
+                        status,
                         total_voltage,
                         current,
                         remaining_capacity,
@@ -1102,22 +1257,28 @@ pub mod jbd_bms {
                         temperatures: temperatures.to_repeated(),
                     })
                 }
-                Self::CellVoltages { state_or_register, cell_voltages } => {
+                Self::CellVoltages { status, cell_voltages } => {
                     Response::CellVoltages(response::CellVoltages {
-                        state_or_register,
+                        status,
                         cell_voltages: cell_voltages.to_repeated(),
                     })
                 }
-                Self::Version { state_or_register, version } => {
+                Self::Version { status, version } => {
                     Response::Version(response::Version {
-                        state_or_register,
+                        status,
                         version: version.to_repeated(),
                     })
                 }
-                Self::Error { state_or_register } => {
-                    Response::Error(response::Error {
-                        state_or_register,
+                Self::BasicInfoError { status } => {
+                    Response::BasicInfoError(response::BasicInfoError { status })
+                }
+                Self::CellVoltagesError { status } => {
+                    Response::CellVoltagesError(response::CellVoltagesError {
+                        status,
                     })
+                }
+                Self::VersionError { status } => {
+                    Response::VersionError(response::VersionError { status })
                 }
             }
         }
@@ -1166,7 +1327,10 @@ pub mod jbd_bms {
             Response::answers(self, request)
         }
         fn is_nak(&self) -> bool {
-            matches!(self, Response::Error(_))
+            matches!(
+                self, Response::BasicInfoError(_) | Response::CellVoltagesError(_) |
+                Response::VersionError(_)
+            )
         }
         #[inline]
         fn decode_as_reply(
@@ -1182,6 +1346,7 @@ pub mod jbd_bms {
         const FRAME_LENGTHS: &'static [usize] = &[7];
         type Span = [u8; 0];
         const EMPTY_SPAN: [u8; 0] = [];
+        const REPLY_BY_REQUEST: bool = false;
         const VIEWS: bool = true;
         #[inline]
         fn candidates(head: &[u8]) -> rt::Candidates {
@@ -1191,16 +1356,32 @@ pub mod jbd_bms {
                     responses: 0,
                 };
             }
-            static TABLE: [u8; 528] = *b"\0\0\0\x10\x10\x10\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0 \0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\x01\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\x01\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0";
-            let mask = match head.get(2) {
-                rt::Some(&b) => {
-                    let i = 256 + TABLE[b as usize] as usize;
-                    let mut m = [0; 16];
-                    m.copy_from_slice(&TABLE[i..i + 16]);
-                    u128::from_le_bytes(m)
-                }
-                rt::None => 0x10000000000000001,
-            };
+            let mask: u128 = ({
+                static TABLE: [u8; 528] = *b"\0\0\0\x10\x10\x10\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\x01\0\0\0\0\0\0\0\x01\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0";
+                let mask = match head.get(2) {
+                    rt::Some(&b) => {
+                        let i = 256 + TABLE[b as usize] as usize;
+                        let mut m = [0; 16];
+                        m.copy_from_slice(&TABLE[i..i + 16]);
+                        u128::from_le_bytes(m)
+                    }
+                    rt::None => 0x10000000000000001,
+                };
+                mask
+            } & (u64::MAX as u128))
+                | ({
+                    static TABLE: [u8; 528] = *b"\0\0\0\x10\x10\x10\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\x01\0\0\0\0\0\0\0\x01\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0";
+                    let mask = match head.get(1) {
+                        rt::Some(&b) => {
+                            let i = 256 + TABLE[b as usize] as usize;
+                            let mut m = [0; 16];
+                            m.copy_from_slice(&TABLE[i..i + 16]);
+                            u128::from_le_bytes(m)
+                        }
+                        rt::None => 0x10000000000000001,
+                    };
+                    mask
+                } & !(u64::MAX as u128));
             rt::Candidates {
                 requests: mask as u64,
                 responses: (mask >> 64) as u64,
@@ -1218,8 +1399,8 @@ pub mod jbd_bms {
                     &[
                         (
                             rt::Fixed {
-                                code_at: 2,
-                                code: &[0x00],
+                                code_at: 1,
+                                code: &[0x03],
                                 lead_at: 4,
                                 lead: &[],
                             },
@@ -1228,8 +1409,8 @@ pub mod jbd_bms {
                         ),
                         (
                             rt::Fixed {
-                                code_at: 2,
-                                code: &[0x00],
+                                code_at: 1,
+                                code: &[0x04],
                                 lead_at: 4,
                                 lead: &[],
                             },
@@ -1238,8 +1419,8 @@ pub mod jbd_bms {
                         ),
                         (
                             rt::Fixed {
-                                code_at: 2,
-                                code: &[0x00],
+                                code_at: 1,
+                                code: &[0x05],
                                 lead_at: 4,
                                 lead: &[],
                             },
@@ -1289,9 +1470,9 @@ pub mod jbd_bms {
         pub const CODE: &'static [u8] = &[0x03];
         pub const LEN: usize = 7;
         pub const DESC: rt::MessageDesc = rt::desc(Self::NAME, 0x03, 1, &[7]);
-        pub const STATE_OR_REGISTER: rt::Range<usize> = 1..2;
+        pub const STATE: rt::Range<usize> = 1..2;
         pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
-            f("state_or_register", rt::Int(self.state_or_register as i64));
+            f("state", rt::Int(self.state.raw() as i64));
         }
         pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             Request::ReadBasicInfo(*self).encode(address, buf)
@@ -1302,9 +1483,9 @@ pub mod jbd_bms {
         pub const CODE: &'static [u8] = &[0x04];
         pub const LEN: usize = 7;
         pub const DESC: rt::MessageDesc = rt::desc(Self::NAME, 0x04, 1, &[7]);
-        pub const STATE_OR_REGISTER: rt::Range<usize> = 1..2;
+        pub const STATE: rt::Range<usize> = 1..2;
         pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
-            f("state_or_register", rt::Int(self.state_or_register as i64));
+            f("state", rt::Int(self.state.raw() as i64));
         }
         pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             Request::ReadCellVoltages(*self).encode(address, buf)
@@ -1315,9 +1496,9 @@ pub mod jbd_bms {
         pub const CODE: &'static [u8] = &[0x05];
         pub const LEN: usize = 7;
         pub const DESC: rt::MessageDesc = rt::desc(Self::NAME, 0x05, 1, &[7]);
-        pub const STATE_OR_REGISTER: rt::Range<usize> = 1..2;
+        pub const STATE: rt::Range<usize> = 1..2;
         pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
-            f("state_or_register", rt::Int(self.state_or_register as i64));
+            f("state", rt::Int(self.state.raw() as i64));
         }
         pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             Request::ReadVersion(*self).encode(address, buf)
@@ -1325,11 +1506,11 @@ pub mod jbd_bms {
     }
     impl response::BasicInfo {
         pub const NAME: &'static str = "basic_info";
-        pub const CODE: &'static [u8] = &[0x00];
+        pub const CODE: &'static [u8] = &[0x03];
         pub const MIN_LEN: usize = 30;
         pub const MAX_LEN: usize = 46;
-        pub const DESC: rt::MessageDesc = rt::desc(Self::NAME, 0x00, 1, &[7, 30]);
-        pub const STATE_OR_REGISTER: rt::Range<usize> = 1..2;
+        pub const DESC: rt::MessageDesc = rt::desc(Self::NAME, 0x03, 1, &[7, 30]);
+        pub const STATUS: rt::Range<usize> = 2..3;
         pub const TOTAL_VOLTAGE: rt::Range<usize> = 4..6;
         pub const CURRENT: rt::Range<usize> = 6..8;
         pub const REMAINING_CAPACITY: rt::Range<usize> = 8..10;
@@ -1349,7 +1530,7 @@ pub mod jbd_bms {
         );
         pub const SOC_DESC: rt::FieldDesc = rt::field(Self::NAME, "soc");
         pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
-            f("state_or_register", rt::Int(self.state_or_register as i64));
+            f("status", rt::Int(self.status.raw() as i64));
             f("total_voltage", rt::Int(self.total_voltage.raw() as i64));
             f("current", rt::Int(self.current.raw() as i64));
             f("remaining_capacity", rt::Int(self.remaining_capacity.raw() as i64));
@@ -1371,17 +1552,17 @@ pub mod jbd_bms {
     }
     impl response::CellVoltages {
         pub const NAME: &'static str = "cell_voltages";
-        pub const CODE: &'static [u8] = &[0x00];
+        pub const CODE: &'static [u8] = &[0x04];
         pub const MIN_LEN: usize = 9;
         pub const MAX_LEN: usize = 71;
-        pub const DESC: rt::MessageDesc = rt::desc(Self::NAME, 0x00, 1, &[7, 30]);
-        pub const STATE_OR_REGISTER: rt::Range<usize> = 1..2;
+        pub const DESC: rt::MessageDesc = rt::desc(Self::NAME, 0x04, 1, &[7]);
+        pub const STATUS: rt::Range<usize> = 2..3;
         pub const CELL_VOLTAGES_DESC: rt::FieldDesc = rt::field(
             Self::NAME,
             "cell_voltages",
         );
         pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
-            f("state_or_register", rt::Int(self.state_or_register as i64));
+            f("status", rt::Int(self.status.raw() as i64));
             f("cell_voltages", rt::List(self.cell_voltages.elements()));
         }
         pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
@@ -1390,31 +1571,57 @@ pub mod jbd_bms {
     }
     impl response::Version {
         pub const NAME: &'static str = "version";
-        pub const CODE: &'static [u8] = &[0x00];
+        pub const CODE: &'static [u8] = &[0x05];
         pub const MIN_LEN: usize = 8;
         pub const MAX_LEN: usize = 39;
-        pub const DESC: rt::MessageDesc = rt::desc(Self::NAME, 0x00, 1, &[7, 30]);
-        pub const STATE_OR_REGISTER: rt::Range<usize> = 1..2;
+        pub const DESC: rt::MessageDesc = rt::desc(Self::NAME, 0x05, 1, &[7]);
+        pub const STATUS: rt::Range<usize> = 2..3;
         pub const VERSION_DESC: rt::FieldDesc = rt::field(Self::NAME, "version");
         pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
-            f("state_or_register", rt::Int(self.state_or_register as i64));
+            f("status", rt::Int(self.status.raw() as i64));
             f("version", rt::Text(self.version.as_slice()));
         }
         pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             Response::Version(*self).encode(address, buf)
         }
     }
-    impl response::Error {
-        pub const NAME: &'static str = "error";
-        pub const CODE: &'static [u8] = &[0x80];
+    impl response::BasicInfoError {
+        pub const NAME: &'static str = "basic_info_error";
+        pub const CODE: &'static [u8] = &[0x03];
         pub const LEN: usize = 7;
-        pub const DESC: rt::MessageDesc = rt::desc(Self::NAME, 0x80, 1, &[7]);
-        pub const STATE_OR_REGISTER: rt::Range<usize> = 1..2;
+        pub const DESC: rt::MessageDesc = rt::desc(Self::NAME, 0x03, 1, &[7, 30]);
+        pub const STATUS: rt::Range<usize> = 2..3;
         pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
-            f("state_or_register", rt::Int(self.state_or_register as i64));
+            f("status", rt::Int(self.status.raw() as i64));
         }
         pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
-            Response::Error(*self).encode(address, buf)
+            Response::BasicInfoError(*self).encode(address, buf)
+        }
+    }
+    impl response::CellVoltagesError {
+        pub const NAME: &'static str = "cell_voltages_error";
+        pub const CODE: &'static [u8] = &[0x04];
+        pub const LEN: usize = 7;
+        pub const DESC: rt::MessageDesc = rt::desc(Self::NAME, 0x04, 1, &[7]);
+        pub const STATUS: rt::Range<usize> = 2..3;
+        pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
+            f("status", rt::Int(self.status.raw() as i64));
+        }
+        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            Response::CellVoltagesError(*self).encode(address, buf)
+        }
+    }
+    impl response::VersionError {
+        pub const NAME: &'static str = "version_error";
+        pub const CODE: &'static [u8] = &[0x05];
+        pub const LEN: usize = 7;
+        pub const DESC: rt::MessageDesc = rt::desc(Self::NAME, 0x05, 1, &[7]);
+        pub const STATUS: rt::Range<usize> = 2..3;
+        pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
+            f("status", rt::Int(self.status.raw() as i64));
+        }
+        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            Response::VersionError(*self).encode(address, buf)
         }
     }
     /// Each request as a struct of its own; its constants (`DESC`, which names it as
@@ -1427,8 +1634,8 @@ pub mod jbd_bms {
         #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]
         #[repr(align(4))]
         pub struct ReadBasicInfo {
-            /// A request's state (0xA5 read, 0x5A write); a reply's register.
-            pub state_or_register: u8,
+            /// Read (0xA5) or write (0x5A).
+            pub state: super::State,
         }
         /// §3 Read cell voltages (04) (code `0x04`, 7 bytes).
         #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
@@ -1436,8 +1643,8 @@ pub mod jbd_bms {
         #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]
         #[repr(align(4))]
         pub struct ReadCellVoltages {
-            /// A request's state (0xA5 read, 0x5A write); a reply's register.
-            pub state_or_register: u8,
+            /// Read (0xA5) or write (0x5A).
+            pub state: super::State,
         }
         /// §3 Read the hardware version (05) (code `0x05`, 7 bytes).
         #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
@@ -1445,20 +1652,20 @@ pub mod jbd_bms {
         #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]
         #[repr(align(4))]
         pub struct ReadVersion {
-            /// A request's state (0xA5 read, 0x5A write); a reply's register.
-            pub state_or_register: u8,
+            /// Read (0xA5) or write (0x5A).
+            pub state: super::State,
         }
     }
     /// Each response as a struct of its own.
     pub mod response {
-        /// §3 Basic information and status (code `0x00`, 30 to 46 bytes).
+        /// §3 Basic information and status (code `0x03`, 30 to 46 bytes).
         #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
         #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
         #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]
         #[repr(align(4))]
         pub struct BasicInfo {
-            /// A request's state (0xA5 read, 0x5A write); a reply's register.
-            pub state_or_register: u8,
+            /// 0x00 where the register was read, 0x80 where it was not.
+            pub status: super::Status,
             /// \[V\]
             pub total_voltage: super::Centivolts,
             /// Positive charging, negative discharging \[A\]
@@ -1486,35 +1693,53 @@ pub mod jbd_bms {
             /// \[°C\]
             pub temperatures: super::rt::Repeated<super::DeciKelvin, 8>,
         }
-        /// §3 Cell voltages (code `0x00`, 9 to 71 bytes).
+        /// §3 Cell voltages (code `0x04`, 9 to 71 bytes).
         #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
         #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
         #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]
         #[repr(align(4))]
         pub struct CellVoltages {
-            /// A request's state (0xA5 read, 0x5A write); a reply's register.
-            pub state_or_register: u8,
+            /// 0x00 where the register was read, 0x80 where it was not.
+            pub status: super::Status,
             /// \[mV\]
             pub cell_voltages: super::rt::Repeated<u16, 32>,
         }
-        /// §3 Hardware version (code `0x00`, 8 to 39 bytes).
+        /// §3 Hardware version (code `0x05`, 8 to 39 bytes).
         #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
         #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
         #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]
         #[repr(align(4))]
         pub struct Version {
-            /// A request's state (0xA5 read, 0x5A write); a reply's register.
-            pub state_or_register: u8,
+            /// 0x00 where the register was read, 0x80 where it was not.
+            pub status: super::Status,
             pub version: super::rt::Repeated<u8, 32>,
         }
-        /// §3 Error status (code `0x80`, 7 bytes).
+        /// §3 Basic information not read (status 80) (code `0x03`, 7 bytes).
         #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
         #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
         #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]
         #[repr(align(4))]
-        pub struct Error {
-            /// A request's state (0xA5 read, 0x5A write); a reply's register.
-            pub state_or_register: u8,
+        pub struct BasicInfoError {
+            /// 0x00 where the register was read, 0x80 where it was not.
+            pub status: super::Status,
+        }
+        /// §3 Cell voltages not read (status 80) (code `0x04`, 7 bytes).
+        #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+        #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
+        #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]
+        #[repr(align(4))]
+        pub struct CellVoltagesError {
+            /// 0x00 where the register was read, 0x80 where it was not.
+            pub status: super::Status,
+        }
+        /// §3 Hardware version not read (status 80) (code `0x05`, 7 bytes).
+        #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+        #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
+        #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]
+        #[repr(align(4))]
+        pub struct VersionError {
+            /// 0x00 where the register was read, 0x80 where it was not.
+            pub status: super::Status,
         }
     }
 }
