@@ -242,11 +242,13 @@ fn main() {
         t.over_request
     );
     println!(
-        "  specs with a layout by direction {} (the header in one direction only {}, the address in one direction only {}, the code at another offset by direction {})",
+        "  specs with a layout by direction {} (the header in one direction only {}, the address in one direction only {}, the code at another offset by direction {}, the checksum covering from another offset by direction {}, header fields by direction {})",
         count("layout by direction"),
         count("header in one direction only"),
         count("address in one direction only"),
-        count("code at another offset by direction")
+        count("code at another offset by direction"),
+        count("checksum covering from another offset by direction"),
+        count("header fields by direction")
     );
     if !f.signatures.is_empty() {
         println!("disagreements by what differs (count, what):");
