@@ -1355,12 +1355,8 @@ fn framing_by_direction(
         // its errors located at the direction's key; none for a direction whose layout has
         // no `header` and whose list is empty.
         let header_by_direction = match &f.header {
-            Some(model::Header::ByDirection(h)) => {
-                let fields = if name == "request" {
-                    h.request.clone()
-                } else {
-                    h.response.clone()
-                };
+            Some(h @ model::Header::ByDirection(_)) => {
+                let fields = h.of(name == "request").clone();
                 own.header = (!fields.is_empty() || list.contains(&Part::Header))
                     .then_some(model::Header::Same(fields));
                 true
@@ -1384,13 +1380,8 @@ fn framing_by_direction(
         // its errors located at the direction's key.
         let by_direction = match own.checksum.as_mut() {
             Some(c) => match c.covers_from {
-                Some(model::CoversFrom::ByDirection(parts)) => {
-                    let part = if name == "request" {
-                        parts.request
-                    } else {
-                        parts.response
-                    };
-                    c.covers_from = Some(model::CoversFrom::Same(part));
+                Some(parts @ model::CoversFrom::ByDirection(_)) => {
+                    c.covers_from = Some(model::CoversFrom::Same(parts.of(name == "request")));
                     true
                 }
                 _ => false,
