@@ -635,10 +635,14 @@ impl<'de> Deserialize<'de> for CoversFrom {
             DirectionPart::deserialize(v)
                 .map(CoversFrom::ByDirection)
                 .map_err(D::Error::custom)
-        } else {
+        } else if v.is_string() {
             Part::deserialize(v)
                 .map(CoversFrom::Same)
                 .map_err(D::Error::custom)
+        } else {
+            Err(D::Error::custom(
+                "expected a part of the layout (`code`) or a part per direction (`{request: code, response: header}`)",
+            ))
         }
     }
 }

@@ -439,3 +439,24 @@ fn header_fields_lead_their_own_directions_messages() {
     );
     assert!(busspec_model::diff::diff(&p, &p).is_empty());
 }
+
+/// `covers_from` as neither a part nor a mapping (a list, a number) is refused at its path in
+/// words that name both forms, not in the YAML library's (`expected a Value::Tagged enum`).
+#[test]
+fn covers_from_of_another_shape_names_both_forms() {
+    let path = Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/fixtures/valid/jbd_bms.yaml");
+    let yaml = std::fs::read_to_string(&path).unwrap();
+    let per_direction = "covers_from: {request: code, response: header}";
+    assert!(yaml.contains(per_direction));
+    for shape in ["[code]", "2"] {
+        let text = yaml.replace(per_direction, &format!("covers_from: {shape}"));
+        let e = busspec_model::load_str("jbd_bms.yaml", &text)
+            .map(|_| ())
+            .unwrap_err()
+            .to_string();
+        assert!(
+            e.contains("framing.checksum.covers_from: expected a part of the layout (`code`) or a part per direction (`{request: code, response: header}`)"),
+            "{shape}: {e}"
+        );
+    }
+}
