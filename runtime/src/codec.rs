@@ -1107,35 +1107,6 @@ pub fn frame_mut_len<'b>(
     Ok(out)
 }
 
-/// Writes the length field of `width` bytes at `at` of `out`, a whole frame (`le`: least
-/// significant byte first): `out.len() + k` where it counts the payload (`grows`), else `k`;
-/// the inverse of [`length_field`].
-#[inline]
-pub fn put_length(
-    out: &mut [u8],
-    at: usize,
-    width: usize,
-    le: bool,
-    grows: bool,
-    k: i64,
-) -> Result<(), EncodeError> {
-    let v = if grows { out.len() as i64 + k } else { k };
-    let fits = u32::try_from(width)
-        .ok()
-        .and_then(|w| 1i64.checked_shl(8 * w))
-        .map_or(true, |limit| v < limit);
-    let slot = out.get_mut(at..at + width);
-    let (Some(slot), true, true) = (slot, v >= 0, fits) else {
-        return Err(EncodeError::OutOfRange { field: "length" });
-    };
-    let n = slot.len();
-    for (i, b) in slot.iter_mut().enumerate() {
-        let shift = if le { 8 * i } else { 8 * (n - 1 - i) };
-        *b = (v >> shift) as u8;
-    }
-    Ok(())
-}
-
 /// [`seal_sum8`] for a frame of variable length.
 #[inline(always)]
 pub fn seal_sum8_len(out: &mut [u8]) -> usize {
@@ -1472,29 +1443,68 @@ pub fn int(bytes: &[u8], le: bool, signed: bool) -> i64 {
     }
 }
 
-/// Checks a length field of `width` bytes at `at` (`le`: least significant byte first): it must
-/// hold `frame.len() + k` where it counts the payload (`grows`), else `k`. A frame whose length
-/// field disagrees is refused with the field's offset and value.
-#[inline]
-pub fn length_field(
-    frame: &[u8],
-    at: usize,
-    width: usize,
-    le: bool,
-    grows: bool,
-    k: i64,
-) -> Result<(), DecodeError> {
-    let bytes = frame.get(at..at + width).unwrap_or(&[]);
-    let found = uint(bytes, le) as i64;
-    let expected = if grows { frame.len() as i64 + k } else { k };
-    if found != expected {
-        return Err(DecodeError::LengthMismatch {
-            offset: at,
-            expected,
-            found,
-        });
+/// A frame's length field (`framing.length`) as decode checks it and encode writes it
+/// ([`crate::stream::LengthField`] is how the stream decoder reads it): `width` bytes at `at` (`le`: least significant
+/// byte first) holding `frame.len() + k` where it counts the payload (`grows`), else `k`. Each
+/// generated module names its own (`LENGTH`, or one for each direction where they differ;
+/// `…_AGAIN` where the layout repeats the field).
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct FrameLength {
+    pub at: usize,
+    pub width: usize,
+    pub le: bool,
+    pub grows: bool,
+    pub k: i64,
+}
+
+impl FrameLength {
+    /// The value the field holds in a frame of `len` bytes.
+    #[inline(always)]
+    const fn value(&self, len: usize) -> i64 {
+        if self.grows {
+            len as i64 + self.k
+        } else {
+            self.k
+        }
     }
-    Ok(())
+
+    /// Checks the field of `frame`: a frame whose field disagrees with its length is refused
+    /// with the field's offset and value.
+    #[inline]
+    pub fn check(&self, frame: &[u8]) -> Result<(), DecodeError> {
+        let bytes = frame.get(self.at..self.at + self.width).unwrap_or(&[]);
+        let found = uint(bytes, self.le) as i64;
+        let expected = self.value(frame.len());
+        if found != expected {
+            return Err(DecodeError::LengthMismatch {
+                offset: self.at,
+                expected,
+                found,
+            });
+        }
+        Ok(())
+    }
+
+    /// Writes the field of `out`, a whole frame; the inverse of [`Self::check`]. A length the
+    /// field cannot hold is [`EncodeError::OutOfRange`] of `length`.
+    #[inline]
+    pub fn put(&self, out: &mut [u8]) -> Result<(), EncodeError> {
+        let v = self.value(out.len());
+        let fits = u32::try_from(self.width)
+            .ok()
+            .and_then(|w| 1i64.checked_shl(8 * w))
+            .map_or(true, |limit| v < limit);
+        let slot = out.get_mut(self.at..self.at + self.width);
+        let (Some(slot), true, true) = (slot, v >= 0, fits) else {
+            return Err(EncodeError::OutOfRange { field: "length" });
+        };
+        let n = slot.len();
+        for (i, b) in slot.iter_mut().enumerate() {
+            let shift = if self.le { 8 * i } else { 8 * (n - 1 - i) };
+            *b = (v >> shift) as u8;
+        }
+        Ok(())
+    }
 }
 
 #[cfg(test)]
@@ -1544,11 +1554,18 @@ mod lang_tests {
 
     #[test]
     fn a_length_field_must_count_the_frame() {
+        let field = |at, width, le, grows, k| FrameLength {
+            at,
+            width,
+            le,
+            grows,
+            k,
+        };
         // FF FF id len code p p ck: len counts code, payload and checksum (4 = 8 - 4).
-        let f = [0xFF, 0xFF, 1, 4, 3, 9, 9, 0];
-        assert_eq!(length_field(&f, 3, 1, true, true, -4), Ok(()));
+        let mut f = [0xFF, 0xFF, 1, 4, 3, 9, 9, 0];
+        assert_eq!(field(3, 1, true, true, -4).check(&f), Ok(()));
         assert_eq!(
-            length_field(&f, 3, 1, true, true, -3),
+            field(3, 1, true, true, -3).check(&f),
             Err(DecodeError::LengthMismatch {
                 offset: 3,
                 expected: 5,
@@ -1556,14 +1573,26 @@ mod lang_tests {
             })
         );
         assert_eq!(
-            length_field(&[0, 1, 2, 0], 1, 2, false, false, 0x102),
+            field(1, 2, false, false, 0x102).check(&[0, 1, 2, 0]),
             Ok(())
+        );
+        assert_eq!(field(1, 2, true, false, 0x102).check(&[0, 2, 1, 0]), Ok(()));
+        assert!(field(1, 2, true, false, 0x102).check(&[0, 2]).is_err());
+        // `put` writes what `check` accepts, and refuses what the field cannot hold.
+        f[3] = 0;
+        assert_eq!(field(3, 1, true, true, -4).put(&mut f), Ok(()));
+        assert_eq!(f[3], 4);
+        let mut g = [0u8; 4];
+        assert_eq!(field(1, 2, true, false, 0x102).put(&mut g), Ok(()));
+        assert_eq!(g, [0, 2, 1, 0]);
+        assert_eq!(
+            field(3, 1, true, true, 300).put(&mut f),
+            Err(EncodeError::OutOfRange { field: "length" })
         );
         assert_eq!(
-            length_field(&[0, 2, 1, 0], 1, 2, true, false, 0x102),
-            Ok(())
+            field(3, 1, true, true, -9).put(&mut f),
+            Err(EncodeError::OutOfRange { field: "length" })
         );
-        assert!(length_field(&[0, 2], 1, 2, true, false, 0x102).is_err());
     }
 
     /// The frame's trailing checksum as `check_sum` reads it, for each width and order.

@@ -542,33 +542,83 @@ fn frame_check(p: &Protocol, d: Direction, min_len: &Literal, max_len: &Literal)
 /// holds a constant plus the frame's length where it counts the payload (every message of the
 /// direction has it at the same offset, and only the payload varies).
 pub(super) fn length_check(p: &Protocol, d: Direction) -> TokenStream {
-    let Some(rule) = p.framing.length_rule(d) else {
-        return quote!();
-    };
-    let checks = length_copies(rule).into_iter().map(|r| {
-        let args = length_args(p, r);
-        quote!(rt::length_field(frame, #args)?;)
-    });
+    let checks = length_consts(p, d)
+        .into_iter()
+        .map(|(name, _)| quote!(#name.check(frame)?;));
     quote!(#(#checks)*)
 }
 
-/// The length field where it sits, and again where the layout repeats it (the same value).
-pub(super) fn length_copies(rule: LengthRule) -> Vec<LengthRule> {
+/// The length field of direction `d` as the module names it (`rt::FrameLength`), and again
+/// where the layout repeats it (the same value): `LENGTH` (`LENGTH_AGAIN`) where both
+/// directions have the same field, else `REQUEST_LENGTH` and `RESPONSE_LENGTH`; none where
+/// the direction has no length field.
+pub(super) fn length_consts(p: &Protocol, d: Direction) -> Vec<(Ident, LengthRule)> {
+    let Some(rule) = p.framing.length_rule(d) else {
+        return Vec::new();
+    };
+    let other = match d {
+        Direction::Request => Direction::Response,
+        Direction::Response => Direction::Request,
+    };
+    // The same field where it sits, reads and counts alike (the shortest frame may differ).
+    let same = |o: LengthRule| {
+        (o.at, o.again, o.width, o.grows, o.k)
+            == (rule.at, rule.again, rule.width, rule.grows, rule.k)
+    };
+    let shared = p.framing.length_rule(other).map_or(true, same);
+    let base = if shared {
+        "LENGTH".to_string()
+    } else {
+        format!("{}_LENGTH", direction_names(d).0.to_string().to_uppercase())
+    };
     let again = rule.again.map(|at| LengthRule { at, ..rule });
-    [Some(rule), again].into_iter().flatten().collect()
+    [
+        Some((format_ident!("{base}"), rule)),
+        again.map(|r| (format_ident!("{base}_AGAIN"), r)),
+    ]
+    .into_iter()
+    .flatten()
+    .collect()
 }
 
-/// A length field's offset, width, byte order, whether it counts the payload and its
-/// constant, as `rt::length_field` (decode) and `rt::put_length` (encode) take them.
-pub(super) fn length_args(p: &Protocol, rule: LengthRule) -> TokenStream {
-    let (at, width, le, grows, k) = (
-        usize_lit(rule.at),
-        usize_lit(rule.width),
-        p.byte_order == ByteOrder::Little,
-        rule.grows,
-        i64_lit(rule.k),
-    );
-    quote!(#at, #width, #le, #grows, #k)
+/// Each length field the module names ([`length_consts`]), once: `rt::FrameLength` constants
+/// of its offset, width, byte order, whether it counts the payload and its constant.
+pub(super) fn length_field_consts(p: &Protocol) -> TokenStream {
+    let mut seen: Vec<Ident> = Vec::new();
+    let mut out = Vec::new();
+    for d in [Direction::Request, Direction::Response] {
+        for (name, rule) in length_consts(p, d) {
+            if seen.contains(&name) {
+                continue;
+            }
+            seen.push(name.clone());
+            let (at, width, le, grows, k) = (
+                usize_lit(rule.at),
+                usize_lit(rule.width),
+                p.byte_order == ByteOrder::Little,
+                rule.grows,
+                i64_lit(rule.k),
+            );
+            let what = if grows {
+                "the frame's length plus `k`"
+            } else {
+                "`k`"
+            };
+            let doc = doc(&format!(
+                "The length field{}: `width` bytes at `at`, holding {what}.",
+                if name.to_string().ends_with("_AGAIN") {
+                    " where the layout repeats it"
+                } else {
+                    ""
+                }
+            ));
+            out.push(quote! {
+                #doc
+                const #name: rt::FrameLength = rt::FrameLength { at: #at, width: #width, le: #le, grows: #grows, k: #k };
+            });
+        }
+    }
+    quote!(#(#out)*)
 }
 
 /// Whether `m` needs the request (`needs_request`) and shares code and length with another

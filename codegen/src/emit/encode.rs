@@ -464,15 +464,9 @@ fn put_field(f: &Field, wt: IntType, at: usize, v: TokenStream) -> TokenStream {
 /// Writes the length field (each copy of it) of a frame of direction `d` from its length,
 /// where the framing has one.
 fn put_lengths(p: &Protocol, d: Direction) -> Vec<TokenStream> {
-    let Some(rule) = p.framing.length_rule(d) else {
-        return Vec::new();
-    };
-    length_copies(rule)
+    length_consts(p, d)
         .into_iter()
-        .map(|r| {
-            let args = length_args(p, r);
-            quote!(rt::put_length(out, #args)?;)
-        })
+        .map(|(name, _)| quote!(#name.put(out)?;))
         .collect()
 }
 

@@ -18,6 +18,7 @@ pub(super) fn emit_header(p: &Protocol, source: &str, spec_path: &str) -> TokenS
     let form = form_const(p);
     let long = long_const(p);
     let truncation = truncation_const(p);
+    let lengths = length_field_consts(p);
     let inner = inner_doc(&format!(
         "{} (`{}`).\n\nGenerated from `{source}`, transcribed from *{title}*, revision {revision} ({date}).\nNumbers travel {} on the wire.\n{}",
         p.title,
@@ -151,6 +152,7 @@ pub(super) fn emit_header(p: &Protocol, source: &str, spec_path: &str) -> TokenS
         #long
         #form
         #truncation
+        #lengths
     }
 }
 

@@ -82,6 +82,14 @@ pub mod cobs_link {
         checksum_be: false,
         checksum_from_end: 2,
     };
+    /// The length field: `width` bytes at `at`, holding the frame's length plus `k`.
+    const LENGTH: rt::FrameLength = rt::FrameLength {
+        at: 0,
+        width: 1,
+        le: true,
+        grows: true,
+        k: -4,
+    };
     /// CRC-8/SMBUS: the frame checksum, over every byte before it.
     pub const CRC_ALGORITHM: rt::crc::Algorithm<u8> = rt::crc::Algorithm {
         width: 8usize as u8,
@@ -201,7 +209,7 @@ pub mod cobs_link {
                 &FRAME,
                 |b| u32::from(checksum(b)),
             )?;
-            rt::length_field(frame, 0, 1, true, true, -4)?;
+            LENGTH.check(frame)?;
             let message = Self::dispatch(frame)?;
             rt::Ok(Decoded { address, message })
         }
@@ -387,7 +395,7 @@ pub mod cobs_link {
                 Self::Log(response::Log { entries: v_entries }) => {
                     let frame_len = REPEAT_LOG.encode_len(v_entries.len())?;
                     let out = rt::frame_mut_len(buf, frame_len, &[])?;
-                    rt::put_length(out, 0, 1, true, true, -4)?;
+                    LENGTH.put(out)?;
                     out[1] = 0xB0;
                     rt::write_elements(v_entries.as_slice(), 1, true, &mut out[2..]);
                     out.len()
@@ -450,7 +458,7 @@ pub mod cobs_link {
                 &FRAME,
                 |b| u32::from(checksum(b)),
             )?;
-            rt::length_field(frame, 0, 1, true, true, -4)?;
+            LENGTH.check(frame)?;
             let message = Self::dispatch(frame)?;
             if let rt::Some(request) = request {
                 if request.replies() >> message.index() & 1 == 0 {

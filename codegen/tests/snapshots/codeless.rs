@@ -63,6 +63,14 @@ pub mod codeless {
         end: &[],
         end_first: false,
     };
+    /// The length field: `width` bytes at `at`, holding the frame's length plus `k`.
+    const LENGTH: rt::FrameLength = rt::FrameLength {
+        at: 3,
+        width: 1,
+        le: true,
+        grows: true,
+        k: -4,
+    };
     /// The frame checksum: the 8-bit sum of the bytes it covers, inverted.
     #[inline]
     pub fn checksum(bytes: &[u8]) -> u8 {
@@ -175,7 +183,7 @@ pub mod codeless {
                 &FRAME,
                 |b| u32::from(checksum(rt::covered(b, 2))),
             )?;
-            rt::length_field(frame, 3, 1, true, true, -4)?;
+            LENGTH.check(frame)?;
             let message = Self::dispatch(frame)?;
             rt::Ok(Decoded { address, message })
         }
@@ -372,7 +380,7 @@ pub mod codeless {
                 &FRAME,
                 |b| u32::from(checksum(rt::covered(b, 2))),
             )?;
-            rt::length_field(frame, 3, 1, true, true, -4)?;
+            LENGTH.check(frame)?;
             let message = Self::dispatch(frame, request)?;
             if let rt::Some(request) = request {
                 if request.replies() >> message.index() & 1 == 0 {

@@ -63,6 +63,14 @@ pub mod crc_extra {
         end: &[],
         end_first: false,
     };
+    /// The length field: `width` bytes at `at`, holding the frame's length plus `k`.
+    const LENGTH: rt::FrameLength = rt::FrameLength {
+        at: 1,
+        width: 1,
+        le: true,
+        grows: true,
+        k: -5,
+    };
     /// CRC-16/MCRF4XX: the frame checksum, over every byte before it.
     pub const CRC_ALGORITHM: rt::crc::Algorithm<u16> = rt::crc::Algorithm {
         width: 16usize as u8,
@@ -196,7 +204,7 @@ pub mod crc_extra {
                 &FRAME,
                 |b| u32::from(checksum(rt::covered(b, 1))),
             )?;
-            rt::length_field(frame, 1, 1, true, true, -5)?;
+            LENGTH.check(frame)?;
             let message = Self::dispatch(frame)?;
             rt::Ok(Decoded { address, message })
         }
@@ -461,7 +469,7 @@ pub mod crc_extra {
                 &FRAME,
                 |b| u32::from(checksum(rt::covered(b, 1))),
             )?;
-            rt::length_field(frame, 1, 1, true, true, -5)?;
+            LENGTH.check(frame)?;
             let message = Self::dispatch(frame)?;
             if let rt::Some(request) = request {
                 if request.replies() >> message.index() & 1 == 0 {

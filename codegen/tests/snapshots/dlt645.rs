@@ -74,6 +74,14 @@ pub mod dlt645 {
     /// (`framing.transform`): undone before fields are read, done before the checksum
     /// is computed.
     pub const TRANSFORM: rt::Transform = rt::Transform::Add(0x33);
+    /// The length field: `width` bytes at `at`, holding the frame's length plus `k`.
+    const LENGTH: rt::FrameLength = rt::FrameLength {
+        at: 9,
+        width: 1,
+        le: true,
+        grows: true,
+        k: -12,
+    };
     /// The frame checksum: 8-bit sum of every byte before it.
     #[inline]
     pub fn checksum(bytes: &[u8]) -> u8 {
@@ -210,7 +218,7 @@ pub mod dlt645 {
                 &FRAME,
                 |b| u32::from(checksum(b)),
             )?;
-            rt::length_field(frame, 9, 1, true, true, -12)?;
+            LENGTH.check(frame)?;
             let mut plain = [0u8; 16];
             let frame = TRANSFORM.undo_into(frame, 10, 2, &mut plain);
             let message = Self::dispatch(frame)?;
@@ -574,7 +582,7 @@ pub mod dlt645 {
                 &FRAME,
                 |b| u32::from(checksum(b)),
             )?;
-            rt::length_field(frame, 9, 1, true, true, -12)?;
+            LENGTH.check(frame)?;
             let mut plain = [0u8; 22];
             let frame = TRANSFORM.undo_into(frame, 10, 2, &mut plain);
             let message = Self::dispatch(frame, request)?;

@@ -61,6 +61,14 @@ pub mod dynamixel {
         end: &[],
         end_first: false,
     };
+    /// The length field: `width` bytes at `at`, holding the frame's length plus `k`.
+    const LENGTH: rt::FrameLength = rt::FrameLength {
+        at: 3,
+        width: 1,
+        le: true,
+        grows: true,
+        k: -4,
+    };
     /// The frame checksum: the 8-bit sum of the bytes it covers, inverted.
     #[inline]
     pub fn checksum(bytes: &[u8]) -> u8 {
@@ -235,7 +243,7 @@ pub mod dynamixel {
                 Self::Write(request::Write { address: v_address, data: v_data }) => {
                     let frame_len = REPEAT_WRITE.encode_len(v_data.len())?;
                     let out = rt::frame_mut_len(buf, frame_len, &[0xFF, 0xFF, address])?;
-                    rt::put_length(out, 3, 1, true, true, -4)?;
+                    LENGTH.put(out)?;
                     out[4] = 0x03;
                     out[5] = v_address;
                     rt::write_elements(v_data.as_slice(), 1, true, &mut out[6..]);
@@ -246,7 +254,7 @@ pub mod dynamixel {
                 ) => {
                     let frame_len = REPEAT_REG_WRITE.encode_len(v_data.len())?;
                     let out = rt::frame_mut_len(buf, frame_len, &[0xFF, 0xFF, address])?;
-                    rt::put_length(out, 3, 1, true, true, -4)?;
+                    LENGTH.put(out)?;
                     out[4] = 0x04;
                     out[5] = v_address;
                     rt::write_elements(v_data.as_slice(), 1, true, &mut out[6..]);
@@ -267,7 +275,7 @@ pub mod dynamixel {
                 ) => {
                     let frame_len = REPEAT_SYNC_WRITE.encode_len(v_blocks.len())?;
                     let out = rt::frame_mut_len(buf, frame_len, &[0xFF, 0xFF, address])?;
-                    rt::put_length(out, 3, 1, true, true, -4)?;
+                    LENGTH.put(out)?;
                     out[4] = 0x83;
                     out[5] = v_address;
                     out[6] = v_data_length;
@@ -291,7 +299,7 @@ pub mod dynamixel {
                 &FRAME,
                 |b| u32::from(checksum(rt::covered(b, 2))),
             )?;
-            rt::length_field(frame, 3, 1, true, true, -4)?;
+            LENGTH.check(frame)?;
             let message = Self::dispatch(frame)?;
             rt::Ok(Decoded { address, message })
         }
@@ -531,7 +539,7 @@ pub mod dynamixel {
                 ) => {
                     let frame_len = REPEAT_READ_STATUS.encode_len(v_data.len())?;
                     let out = rt::frame_mut_len(buf, frame_len, &[0xFF, 0xFF, address])?;
-                    rt::put_length(out, 3, 1, true, true, -4)?;
+                    LENGTH.put(out)?;
                     out[4] = v_error.raw();
                     rt::write_elements(v_data.as_slice(), 1, true, &mut out[5..]);
                     out.len()
@@ -575,7 +583,7 @@ pub mod dynamixel {
                 &FRAME,
                 |b| u32::from(checksum(rt::covered(b, 2))),
             )?;
-            rt::length_field(frame, 3, 1, true, true, -4)?;
+            LENGTH.check(frame)?;
             let message = Self::dispatch(frame, request)?;
             if let rt::Some(request) = request {
                 if request.replies() >> message.index() & 1 == 0 {
@@ -728,7 +736,7 @@ pub mod dynamixel {
                 &FRAME,
                 |b| u32::from(checksum(rt::covered(b, 2))),
             )?;
-            rt::length_field(frame, 3, 1, true, true, -4)?;
+            LENGTH.check(frame)?;
             let message = Self::dispatch(frame)?;
             rt::Ok(Decoded { address, message })
         }
@@ -870,7 +878,7 @@ pub mod dynamixel {
                 &FRAME,
                 |b| u32::from(checksum(rt::covered(b, 2))),
             )?;
-            rt::length_field(frame, 3, 1, true, true, -4)?;
+            LENGTH.check(frame)?;
             let message = Self::dispatch(frame, request)?;
             if let rt::Some(request) = request {
                 if request.replies() >> message.index() & 1 == 0 {

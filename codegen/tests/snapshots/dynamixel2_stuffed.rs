@@ -85,6 +85,14 @@ pub mod dynamixel2_stuffed {
         checksum_be: false,
         checksum_from_end: 2,
     };
+    /// The length field: `width` bytes at `at`, holding the frame's length plus `k`.
+    const LENGTH: rt::FrameLength = rt::FrameLength {
+        at: 5,
+        width: 2,
+        le: true,
+        grows: true,
+        k: -7,
+    };
     /// CRC-16/UMTS: the frame checksum, over every byte before it.
     pub const CRC_ALGORITHM: rt::crc::Algorithm<u16> = rt::crc::Algorithm {
         width: 16usize as u8,
@@ -259,7 +267,7 @@ pub mod dynamixel2_stuffed {
                 &FRAME,
                 |b| u32::from(checksum(b)),
             )?;
-            rt::length_field(frame, 5, 2, true, true, -7)?;
+            LENGTH.check(frame)?;
             let message = Self::dispatch(frame)?;
             rt::Ok(Decoded { address, message })
         }
@@ -501,7 +509,7 @@ pub mod dynamixel2_stuffed {
                 &FRAME,
                 |b| u32::from(checksum(b)),
             )?;
-            rt::length_field(frame, 5, 2, true, true, -7)?;
+            LENGTH.check(frame)?;
             let message = Self::dispatch(frame, request)?;
             if let rt::Some(request) = request {
                 if request.replies() >> message.index() & 1 == 0 {

@@ -63,6 +63,22 @@ pub mod ft12_variable {
         end: &[0x16],
         end_first: false,
     };
+    /// The length field: `width` bytes at `at`, holding the frame's length plus `k`.
+    const LENGTH: rt::FrameLength = rt::FrameLength {
+        at: 1,
+        width: 1,
+        le: true,
+        grows: true,
+        k: -6,
+    };
+    /// The length field where the layout repeats it: `width` bytes at `at`, holding the frame's length plus `k`.
+    const LENGTH_AGAIN: rt::FrameLength = rt::FrameLength {
+        at: 2,
+        width: 1,
+        le: true,
+        grows: true,
+        k: -6,
+    };
     /// The frame checksum: 8-bit sum of every byte before it.
     #[inline]
     pub fn checksum(bytes: &[u8]) -> u8 {
@@ -137,8 +153,8 @@ pub mod ft12_variable {
                 &FRAME,
                 |b| u32::from(checksum(rt::covered(b, 4))),
             )?;
-            rt::length_field(frame, 1, 1, true, true, -6)?;
-            rt::length_field(frame, 2, 1, true, true, -6)?;
+            LENGTH.check(frame)?;
+            LENGTH_AGAIN.check(frame)?;
             let message = Self::dispatch(frame)?;
             rt::Ok(Decoded { address, message })
         }
@@ -354,8 +370,8 @@ pub mod ft12_variable {
                 &FRAME,
                 |b| u32::from(checksum(rt::covered(b, 4))),
             )?;
-            rt::length_field(frame, 1, 1, true, true, -6)?;
-            rt::length_field(frame, 2, 1, true, true, -6)?;
+            LENGTH.check(frame)?;
+            LENGTH_AGAIN.check(frame)?;
             let message = Self::dispatch(frame)?;
             if let rt::Some(request) = request {
                 if request.replies() >> message.index() & 1 == 0 {

@@ -63,6 +63,14 @@ pub mod jbd_bms {
         end: &[0x77],
         end_first: false,
     };
+    /// The length field: `width` bytes at `at`, holding the frame's length plus `k`.
+    const LENGTH: rt::FrameLength = rt::FrameLength {
+        at: 3,
+        width: 1,
+        le: false,
+        grows: true,
+        k: -7,
+    };
     /// The frame checksum: the 16-bit sum of the bytes it covers, negated.
     #[inline]
     pub fn checksum(bytes: &[u8]) -> u16 {
@@ -437,7 +445,7 @@ pub mod jbd_bms {
                 &FRAME,
                 |b| u32::from(checksum(rt::covered(b, 2))),
             )?;
-            rt::length_field(frame, 3, 1, false, true, -7)?;
+            LENGTH.check(frame)?;
             let message = Self::dispatch(frame)?;
             rt::Ok(Decoded { address, message })
         }
@@ -692,7 +700,7 @@ pub mod jbd_bms {
                         .encode_in_range(v_temperatures.as_slice(), 0, 65535)?;
                     let frame_len = REPEAT_BASIC_INFO.encode_len(v_temperatures.len())?;
                     let out = rt::frame_mut_len(buf, frame_len, &[0xDD, 0x03])?;
-                    rt::put_length(out, 3, 1, false, true, -7)?;
+                    LENGTH.put(out)?;
                     out[2] = v_status.raw();
                     out[4..6].copy_from_slice(&v_total_voltage.raw().to_be_bytes());
                     out[6..8].copy_from_slice(&v_current.raw().to_be_bytes());
@@ -731,7 +739,7 @@ pub mod jbd_bms {
                     let frame_len = REPEAT_CELL_VOLTAGES
                         .encode_len(v_cell_voltages.len())?;
                     let out = rt::frame_mut_len(buf, frame_len, &[0xDD, 0x04])?;
-                    rt::put_length(out, 3, 1, false, true, -7)?;
+                    LENGTH.put(out)?;
                     out[2] = v_status.raw();
                     rt::write_elements(
                         v_cell_voltages.as_slice(),
@@ -746,7 +754,7 @@ pub mod jbd_bms {
                 ) => {
                     let frame_len = REPEAT_VERSION.encode_len(v_version.len())?;
                     let out = rt::frame_mut_len(buf, frame_len, &[0xDD, 0x05])?;
-                    rt::put_length(out, 3, 1, false, true, -7)?;
+                    LENGTH.put(out)?;
                     out[2] = v_status.raw();
                     rt::write_elements(v_version.as_slice(), 1, false, &mut out[4..]);
                     out.len()
@@ -810,7 +818,7 @@ pub mod jbd_bms {
                 &FRAME,
                 |b| u32::from(checksum(rt::covered(b, 2))),
             )?;
-            rt::length_field(frame, 3, 1, false, true, -7)?;
+            LENGTH.check(frame)?;
             let message = Self::dispatch(frame, request)?;
             if let rt::Some(request) = request {
                 if request.replies() >> message.index() & 1 == 0 {
@@ -1100,7 +1108,7 @@ pub mod jbd_bms {
                 &FRAME,
                 |b| u32::from(checksum(rt::covered(b, 2))),
             )?;
-            rt::length_field(frame, 3, 1, false, true, -7)?;
+            LENGTH.check(frame)?;
             let message = Self::dispatch(frame, request)?;
             if let rt::Some(request) = request {
                 if request.replies() >> message.index() & 1 == 0 {

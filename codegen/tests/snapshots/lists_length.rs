@@ -63,6 +63,14 @@ pub mod lists_length {
         end: &[],
         end_first: false,
     };
+    /// The length field: `width` bytes at `at`, holding the frame's length plus `k`.
+    const LENGTH: rt::FrameLength = rt::FrameLength {
+        at: 1,
+        width: 1,
+        le: true,
+        grows: true,
+        k: -3,
+    };
     /// The frame checksum: 8-bit sum of every byte before it.
     #[inline]
     pub fn checksum(bytes: &[u8]) -> u8 {
@@ -294,7 +302,7 @@ pub mod lists_length {
                         true,
                         &mut out[4 + bytes_0..],
                     );
-                    rt::put_length(out, 1, 1, true, true, -3)?;
+                    LENGTH.put(out)?;
                     out.len()
                 }
                 Self::SetOutputs(
@@ -318,7 +326,7 @@ pub mod lists_length {
                     out[4..6].copy_from_slice(&v_mask.to_le_bytes());
                     let out = LISTS_SET_OUTPUTS.expand(&compact, &[bytes_0], buf)?;
                     rt::write_bits(&v_outputs, &mut out[4..]);
-                    rt::put_length(out, 1, 1, true, true, -3)?;
+                    LENGTH.put(out)?;
                     out.len()
                 }
             };
@@ -337,7 +345,7 @@ pub mod lists_length {
                 &FRAME,
                 |b| u32::from(checksum(rt::covered(b, 1))),
             )?;
-            rt::length_field(frame, 1, 1, true, true, -3)?;
+            LENGTH.check(frame)?;
             let message = Self::dispatch(frame)?;
             rt::Ok(Decoded { address, message })
         }
@@ -547,7 +555,7 @@ pub mod lists_length {
                 &FRAME,
                 |b| u32::from(checksum(rt::covered(b, 1))),
             )?;
-            rt::length_field(frame, 1, 1, true, true, -3)?;
+            LENGTH.check(frame)?;
             let message = Self::dispatch(frame)?;
             if let rt::Some(request) = request {
                 if request.replies() >> message.index() & 1 == 0 {
@@ -649,7 +657,7 @@ pub mod lists_length {
                 &FRAME,
                 |b| u32::from(checksum(rt::covered(b, 1))),
             )?;
-            rt::length_field(frame, 1, 1, true, true, -3)?;
+            LENGTH.check(frame)?;
             let message = Self::dispatch(frame)?;
             rt::Ok(Decoded { address, message })
         }

@@ -87,6 +87,14 @@ pub mod mavlink_v2 {
             (0x530100, 5, 2),
         ],
     };
+    /// The length field: `width` bytes at `at`, holding the frame's length plus `k`.
+    const LENGTH: rt::FrameLength = rt::FrameLength {
+        at: 1,
+        width: 1,
+        le: true,
+        grows: true,
+        k: -12,
+    };
     /// CRC-16/MCRF4XX: the frame checksum, over every byte before it.
     pub const CRC_ALGORITHM: rt::crc::Algorithm<u16> = rt::crc::Algorithm {
         width: 16usize as u8,
@@ -273,7 +281,7 @@ pub mod mavlink_v2 {
                 &FRAME,
                 |b| u32::from(checksum(rt::covered(b, 1))),
             )?;
-            rt::length_field(frame, 1, 1, true, true, -12)?;
+            LENGTH.check(frame)?;
             let message = Self::dispatch(frame)?;
             rt::Ok(Decoded { address, message })
         }
@@ -808,7 +816,7 @@ pub mod mavlink_v2 {
                 &FRAME,
                 |b| u32::from(checksum(rt::covered(b, 1))),
             )?;
-            rt::length_field(frame, 1, 1, true, true, -12)?;
+            LENGTH.check(frame)?;
             let message = Self::dispatch(frame)?;
             if let rt::Some(request) = request {
                 if request.replies() >> message.index() & 1 == 0 {

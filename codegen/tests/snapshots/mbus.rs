@@ -80,6 +80,22 @@ pub mod mbus {
         laid_len: 8,
         rules: [rt::Some((-6, 8, 9)), rt::Some((-6, 8, 27))],
     };
+    /// The length field: `width` bytes at `at`, holding the frame's length plus `k`.
+    const LENGTH: rt::FrameLength = rt::FrameLength {
+        at: 1,
+        width: 1,
+        le: true,
+        grows: true,
+        k: -6,
+    };
+    /// The length field where the layout repeats it: `width` bytes at `at`, holding the frame's length plus `k`.
+    const LENGTH_AGAIN: rt::FrameLength = rt::FrameLength {
+        at: 2,
+        width: 1,
+        le: true,
+        grows: true,
+        k: -6,
+    };
     /// The frame checksum: 8-bit sum of every byte before it.
     #[inline]
     pub fn checksum(bytes: &[u8]) -> u8 {
@@ -181,8 +197,8 @@ pub mod mbus {
                 &FRAME,
                 |b| u32::from(checksum(rt::covered(b, 4))),
             )?;
-            rt::length_field(frame, 1, 1, true, true, -6)?;
-            rt::length_field(frame, 2, 1, true, true, -6)?;
+            LENGTH.check(frame)?;
+            LENGTH_AGAIN.check(frame)?;
             let message = Self::dispatch(frame)?;
             rt::Ok(Decoded { address, message })
         }
@@ -450,8 +466,8 @@ pub mod mbus {
                 &FRAME,
                 |b| u32::from(checksum(rt::covered(b, 4))),
             )?;
-            rt::length_field(frame, 1, 1, true, true, -6)?;
-            rt::length_field(frame, 2, 1, true, true, -6)?;
+            LENGTH.check(frame)?;
+            LENGTH_AGAIN.check(frame)?;
             let message = Self::dispatch(frame)?;
             if let rt::Some(request) = request {
                 if request.replies() >> message.index() & 1 == 0 {

@@ -63,6 +63,14 @@ pub mod msp_by_direction {
         end: &[],
         end_first: false,
     };
+    /// The length field: `width` bytes at `at`, holding the frame's length plus `k`.
+    const LENGTH: rt::FrameLength = rt::FrameLength {
+        at: 3,
+        width: 1,
+        le: true,
+        grows: true,
+        k: -6,
+    };
     /// The frame checksum: 8-bit XOR of the bytes it covers.
     #[inline]
     pub fn checksum(bytes: &[u8]) -> u8 {
@@ -177,7 +185,7 @@ pub mod msp_by_direction {
                 &FRAME,
                 |b| u32::from(checksum(rt::covered(b, 3))),
             )?;
-            rt::length_field(frame, 3, 1, true, true, -6)?;
+            LENGTH.check(frame)?;
             let message = Self::dispatch(frame)?;
             rt::Ok(Decoded { address, message })
         }
@@ -355,7 +363,7 @@ pub mod msp_by_direction {
                 Self::RcReply(response::RcReply { channels: v_channels }) => {
                     let frame_len = REPEAT_RC_REPLY.encode_len(v_channels.len())?;
                     let out = rt::frame_mut_len(buf, frame_len, &[0x24, 0x4D, 0x3E])?;
-                    rt::put_length(out, 3, 1, true, true, -6)?;
+                    LENGTH.put(out)?;
                     out[4] = 0x69;
                     rt::write_elements(v_channels.as_slice(), 2, true, &mut out[5..]);
                     out.len()
@@ -408,7 +416,7 @@ pub mod msp_by_direction {
                 &FRAME,
                 |b| u32::from(checksum(rt::covered(b, 3))),
             )?;
-            rt::length_field(frame, 3, 1, true, true, -6)?;
+            LENGTH.check(frame)?;
             let message = Self::dispatch(frame)?;
             if let rt::Some(request) = request {
                 if request.replies() >> message.index() & 1 == 0 {
@@ -570,7 +578,7 @@ pub mod msp_by_direction {
                 &FRAME,
                 |b| u32::from(checksum(rt::covered(b, 3))),
             )?;
-            rt::length_field(frame, 3, 1, true, true, -6)?;
+            LENGTH.check(frame)?;
             let message = Self::dispatch(frame)?;
             if let rt::Some(request) = request {
                 if request.replies() >> message.index() & 1 == 0 {

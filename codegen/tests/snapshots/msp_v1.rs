@@ -63,6 +63,14 @@ pub mod msp_v1 {
         end: &[],
         end_first: false,
     };
+    /// The length field: `width` bytes at `at`, holding the frame's length plus `k`.
+    const LENGTH: rt::FrameLength = rt::FrameLength {
+        at: 3,
+        width: 1,
+        le: true,
+        grows: true,
+        k: -6,
+    };
     /// The frame checksum: 8-bit XOR of the bytes it covers.
     #[inline]
     pub fn checksum(bytes: &[u8]) -> u8 {
@@ -173,7 +181,7 @@ pub mod msp_v1 {
                 &FRAME,
                 |b| u32::from(checksum(rt::covered(b, 3))),
             )?;
-            rt::length_field(frame, 3, 1, true, true, -6)?;
+            LENGTH.check(frame)?;
             let message = Self::dispatch(frame)?;
             rt::Ok(Decoded { address, message })
         }
@@ -384,7 +392,7 @@ pub mod msp_v1 {
                 &FRAME,
                 |b| u32::from(checksum(rt::covered(b, 3))),
             )?;
-            rt::length_field(frame, 3, 1, true, true, -6)?;
+            LENGTH.check(frame)?;
             let message = Self::dispatch(frame, request)?;
             if let rt::Some(request) = request {
                 if request.replies() >> message.index() & 1 == 0 {

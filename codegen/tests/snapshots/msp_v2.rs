@@ -63,6 +63,14 @@ pub mod msp_v2 {
         end: &[],
         end_first: false,
     };
+    /// The length field: `width` bytes at `at`, holding the frame's length plus `k`.
+    const LENGTH: rt::FrameLength = rt::FrameLength {
+        at: 6,
+        width: 2,
+        le: true,
+        grows: true,
+        k: -9,
+    };
     /// CRC-8/DVB-S2: the frame checksum, over every byte before it.
     pub const CRC_ALGORITHM: rt::crc::Algorithm<u8> = rt::crc::Algorithm {
         width: 8usize as u8,
@@ -160,7 +168,7 @@ pub mod msp_v2 {
                 &FRAME,
                 |b| u32::from(checksum(rt::covered(b, 3))),
             )?;
-            rt::length_field(frame, 6, 2, true, true, -9)?;
+            LENGTH.check(frame)?;
             let message = Self::dispatch(frame)?;
             rt::Ok(Decoded { address, message })
         }
@@ -404,7 +412,7 @@ pub mod msp_v2 {
                 &FRAME,
                 |b| u32::from(checksum(rt::covered(b, 3))),
             )?;
-            rt::length_field(frame, 6, 2, true, true, -9)?;
+            LENGTH.check(frame)?;
             let message = Self::dispatch(frame)?;
             if let rt::Some(request) = request {
                 if request.replies() >> message.index() & 1 == 0 {

@@ -63,6 +63,14 @@ pub mod optional_sensor {
         end: &[],
         end_first: false,
     };
+    /// The length field: `width` bytes at `at`, holding the frame's length plus `k`.
+    const LENGTH: rt::FrameLength = rt::FrameLength {
+        at: 2,
+        width: 1,
+        le: false,
+        grows: true,
+        k: -5,
+    };
     /// The frame checksum: 8-bit sum of every byte before it.
     #[inline]
     pub fn checksum(bytes: &[u8]) -> u8 {
@@ -299,7 +307,7 @@ pub mod optional_sensor {
                 &FRAME,
                 |b| u32::from(checksum(rt::covered(b, 1))),
             )?;
-            rt::length_field(frame, 2, 1, false, true, -5)?;
+            LENGTH.check(frame)?;
             let message = Self::dispatch(frame)?;
             rt::Ok(Decoded { address, message })
         }
@@ -546,7 +554,7 @@ pub mod optional_sensor {
                             &[v_humidity.is_some(), v_pressure.is_some()],
                             buf,
                         )?;
-                    rt::put_length(out, 2, 1, false, true, -5)?;
+                    LENGTH.put(out)?;
                     out.len()
                 }
                 Self::Event(response::Event { kind: v_kind, detail: v_detail }) => {
@@ -568,7 +576,7 @@ pub mod optional_sensor {
                         out[5..7].copy_from_slice(&v_detail.to_be_bytes());
                     }
                     let out = OPTIONAL_EVENT.pack(&compact, &[v_detail.is_some()], buf)?;
-                    rt::put_length(out, 2, 1, false, true, -5)?;
+                    LENGTH.put(out)?;
                     out.len()
                 }
             };
@@ -609,7 +617,7 @@ pub mod optional_sensor {
                 &FRAME,
                 |b| u32::from(checksum(rt::covered(b, 1))),
             )?;
-            rt::length_field(frame, 2, 1, false, true, -5)?;
+            LENGTH.check(frame)?;
             let message = Self::dispatch(frame)?;
             if let rt::Some(request) = request {
                 if request.replies() >> message.index() & 1 == 0 {

@@ -63,6 +63,14 @@ pub mod packed_channels {
         end: &[],
         end_first: false,
     };
+    /// The length field: `width` bytes at `at`, holding the frame's length plus `k`.
+    const LENGTH: rt::FrameLength = rt::FrameLength {
+        at: 1,
+        width: 1,
+        le: false,
+        grows: true,
+        k: -2,
+    };
     /// CRC-8/DVB-S2: the frame checksum, over every byte before it.
     pub const CRC_ALGORITHM: rt::crc::Algorithm<u8> = rt::crc::Algorithm {
         width: 8usize as u8,
@@ -418,7 +426,7 @@ pub mod packed_channels {
                 &FRAME,
                 |b| u32::from(checksum(rt::covered(b, 2))),
             )?;
-            rt::length_field(frame, 1, 1, false, true, -2)?;
+            LENGTH.check(frame)?;
             let message = Self::dispatch(frame)?;
             rt::Ok(Decoded { address, message })
         }
@@ -818,7 +826,7 @@ pub mod packed_channels {
                 &FRAME,
                 |b| u32::from(checksum(rt::covered(b, 2))),
             )?;
-            rt::length_field(frame, 1, 1, false, true, -2)?;
+            LENGTH.check(frame)?;
             let message = Self::dispatch(frame)?;
             if let rt::Some(request) = request {
                 if request.replies() >> message.index() & 1 == 0 {

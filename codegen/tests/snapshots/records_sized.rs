@@ -63,6 +63,14 @@ pub mod records_sized {
         end: &[],
         end_first: false,
     };
+    /// The length field: `width` bytes at `at`, holding the frame's length plus `k`.
+    const LENGTH: rt::FrameLength = rt::FrameLength {
+        at: 2,
+        width: 1,
+        le: true,
+        grows: true,
+        k: -4,
+    };
     /// The frame checksum: 8-bit sum of every byte before it.
     #[inline]
     pub fn checksum(bytes: &[u8]) -> u8 {
@@ -381,7 +389,7 @@ pub mod records_sized {
                         .encode_len_sized(v_blocks.len(), (v_data_length) as u64)?;
                     let last_width = (v_data_length) as usize;
                     let out = rt::frame_mut_len(buf, frame_len, &[0xC5, address])?;
-                    rt::put_length(out, 2, 1, true, true, -4)?;
+                    LENGTH.put(out)?;
                     out[3] = 0x83;
                     out[4..6].copy_from_slice(&v_start_address.to_le_bytes());
                     out[6..8].copy_from_slice(&v_data_length.to_le_bytes());
@@ -405,7 +413,7 @@ pub mod records_sized {
                         .encode_len_sized(v_offsets.len(), (v_width) as u64)?;
                     let last_width = (v_width) as usize;
                     let out = rt::frame_mut_len(buf, frame_len, &[0xC5, address])?;
-                    rt::put_length(out, 2, 1, true, true, -4)?;
+                    LENGTH.put(out)?;
                     out[3] = 0x84;
                     out[4] = v_width;
                     let rec_width = 1 + last_width;
@@ -438,7 +446,7 @@ pub mod records_sized {
                 &FRAME,
                 |b| u32::from(checksum(rt::covered(b, 1))),
             )?;
-            rt::length_field(frame, 2, 1, true, true, -4)?;
+            LENGTH.check(frame)?;
             let message = Self::dispatch(frame)?;
             rt::Ok(Decoded { address, message })
         }
@@ -666,7 +674,7 @@ pub mod records_sized {
                 &FRAME,
                 |b| u32::from(checksum(rt::covered(b, 1))),
             )?;
-            rt::length_field(frame, 2, 1, true, true, -4)?;
+            LENGTH.check(frame)?;
             let message = Self::dispatch(frame)?;
             if let rt::Some(request) = request {
                 if request.replies() >> message.index() & 1 == 0 {

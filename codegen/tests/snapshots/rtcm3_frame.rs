@@ -63,6 +63,14 @@ pub mod rtcm3_frame {
         end: &[],
         end_first: false,
     };
+    /// The length field: `width` bytes at `at`, holding the frame's length plus `k`.
+    const LENGTH: rt::FrameLength = rt::FrameLength {
+        at: 1,
+        width: 2,
+        le: false,
+        grows: true,
+        k: -6,
+    };
     /// CRC-24/LTE-A: the frame checksum, over every byte before it.
     pub const CRC_ALGORITHM: rt::crc::Algorithm<u32> = rt::crc::Algorithm {
         width: 24usize as u8,
@@ -161,7 +169,7 @@ pub mod rtcm3_frame {
                 ) => {
                     let frame_len = REPEAT_STATION_ARP.encode_len(v_rest.len())?;
                     let out = rt::frame_mut_len(buf, frame_len, &[0xD3])?;
-                    rt::put_length(out, 1, 2, false, true, -6)?;
+                    LENGTH.put(out)?;
                     let field_0: u16 = (0x3ED << 4)
                         | ((rt::fits("station_high", v_station_high, 0, 15)? as u16)
                             & 0xF);
@@ -174,7 +182,7 @@ pub mod rtcm3_frame {
                 ) => {
                     let frame_len = REPEAT_ANTENNA.encode_len(v_rest.len())?;
                     let out = rt::frame_mut_len(buf, frame_len, &[0xD3])?;
-                    rt::put_length(out, 1, 2, false, true, -6)?;
+                    LENGTH.put(out)?;
                     let field_0: u16 = (0x3EF << 4)
                         | ((rt::fits("station_high", v_station_high, 0, 15)? as u16)
                             & 0xF);
@@ -198,7 +206,7 @@ pub mod rtcm3_frame {
                 &FRAME,
                 |b| u32::from(checksum(b)),
             )?;
-            rt::length_field(frame, 1, 2, false, true, -6)?;
+            LENGTH.check(frame)?;
             let message = Self::dispatch(frame)?;
             rt::Ok(Decoded { address, message })
         }
@@ -423,7 +431,7 @@ pub mod rtcm3_frame {
                 &FRAME,
                 |b| u32::from(checksum(b)),
             )?;
-            rt::length_field(frame, 1, 2, false, true, -6)?;
+            LENGTH.check(frame)?;
             let message = Self::dispatch(frame)?;
             if let rt::Some(request) = request {
                 if request.replies() >> message.index() & 1 == 0 {
@@ -506,7 +514,7 @@ pub mod rtcm3_frame {
                 &FRAME,
                 |b| u32::from(checksum(b)),
             )?;
-            rt::length_field(frame, 1, 2, false, true, -6)?;
+            LENGTH.check(frame)?;
             let message = Self::dispatch(frame)?;
             rt::Ok(Decoded { address, message })
         }

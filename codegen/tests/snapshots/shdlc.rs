@@ -85,6 +85,22 @@ pub mod shdlc {
         checksum_be: true,
         checksum_from_end: 2,
     };
+    /// The length field: `width` bytes at `at`, holding the frame's length plus `k`.
+    const REQUEST_LENGTH: rt::FrameLength = rt::FrameLength {
+        at: 3,
+        width: 1,
+        le: false,
+        grows: true,
+        k: -6,
+    };
+    /// The length field: `width` bytes at `at`, holding the frame's length plus `k`.
+    const RESPONSE_LENGTH: rt::FrameLength = rt::FrameLength {
+        at: 4,
+        width: 1,
+        le: false,
+        grows: true,
+        k: -7,
+    };
     /// The frame checksum: the 8-bit sum of the bytes it covers, inverted.
     #[inline]
     pub fn checksum(bytes: &[u8]) -> u8 {
@@ -416,7 +432,7 @@ pub mod shdlc {
                 &FRAME,
                 |b| u32::from(checksum(rt::covered(b, 1))),
             )?;
-            rt::length_field(frame, 3, 1, false, true, -6)?;
+            REQUEST_LENGTH.check(frame)?;
             let message = Self::dispatch(frame)?;
             rt::Ok(Decoded { address, message })
         }
@@ -801,7 +817,7 @@ pub mod shdlc {
                             *b = 0;
                         }
                     }
-                    rt::put_length(out, 4, 1, false, true, -7)?;
+                    RESPONSE_LENGTH.put(out)?;
                     out.len()
                 }
                 Self::ResetDone(response::ResetDone { state: v_state }) => {
@@ -869,7 +885,7 @@ pub mod shdlc {
                 &FRAME,
                 |b| u32::from(checksum(rt::covered(b, 1))),
             )?;
-            rt::length_field(frame, 4, 1, false, true, -7)?;
+            RESPONSE_LENGTH.check(frame)?;
             let message = Self::dispatch(frame, request)?;
             if let rt::Some(request) = request {
                 if request.replies() >> message.index() & 1 == 0 {

@@ -63,6 +63,14 @@ pub mod syncy {
         end: &[],
         end_first: false,
     };
+    /// The length field: `width` bytes at `at`, holding the frame's length plus `k`.
+    const LENGTH: rt::FrameLength = rt::FrameLength {
+        at: 3,
+        width: 1,
+        le: false,
+        grows: true,
+        k: -4,
+    };
     /// The frame checksum: the 8-bit sum of the bytes it covers, inverted.
     #[inline]
     pub fn checksum(bytes: &[u8]) -> u8 {
@@ -216,7 +224,7 @@ pub mod syncy {
                 &FRAME,
                 |b| u32::from(checksum(rt::covered(b, 2))),
             )?;
-            rt::length_field(frame, 3, 1, false, true, -4)?;
+            LENGTH.check(frame)?;
             let message = Self::dispatch(frame)?;
             rt::Ok(Decoded { address, message })
         }
@@ -487,7 +495,7 @@ pub mod syncy {
                 &FRAME,
                 |b| u32::from(checksum(rt::covered(b, 2))),
             )?;
-            rt::length_field(frame, 3, 1, false, true, -4)?;
+            LENGTH.check(frame)?;
             let message = Self::dispatch(frame)?;
             if let rt::Some(request) = request {
                 if request.replies() >> message.index() & 1 == 0 {

@@ -63,6 +63,14 @@ pub mod telemetry_le {
         end: &[],
         end_first: false,
     };
+    /// The length field: `width` bytes at `at`, holding the frame's length plus `k`.
+    const LENGTH: rt::FrameLength = rt::FrameLength {
+        at: 2,
+        width: 1,
+        le: true,
+        grows: true,
+        k: -4,
+    };
     /// The frame checksum: 8-bit XOR of the bytes it covers.
     #[inline]
     pub fn checksum(bytes: &[u8]) -> u8 {
@@ -154,7 +162,7 @@ pub mod telemetry_le {
                 &FRAME,
                 |b| u32::from(checksum(rt::covered(b, 2))),
             )?;
-            rt::length_field(frame, 2, 1, true, true, -4)?;
+            LENGTH.check(frame)?;
             let message = Self::dispatch(frame)?;
             rt::Ok(Decoded { address, message })
         }
@@ -406,7 +414,7 @@ pub mod telemetry_le {
                 &FRAME,
                 |b| u32::from(checksum(rt::covered(b, 2))),
             )?;
-            rt::length_field(frame, 2, 1, true, true, -4)?;
+            LENGTH.check(frame)?;
             let message = Self::dispatch(frame)?;
             if let rt::Some(request) = request {
                 if request.replies() >> message.index() & 1 == 0 {

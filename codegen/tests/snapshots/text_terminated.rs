@@ -63,6 +63,14 @@ pub mod text_terminated {
         end: &[],
         end_first: false,
     };
+    /// The length field: `width` bytes at `at`, holding the frame's length plus `k`.
+    const LENGTH: rt::FrameLength = rt::FrameLength {
+        at: 1,
+        width: 1,
+        le: false,
+        grows: true,
+        k: -2,
+    };
     /// The frame checksum: 8-bit XOR of the bytes it covers.
     #[inline]
     pub fn checksum(bytes: &[u8]) -> u8 {
@@ -172,7 +180,7 @@ pub mod text_terminated {
                             *b = 0;
                         }
                     }
-                    rt::put_length(out, 1, 1, false, true, -2)?;
+                    LENGTH.put(out)?;
                     out.len()
                 }
                 Self::ReadParameter(request::ReadParameter { index: v_index }) => {
@@ -196,7 +204,7 @@ pub mod text_terminated {
                 &FRAME,
                 |b| u32::from(checksum(rt::covered(b, 2))),
             )?;
-            rt::length_field(frame, 1, 1, false, true, -2)?;
+            LENGTH.check(frame)?;
             let message = Self::dispatch(frame)?;
             rt::Ok(Decoded { address, message })
         }
@@ -474,7 +482,7 @@ pub mod text_terminated {
                             *b = 0;
                         }
                     }
-                    rt::put_length(out, 1, 1, false, true, -2)?;
+                    LENGTH.put(out)?;
                     out.len()
                 }
                 Self::Ack(response::Ack { status: v_status }) => {
@@ -522,7 +530,7 @@ pub mod text_terminated {
                             *b = 0;
                         }
                     }
-                    rt::put_length(out, 1, 1, false, true, -2)?;
+                    LENGTH.put(out)?;
                     out.len()
                 }
             };
@@ -563,7 +571,7 @@ pub mod text_terminated {
                 &FRAME,
                 |b| u32::from(checksum(rt::covered(b, 2))),
             )?;
-            rt::length_field(frame, 1, 1, false, true, -2)?;
+            LENGTH.check(frame)?;
             let message = Self::dispatch(frame)?;
             if let rt::Some(request) = request {
                 if request.replies() >> message.index() & 1 == 0 {
@@ -724,7 +732,7 @@ pub mod text_terminated {
                 &FRAME,
                 |b| u32::from(checksum(rt::covered(b, 2))),
             )?;
-            rt::length_field(frame, 1, 1, false, true, -2)?;
+            LENGTH.check(frame)?;
             let message = Self::dispatch(frame)?;
             rt::Ok(Decoded { address, message })
         }
@@ -842,7 +850,7 @@ pub mod text_terminated {
                 &FRAME,
                 |b| u32::from(checksum(rt::covered(b, 2))),
             )?;
-            rt::length_field(frame, 1, 1, false, true, -2)?;
+            LENGTH.check(frame)?;
             let message = Self::dispatch(frame)?;
             if let rt::Some(request) = request {
                 if request.replies() >> message.index() & 1 == 0 {

@@ -63,6 +63,14 @@ pub mod ubx_fixed_blocks {
         end: &[],
         end_first: false,
     };
+    /// The length field: `width` bytes at `at`, holding the frame's length plus `k`.
+    const LENGTH: rt::FrameLength = rt::FrameLength {
+        at: 4,
+        width: 2,
+        le: true,
+        grows: true,
+        k: -8,
+    };
     /// The frame checksum: 8-bit Fletcher (modulo 256) of the bytes it covers.
     #[inline]
     pub fn checksum(bytes: &[u8]) -> u16 {
@@ -376,7 +384,7 @@ pub mod ubx_fixed_blocks {
                         true,
                         &mut out[7 + bytes_0..],
                     );
-                    rt::put_length(out, 4, 2, true, true, -8)?;
+                    LENGTH.put(out)?;
                     out.len()
                 }
             };
@@ -396,7 +404,7 @@ pub mod ubx_fixed_blocks {
                 &FRAME,
                 |b| u32::from(checksum(rt::covered(b, 2))),
             )?;
-            rt::length_field(frame, 4, 2, true, true, -8)?;
+            LENGTH.check(frame)?;
             let message = Self::dispatch(frame)?;
             rt::Ok(Decoded { address, message })
         }
@@ -736,7 +744,7 @@ pub mod ubx_fixed_blocks {
                             to.copy_from_slice(&bytes);
                         }
                     }
-                    rt::put_length(out, 4, 2, true, true, -8)?;
+                    LENGTH.put(out)?;
                     out.len()
                 }
                 Self::Ack(response::Ack { class_id: v_class_id, msg_id: v_msg_id }) => {
@@ -786,7 +794,7 @@ pub mod ubx_fixed_blocks {
                 &FRAME,
                 |b| u32::from(checksum(rt::covered(b, 2))),
             )?;
-            rt::length_field(frame, 4, 2, true, true, -8)?;
+            LENGTH.check(frame)?;
             let message = Self::dispatch(frame)?;
             if let rt::Some(request) = request {
                 if request.replies() >> message.index() & 1 == 0 {
@@ -916,7 +924,7 @@ pub mod ubx_fixed_blocks {
                 &FRAME,
                 |b| u32::from(checksum(rt::covered(b, 2))),
             )?;
-            rt::length_field(frame, 4, 2, true, true, -8)?;
+            LENGTH.check(frame)?;
             let message = Self::dispatch(frame)?;
             rt::Ok(Decoded { address, message })
         }

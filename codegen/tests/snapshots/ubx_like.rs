@@ -63,6 +63,14 @@ pub mod ubx_like {
         end: &[],
         end_first: false,
     };
+    /// The length field: `width` bytes at `at`, holding the frame's length plus `k`.
+    const LENGTH: rt::FrameLength = rt::FrameLength {
+        at: 4,
+        width: 2,
+        le: true,
+        grows: true,
+        k: -8,
+    };
     /// The frame checksum: 8-bit Fletcher (modulo 256) of the bytes it covers.
     #[inline]
     pub fn checksum(bytes: &[u8]) -> u16 {
@@ -251,7 +259,7 @@ pub mod ubx_like {
                 &FRAME,
                 |b| u32::from(checksum(rt::covered(b, 2))),
             )?;
-            rt::length_field(frame, 4, 2, true, true, -8)?;
+            LENGTH.check(frame)?;
             let message = Self::dispatch(frame)?;
             rt::Ok(Decoded { address, message })
         }
@@ -641,7 +649,7 @@ pub mod ubx_like {
                         frame_len,
                         &[0xB5, 0x62, 0x01, 0x35],
                     )?;
-                    rt::put_length(out, 4, 2, true, true, -8)?;
+                    LENGTH.put(out)?;
                     out[10] = 0x01;
                     out[6..10].copy_from_slice(&v_itow.to_le_bytes());
                     out[11] = rt::fits(
@@ -700,7 +708,7 @@ pub mod ubx_like {
                 &FRAME,
                 |b| u32::from(checksum(rt::covered(b, 2))),
             )?;
-            rt::length_field(frame, 4, 2, true, true, -8)?;
+            LENGTH.check(frame)?;
             let message = Self::dispatch(frame)?;
             if let rt::Some(request) = request {
                 if request.replies() >> message.index() & 1 == 0 {

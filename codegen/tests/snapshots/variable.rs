@@ -63,6 +63,14 @@ pub mod vario {
         end: &[],
         end_first: false,
     };
+    /// The length field: `width` bytes at `at`, holding the frame's length plus `k`.
+    const LENGTH: rt::FrameLength = rt::FrameLength {
+        at: 3,
+        width: 1,
+        le: false,
+        grows: true,
+        k: -4,
+    };
     /// The frame checksum: 8-bit XOR of the bytes it covers.
     #[inline]
     pub fn checksum(bytes: &[u8]) -> u8 {
@@ -155,7 +163,7 @@ pub mod vario {
                     rt::encode_in_range("quantity", v_quantity, 1, 16)?;
                     let frame_len = REPEAT_WRITE.encode_len(v_values.len())?;
                     let out = rt::frame_mut_len(buf, frame_len, &[0xA5, 0x5A, address])?;
-                    rt::put_length(out, 3, 1, false, true, -4)?;
+                    LENGTH.put(out)?;
                     out[4] = 0x02;
                     let field_0: u8 = v_quantity;
                     out[5] = field_0;
@@ -200,7 +208,7 @@ pub mod vario {
                 &FRAME,
                 |b| u32::from(checksum(rt::covered(b, 2))),
             )?;
-            rt::length_field(frame, 3, 1, false, true, -4)?;
+            LENGTH.check(frame)?;
             let message = Self::dispatch(frame)?;
             rt::Ok(Decoded { address, message })
         }
@@ -405,7 +413,7 @@ pub mod vario {
                 Self::ReadReply(response::ReadReply { values: v_values }) => {
                     let frame_len = REPEAT_READ_REPLY.encode_len(v_values.len())?;
                     let out = rt::frame_mut_len(buf, frame_len, &[0xA5, 0x5A, address])?;
-                    rt::put_length(out, 3, 1, false, true, -4)?;
+                    LENGTH.put(out)?;
                     out[4] = 0x01;
                     rt::write_elements(v_values.as_slice(), 2, false, &mut out[5..]);
                     out.len()
@@ -463,7 +471,7 @@ pub mod vario {
                 &FRAME,
                 |b| u32::from(checksum(rt::covered(b, 2))),
             )?;
-            rt::length_field(frame, 3, 1, false, true, -4)?;
+            LENGTH.check(frame)?;
             let message = Self::dispatch(frame)?;
             if let rt::Some(request) = request {
                 if request.replies() >> message.index() & 1 == 0 {
@@ -611,7 +619,7 @@ pub mod vario {
                 &FRAME,
                 |b| u32::from(checksum(rt::covered(b, 2))),
             )?;
-            rt::length_field(frame, 3, 1, false, true, -4)?;
+            LENGTH.check(frame)?;
             let message = Self::dispatch(frame)?;
             rt::Ok(Decoded { address, message })
         }
@@ -726,7 +734,7 @@ pub mod vario {
                 &FRAME,
                 |b| u32::from(checksum(rt::covered(b, 2))),
             )?;
-            rt::length_field(frame, 3, 1, false, true, -4)?;
+            LENGTH.check(frame)?;
             let message = Self::dispatch(frame)?;
             if let rt::Some(request) = request {
                 if request.replies() >> message.index() & 1 == 0 {

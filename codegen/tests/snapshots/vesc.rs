@@ -77,6 +77,14 @@ pub mod vesc {
         le: false,
         rules: [rt::Some((-6, 7, 523)), rt::Some((-6, 9, 69))],
     };
+    /// The length field: `width` bytes at `at`, holding the frame's length plus `k`.
+    const LENGTH: rt::FrameLength = rt::FrameLength {
+        at: 1,
+        width: 2,
+        le: false,
+        grows: true,
+        k: -6,
+    };
     /// CRC-16/XMODEM: the frame checksum, over every byte before it.
     pub const CRC_ALGORITHM: rt::crc::Algorithm<u16> = rt::crc::Algorithm {
         width: 16usize as u8,
@@ -560,7 +568,7 @@ pub mod vesc {
                 ) => {
                     let frame_len = REPEAT_WRITE_NEW_APP_DATA.encode_len(v_data.len())?;
                     let out = rt::frame_mut_len(buf, frame_len, &[0x02])?;
-                    rt::put_length(out, 1, 2, false, true, -6)?;
+                    LENGTH.put(out)?;
                     out[3] = 0x03;
                     out[4..8].copy_from_slice(&v_offset.to_be_bytes());
                     rt::write_elements(v_data.as_slice(), 1, false, &mut out[8..]);
@@ -623,7 +631,7 @@ pub mod vesc {
                 &FRAME,
                 |b| u32::from(checksum(rt::covered(b, 3))),
             )?;
-            rt::length_field(frame, 1, 2, false, true, -6)?;
+            LENGTH.check(frame)?;
             let message = Self::dispatch(frame)?;
             rt::Ok(Decoded { address, message })
         }
@@ -917,7 +925,7 @@ pub mod vesc {
                 ) => {
                     let frame_len = REPEAT_FW_VERSION_REPLY.encode_len(v_rest.len())?;
                     let out = rt::frame_mut_len(buf, frame_len, &[0x02])?;
-                    rt::put_length(out, 1, 2, false, true, -6)?;
+                    LENGTH.put(out)?;
                     out[3] = 0x00;
                     out[4] = v_fw_major;
                     out[5] = v_fw_minor;
@@ -1027,7 +1035,7 @@ pub mod vesc {
                 &FRAME,
                 |b| u32::from(checksum(rt::covered(b, 3))),
             )?;
-            rt::length_field(frame, 1, 2, false, true, -6)?;
+            LENGTH.check(frame)?;
             let message = Self::dispatch(frame)?;
             if let rt::Some(request) = request {
                 if request.replies() >> message.index() & 1 == 0 {

@@ -85,6 +85,14 @@ pub mod xbee_api2 {
         checksum_be: true,
         checksum_from_end: 1,
     };
+    /// The length field: `width` bytes at `at`, holding the frame's length plus `k`.
+    const LENGTH: rt::FrameLength = rt::FrameLength {
+        at: 1,
+        width: 2,
+        le: false,
+        grows: true,
+        k: -4,
+    };
     /// The frame checksum: the 8-bit sum of the bytes it covers, inverted.
     #[inline]
     pub fn checksum(bytes: &[u8]) -> u8 {
@@ -382,7 +390,7 @@ pub mod xbee_api2 {
                 ) => {
                     let frame_len = REPEAT_AT_COMMAND.encode_len(v_parameter.len())?;
                     let out = rt::frame_mut_len(buf, frame_len, &[0x7E])?;
-                    rt::put_length(out, 1, 2, false, true, -4)?;
+                    LENGTH.put(out)?;
                     out[3] = 0x08;
                     out[4] = v_frame_id;
                     out[5..7].copy_from_slice(&v_command.0);
@@ -401,7 +409,7 @@ pub mod xbee_api2 {
                 ) => {
                     let frame_len = REPEAT_TRANSMIT_REQUEST.encode_len(v_data.len())?;
                     let out = rt::frame_mut_len(buf, frame_len, &[0x7E])?;
-                    rt::put_length(out, 1, 2, false, true, -4)?;
+                    LENGTH.put(out)?;
                     out[3] = 0x10;
                     out[4] = v_frame_id;
                     out[5..13].copy_from_slice(&v_destination64.to_be_bytes());
@@ -446,7 +454,7 @@ pub mod xbee_api2 {
                 &FRAME,
                 |b| u32::from(checksum(rt::covered(b, 3))),
             )?;
-            rt::length_field(frame, 1, 2, false, true, -4)?;
+            LENGTH.check(frame)?;
             let message = Self::dispatch(frame)?;
             rt::Ok(Decoded { address, message })
         }
@@ -690,7 +698,7 @@ pub mod xbee_api2 {
                 ) => {
                     let frame_len = REPEAT_AT_RESPONSE.encode_len(v_data.len())?;
                     let out = rt::frame_mut_len(buf, frame_len, &[0x7E])?;
-                    rt::put_length(out, 1, 2, false, true, -4)?;
+                    LENGTH.put(out)?;
                     out[3] = 0x88;
                     out[4] = v_frame_id;
                     out[5..7].copy_from_slice(&v_command.0);
@@ -730,7 +738,7 @@ pub mod xbee_api2 {
                 ) => {
                     let frame_len = REPEAT_RECEIVE_PACKET.encode_len(v_data.len())?;
                     let out = rt::frame_mut_len(buf, frame_len, &[0x7E])?;
-                    rt::put_length(out, 1, 2, false, true, -4)?;
+                    LENGTH.put(out)?;
                     out[3] = 0x90;
                     out[4..12].copy_from_slice(&v_source64.to_be_bytes());
                     out[12..14].copy_from_slice(&v_source16.to_be_bytes());
@@ -796,7 +804,7 @@ pub mod xbee_api2 {
                 &FRAME,
                 |b| u32::from(checksum(rt::covered(b, 3))),
             )?;
-            rt::length_field(frame, 1, 2, false, true, -4)?;
+            LENGTH.check(frame)?;
             let message = Self::dispatch(frame)?;
             if let rt::Some(request) = request {
                 if request.replies() >> message.index() & 1 == 0 {
