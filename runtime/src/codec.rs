@@ -427,34 +427,37 @@ pub fn not_a_reply(message: &'static str, request: &'static str) -> DecodeError 
     DecodeError::NotAReply { message, request }
 }
 
-/// The error for a code no message of the direction has: its `longest` bytes from `at`, or as
-/// many as lie before the checksum.
-#[inline]
-pub fn unknown_code(
-    frame: &[u8],
-    at: usize,
-    longest: usize,
-    checksum_len: usize,
-    response: bool,
-) -> DecodeError {
-    let n = frame.len().saturating_sub(at + checksum_len).min(longest);
-    let code = frame
-        .iter()
-        .skip(at)
-        .take(n)
-        .fold(0u32, |a, b| (a << 8) | u32::from(*b));
-    let len = n as u8;
-    if response {
-        DecodeError::UnknownResponse {
-            offset: at,
-            code,
-            len,
-        }
-    } else {
-        DecodeError::UnknownCommand {
-            offset: at,
-            code,
-            len,
+/// Where the code of a direction's frames sits (each generated module's `REQUEST_CODE` and
+/// `RESPONSE_CODE`): from `at`, at most `longest` bytes, before a trailer (checksum and end
+/// bytes) of `trailer` bytes.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct CodeAt {
+    pub at: usize,
+    pub longest: usize,
+    pub trailer: usize,
+    /// The direction is the responses' (an unknown code is [`DecodeError::UnknownResponse`]).
+    pub response: bool,
+}
+
+impl CodeAt {
+    /// The error for a code no message of the direction has: its `longest` bytes from `at`,
+    /// or as many as lie before the trailer.
+    #[inline]
+    pub fn unknown(&self, frame: &[u8]) -> DecodeError {
+        let n = frame
+            .len()
+            .saturating_sub(self.at + self.trailer)
+            .min(self.longest);
+        let code = frame
+            .iter()
+            .skip(self.at)
+            .take(n)
+            .fold(0u32, |a, b| (a << 8) | u32::from(*b));
+        let (offset, len) = (self.at, n as u8);
+        if self.response {
+            DecodeError::UnknownResponse { offset, code, len }
+        } else {
+            DecodeError::UnknownCommand { offset, code, len }
         }
     }
 }

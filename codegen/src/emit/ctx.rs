@@ -133,6 +133,9 @@ pub(super) struct Ctx<'a> {
     /// `rt::ListView`/`rt::BitsView` instead of copying it, and its functions take the
     /// frame as `&'a [u8]`.
     pub(super) view: std::cell::Cell<bool>,
+    /// Whether a decoder of each direction (request, response) quotes an unknown code, so
+    /// the module defines its `REQUEST_CODE`/`RESPONSE_CODE` (`dispatch::code_consts`).
+    pub(super) codes_used: std::cell::Cell<[bool; 2]>,
 }
 
 impl<'a> Ctx<'a> {
@@ -215,6 +218,7 @@ impl<'a> Ctx<'a> {
             structs: std::cell::RefCell::new(Vec::new()),
             impls: std::cell::RefCell::new(Vec::new()),
             view: std::cell::Cell::new(false),
+            codes_used: std::cell::Cell::new([false; 2]),
         }
     }
 

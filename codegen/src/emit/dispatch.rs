@@ -49,15 +49,6 @@ pub(super) fn emit_dispatch(ctx: &Ctx, d: Direction, ty: &TokenStream) -> TokenS
     } else {
         quote!(&[u8])
     };
-    // An unknown code is quoted with as many bytes as this direction's longest code.
-    let longest_code = p
-        .framing
-        .direction(d)
-        .code_lengths
-        .iter()
-        .copied()
-        .max()
-        .unwrap_or(1);
     // Constant whole frames (`frame:`) are recognised before the framing is checked.
     let msgs = p.framed(d);
     // Messages without a checksum (`checksum: none`, one code length in their direction:
@@ -82,14 +73,9 @@ pub(super) fn emit_dispatch(ctx: &Ctx, d: Direction, ty: &TokenStream) -> TokenS
         .min()
         .unwrap_or_else(|| if msgs.is_empty() { 0 } else { head_len() });
     let max_len = msgs.iter().map(|m| m.max_len).max().unwrap_or(0);
-    let code_at = |l: usize| p.framing.head(d, l).code;
     let replies = d == Direction::Response;
-    let first_code_at = usize_lit(code_at(1));
-    let unknown = {
-        let clen = p.framing.trailer_len();
-        let (clen, longest_code) = (usize_lit(clen), usize_lit(longest_code));
-        quote!(rt::Err(rt::unknown_code(frame, #first_code_at, #longest_code, #clen, #replies)))
-    };
+    let codes = code_const(d);
+    let unknown = quote!(rt::Err(#codes.unknown(frame)));
     // Code-less messages beside coded ones: the empty code is a prefix of every code, so a
     // frame whose code is known is tried as its coded messages first, then as each code-less
     // one (the interpreter's order: the longest code that matches first), and a frame whose
@@ -184,6 +170,17 @@ pub(super) fn emit_dispatch(ctx: &Ctx, d: Direction, ty: &TokenStream) -> TokenS
     } else {
         quote!()
     };
+    // The direction's `CodeAt` is defined where a decoder quotes an unknown code with it.
+    let name = codes.to_string();
+    if body
+        .iter()
+        .chain([&no_message])
+        .any(|t| t.to_string().contains(&name))
+    {
+        let mut used = ctx.codes_used.get();
+        used[usize::from(d == Direction::Response)] = true;
+        ctx.codes_used.set(used);
+    }
     let dispatch = quote! {
         /// The message of a frame that passed the checks every frame passes, by its code.
         #[inline]
@@ -546,6 +543,41 @@ pub(super) fn length_check(p: &Protocol, d: Direction) -> TokenStream {
         .into_iter()
         .map(|(name, _)| quote!(#name.check(frame)?;));
     quote!(#(#checks)*)
+}
+
+/// The name of direction `d`'s `rt::CodeAt` ([`code_consts`]).
+pub(super) fn code_const(d: Direction) -> Ident {
+    format_ident!("{}_CODE", direction_names(d).0.to_string().to_uppercase())
+}
+
+/// `REQUEST_CODE` and `RESPONSE_CODE`: where each direction's code sits (its first code
+/// length's offset, its longest code, the trailer after it), from which a code no message has
+/// is quoted; each where a decoder of its direction quotes one (`Ctx::codes_used`, so call
+/// this after the decoders are emitted).
+pub(super) fn code_consts(ctx: &Ctx) -> TokenStream {
+    let (p, used) = (ctx.p, ctx.codes_used.get());
+    let consts = [Direction::Request, Direction::Response].map(|d| {
+        if !used[usize::from(d == Direction::Response)] {
+            return quote!();
+        }
+        let name = code_const(d);
+        let longest = p.framing.direction(d).code_lengths.iter().copied().max().unwrap_or(1);
+        let (at, longest, trailer) = (
+            usize_lit(p.framing.head(d, 1).code),
+            usize_lit(longest),
+            usize_lit(p.framing.trailer_len()),
+        );
+        let response = d == Direction::Response;
+        let what = if response { "a response's" } else { "a request's" };
+        let doc = doc(&format!(
+            "Where {what} code sits: from `at`, at most `longest` bytes, before `trailer` bytes."
+        ));
+        quote! {
+            #doc
+            const #name: rt::CodeAt = rt::CodeAt { at: #at, longest: #longest, trailer: #trailer, response: #response };
+        }
+    });
+    quote!(#(#consts)*)
 }
 
 /// The length field of direction `d` as the module names it (`rt::FrameLength`), and again

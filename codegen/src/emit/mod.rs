@@ -189,10 +189,12 @@ fn module_tokens(p: &Protocol, source: &str, spec_path: &str) -> TokenStream {
     let response_view = emit_view(&ctx, Direction::Response);
     let stream = emit_stream(p);
     let descs = emit_descs(&ctx);
+    let codes = code_consts(&ctx);
     let name = ident(&p.name);
     quote! {
       pub mod #name {
         #header
+        #codes
         #checksum
         #over_request
         #unchecked

@@ -63,6 +63,20 @@ pub mod bcd_meter {
         end: &[0x16],
         end_first: false,
     };
+    /// Where a request's code sits: from `at`, at most `longest` bytes, before `trailer` bytes.
+    const REQUEST_CODE: rt::CodeAt = rt::CodeAt {
+        at: 2,
+        longest: 1,
+        trailer: 2,
+        response: false,
+    };
+    /// Where a response's code sits: from `at`, at most `longest` bytes, before `trailer` bytes.
+    const RESPONSE_CODE: rt::CodeAt = rt::CodeAt {
+        at: 2,
+        longest: 1,
+        trailer: 2,
+        response: true,
+    };
     /// The frame checksum: 8-bit sum of every byte before it.
     #[inline]
     pub fn checksum(bytes: &[u8]) -> u8 {
@@ -229,7 +243,7 @@ pub mod bcd_meter {
                         }),
                     )
                 }
-                _ => rt::Err(rt::unknown_code(frame, 2, 1, 2, false)),
+                _ => rt::Err(REQUEST_CODE.unknown(frame)),
             }
         }
         /// The message called `name` in the spec, from each field's raw wire value by its spec
@@ -452,7 +466,7 @@ pub mod bcd_meter {
                     rt::fixed::<5>(frame, &response::Ack::DESC)
                         .map(|_| Self::Ack(response::Ack))
                 }
-                _ => rt::Err(rt::unknown_code(frame, 2, 1, 2, true)),
+                _ => rt::Err(RESPONSE_CODE.unknown(frame)),
             }
         }
         /// The message called `name` in the spec, from each field's raw wire value by its spec

@@ -90,6 +90,20 @@ pub mod cobs_link {
         grows: true,
         k: -4,
     };
+    /// Where a request's code sits: from `at`, at most `longest` bytes, before `trailer` bytes.
+    const REQUEST_CODE: rt::CodeAt = rt::CodeAt {
+        at: 1,
+        longest: 1,
+        trailer: 2,
+        response: false,
+    };
+    /// Where a response's code sits: from `at`, at most `longest` bytes, before `trailer` bytes.
+    const RESPONSE_CODE: rt::CodeAt = rt::CodeAt {
+        at: 1,
+        longest: 1,
+        trailer: 2,
+        response: true,
+    };
     /// CRC-8/SMBUS: the frame checksum, over every byte before it.
     pub const CRC_ALGORITHM: rt::crc::Algorithm<u8> = rt::crc::Algorithm {
         width: 8usize as u8,
@@ -233,7 +247,7 @@ pub mod cobs_link {
                     rt::fixed::<4>(frame, &request::ReadLog::DESC)
                         .map(|_| Self::ReadLog(request::ReadLog))
                 }
-                _ => rt::Err(rt::unknown_code(frame, 1, 1, 2, false)),
+                _ => rt::Err(REQUEST_CODE.unknown(frame)),
             }
         }
         /// The message called `name` in the spec, from each field's raw wire value by its spec
@@ -497,7 +511,7 @@ pub mod cobs_link {
                         }),
                     )
                 }
-                _ => rt::Err(rt::unknown_code(frame, 1, 1, 2, true)),
+                _ => rt::Err(RESPONSE_CODE.unknown(frame)),
             }
         }
         /// The message called `name` in the spec, from each field's raw wire value by its spec

@@ -63,6 +63,20 @@ pub mod clash {
         end: &[],
         end_first: false,
     };
+    /// Where a request's code sits: from `at`, at most `longest` bytes, before `trailer` bytes.
+    const REQUEST_CODE: rt::CodeAt = rt::CodeAt {
+        at: 2,
+        longest: 1,
+        trailer: 1,
+        response: false,
+    };
+    /// Where a response's code sits: from `at`, at most `longest` bytes, before `trailer` bytes.
+    const RESPONSE_CODE: rt::CodeAt = rt::CodeAt {
+        at: 2,
+        longest: 1,
+        trailer: 1,
+        response: true,
+    };
     /// The frame checksum: 8-bit sum of every byte before it.
     #[inline]
     pub fn checksum(bytes: &[u8]) -> u8 {
@@ -380,7 +394,7 @@ pub mod clash {
                     rt::same(&request::Rt::FIELD_DESC, 4, frame[4], "f", frame[3])?;
                     rt::Ok(Self::Rt(request::Rt { f: frame[3] }))
                 }
-                _ => rt::Err(rt::unknown_code(frame, 2, 1, 1, false)),
+                _ => rt::Err(REQUEST_CODE.unknown(frame)),
             }
         }
         /// The message called `name` in the spec, from each field's raw wire value by its spec
@@ -636,7 +650,7 @@ pub mod clash {
                         }),
                     )
                 }
-                _ => rt::Err(rt::unknown_code(frame, 2, 1, 1, true)),
+                _ => rt::Err(RESPONSE_CODE.unknown(frame)),
             }
         }
         /// The message called `name` in the spec, from each field's raw wire value by its spec

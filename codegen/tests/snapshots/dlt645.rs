@@ -82,6 +82,20 @@ pub mod dlt645 {
         grows: true,
         k: -12,
     };
+    /// Where a request's code sits: from `at`, at most `longest` bytes, before `trailer` bytes.
+    const REQUEST_CODE: rt::CodeAt = rt::CodeAt {
+        at: 8,
+        longest: 1,
+        trailer: 2,
+        response: false,
+    };
+    /// Where a response's code sits: from `at`, at most `longest` bytes, before `trailer` bytes.
+    const RESPONSE_CODE: rt::CodeAt = rt::CodeAt {
+        at: 8,
+        longest: 1,
+        trailer: 2,
+        response: true,
+    };
     /// The frame checksum: 8-bit sum of every byte before it.
     #[inline]
     pub fn checksum(bytes: &[u8]) -> u8 {
@@ -252,7 +266,7 @@ pub mod dlt645 {
                         }),
                     )
                 }
-                _ => rt::Err(rt::unknown_code(frame, 8, 1, 2, false)),
+                _ => rt::Err(REQUEST_CODE.unknown(frame)),
             }
         }
         /// The message called `name` in the spec, from each field's raw wire value by its spec
@@ -674,7 +688,7 @@ pub mod dlt645 {
                     });
                     g.end(&response::DataReply::DESC)
                 }
-                _ => rt::Err(rt::unknown_code(frame, 8, 1, 2, true)),
+                _ => rt::Err(RESPONSE_CODE.unknown(frame)),
             }
         }
         /// The message called `name` in the spec, from each field's raw wire value by its spec

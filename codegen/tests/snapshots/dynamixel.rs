@@ -69,6 +69,20 @@ pub mod dynamixel {
         grows: true,
         k: -4,
     };
+    /// Where a request's code sits: from `at`, at most `longest` bytes, before `trailer` bytes.
+    const REQUEST_CODE: rt::CodeAt = rt::CodeAt {
+        at: 4,
+        longest: 1,
+        trailer: 1,
+        response: false,
+    };
+    /// Where a response's code sits: from `at`, at most `longest` bytes, before `trailer` bytes.
+    const RESPONSE_CODE: rt::CodeAt = rt::CodeAt {
+        at: 4,
+        longest: 0,
+        trailer: 1,
+        response: true,
+    };
     /// The frame checksum: the 8-bit sum of the bytes it covers, inverted.
     #[inline]
     pub fn checksum(bytes: &[u8]) -> u8 {
@@ -362,7 +376,7 @@ pub mod dynamixel {
                         }),
                     )
                 }
-                _ => rt::Err(rt::unknown_code(frame, 4, 1, 1, false)),
+                _ => rt::Err(REQUEST_CODE.unknown(frame)),
             }
         }
         /// The message called `name` in the spec, from each field's raw wire value by its spec
@@ -623,7 +637,7 @@ pub mod dynamixel {
                     );
                     g.end(&response::Status::DESC)
                 }
-                _ => rt::Err(rt::unknown_code(frame, 4, 0, 1, true)),
+                _ => rt::Err(RESPONSE_CODE.unknown(frame)),
             }
         }
         /// The message called `name` in the spec, from each field's raw wire value by its spec
@@ -784,7 +798,7 @@ pub mod dynamixel {
                         blocks: REPEAT_SYNC_WRITE.view::<u8, 251>(elements, true, false)?,
                     })
                 }
-                _ => rt::Err(rt::unknown_code(frame, 4, 1, 1, false)),
+                _ => rt::Err(REQUEST_CODE.unknown(frame)),
             }
         }
         /// This message's row in the owned type's `MESSAGES`.
@@ -914,7 +928,7 @@ pub mod dynamixel {
                     );
                     g.end(&response::Status::DESC)
                 }
-                _ => rt::Err(rt::unknown_code(frame, 4, 0, 1, true)),
+                _ => rt::Err(RESPONSE_CODE.unknown(frame)),
             }
         }
         /// This message's row in the owned type's `MESSAGES`.

@@ -93,6 +93,20 @@ pub mod dynamixel2_stuffed {
         grows: true,
         k: -7,
     };
+    /// Where a request's code sits: from `at`, at most `longest` bytes, before `trailer` bytes.
+    const REQUEST_CODE: rt::CodeAt = rt::CodeAt {
+        at: 7,
+        longest: 1,
+        trailer: 2,
+        response: false,
+    };
+    /// Where a response's code sits: from `at`, at most `longest` bytes, before `trailer` bytes.
+    const RESPONSE_CODE: rt::CodeAt = rt::CodeAt {
+        at: 7,
+        longest: 1,
+        trailer: 2,
+        response: true,
+    };
     /// CRC-16/UMTS: the frame checksum, over every byte before it.
     pub const CRC_ALGORITHM: rt::crc::Algorithm<u16> = rt::crc::Algorithm {
         width: 16usize as u8,
@@ -293,7 +307,7 @@ pub mod dynamixel2_stuffed {
                         }),
                     )
                 }
-                _ => rt::Err(rt::unknown_code(frame, 7, 1, 2, false)),
+                _ => rt::Err(REQUEST_CODE.unknown(frame)),
             }
         }
         /// The message called `name` in the spec, from each field's raw wire value by its spec
@@ -545,7 +559,7 @@ pub mod dynamixel2_stuffed {
                     });
                     g.end(&response::PingStatus::DESC)
                 }
-                _ => rt::Err(rt::unknown_code(frame, 7, 1, 2, true)),
+                _ => rt::Err(RESPONSE_CODE.unknown(frame)),
             }
         }
         /// The message called `name` in the spec, from each field's raw wire value by its spec

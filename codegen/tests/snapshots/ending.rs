@@ -63,6 +63,20 @@ pub mod ending {
         end: &[],
         end_first: false,
     };
+    /// Where a request's code sits: from `at`, at most `longest` bytes, before `trailer` bytes.
+    const REQUEST_CODE: rt::CodeAt = rt::CodeAt {
+        at: 3,
+        longest: 1,
+        trailer: 1,
+        response: false,
+    };
+    /// Where a response's code sits: from `at`, at most `longest` bytes, before `trailer` bytes.
+    const RESPONSE_CODE: rt::CodeAt = rt::CodeAt {
+        at: 3,
+        longest: 1,
+        trailer: 1,
+        response: true,
+    };
     /// The frame checksum: 8-bit XOR of the bytes it covers.
     #[inline]
     pub fn checksum(bytes: &[u8]) -> u8 {
@@ -242,7 +256,7 @@ pub mod ending {
                         }),
                     )
                 }
-                _ => rt::Err(rt::unknown_code(frame, 3, 1, 1, false)),
+                _ => rt::Err(REQUEST_CODE.unknown(frame)),
             }
         }
         /// The message called `name` in the spec, from each field's raw wire value by its spec
@@ -496,7 +510,7 @@ pub mod ending {
                         }),
                     )
                 }
-                _ => rt::Err(rt::unknown_code(frame, 3, 1, 1, true)),
+                _ => rt::Err(RESPONSE_CODE.unknown(frame)),
             }
         }
         /// The message called `name` in the spec, from each field's raw wire value by its spec
@@ -642,7 +656,7 @@ pub mod ending {
                         ticks: rt::u24([frame[4], frame[5], frame[6]], false),
                     })
                 }
-                _ => rt::Err(rt::unknown_code(frame, 3, 1, 1, false)),
+                _ => rt::Err(REQUEST_CODE.unknown(frame)),
             }
         }
         /// This message's row in the owned type's `MESSAGES`.
@@ -751,7 +765,7 @@ pub mod ending {
                         status: frame[4],
                     })
                 }
-                _ => rt::Err(rt::unknown_code(frame, 3, 1, 1, true)),
+                _ => rt::Err(RESPONSE_CODE.unknown(frame)),
             }
         }
         /// This message's row in the owned type's `MESSAGES`.

@@ -79,6 +79,20 @@ pub mod ft12_variable {
         grows: true,
         k: -6,
     };
+    /// Where a request's code sits: from `at`, at most `longest` bytes, before `trailer` bytes.
+    const REQUEST_CODE: rt::CodeAt = rt::CodeAt {
+        at: 4,
+        longest: 1,
+        trailer: 2,
+        response: false,
+    };
+    /// Where a response's code sits: from `at`, at most `longest` bytes, before `trailer` bytes.
+    const RESPONSE_CODE: rt::CodeAt = rt::CodeAt {
+        at: 4,
+        longest: 1,
+        trailer: 2,
+        response: true,
+    };
     /// The frame checksum: 8-bit sum of every byte before it.
     #[inline]
     pub fn checksum(bytes: &[u8]) -> u8 {
@@ -173,7 +187,7 @@ pub mod ft12_variable {
                     rt::equal(&request::ReadData::CI_DESC, 6, frame[6], 0x5B)?;
                     rt::Ok(Self::ReadData(request::ReadData))
                 }
-                _ => rt::Err(rt::unknown_code(frame, 4, 1, 2, false)),
+                _ => rt::Err(REQUEST_CODE.unknown(frame)),
             }
         }
         /// The message called `name` in the spec, from each field's raw wire value by its spec
@@ -420,7 +434,7 @@ pub mod ft12_variable {
                         }),
                     )
                 }
-                _ => rt::Err(rt::unknown_code(frame, 4, 1, 2, true)),
+                _ => rt::Err(RESPONSE_CODE.unknown(frame)),
             }
         }
         /// The message called `name` in the spec, from each field's raw wire value by its spec

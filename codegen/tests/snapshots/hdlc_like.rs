@@ -85,6 +85,20 @@ pub mod hdlc_like {
         checksum_be: false,
         checksum_from_end: 3,
     };
+    /// Where a request's code sits: from `at`, at most `longest` bytes, before `trailer` bytes.
+    const REQUEST_CODE: rt::CodeAt = rt::CodeAt {
+        at: 2,
+        longest: 1,
+        trailer: 3,
+        response: false,
+    };
+    /// Where a response's code sits: from `at`, at most `longest` bytes, before `trailer` bytes.
+    const RESPONSE_CODE: rt::CodeAt = rt::CodeAt {
+        at: 2,
+        longest: 1,
+        trailer: 3,
+        response: true,
+    };
     /// CRC-16/IBM-SDLC: the frame checksum, over every byte before it.
     pub const CRC_ALGORITHM: rt::crc::Algorithm<u16> = rt::crc::Algorithm {
         width: 16usize as u8,
@@ -232,7 +246,7 @@ pub mod hdlc_like {
                         }),
                     )
                 }
-                _ => rt::Err(rt::unknown_code(frame, 2, 1, 3, false)),
+                _ => rt::Err(REQUEST_CODE.unknown(frame)),
             }
         }
         /// The message called `name` in the spec, from each field's raw wire value by its spec
@@ -460,7 +474,7 @@ pub mod hdlc_like {
                     rt::fixed::<6>(frame, &response::Ack::DESC)
                         .map(|_| Self::Ack(response::Ack))
                 }
-                _ => rt::Err(rt::unknown_code(frame, 2, 1, 3, true)),
+                _ => rt::Err(RESPONSE_CODE.unknown(frame)),
             }
         }
         /// The message called `name` in the spec, from each field's raw wire value by its spec

@@ -71,6 +71,20 @@ pub mod jbd_bms {
         grows: true,
         k: -7,
     };
+    /// Where a request's code sits: from `at`, at most `longest` bytes, before `trailer` bytes.
+    const REQUEST_CODE: rt::CodeAt = rt::CodeAt {
+        at: 2,
+        longest: 1,
+        trailer: 3,
+        response: false,
+    };
+    /// Where a response's code sits: from `at`, at most `longest` bytes, before `trailer` bytes.
+    const RESPONSE_CODE: rt::CodeAt = rt::CodeAt {
+        at: 1,
+        longest: 1,
+        trailer: 3,
+        response: true,
+    };
     /// The frame checksum: the 16-bit sum of the bytes it covers, negated.
     #[inline]
     pub fn checksum(bytes: &[u8]) -> u16 {
@@ -477,7 +491,7 @@ pub mod jbd_bms {
                         }),
                     )
                 }
-                _ => rt::Err(rt::unknown_code(frame, 2, 1, 3, false)),
+                _ => rt::Err(REQUEST_CODE.unknown(frame)),
             }
         }
         /// The message called `name` in the spec, from each field's raw wire value by its spec
@@ -931,7 +945,7 @@ pub mod jbd_bms {
                     });
                     g.end(&response::Version::DESC)
                 }
-                _ => rt::Err(rt::unknown_code(frame, 1, 1, 3, true)),
+                _ => rt::Err(RESPONSE_CODE.unknown(frame)),
             }
         }
         /// The message called `name` in the spec, from each field's raw wire value by its spec
@@ -1209,7 +1223,7 @@ pub mod jbd_bms {
                     });
                     g.end(&response::Version::DESC)
                 }
-                _ => rt::Err(rt::unknown_code(frame, 1, 1, 3, true)),
+                _ => rt::Err(RESPONSE_CODE.unknown(frame)),
             }
         }
         /// This message's row in the owned type's `MESSAGES`.

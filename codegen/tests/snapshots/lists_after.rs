@@ -63,6 +63,20 @@ pub mod lists_after {
         end: &[],
         end_first: false,
     };
+    /// Where a request's code sits: from `at`, at most `longest` bytes, before `trailer` bytes.
+    const REQUEST_CODE: rt::CodeAt = rt::CodeAt {
+        at: 2,
+        longest: 1,
+        trailer: 1,
+        response: false,
+    };
+    /// Where a response's code sits: from `at`, at most `longest` bytes, before `trailer` bytes.
+    const RESPONSE_CODE: rt::CodeAt = rt::CodeAt {
+        at: 2,
+        longest: 1,
+        trailer: 1,
+        response: true,
+    };
     /// The frame checksum: 8-bit XOR of the bytes it covers.
     #[inline]
     pub fn checksum(bytes: &[u8]) -> u8 {
@@ -350,7 +364,7 @@ pub mod lists_after {
                         }),
                     )
                 }
-                _ => rt::Err(rt::unknown_code(frame, 2, 1, 1, false)),
+                _ => rt::Err(REQUEST_CODE.unknown(frame)),
             }
         }
         /// The message called `name` in the spec, from each field's raw wire value by its spec
@@ -607,7 +621,7 @@ pub mod lists_after {
                     let frame = rt::fixed::<5>(frame, &response::Ack::DESC)?;
                     rt::Ok(Self::Ack(response::Ack { status: frame[3] }))
                 }
-                _ => rt::Err(rt::unknown_code(frame, 2, 1, 1, true)),
+                _ => rt::Err(RESPONSE_CODE.unknown(frame)),
             }
         }
         /// The message called `name` in the spec, from each field's raw wire value by its spec
@@ -755,7 +769,7 @@ pub mod lists_after {
                         targets: v_targets,
                     })
                 }
-                _ => rt::Err(rt::unknown_code(frame, 2, 1, 1, false)),
+                _ => rt::Err(REQUEST_CODE.unknown(frame)),
             }
         }
         /// This message's row in the owned type's `MESSAGES`.
@@ -862,7 +876,7 @@ pub mod lists_after {
                     let frame = rt::fixed::<5>(frame, &response::Ack::DESC)?;
                     rt::Ok(Self::Ack { status: frame[3] })
                 }
-                _ => rt::Err(rt::unknown_code(frame, 2, 1, 1, true)),
+                _ => rt::Err(RESPONSE_CODE.unknown(frame)),
             }
         }
         /// This message's row in the owned type's `MESSAGES`.

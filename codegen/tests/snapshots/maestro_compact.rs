@@ -63,6 +63,20 @@ pub mod maestro_compact {
         end: &[],
         end_first: false,
     };
+    /// Where a request's code sits: from `at`, at most `longest` bytes, before `trailer` bytes.
+    const REQUEST_CODE: rt::CodeAt = rt::CodeAt {
+        at: 0,
+        longest: 1,
+        trailer: 0,
+        response: false,
+    };
+    /// Where a response's code sits: from `at`, at most `longest` bytes, before `trailer` bytes.
+    const RESPONSE_CODE: rt::CodeAt = rt::CodeAt {
+        at: 0,
+        longest: 0,
+        trailer: 0,
+        response: true,
+    };
     /// Frames carry no checksum: nothing to compute.
     #[inline]
     pub fn checksum(_bytes: &[u8]) -> u8 {
@@ -249,7 +263,7 @@ pub mod maestro_compact {
                         }),
                     )
                 }
-                _ => rt::Err(rt::unknown_code(frame, 0, 1, 0, false)),
+                _ => rt::Err(REQUEST_CODE.unknown(frame)),
             }
         }
         /// The message called `name` in the spec, from each field's raw wire value by its spec
@@ -451,7 +465,7 @@ pub mod maestro_compact {
                         }),
                     )
                 }
-                _ => rt::Err(rt::unknown_code(frame, 0, 0, 0, true)),
+                _ => rt::Err(RESPONSE_CODE.unknown(frame)),
             }
         }
         /// The message called `name` in the spec, from each field's raw wire value by its spec

@@ -71,6 +71,20 @@ pub mod mavlink_v1 {
         grows: true,
         k: -8,
     };
+    /// Where a request's code sits: from `at`, at most `longest` bytes, before `trailer` bytes.
+    const REQUEST_CODE: rt::CodeAt = rt::CodeAt {
+        at: 5,
+        longest: 1,
+        trailer: 2,
+        response: false,
+    };
+    /// Where a response's code sits: from `at`, at most `longest` bytes, before `trailer` bytes.
+    const RESPONSE_CODE: rt::CodeAt = rt::CodeAt {
+        at: 5,
+        longest: 1,
+        trailer: 2,
+        response: true,
+    };
     /// CRC-16/MCRF4XX: the frame checksum, over every byte before it.
     pub const CRC_ALGORITHM: rt::crc::Algorithm<u16> = rt::crc::Algorithm {
         width: 16usize as u8,
@@ -280,7 +294,7 @@ pub mod mavlink_v1 {
                         }),
                     )
                 }
-                _ => rt::Err(rt::unknown_code(frame, 5, 1, 2, false)),
+                _ => rt::Err(REQUEST_CODE.unknown(frame)),
             }
         }
         /// The message called `name` in the spec, from each field's raw wire value by its spec
@@ -748,7 +762,7 @@ pub mod mavlink_v1 {
                         }),
                     )
                 }
-                _ => rt::Err(rt::unknown_code(frame, 5, 1, 2, true)),
+                _ => rt::Err(RESPONSE_CODE.unknown(frame)),
             }
         }
         /// The message called `name` in the spec, from each field's raw wire value by its spec

@@ -95,6 +95,20 @@ pub mod mavlink_v2 {
         grows: true,
         k: -12,
     };
+    /// Where a request's code sits: from `at`, at most `longest` bytes, before `trailer` bytes.
+    const REQUEST_CODE: rt::CodeAt = rt::CodeAt {
+        at: 7,
+        longest: 3,
+        trailer: 2,
+        response: false,
+    };
+    /// Where a response's code sits: from `at`, at most `longest` bytes, before `trailer` bytes.
+    const RESPONSE_CODE: rt::CodeAt = rt::CodeAt {
+        at: 7,
+        longest: 3,
+        trailer: 2,
+        response: true,
+    };
     /// CRC-16/MCRF4XX: the frame checksum, over every byte before it.
     pub const CRC_ALGORITHM: rt::crc::Algorithm<u16> = rt::crc::Algorithm {
         width: 16usize as u8,
@@ -359,7 +373,7 @@ pub mod mavlink_v2 {
                         }),
                     )
                 }
-                _ => rt::Err(rt::unknown_code(frame, 7, 3, 2, false)),
+                _ => rt::Err(REQUEST_CODE.unknown(frame)),
             }
         }
         /// The message called `name` in the spec, from each field's raw wire value by its spec
@@ -1128,7 +1142,7 @@ pub mod mavlink_v2 {
                         }),
                     )
                 }
-                _ => rt::Err(rt::unknown_code(frame, 7, 3, 2, true)),
+                _ => rt::Err(RESPONSE_CODE.unknown(frame)),
             }
         }
         /// The message called `name` in the spec, from each field's raw wire value by its spec

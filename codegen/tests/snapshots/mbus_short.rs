@@ -63,6 +63,20 @@ pub mod mbus_short {
         end: &[0x16],
         end_first: false,
     };
+    /// Where a request's code sits: from `at`, at most `longest` bytes, before `trailer` bytes.
+    const REQUEST_CODE: rt::CodeAt = rt::CodeAt {
+        at: 1,
+        longest: 1,
+        trailer: 2,
+        response: false,
+    };
+    /// Where a response's code sits: from `at`, at most `longest` bytes, before `trailer` bytes.
+    const RESPONSE_CODE: rt::CodeAt = rt::CodeAt {
+        at: 1,
+        longest: 1,
+        trailer: 2,
+        response: true,
+    };
     /// The frame checksum: 8-bit sum of every byte before it.
     #[inline]
     pub fn checksum(bytes: &[u8]) -> u8 {
@@ -149,7 +163,7 @@ pub mod mbus_short {
                     rt::no_broadcast(frame[2], 0xFF, &request::ReqSke::DESC)?;
                     rt::Ok(Self::ReqSke(request::ReqSke))
                 }
-                _ => rt::Err(rt::unknown_code(frame, 1, 1, 2, false)),
+                _ => rt::Err(REQUEST_CODE.unknown(frame)),
             }
         }
         /// The message called `name` in the spec, from each field's raw wire value by its spec
@@ -349,7 +363,7 @@ pub mod mbus_short {
                     rt::fixed::<5>(frame, &response::StatusOfLink::DESC)
                         .map(|_| Self::StatusOfLink(response::StatusOfLink))
                 }
-                _ => rt::Err(rt::unknown_code(frame, 1, 1, 2, true)),
+                _ => rt::Err(RESPONSE_CODE.unknown(frame)),
             }
         }
         /// The message called `name` in the spec, from each field's raw wire value by its spec

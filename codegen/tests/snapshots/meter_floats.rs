@@ -63,6 +63,20 @@ pub mod meter_floats {
         end: &[],
         end_first: false,
     };
+    /// Where a request's code sits: from `at`, at most `longest` bytes, before `trailer` bytes.
+    const REQUEST_CODE: rt::CodeAt = rt::CodeAt {
+        at: 1,
+        longest: 1,
+        trailer: 2,
+        response: false,
+    };
+    /// Where a response's code sits: from `at`, at most `longest` bytes, before `trailer` bytes.
+    const RESPONSE_CODE: rt::CodeAt = rt::CodeAt {
+        at: 1,
+        longest: 1,
+        trailer: 2,
+        response: true,
+    };
     /// CRC-16/MODBUS: the frame checksum, over every byte before it.
     pub const CRC_ALGORITHM: rt::crc::Algorithm<u16> = rt::crc::Algorithm {
         width: 16usize as u8,
@@ -210,7 +224,7 @@ pub mod meter_floats {
                         }),
                     )
                 }
-                _ => rt::Err(rt::unknown_code(frame, 1, 1, 2, false)),
+                _ => rt::Err(REQUEST_CODE.unknown(frame)),
             }
         }
         /// The message called `name` in the spec, from each field's raw wire value by its spec
@@ -559,7 +573,7 @@ pub mod meter_floats {
                         }),
                     )
                 }
-                _ => rt::Err(rt::unknown_code(frame, 1, 1, 2, true)),
+                _ => rt::Err(RESPONSE_CODE.unknown(frame)),
             }
         }
         /// The message called `name` in the spec, from each field's raw wire value by its spec

@@ -63,6 +63,20 @@ pub mod mini {
         end: &[],
         end_first: false,
     };
+    /// Where a request's code sits: from `at`, at most `longest` bytes, before `trailer` bytes.
+    const REQUEST_CODE: rt::CodeAt = rt::CodeAt {
+        at: 2,
+        longest: 2,
+        trailer: 1,
+        response: false,
+    };
+    /// Where a response's code sits: from `at`, at most `longest` bytes, before `trailer` bytes.
+    const RESPONSE_CODE: rt::CodeAt = rt::CodeAt {
+        at: 2,
+        longest: 2,
+        trailer: 1,
+        response: true,
+    };
     /// The frame checksum: 8-bit sum of every byte before it.
     #[inline]
     pub fn checksum(bytes: &[u8]) -> u8 {
@@ -403,7 +417,7 @@ pub mod mini {
                         }),
                     )
                 }
-                _ => rt::Err(rt::unknown_code(frame, 2, 2, 1, false)),
+                _ => rt::Err(REQUEST_CODE.unknown(frame)),
             }
         }
         /// The message called `name` in the spec, from each field's raw wire value by its spec
@@ -639,7 +653,7 @@ pub mod mini {
                 }
             }
             if frame.len() < 5 {
-                return rt::Err(rt::unknown_code(frame, 2, 2, 1, true));
+                return rt::Err(RESPONSE_CODE.unknown(frame));
             }
             match rt::code(frame, 2, 2) {
                 0x3000 => {
@@ -664,7 +678,7 @@ pub mod mini {
                         }),
                     )
                 }
-                _ => rt::Err(rt::unknown_code(frame, 2, 2, 1, true)),
+                _ => rt::Err(RESPONSE_CODE.unknown(frame)),
             }
         }
         /// The message called `name` in the spec, from each field's raw wire value by its spec

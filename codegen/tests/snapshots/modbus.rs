@@ -61,6 +61,20 @@ pub mod modbus {
         end: &[],
         end_first: false,
     };
+    /// Where a request's code sits: from `at`, at most `longest` bytes, before `trailer` bytes.
+    const REQUEST_CODE: rt::CodeAt = rt::CodeAt {
+        at: 1,
+        longest: 1,
+        trailer: 2,
+        response: false,
+    };
+    /// Where a response's code sits: from `at`, at most `longest` bytes, before `trailer` bytes.
+    const RESPONSE_CODE: rt::CodeAt = rt::CodeAt {
+        at: 1,
+        longest: 1,
+        trailer: 2,
+        response: true,
+    };
     /// CRC-16/MODBUS: the frame checksum, over every byte before it.
     pub const CRC_ALGORITHM: rt::crc::Algorithm<u16> = rt::crc::Algorithm {
         width: 16usize as u8,
@@ -660,7 +674,7 @@ pub mod modbus {
                         }),
                     )
                 }
-                _ => rt::Err(rt::unknown_code(frame, 1, 1, 2, false)),
+                _ => rt::Err(REQUEST_CODE.unknown(frame)),
             }
         }
         /// The message called `name` in the spec, from each field's raw wire value by its spec
@@ -1370,7 +1384,7 @@ pub mod modbus {
                         }),
                     )
                 }
-                _ => rt::Err(rt::unknown_code(frame, 1, 1, 2, true)),
+                _ => rt::Err(RESPONSE_CODE.unknown(frame)),
             }
         }
         /// The message called `name` in the spec, from each field's raw wire value by its spec
@@ -1888,7 +1902,7 @@ pub mod modbus {
                             .view::<u16, 123>(elements, false, false)?,
                     })
                 }
-                _ => rt::Err(rt::unknown_code(frame, 1, 1, 2, false)),
+                _ => rt::Err(REQUEST_CODE.unknown(frame)),
             }
         }
         /// This message's row in the owned type's `MESSAGES`.
@@ -2187,7 +2201,7 @@ pub mod modbus {
                         exception_code: ExceptionCode::from_raw(frame[2]),
                     })
                 }
-                _ => rt::Err(rt::unknown_code(frame, 1, 1, 2, true)),
+                _ => rt::Err(RESPONSE_CODE.unknown(frame)),
             }
         }
         /// This message's row in the owned type's `MESSAGES`.

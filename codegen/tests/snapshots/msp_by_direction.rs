@@ -71,6 +71,20 @@ pub mod msp_by_direction {
         grows: true,
         k: -6,
     };
+    /// Where a request's code sits: from `at`, at most `longest` bytes, before `trailer` bytes.
+    const REQUEST_CODE: rt::CodeAt = rt::CodeAt {
+        at: 4,
+        longest: 1,
+        trailer: 1,
+        response: false,
+    };
+    /// Where a response's code sits: from `at`, at most `longest` bytes, before `trailer` bytes.
+    const RESPONSE_CODE: rt::CodeAt = rt::CodeAt {
+        at: 4,
+        longest: 1,
+        trailer: 1,
+        response: true,
+    };
     /// The frame checksum: 8-bit XOR of the bytes it covers.
     #[inline]
     pub fn checksum(bytes: &[u8]) -> u8 {
@@ -205,7 +219,7 @@ pub mod msp_by_direction {
                     rt::fixed::<6>(frame, &request::Attitude::DESC)
                         .map(|_| Self::Attitude(request::Attitude))
                 }
-                _ => rt::Err(rt::unknown_code(frame, 4, 1, 1, false)),
+                _ => rt::Err(REQUEST_CODE.unknown(frame)),
             }
         }
         /// The message called `name` in the spec, from each field's raw wire value by its spec
@@ -462,7 +476,7 @@ pub mod msp_by_direction {
                         }),
                     )
                 }
-                _ => rt::Err(rt::unknown_code(frame, 4, 1, 1, true)),
+                _ => rt::Err(RESPONSE_CODE.unknown(frame)),
             }
         }
         /// The message called `name` in the spec, from each field's raw wire value by its spec
@@ -617,7 +631,7 @@ pub mod msp_by_direction {
                         yaw: i16::from_le_bytes([frame[9], frame[10]]),
                     })
                 }
-                _ => rt::Err(rt::unknown_code(frame, 4, 1, 1, true)),
+                _ => rt::Err(RESPONSE_CODE.unknown(frame)),
             }
         }
         /// This message's row in the owned type's `MESSAGES`.

@@ -71,6 +71,20 @@ pub mod msp_v2 {
         grows: true,
         k: -9,
     };
+    /// Where a request's code sits: from `at`, at most `longest` bytes, before `trailer` bytes.
+    const REQUEST_CODE: rt::CodeAt = rt::CodeAt {
+        at: 4,
+        longest: 2,
+        trailer: 1,
+        response: false,
+    };
+    /// Where a response's code sits: from `at`, at most `longest` bytes, before `trailer` bytes.
+    const RESPONSE_CODE: rt::CodeAt = rt::CodeAt {
+        at: 4,
+        longest: 2,
+        trailer: 1,
+        response: true,
+    };
     /// CRC-8/DVB-S2: the frame checksum, over every byte before it.
     pub const CRC_ALGORITHM: rt::crc::Algorithm<u8> = rt::crc::Algorithm {
         width: 8usize as u8,
@@ -204,7 +218,7 @@ pub mod msp_v2 {
                         }),
                     )
                 }
-                _ => rt::Err(rt::unknown_code(frame, 4, 2, 1, false)),
+                _ => rt::Err(REQUEST_CODE.unknown(frame)),
             }
         }
         /// The message called `name` in the spec, from each field's raw wire value by its spec
@@ -459,7 +473,7 @@ pub mod msp_v2 {
                         }),
                     )
                 }
-                _ => rt::Err(rt::unknown_code(frame, 4, 2, 1, true)),
+                _ => rt::Err(RESPONSE_CODE.unknown(frame)),
             }
         }
         /// The message called `name` in the spec, from each field's raw wire value by its spec

@@ -63,6 +63,20 @@ pub mod nextion {
         end: &[0xFF, 0xFF, 0xFF],
         end_first: false,
     };
+    /// Where a request's code sits: from `at`, at most `longest` bytes, before `trailer` bytes.
+    const REQUEST_CODE: rt::CodeAt = rt::CodeAt {
+        at: 0,
+        longest: 0,
+        trailer: 3,
+        response: false,
+    };
+    /// Where a response's code sits: from `at`, at most `longest` bytes, before `trailer` bytes.
+    const RESPONSE_CODE: rt::CodeAt = rt::CodeAt {
+        at: 0,
+        longest: 1,
+        trailer: 3,
+        response: true,
+    };
     /// Frames carry no checksum: nothing to compute.
     #[inline]
     pub fn checksum(_bytes: &[u8]) -> u8 {
@@ -218,7 +232,7 @@ pub mod nextion {
                         }),
                     )
                 }
-                _ => rt::Err(rt::unknown_code(frame, 0, 0, 3, false)),
+                _ => rt::Err(REQUEST_CODE.unknown(frame)),
             }
         }
         /// The message called `name` in the spec, from each field's raw wire value by its spec
@@ -528,7 +542,7 @@ pub mod nextion {
                         }),
                     )
                 }
-                _ => rt::Err(rt::unknown_code(frame, 0, 1, 3, true)),
+                _ => rt::Err(RESPONSE_CODE.unknown(frame)),
             }
         }
         /// The message called `name` in the spec, from each field's raw wire value by its spec
@@ -640,7 +654,7 @@ pub mod nextion {
                         text: REPEAT_INSTRUCTION.view::<u8, 200>(elements, true, false)?,
                     })
                 }
-                _ => rt::Err(rt::unknown_code(frame, 0, 0, 3, false)),
+                _ => rt::Err(REQUEST_CODE.unknown(frame)),
             }
         }
         /// This message's row in the owned type's `MESSAGES`.
@@ -784,7 +798,7 @@ pub mod nextion {
                         ]),
                     })
                 }
-                _ => rt::Err(rt::unknown_code(frame, 0, 1, 3, true)),
+                _ => rt::Err(RESPONSE_CODE.unknown(frame)),
             }
         }
         /// This message's row in the owned type's `MESSAGES`.

@@ -71,6 +71,20 @@ pub mod optional_sensor {
         grows: true,
         k: -5,
     };
+    /// Where a request's code sits: from `at`, at most `longest` bytes, before `trailer` bytes.
+    const REQUEST_CODE: rt::CodeAt = rt::CodeAt {
+        at: 3,
+        longest: 1,
+        trailer: 1,
+        response: false,
+    };
+    /// Where a response's code sits: from `at`, at most `longest` bytes, before `trailer` bytes.
+    const RESPONSE_CODE: rt::CodeAt = rt::CodeAt {
+        at: 3,
+        longest: 1,
+        trailer: 1,
+        response: true,
+    };
     /// The frame checksum: 8-bit sum of every byte before it.
     #[inline]
     pub fn checksum(bytes: &[u8]) -> u8 {
@@ -323,7 +337,7 @@ pub mod optional_sensor {
                     rt::fixed::<5>(frame, &request::LastEvent::DESC)
                         .map(|_| Self::LastEvent(request::LastEvent))
                 }
-                _ => rt::Err(rt::unknown_code(frame, 3, 1, 1, false)),
+                _ => rt::Err(REQUEST_CODE.unknown(frame)),
             }
         }
         /// The message called `name` in the spec, from each field's raw wire value by its spec
@@ -684,7 +698,7 @@ pub mod optional_sensor {
                         }),
                     )
                 }
-                _ => rt::Err(rt::unknown_code(frame, 3, 1, 1, true)),
+                _ => rt::Err(RESPONSE_CODE.unknown(frame)),
             }
         }
         /// The message called `name` in the spec, from each field's raw wire value by its spec

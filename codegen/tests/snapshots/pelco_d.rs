@@ -63,6 +63,13 @@ pub mod pelco_d2 {
         end: &[],
         end_first: false,
     };
+    /// Where a response's code sits: from `at`, at most `longest` bytes, before `trailer` bytes.
+    const RESPONSE_CODE: rt::CodeAt = rt::CodeAt {
+        at: 2,
+        longest: 0,
+        trailer: 1,
+        response: true,
+    };
     /// The frame checksum: 8-bit sum of every byte before it.
     #[inline]
     pub fn checksum(bytes: &[u8]) -> u8 {
@@ -552,7 +559,7 @@ pub mod pelco_d2 {
                         }),
                     )
                 }
-                _ => rt::Err(rt::unknown_code(frame, 2, 0, 1, true)),
+                _ => rt::Err(RESPONSE_CODE.unknown(frame)),
             }
         }
         /// The message called `name` in the spec, from each field's raw wire value by its spec

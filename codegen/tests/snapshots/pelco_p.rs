@@ -63,6 +63,13 @@ pub mod pelco_p {
         end: &[0xAF],
         end_first: true,
     };
+    /// Where a response's code sits: from `at`, at most `longest` bytes, before `trailer` bytes.
+    const RESPONSE_CODE: rt::CodeAt = rt::CodeAt {
+        at: 2,
+        longest: 0,
+        trailer: 2,
+        response: true,
+    };
     /// The frame checksum: 8-bit XOR of the bytes it covers.
     #[inline]
     pub fn checksum(bytes: &[u8]) -> u8 {
@@ -495,7 +502,7 @@ pub mod pelco_p {
         /// The message of a frame that passed the checks every frame passes, by its code.
         #[inline]
         fn dispatch(frame: &[u8]) -> rt::DecodeResult<Self> {
-            rt::Err(rt::unknown_code(frame, 2, 0, 2, true))
+            rt::Err(RESPONSE_CODE.unknown(frame))
         }
         /// The message called `name` in the spec, from each field's raw wire value by its spec
         /// name, as [`Self::visit`] gives them (`None`: no value); constant and repeated fields

@@ -71,6 +71,20 @@ pub mod records_sized {
         grows: true,
         k: -4,
     };
+    /// Where a request's code sits: from `at`, at most `longest` bytes, before `trailer` bytes.
+    const REQUEST_CODE: rt::CodeAt = rt::CodeAt {
+        at: 3,
+        longest: 1,
+        trailer: 1,
+        response: false,
+    };
+    /// Where a response's code sits: from `at`, at most `longest` bytes, before `trailer` bytes.
+    const RESPONSE_CODE: rt::CodeAt = rt::CodeAt {
+        at: 3,
+        longest: 1,
+        trailer: 1,
+        response: true,
+    };
     /// The frame checksum: 8-bit sum of every byte before it.
     #[inline]
     pub fn checksum(bytes: &[u8]) -> u8 {
@@ -502,7 +516,7 @@ pub mod records_sized {
                         }),
                     )
                 }
-                _ => rt::Err(rt::unknown_code(frame, 3, 1, 1, false)),
+                _ => rt::Err(REQUEST_CODE.unknown(frame)),
             }
         }
         /// The message called `name` in the spec, from each field's raw wire value by its spec
@@ -691,7 +705,7 @@ pub mod records_sized {
                     let frame = rt::fixed::<6>(frame, &response::Ack::DESC)?;
                     rt::Ok(Self::Ack(response::Ack { error: frame[4] }))
                 }
-                _ => rt::Err(rt::unknown_code(frame, 3, 1, 1, true)),
+                _ => rt::Err(RESPONSE_CODE.unknown(frame)),
             }
         }
         /// The message called `name` in the spec, from each field's raw wire value by its spec

@@ -71,6 +71,20 @@ pub mod roboclaw {
         host: rt::None,
         ..FRAME
     };
+    /// Where a request's code sits: from `at`, at most `longest` bytes, before `trailer` bytes.
+    const REQUEST_CODE: rt::CodeAt = rt::CodeAt {
+        at: 1,
+        longest: 1,
+        trailer: 2,
+        response: false,
+    };
+    /// Where a response's code sits: from `at`, at most `longest` bytes, before `trailer` bytes.
+    const RESPONSE_CODE: rt::CodeAt = rt::CodeAt {
+        at: 0,
+        longest: 0,
+        trailer: 2,
+        response: true,
+    };
     /// CRC-16/XMODEM: the frame checksum, over every byte before it.
     pub const CRC_ALGORITHM: rt::crc::Algorithm<u16> = rt::crc::Algorithm {
         width: 16usize as u8,
@@ -719,7 +733,7 @@ pub mod roboclaw {
                     rt::fixed::<2>(frame, &request::ReadStatus::DESC)
                         .map(|_| Self::ReadStatus(request::ReadStatus))
                 }
-                _ => rt::Err(rt::unknown_code(frame, 1, 1, 2, false)),
+                _ => rt::Err(REQUEST_CODE.unknown(frame)),
             }
         }
         /// The message called `name` in the spec, from each field's raw wire value by its spec
@@ -1195,7 +1209,7 @@ pub mod roboclaw {
                     );
                     g.end(&response::Ack::DESC)
                 }
-                _ => rt::Err(rt::unknown_code(frame, 0, 0, 2, true)),
+                _ => rt::Err(RESPONSE_CODE.unknown(frame)),
             }
         }
         /// The message called `name` in the spec, from each field's raw wire value by its spec

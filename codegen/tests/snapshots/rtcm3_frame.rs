@@ -71,6 +71,20 @@ pub mod rtcm3_frame {
         grows: true,
         k: -6,
     };
+    /// Where a request's code sits: from `at`, at most `longest` bytes, before `trailer` bytes.
+    const REQUEST_CODE: rt::CodeAt = rt::CodeAt {
+        at: 3,
+        longest: 0,
+        trailer: 3,
+        response: false,
+    };
+    /// Where a response's code sits: from `at`, at most `longest` bytes, before `trailer` bytes.
+    const RESPONSE_CODE: rt::CodeAt = rt::CodeAt {
+        at: 3,
+        longest: 0,
+        trailer: 3,
+        response: true,
+    };
     /// CRC-24/LTE-A: the frame checksum, over every byte before it.
     pub const CRC_ALGORITHM: rt::crc::Algorithm<u32> = rt::crc::Algorithm {
         width: 24usize as u8,
@@ -256,7 +270,7 @@ pub mod rtcm3_frame {
                     );
                     g.end(&request::StationArp::DESC)
                 }
-                _ => rt::Err(rt::unknown_code(frame, 3, 0, 3, false)),
+                _ => rt::Err(REQUEST_CODE.unknown(frame)),
             }
         }
         /// The message called `name` in the spec, from each field's raw wire value by its spec
@@ -443,7 +457,7 @@ pub mod rtcm3_frame {
         /// The message of a frame that passed the checks every frame passes, by its code.
         #[inline]
         fn dispatch(frame: &[u8]) -> rt::DecodeResult<Self> {
-            rt::Err(rt::unknown_code(frame, 3, 0, 3, true))
+            rt::Err(RESPONSE_CODE.unknown(frame))
         }
         /// The message called `name` in the spec, from each field's raw wire value by its spec
         /// name, as [`Self::visit`] gives them (`None`: no value); constant and repeated fields
@@ -559,7 +573,7 @@ pub mod rtcm3_frame {
                     );
                     g.end(&request::StationArp::DESC)
                 }
-                _ => rt::Err(rt::unknown_code(frame, 3, 0, 3, false)),
+                _ => rt::Err(REQUEST_CODE.unknown(frame)),
             }
         }
         /// This message's row in the owned type's `MESSAGES`.

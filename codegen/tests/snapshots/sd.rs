@@ -61,6 +61,20 @@ pub mod sd {
         end: &[],
         end_first: false,
     };
+    /// Where a request's code sits: from `at`, at most `longest` bytes, before `trailer` bytes.
+    const REQUEST_CODE: rt::CodeAt = rt::CodeAt {
+        at: 0,
+        longest: 1,
+        trailer: 2,
+        response: false,
+    };
+    /// Where a response's code sits: from `at`, at most `longest` bytes, before `trailer` bytes.
+    const RESPONSE_CODE: rt::CodeAt = rt::CodeAt {
+        at: 0,
+        longest: 1,
+        trailer: 2,
+        response: true,
+    };
     /// CRC-16/CMS: the frame checksum, over every byte before it.
     pub const CRC_ALGORITHM: rt::crc::Algorithm<u16> = rt::crc::Algorithm {
         width: 16usize as u8,
@@ -1783,7 +1797,7 @@ pub mod sd {
                     rt::equal(&request::ReadPowerUpCycles::ARG2_DESC, 3, frame[3], 0x0)?;
                     rt::Ok(Self::ReadPowerUpCycles(request::ReadPowerUpCycles))
                 }
-                _ => rt::Err(rt::unknown_code(frame, 0, 1, 2, false)),
+                _ => rt::Err(REQUEST_CODE.unknown(frame)),
             }
         }
         /// The message called `name` in the spec, from each field's raw wire value by its spec
@@ -3442,7 +3456,7 @@ pub mod sd {
                         }),
                     )
                 }
-                _ => rt::Err(rt::unknown_code(frame, 0, 1, 2, true)),
+                _ => rt::Err(RESPONSE_CODE.unknown(frame)),
             }
         }
         /// The message called `name` in the spec, from each field's raw wire value by its spec

@@ -101,6 +101,20 @@ pub mod shdlc {
         grows: true,
         k: -7,
     };
+    /// Where a request's code sits: from `at`, at most `longest` bytes, before `trailer` bytes.
+    const REQUEST_CODE: rt::CodeAt = rt::CodeAt {
+        at: 2,
+        longest: 1,
+        trailer: 2,
+        response: false,
+    };
+    /// Where a response's code sits: from `at`, at most `longest` bytes, before `trailer` bytes.
+    const RESPONSE_CODE: rt::CodeAt = rt::CodeAt {
+        at: 2,
+        longest: 1,
+        trailer: 2,
+        response: true,
+    };
     /// The frame checksum: the 8-bit sum of the bytes it covers, inverted.
     #[inline]
     pub fn checksum(bytes: &[u8]) -> u8 {
@@ -484,7 +498,7 @@ pub mod shdlc {
                     rt::fixed::<6>(frame, &request::Reset::DESC)
                         .map(|_| Self::Reset(request::Reset))
                 }
-                _ => rt::Err(rt::unknown_code(frame, 2, 1, 2, false)),
+                _ => rt::Err(REQUEST_CODE.unknown(frame)),
             }
         }
         /// The message called `name` in the spec, from each field's raw wire value by its spec
@@ -1052,7 +1066,7 @@ pub mod shdlc {
                         }),
                     )
                 }
-                _ => rt::Err(rt::unknown_code(frame, 2, 1, 2, true)),
+                _ => rt::Err(RESPONSE_CODE.unknown(frame)),
             }
         }
         /// The message called `name` in the spec, from each field's raw wire value by its spec

@@ -85,6 +85,20 @@ pub mod slip_sensor {
         checksum_be: true,
         checksum_from_end: 3,
     };
+    /// Where a request's code sits: from `at`, at most `longest` bytes, before `trailer` bytes.
+    const REQUEST_CODE: rt::CodeAt = rt::CodeAt {
+        at: 0,
+        longest: 1,
+        trailer: 3,
+        response: false,
+    };
+    /// Where a response's code sits: from `at`, at most `longest` bytes, before `trailer` bytes.
+    const RESPONSE_CODE: rt::CodeAt = rt::CodeAt {
+        at: 0,
+        longest: 1,
+        trailer: 3,
+        response: true,
+    };
     /// CRC-16/XMODEM: the frame checksum, over every byte before it.
     pub const CRC_ALGORITHM: rt::crc::Algorithm<u16> = rt::crc::Algorithm {
         width: 16usize as u8,
@@ -267,7 +281,7 @@ pub mod slip_sensor {
                     rt::fixed::<4>(frame, &request::ReadSamples::DESC)
                         .map(|_| Self::ReadSamples(request::ReadSamples))
                 }
-                _ => rt::Err(rt::unknown_code(frame, 0, 1, 3, false)),
+                _ => rt::Err(REQUEST_CODE.unknown(frame)),
             }
         }
         /// The message called `name` in the spec, from each field's raw wire value by its spec
@@ -529,7 +543,7 @@ pub mod slip_sensor {
                         }),
                     )
                 }
-                _ => rt::Err(rt::unknown_code(frame, 0, 1, 3, true)),
+                _ => rt::Err(RESPONSE_CODE.unknown(frame)),
             }
         }
         /// The message called `name` in the spec, from each field's raw wire value by its spec

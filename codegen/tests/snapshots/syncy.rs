@@ -71,6 +71,20 @@ pub mod syncy {
         grows: true,
         k: -4,
     };
+    /// Where a request's code sits: from `at`, at most `longest` bytes, before `trailer` bytes.
+    const REQUEST_CODE: rt::CodeAt = rt::CodeAt {
+        at: 4,
+        longest: 1,
+        trailer: 1,
+        response: false,
+    };
+    /// Where a response's code sits: from `at`, at most `longest` bytes, before `trailer` bytes.
+    const RESPONSE_CODE: rt::CodeAt = rt::CodeAt {
+        at: 4,
+        longest: 1,
+        trailer: 1,
+        response: true,
+    };
     /// The frame checksum: the 8-bit sum of the bytes it covers, inverted.
     #[inline]
     pub fn checksum(bytes: &[u8]) -> u8 {
@@ -273,7 +287,7 @@ pub mod syncy {
                         }),
                     )
                 }
-                _ => rt::Err(rt::unknown_code(frame, 4, 1, 1, false)),
+                _ => rt::Err(REQUEST_CODE.unknown(frame)),
             }
         }
         /// The message called `name` in the spec, from each field's raw wire value by its spec
@@ -541,7 +555,7 @@ pub mod syncy {
                         }),
                     )
                 }
-                _ => rt::Err(rt::unknown_code(frame, 4, 1, 1, true)),
+                _ => rt::Err(RESPONSE_CODE.unknown(frame)),
             }
         }
         /// The message called `name` in the spec, from each field's raw wire value by its spec

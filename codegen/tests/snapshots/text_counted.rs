@@ -63,6 +63,20 @@ pub mod text_counted {
         end: &[],
         end_first: false,
     };
+    /// Where a request's code sits: from `at`, at most `longest` bytes, before `trailer` bytes.
+    const REQUEST_CODE: rt::CodeAt = rt::CodeAt {
+        at: 2,
+        longest: 1,
+        trailer: 1,
+        response: false,
+    };
+    /// Where a response's code sits: from `at`, at most `longest` bytes, before `trailer` bytes.
+    const RESPONSE_CODE: rt::CodeAt = rt::CodeAt {
+        at: 2,
+        longest: 1,
+        trailer: 1,
+        response: true,
+    };
     /// The frame checksum: 8-bit XOR of the bytes it covers.
     #[inline]
     pub fn checksum(bytes: &[u8]) -> u8 {
@@ -226,7 +240,7 @@ pub mod text_counted {
                     rt::fixed::<4>(frame, &request::GetInfo::DESC)
                         .map(|_| Self::GetInfo(request::GetInfo))
                 }
-                _ => rt::Err(rt::unknown_code(frame, 2, 1, 1, false)),
+                _ => rt::Err(REQUEST_CODE.unknown(frame)),
             }
         }
         /// The message called `name` in the spec, from each field's raw wire value by its spec
@@ -497,7 +511,7 @@ pub mod text_counted {
                         }),
                     )
                 }
-                _ => rt::Err(rt::unknown_code(frame, 2, 1, 1, true)),
+                _ => rt::Err(RESPONSE_CODE.unknown(frame)),
             }
         }
         /// The message called `name` in the spec, from each field's raw wire value by its spec
@@ -606,7 +620,7 @@ pub mod text_counted {
                 0x21 => {
                     rt::fixed::<4>(frame, &request::GetInfo::DESC).map(|_| Self::GetInfo)
                 }
-                _ => rt::Err(rt::unknown_code(frame, 2, 1, 1, false)),
+                _ => rt::Err(REQUEST_CODE.unknown(frame)),
             }
         }
         /// This message's row in the owned type's `MESSAGES`.
@@ -706,7 +720,7 @@ pub mod text_counted {
                         version: frame[8],
                     })
                 }
-                _ => rt::Err(rt::unknown_code(frame, 2, 1, 1, true)),
+                _ => rt::Err(RESPONSE_CODE.unknown(frame)),
             }
         }
         /// This message's row in the owned type's `MESSAGES`.

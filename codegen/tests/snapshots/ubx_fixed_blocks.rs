@@ -71,6 +71,20 @@ pub mod ubx_fixed_blocks {
         grows: true,
         k: -8,
     };
+    /// Where a request's code sits: from `at`, at most `longest` bytes, before `trailer` bytes.
+    const REQUEST_CODE: rt::CodeAt = rt::CodeAt {
+        at: 2,
+        longest: 2,
+        trailer: 2,
+        response: false,
+    };
+    /// Where a response's code sits: from `at`, at most `longest` bytes, before `trailer` bytes.
+    const RESPONSE_CODE: rt::CodeAt = rt::CodeAt {
+        at: 2,
+        longest: 2,
+        trailer: 2,
+        response: true,
+    };
     /// The frame checksum: 8-bit Fletcher (modulo 256) of the bytes it covers.
     #[inline]
     pub fn checksum(bytes: &[u8]) -> u16 {
@@ -433,7 +447,7 @@ pub mod ubx_fixed_blocks {
                         }),
                     )
                 }
-                _ => rt::Err(rt::unknown_code(frame, 2, 2, 2, false)),
+                _ => rt::Err(REQUEST_CODE.unknown(frame)),
             }
         }
         /// The message called `name` in the spec, from each field's raw wire value by its spec
@@ -838,7 +852,7 @@ pub mod ubx_fixed_blocks {
                         }),
                     )
                 }
-                _ => rt::Err(rt::unknown_code(frame, 2, 2, 2, true)),
+                _ => rt::Err(RESPONSE_CODE.unknown(frame)),
             }
         }
         /// The message called `name` in the spec, from each field's raw wire value by its spec
@@ -949,7 +963,7 @@ pub mod ubx_fixed_blocks {
                         pins: s.lists[1].view::<u8, 8>(s.elements(1), true, false)?,
                     })
                 }
-                _ => rt::Err(rt::unknown_code(frame, 2, 2, 2, false)),
+                _ => rt::Err(REQUEST_CODE.unknown(frame)),
             }
         }
         /// This message's row in the owned type's `MESSAGES`.

@@ -71,6 +71,20 @@ pub mod ubx_like {
         grows: true,
         k: -8,
     };
+    /// Where a request's code sits: from `at`, at most `longest` bytes, before `trailer` bytes.
+    const REQUEST_CODE: rt::CodeAt = rt::CodeAt {
+        at: 2,
+        longest: 2,
+        trailer: 2,
+        response: false,
+    };
+    /// Where a response's code sits: from `at`, at most `longest` bytes, before `trailer` bytes.
+    const RESPONSE_CODE: rt::CodeAt = rt::CodeAt {
+        at: 2,
+        longest: 2,
+        trailer: 2,
+        response: true,
+    };
     /// The frame checksum: 8-bit Fletcher (modulo 256) of the bytes it covers.
     #[inline]
     pub fn checksum(bytes: &[u8]) -> u16 {
@@ -303,7 +317,7 @@ pub mod ubx_like {
                     rt::fixed::<8>(frame, &request::PollSatellites::DESC)
                         .map(|_| Self::PollSatellites(request::PollSatellites))
                 }
-                _ => rt::Err(rt::unknown_code(frame, 2, 2, 2, false)),
+                _ => rt::Err(REQUEST_CODE.unknown(frame)),
             }
         }
         /// The message called `name` in the spec, from each field's raw wire value by its spec
@@ -772,7 +786,7 @@ pub mod ubx_like {
                         }),
                     )
                 }
-                _ => rt::Err(rt::unknown_code(frame, 2, 2, 2, true)),
+                _ => rt::Err(RESPONSE_CODE.unknown(frame)),
             }
         }
         /// The message called `name` in the spec, from each field's raw wire value by its spec

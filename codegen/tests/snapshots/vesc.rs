@@ -85,6 +85,20 @@ pub mod vesc {
         grows: true,
         k: -6,
     };
+    /// Where a request's code sits: from `at`, at most `longest` bytes, before `trailer` bytes.
+    const REQUEST_CODE: rt::CodeAt = rt::CodeAt {
+        at: 3,
+        longest: 1,
+        trailer: 3,
+        response: false,
+    };
+    /// Where a response's code sits: from `at`, at most `longest` bytes, before `trailer` bytes.
+    const RESPONSE_CODE: rt::CodeAt = rt::CodeAt {
+        at: 3,
+        longest: 1,
+        trailer: 3,
+        response: true,
+    };
     /// CRC-16/XMODEM: the frame checksum, over every byte before it.
     pub const CRC_ALGORITHM: rt::crc::Algorithm<u16> = rt::crc::Algorithm {
         width: 16usize as u8,
@@ -720,7 +734,7 @@ pub mod vesc {
                     rt::fixed::<7>(frame, &request::Alive::DESC)
                         .map(|_| Self::Alive(request::Alive))
                 }
-                _ => rt::Err(rt::unknown_code(frame, 3, 1, 3, false)),
+                _ => rt::Err(REQUEST_CODE.unknown(frame)),
             }
         }
         /// The message called `name` in the spec, from each field's raw wire value by its spec
@@ -1184,7 +1198,7 @@ pub mod vesc {
                         }),
                     )
                 }
-                _ => rt::Err(rt::unknown_code(frame, 3, 1, 3, true)),
+                _ => rt::Err(RESPONSE_CODE.unknown(frame)),
             }
         }
         /// The message called `name` in the spec, from each field's raw wire value by its spec

@@ -93,6 +93,20 @@ pub mod xbee_api2 {
         grows: true,
         k: -4,
     };
+    /// Where a request's code sits: from `at`, at most `longest` bytes, before `trailer` bytes.
+    const REQUEST_CODE: rt::CodeAt = rt::CodeAt {
+        at: 3,
+        longest: 1,
+        trailer: 1,
+        response: false,
+    };
+    /// Where a response's code sits: from `at`, at most `longest` bytes, before `trailer` bytes.
+    const RESPONSE_CODE: rt::CodeAt = rt::CodeAt {
+        at: 3,
+        longest: 1,
+        trailer: 1,
+        response: true,
+    };
     /// The frame checksum: the 8-bit sum of the bytes it covers, inverted.
     #[inline]
     pub fn checksum(bytes: &[u8]) -> u8 {
@@ -497,7 +511,7 @@ pub mod xbee_api2 {
                         }),
                     )
                 }
-                _ => rt::Err(rt::unknown_code(frame, 3, 1, 1, false)),
+                _ => rt::Err(REQUEST_CODE.unknown(frame)),
             }
         }
         /// The message called `name` in the spec, from each field's raw wire value by its spec
@@ -870,7 +884,7 @@ pub mod xbee_api2 {
                         }),
                     )
                 }
-                _ => rt::Err(rt::unknown_code(frame, 3, 1, 1, true)),
+                _ => rt::Err(RESPONSE_CODE.unknown(frame)),
             }
         }
         /// The message called `name` in the spec, from each field's raw wire value by its spec
