@@ -10,10 +10,11 @@
 # instruction that also reads as a status packet) though it decoded them.
 # Prints Markdown table rows. Needs valgrind.
 # Usage: bash benches/icount.sh [ub2|sd|modbus|dynamixel ...] (default: all four)
+# Builds into and runs from $CARGO_TARGET_DIR when set (a worktree with its own target).
 set -euo pipefail
 cd "$(dirname "${BASH_SOURCE[0]}")/.."
 cargo build --release --locked -q -p busspec-benches --bin icount
-bin=target/release/icount
+bin=${CARGO_TARGET_DIR:-target}/release/icount
 
 # count ARGS... -> "instructions units_per_pass"
 count() {

@@ -462,3 +462,56 @@ fn a_reply_decodes_as_on_its_own_where_no_response_needs_its_request() {
     assert_eq!(unpaired.iter().filter(|&&u| u).count(), 5, "{unpaired:?}");
     assert!(unpaired[0] && !unpaired[1] && unpaired[2] && unpaired[3] && !unpaired[4]);
 }
+
+/// `Framing::decodes_both_ways` (generated where both directions check a frame alike: the
+/// framing checked once, then each direction's code) against the two checks asked apart, the
+/// trait's default: the same answer, error included, on every value of each of the first four
+/// bytes of every example (its checksum written again, and left as it was), every prefix of
+/// each, and random frames and inputs of the spec.
+#[test]
+fn decodes_both_ways_is_each_direction_asked_apart() {
+    use busspec_protocols::DecodeError;
+    fn apart<P: Protocol>(frame: &[u8]) -> Result<bool, DecodeError> {
+        P::request_decodes(frame)?;
+        Ok(matches!(
+            P::response_decodes(frame, None, None),
+            Ok(()) | Err(DecodeError::Ambiguous { .. })
+        ))
+    }
+    fn run<P: Protocol>(seed: u64) -> usize {
+        let (p, wires, _) = examples::<P>();
+        let mut rng = fastrand::Rng::with_seed(seed);
+        let mut frames: Vec<Vec<u8>> = Vec::new();
+        for wire in &wires {
+            frames.extend((0..=wire.len()).map(|n| wire[..n].to_vec()));
+            for at in 0..4.min(wire.len()) {
+                for v in 0..=255u8 {
+                    let mut b = wire.clone();
+                    b[at] = v;
+                    frames.push(b.clone());
+                    fix_checksum(&p, &mut b);
+                    frames.push(b);
+                }
+            }
+        }
+        for _ in 0..5_000 {
+            frames.push(random_input(&p, &mut rng));
+        }
+        let mut both = 0;
+        for f in &frames {
+            let fast = P::decodes_both_ways(f);
+            assert_eq!(fast, apart::<P>(f), "{}: {f:02X?}", P::NAME);
+            both += usize::from(fast == Ok(true));
+        }
+        both
+    }
+    // Where the protocol has the combined check, frames decode both ways among these.
+    assert!(run::<Dynamixel>(31) > 100);
+    assert!(run::<Modbus>(32) > 100);
+    run::<Ub2>(33);
+    run::<Sd>(34);
+    run::<PelcoD>(35);
+    run::<PelcoP>(36);
+    run::<Crsf>(37);
+    run::<Dynamixel2>(38);
+}

@@ -907,6 +907,7 @@ impl MessageNames {
     }
 
     /// Adds `message` (dropped past the fourth).
+    #[inline]
     pub fn push(&mut self, message: &'static MessageDesc) {
         if let Some(slot) = self.messages.get_mut(usize::from(self.len)) {
             *slot = message;
@@ -914,7 +915,9 @@ impl MessageNames {
         }
     }
 
-    /// The messages, in spec order.
+    /// The messages, in spec order. Inlined: `rt::Group::end` asks how many on every frame
+    /// of a group, which a call cost.
+    #[inline]
     pub fn messages(&self) -> &[&'static MessageDesc] {
         &self.messages[..usize::from(self.len)]
     }

@@ -405,6 +405,25 @@ pub trait Framing {
         <Self as Protocol>::Response::decode_as_reply_over(frame, request, covered).map(|_| ())
     }
 
+    /// Whether `frame` decodes as a request (`Ok`, else the request's error, as
+    /// [`Self::request_decodes`] gives it) and then also as a response on its own (`Ok(true)`
+    /// where [`Self::response_decodes`] without a request decodes it or finds it ambiguous):
+    /// what the stream decoder asks of a frame both directions may be, where no response needs
+    /// its request ([`Self::REPLY_BY_REQUEST`] and [`Self::OVER_REQUEST`] are `false`).
+    /// Generated code checks the framing once where both directions check it alike (the same
+    /// start, length, address, checksum and length field), then each direction's code.
+    #[inline]
+    fn decodes_both_ways(frame: &[u8]) -> Result<bool, DecodeError>
+    where
+        Self: Protocol,
+    {
+        Self::request_decodes(frame)?;
+        Ok(matches!(
+            Self::response_decodes(frame, None, None),
+            Ok(()) | Err(DecodeError::Ambiguous { .. })
+        ))
+    }
+
     /// Whether `frame` ends in the checksum of the bytes it covers, and nothing else: the
     /// weakest acceptance test (a frame shorter than a checksum fails it). It knows no
     /// request: a reply whose checksum takes in its request's bytes (`checksum_over_request`)

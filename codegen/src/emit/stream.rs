@@ -445,6 +445,7 @@ fn view_checks(p: &Protocol) -> (TokenStream, TokenStream) {
             }
         }
     };
+    let both_ways = both_ways_check(p);
     let views =
         if no_view(p, Direction::Request).is_none() || no_view(p, Direction::Response).is_none() {
             quote!(
@@ -453,7 +454,75 @@ fn view_checks(p: &Protocol) -> (TokenStream, TokenStream) {
         } else {
             quote!()
         };
-    (views, quote!(#request_decodes #response_decodes))
+    (views, quote!(#request_decodes #response_decodes #both_ways))
+}
+
+/// `decodes_both_ways`, where both directions have a view, no response needs its request
+/// (neither to be told apart nor for its checksum) and both directions' frame checks are the
+/// same tokens (the same start, longest frame, address, checksum and length field; no preamble
+/// to skip) once each takes the longer of the two directions' shortest frames: a frame at
+/// least that long is checked once, then each view's `dispatch` reads its code, which is what
+/// each view's decoder does after the same checks. A shorter frame goes through both views'
+/// decoders whole, as everywhere else (the trait's default).
+fn both_ways_check(p: &Protocol) -> TokenStream {
+    use super::dispatch::{address_at, dispatch_groups, frame_bounds, framing_checks};
+    let simple = no_view(p, Direction::Request).is_none()
+        && no_view(p, Direction::Response).is_none()
+        && !p.has_over_request()
+        && !p.responses.iter().any(|m| m.needs_request)
+        && p.framing.preamble.is_none();
+    if !simple {
+        return quote!();
+    }
+    let (q, r) = (
+        frame_bounds(p, Direction::Request).0,
+        frame_bounds(p, Direction::Response).0,
+    );
+    // `rt::check_frame` refuses every frame of a direction whose shortest frame does not
+    // reach past its address or hold its checksum and end bytes, whatever its length: such a
+    // direction's checks are not the other's for any frame.
+    let lies = |d: Direction, min: usize| min <= address_at(p, d) || min < p.framing.trailer_len();
+    if lies(Direction::Request, q) || lies(Direction::Response, r) {
+        return quote!();
+    }
+    // Past both shortest frames, the shortest frame plays no part in the checks.
+    let min = q.max(r);
+    let checks = framing_checks(p, Direction::Request, Some(min));
+    if checks.to_string() != framing_checks(p, Direction::Response, Some(min)).to_string() {
+        return quote!();
+    }
+    let shorter = if q == r {
+        quote!()
+    } else {
+        let min = usize_lit(min);
+        quote! {
+            if frame.len() < #min {
+                Self::request_decodes(frame)?;
+                return rt::Ok(matches!(
+                    Self::response_decodes(frame, rt::None, rt::None),
+                    rt::Ok(()) | rt::Err(rt::DecodeError::Ambiguous { .. })
+                ));
+            }
+        }
+    };
+    let no_request = if dispatch_groups(p, Direction::Response).is_empty() {
+        quote!()
+    } else {
+        quote!(, rt::None)
+    };
+    quote! {
+        #[inline]
+        fn decodes_both_ways(frame: &[u8]) -> rt::Result<bool, rt::DecodeError> {
+            #shorter
+            #checks
+            let _ = address;
+            RequestView::dispatch(frame)?;
+            rt::Ok(matches!(
+                ResponseView::dispatch(frame #no_request),
+                rt::Ok(_) | rt::Err(rt::DecodeError::Ambiguous { .. })
+            ))
+        }
+    }
 }
 
 /// `candidate`, where the code is one or two bytes, there is more than one frame length and no

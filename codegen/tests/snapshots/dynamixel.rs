@@ -1158,6 +1158,27 @@ pub mod dynamixel {
         ) -> rt::Result<(), rt::DecodeError> {
             ResponseView::decode_for(frame, request).map(|_| ())
         }
+        #[inline]
+        fn decodes_both_ways(frame: &[u8]) -> rt::Result<bool, rt::DecodeError> {
+            rt::check_sync(frame, 259, 0, &[0xFF, 0xFF])?;
+            let address = rt::check_frame(
+                frame,
+                6,
+                259,
+                2,
+                &FRAME,
+                |b| u32::from(checksum(rt::covered(b, 2))),
+            )?;
+            LENGTH.check(frame)?;
+            let _ = address;
+            RequestView::dispatch(frame)?;
+            rt::Ok(
+                matches!(
+                    ResponseView::dispatch(frame, rt::None), rt::Ok(_) |
+                    rt::Err(rt::DecodeError::Ambiguous { .. })
+                ),
+            )
+        }
         fn checksum_ok(frame: &[u8]) -> bool {
             match frame.len().checked_sub(1) {
                 rt::Some(n) if n > 0 => {

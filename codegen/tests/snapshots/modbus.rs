@@ -2685,6 +2685,34 @@ pub mod modbus {
         ) -> rt::Result<(), rt::DecodeError> {
             ResponseView::decode_for(frame, request).map(|_| ())
         }
+        #[inline]
+        fn decodes_both_ways(frame: &[u8]) -> rt::Result<bool, rt::DecodeError> {
+            if frame.len() < 8 {
+                Self::request_decodes(frame)?;
+                return rt::Ok(
+                    matches!(
+                        Self::response_decodes(frame, rt::None, rt::None), rt::Ok(()) |
+                        rt::Err(rt::DecodeError::Ambiguous { .. })
+                    ),
+                );
+            }
+            let address = rt::check_frame(
+                frame,
+                8,
+                255,
+                0,
+                &FRAME,
+                |b| u32::from(checksum(b)),
+            )?;
+            let _ = address;
+            RequestView::dispatch(frame)?;
+            rt::Ok(
+                matches!(
+                    ResponseView::dispatch(frame), rt::Ok(_) |
+                    rt::Err(rt::DecodeError::Ambiguous { .. })
+                ),
+            )
+        }
         fn checksum_ok(frame: &[u8]) -> bool {
             match frame.len().checked_sub(2) {
                 rt::Some(n) if n > 0 => {
