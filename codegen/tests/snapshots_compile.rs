@@ -3274,3 +3274,60 @@ fn terminated_frame_snapshot_agrees_with_the_interpreter() {
     let t = agree::agree::<Roboclaw>(&p);
     assert!(t.accepted >= 10 && t.refused > 50, "{t:?}");
 }
+
+/// The generated stream decoder's fast path against its full rule on every head of captures
+/// of RoboClaw's reads and firmware versions (text up to a NUL, no length field: the
+/// candidate's length known once the NUL is buffered), with noise, cut replies and runs of
+/// text without a NUL: where the fast path decides, the same event and state.
+#[test]
+fn terminated_frame_fast_path_is_the_rule() {
+    use busspec_runtime::stream::{Direction as Dir, StreamDecoder};
+    use roboclaw::{Request, Roboclaw};
+    let read = [0x80, 0x15];
+    let reply = |text: &[u8]| {
+        let mut f = [text, &[0]].concat();
+        let crc = crc16_xmodem(&[&read[..], &f].concat());
+        f.extend_from_slice(&crc.to_be_bytes());
+        f
+    };
+    let mut after = StreamDecoder::<Roboclaw>::new(None);
+    assert!(after.feed(&read).count() > 0);
+    let states = [
+        StreamDecoder::<Roboclaw>::new(None),
+        after,
+        StreamDecoder::<Roboclaw>::new(Some(Dir::Response)).with_default_request(Some(
+            Request::ReadFirmwareVersion(roboclaw::request::ReadFirmwareVersion),
+        )),
+        StreamDecoder::<Roboclaw>::new(Some(Dir::Request)),
+    ];
+    let cap = <Roboclaw as Protocol>::MAX_FRAME_LEN;
+    let mut rng = agree::Rng(0x21);
+    let mut decided = 0;
+    for _ in 0..60 {
+        let mut bytes = Vec::new();
+        for _ in 0..6 {
+            bytes.extend_from_slice(&read);
+            let n = rng.below(48) as usize;
+            let text: Vec<u8> = (0..n).map(|_| 1 + rng.below(255) as u8).collect();
+            let f = reply(&text);
+            match rng.below(6) {
+                0 => bytes.extend((0..1 + rng.below(3)).map(|_| rng.below(256) as u8)),
+                1 => bytes.extend_from_slice(&f[..f.len() - 1]),
+                2 => bytes.extend(std::iter::repeat(b'v').take(45 + rng.below(8) as usize)),
+                _ => bytes.extend_from_slice(&f),
+            }
+        }
+        for at in 0..bytes.len() {
+            let mut w: Vec<u8> = bytes[at..].iter().copied().take(cap).collect();
+            w.resize(cap, 0);
+            for (i, d) in states.iter().enumerate() {
+                let Some([fast, full]) = d.fast_and_full(&w, (i % 2) as u64) else {
+                    continue;
+                };
+                assert_eq!(fast, full, "{w:02X?} from state {i}");
+                decided += 1;
+            }
+        }
+    }
+    assert!(decided > 2000, "{decided} decided");
+}
