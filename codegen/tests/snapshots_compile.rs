@@ -3218,7 +3218,7 @@ fn terminated_frame_snapshot_agrees_with_the_interpreter() {
         let i = interp::decode_reply_with(&p, &request, Some(&read), frame).map(|_| ());
         match (&g, i) {
             (Ok(()), Ok(())) => {}
-            (g, i) => same_text(g.clone(), i),
+            (g, i) => same_text(*g, i),
         }
         g
     };
