@@ -3166,3 +3166,170 @@ fn short_form_snapshot_agrees_with_the_interpreter() {
     let found = examples_stream_alike::<Mbus>(&p, 0x1068, "req_ud2");
     assert!(found > 30, "only {found} req_ud2 frames found");
 }
+
+/// CRC-16/XMODEM, RoboClaw's.
+fn crc16_xmodem(data: &[u8]) -> u16 {
+    let mut crc = 0u16;
+    for &b in data {
+        crc ^= u16::from(b) << 8;
+        for _ in 0..8 {
+            crc = if crc & 0x8000 != 0 {
+                crc << 1 ^ 0x1021
+            } else {
+                crc << 1
+            };
+        }
+    }
+    crc
+}
+
+/// RoboClaw's firmware version (command 21): text up to a NUL and a CRC, no length field, so
+/// only the NUL tells where the reply ends. One frame: a reply whose text has no NUL, or whose
+/// NUL is not where the frame's end says, is refused in both engines' words. A stream: both
+/// decoders end the reply at its first NUL, wait for it while fewer than 48 bytes of text are
+/// buffered, and take a run of 48 without one for no reply; they agree on captures of reads
+/// and replies of every length, with noise, however they are cut.
+#[test]
+fn terminated_frame_snapshot_agrees_with_the_interpreter() {
+    use busspec_model::interp;
+    use roboclaw::{Response, Roboclaw};
+    let file = "model/tests/fixtures/valid/roboclaw.yaml";
+    let p = fixture(file);
+    let read = [0x80, 0x15];
+    let reply = |text: &[u8]| {
+        let mut f = [text, &[0]].concat();
+        let crc = crc16_xmodem(&[&read[..], &f].concat());
+        f.extend_from_slice(&crc.to_be_bytes());
+        f
+    };
+    let version = b"RoboClaw 10.2A v4.1.11\n";
+    let d = Roboclaw::decode_reply_to(&reply(version), &read).unwrap();
+    let Response::FirmwareVersion(roboclaw::response::FirmwareVersion { version: v }) = d.message
+    else {
+        panic!("{:?}", d.message)
+    };
+    assert_eq!(v.as_slice(), version);
+    let mut buf = [0u8; 64];
+    let n = Roboclaw::encode_reply(&d.message, 0, &read, &mut buf).unwrap();
+    assert_eq!(buf[..n], reply(version));
+    let request = interp::decode(&p, Some(Direction::Request), None, &read).unwrap();
+    let both = |frame: &[u8]| {
+        let g = Roboclaw::decode_reply_to(frame, &read).map(|_| ());
+        let i = interp::decode_reply_with(&p, &request, Some(&read), frame).map(|_| ());
+        match (&g, i) {
+            (Ok(()), Ok(())) => {}
+            (g, i) => same_text(*g, i),
+        }
+        g
+    };
+    // No NUL: the CRC right after the text, resealed.
+    let mut none = version.to_vec();
+    let crc = crc16_xmodem(&[&read[..], &none].concat());
+    none.extend_from_slice(&crc.to_be_bytes());
+    let e = both(&none).unwrap_err().to_string();
+    assert!(e.contains("no terminator 0x00"), "{e}");
+    // A NUL before the frame's end says: the text ends early.
+    let early = reply(b"v4\x001.11");
+    let e = both(&early).unwrap_err().to_string();
+    assert!(e.contains("expected 7 by the frame's length"), "{e}");
+    // 47 characters are the most; 48 are refused alike.
+    assert!(both(&reply(&[b'x'; 47])).is_ok());
+    assert!(both(&reply(&[b'x'; 48])).is_err());
+    assert!(both(&reply(b"")).is_ok());
+    // Encoding text that holds its terminator is refused.
+    let held = Response::FirmwareVersion(roboclaw::response::FirmwareVersion {
+        version: busspec_runtime::codec::Repeated::from_slice(b"v4\x00").unwrap(),
+    });
+    let e = Roboclaw::encode_reply(&held, 0, &read, &mut buf).unwrap_err();
+    assert!(e.to_string().contains("holds its terminator 0x00"), "{e}");
+    // A stream of replies alone, each after its read: one event each, whatever the cuts.
+    let mut rng = agree::Rng(0x2115);
+    let mut found = 0;
+    for round in 0..200 {
+        let mut cap = Vec::new();
+        for _ in 0..8 {
+            if rng.below(6) == 0 {
+                cap.extend((0..1 + rng.below(4)).map(|_| rng.below(256) as u8));
+            }
+            cap.extend_from_slice(&read);
+            let n = rng.below(48) as usize;
+            let text: Vec<u8> = (0..n).map(|_| 1 + rng.below(255) as u8).collect();
+            cap.extend_from_slice(&reply(&text));
+            // Now and then a run of text without its NUL.
+            if round % 7 == 0 && rng.below(4) == 0 {
+                cap.extend(std::iter::repeat(b'z').take(40 + rng.below(20) as usize));
+            }
+        }
+        let cuts: Vec<usize> = (0..6).map(|_| 1 + rng.below(30) as usize).collect();
+        let want = interp_seen(&p, &cap, &cuts);
+        let got = generated_seen::<Roboclaw>(&cap, &cuts);
+        assert_eq!(got, want, "capture {cap:02X?}");
+        assert_eq!(generated_seen::<Roboclaw>(&cap, &[cap.len()]), got);
+        found += got.iter().filter(|s| s.0 == "firmware_version").count();
+    }
+    assert!(found > 200 * 5, "only {found} firmware versions found");
+    // The examples in random order: a reply frames only right after its read.
+    let found = examples_stream_alike::<Roboclaw>(&p, 0x15, "firmware_version");
+    assert!(found > 2, "only {found} firmware versions found");
+    let t = agree::agree::<Roboclaw>(&p);
+    assert!(t.accepted >= 10 && t.refused > 50, "{t:?}");
+}
+
+/// The generated stream decoder's fast path against its full rule on every head of captures
+/// of RoboClaw's reads and firmware versions (text up to a NUL, no length field: the
+/// candidate's length known once the NUL is buffered), with noise, cut replies and runs of
+/// text without a NUL: where the fast path decides, the same event and state.
+#[test]
+fn terminated_frame_fast_path_is_the_rule() {
+    use busspec_runtime::stream::{Direction as Dir, StreamDecoder};
+    use roboclaw::{Request, Roboclaw};
+    let read = [0x80, 0x15];
+    let reply = |text: &[u8]| {
+        let mut f = [text, &[0]].concat();
+        let crc = crc16_xmodem(&[&read[..], &f].concat());
+        f.extend_from_slice(&crc.to_be_bytes());
+        f
+    };
+    // After a read (settled: alone, it may be the start of a reply's text).
+    let mut after = StreamDecoder::<Roboclaw>::new(None);
+    let n = after.feed(&read).count();
+    assert!(n + core::iter::from_fn(|| after.finish()).count() > 0);
+    let states = [
+        StreamDecoder::<Roboclaw>::new(None),
+        after,
+        StreamDecoder::<Roboclaw>::new(Some(Dir::Response)).with_default_request(Some(
+            Request::ReadFirmwareVersion(roboclaw::request::ReadFirmwareVersion),
+        )),
+        StreamDecoder::<Roboclaw>::new(Some(Dir::Request)),
+    ];
+    let cap = <Roboclaw as Protocol>::MAX_FRAME_LEN;
+    let mut rng = agree::Rng(0x21);
+    let mut decided = 0;
+    for _ in 0..60 {
+        let mut bytes = Vec::new();
+        for _ in 0..6 {
+            bytes.extend_from_slice(&read);
+            let n = rng.below(48) as usize;
+            let text: Vec<u8> = (0..n).map(|_| 1 + rng.below(255) as u8).collect();
+            let f = reply(&text);
+            match rng.below(6) {
+                0 => bytes.extend((0..1 + rng.below(3)).map(|_| rng.below(256) as u8)),
+                1 => bytes.extend_from_slice(&f[..f.len() - 1]),
+                2 => bytes.extend(std::iter::repeat(b'v').take(45 + rng.below(8) as usize)),
+                _ => bytes.extend_from_slice(&f),
+            }
+        }
+        for at in 0..bytes.len() {
+            let mut w: Vec<u8> = bytes[at..].iter().copied().take(cap).collect();
+            w.resize(cap, 0);
+            for (i, d) in states.iter().enumerate() {
+                let Some([fast, full]) = d.fast_and_full(&w, (i % 2) as u64) else {
+                    continue;
+                };
+                assert_eq!(fast, full, "{w:02X?} from state {i}");
+                decided += 1;
+            }
+        }
+    }
+    assert!(decided > 2000, "{decided} decided");
+}

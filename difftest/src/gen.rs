@@ -233,6 +233,9 @@ enum Own {
     LongForm = 0x0303_0303_0303_0303,
     /// Text up to a terminator (`repeat: {until}`), from counted text.
     TerminatedText = 0x0000_5A5A_0000_5A5A,
+    /// Text up to a terminator in frames without a length field, which only its terminator
+    /// ends, from counted text.
+    TerminatedFrame = 0x5A00_5A00_5A00_5A00,
     /// A short form of the frame (`framing.forms`): whether an eligible spec takes one, its
     /// start byte.
     ShortForm = 0x1068_1068_1068_1068,
@@ -2448,6 +2451,69 @@ fn random_spec_without_examples(seed: u64) -> (String, usize) {
                 f.repeat_tail += 1;
             }
         }
+    } else if escaping == Escaping::None {
+        // Without a length field only the terminator ends the frame (RoboClaw's firmware
+        // version): counted text becomes text up to a terminator in about 40 % of the messages
+        // where it is the only list and no other message of the direction shares the code (a
+        // stream decoder frames one variable-length message per code). Drawn by a generator
+        // of its own, so every spec drawn without it is as it was.
+        let mut rng = own_rng(seed, Own::TerminatedFrame);
+        for msgs in [&mut commands, &mut responses] {
+            let codes: Vec<Vec<u8>> = msgs.iter().map(|m| m.code.clone()).collect();
+            for (k, m) in msgs.iter_mut().enumerate() {
+                let lists = m
+                    .fields
+                    .iter()
+                    .filter(|f| f.yaml.contains("repeat: {"))
+                    .count();
+                let apart = codes
+                    .iter()
+                    .enumerate()
+                    .all(|(j, c)| j == k || !(c.starts_with(&m.code) || m.code.starts_with(c)));
+                if !apart || m.fields.iter().any(|f| f.yaml.contains("present:")) {
+                    continue;
+                }
+                // A message without a list may end in such text, in about one in eight.
+                if lists == 0 && rng.u8(..100) < 12 {
+                    let (min, max) = (rng.usize(..=1), rng.usize(1..=12));
+                    let t = if rng.u8(..4) == 0 { rng.u8(..) } else { 0 };
+                    m.fields.push(Gf {
+                        name: "txt".to_owned(),
+                        ty: "ascii",
+                        width: 1,
+                        yaml: format!(
+                            "{{name: txt, type: ascii, repeat: {{until: {t:#04X}, min: {min}, max: {max}}}}}"
+                        ),
+                        plain: false,
+                        countable: false,
+                        repeat_tail: max + 1,
+                    });
+                    continue;
+                }
+                if lists != 1 {
+                    continue;
+                }
+                for f in m.fields.iter_mut().filter(|f| f.ty == "ascii") {
+                    let Some(a) = f.yaml.find("repeat: {count: ") else {
+                        continue;
+                    };
+                    if rng.u8(..100) >= 40 {
+                        continue;
+                    }
+                    let start = a + "repeat: {".len();
+                    let Some(len) = f.yaml[start..].find(", ") else {
+                        continue;
+                    };
+                    let mut rest = f.yaml[start + len..].to_owned();
+                    for of in [", of: elements", ", of: bytes"] {
+                        rest = rest.replacen(of, "", 1);
+                    }
+                    let t = if rng.u8(..4) == 0 { rng.u8(..) } else { 0 };
+                    f.yaml = format!("{}until: {t:#04X}{rest}", &f.yaml[..start]);
+                    f.repeat_tail += 1;
+                }
+            }
+        }
     }
 
     // Lists of a fixed count (`repeat: {count: N}`): packed elements of whole bytes in the
@@ -3326,6 +3392,13 @@ pub fn constructs(p: &ir::Protocol) -> Vec<&'static str> {
     );
     add(!f.end.is_empty(), "end bytes");
     add(f.end_first(), "end bytes before the checksum");
+    add(
+        p.commands
+            .iter()
+            .chain(&p.responses)
+            .any(|m| m.terminated_text(f).is_some()),
+        "text only its terminator ends",
+    );
     add(
         p.commands
             .iter()

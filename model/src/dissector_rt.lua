@@ -723,6 +723,9 @@ local function shape(m, b, n)
           end
         end
         if not count then return nil end
+        -- The last list takes exactly what the frame leaves, as busspec's decode: without a
+        -- length field its terminator alone ends the frame (RoboClaw's firmware version).
+        if last and count + 1 ~= rest then return nil end
       elseif r.count == "fixed" then
         -- Records of a fixed count (`r.by` of them): as a count field saying so would.
         local bytes = elements_len(f, r.by)

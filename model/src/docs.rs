@@ -763,6 +763,23 @@ pub fn render(p: &Protocol, source: &str) -> String {
         );
     }
 
+    let terminated: Vec<String> = p
+        .commands
+        .iter()
+        .chain(&p.responses)
+        .filter_map(|m| {
+            m.terminated_text(f)
+                .map(|(l, _, t)| format!("`{}.{}` (0x{t:02X})", m.name, l.name))
+        })
+        .collect();
+    if !terminated.is_empty() {
+        let _ = writeln!(
+            o,
+            "No length field: text up to a terminator ({}) ends its frame's variable part at its first terminator byte from its first byte, within its most characters and the terminator; the fields after it and the trailer follow. Decoders refuse a frame whose text has no terminator or whose terminator is not where the frame's end says; stream decoders end such a frame there, and take a run of its most characters without a terminator for no frame.\n",
+            terminated.join(", ")
+        );
+    }
+
     if let Some(t) = &f.transform {
         let _ = writeln!(
             o,

@@ -1153,6 +1153,20 @@ impl Message {
             .then(|| (f, f.frame_at(&self.layout)))
     }
 
+    /// Where the framing has no length field, its text up to a terminator (`repeat: {until}`,
+    /// the message's only list: validated), the text's offset in the frame and its
+    /// terminator: the frame ends at the first terminator from the text's first byte, within
+    /// its `max` characters and the terminator, then the fields after the text and the trailer.
+    /// Both stream decoders frame it so: `layout.len` + the characters + 1.
+    pub fn terminated_text(&self, framing: &Framing) -> Option<(&Field, usize, u8)> {
+        if framing.length.is_some() {
+            return None;
+        }
+        let (f, _) = self.repeat()?;
+        let t = f.terminator()?;
+        Some((f, f.frame_at(&self.layout), t))
+    }
+
     /// Whether its one variable part, if any, is a single repeated field ending the payload:
     /// every field keeps a fixed offset. A message with fields after a list, or with several
     /// lists, places each field after a list by the lists before it.

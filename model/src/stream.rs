@@ -50,6 +50,13 @@
 //! its bounds. Decoding refuses such a list holding them ([`DecodeError::EndInside`]), so no
 //! longer length could decode either.
 //!
+//! Text up to a terminator in a frame without a length field
+//! ([`crate::ir::Message::terminated_text`], the message's only list) has one length too: the
+//! message's frame with the characters up to the first terminator from the text's first byte,
+//! and the terminator; waited for while fewer than its `max` characters and the terminator
+//! are buffered from there, none where they hold no terminator or it comes before `min`
+//! characters (decoding would refuse every length).
+//!
 //! Why longest first: when a short and a long message share a code (a UB2 setter request
 //! `AA 21 43 00 a s cs` and its ACK `AA 21 43 00 cs`), preferring the short one would misread
 //! every request whose first payload byte happens to equal the ACK's checksum — a fixed value
@@ -299,7 +306,7 @@ fn lens_of(p: &Protocol, m: &Message, buf: &[u8]) -> Lens {
                         let v = interp::read_uint(bytes, cf.byte_order);
                         usize::try_from(v).unwrap_or(usize::MAX)
                     }
-                    // Text up to a terminator has a length field (validated): not here.
+                    // Text up to a terminator is here only with a length field (validated).
                     Count::ToEnd | Count::Until(_) => continue,
                 };
                 let len = match lr.count {
@@ -322,8 +329,20 @@ fn lens_of(p: &Protocol, m: &Message, buf: &[u8]) -> Lens {
             }
             within(m.layout.len.saturating_add(tail) as i64)
         }
-        // Text up to a terminator has a length field (validated), read above.
-        Count::Until(_) => Lens::Are(Vec::new()),
+        // Text up to a terminator without a length field (the message's only list:
+        // validated): the frame ends at its first terminator from the text's first byte, its
+        // characters and the terminator at most `max` + 1 bytes.
+        Count::Until(t) => {
+            let at = f.frame_at(&m.layout);
+            let most = at.saturating_add(r.max).saturating_add(1);
+            let seen = buf.get(at..buf.len().min(most)).unwrap_or(&[]);
+            match seen.iter().position(|&b| b == t) {
+                Some(n) if n >= r.min => within(m.layout.len.saturating_add(n + 1) as i64),
+                Some(_) => Lens::Are(Vec::new()),
+                None if buf.len() >= most => Lens::Are(Vec::new()),
+                None => Lens::Need,
+            }
+        }
         Count::ToEnd => {
             let step = if f.ty == crate::ir::FieldType::Bit {
                 1

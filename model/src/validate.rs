@@ -496,6 +496,8 @@ fn validate_ordered(spec: &model::Spec, sink: &mut Sink) -> Option<Protocol> {
     over_requests(spec, &framing, &mut responses, sink);
     transform_lists(&framing, &commands, "commands", sink);
     transform_lists(&framing, &responses, "responses", sink);
+    terminated_apart(&framing, &commands, "commands", sink);
+    terminated_apart(&framing, &responses, "responses", sink);
     truncated_messages(&framing, &commands, "commands", sink);
     truncated_messages(&framing, &responses, "responses", sink);
     truncated_across(&framing, &commands, &responses, sink);
@@ -735,10 +737,11 @@ fn checksum_extras(
 }
 
 /// Whether frames of `a` and `b` are told apart by code and length alone, before any
-/// checksum is checked: their lengths cannot meet, their codes differ where both sit, or one is
-/// a constant whole frame.
+/// checksum is checked: their lengths cannot meet (from the shortest frame each can have: text
+/// up to a terminator has its terminator at least), their codes differ where both sit, or one
+/// is a constant whole frame.
 fn told_apart(a: &Message, b: &Message) -> bool {
-    let overlap = a.layout.len <= b.max_len && b.layout.len <= a.max_len;
+    let overlap = a.min_len() <= b.max_len && b.min_len() <= a.max_len;
     let coded = !a.code.is_empty()
         && a.code.len() == b.code.len()
         && a.layout.code == b.layout.code
@@ -2487,6 +2490,30 @@ fn long_form(
 /// A transform (`framing.transform`) beside a list whose count field a stream would read
 /// before the frame's length is known (no length field): not expressible yet, located at the
 /// list.
+/// Text up to a terminator without a length field ([`Message::terminated_text`]): a stream
+/// decoder frames it by reading for its terminator, one variable-length message for the
+/// bytes its code and leading constants agree with, so no other variable-length message of
+/// its direction may share its code (a message without a code shares every code).
+fn terminated_apart(framing: &Framing, msgs: &[Message], list: &str, sink: &mut Sink) {
+    for m in msgs {
+        let Some((f, _, _)) = m.terminated_text(framing) else {
+            continue;
+        };
+        let shares = |o: &&Message| {
+            o.name != m.name
+                && o.frame.is_none()
+                && o.is_variable()
+                && (o.code.starts_with(&m.code) || m.code.starts_with(&o.code))
+        };
+        if let Some(o) = msgs.iter().find(shares) {
+            sink.error(
+                format!("{list}.{}.fields.{}.repeat.until", m.name, f.name),
+                format!("text up to a terminator without a length field (framing.length) beside `{}`, a variable-length message its code does not tell apart, is not expressible yet: a stream decoder frames one variable-length message per code", o.name),
+            );
+        }
+    }
+}
+
 fn transform_lists(framing: &Framing, msgs: &[Message], list: &str, sink: &mut Sink) {
     if framing.transform.is_none() || framing.length.is_some() {
         return;
@@ -3379,10 +3406,15 @@ fn message_body(
         if let Some(r) = f.repeat.as_ref().filter(|r| r.until.is_some()) {
             // Its terminator is found by reading the frame: a stream needs the frame's length
             // first, and the bytes must be the characters as they are.
-            let why = if framing.length.is_none() {
-                Some("text up to a terminator needs a length field (framing.length): a stream decoder reads the frame's length before it can look for the terminator")
-            } else if framing.transform.is_some() {
+            // Without a length field the terminator alone ends the frame: the text is the
+            // message's only list, the bytes as they travel are its characters.
+            let lists = fields.iter().filter(|g| g.repeat.is_some()).count();
+            let why = if framing.transform.is_some() {
                 Some("text up to a terminator beside a transform (framing.transform) is not expressible yet")
+            } else if framing.length.is_none() && framing.escaping.is_some() {
+                Some("text up to a terminator without a length field (framing.length) beside escaping (framing.escaping) is not expressible yet")
+            } else if framing.length.is_none() && lists > 1 {
+                Some("text up to a terminator without a length field (framing.length) must be its message's only repeated field: its terminator alone tells where the frame ends")
             } else {
                 None
             };

@@ -238,6 +238,9 @@ impl Lists {
             let (c, by_bytes) = match r.count {
                 // The only list (validated): up to the first end bytes from its first byte.
                 CountBy::Delimited(_) => return r.frame_len(head),
+                // Without a length field, text up to a terminator is the only list
+                // (validated): up to its first terminator.
+                CountBy::Until(_) if self.lists.len() == 1 => return r.frame_len(head),
                 CountBy::End | CountBy::EndSized(_) | CountBy::Until(_) => return None,
                 CountBy::Fixed(v) => {
                     bytes[k] = r.bytes_of(v);

@@ -473,7 +473,9 @@ pub enum CountBy {
     EndSized(SizedBy),
     /// Text up to the first terminator byte (this one) among the bytes the frame's length
     /// leaves it (`repeat: {until: 0x00}`): its characters, then the terminator, which is no
-    /// character. Always decoded through [`crate::codec::Lists`]; the frame has a length field.
+    /// character. Always decoded through [`crate::codec::Lists`]. Where the frame has no
+    /// length field it is the message's only list and its terminator ends the frame: a stream
+    /// decoder reads for it ([`RepeatAt::frame_len`]).
     Until(u8),
     /// Exactly this many elements, always (records of a fixed count: `repeat: {count: 3}`):
     /// no field counts them, and the frame's length must give them.
@@ -731,6 +733,25 @@ impl RepeatAt {
         })
     }
 
+    /// The length of the frame that starts `head` whose text up to terminator `t`
+    /// ([`CountBy::Until`]) only its terminator ends (a frame without a length field): the
+    /// frame with its characters up to the first terminator from [`Self::at`] and the
+    /// terminator, where that is buffered within `max` characters and the terminator
+    /// (`Some(0)` where it comes before `min` characters, or they hold none), `None` while
+    /// they are not all buffered.
+    fn terminated_len(&self, head: &[u8], t: u8) -> Option<usize> {
+        let most = self.at.saturating_add(self.max).saturating_add(1);
+        let seen = head.get(self.at..head.len().min(most)).unwrap_or(&[]);
+        let Some(n) = seen.iter().position(|&b| b == t) else {
+            return (head.len() >= most).then_some(0);
+        };
+        Some(if n >= self.min {
+            self.base.saturating_add(n + 1)
+        } else {
+            0
+        })
+    }
+
     /// Where end bytes alone delimit the frame ([`CountBy::Delimited`]): the refusal of
     /// `frame` (a whole frame of the message) where they appear from the list's first byte on
     /// before the frame's own. Any other list: none.
@@ -810,7 +831,8 @@ impl RepeatAt {
     pub(crate) fn frame_len_inline(&self, head: &[u8]) -> Option<usize> {
         let (c, bytes) = match self.count {
             CountBy::Delimited(end) => return self.delimited_len(head, end),
-            CountBy::End | CountBy::EndSized(_) | CountBy::Until(_) => return None,
+            CountBy::Until(t) => return self.terminated_len(head, t),
+            CountBy::End | CountBy::EndSized(_) => return None,
             CountBy::Fixed(v) => return Some(self.base + self.bytes_of(v)),
             CountBy::Elements(c) => (c, false),
             CountBy::Bytes(c) => (c, true),

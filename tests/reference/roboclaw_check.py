@@ -11,6 +11,8 @@ hands it the bytes busspec made:
 - busspec encodes random replies to each read over the read's bytes (`--request`); the
   library reads each back to the values busspec was given, its CRC over the read's bytes and
   the data accepted, and busspec decodes the frame back to them;
+- the firmware version (command 21) is text up to a NUL, then the CRC, with no length field:
+  busspec's replies of 0 to 47 characters are read back by the library's ReadVersion;
 - a reply with one bit changed, or whose CRC leaves out the read's bytes, is refused by both;
 - the write acknowledgement FF is a frame to both.
 
@@ -118,7 +120,12 @@ def reads(r):
     v1, v2, t = r.randint(0, 65535), r.randint(0, 65535), r.randint(0, 65535)
     m1, m2 = r.randint(-32768, 32767), r.randint(-32768, 32767)
     st = r.getrandbits(26) & ~(0b11 << 14)
+    # Up to 47 characters and the NUL: the library reads at most 48 bytes before the CRC.
+    name = "RoboClaw " + "".join(chr(r.randint(0x20, 0x7E)) for _ in range(r.randint(0, 36)))
+    version = (name + "\n")[: r.randint(9, 47)]
     return [
+        ("ReadVersion", "read_firmware_version", "firmware_version", {"version": version},
+         (version,)),
         ("ReadEncM1", "read_encoder_m1", "encoder_m1",
          {"count": count, "status": flags(est, ENCODER_STATUS)}, (count, est)),
         ("ReadSpeedM1", "read_speed_m1", "encoder_speed_m1",
@@ -158,7 +165,7 @@ def numbers(fields):
 def main():
     n = int(sys.argv[1]) if len(sys.argv) > 1 else 100
     r = random.Random(0x80)
-    requests = replies = refused = 0
+    requests = replies = refused = versions = 0
     for _ in range(n):
         # A write: the library's frame, decoded and encoded by busspec; FF acknowledges it.
         method, command, field, value = r.choice(WRITES)
@@ -201,6 +208,7 @@ def main():
         if back["message"] != reply or not same(back["fields"], fields):
             fail(f"{reply} {frame.hex()}: busspec decodes {back}, expected {fields}")
         replies += 1
+        versions += reply == "firmware_version"
         # Damaged: one bit changed, or the CRC over the reply's own bytes alone.
         bad = bytearray(frame)
         bad[r.randrange(len(bad))] ^= 1 << r.randrange(8)
@@ -213,11 +221,16 @@ def main():
                 fail(f"{method}: the library took {wrong.hex()}")
             d = busspec(["decode", "--spec", SPEC, "--request", read.hex(), "roboclaw",
                          wrong.hex()], ok=False)
-            if d.returncode == 0 or "checksum mismatch" not in d.stderr:
+            # Text up to a NUL: a bit that makes or unmakes the NUL moves where the text
+            # ends, which decode refuses before it checks the CRC.
+            moved = reply == "firmware_version" and ("terminator" in d.stderr
+                                                      or "by the frame's length" in d.stderr)
+            if d.returncode == 0 or ("checksum mismatch" not in d.stderr and not moved):
                 fail(f"{reply}: busspec took {wrong.hex()}: {d.stdout}{d.stderr}")
             refused += 1
     print(f"roboclaw (tcr-roboclaw 0.1.5): {requests} library frames decoded and encoded back, "
-          f"{replies} busspec replies read by the library, {refused} damaged replies refused by both")
+          f"{replies} busspec replies read by the library ({versions} firmware versions), "
+          f"{refused} damaged replies refused by both")
 
 
 if __name__ == "__main__":

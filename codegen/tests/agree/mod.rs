@@ -187,13 +187,8 @@ impl Rng {
     }
 }
 
-/// The message `name` of `P` from `values` through `from_fields`, encoded for `address`.
-fn encode_generated<M: Message>(
-    name: &str,
-    address: u8,
-    values: &[Value],
-    buf: &mut [u8],
-) -> Option<Vec<u8>> {
+/// The message `name` of `P` from `values` through `from_fields`.
+fn build_generated<M: Message>(name: &str, values: &[Value]) -> Option<M> {
     // Records lent flat, record after record.
     let flats: Vec<(Vec<i64>, usize)> = values
         .iter()
@@ -202,7 +197,7 @@ fn encode_generated<M: Message>(
             _ => (Vec::new(), 0),
         })
         .collect();
-    let m = M::from_fields(name, |n| {
+    M::from_fields(name, |n| {
         values
             .iter()
             .zip(&flats)
@@ -217,9 +212,7 @@ fn encode_generated<M: Message>(
                 }),
             })
     })
-    .ok()?;
-    let n = m.encode(address, buf).ok()?;
-    Some(buf[..n].to_vec())
+    .ok()
 }
 
 /// Both engines encode `values` as message `r` alike: the same bytes, or both refuse.
@@ -230,13 +223,40 @@ pub fn encode_alike<P: Protocol>(
     address: u8,
     values: &[Value],
 ) -> bool {
+    encode_alike_over::<P>(p, r, address, values, None)
+}
+
+/// [`encode_alike`] of a reply whose checksum takes in its request's bytes
+/// (`checksum_over_request`), over the request's frame `request`.
+pub fn encode_alike_over<P: Protocol>(
+    p: &ir::Protocol,
+    r: MessageRef,
+    address: u8,
+    values: &[Value],
+    request: Option<&[u8]>,
+) -> bool {
     let name = &p.message(r).name;
     let mut buf = vec![0u8; P::MAX_FRAME_LEN];
-    let g = match r.direction {
-        Direction::Request => encode_generated::<P::Request>(name, address, values, &mut buf),
-        Direction::Response => encode_generated::<P::Response>(name, address, values, &mut buf),
+    let n = match (r.direction, request) {
+        (Direction::Request, _) => build_generated::<P::Request>(name, values)
+            .and_then(|m| m.encode(address, &mut buf).ok()),
+        (Direction::Response, None) => build_generated::<P::Response>(name, values)
+            .and_then(|m| m.encode(address, &mut buf).ok()),
+        (Direction::Response, Some(w)) => {
+            build_generated::<P::Response>(name, values).and_then(|m| {
+                m.encode_reply_over(address, P::Request::covered(w), &mut buf)
+                    .ok()
+            })
+        }
     };
-    let i = interp::encode(p, r, address, values);
+    let g = n.map(|n| buf[..n].to_vec());
+    let i = interp::encode_with(
+        p,
+        r,
+        address,
+        values,
+        request.and_then(|w| p.checksum_span(w)),
+    );
     assert_eq!(
         g.is_some(),
         i.is_ok(),
@@ -323,7 +343,18 @@ pub fn agree<P: Protocol>(p: &ir::Protocol) -> Tally {
             .filter(|v| names.contains(&&*v.name))
             .cloned()
             .collect();
-        assert!(encode_alike::<P>(p, e.message, decoded.address, &given));
+        // A reply whose checksum takes in its request's bytes is encoded over them.
+        let over = request
+            .as_ref()
+            .filter(|_| m.over_request.is_some())
+            .map(|r| r.2.as_slice());
+        assert!(encode_alike_over::<P>(
+            p,
+            e.message,
+            decoded.address,
+            &given,
+            over
+        ));
         // Each list in turn (a message may have several), the others as the example has them.
         for (_, rf, r) in m.repeats() {
             let (lo, hi) = if rf.ty == ir::FieldType::Bit {
@@ -398,7 +429,7 @@ pub fn agree<P: Protocol>(p: &ir::Protocol) -> Tally {
                     }
                 }
                 for values in tries {
-                    if encode_alike::<P>(p, e.message, decoded.address, &values) {
+                    if encode_alike_over::<P>(p, e.message, decoded.address, &values, over) {
                         t.encoded += 1;
                     } else {
                         t.encode_refused += 1;

@@ -4,7 +4,7 @@ pub mod roboclaw {
     //!
     //! Generated from `model/tests/fixtures/valid/roboclaw.yaml`, transcribed from *RoboClaw Series Brushed DC Motor Controllers User Manual*, revision 5.7 (2015-06-26).
     //! Numbers travel big-endian on the wire.
-    //! Borrowed views: no `RequestView`: no message of the direction has a list to lend; no `ResponseView`: no message of the direction has a list to lend.
+    //! Borrowed views: no `RequestView`: no message of the direction has a list to lend; `ResponseView<'a>` lends its lists.
     #![allow(
         clippy::get_first,
         clippy::unnecessary_cast,
@@ -26,7 +26,7 @@ pub mod roboclaw {
     /// The document's date.
     pub const DOCUMENT_DATE: &str = "2015-06-26";
     /// SHA-256 of the spec file this module was generated from, lowercase hex (`sha256sum`).
-    pub const SPEC_SHA256: &str = "27cb58b90afb2f879dac5131668b4e52e29ceb30cbebec57e9b69db28fd8b0a5";
+    pub const SPEC_SHA256: &str = "2cc438f27ed8ef39f19b43591d4b2ef26689f5992292bda58bd92b7bfc38472c";
     /// The spec's text, exactly as this module was generated from it.
     pub const SPEC_YAML: &str = include_str!(
         "../../../model/tests/fixtures/valid/roboclaw.yaml"
@@ -34,9 +34,9 @@ pub mod roboclaw {
     /// The longest request frame, in bytes.
     pub const MAX_REQUEST_LEN: usize = 8;
     /// The longest response frame, in bytes.
-    pub const MAX_RESPONSE_LEN: usize = 7;
+    pub const MAX_RESPONSE_LEN: usize = 50;
     /// The longest frame in either direction: a buffer this long holds any frame.
-    pub const MAX_FRAME_LEN: usize = 8;
+    pub const MAX_FRAME_LEN: usize = 50;
     /// The document's baud rate.
     pub const BAUD: u32 = 38400u32;
     /// The quiet time the document demands between frames, in milliseconds, if it says.
@@ -123,6 +123,9 @@ pub mod roboclaw {
         if (7..=7).contains(&frame.len()) && frame.get(0..0) == rt::Some(&[]) {
             return rt::Some((0, &response::EncoderSpeedM1::DESC));
         }
+        if (2..=50).contains(&frame.len()) && frame.get(0..0) == rt::Some(&[]) {
+            return rt::Some((0, &response::FirmwareVersion::DESC));
+        }
         if (4..=4).contains(&frame.len()) && frame.get(0..0) == rt::Some(&[]) {
             return rt::Some((0, &response::MainBattery::DESC));
         }
@@ -174,6 +177,7 @@ pub mod roboclaw {
     fn unchecked_request(frame: &[u8]) -> bool {
         frame.len() == 2 && frame.get(1..2) == rt::Some(&[0x10])
             || frame.len() == 2 && frame.get(1..2) == rt::Some(&[0x12])
+            || frame.len() == 2 && frame.get(1..2) == rt::Some(&[0x15])
             || frame.len() == 2 && frame.get(1..2) == rt::Some(&[0x18])
             || frame.len() == 2 && frame.get(1..2) == rt::Some(&[0x19])
             || frame.len() == 2 && frame.get(1..2) == rt::Some(&[0x31])
@@ -509,6 +513,7 @@ pub mod roboclaw {
         ReadEncoderM1(request::ReadEncoderM1),
         ReadSpeedM1(request::ReadSpeedM1),
         ResetEncoders(request::ResetEncoders),
+        ReadFirmwareVersion(request::ReadFirmwareVersion),
         ReadMainBattery(request::ReadMainBattery),
         ReadLogicBattery(request::ReadLogicBattery),
         DutyM1(request::DutyM1),
@@ -519,12 +524,13 @@ pub mod roboclaw {
     }
     impl Request {
         /// Each message's spec name, code and frame length, in spec order.
-        const MESSAGES: [(&'static str, &'static [u8], usize); 12] = [
+        const MESSAGES: [(&'static str, &'static [u8], usize); 13] = [
             ("drive_forward_m1", &[0x00], 5),
             ("drive_backward_m1", &[0x01], 5),
             ("read_encoder_m1", &[0x10], 2),
             ("read_speed_m1", &[0x12], 2),
             ("reset_encoders", &[0x14], 4),
+            ("read_firmware_version", &[0x15], 2),
             ("read_main_battery", &[0x18], 2),
             ("read_logic_battery", &[0x19], 2),
             ("duty_m1", &[0x20], 6),
@@ -541,13 +547,14 @@ pub mod roboclaw {
                 Self::ReadEncoderM1(_) => 2,
                 Self::ReadSpeedM1(_) => 3,
                 Self::ResetEncoders(_) => 4,
-                Self::ReadMainBattery(_) => 5,
-                Self::ReadLogicBattery(_) => 6,
-                Self::DutyM1(_) => 7,
-                Self::SpeedM1(_) => 8,
-                Self::ReadCurrents(_) => 9,
-                Self::ReadTemperature(_) => 10,
-                Self::ReadStatus(_) => 11,
+                Self::ReadFirmwareVersion(_) => 5,
+                Self::ReadMainBattery(_) => 6,
+                Self::ReadLogicBattery(_) => 7,
+                Self::DutyM1(_) => 8,
+                Self::SpeedM1(_) => 9,
+                Self::ReadCurrents(_) => 10,
+                Self::ReadTemperature(_) => 11,
+                Self::ReadStatus(_) => 12,
             }
         }
         /// The spec's snake_case name of this message.
@@ -599,6 +606,9 @@ pub mod roboclaw {
                 }
                 Self::ResetEncoders(_) => {
                     rt::frame_mut::<4>(buf, &[address, 0x14])?.len()
+                }
+                Self::ReadFirmwareVersion(_) => {
+                    return rt::Ok(rt::frame_mut::<2>(buf, &[address, 0x15])?.len());
                 }
                 Self::ReadMainBattery(_) => {
                     return rt::Ok(rt::frame_mut::<2>(buf, &[address, 0x18])?.len());
@@ -688,6 +698,10 @@ pub mod roboclaw {
                     rt::fixed::<4>(frame, &request::ResetEncoders::DESC)
                         .map(|_| Self::ResetEncoders(request::ResetEncoders))
                 }
+                0x15 => {
+                    rt::fixed::<2>(frame, &request::ReadFirmwareVersion::DESC)
+                        .map(|_| Self::ReadFirmwareVersion(request::ReadFirmwareVersion))
+                }
                 0x18 => {
                     rt::fixed::<2>(frame, &request::ReadMainBattery::DESC)
                         .map(|_| Self::ReadMainBattery(request::ReadMainBattery))
@@ -757,6 +771,9 @@ pub mod roboclaw {
                 "read_encoder_m1" => Self::ReadEncoderM1(request::ReadEncoderM1),
                 "read_speed_m1" => Self::ReadSpeedM1(request::ReadSpeedM1),
                 "reset_encoders" => Self::ResetEncoders(request::ResetEncoders),
+                "read_firmware_version" => {
+                    Self::ReadFirmwareVersion(request::ReadFirmwareVersion)
+                }
                 "read_main_battery" => Self::ReadMainBattery(request::ReadMainBattery),
                 "read_logic_battery" => Self::ReadLogicBattery(request::ReadLogicBattery),
                 "duty_m1" => {
@@ -809,7 +826,7 @@ pub mod roboclaw {
     impl Request {
         /// Each command's kind, whether it accepts and answers the broadcast address, and the
         /// responses it may get (bit `i`: row `i` of `Response::MESSAGES`), in spec order.
-        const COMMANDS: [(rt::CommandKind, bool, bool, u64); 12] = [
+        const COMMANDS: [(rt::CommandKind, bool, bool, u64); 13] = [
             (rt::Movement, false, false, 0x1),
             (rt::Movement, false, false, 0x1),
             (rt::Getter, false, false, 0x2),
@@ -817,11 +834,12 @@ pub mod roboclaw {
             (rt::Reset, false, false, 0x1),
             (rt::Getter, false, false, 0x8),
             (rt::Getter, false, false, 0x10),
-            (rt::Movement, false, false, 0x1),
-            (rt::Movement, false, false, 0x1),
             (rt::Getter, false, false, 0x20),
+            (rt::Movement, false, false, 0x1),
+            (rt::Movement, false, false, 0x1),
             (rt::Getter, false, false, 0x40),
             (rt::Getter, false, false, 0x80),
+            (rt::Getter, false, false, 0x100),
         ];
         /// What the spec says of the command beyond its frame: its kind, the broadcast
         /// address, its reply, whether a master may send it again.
@@ -842,6 +860,31 @@ pub mod roboclaw {
             Self::COMMANDS[self.index()].3
         }
     }
+    /// Where `firmware_version.version` sits in the frame and how its elements are counted.
+    pub const REPEAT_FIRMWARE_VERSION: rt::RepeatAt = rt::RepeatAt {
+        field: &response::FirmwareVersion::VERSION_DESC,
+        base: 2,
+        at: 0,
+        width: 1,
+        count: rt::CountBy::Until(0),
+        min: 0,
+        max: 47,
+    };
+    /// Every repeated field of `firmware_version`, in wire order, each where it sits with every earlier list empty.
+    pub const LISTS_FIRMWARE_VERSION: rt::Lists = rt::Lists {
+        base: 2,
+        lists: &[
+            rt::RepeatAt {
+                field: &response::FirmwareVersion::VERSION_DESC,
+                base: 2,
+                at: 0,
+                width: 1,
+                count: rt::CountBy::Until(0),
+                min: 0,
+                max: 47,
+            },
+        ],
+    };
     ///A response, device to host.
     #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
     #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
@@ -851,6 +894,7 @@ pub mod roboclaw {
         Ack(response::Ack),
         EncoderM1(response::EncoderM1),
         EncoderSpeedM1(response::EncoderSpeedM1),
+        FirmwareVersion(response::FirmwareVersion),
         MainBattery(response::MainBattery),
         LogicBattery(response::LogicBattery),
         Currents(response::Currents),
@@ -859,10 +903,11 @@ pub mod roboclaw {
     }
     impl Response {
         /// Each message's spec name, code and frame length, in spec order.
-        const MESSAGES: [(&'static str, &'static [u8], usize); 8] = [
+        const MESSAGES: [(&'static str, &'static [u8], usize); 9] = [
             ("ack", &[], 1),
             ("encoder_m1", &[], 7),
             ("encoder_speed_m1", &[], 7),
+            ("firmware_version", &[], 2),
             ("main_battery", &[], 4),
             ("logic_battery", &[], 4),
             ("currents", &[], 6),
@@ -875,11 +920,12 @@ pub mod roboclaw {
                 Self::Ack(_) => 0,
                 Self::EncoderM1(_) => 1,
                 Self::EncoderSpeedM1(_) => 2,
-                Self::MainBattery(_) => 3,
-                Self::LogicBattery(_) => 4,
-                Self::Currents(_) => 5,
-                Self::Temperature(_) => 6,
-                Self::Status(_) => 7,
+                Self::FirmwareVersion(_) => 3,
+                Self::MainBattery(_) => 4,
+                Self::LogicBattery(_) => 5,
+                Self::Currents(_) => 6,
+                Self::Temperature(_) => 7,
+                Self::Status(_) => 8,
             }
         }
         /// The spec's snake_case name of this message.
@@ -892,7 +938,13 @@ pub mod roboclaw {
         }
         /// The length of this message's frame, in bytes.
         pub const fn frame_len(&self) -> usize {
-            Self::MESSAGES[self.index()].2
+            match self {
+                Self::FirmwareVersion(m) => {
+                    LISTS_FIRMWARE_VERSION.base
+                        + LISTS_FIRMWARE_VERSION.lists[0].bytes_of(m.version.len())
+                }
+                _ => Self::MESSAGES[self.index()].2,
+            }
         }
         /// Calls `f` with each field's spec name and raw wire value (sign-extended where the
         /// field is signed), in frame order; constant and repeated fields are not visited.
@@ -900,6 +952,7 @@ pub mod roboclaw {
             match self {
                 Self::EncoderM1(m) => m.visit(f),
                 Self::EncoderSpeedM1(m) => m.visit(f),
+                Self::FirmwareVersion(m) => m.visit(f),
                 Self::MainBattery(m) => m.visit(f),
                 Self::LogicBattery(m) => m.visit(f),
                 Self::Currents(m) => m.visit(f),
@@ -952,6 +1005,7 @@ pub mod roboclaw {
             match *self {
                 Self::EncoderM1 { .. } => rt::Some(0),
                 Self::EncoderSpeedM1 { .. } => rt::Some(0),
+                Self::FirmwareVersion { .. } => rt::Some(0),
                 Self::MainBattery { .. } => rt::Some(0),
                 Self::LogicBattery { .. } => rt::Some(0),
                 Self::Currents { .. } => rt::Some(0),
@@ -981,6 +1035,33 @@ pub mod roboclaw {
                     let out = rt::frame_mut::<7>(buf, &[])?;
                     out[0..4].copy_from_slice(&v_speed.to_be_bytes());
                     out[4] = v_direction.raw();
+                    out.len()
+                }
+                Self::FirmwareVersion(
+                    response::FirmwareVersion { version: v_version },
+                ) => {
+                    LISTS_FIRMWARE_VERSION.lists[0].encode_until(v_version.as_slice())?;
+                    let bytes_0: usize = LISTS_FIRMWARE_VERSION
+                        .lists[0]
+                        .encode_len(v_version.len())? - LISTS_FIRMWARE_VERSION.base;
+                    let mut compact = [0u8; 2];
+                    let out = {
+                        compact[..0].copy_from_slice(&[]);
+                        &mut compact
+                    };
+                    let out = LISTS_FIRMWARE_VERSION.expand(&compact, &[bytes_0], buf)?;
+                    {
+                        let at = 0;
+                        rt::write_elements(
+                            v_version.as_slice(),
+                            1,
+                            false,
+                            &mut out[at..],
+                        );
+                        if let rt::Some(b) = out.get_mut(at + v_version.len()) {
+                            *b = 0;
+                        }
+                    }
                     out.len()
                 }
                 Self::MainBattery(response::MainBattery { voltage: v_voltage }) => {
@@ -1068,7 +1149,7 @@ pub mod roboclaw {
                 rt::check_frame(
                     frame,
                     frame.len(),
-                    7,
+                    50,
                     0,
                     &UNCHECKED_FRAME_UNADDRESSED,
                     |_| 0,
@@ -1076,8 +1157,8 @@ pub mod roboclaw {
             } else {
                 rt::check_frame_with(
                     frame,
-                    4,
-                    7,
+                    3,
+                    50,
                     0,
                     &FRAME_UNADDRESSED,
                     |b| response_sum(frame, b, covered),
@@ -1139,8 +1220,26 @@ pub mod roboclaw {
                             )
                         },
                     );
-                    g.ambiguous(
+                    g.ambiguous_lists::<
+                            2,
+                            1,
+                        >(
                         asked >> 3 & 1 != 0,
+                        &response::FirmwareVersion::DESC,
+                        &LISTS_FIRMWARE_VERSION,
+                        |s: &rt::Split<'_, 2, 1>| {
+                            let frame = &s.frame;
+                            rt::Ok(
+                                Self::FirmwareVersion(response::FirmwareVersion {
+                                    version: s
+                                        .lists[0]
+                                        .elements::<u8, 47>(s.elements(0), false, false)?,
+                                }),
+                            )
+                        },
+                    );
+                    g.ambiguous(
+                        asked >> 4 & 1 != 0,
                         &response::MainBattery::DESC,
                         |frame: &[u8; 4]| {
                             rt::Ok(
@@ -1153,7 +1252,7 @@ pub mod roboclaw {
                         },
                     );
                     g.ambiguous(
-                        asked >> 4 & 1 != 0,
+                        asked >> 5 & 1 != 0,
                         &response::LogicBattery::DESC,
                         |frame: &[u8; 4]| {
                             rt::Ok(
@@ -1166,7 +1265,7 @@ pub mod roboclaw {
                         },
                     );
                     g.ambiguous(
-                        asked >> 5 & 1 != 0,
+                        asked >> 6 & 1 != 0,
                         &response::Currents::DESC,
                         |frame: &[u8; 6]| {
                             rt::Ok(
@@ -1182,7 +1281,7 @@ pub mod roboclaw {
                         },
                     );
                     g.ambiguous(
-                        asked >> 6 & 1 != 0,
+                        asked >> 7 & 1 != 0,
                         &response::Temperature::DESC,
                         |frame: &[u8; 4]| {
                             rt::Ok(
@@ -1195,7 +1294,7 @@ pub mod roboclaw {
                         },
                     );
                     g.ambiguous(
-                        asked >> 7 & 1 != 0,
+                        asked >> 8 & 1 != 0,
                         &response::Status::DESC,
                         |frame: &[u8; 6]| {
                             rt::Ok(
@@ -1231,6 +1330,11 @@ pub mod roboclaw {
                     Self::EncoderSpeedM1(response::EncoderSpeedM1 {
                         speed: rt::get(&mut field, "speed")?,
                         direction: Direction::from_raw(rt::get(&mut field, "direction")?),
+                    })
+                }
+                "firmware_version" => {
+                    Self::FirmwareVersion(response::FirmwareVersion {
+                        version: rt::list_text::<47>(&mut field, "version")?,
                     })
                 }
                 "main_battery" => {
@@ -1299,6 +1403,285 @@ pub mod roboclaw {
         /// Whether this response is one the document says `request` may get.
         pub fn answers(&self, request: &Request) -> bool {
             request.replies() >> self.index() & 1 != 0
+        }
+    }
+    /// A response checked once and read in place: [`Response`] with each list lent by the frame (`rt::ListView`, `rt::BitsView`) instead of copied. Scalar fields are read (and checked) when the view is made.
+    #[derive(Debug, Clone, Copy, PartialEq)]
+    pub enum ResponseView<'a> {
+        /// [`response::Ack`], read from the frame.
+        Ack,
+        /// [`response::EncoderM1`], read from the frame.
+        EncoderM1 { count: i32, status: EncoderStatus },
+        /// [`response::EncoderSpeedM1`], read from the frame.
+        EncoderSpeedM1 { speed: i32, direction: Direction },
+        /// [`response::FirmwareVersion`], read from the frame.
+        FirmwareVersion { version: rt::ListView<'a, u8> },
+        /// [`response::MainBattery`], read from the frame.
+        MainBattery { voltage: Decivolts },
+        /// [`response::LogicBattery`], read from the frame.
+        LogicBattery { voltage: Decivolts },
+        /// [`response::Currents`], read from the frame.
+        Currents { m1: Centiamps, m2: Centiamps },
+        /// [`response::Temperature`], read from the frame.
+        Temperature { temperature: Decidegrees },
+        /// [`response::Status`], read from the frame.
+        Status { status: Status },
+    }
+    impl<'a> ResponseView<'a> {
+        /// Decodes one whole frame: refuses one longer than the longest, checks its start byte,
+        /// checksum and address, then its code, constants, repeated fields, the ranges the
+        /// spec gives its fields and the command's broadcast rule.
+        ///
+        /// Responses that only their request tells apart are reported as
+        /// [`busspec_runtime::DecodeError::Ambiguous`]; decode those with [`Self::decode_reply`].
+        #[inline]
+        pub fn decode(frame: &'a [u8]) -> rt::Result<Decoded<Self>, rt::DecodeError> {
+            Self::decode_for(frame, rt::None)
+        }
+        /// Decodes a frame as the reply to `request`: only responses `request` may get are
+        /// considered, which settles responses that share code and length (and are otherwise
+        /// reported as [`busspec_runtime::DecodeError::Ambiguous`]).
+        #[inline]
+        pub fn decode_reply(
+            frame: &'a [u8],
+            request: &Request,
+        ) -> rt::Result<Decoded<Self>, rt::DecodeError> {
+            Self::decode_for(frame, rt::Some(request))
+        }
+        /// The one decoder behind [`Self::decode`] (`request` is `None`) and
+        /// [`Self::decode_reply`].
+        fn decode_for(
+            frame: &'a [u8],
+            request: rt::Option<&Request>,
+        ) -> rt::Result<Decoded<Self>, rt::DecodeError> {
+            Self::decode_over(frame, request, rt::None)
+        }
+        /// Decodes a frame as the reply to `request`, whose frame's checksum covered
+        /// `covered` (`busspec_runtime::RequestMessage::covered` of it): as
+        /// [`Self::decode_reply`], and the checksum of a reply that takes in its
+        /// request's bytes (`checksum_over_request`) is checked over them, where
+        /// [`Self::decode_reply`] refuses such a reply
+        /// ([`busspec_runtime::DecodeError::NeedsRequest`]).
+        #[inline]
+        pub fn decode_reply_over(
+            frame: &'a [u8],
+            request: &Request,
+            covered: &[u8],
+        ) -> rt::Result<Decoded<Self>, rt::DecodeError> {
+            Self::decode_over(frame, rt::Some(request), rt::Some(covered))
+        }
+        /// [`Self::decode_for`] with the bytes the request's checksum covered, where
+        /// known.
+        pub(crate) fn decode_over(
+            frame: &'a [u8],
+            request: rt::Option<&Request>,
+            covered: rt::Option<&[u8]>,
+        ) -> rt::Result<Decoded<Self>, rt::DecodeError> {
+            let address = if unchecked_response(frame) {
+                rt::check_frame(
+                    frame,
+                    frame.len(),
+                    50,
+                    0,
+                    &UNCHECKED_FRAME_UNADDRESSED,
+                    |_| 0,
+                )?
+            } else {
+                rt::check_frame_with(
+                    frame,
+                    3,
+                    50,
+                    0,
+                    &FRAME_UNADDRESSED,
+                    |b| response_sum(frame, b, covered),
+                )?
+            };
+            let message = Self::dispatch(frame, request)?;
+            if let rt::Some(request) = request {
+                if request.replies() >> message.index() & 1 == 0 {
+                    return rt::Err(rt::not_a_reply(message.name(), request.name()));
+                }
+            }
+            rt::Ok(Decoded { address, message })
+        }
+        /// The message of a frame that passed the checks every frame passes, by its code.
+        #[inline]
+        fn dispatch(
+            frame: &'a [u8],
+            request: rt::Option<&Request>,
+        ) -> rt::DecodeResult<Self> {
+            let asked: u64 = request.map_or(!0, Request::replies);
+            match rt::code(frame, 0, 0) {
+                0u32 => {
+                    let mut g = rt::Group::new(frame, 0u32, request.map(Request::name));
+                    g.attempt(|frame: &[u8; 1]| {
+                        rt::equal(&response::Ack::ACK_DESC, 0, frame[0], 0xFF)?;
+                        rt::Ok(Self::Ack)
+                    });
+                    g.ambiguous(
+                        asked >> 1 & 1 != 0,
+                        &response::EncoderM1::DESC,
+                        |frame: &[u8; 7]| {
+                            rt::Ok(Self::EncoderM1 {
+                                count: i32::from_be_bytes([
+                                    frame[0],
+                                    frame[1],
+                                    frame[2],
+                                    frame[3],
+                                ]),
+                                status: EncoderStatus::from_raw(frame[4]),
+                            })
+                        },
+                    );
+                    g.ambiguous(
+                        asked >> 2 & 1 != 0,
+                        &response::EncoderSpeedM1::DESC,
+                        |frame: &[u8; 7]| {
+                            rt::Ok(Self::EncoderSpeedM1 {
+                                speed: i32::from_be_bytes([
+                                    frame[0],
+                                    frame[1],
+                                    frame[2],
+                                    frame[3],
+                                ]),
+                                direction: Direction::from_raw(frame[4]),
+                            })
+                        },
+                    );
+                    g.ambiguous_lists::<
+                            2,
+                            1,
+                        >(
+                        asked >> 3 & 1 != 0,
+                        &response::FirmwareVersion::DESC,
+                        &LISTS_FIRMWARE_VERSION,
+                        |s: &rt::Split<'a, 2, 1>| {
+                            let frame = &s.frame;
+                            rt::Ok(Self::FirmwareVersion {
+                                version: s
+                                    .lists[0]
+                                    .view::<u8, 47>(s.elements(0), false, false)?,
+                            })
+                        },
+                    );
+                    g.ambiguous(
+                        asked >> 4 & 1 != 0,
+                        &response::MainBattery::DESC,
+                        |frame: &[u8; 4]| {
+                            rt::Ok(Self::MainBattery {
+                                voltage: Decivolts::from_raw(
+                                    u16::from_be_bytes([frame[0], frame[1]]),
+                                ),
+                            })
+                        },
+                    );
+                    g.ambiguous(
+                        asked >> 5 & 1 != 0,
+                        &response::LogicBattery::DESC,
+                        |frame: &[u8; 4]| {
+                            rt::Ok(Self::LogicBattery {
+                                voltage: Decivolts::from_raw(
+                                    u16::from_be_bytes([frame[0], frame[1]]),
+                                ),
+                            })
+                        },
+                    );
+                    g.ambiguous(
+                        asked >> 6 & 1 != 0,
+                        &response::Currents::DESC,
+                        |frame: &[u8; 6]| {
+                            rt::Ok(Self::Currents {
+                                m1: Centiamps::from_raw(
+                                    i16::from_be_bytes([frame[0], frame[1]]),
+                                ),
+                                m2: Centiamps::from_raw(
+                                    i16::from_be_bytes([frame[2], frame[3]]),
+                                ),
+                            })
+                        },
+                    );
+                    g.ambiguous(
+                        asked >> 7 & 1 != 0,
+                        &response::Temperature::DESC,
+                        |frame: &[u8; 4]| {
+                            rt::Ok(Self::Temperature {
+                                temperature: Decidegrees::from_raw(
+                                    u16::from_be_bytes([frame[0], frame[1]]),
+                                ),
+                            })
+                        },
+                    );
+                    g.ambiguous(
+                        asked >> 8 & 1 != 0,
+                        &response::Status::DESC,
+                        |frame: &[u8; 6]| {
+                            rt::Ok(Self::Status {
+                                status: Status::from_raw(
+                                    u32::from_be_bytes([frame[0], frame[1], frame[2], frame[3]]),
+                                ),
+                            })
+                        },
+                    );
+                    g.end(&response::Ack::DESC)
+                }
+                _ => rt::Err(rt::unknown_code(frame, 0, 0, 2, true)),
+            }
+        }
+        /// This message's row in the owned type's `MESSAGES`.
+        const fn index(&self) -> usize {
+            match *self {
+                Self::Ack => 0,
+                Self::EncoderM1 { .. } => 1,
+                Self::EncoderSpeedM1 { .. } => 2,
+                Self::FirmwareVersion { .. } => 3,
+                Self::MainBattery { .. } => 4,
+                Self::LogicBattery { .. } => 5,
+                Self::Currents { .. } => 6,
+                Self::Temperature { .. } => 7,
+                Self::Status { .. } => 8,
+            }
+        }
+        /// The spec's snake_case name of this message.
+        pub const fn name(&self) -> &'static str {
+            Response::MESSAGES[self.index()].0
+        }
+        /// The owned message: each lent list copied.
+        pub fn to_owned(self) -> Response {
+            match self {
+                Self::Ack => Response::Ack(response::Ack),
+                Self::EncoderM1 { count, status } => {
+                    Response::EncoderM1(response::EncoderM1 {
+                        count,
+                        status,
+                    })
+                }
+                Self::EncoderSpeedM1 { speed, direction } => {
+                    Response::EncoderSpeedM1(response::EncoderSpeedM1 {
+                        speed,
+                        direction,
+                    })
+                }
+                Self::FirmwareVersion { version } => {
+                    Response::FirmwareVersion(response::FirmwareVersion {
+                        version: version.to_repeated(),
+                    })
+                }
+                Self::MainBattery { voltage } => {
+                    Response::MainBattery(response::MainBattery { voltage })
+                }
+                Self::LogicBattery { voltage } => {
+                    Response::LogicBattery(response::LogicBattery { voltage })
+                }
+                Self::Currents { m1, m2 } => {
+                    Response::Currents(response::Currents { m1, m2 })
+                }
+                Self::Temperature { temperature } => {
+                    Response::Temperature(response::Temperature {
+                        temperature,
+                    })
+                }
+                Self::Status { status } => Response::Status(response::Status { status }),
+            }
         }
     }
     /// The roboclaw protocol as a type: implements [`busspec_runtime::Protocol`], so code generic over protocols works with it.
@@ -1386,10 +1769,11 @@ pub mod roboclaw {
         const OVER_REQUEST: bool = true;
         type Span = [u8; MAX_REQUEST_LEN];
         const EMPTY_SPAN: [u8; MAX_REQUEST_LEN] = [0; MAX_REQUEST_LEN];
+        const VIEWS: bool = true;
         #[inline]
         fn candidates(head: &[u8]) -> rt::Candidates {
             let mask: u128 = ({
-                static TABLE: [u8; 528] = *b"\0\0\x10\x10\x10\x10\x10\x10\x10\x10\x10\x10\x10\x10\x10\x10 \x10 \x100\x10\x10\x10  \x10\x10\x10\x10\x10\x10@\x10\x10P\x10\x10\x10\x10\x10\x10\x10\x10\x10\x10\x10\x10\x10 \x10\x10\x10\x10\x10\x10\x10\x10\x10\x10\x10\x10\x10\x10\x10\x10\x10\x10\x10\x10\x10\x10\x10\x10\x10\x10\x10\x10\x10\x10\x10\x10 \x10\x10\x10\x10\x10\x10\x10 \x10\x10\x10\x10\x10\x10\x10\x10\x10\x10\x10\x10\x10\x10\x10\x10\x10\x10\x10\x10\x10\x10\x10\x10\x10\x10\x10\x10\x10\x10\x10\x10\x10\x10\x10\x10\x10\x10\x10\x10\x10\x10\x10\x10\x10\x10\x10\x10\x10\x10\x10\x10\x10\x10\x10\x10\x10\x10\x10\x10\x10\x10\x10\x10\x10\x10\x10\x10\x10\x10\x10\x10\x10\x10\x10\x10\x10\x10\x10\x10\x10\x10\x10\x10\x10\x10\x10\x10\x10\x10\x10\x10\x10\x10\x10\x10\x10\x10\x10\x10\x10\x10\x10\x10\x10\x10\x10\x10\x10\x10\x10\x10\x10\x10\x10\x10\x10\x10\x10\x10\x10\x10\x10\x10\x10\x10\x10\x10\x10\x10\x10\x10\x10\x10\x10\x10\x10\x10\x10\x10\x10\x10\x10\x10\x10\x10\x10\x10\x10\x10\x10\x10\x10\x10\x10\x10\x10\x10\x10\x10\x10\x10\x10\x10\x10\x08\0\0\0\0\0\0\0V\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0V\0\0\0\0\0\0\0 \0\0\0\0\0\0\0V\0\0\0\0\0\0\0\x10\0\0\0\0\0\0\0V\0\0\0\0\0\0\0\x04\0\0\0\0\0\0\0V\0\0\0\0\0\0\0\x01\0\0\0\0\0\0\0V\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0";
+                static TABLE: [u8; 528] = *b"\0\0\x10\x10\x10\x10\x10\x10\x10\x10\x10\x10\x10\x10\x10\x10 \x10 \x100 \x10\x10  \x10\x10\x10\x10\x10\x10@\x10\x10P\x10\x10\x10\x10\x10\x10\x10\x10\x10\x10\x10\x10\x10 \x10\x10\x10\x10\x10\x10\x10\x10\x10\x10\x10\x10\x10\x10\x10\x10\x10\x10\x10\x10\x10\x10\x10\x10\x10\x10\x10\x10\x10\x10\x10\x10 \x10\x10\x10\x10\x10\x10\x10 \x10\x10\x10\x10\x10\x10\x10\x10\x10\x10\x10\x10\x10\x10\x10\x10\x10\x10\x10\x10\x10\x10\x10\x10\x10\x10\x10\x10\x10\x10\x10\x10\x10\x10\x10\x10\x10\x10\x10\x10\x10\x10\x10\x10\x10\x10\x10\x10\x10\x10\x10\x10\x10\x10\x10\x10\x10\x10\x10\x10\x10\x10\x10\x10\x10\x10\x10\x10\x10\x10\x10\x10\x10\x10\x10\x10\x10\x10\x10\x10\x10\x10\x10\x10\x10\x10\x10\x10\x10\x10\x10\x10\x10\x10\x10\x10\x10\x10\x10\x10\x10\x10\x10\x10\x10\x10\x10\x10\x10\x10\x10\x10\x10\x10\x10\x10\x10\x10\x10\x10\x10\x10\x10\x10\x10\x10\x10\x10\x10\x10\x10\x10\x10\x10\x10\x10\x10\x10\x10\x10\x10\x10\x10\x10\x10\x10\x10\x10\x10\x10\x10\x10\x10\x10\x10\x10\x10\x10\x10\x10\x10\x10\x10\x10\x10\x08\0\0\0\0\0\0\0V\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0V\0\0\0\0\0\0\0 \0\0\0\0\0\0\0V\0\0\0\0\0\0\0\x10\0\0\0\0\0\0\0V\0\0\0\0\0\0\0\x04\0\0\0\0\0\0\0V\0\0\0\0\0\0\0\x01\0\0\0\0\0\0\0V\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0";
                 let mask = match head.get(1) {
                     rt::Some(&b) => {
                         let i = 256 + TABLE[b as usize] as usize;
@@ -1402,7 +1786,7 @@ pub mod roboclaw {
                 mask
             } & (u64::MAX as u128))
                 | ({
-                    static TABLE: [u8; 528] = *b"\0\0\x10\x10\x10\x10\x10\x10\x10\x10\x10\x10\x10\x10\x10\x10 \x10 \x100\x10\x10\x10  \x10\x10\x10\x10\x10\x10@\x10\x10P\x10\x10\x10\x10\x10\x10\x10\x10\x10\x10\x10\x10\x10 \x10\x10\x10\x10\x10\x10\x10\x10\x10\x10\x10\x10\x10\x10\x10\x10\x10\x10\x10\x10\x10\x10\x10\x10\x10\x10\x10\x10\x10\x10\x10\x10 \x10\x10\x10\x10\x10\x10\x10 \x10\x10\x10\x10\x10\x10\x10\x10\x10\x10\x10\x10\x10\x10\x10\x10\x10\x10\x10\x10\x10\x10\x10\x10\x10\x10\x10\x10\x10\x10\x10\x10\x10\x10\x10\x10\x10\x10\x10\x10\x10\x10\x10\x10\x10\x10\x10\x10\x10\x10\x10\x10\x10\x10\x10\x10\x10\x10\x10\x10\x10\x10\x10\x10\x10\x10\x10\x10\x10\x10\x10\x10\x10\x10\x10\x10\x10\x10\x10\x10\x10\x10\x10\x10\x10\x10\x10\x10\x10\x10\x10\x10\x10\x10\x10\x10\x10\x10\x10\x10\x10\x10\x10\x10\x10\x10\x10\x10\x10\x10\x10\x10\x10\x10\x10\x10\x10\x10\x10\x10\x10\x10\x10\x10\x10\x10\x10\x10\x10\x10\x10\x10\x10\x10\x10\x10\x10\x10\x10\x10\x10\x10\x10\x10\x10\x10\x10\x10\x10\x10\x10\x10\x10\x10\x10\x10\x10\x10\x10\x10\x10\x10\x10\x10\x10\x08\0\0\0\0\0\0\0V\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0V\0\0\0\0\0\0\0 \0\0\0\0\0\0\0V\0\0\0\0\0\0\0\x10\0\0\0\0\0\0\0V\0\0\0\0\0\0\0\x04\0\0\0\0\0\0\0V\0\0\0\0\0\0\0\x01\0\0\0\0\0\0\0V\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0";
+                    static TABLE: [u8; 528] = *b"\0\0\x10\x10\x10\x10\x10\x10\x10\x10\x10\x10\x10\x10\x10\x10 \x10 \x100 \x10\x10  \x10\x10\x10\x10\x10\x10@\x10\x10P\x10\x10\x10\x10\x10\x10\x10\x10\x10\x10\x10\x10\x10 \x10\x10\x10\x10\x10\x10\x10\x10\x10\x10\x10\x10\x10\x10\x10\x10\x10\x10\x10\x10\x10\x10\x10\x10\x10\x10\x10\x10\x10\x10\x10\x10 \x10\x10\x10\x10\x10\x10\x10 \x10\x10\x10\x10\x10\x10\x10\x10\x10\x10\x10\x10\x10\x10\x10\x10\x10\x10\x10\x10\x10\x10\x10\x10\x10\x10\x10\x10\x10\x10\x10\x10\x10\x10\x10\x10\x10\x10\x10\x10\x10\x10\x10\x10\x10\x10\x10\x10\x10\x10\x10\x10\x10\x10\x10\x10\x10\x10\x10\x10\x10\x10\x10\x10\x10\x10\x10\x10\x10\x10\x10\x10\x10\x10\x10\x10\x10\x10\x10\x10\x10\x10\x10\x10\x10\x10\x10\x10\x10\x10\x10\x10\x10\x10\x10\x10\x10\x10\x10\x10\x10\x10\x10\x10\x10\x10\x10\x10\x10\x10\x10\x10\x10\x10\x10\x10\x10\x10\x10\x10\x10\x10\x10\x10\x10\x10\x10\x10\x10\x10\x10\x10\x10\x10\x10\x10\x10\x10\x10\x10\x10\x10\x10\x10\x10\x10\x10\x10\x10\x10\x10\x10\x10\x10\x10\x10\x10\x10\x10\x10\x10\x10\x10\x10\x10\x08\0\0\0\0\0\0\0V\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0V\0\0\0\0\0\0\0 \0\0\0\0\0\0\0V\0\0\0\0\0\0\0\x10\0\0\0\0\0\0\0V\0\0\0\0\0\0\0\x04\0\0\0\0\0\0\0V\0\0\0\0\0\0\0\x01\0\0\0\0\0\0\0V\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0";
                     let mask = match head.first() {
                         rt::Some(&b) => {
                             let i = 256 + TABLE[b as usize] as usize;
@@ -1418,6 +1802,34 @@ pub mod roboclaw {
                 requests: mask as u64,
                 responses: (mask >> 64) as u64,
             }
+        }
+        #[inline]
+        fn variable_candidates(head: &[u8]) -> rt::VarLens {
+            rt::VarLens {
+                requests: rt::VarLen::NONE,
+                responses: rt::var_by_counts(
+                    head,
+                    &[
+                        (
+                            rt::Fixed {
+                                code_at: 0,
+                                code: &[],
+                                lead_at: 0,
+                                lead: &[],
+                            },
+                            rt::Counted::Many(LISTS_FIRMWARE_VERSION),
+                        ),
+                    ],
+                ),
+            }
+        }
+        #[inline]
+        fn response_decodes(
+            frame: &[u8],
+            request: rt::Option<&Request>,
+            covered: rt::Option<&[u8]>,
+        ) -> rt::Result<(), rt::DecodeError> {
+            ResponseView::decode_over(frame, request, covered).map(|_| ())
         }
         fn checksum_ok(frame: &[u8]) -> bool {
             if unchecked_request(frame) {
@@ -1491,6 +1903,15 @@ pub mod roboclaw {
         pub const DESC: rt::MessageDesc = rt::desc(Self::NAME, 0x14, 1, &[4]);
         pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             Request::ResetEncoders(*self).encode(address, buf)
+        }
+    }
+    impl request::ReadFirmwareVersion {
+        pub const NAME: &'static str = "read_firmware_version";
+        pub const CODE: &'static [u8] = &[0x15];
+        pub const LEN: usize = 2;
+        pub const DESC: rt::MessageDesc = rt::desc(Self::NAME, 0x15, 1, &[2]);
+        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            Request::ReadFirmwareVersion(*self).encode(address, buf)
         }
     }
     impl request::ReadMainBattery {
@@ -1569,7 +1990,7 @@ pub mod roboclaw {
         pub const NAME: &'static str = "ack";
         pub const CODE: &'static [u8] = &[];
         pub const LEN: usize = 1;
-        pub const DESC: rt::MessageDesc = rt::desc(Self::NAME, 0, 0, &[1, 4, 6, 7]);
+        pub const DESC: rt::MessageDesc = rt::desc(Self::NAME, 0, 0, &[1, 2, 4, 6, 7]);
         pub const ACK_DESC: rt::FieldDesc = rt::field(Self::NAME, "ack");
         pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             Response::Ack(*self).encode(address, buf)
@@ -1579,7 +2000,7 @@ pub mod roboclaw {
         pub const NAME: &'static str = "encoder_m1";
         pub const CODE: &'static [u8] = &[];
         pub const LEN: usize = 7;
-        pub const DESC: rt::MessageDesc = rt::desc(Self::NAME, 0, 0, &[1, 4, 6, 7]);
+        pub const DESC: rt::MessageDesc = rt::desc(Self::NAME, 0, 0, &[1, 2, 4, 6, 7]);
         pub const COUNT: rt::Range<usize> = 0..4;
         pub const STATUS: rt::Range<usize> = 4..5;
         pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
@@ -1594,7 +2015,7 @@ pub mod roboclaw {
         pub const NAME: &'static str = "encoder_speed_m1";
         pub const CODE: &'static [u8] = &[];
         pub const LEN: usize = 7;
-        pub const DESC: rt::MessageDesc = rt::desc(Self::NAME, 0, 0, &[1, 4, 6, 7]);
+        pub const DESC: rt::MessageDesc = rt::desc(Self::NAME, 0, 0, &[1, 2, 4, 6, 7]);
         pub const SPEED: rt::Range<usize> = 0..4;
         pub const DIRECTION: rt::Range<usize> = 4..5;
         pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
@@ -1605,11 +2026,25 @@ pub mod roboclaw {
             Response::EncoderSpeedM1(*self).encode(address, buf)
         }
     }
+    impl response::FirmwareVersion {
+        pub const NAME: &'static str = "firmware_version";
+        pub const CODE: &'static [u8] = &[];
+        pub const MIN_LEN: usize = 3;
+        pub const MAX_LEN: usize = 50;
+        pub const DESC: rt::MessageDesc = rt::desc(Self::NAME, 0, 0, &[1, 2, 4, 6, 7]);
+        pub const VERSION_DESC: rt::FieldDesc = rt::field(Self::NAME, "version");
+        pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
+            f("version", rt::Text(self.version.as_slice()));
+        }
+        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            Response::FirmwareVersion(*self).encode(address, buf)
+        }
+    }
     impl response::MainBattery {
         pub const NAME: &'static str = "main_battery";
         pub const CODE: &'static [u8] = &[];
         pub const LEN: usize = 4;
-        pub const DESC: rt::MessageDesc = rt::desc(Self::NAME, 0, 0, &[1, 4, 6, 7]);
+        pub const DESC: rt::MessageDesc = rt::desc(Self::NAME, 0, 0, &[1, 2, 4, 6, 7]);
         pub const VOLTAGE: rt::Range<usize> = 0..2;
         pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
             f("voltage", rt::Int(self.voltage.raw() as i64));
@@ -1622,7 +2057,7 @@ pub mod roboclaw {
         pub const NAME: &'static str = "logic_battery";
         pub const CODE: &'static [u8] = &[];
         pub const LEN: usize = 4;
-        pub const DESC: rt::MessageDesc = rt::desc(Self::NAME, 0, 0, &[1, 4, 6, 7]);
+        pub const DESC: rt::MessageDesc = rt::desc(Self::NAME, 0, 0, &[1, 2, 4, 6, 7]);
         pub const VOLTAGE: rt::Range<usize> = 0..2;
         pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
             f("voltage", rt::Int(self.voltage.raw() as i64));
@@ -1635,7 +2070,7 @@ pub mod roboclaw {
         pub const NAME: &'static str = "currents";
         pub const CODE: &'static [u8] = &[];
         pub const LEN: usize = 6;
-        pub const DESC: rt::MessageDesc = rt::desc(Self::NAME, 0, 0, &[1, 4, 6, 7]);
+        pub const DESC: rt::MessageDesc = rt::desc(Self::NAME, 0, 0, &[1, 2, 4, 6, 7]);
         pub const M1: rt::Range<usize> = 0..2;
         pub const M2: rt::Range<usize> = 2..4;
         pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
@@ -1650,7 +2085,7 @@ pub mod roboclaw {
         pub const NAME: &'static str = "temperature";
         pub const CODE: &'static [u8] = &[];
         pub const LEN: usize = 4;
-        pub const DESC: rt::MessageDesc = rt::desc(Self::NAME, 0, 0, &[1, 4, 6, 7]);
+        pub const DESC: rt::MessageDesc = rt::desc(Self::NAME, 0, 0, &[1, 2, 4, 6, 7]);
         pub const TEMPERATURE: rt::Range<usize> = 0..2;
         pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
             f("temperature", rt::Int(self.temperature.raw() as i64));
@@ -1663,7 +2098,7 @@ pub mod roboclaw {
         pub const NAME: &'static str = "status";
         pub const CODE: &'static [u8] = &[];
         pub const LEN: usize = 6;
-        pub const DESC: rt::MessageDesc = rt::desc(Self::NAME, 0, 0, &[1, 4, 6, 7]);
+        pub const DESC: rt::MessageDesc = rt::desc(Self::NAME, 0, 0, &[1, 2, 4, 6, 7]);
         pub const STATUS: rt::Range<usize> = 0..4;
         pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
             f("status", rt::Int(self.status.raw() as i64));
@@ -1709,6 +2144,11 @@ pub mod roboclaw {
         #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
         #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]
         pub struct ResetEncoders;
+        /// §21 Read firmware version (code `0x15`, 2 bytes).
+        #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+        #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
+        #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]
+        pub struct ReadFirmwareVersion;
         /// §24 Read main battery voltage (code `0x18`, 2 bytes).
         #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
         #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
@@ -1779,6 +2219,14 @@ pub mod roboclaw {
             /// \[pulse/s\]
             pub speed: i32,
             pub direction: super::Direction,
+        }
+        /// §21 Firmware version (code `0x`, 3 to 50 bytes). The product name and firmware version, ending in a line feed, then a NUL: up to 48 bytes with it. The reply has no length: only the NUL tells where the text ends and the CRC begins.
+        #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+        #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
+        #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]
+        #[repr(align(4))]
+        pub struct FirmwareVersion {
+            pub version: super::rt::Repeated<u8, 47>,
         }
         /// §24 Main battery voltage (code `0x`, 4 bytes).
         #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
