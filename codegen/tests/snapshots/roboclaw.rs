@@ -1624,7 +1624,7 @@ pub mod roboclaw {
                     );
                     g.end(&response::Ack::DESC)
                 }
-                _ => rt::Err(rt::unknown_code(frame, 0, 0, 2, true)),
+                _ => rt::Err(RESPONSE_CODE.unknown(frame)),
             }
         }
         /// This message's row in the owned type's `MESSAGES`.
