@@ -515,7 +515,6 @@ fn both_ways_check(p: &Protocol) -> TokenStream {
         fn decodes_both_ways(frame: &[u8]) -> rt::Result<bool, rt::DecodeError> {
             #shorter
             #checks
-            let _ = address;
             RequestView::dispatch(frame)?;
             rt::Ok(matches!(
                 ResponseView::dispatch(frame #no_request),

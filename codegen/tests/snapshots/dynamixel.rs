@@ -1170,7 +1170,6 @@ pub mod dynamixel {
                 |b| u32::from(checksum(rt::covered(b, 2))),
             )?;
             LENGTH.check(frame)?;
-            let _ = address;
             RequestView::dispatch(frame)?;
             rt::Ok(
                 matches!(

@@ -2704,7 +2704,6 @@ pub mod modbus {
                 &FRAME,
                 |b| u32::from(checksum(b)),
             )?;
-            let _ = address;
             RequestView::dispatch(frame)?;
             rt::Ok(
                 matches!(
