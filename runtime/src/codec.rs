@@ -271,6 +271,18 @@ impl Frame {
         }
     }
 
+    /// Writes the end bytes and the checksum (`sum` of the bytes before it) of the `len`-byte
+    /// frame in `buf`, in the order the frame has them (the checksum covers end bytes before
+    /// it). Where frames carry no checksum nor end bytes, nothing.
+    #[inline(always)]
+    pub fn seal(&self, buf: &mut [u8], len: usize, sum: impl FnOnce(&[u8]) -> u32) {
+        if self.end.is_empty() {
+            seal(buf, len, sum, self.checksum_len, self.checksum_be);
+        } else {
+            seal_end(buf, len, sum, self);
+        }
+    }
+
     /// Whether a frame may carry `address`: a device's, the broadcast or the host address.
     #[inline(always)]
     pub const fn address_ok(&self, address: u8) -> bool {
@@ -382,6 +394,95 @@ pub fn check_frame_with(
         });
     }
     Ok(address)
+}
+
+/// The checks every frame of a direction passes before its code is read, with the numbers
+/// they take named: each generated module's `CHECKS`, or `REQUEST_CHECKS` and
+/// `RESPONSE_CHECKS` where the directions' differ.
+#[derive(Debug, Clone, Copy)]
+pub struct FrameChecks {
+    /// Sync sequences checked first, each at its offset (where one is longer than the start
+    /// byte, differs by direction or comes twice): [`check_sync`].
+    pub sync: &'static [(usize, &'static [u8])],
+    /// What every frame of the direction shares: start byte, addresses, checksum, end bytes.
+    pub frame: &'static Frame,
+    /// The direction's shortest and longest frame, in bytes.
+    pub min: usize,
+    pub max: usize,
+    /// The address's offset (not looked at where frames carry none).
+    pub address_at: usize,
+}
+
+impl FrameChecks {
+    /// [`check_frame`] with these numbers: the frame's address, or why the frame is refused.
+    #[inline(always)]
+    pub fn check(
+        &self,
+        frame: &[u8],
+        checksum: impl FnOnce(&[u8]) -> u32,
+    ) -> Result<u8, DecodeError> {
+        self.check_syncs(frame)?;
+        check_frame(
+            frame,
+            self.min,
+            self.max,
+            self.address_at,
+            self.frame,
+            checksum,
+        )
+    }
+
+    #[inline(always)]
+    fn check_syncs(&self, frame: &[u8]) -> Result<(), DecodeError> {
+        // One sync sequence (the common case) is checked without a loop over them.
+        match self.sync {
+            [] => Ok(()),
+            &[(at, sync)] => check_sync(frame, self.max, at, sync),
+            many => {
+                for &(at, sync) in many {
+                    check_sync(frame, self.max, at, sync)?;
+                }
+                Ok(())
+            }
+        }
+    }
+
+    /// [`check_frame_with`] with these numbers: a checksum that may refuse the frame.
+    #[inline(always)]
+    pub fn check_with(
+        &self,
+        frame: &[u8],
+        checksum: impl FnOnce(&[u8]) -> Result<u32, DecodeError>,
+    ) -> Result<u8, DecodeError> {
+        self.check_syncs(frame)?;
+        check_frame_with(
+            frame,
+            self.min,
+            self.max,
+            self.address_at,
+            self.frame,
+            checksum,
+        )
+    }
+
+    /// The checks of a frame that travels without a checksum (`checksum: none`), found by its
+    /// code and length: every check but the checksum and the shortest frame.
+    #[inline(always)]
+    pub fn check_unsummed(&self, frame: &[u8]) -> Result<u8, DecodeError> {
+        self.check_syncs(frame)?;
+        let unsummed = Frame {
+            checksum_len: 0,
+            ..*self.frame
+        };
+        check_frame(
+            frame,
+            frame.len(),
+            self.max,
+            self.address_at,
+            &unsummed,
+            |_| 0,
+        )
+    }
 }
 
 /// The code: `n` bytes from `at`, big-endian (as codes are written). The caller has checked

@@ -38,7 +38,7 @@ pub(super) fn messages_by_code(msgs: &[Message]) -> Vec<(&[u8], Vec<&Message>)> 
 }
 
 /// `decode` (and, for responses, `decode_reply`): the frame checks shared by every message
-/// (`rt::check_frame`), then `dispatch`, one `match` on the code per code length, each arm
+/// (`CHECKS.check`, an `rt::FrameChecks`), then `dispatch`, one `match` on the code per code length, each arm
 /// decoding its message from the frame as a fixed-size array. Messages sharing a code are
 /// told apart by length, then constants (`rt::Group`).
 pub(super) fn emit_dispatch(ctx: &Ctx, d: Direction, ty: &TokenStream) -> TokenStream {
@@ -308,19 +308,22 @@ pub(super) fn frame_bounds(p: &Protocol, d: Direction) -> (usize, usize) {
     (min_len, max_len)
 }
 
-/// The checks of direction `d`'s decoder that every frame passes before its code is read: the
-/// sync bytes, `rt::check_frame` (length, start, address, checksum: `let address = …;`) and
-/// the length field. Two directions whose checks are the same tokens check a frame alike.
+/// The checks of direction `d`'s decoder that every frame passes before its code is read:
+/// `rt::FrameChecks` (length, sync, start, address, checksum: `let address = …;`) and the
+/// length field. Two directions whose checks are the same tokens check a frame alike.
 /// `shortest`: the shortest frame checked, where not the direction's own.
 pub(super) fn framing_checks(p: &Protocol, d: Direction, shortest: Option<usize>) -> TokenStream {
-    let (min_len, max_len) = frame_bounds(p, d);
-    let min_len = shortest.unwrap_or(min_len);
-    let (min_len, max_len) = (usize_lit(min_len), usize_lit(max_len));
-    let sync = sync_checks(p, d, &max_len);
-    let check_frame = frame_check(p, d, &min_len, &max_len);
+    // A shortest frame of its own (`decodes_both_ways`, past both directions' shortest) is
+    // written out, unless it is each direction's.
+    let own = |d: Direction| shortest.map_or(true, |min| min == frame_bounds(p, d).0);
+    let checks = if own(Direction::Request) && own(Direction::Response) {
+        checks_name(p, d)
+    } else {
+        checks_value(p, d, shortest)
+    };
+    let check_frame = frame_check(p, d, &checks);
     let length = length_check(p, d);
     quote! {
-        #sync
         #check_frame
         #length
     }
@@ -348,10 +351,11 @@ pub(super) fn dispatch_groups(p: &Protocol, d: Direction) -> Vec<Vec<&Message>> 
         .collect()
 }
 
-/// A sync sequence's first byte is `FRAME.start`'s; the others are checked first. Start
-/// bytes that differ by direction, or come twice, are all checked here (`FRAME.start` is
-/// `None`), in the order the interpreter checks them.
-fn sync_checks(p: &Protocol, d: Direction, max_len: &Literal) -> TokenStream {
+/// The sync sequences checked before the other frame checks, each at its offset: a sync
+/// sequence's first byte is `FRAME.start`'s, the others are checked first. Start bytes that
+/// differ by direction, or come twice, are all checked here (`FRAME.start` is `None`), in the
+/// order the interpreter checks them.
+fn syncs(p: &Protocol, d: Direction) -> Vec<(usize, &[u8])> {
     let by_direction = starts_by_direction(p);
     // The direction's own layout: a second start after the code sits after its one length.
     let code_len = p
@@ -367,14 +371,9 @@ fn sync_checks(p: &Protocol, d: Direction, max_len: &Literal) -> TokenStream {
             if sync.len() > 1
                 || ((by_direction || head.start_again.is_some()) && !sync.is_empty()) =>
         {
-            let checks = head.starts().map(|at| {
-                let at = usize_lit(at);
-                let bytes = sync.iter().map(|b| hex_u8(*b));
-                quote!(rt::check_sync(frame, #max_len, #at, &[#(#bytes),*])?;)
-            });
-            quote!(#(#checks)*)
+            head.starts().map(|at| (at, sync)).collect()
         }
-        _ => quote!(),
+        _ => Vec::new(),
     }
 }
 
@@ -482,26 +481,42 @@ fn code_matches(
         let last = li + 1 == lens.len() && !mixed;
         let at = code_at(l);
         let codes = by_code.iter().filter(|(code, _)| code.len() == l);
-        let arms = codes.map(|(code, group)| {
+        let codes = codes.map(|(code, group)| {
             let mut group = group.clone();
             if mixed {
                 group.extend(codeless);
             }
-            let lit = hex_code(code);
-            let arm = emit_group(ctx, &group, replies, mixed);
+            (hex_code(code), emit_group(ctx, &group, replies, mixed))
+        });
+        let need = at + l + clen;
+        let code = read_code(at, l);
+        // The one message group without a code needs no `match` on it.
+        if l == 0 {
+            let arm = codes.map(|(_, arm)| arm);
+            if last {
+                body.push(quote!(#(#arm)*));
+            } else {
+                let need = usize_lit(need);
+                body.push(quote! {
+                    if frame.len() >= #need {
+                        #(return #arm;)*
+                    }
+                });
+            }
+            continue;
+        }
+        let arms = codes.map(|(lit, arm)| {
             if last {
                 quote!(#lit => #arm,)
             } else {
                 quote!(#lit => return #arm,)
             }
         });
-        let need = at + l + clen;
-        let (at, l) = (usize_lit(at), usize_lit(l));
         if !last {
             let need = usize_lit(need);
             body.push(quote! {
                 if frame.len() >= #need {
-                    match rt::code(frame, #at, #l) {
+                    match #code {
                         #(#arms)*
                         _ => {}
                     }
@@ -518,7 +533,7 @@ fn code_matches(
             });
         }
         body.push(quote! {
-            match rt::code(frame, #at, #l) {
+            match #code {
                 #(#arms)*
                 _ => #unknown,
             }
@@ -530,31 +545,45 @@ fn code_matches(
     body
 }
 
+/// The `l`-byte code at offset `at` of a frame long enough to hold it, big-endian as codes
+/// are written: the byte itself, or the bytes as a `u16` or `u32` (through `rt::code` for a
+/// code of three bytes).
+fn read_code(at: usize, l: usize) -> TokenStream {
+    let bytes = (at..at + l).map(|i| {
+        let i = usize_lit(i);
+        quote!(frame[#i])
+    });
+    match l {
+        1 => quote!(#(#bytes)*),
+        2 => quote!(u16::from_be_bytes([#(#bytes),*])),
+        4 => quote!(u32::from_be_bytes([#(#bytes),*])),
+        _ => {
+            let (at, l) = (usize_lit(at), usize_lit(l));
+            quote!(rt::code(frame, #at, #l))
+        }
+    }
+}
+
 /// The checks every frame of direction `d` passes (length, address, checksum, end bytes),
-/// which give its address: `let address = …;`. A message without a checksum is checked without
-/// one, found by its code and length first.
-fn frame_check(p: &Protocol, d: Direction, min_len: &Literal, max_len: &Literal) -> TokenStream {
+/// which give its address: `let address = …;`, by `checks` (an `rt::FrameChecks`). A message
+/// without a checksum is checked without one, found by its code and length first.
+fn frame_check(p: &Protocol, d: Direction, checks: &TokenStream) -> TokenStream {
     let unchecked = p.framed(d).iter().any(|m| m.unchecked);
     let replies = d == Direction::Response;
-    let addr_at = usize_lit(address_at(p, d));
     let sum = frame_sum(p, d);
-    let frame_const = frame_of(p, d);
     // A reply whose checksum takes in its request's bytes (`checksum_over_request`):
     // `response_sum` checks it over `covered`, or refuses it without them.
     let over = replies && p.has_over_request();
     let check_frame = if over {
-        quote!(rt::check_frame_with(frame, #min_len, #max_len, #addr_at, &#frame_const, |b| response_sum(frame, b, covered))?)
+        quote!(#checks.check_with(frame, |b| response_sum(frame, b, covered))?)
     } else {
-        quote!(rt::check_frame(frame, #min_len, #max_len, #addr_at, &#frame_const, #sum)?)
+        quote!(#checks.check(frame, #sum)?)
     };
     if unchecked {
-        let (is, frame_const) = (
-            super::head::unchecked_fn(d),
-            super::head::unchecked_frame(p, d),
-        );
+        let is = super::head::unchecked_fn(d);
         quote! {
             let address = if #is(frame) {
-                rt::check_frame(frame, frame.len(), #max_len, #addr_at, &#frame_const, |_| 0)?
+                #checks.check_unsummed(frame)?
             } else {
                 #check_frame
             };
@@ -562,6 +591,96 @@ fn frame_check(p: &Protocol, d: Direction, min_len: &Literal, max_len: &Literal)
     } else {
         quote!(let address = #check_frame;)
     }
+}
+
+/// Direction `d`'s frame checks as an `rt::FrameChecks` value: its sync sequences, its frame
+/// constant, its shortest (or `shortest`) and longest frame, its address's offset.
+fn checks_value(p: &Protocol, d: Direction, shortest: Option<usize>) -> TokenStream {
+    let (min, max) = frame_bounds(p, d);
+    let (min, max) = (usize_lit(shortest.unwrap_or(min)), usize_lit(max));
+    let at = usize_lit(address_at(p, d));
+    let frame = frame_of(p, d);
+    let sync = syncs(p, d).into_iter().map(|(at, bytes)| {
+        let (at, bytes) = (usize_lit(at), bytes.iter().map(|b| hex_u8(*b)));
+        quote!((#at, &[#(#bytes),*]))
+    });
+    quote!(rt::FrameChecks { sync: &[#(#sync),*], frame: &#frame, min: #min, max: #max, address_at: #at })
+}
+
+/// The name of direction `d`'s frame checks constant ([`emit_frame_checks`]): `CHECKS` where
+/// both directions check frames alike.
+pub(super) fn checks_name(p: &Protocol, d: Direction) -> TokenStream {
+    let same = checks_value(p, Direction::Request, None).to_string()
+        == checks_value(p, Direction::Response, None).to_string();
+    match (same, d) {
+        (true, _) => quote!(CHECKS),
+        (false, Direction::Request) => quote!(REQUEST_CHECKS),
+        (false, Direction::Response) => quote!(RESPONSE_CHECKS),
+    }
+}
+
+/// The constants [`checks_name`] names: what each direction's frames are checked by before
+/// their code is read.
+pub(super) fn emit_frame_checks(p: &Protocol) -> TokenStream {
+    let dirs = if checks_name(p, Direction::Request).to_string() == "CHECKS" {
+        &[Direction::Request][..]
+    } else {
+        &[Direction::Request, Direction::Response][..]
+    };
+    let consts = dirs.iter().map(|&d| {
+        let (name, value) = (checks_name(p, d), checks_value(p, d, None));
+        let (min, max) = frame_bounds(p, d);
+        let whose = match (name.to_string().as_str(), d) {
+            ("CHECKS", _) => "every frame",
+            (_, Direction::Request) => "every request",
+            (_, Direction::Response) => "every response",
+        };
+        let f = &p.framing;
+        let head = f.head(d, 1);
+        let syncs = syncs(p, d);
+        let sync = syncs
+            .iter()
+            .map(|(at, bytes)| {
+                let hex: Vec<String> = bytes.iter().map(|b| format!("{b:02X}")).collect();
+                format!("{} at offset {at}", hex.join(" "))
+            })
+            .collect::<Vec<_>>()
+            .join(" and ");
+        let parts = [
+            (!syncs.is_empty(), format!("its sync bytes ({sync})")),
+            (
+                syncs.is_empty() && head.start.is_some() && f.start.is_some(),
+                "its start byte".to_string(),
+            ),
+            (!f.end.is_empty(), "its end bytes".to_string()),
+            (!f.checksum.is_empty(), "its checksum".to_string()),
+            (
+                f.has_address_in(d),
+                format!("its address (offset {})", address_at(p, d)),
+            ),
+        ];
+        let parts: Vec<String> = parts
+            .into_iter()
+            .filter(|(on, _)| *on)
+            .map(|(_, t)| t)
+            .collect();
+        let then = if parts.is_empty() {
+            String::new()
+        } else {
+            format!(", then {}", parts.join(", "))
+        };
+        let bytes = if min == max {
+            format!("{min} bytes")
+        } else {
+            format!("{min} to {max} bytes")
+        };
+        let doc = format!(" The checks {whose} passes before its code is read: {bytes}{then}.");
+        quote! {
+            #[doc = #doc]
+            const #name: rt::FrameChecks = #value;
+        }
+    });
+    quote!(#(#consts)*)
 }
 
 /// The check of the length field of a frame of direction `d`, where the framing has one: it

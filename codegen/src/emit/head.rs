@@ -472,24 +472,7 @@ pub(super) fn emit_unchecked(p: &Protocol) -> TokenStream {
             }
         }
     });
-    let mut frames: Vec<TokenStream> = dirs
-        .iter()
-        .map(|&d| {
-            let (name, frame) = (unchecked_frame(p, d), frame_of(p, d));
-            quote!(const #name: rt::Frame = rt::Frame { checksum_len: 0, ..#frame };)
-        })
-        .collect();
-    frames.dedup_by(|a, b| a.to_string() == b.to_string());
-    quote! {
-        #(#fns)*
-        #(#frames)*
-    }
-}
-
-/// The frame checks of direction `d` without the checksum, for its messages that travel
-/// without one.
-pub(super) fn unchecked_frame(p: &Protocol, d: Direction) -> proc_macro2::Ident {
-    format_ident!("UNCHECKED_{}", frame_of(p, d).to_string())
+    quote!(#(#fns)*)
 }
 
 /// Where a reply's checksum takes in its request's bytes (`checksum_over_request`):
@@ -537,15 +520,12 @@ pub(super) fn emit_over_request(p: &Protocol) -> TokenStream {
             rt::None
         }
         /// The checksum of a response frame, as the frame checks take it
-        /// (`rt::check_frame_with`): over the request's bytes `covered` first where the frame
+        /// (`RESPONSE_CHECKS.check_with`): over the request's bytes `covered` first where the frame
         /// is a reply that takes them in, refused without them.
         #[inline]
         fn response_sum(frame: &[u8], b: &[u8], covered: rt::Option<&[u8]>) -> rt::Result<u32, rt::DecodeError> {
             match over_request(frame) {
-                rt::None => {
-                    let own = #sum;
-                    rt::Ok(own(b))
-                }
+                rt::None => rt::Ok(#sum(b)),
                 rt::Some((from, message)) => match covered {
                     rt::Some(q) => rt::Ok(u32::from(checksum_after(q, rt::covered(b, from)))),
                     rt::None => rt::Err(rt::DecodeError::NeedsRequest { message, offset: b.len() }),
@@ -783,15 +763,49 @@ pub(super) fn checksum_in_arms(p: &Protocol) -> bool {
 }
 
 /// The checksum of a frame of direction `d`'s bytes before it, as the runtime's frame checks
-/// take it: over the bytes from `covers_from` on where the checksum skips the first
-/// (Dynamixel's sync bytes), each direction's own where they differ (`covers_from: {request,
-/// response}`).
+/// take it: the name of the function [`emit_frame_sums`] writes, one for both directions
+/// (`frame_sum`) where they cover the same bytes.
 pub(super) fn frame_sum(p: &Protocol, d: Direction) -> TokenStream {
-    match p.framing.checksum.covers_from_of(d) {
-        0 => quote!(|b| u32::from(checksum(b))),
-        from => {
-            let from = usize_lit(from);
-            quote!(|b| u32::from(checksum(rt::covered(b, #from))))
-        }
+    if !p.framing.checksum.covers_by_direction() {
+        quote!(frame_sum)
+    } else if d == Direction::Request {
+        quote!(request_frame_sum)
+    } else {
+        quote!(response_frame_sum)
     }
+}
+
+/// The functions [`frame_sum`] names: over the bytes from `covers_from` on where the checksum
+/// skips the first (Dynamixel's sync bytes), each direction's own where they differ
+/// (`covers_from: {request, response}`).
+pub(super) fn emit_frame_sums(p: &Protocol) -> TokenStream {
+    let dirs = if p.framing.checksum.covers_by_direction() {
+        &[Direction::Request, Direction::Response][..]
+    } else {
+        &[Direction::Request][..]
+    };
+    let fns = dirs.iter().map(|&d| {
+        let name = frame_sum(p, d);
+        let (doc, covered) = match p.framing.checksum.covers_from_of(d) {
+            0 => (
+                " The checksum a frame carries, as the frame checks compare it: over every byte before it.".to_string(),
+                quote!(bytes),
+            ),
+            from => {
+                let lit = usize_lit(from);
+                (
+                    format!(" The checksum a frame carries, as the frame checks compare it: over the bytes before it from offset {from} on."),
+                    quote!(rt::covered(bytes, #lit)),
+                )
+            }
+        };
+        quote! {
+            #[doc = #doc]
+            #[inline]
+            fn #name(bytes: &[u8]) -> u32 {
+                u32::from(checksum(#covered))
+            }
+        }
+    });
+    quote!(#(#fns)*)
 }

@@ -347,19 +347,10 @@ fn encode_seal(p: &Protocol, d: Direction) -> TokenStream {
     if checksum_in_arms(p) {
         quote!(rt::Ok(len))
     } else {
-        let n = usize_lit(p.framing.checksum.len());
-        let be = p.framing.checksum.byte_order == ByteOrder::Big;
         let sum = frame_sum(p, d);
-        if p.framing.end.is_empty() {
-            quote! {
-                rt::seal(buf, len, #sum, #n, #be);
-                rt::Ok(len)
-            }
-        } else {
-            quote! {
-                rt::seal_end(buf, len, #sum, &FRAME);
-                rt::Ok(len)
-            }
+        quote! {
+            FRAME.seal(buf, len, #sum);
+            rt::Ok(len)
         }
     }
 }

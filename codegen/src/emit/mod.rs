@@ -29,7 +29,7 @@
 //!   module name no spec name can take, since spec names become `CamelCase` types, variants
 //!   or fields (`codegen/tests/fixtures/core_names.yaml` names its types `Option`, `Ok`, ...);
 //! - checks every frame or message shares are small `#[inline]` runtime helpers
-//!   (`rt::check_frame`, `rt::in_range`, `rt::frame_mut`, `rt::Group`, ...);
+//!   (`rt::FrameChecks`, `rt::in_range`, `rt::frame_mut`, `rt::Group`, ...);
 //! - per-message constants are tables (`MESSAGES`: name, code, length; `COMMANDS`: kind,
 //!   broadcast rule, replies), indexed by one `match` (`index`);
 //! - `dispatch` has one arm per code, which decodes its message from the frame as a
@@ -180,6 +180,8 @@ fn module_tokens(p: &Protocol, source: &str, spec_path: &str) -> TokenStream {
     let enums = emit_enums(&ctx);
     let flags = emit_flags(&ctx);
     let checksum = emit_checksum(p);
+    let frame_sums = emit_frame_sums(p);
+    let frame_checks = dispatch::emit_frame_checks(p);
     let over_request = emit_over_request(p);
     let unchecked = emit_unchecked(p);
     let requests = emit_messages(&ctx, Direction::Request);
@@ -196,6 +198,8 @@ fn module_tokens(p: &Protocol, source: &str, spec_path: &str) -> TokenStream {
         #header
         #codes
         #checksum
+        #frame_sums
+        #frame_checks
         #over_request
         #unchecked
         #units

@@ -478,7 +478,7 @@ fn both_ways_check(p: &Protocol) -> TokenStream {
         frame_bounds(p, Direction::Request).0,
         frame_bounds(p, Direction::Response).0,
     );
-    // `rt::check_frame` refuses every frame of a direction whose shortest frame does not
+    // The frame checks refuse every frame of a direction whose shortest frame does not
     // reach past its address or hold its checksum and end bytes, whatever its length: such a
     // direction's checks are not the other's for any frame.
     let lies = |d: Direction, min: usize| min <= address_at(p, d) || min < p.framing.trailer_len();

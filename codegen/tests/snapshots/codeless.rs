@@ -78,18 +78,32 @@ pub mod codeless {
         trailer: 1,
         response: false,
     };
-    /// Where a response's code sits: from `at`, at most `longest` bytes, before `trailer` bytes.
-    const RESPONSE_CODE: rt::CodeAt = rt::CodeAt {
-        at: 4,
-        longest: 0,
-        trailer: 1,
-        response: true,
-    };
     /// The frame checksum: the 8-bit sum of the bytes it covers, inverted.
     #[inline]
     pub fn checksum(bytes: &[u8]) -> u8 {
         rt::sum8_ones(bytes)
     }
+    /// The checksum a frame carries, as the frame checks compare it: over the bytes before it from offset 2 on.
+    #[inline]
+    fn frame_sum(bytes: &[u8]) -> u32 {
+        u32::from(checksum(rt::covered(bytes, 2)))
+    }
+    /// The checks every request passes before its code is read: 6 to 7 bytes, then its sync bytes (FF FF at offset 0), its checksum, its address (offset 2).
+    const REQUEST_CHECKS: rt::FrameChecks = rt::FrameChecks {
+        sync: &[(0, &[0xFF, 0xFF])],
+        frame: &FRAME,
+        min: 6,
+        max: 7,
+        address_at: 2,
+    };
+    /// The checks every response passes before its code is read: 6 to 8 bytes, then its sync bytes (FF FF at offset 0), its checksum, its address (offset 2).
+    const RESPONSE_CHECKS: rt::FrameChecks = rt::FrameChecks {
+        sync: &[(0, &[0xFF, 0xFF])],
+        frame: &FRAME,
+        min: 6,
+        max: 8,
+        address_at: 2,
+    };
     ///  (§3)
     #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, Default)]
     #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
@@ -181,22 +195,14 @@ pub mod codeless {
                     out.len()
                 }
             };
-            rt::seal(buf, len, |b| u32::from(checksum(rt::covered(b, 2))), 1, false);
+            FRAME.seal(buf, len, frame_sum);
             rt::Ok(len)
         }
         /// Decodes one whole frame: refuses one longer than the longest, checks its start byte,
         /// checksum and address, then its code, constants, repeated fields, the ranges the
         /// spec gives its fields and the command's broadcast rule.
         pub fn decode(frame: &[u8]) -> rt::Result<Decoded<Request>, rt::DecodeError> {
-            rt::check_sync(frame, 7, 0, &[0xFF, 0xFF])?;
-            let address = rt::check_frame(
-                frame,
-                6,
-                7,
-                2,
-                &FRAME,
-                |b| u32::from(checksum(rt::covered(b, 2))),
-            )?;
+            let address = REQUEST_CHECKS.check(frame, frame_sum)?;
             LENGTH.check(frame)?;
             let message = Self::dispatch(frame)?;
             rt::Ok(Decoded { address, message })
@@ -204,7 +210,7 @@ pub mod codeless {
         /// The message of a frame that passed the checks every frame passes, by its code.
         #[inline]
         fn dispatch(frame: &[u8]) -> rt::DecodeResult<Self> {
-            match rt::code(frame, 4, 1) {
+            match frame[4] {
                 0x01 => {
                     rt::fixed::<6>(frame, &request::Ping::DESC)
                         .map(|_| Self::Ping(request::Ping))
@@ -356,7 +362,7 @@ pub mod codeless {
                     out.len()
                 }
             };
-            rt::seal(buf, len, |b| u32::from(checksum(rt::covered(b, 2))), 1, false);
+            FRAME.seal(buf, len, frame_sum);
             rt::Ok(len)
         }
         /// Decodes one whole frame: refuses one longer than the longest, checks its start byte,
@@ -385,15 +391,7 @@ pub mod codeless {
             frame: &[u8],
             request: rt::Option<&Request>,
         ) -> rt::Result<Decoded<Response>, rt::DecodeError> {
-            rt::check_sync(frame, 8, 0, &[0xFF, 0xFF])?;
-            let address = rt::check_frame(
-                frame,
-                6,
-                8,
-                2,
-                &FRAME,
-                |b| u32::from(checksum(rt::covered(b, 2))),
-            )?;
+            let address = RESPONSE_CHECKS.check(frame, frame_sum)?;
             LENGTH.check(frame)?;
             let message = Self::dispatch(frame, request)?;
             if let rt::Some(request) = request {
@@ -409,27 +407,24 @@ pub mod codeless {
             frame: &[u8],
             request: rt::Option<&Request>,
         ) -> rt::DecodeResult<Self> {
-            match rt::code(frame, 4, 0) {
-                0u32 => {
-                    let mut g = rt::Group::new(frame, 0u32, request.map(Request::name));
-                    g.attempt(|frame: &[u8; 6]| {
-                        rt::Ok(
-                            Self::Status(response::Status {
-                                error: Errors::from_raw(frame[4]),
-                            }),
-                        )
-                    });
-                    g.attempt(|frame: &[u8; 8]| {
-                        rt::Ok(
-                            Self::ReadStatus(response::ReadStatus {
-                                error: Errors::from_raw(frame[4]),
-                                value: u16::from_le_bytes([frame[5], frame[6]]),
-                            }),
-                        )
-                    });
-                    g.end(&response::Status::DESC)
-                }
-                _ => rt::Err(RESPONSE_CODE.unknown(frame)),
+            {
+                let mut g = rt::Group::new(frame, 0u32, request.map(Request::name));
+                g.attempt(|frame: &[u8; 6]| {
+                    rt::Ok(
+                        Self::Status(response::Status {
+                            error: Errors::from_raw(frame[4]),
+                        }),
+                    )
+                });
+                g.attempt(|frame: &[u8; 8]| {
+                    rt::Ok(
+                        Self::ReadStatus(response::ReadStatus {
+                            error: Errors::from_raw(frame[4]),
+                            value: u16::from_le_bytes([frame[5], frame[6]]),
+                        }),
+                    )
+                });
+                g.end(&response::Status::DESC)
             }
         }
         /// The message called `name` in the spec, from each field's raw wire value by its spec
@@ -600,14 +595,7 @@ pub mod codeless {
         }
         fn checksum_ok(frame: &[u8]) -> bool {
             match frame.len().checked_sub(1) {
-                rt::Some(n) if n > 0 => {
-                    rt::check_sum(
-                        frame,
-                        n,
-                        &FRAME,
-                        |b| u32::from(checksum(rt::covered(b, 2))),
-                    )
-                }
+                rt::Some(n) if n > 0 => rt::check_sum(frame, n, &FRAME, frame_sum),
                 _ => false,
             }
         }

@@ -101,6 +101,27 @@ pub mod dlt645 {
     pub fn checksum(bytes: &[u8]) -> u8 {
         rt::sum8(bytes)
     }
+    /// The checksum a frame carries, as the frame checks compare it: over every byte before it.
+    #[inline]
+    fn frame_sum(bytes: &[u8]) -> u32 {
+        u32::from(checksum(bytes))
+    }
+    /// The checks every request passes before its code is read: 12 to 16 bytes, then its sync bytes (68 at offset 0 and 68 at offset 7), its end bytes, its checksum.
+    const REQUEST_CHECKS: rt::FrameChecks = rt::FrameChecks {
+        sync: &[(0, &[0x68]), (7, &[0x68])],
+        frame: &FRAME,
+        min: 12,
+        max: 16,
+        address_at: 0,
+    };
+    /// The checks every response passes before its code is read: 18 to 22 bytes, then its sync bytes (68 at offset 0 and 68 at offset 7), its end bytes, its checksum.
+    const RESPONSE_CHECKS: rt::FrameChecks = rt::FrameChecks {
+        sync: &[(0, &[0x68]), (7, &[0x68])],
+        frame: &FRAME,
+        min: 18,
+        max: 22,
+        address_at: 0,
+    };
     ///A request (command), host to device.
     #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
     #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
@@ -214,7 +235,7 @@ pub mod dlt645 {
                 }
             };
             TRANSFORM.put(buf, len, 10, 2);
-            rt::seal_end(buf, len, |b| u32::from(checksum(b)), &FRAME);
+            FRAME.seal(buf, len, frame_sum);
             rt::Ok(len)
         }
         /// Decodes one whole frame: refuses one longer than the longest, checks its start byte,
@@ -222,16 +243,7 @@ pub mod dlt645 {
         /// spec gives its fields and the command's broadcast rule.
         pub fn decode(frame: &[u8]) -> rt::Result<Decoded<Request>, rt::DecodeError> {
             let frame = PREAMBLE.skip(frame);
-            rt::check_sync(frame, 16, 0, &[0x68])?;
-            rt::check_sync(frame, 16, 7, &[0x68])?;
-            let address = rt::check_frame(
-                frame,
-                12,
-                16,
-                0,
-                &FRAME,
-                |b| u32::from(checksum(b)),
-            )?;
+            let address = REQUEST_CHECKS.check(frame, frame_sum)?;
             LENGTH.check(frame)?;
             let mut plain = [0u8; 16];
             let frame = TRANSFORM.undo_into(frame, 10, 2, &mut plain);
@@ -241,7 +253,7 @@ pub mod dlt645 {
         /// The message of a frame that passed the checks every frame passes, by its code.
         #[inline]
         fn dispatch(frame: &[u8]) -> rt::DecodeResult<Self> {
-            match rt::code(frame, 8, 1) {
+            match frame[8] {
                 0x13 => {
                     let frame = rt::fixed::<12>(frame, &request::ReadAddress::DESC)?;
                     rt::Ok(
@@ -556,7 +568,7 @@ pub mod dlt645 {
                 }
             };
             TRANSFORM.put(buf, len, 10, 2);
-            rt::seal_end(buf, len, |b| u32::from(checksum(b)), &FRAME);
+            FRAME.seal(buf, len, frame_sum);
             rt::Ok(len)
         }
         /// Decodes one whole frame: refuses one longer than the longest, checks its start byte,
@@ -586,16 +598,7 @@ pub mod dlt645 {
             request: rt::Option<&Request>,
         ) -> rt::Result<Decoded<Response>, rt::DecodeError> {
             let frame = PREAMBLE.skip(frame);
-            rt::check_sync(frame, 22, 0, &[0x68])?;
-            rt::check_sync(frame, 22, 7, &[0x68])?;
-            let address = rt::check_frame(
-                frame,
-                18,
-                22,
-                0,
-                &FRAME,
-                |b| u32::from(checksum(b)),
-            )?;
+            let address = RESPONSE_CHECKS.check(frame, frame_sum)?;
             LENGTH.check(frame)?;
             let mut plain = [0u8; 22];
             let frame = TRANSFORM.undo_into(frame, 10, 2, &mut plain);
@@ -613,7 +616,7 @@ pub mod dlt645 {
             frame: &[u8],
             request: rt::Option<&Request>,
         ) -> rt::DecodeResult<Self> {
-            match rt::code(frame, 8, 1) {
+            match frame[8] {
                 0x93 => {
                     let frame = rt::fixed::<18>(frame, &response::AddressReply::DESC)?;
                     rt::Ok(
@@ -916,9 +919,7 @@ pub mod dlt645 {
         fn checksum_ok(frame: &[u8]) -> bool {
             let frame = PREAMBLE.skip(frame);
             match frame.len().checked_sub(2) {
-                rt::Some(n) if n > 0 => {
-                    rt::check_sum(frame, n, &FRAME, |b| u32::from(checksum(b)))
-                }
+                rt::Some(n) if n > 0 => rt::check_sum(frame, n, &FRAME, frame_sum),
                 _ => false,
             }
         }

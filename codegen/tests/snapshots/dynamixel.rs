@@ -76,18 +76,24 @@ pub mod dynamixel {
         trailer: 1,
         response: false,
     };
-    /// Where a response's code sits: from `at`, at most `longest` bytes, before `trailer` bytes.
-    const RESPONSE_CODE: rt::CodeAt = rt::CodeAt {
-        at: 4,
-        longest: 0,
-        trailer: 1,
-        response: true,
-    };
     /// The frame checksum: the 8-bit sum of the bytes it covers, inverted.
     #[inline]
     pub fn checksum(bytes: &[u8]) -> u8 {
         rt::sum8_ones(bytes)
     }
+    /// The checksum a frame carries, as the frame checks compare it: over the bytes before it from offset 2 on.
+    #[inline]
+    fn frame_sum(bytes: &[u8]) -> u32 {
+        u32::from(checksum(rt::covered(bytes, 2)))
+    }
+    /// The checks every frame passes before its code is read: 6 to 259 bytes, then its sync bytes (FF FF at offset 0), its checksum, its address (offset 2).
+    const CHECKS: rt::FrameChecks = rt::FrameChecks {
+        sync: &[(0, &[0xFF, 0xFF])],
+        frame: &FRAME,
+        min: 6,
+        max: 259,
+        address_at: 2,
+    };
     /// The error byte of a status packet: each bit set reports one error. (§Status Packet)
     #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, Default)]
     #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
@@ -297,22 +303,14 @@ pub mod dynamixel {
                     out.len()
                 }
             };
-            rt::seal(buf, len, |b| u32::from(checksum(rt::covered(b, 2))), 1, false);
+            FRAME.seal(buf, len, frame_sum);
             rt::Ok(len)
         }
         /// Decodes one whole frame: refuses one longer than the longest, checks its start byte,
         /// checksum and address, then its code, constants, repeated fields, the ranges the
         /// spec gives its fields and the command's broadcast rule.
         pub fn decode(frame: &[u8]) -> rt::Result<Decoded<Request>, rt::DecodeError> {
-            rt::check_sync(frame, 259, 0, &[0xFF, 0xFF])?;
-            let address = rt::check_frame(
-                frame,
-                6,
-                259,
-                2,
-                &FRAME,
-                |b| u32::from(checksum(rt::covered(b, 2))),
-            )?;
+            let address = CHECKS.check(frame, frame_sum)?;
             LENGTH.check(frame)?;
             let message = Self::dispatch(frame)?;
             rt::Ok(Decoded { address, message })
@@ -320,7 +318,7 @@ pub mod dynamixel {
         /// The message of a frame that passed the checks every frame passes, by its code.
         #[inline]
         fn dispatch(frame: &[u8]) -> rt::DecodeResult<Self> {
-            match rt::code(frame, 4, 1) {
+            match frame[4] {
                 0x01 => {
                     let frame = rt::fixed::<6>(frame, &request::Ping::DESC)?;
                     rt::no_broadcast(frame[2], 0xFE, &request::Ping::DESC)?;
@@ -559,7 +557,7 @@ pub mod dynamixel {
                     out.len()
                 }
             };
-            rt::seal(buf, len, |b| u32::from(checksum(rt::covered(b, 2))), 1, false);
+            FRAME.seal(buf, len, frame_sum);
             rt::Ok(len)
         }
         /// Decodes one whole frame: refuses one longer than the longest, checks its start byte,
@@ -588,15 +586,7 @@ pub mod dynamixel {
             frame: &[u8],
             request: rt::Option<&Request>,
         ) -> rt::Result<Decoded<Response>, rt::DecodeError> {
-            rt::check_sync(frame, 259, 0, &[0xFF, 0xFF])?;
-            let address = rt::check_frame(
-                frame,
-                6,
-                259,
-                2,
-                &FRAME,
-                |b| u32::from(checksum(rt::covered(b, 2))),
-            )?;
+            let address = CHECKS.check(frame, frame_sum)?;
             LENGTH.check(frame)?;
             let message = Self::dispatch(frame, request)?;
             if let rt::Some(request) = request {
@@ -613,31 +603,28 @@ pub mod dynamixel {
             frame: &[u8],
             request: rt::Option<&Request>,
         ) -> rt::DecodeResult<Self> {
-            match rt::code(frame, 4, 0) {
-                0u32 => {
-                    let mut g = rt::Group::new(frame, 0u32, request.map(Request::name));
-                    g.attempt(|frame: &[u8; 6]| {
+            {
+                let mut g = rt::Group::new(frame, 0u32, request.map(Request::name));
+                g.attempt(|frame: &[u8; 6]| {
+                    rt::Ok(
+                        Self::Status(response::Status {
+                            error: StatusError::from_raw(frame[4]),
+                        }),
+                    )
+                });
+                g.attempt_split(
+                    &REPEAT_READ_STATUS,
+                    |frame: &[u8; 5], elements: &[u8], _: usize| {
                         rt::Ok(
-                            Self::Status(response::Status {
+                            Self::ReadStatus(response::ReadStatus {
                                 error: StatusError::from_raw(frame[4]),
+                                data: REPEAT_READ_STATUS
+                                    .elements::<u8, 253>(elements, true, false)?,
                             }),
                         )
-                    });
-                    g.attempt_split(
-                        &REPEAT_READ_STATUS,
-                        |frame: &[u8; 5], elements: &[u8], _: usize| {
-                            rt::Ok(
-                                Self::ReadStatus(response::ReadStatus {
-                                    error: StatusError::from_raw(frame[4]),
-                                    data: REPEAT_READ_STATUS
-                                        .elements::<u8, 253>(elements, true, false)?,
-                                }),
-                            )
-                        },
-                    );
-                    g.end(&response::Status::DESC)
-                }
-                _ => rt::Err(RESPONSE_CODE.unknown(frame)),
+                    },
+                );
+                g.end(&response::Status::DESC)
             }
         }
         /// The message called `name` in the spec, from each field's raw wire value by its spec
@@ -741,15 +728,7 @@ pub mod dynamixel {
         /// checksum and address, then its code, constants, repeated fields, the ranges the
         /// spec gives its fields and the command's broadcast rule.
         pub fn decode(frame: &'a [u8]) -> rt::Result<Decoded<Self>, rt::DecodeError> {
-            rt::check_sync(frame, 259, 0, &[0xFF, 0xFF])?;
-            let address = rt::check_frame(
-                frame,
-                6,
-                259,
-                2,
-                &FRAME,
-                |b| u32::from(checksum(rt::covered(b, 2))),
-            )?;
+            let address = CHECKS.check(frame, frame_sum)?;
             LENGTH.check(frame)?;
             let message = Self::dispatch(frame)?;
             rt::Ok(Decoded { address, message })
@@ -757,7 +736,7 @@ pub mod dynamixel {
         /// The message of a frame that passed the checks every frame passes, by its code.
         #[inline]
         fn dispatch(frame: &'a [u8]) -> rt::DecodeResult<Self> {
-            match rt::code(frame, 4, 1) {
+            match frame[4] {
                 0x01 => {
                     let frame = rt::fixed::<6>(frame, &request::Ping::DESC)?;
                     rt::no_broadcast(frame[2], 0xFE, &request::Ping::DESC)?;
@@ -883,15 +862,7 @@ pub mod dynamixel {
             frame: &'a [u8],
             request: rt::Option<&Request>,
         ) -> rt::Result<Decoded<Self>, rt::DecodeError> {
-            rt::check_sync(frame, 259, 0, &[0xFF, 0xFF])?;
-            let address = rt::check_frame(
-                frame,
-                6,
-                259,
-                2,
-                &FRAME,
-                |b| u32::from(checksum(rt::covered(b, 2))),
-            )?;
+            let address = CHECKS.check(frame, frame_sum)?;
             LENGTH.check(frame)?;
             let message = Self::dispatch(frame, request)?;
             if let rt::Some(request) = request {
@@ -908,27 +879,24 @@ pub mod dynamixel {
             frame: &'a [u8],
             request: rt::Option<&Request>,
         ) -> rt::DecodeResult<Self> {
-            match rt::code(frame, 4, 0) {
-                0u32 => {
-                    let mut g = rt::Group::new(frame, 0u32, request.map(Request::name));
-                    g.attempt(|frame: &[u8; 6]| {
-                        rt::Ok(Self::Status {
+            {
+                let mut g = rt::Group::new(frame, 0u32, request.map(Request::name));
+                g.attempt(|frame: &[u8; 6]| {
+                    rt::Ok(Self::Status {
+                        error: StatusError::from_raw(frame[4]),
+                    })
+                });
+                g.attempt_split(
+                    &REPEAT_READ_STATUS,
+                    |frame: &'a [u8; 5], elements: &'a [u8], _: usize| {
+                        rt::Ok(Self::ReadStatus {
                             error: StatusError::from_raw(frame[4]),
+                            data: REPEAT_READ_STATUS
+                                .view::<u8, 253>(elements, true, false)?,
                         })
-                    });
-                    g.attempt_split(
-                        &REPEAT_READ_STATUS,
-                        |frame: &'a [u8; 5], elements: &'a [u8], _: usize| {
-                            rt::Ok(Self::ReadStatus {
-                                error: StatusError::from_raw(frame[4]),
-                                data: REPEAT_READ_STATUS
-                                    .view::<u8, 253>(elements, true, false)?,
-                            })
-                        },
-                    );
-                    g.end(&response::Status::DESC)
-                }
-                _ => rt::Err(RESPONSE_CODE.unknown(frame)),
+                    },
+                );
+                g.end(&response::Status::DESC)
             }
         }
         /// This message's row in the owned type's `MESSAGES`.
@@ -1160,15 +1128,7 @@ pub mod dynamixel {
         }
         #[inline]
         fn decodes_both_ways(frame: &[u8]) -> rt::Result<bool, rt::DecodeError> {
-            rt::check_sync(frame, 259, 0, &[0xFF, 0xFF])?;
-            let address = rt::check_frame(
-                frame,
-                6,
-                259,
-                2,
-                &FRAME,
-                |b| u32::from(checksum(rt::covered(b, 2))),
-            )?;
+            let address = CHECKS.check(frame, frame_sum)?;
             LENGTH.check(frame)?;
             RequestView::dispatch(frame)?;
             rt::Ok(
@@ -1180,14 +1140,7 @@ pub mod dynamixel {
         }
         fn checksum_ok(frame: &[u8]) -> bool {
             match frame.len().checked_sub(1) {
-                rt::Some(n) if n > 0 => {
-                    rt::check_sum(
-                        frame,
-                        n,
-                        &FRAME,
-                        |b| u32::from(checksum(rt::covered(b, 2))),
-                    )
-                }
+                rt::Some(n) if n > 0 => rt::check_sum(frame, n, &FRAME, frame_sum),
                 _ => false,
             }
         }

@@ -124,6 +124,27 @@ pub mod dynamixel2_stuffed {
     pub fn checksum(bytes: &[u8]) -> u16 {
         CRC.checksum(bytes)
     }
+    /// The checksum a frame carries, as the frame checks compare it: over every byte before it.
+    #[inline]
+    fn frame_sum(bytes: &[u8]) -> u32 {
+        u32::from(checksum(bytes))
+    }
+    /// The checks every request passes before its code is read: 10 to 16 bytes, then its sync bytes (FF FF FD 00 at offset 0), its checksum, its address (offset 4).
+    const REQUEST_CHECKS: rt::FrameChecks = rt::FrameChecks {
+        sync: &[(0, &[0xFF, 0xFF, 0xFD, 0x00])],
+        frame: &FRAME,
+        min: 10,
+        max: 16,
+        address_at: 4,
+    };
+    /// The checks every response passes before its code is read: 11 to 14 bytes, then its sync bytes (FF FF FD 00 at offset 0), its checksum, its address (offset 4).
+    const RESPONSE_CHECKS: rt::FrameChecks = rt::FrameChecks {
+        sync: &[(0, &[0xFF, 0xFF, 0xFD, 0x00])],
+        frame: &FRAME,
+        min: 11,
+        max: 14,
+        address_at: 4,
+    };
     /// The status packet's error byte. (§Status Packet)
     #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, Default)]
     #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
@@ -225,7 +246,7 @@ pub mod dynamixel2_stuffed {
         pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             let mut plain = [0u8; UNESCAPED_LEN];
             let len = self.encode_unescaped(address, &mut plain)?;
-            rt::escape_frame(&ESCAPING, &plain[..len], buf, |b| u32::from(checksum(b)))
+            rt::escape_frame(&ESCAPING, &plain[..len], buf, frame_sum)
         }
         /// The frame before escaping, into `buf`.
         fn encode_unescaped(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
@@ -246,7 +267,7 @@ pub mod dynamixel2_stuffed {
                     out.len()
                 }
             };
-            rt::seal(buf, len, |b| u32::from(checksum(b)), 2, false);
+            FRAME.seal(buf, len, frame_sum);
             rt::Ok(len)
         }
         /// Decodes one whole frame: refuses one longer than the longest, checks its start byte,
@@ -254,12 +275,7 @@ pub mod dynamixel2_stuffed {
         /// spec gives its fields and the command's broadcast rule.
         pub fn decode(frame: &[u8]) -> rt::Result<Decoded<Request>, rt::DecodeError> {
             let mut plain = [0u8; UNESCAPED_LEN];
-            let un = rt::unescape_frame(
-                &ESCAPING,
-                frame,
-                &mut plain,
-                |b| u32::from(checksum(b)),
-            )?;
+            let un = rt::unescape_frame(&ESCAPING, frame, &mut plain, frame_sum)?;
             let rt::Some(plain) = plain.get(..un.len) else {
                 return rt::Err(rt::DecodeError::TooLong {
                     max: 16,
@@ -272,15 +288,7 @@ pub mod dynamixel2_stuffed {
         fn decode_unescaped(
             frame: &[u8],
         ) -> rt::Result<Decoded<Request>, rt::DecodeError> {
-            rt::check_sync(frame, 16, 0, &[0xFF, 0xFF, 0xFD, 0x00])?;
-            let address = rt::check_frame(
-                frame,
-                10,
-                16,
-                4,
-                &FRAME,
-                |b| u32::from(checksum(b)),
-            )?;
+            let address = REQUEST_CHECKS.check(frame, frame_sum)?;
             LENGTH.check(frame)?;
             let message = Self::dispatch(frame)?;
             rt::Ok(Decoded { address, message })
@@ -288,7 +296,7 @@ pub mod dynamixel2_stuffed {
         /// The message of a frame that passed the checks every frame passes, by its code.
         #[inline]
         fn dispatch(frame: &[u8]) -> rt::DecodeResult<Self> {
-            match rt::code(frame, 7, 1) {
+            match frame[7] {
                 0x01 => {
                     rt::fixed::<10>(frame, &request::Ping::DESC)
                         .map(|_| Self::Ping(request::Ping))
@@ -436,7 +444,7 @@ pub mod dynamixel2_stuffed {
         pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             let mut plain = [0u8; UNESCAPED_LEN];
             let len = self.encode_unescaped(address, &mut plain)?;
-            rt::escape_frame(&ESCAPING, &plain[..len], buf, |b| u32::from(checksum(b)))
+            rt::escape_frame(&ESCAPING, &plain[..len], buf, frame_sum)
         }
         /// The frame before escaping, into `buf`.
         fn encode_unescaped(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
@@ -465,7 +473,7 @@ pub mod dynamixel2_stuffed {
                     out.len()
                 }
             };
-            rt::seal(buf, len, |b| u32::from(checksum(b)), 2, false);
+            FRAME.seal(buf, len, frame_sum);
             rt::Ok(len)
         }
         /// Decodes one whole frame: refuses one longer than the longest, checks its start byte,
@@ -495,12 +503,7 @@ pub mod dynamixel2_stuffed {
             request: rt::Option<&Request>,
         ) -> rt::Result<Decoded<Response>, rt::DecodeError> {
             let mut plain = [0u8; UNESCAPED_LEN];
-            let un = rt::unescape_frame(
-                &ESCAPING,
-                frame,
-                &mut plain,
-                |b| u32::from(checksum(b)),
-            )?;
+            let un = rt::unescape_frame(&ESCAPING, frame, &mut plain, frame_sum)?;
             let rt::Some(plain) = plain.get(..un.len) else {
                 return rt::Err(rt::DecodeError::TooLong {
                     max: 14,
@@ -514,15 +517,7 @@ pub mod dynamixel2_stuffed {
             frame: &[u8],
             request: rt::Option<&Request>,
         ) -> rt::Result<Decoded<Response>, rt::DecodeError> {
-            rt::check_sync(frame, 14, 0, &[0xFF, 0xFF, 0xFD, 0x00])?;
-            let address = rt::check_frame(
-                frame,
-                11,
-                14,
-                4,
-                &FRAME,
-                |b| u32::from(checksum(b)),
-            )?;
+            let address = RESPONSE_CHECKS.check(frame, frame_sum)?;
             LENGTH.check(frame)?;
             let message = Self::dispatch(frame, request)?;
             if let rt::Some(request) = request {
@@ -538,7 +533,7 @@ pub mod dynamixel2_stuffed {
             frame: &[u8],
             request: rt::Option<&Request>,
         ) -> rt::DecodeResult<Self> {
-            match rt::code(frame, 7, 1) {
+            match frame[7] {
                 0x55 => {
                     let mut g = rt::Group::new(frame, 0x55, request.map(Request::name));
                     g.attempt(|frame: &[u8; 14]| {
@@ -696,12 +691,7 @@ pub mod dynamixel2_stuffed {
         }
         fn checksum_ok(frame: &[u8]) -> bool {
             let mut plain = [0u8; UNESCAPED_LEN];
-            let un = match rt::unescape_frame(
-                &ESCAPING,
-                frame,
-                &mut plain,
-                |b| u32::from(checksum(b)),
-            ) {
+            let un = match rt::unescape_frame(&ESCAPING, frame, &mut plain, frame_sum) {
                 rt::Ok(un) => un,
                 rt::Err(_) => return false,
             };
@@ -709,9 +699,7 @@ pub mod dynamixel2_stuffed {
                 return false;
             };
             match frame.len().checked_sub(2) {
-                rt::Some(n) if n > 0 => {
-                    rt::check_sum(frame, n, &FRAME, |b| u32::from(checksum(b)))
-                }
+                rt::Some(n) if n > 0 => rt::check_sum(frame, n, &FRAME, frame_sum),
                 _ => false,
             }
         }

@@ -82,6 +82,27 @@ pub mod ending {
     pub fn checksum(bytes: &[u8]) -> u8 {
         rt::xor8(bytes)
     }
+    /// The checksum a frame carries, as the frame checks compare it: over the bytes before it from offset 2 on.
+    #[inline]
+    fn frame_sum(bytes: &[u8]) -> u32 {
+        u32::from(checksum(rt::covered(bytes, 2)))
+    }
+    /// The checks every request passes before its code is read: 8 to 39 bytes, then its sync bytes (A5 5A at offset 0), its checksum, its address (offset 2).
+    const REQUEST_CHECKS: rt::FrameChecks = rt::FrameChecks {
+        sync: &[(0, &[0xA5, 0x5A])],
+        frame: &FRAME,
+        min: 8,
+        max: 39,
+        address_at: 2,
+    };
+    /// The checks every response passes before its code is read: 6 to 37 bytes, then its sync bytes (A5 5A at offset 0), its checksum, its address (offset 2).
+    const RESPONSE_CHECKS: rt::FrameChecks = rt::FrameChecks {
+        sync: &[(0, &[0xA5, 0x5A])],
+        frame: &FRAME,
+        min: 6,
+        max: 37,
+        address_at: 2,
+    };
     /// Where `write.values` sits in the frame and how its elements are counted.
     pub const REPEAT_WRITE: rt::RepeatAt = rt::RepeatAt {
         field: &request::Write::VALUES_DESC,
@@ -196,29 +217,21 @@ pub mod ending {
                     out.len()
                 }
             };
-            rt::seal(buf, len, |b| u32::from(checksum(rt::covered(b, 2))), 1, true);
+            FRAME.seal(buf, len, frame_sum);
             rt::Ok(len)
         }
         /// Decodes one whole frame: refuses one longer than the longest, checks its start byte,
         /// checksum and address, then its code, constants, repeated fields, the ranges the
         /// spec gives its fields and the command's broadcast rule.
         pub fn decode(frame: &[u8]) -> rt::Result<Decoded<Request>, rt::DecodeError> {
-            rt::check_sync(frame, 39, 0, &[0xA5, 0x5A])?;
-            let address = rt::check_frame(
-                frame,
-                8,
-                39,
-                2,
-                &FRAME,
-                |b| u32::from(checksum(rt::covered(b, 2))),
-            )?;
+            let address = REQUEST_CHECKS.check(frame, frame_sum)?;
             let message = Self::dispatch(frame)?;
             rt::Ok(Decoded { address, message })
         }
         /// The message of a frame that passed the checks every frame passes, by its code.
         #[inline]
         fn dispatch(frame: &[u8]) -> rt::DecodeResult<Self> {
-            match rt::code(frame, 3, 1) {
+            match frame[3] {
                 0x01 => {
                     let frame = rt::fixed::<8>(frame, &request::Read::DESC)?;
                     rt::in_range(&request::Read::QUANTITY_DESC, 6, frame[6], 1, 16)?;
@@ -434,7 +447,7 @@ pub mod ending {
                     out.len()
                 }
             };
-            rt::seal(buf, len, |b| u32::from(checksum(rt::covered(b, 2))), 1, true);
+            FRAME.seal(buf, len, frame_sum);
             rt::Ok(len)
         }
         /// Decodes one whole frame: refuses one longer than the longest, checks its start byte,
@@ -463,15 +476,7 @@ pub mod ending {
             frame: &[u8],
             request: rt::Option<&Request>,
         ) -> rt::Result<Decoded<Response>, rt::DecodeError> {
-            rt::check_sync(frame, 37, 0, &[0xA5, 0x5A])?;
-            let address = rt::check_frame(
-                frame,
-                6,
-                37,
-                2,
-                &FRAME,
-                |b| u32::from(checksum(rt::covered(b, 2))),
-            )?;
+            let address = RESPONSE_CHECKS.check(frame, frame_sum)?;
             let message = Self::dispatch(frame)?;
             if let rt::Some(request) = request {
                 if request.replies() >> message.index() & 1 == 0 {
@@ -484,7 +489,7 @@ pub mod ending {
         /// The message of a frame that passed the checks every frame passes, by its code.
         #[inline]
         fn dispatch(frame: &[u8]) -> rt::DecodeResult<Self> {
-            match rt::code(frame, 3, 1) {
+            match frame[3] {
                 0x01 => {
                     let (_, elements, _) = REPEAT_READ_REPLY.split::<4>(frame)?;
                     rt::Ok(
@@ -610,22 +615,14 @@ pub mod ending {
         /// checksum and address, then its code, constants, repeated fields, the ranges the
         /// spec gives its fields and the command's broadcast rule.
         pub fn decode(frame: &'a [u8]) -> rt::Result<Decoded<Self>, rt::DecodeError> {
-            rt::check_sync(frame, 39, 0, &[0xA5, 0x5A])?;
-            let address = rt::check_frame(
-                frame,
-                8,
-                39,
-                2,
-                &FRAME,
-                |b| u32::from(checksum(rt::covered(b, 2))),
-            )?;
+            let address = REQUEST_CHECKS.check(frame, frame_sum)?;
             let message = Self::dispatch(frame)?;
             rt::Ok(Decoded { address, message })
         }
         /// The message of a frame that passed the checks every frame passes, by its code.
         #[inline]
         fn dispatch(frame: &'a [u8]) -> rt::DecodeResult<Self> {
-            match rt::code(frame, 3, 1) {
+            match frame[3] {
                 0x01 => {
                     let frame = rt::fixed::<8>(frame, &request::Read::DESC)?;
                     rt::in_range(&request::Read::QUANTITY_DESC, 6, frame[6], 1, 16)?;
@@ -724,15 +721,7 @@ pub mod ending {
             frame: &'a [u8],
             request: rt::Option<&Request>,
         ) -> rt::Result<Decoded<Self>, rt::DecodeError> {
-            rt::check_sync(frame, 37, 0, &[0xA5, 0x5A])?;
-            let address = rt::check_frame(
-                frame,
-                6,
-                37,
-                2,
-                &FRAME,
-                |b| u32::from(checksum(rt::covered(b, 2))),
-            )?;
+            let address = RESPONSE_CHECKS.check(frame, frame_sum)?;
             let message = Self::dispatch(frame)?;
             if let rt::Some(request) = request {
                 if request.replies() >> message.index() & 1 == 0 {
@@ -745,7 +734,7 @@ pub mod ending {
         /// The message of a frame that passed the checks every frame passes, by its code.
         #[inline]
         fn dispatch(frame: &'a [u8]) -> rt::DecodeResult<Self> {
-            match rt::code(frame, 3, 1) {
+            match frame[3] {
                 0x01 => {
                     let (_, elements, _) = REPEAT_READ_REPLY.split::<4>(frame)?;
                     rt::Ok(Self::ReadReply {
@@ -947,14 +936,7 @@ pub mod ending {
         }
         fn checksum_ok(frame: &[u8]) -> bool {
             match frame.len().checked_sub(1) {
-                rt::Some(n) if n > 0 => {
-                    rt::check_sum(
-                        frame,
-                        n,
-                        &FRAME,
-                        |b| u32::from(checksum(rt::covered(b, 2))),
-                    )
-                }
+                rt::Some(n) if n > 0 => rt::check_sum(frame, n, &FRAME, frame_sum),
                 _ => false,
             }
         }

@@ -82,6 +82,19 @@ pub mod ft12_fixed {
     pub fn checksum(bytes: &[u8]) -> u8 {
         rt::sum8(bytes)
     }
+    /// The checksum a frame carries, as the frame checks compare it: over the bytes before it from offset 1 on.
+    #[inline]
+    fn frame_sum(bytes: &[u8]) -> u32 {
+        u32::from(checksum(rt::covered(bytes, 1)))
+    }
+    /// The checks every frame passes before its code is read: 5 bytes, then its start byte, its end bytes, its checksum, its address (offset 2).
+    const CHECKS: rt::FrameChecks = rt::FrameChecks {
+        sync: &[],
+        frame: &FRAME,
+        min: 5,
+        max: 5,
+        address_at: 2,
+    };
     ///A request (command), host to device.
     #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
     #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
@@ -154,28 +167,21 @@ pub mod ft12_fixed {
                     rt::head(out, &[0x10, 0x7B, address]).len()
                 }
             };
-            rt::seal_end(buf, len, |b| u32::from(checksum(rt::covered(b, 1))), &FRAME);
+            FRAME.seal(buf, len, frame_sum);
             rt::Ok(len)
         }
         /// Decodes one whole frame: refuses one longer than the longest, checks its start byte,
         /// checksum and address, then its code, constants, repeated fields, the ranges the
         /// spec gives its fields and the command's broadcast rule.
         pub fn decode(frame: &[u8]) -> rt::Result<Decoded<Request>, rt::DecodeError> {
-            let address = rt::check_frame(
-                frame,
-                5,
-                5,
-                2,
-                &FRAME,
-                |b| u32::from(checksum(rt::covered(b, 1))),
-            )?;
+            let address = CHECKS.check(frame, frame_sum)?;
             let message = Self::dispatch(frame)?;
             rt::Ok(Decoded { address, message })
         }
         /// The message of a frame that passed the checks every frame passes, by its code.
         #[inline]
         fn dispatch(frame: &[u8]) -> rt::DecodeResult<Self> {
-            match rt::code(frame, 1, 1) {
+            match frame[1] {
                 0x40 => {
                     rt::fixed::<5>(frame, &request::ResetRemoteLink::DESC)
                         .map(|_| Self::ResetRemoteLink(request::ResetRemoteLink))
@@ -336,7 +342,7 @@ pub mod ft12_fixed {
                 Self::Nack(_) => rt::head(out, &[0x10, 0x01, address]).len(),
                 Self::StatusOfLink(_) => rt::head(out, &[0x10, 0x0B, address]).len(),
             };
-            rt::seal_end(buf, len, |b| u32::from(checksum(rt::covered(b, 1))), &FRAME);
+            FRAME.seal(buf, len, frame_sum);
             rt::Ok(len)
         }
         /// Decodes one whole frame: refuses one longer than the longest, checks its start byte,
@@ -365,14 +371,7 @@ pub mod ft12_fixed {
             frame: &[u8],
             request: rt::Option<&Request>,
         ) -> rt::Result<Decoded<Response>, rt::DecodeError> {
-            let address = rt::check_frame(
-                frame,
-                5,
-                5,
-                2,
-                &FRAME,
-                |b| u32::from(checksum(rt::covered(b, 1))),
-            )?;
+            let address = CHECKS.check(frame, frame_sum)?;
             let message = Self::dispatch(frame)?;
             if let rt::Some(request) = request {
                 if request.replies() >> message.index() & 1 == 0 {
@@ -384,7 +383,7 @@ pub mod ft12_fixed {
         /// The message of a frame that passed the checks every frame passes, by its code.
         #[inline]
         fn dispatch(frame: &[u8]) -> rt::DecodeResult<Self> {
-            match rt::code(frame, 1, 1) {
+            match frame[1] {
                 0x00 => {
                     rt::fixed::<5>(frame, &response::Ack::DESC)
                         .map(|_| Self::Ack(response::Ack))
@@ -537,14 +536,7 @@ pub mod ft12_fixed {
         }
         fn checksum_ok(frame: &[u8]) -> bool {
             match frame.len().checked_sub(2) {
-                rt::Some(n) if n > 0 => {
-                    rt::check_sum(
-                        frame,
-                        n,
-                        &FRAME,
-                        |b| u32::from(checksum(rt::covered(b, 1))),
-                    )
-                }
+                rt::Some(n) if n > 0 => rt::check_sum(frame, n, &FRAME, frame_sum),
                 _ => false,
             }
         }

@@ -98,6 +98,27 @@ pub mod ft12_variable {
     pub fn checksum(bytes: &[u8]) -> u8 {
         rt::sum8(bytes)
     }
+    /// The checksum a frame carries, as the frame checks compare it: over the bytes before it from offset 4 on.
+    #[inline]
+    fn frame_sum(bytes: &[u8]) -> u32 {
+        u32::from(checksum(rt::covered(bytes, 4)))
+    }
+    /// The checks every request passes before its code is read: 9 bytes, then its sync bytes (68 at offset 0 and 68 at offset 3), its end bytes, its checksum, its address (offset 5).
+    const REQUEST_CHECKS: rt::FrameChecks = rt::FrameChecks {
+        sync: &[(0, &[0x68]), (3, &[0x68])],
+        frame: &FRAME,
+        min: 9,
+        max: 9,
+        address_at: 5,
+    };
+    /// The checks every response passes before its code is read: 27 bytes, then its sync bytes (68 at offset 0 and 68 at offset 3), its end bytes, its checksum, its address (offset 5).
+    const RESPONSE_CHECKS: rt::FrameChecks = rt::FrameChecks {
+        sync: &[(0, &[0x68]), (3, &[0x68])],
+        frame: &FRAME,
+        min: 27,
+        max: 27,
+        address_at: 5,
+    };
     ///A request (command), host to device.
     #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
     #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
@@ -150,23 +171,14 @@ pub mod ft12_variable {
                     rt::head(out, &[0x68, 0x03, 0x03, 0x68, 0x7B, address, 0x5B]).len()
                 }
             };
-            rt::seal_end(buf, len, |b| u32::from(checksum(rt::covered(b, 4))), &FRAME);
+            FRAME.seal(buf, len, frame_sum);
             rt::Ok(len)
         }
         /// Decodes one whole frame: refuses one longer than the longest, checks its start byte,
         /// checksum and address, then its code, constants, repeated fields, the ranges the
         /// spec gives its fields and the command's broadcast rule.
         pub fn decode(frame: &[u8]) -> rt::Result<Decoded<Request>, rt::DecodeError> {
-            rt::check_sync(frame, 9, 0, &[0x68])?;
-            rt::check_sync(frame, 9, 3, &[0x68])?;
-            let address = rt::check_frame(
-                frame,
-                9,
-                9,
-                5,
-                &FRAME,
-                |b| u32::from(checksum(rt::covered(b, 4))),
-            )?;
+            let address = REQUEST_CHECKS.check(frame, frame_sum)?;
             LENGTH.check(frame)?;
             LENGTH_AGAIN.check(frame)?;
             let message = Self::dispatch(frame)?;
@@ -175,7 +187,7 @@ pub mod ft12_variable {
         /// The message of a frame that passed the checks every frame passes, by its code.
         #[inline]
         fn dispatch(frame: &[u8]) -> rt::DecodeResult<Self> {
-            match rt::code(frame, 4, 1) {
+            match frame[4] {
                 0x53 => {
                     let frame = rt::fixed::<9>(frame, &request::Reset::DESC)?;
                     rt::equal(&request::Reset::CI_DESC, 6, frame[6], 0x50)?;
@@ -345,7 +357,7 @@ pub mod ft12_variable {
                     out.len()
                 }
             };
-            rt::seal_end(buf, len, |b| u32::from(checksum(rt::covered(b, 4))), &FRAME);
+            FRAME.seal(buf, len, frame_sum);
             rt::Ok(len)
         }
         /// Decodes one whole frame: refuses one longer than the longest, checks its start byte,
@@ -374,16 +386,7 @@ pub mod ft12_variable {
             frame: &[u8],
             request: rt::Option<&Request>,
         ) -> rt::Result<Decoded<Response>, rt::DecodeError> {
-            rt::check_sync(frame, 27, 0, &[0x68])?;
-            rt::check_sync(frame, 27, 3, &[0x68])?;
-            let address = rt::check_frame(
-                frame,
-                27,
-                27,
-                5,
-                &FRAME,
-                |b| u32::from(checksum(rt::covered(b, 4))),
-            )?;
+            let address = RESPONSE_CHECKS.check(frame, frame_sum)?;
             LENGTH.check(frame)?;
             LENGTH_AGAIN.check(frame)?;
             let message = Self::dispatch(frame)?;
@@ -397,7 +400,7 @@ pub mod ft12_variable {
         /// The message of a frame that passed the checks every frame passes, by its code.
         #[inline]
         fn dispatch(frame: &[u8]) -> rt::DecodeResult<Self> {
-            match rt::code(frame, 4, 1) {
+            match frame[4] {
                 0x08 => {
                     let frame = rt::fixed::<27>(frame, &response::RspUd::DESC)?;
                     rt::equal(&response::RspUd::CI_DESC, 6, frame[6], 0x72)?;
@@ -597,14 +600,7 @@ pub mod ft12_variable {
         }
         fn checksum_ok(frame: &[u8]) -> bool {
             match frame.len().checked_sub(2) {
-                rt::Some(n) if n > 0 => {
-                    rt::check_sum(
-                        frame,
-                        n,
-                        &FRAME,
-                        |b| u32::from(checksum(rt::covered(b, 4))),
-                    )
-                }
+                rt::Some(n) if n > 0 => rt::check_sum(frame, n, &FRAME, frame_sum),
                 _ => false,
             }
         }

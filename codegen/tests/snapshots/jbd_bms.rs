@@ -90,6 +90,27 @@ pub mod jbd_bms {
     pub fn checksum(bytes: &[u8]) -> u16 {
         rt::sum16(bytes).wrapping_neg()
     }
+    /// The checksum a frame carries, as the frame checks compare it: over the bytes before it from offset 2 on.
+    #[inline]
+    fn frame_sum(bytes: &[u8]) -> u32 {
+        u32::from(checksum(rt::covered(bytes, 2)))
+    }
+    /// The checks every request passes before its code is read: 7 bytes, then its sync bytes (DD at offset 0), its end bytes, its checksum.
+    const REQUEST_CHECKS: rt::FrameChecks = rt::FrameChecks {
+        sync: &[(0, &[0xDD])],
+        frame: &FRAME,
+        min: 7,
+        max: 7,
+        address_at: 0,
+    };
+    /// The checks every response passes before its code is read: 7 to 71 bytes, then its sync bytes (DD at offset 0), its end bytes, its checksum.
+    const RESPONSE_CHECKS: rt::FrameChecks = rt::FrameChecks {
+        sync: &[(0, &[0xDD])],
+        frame: &FRAME,
+        min: 7,
+        max: 71,
+        address_at: 0,
+    };
     /// centivolts
     ///
     /// Physical value = raw × 0.01.
@@ -443,22 +464,14 @@ pub mod jbd_bms {
                     out.len()
                 }
             };
-            rt::seal_end(buf, len, |b| u32::from(checksum(rt::covered(b, 2))), &FRAME);
+            FRAME.seal(buf, len, frame_sum);
             rt::Ok(len)
         }
         /// Decodes one whole frame: refuses one longer than the longest, checks its start byte,
         /// checksum and address, then its code, constants, repeated fields, the ranges the
         /// spec gives its fields and the command's broadcast rule.
         pub fn decode(frame: &[u8]) -> rt::Result<Decoded<Request>, rt::DecodeError> {
-            rt::check_sync(frame, 7, 0, &[0xDD])?;
-            let address = rt::check_frame(
-                frame,
-                7,
-                7,
-                0,
-                &FRAME,
-                |b| u32::from(checksum(rt::covered(b, 2))),
-            )?;
+            let address = REQUEST_CHECKS.check(frame, frame_sum)?;
             LENGTH.check(frame)?;
             let message = Self::dispatch(frame)?;
             rt::Ok(Decoded { address, message })
@@ -466,7 +479,7 @@ pub mod jbd_bms {
         /// The message of a frame that passed the checks every frame passes, by its code.
         #[inline]
         fn dispatch(frame: &[u8]) -> rt::DecodeResult<Self> {
-            match rt::code(frame, 2, 1) {
+            match frame[2] {
                 0x03 => {
                     let frame = rt::fixed::<7>(frame, &request::ReadBasicInfo::DESC)?;
                     rt::Ok(
@@ -794,7 +807,7 @@ pub mod jbd_bms {
                     out.len()
                 }
             };
-            rt::seal_end(buf, len, |b| u32::from(checksum(rt::covered(b, 2))), &FRAME);
+            FRAME.seal(buf, len, frame_sum);
             rt::Ok(len)
         }
         /// Decodes one whole frame: refuses one longer than the longest, checks its start byte,
@@ -823,15 +836,7 @@ pub mod jbd_bms {
             frame: &[u8],
             request: rt::Option<&Request>,
         ) -> rt::Result<Decoded<Response>, rt::DecodeError> {
-            rt::check_sync(frame, 71, 0, &[0xDD])?;
-            let address = rt::check_frame(
-                frame,
-                7,
-                71,
-                0,
-                &FRAME,
-                |b| u32::from(checksum(rt::covered(b, 2))),
-            )?;
+            let address = RESPONSE_CHECKS.check(frame, frame_sum)?;
             LENGTH.check(frame)?;
             let message = Self::dispatch(frame, request)?;
             if let rt::Some(request) = request {
@@ -847,7 +852,7 @@ pub mod jbd_bms {
             frame: &[u8],
             request: rt::Option<&Request>,
         ) -> rt::DecodeResult<Self> {
-            match rt::code(frame, 1, 1) {
+            match frame[1] {
                 0x03 => {
                     let mut g = rt::Group::new(frame, 0x03, request.map(Request::name));
                     g.attempt_split(
@@ -1113,15 +1118,7 @@ pub mod jbd_bms {
             frame: &'a [u8],
             request: rt::Option<&Request>,
         ) -> rt::Result<Decoded<Self>, rt::DecodeError> {
-            rt::check_sync(frame, 71, 0, &[0xDD])?;
-            let address = rt::check_frame(
-                frame,
-                7,
-                71,
-                0,
-                &FRAME,
-                |b| u32::from(checksum(rt::covered(b, 2))),
-            )?;
+            let address = RESPONSE_CHECKS.check(frame, frame_sum)?;
             LENGTH.check(frame)?;
             let message = Self::dispatch(frame, request)?;
             if let rt::Some(request) = request {
@@ -1137,7 +1134,7 @@ pub mod jbd_bms {
             frame: &'a [u8],
             request: rt::Option<&Request>,
         ) -> rt::DecodeResult<Self> {
-            match rt::code(frame, 1, 1) {
+            match frame[1] {
                 0x03 => {
                     let mut g = rt::Group::new(frame, 0x03, request.map(Request::name));
                     g.attempt_split(
@@ -1471,14 +1468,7 @@ pub mod jbd_bms {
         }
         fn checksum_ok(frame: &[u8]) -> bool {
             match frame.len().checked_sub(3) {
-                rt::Some(n) if n > 0 => {
-                    rt::check_sum(
-                        frame,
-                        n,
-                        &FRAME,
-                        |b| u32::from(checksum(rt::covered(b, 2))),
-                    )
-                }
+                rt::Some(n) if n > 0 => rt::check_sum(frame, n, &FRAME, frame_sum),
                 _ => false,
             }
         }

@@ -82,6 +82,27 @@ pub mod lists_after {
     pub fn checksum(bytes: &[u8]) -> u8 {
         rt::xor8(bytes)
     }
+    /// The checksum a frame carries, as the frame checks compare it: over the bytes before it from offset 1 on.
+    #[inline]
+    fn frame_sum(bytes: &[u8]) -> u32 {
+        u32::from(checksum(rt::covered(bytes, 1)))
+    }
+    /// The checks every request passes before its code is read: 7 to 23 bytes, then its start byte, its checksum, its address (offset 1).
+    const REQUEST_CHECKS: rt::FrameChecks = rt::FrameChecks {
+        sync: &[],
+        frame: &FRAME,
+        min: 7,
+        max: 23,
+        address_at: 1,
+    };
+    /// The checks every response passes before its code is read: 5 to 22 bytes, then its start byte, its checksum, its address (offset 1).
+    const RESPONSE_CHECKS: rt::FrameChecks = rt::FrameChecks {
+        sync: &[],
+        frame: &FRAME,
+        min: 5,
+        max: 22,
+        address_at: 1,
+    };
     /// Where `write_block.values` sits in the frame and how its elements are counted.
     pub const REPEAT_WRITE_BLOCK: rt::RepeatAt = rt::RepeatAt {
         field: &request::WriteBlock::VALUES_DESC,
@@ -295,28 +316,21 @@ pub mod lists_after {
                     out.len()
                 }
             };
-            rt::seal(buf, len, |b| u32::from(checksum(rt::covered(b, 1))), 1, true);
+            FRAME.seal(buf, len, frame_sum);
             rt::Ok(len)
         }
         /// Decodes one whole frame: refuses one longer than the longest, checks its start byte,
         /// checksum and address, then its code, constants, repeated fields, the ranges the
         /// spec gives its fields and the command's broadcast rule.
         pub fn decode(frame: &[u8]) -> rt::Result<Decoded<Request>, rt::DecodeError> {
-            let address = rt::check_frame(
-                frame,
-                7,
-                23,
-                1,
-                &FRAME,
-                |b| u32::from(checksum(rt::covered(b, 1))),
-            )?;
+            let address = REQUEST_CHECKS.check(frame, frame_sum)?;
             let message = Self::dispatch(frame)?;
             rt::Ok(Decoded { address, message })
         }
         /// The message of a frame that passed the checks every frame passes, by its code.
         #[inline]
         fn dispatch(frame: &[u8]) -> rt::DecodeResult<Self> {
-            match rt::code(frame, 2, 1) {
+            match frame[2] {
                 0x10 => {
                     let frame = rt::fixed::<7>(frame, &request::ReadBlock::DESC)?;
                     rt::in_range(&request::ReadBlock::QUANTITY_DESC, 5, frame[5], 1, 8)?;
@@ -555,7 +569,7 @@ pub mod lists_after {
                     out.len()
                 }
             };
-            rt::seal(buf, len, |b| u32::from(checksum(rt::covered(b, 1))), 1, true);
+            FRAME.seal(buf, len, frame_sum);
             rt::Ok(len)
         }
         /// Decodes one whole frame: refuses one longer than the longest, checks its start byte,
@@ -584,14 +598,7 @@ pub mod lists_after {
             frame: &[u8],
             request: rt::Option<&Request>,
         ) -> rt::Result<Decoded<Response>, rt::DecodeError> {
-            let address = rt::check_frame(
-                frame,
-                5,
-                22,
-                1,
-                &FRAME,
-                |b| u32::from(checksum(rt::covered(b, 1))),
-            )?;
+            let address = RESPONSE_CHECKS.check(frame, frame_sum)?;
             let message = Self::dispatch(frame)?;
             if let rt::Some(request) = request {
                 if request.replies() >> message.index() & 1 == 0 {
@@ -604,7 +611,7 @@ pub mod lists_after {
         /// The message of a frame that passed the checks every frame passes, by its code.
         #[inline]
         fn dispatch(frame: &[u8]) -> rt::DecodeResult<Self> {
-            match rt::code(frame, 2, 1) {
+            match frame[2] {
                 0x10 => {
                     let s = LISTS_BLOCK_REPLY.split::<6, 1>(frame)?;
                     let frame = &s.frame;
@@ -717,21 +724,14 @@ pub mod lists_after {
         /// checksum and address, then its code, constants, repeated fields, the ranges the
         /// spec gives its fields and the command's broadcast rule.
         pub fn decode(frame: &'a [u8]) -> rt::Result<Decoded<Self>, rt::DecodeError> {
-            let address = rt::check_frame(
-                frame,
-                7,
-                23,
-                1,
-                &FRAME,
-                |b| u32::from(checksum(rt::covered(b, 1))),
-            )?;
+            let address = REQUEST_CHECKS.check(frame, frame_sum)?;
             let message = Self::dispatch(frame)?;
             rt::Ok(Decoded { address, message })
         }
         /// The message of a frame that passed the checks every frame passes, by its code.
         #[inline]
         fn dispatch(frame: &'a [u8]) -> rt::DecodeResult<Self> {
-            match rt::code(frame, 2, 1) {
+            match frame[2] {
                 0x10 => {
                     let frame = rt::fixed::<7>(frame, &request::ReadBlock::DESC)?;
                     rt::in_range(&request::ReadBlock::QUANTITY_DESC, 5, frame[5], 1, 8)?;
@@ -843,14 +843,7 @@ pub mod lists_after {
             frame: &'a [u8],
             request: rt::Option<&Request>,
         ) -> rt::Result<Decoded<Self>, rt::DecodeError> {
-            let address = rt::check_frame(
-                frame,
-                5,
-                22,
-                1,
-                &FRAME,
-                |b| u32::from(checksum(rt::covered(b, 1))),
-            )?;
+            let address = RESPONSE_CHECKS.check(frame, frame_sum)?;
             let message = Self::dispatch(frame)?;
             if let rt::Some(request) = request {
                 if request.replies() >> message.index() & 1 == 0 {
@@ -863,7 +856,7 @@ pub mod lists_after {
         /// The message of a frame that passed the checks every frame passes, by its code.
         #[inline]
         fn dispatch(frame: &'a [u8]) -> rt::DecodeResult<Self> {
-            match rt::code(frame, 2, 1) {
+            match frame[2] {
                 0x10 => {
                     let s = LISTS_BLOCK_REPLY.split::<6, 1>(frame)?;
                     let frame = &s.frame;
@@ -1053,14 +1046,7 @@ pub mod lists_after {
         }
         fn checksum_ok(frame: &[u8]) -> bool {
             match frame.len().checked_sub(1) {
-                rt::Some(n) if n > 0 => {
-                    rt::check_sum(
-                        frame,
-                        n,
-                        &FRAME,
-                        |b| u32::from(checksum(rt::covered(b, 1))),
-                    )
-                }
+                rt::Some(n) if n > 0 => rt::check_sum(frame, n, &FRAME, frame_sum),
                 _ => false,
             }
         }

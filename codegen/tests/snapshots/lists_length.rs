@@ -90,6 +90,27 @@ pub mod lists_length {
     pub fn checksum(bytes: &[u8]) -> u8 {
         rt::sum8(bytes)
     }
+    /// The checksum a frame carries, as the frame checks compare it: over the bytes before it from offset 1 on.
+    #[inline]
+    fn frame_sum(bytes: &[u8]) -> u32 {
+        u32::from(checksum(rt::covered(bytes, 1)))
+    }
+    /// The checks every request passes before its code is read: 8 to 25 bytes, then its start byte, its checksum.
+    const REQUEST_CHECKS: rt::FrameChecks = rt::FrameChecks {
+        sync: &[],
+        frame: &FRAME,
+        min: 8,
+        max: 25,
+        address_at: 0,
+    };
+    /// The checks every response passes before its code is read: 6 bytes, then its start byte, its checksum.
+    const RESPONSE_CHECKS: rt::FrameChecks = rt::FrameChecks {
+        sync: &[],
+        frame: &FRAME,
+        min: 6,
+        max: 6,
+        address_at: 0,
+    };
     /// millivolts
     ///
     /// Physical value = raw × 0.5.
@@ -344,21 +365,14 @@ pub mod lists_length {
                     out.len()
                 }
             };
-            rt::seal(buf, len, |b| u32::from(checksum(rt::covered(b, 1))), 1, false);
+            FRAME.seal(buf, len, frame_sum);
             rt::Ok(len)
         }
         /// Decodes one whole frame: refuses one longer than the longest, checks its start byte,
         /// checksum and address, then its code, constants, repeated fields, the ranges the
         /// spec gives its fields and the command's broadcast rule.
         pub fn decode(frame: &[u8]) -> rt::Result<Decoded<Request>, rt::DecodeError> {
-            let address = rt::check_frame(
-                frame,
-                8,
-                25,
-                0,
-                &FRAME,
-                |b| u32::from(checksum(rt::covered(b, 1))),
-            )?;
+            let address = REQUEST_CHECKS.check(frame, frame_sum)?;
             LENGTH.check(frame)?;
             let message = Self::dispatch(frame)?;
             rt::Ok(Decoded { address, message })
@@ -366,7 +380,7 @@ pub mod lists_length {
         /// The message of a frame that passed the checks every frame passes, by its code.
         #[inline]
         fn dispatch(frame: &[u8]) -> rt::DecodeResult<Self> {
-            match rt::code(frame, 2, 1) {
+            match frame[2] {
                 0x20 => {
                     let s = LISTS_LOG.split::<7, 2>(frame)?;
                     let frame = &s.frame;
@@ -532,7 +546,7 @@ pub mod lists_length {
                     out.len()
                 }
             };
-            rt::seal(buf, len, |b| u32::from(checksum(rt::covered(b, 1))), 1, false);
+            FRAME.seal(buf, len, frame_sum);
             rt::Ok(len)
         }
         /// Decodes one whole frame: refuses one longer than the longest, checks its start byte,
@@ -561,14 +575,7 @@ pub mod lists_length {
             frame: &[u8],
             request: rt::Option<&Request>,
         ) -> rt::Result<Decoded<Response>, rt::DecodeError> {
-            let address = rt::check_frame(
-                frame,
-                6,
-                6,
-                0,
-                &FRAME,
-                |b| u32::from(checksum(rt::covered(b, 1))),
-            )?;
+            let address = RESPONSE_CHECKS.check(frame, frame_sum)?;
             LENGTH.check(frame)?;
             let message = Self::dispatch(frame)?;
             if let rt::Some(request) = request {
@@ -581,7 +588,7 @@ pub mod lists_length {
         /// The message of a frame that passed the checks every frame passes, by its code.
         #[inline]
         fn dispatch(frame: &[u8]) -> rt::DecodeResult<Self> {
-            match rt::code(frame, 2, 1) {
+            match frame[2] {
                 0x20 => {
                     let frame = rt::fixed::<6>(frame, &response::LogAck::DESC)?;
                     rt::Ok(
@@ -663,14 +670,7 @@ pub mod lists_length {
         /// checksum and address, then its code, constants, repeated fields, the ranges the
         /// spec gives its fields and the command's broadcast rule.
         pub fn decode(frame: &'a [u8]) -> rt::Result<Decoded<Self>, rt::DecodeError> {
-            let address = rt::check_frame(
-                frame,
-                8,
-                25,
-                0,
-                &FRAME,
-                |b| u32::from(checksum(rt::covered(b, 1))),
-            )?;
+            let address = REQUEST_CHECKS.check(frame, frame_sum)?;
             LENGTH.check(frame)?;
             let message = Self::dispatch(frame)?;
             rt::Ok(Decoded { address, message })
@@ -678,7 +678,7 @@ pub mod lists_length {
         /// The message of a frame that passed the checks every frame passes, by its code.
         #[inline]
         fn dispatch(frame: &'a [u8]) -> rt::DecodeResult<Self> {
-            match rt::code(frame, 2, 1) {
+            match frame[2] {
                 0x20 => {
                     let s = LISTS_LOG.split::<7, 2>(frame)?;
                     let frame = &s.frame;
@@ -868,14 +868,7 @@ pub mod lists_length {
         }
         fn checksum_ok(frame: &[u8]) -> bool {
             match frame.len().checked_sub(1) {
-                rt::Some(n) if n > 0 => {
-                    rt::check_sum(
-                        frame,
-                        n,
-                        &FRAME,
-                        |b| u32::from(checksum(rt::covered(b, 1))),
-                    )
-                }
+                rt::Some(n) if n > 0 => rt::check_sum(frame, n, &FRAME, frame_sum),
                 _ => false,
             }
         }

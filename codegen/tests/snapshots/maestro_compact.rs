@@ -70,18 +70,32 @@ pub mod maestro_compact {
         trailer: 0,
         response: false,
     };
-    /// Where a response's code sits: from `at`, at most `longest` bytes, before `trailer` bytes.
-    const RESPONSE_CODE: rt::CodeAt = rt::CodeAt {
-        at: 0,
-        longest: 0,
-        trailer: 0,
-        response: true,
-    };
     /// Frames carry no checksum: nothing to compute.
     #[inline]
     pub fn checksum(_bytes: &[u8]) -> u8 {
         0
     }
+    /// The checksum a frame carries, as the frame checks compare it: over every byte before it.
+    #[inline]
+    fn frame_sum(bytes: &[u8]) -> u32 {
+        u32::from(checksum(bytes))
+    }
+    /// The checks every request passes before its code is read: 2 to 4 bytes.
+    const REQUEST_CHECKS: rt::FrameChecks = rt::FrameChecks {
+        sync: &[],
+        frame: &FRAME,
+        min: 2,
+        max: 4,
+        address_at: 0,
+    };
+    /// The checks every response passes before its code is read: 2 bytes.
+    const RESPONSE_CHECKS: rt::FrameChecks = rt::FrameChecks {
+        sync: &[],
+        frame: &FRAME,
+        min: 2,
+        max: 2,
+        address_at: 0,
+    };
     /// Pulse width in quarter-microseconds.
     ///
     /// Physical value = raw × 0.25.
@@ -198,28 +212,21 @@ pub mod maestro_compact {
                     out.len()
                 }
             };
-            rt::seal(buf, len, |b| u32::from(checksum(b)), 0, false);
+            FRAME.seal(buf, len, frame_sum);
             rt::Ok(len)
         }
         /// Decodes one whole frame: refuses one longer than the longest, checks its start byte,
         /// checksum and address, then its code, constants, repeated fields, the ranges the
         /// spec gives its fields and the command's broadcast rule.
         pub fn decode(frame: &[u8]) -> rt::Result<Decoded<Request>, rt::DecodeError> {
-            let address = rt::check_frame(
-                frame,
-                2,
-                4,
-                0,
-                &FRAME,
-                |b| u32::from(checksum(b)),
-            )?;
+            let address = REQUEST_CHECKS.check(frame, frame_sum)?;
             let message = Self::dispatch(frame)?;
             rt::Ok(Decoded { address, message })
         }
         /// The message of a frame that passed the checks every frame passes, by its code.
         #[inline]
         fn dispatch(frame: &[u8]) -> rt::DecodeResult<Self> {
-            match rt::code(frame, 0, 1) {
+            match frame[0] {
                 0x84 => {
                     let frame = rt::fixed::<4>(frame, &request::SetTarget::DESC)?;
                     rt::in_range(&request::SetTarget::CHANNEL_DESC, 1, frame[1], 0, 23)?;
@@ -406,7 +413,7 @@ pub mod maestro_compact {
                     out.len()
                 }
             };
-            rt::seal(buf, len, |b| u32::from(checksum(b)), 0, false);
+            FRAME.seal(buf, len, frame_sum);
             rt::Ok(len)
         }
         /// Decodes one whole frame: refuses one longer than the longest, checks its start byte,
@@ -435,14 +442,7 @@ pub mod maestro_compact {
             frame: &[u8],
             request: rt::Option<&Request>,
         ) -> rt::Result<Decoded<Response>, rt::DecodeError> {
-            let address = rt::check_frame(
-                frame,
-                2,
-                2,
-                0,
-                &FRAME,
-                |b| u32::from(checksum(b)),
-            )?;
+            let address = RESPONSE_CHECKS.check(frame, frame_sum)?;
             let message = Self::dispatch(frame)?;
             if let rt::Some(request) = request {
                 if request.replies() >> message.index() & 1 == 0 {
@@ -454,18 +454,15 @@ pub mod maestro_compact {
         /// The message of a frame that passed the checks every frame passes, by its code.
         #[inline]
         fn dispatch(frame: &[u8]) -> rt::DecodeResult<Self> {
-            match rt::code(frame, 0, 0) {
-                0u32 => {
-                    let frame = rt::fixed::<2>(frame, &response::Position::DESC)?;
-                    rt::Ok(
-                        Self::Position(response::Position {
-                            position: QuarterMicroseconds::from_raw(
-                                u16::from_le_bytes([frame[0], frame[1]]),
-                            ),
-                        }),
-                    )
-                }
-                _ => rt::Err(RESPONSE_CODE.unknown(frame)),
+            {
+                let frame = rt::fixed::<2>(frame, &response::Position::DESC)?;
+                rt::Ok(
+                    Self::Position(response::Position {
+                        position: QuarterMicroseconds::from_raw(
+                            u16::from_le_bytes([frame[0], frame[1]]),
+                        ),
+                    }),
+                )
             }
         }
         /// The message called `name` in the spec, from each field's raw wire value by its spec
@@ -614,9 +611,7 @@ pub mod maestro_compact {
         }
         fn checksum_ok(frame: &[u8]) -> bool {
             match frame.len().checked_sub(0) {
-                rt::Some(n) if n > 0 => {
-                    rt::check_sum(frame, n, &FRAME, |b| u32::from(checksum(b)))
-                }
+                rt::Some(n) if n > 0 => rt::check_sum(frame, n, &FRAME, frame_sum),
                 _ => false,
             }
         }

@@ -149,6 +149,27 @@ pub mod mavlink_v2 {
             rt::None => CRC.checksum(bytes),
         }
     }
+    /// The checksum a frame carries, as the frame checks compare it: over the bytes before it from offset 1 on.
+    #[inline]
+    fn frame_sum(bytes: &[u8]) -> u32 {
+        u32::from(checksum(rt::covered(bytes, 1)))
+    }
+    /// The checks every request passes before its code is read: 18 to 26 bytes, then its start byte, its checksum.
+    const REQUEST_CHECKS: rt::FrameChecks = rt::FrameChecks {
+        sync: &[],
+        frame: &FRAME,
+        min: 18,
+        max: 26,
+        address_at: 0,
+    };
+    /// The checks every response passes before its code is read: 17 to 60 bytes, then its start byte, its checksum.
+    const RESPONSE_CHECKS: rt::FrameChecks = rt::FrameChecks {
+        sync: &[],
+        frame: &FRAME,
+        min: 17,
+        max: 60,
+        address_at: 0,
+    };
     ///A request (command), host to device.
     #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
     #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
@@ -199,10 +220,7 @@ pub mod mavlink_v2 {
         /// and checksum rewritten (`framing.truncation`).
         pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             let len = self.encode_laid_out(address, buf)?;
-            rt::Ok(
-                TRUNCATION
-                    .travel(buf, len, &FRAME, |b| u32::from(checksum(rt::covered(b, 1)))),
-            )
+            rt::Ok(TRUNCATION.travel(buf, len, &FRAME, frame_sum))
         }
         /// The frame laid out with its whole payload, into `buf`.
         fn encode_laid_out(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
@@ -266,7 +284,7 @@ pub mod mavlink_v2 {
                     out.len()
                 }
             };
-            rt::seal(buf, len, |b| u32::from(checksum(rt::covered(b, 1))), 2, false);
+            FRAME.seal(buf, len, frame_sum);
             rt::Ok(len)
         }
         /// Decodes one whole frame: refuses one longer than the longest, checks its start byte,
@@ -274,27 +292,14 @@ pub mod mavlink_v2 {
         /// spec gives its fields and the command's broadcast rule.
         pub fn decode(frame: &[u8]) -> rt::Result<Decoded<Request>, rt::DecodeError> {
             let mut laid = [0u8; 26];
-            let laid = TRUNCATION
-                .lay_out(
-                    frame,
-                    &mut laid,
-                    &FRAME,
-                    |b| u32::from(checksum(rt::covered(b, 1))),
-                )?;
+            let laid = TRUNCATION.lay_out(frame, &mut laid, &FRAME, frame_sum)?;
             Self::decode_laid_out(laid)
         }
         /// [`Self::decode`] of the frame with its whole payload.
         fn decode_laid_out(
             frame: &[u8],
         ) -> rt::Result<Decoded<Request>, rt::DecodeError> {
-            let address = rt::check_frame(
-                frame,
-                18,
-                26,
-                0,
-                &FRAME,
-                |b| u32::from(checksum(rt::covered(b, 1))),
-            )?;
+            let address = REQUEST_CHECKS.check(frame, frame_sum)?;
             LENGTH.check(frame)?;
             let message = Self::dispatch(frame)?;
             rt::Ok(Decoded { address, message })
@@ -540,10 +545,7 @@ pub mod mavlink_v2 {
         /// and checksum rewritten (`framing.truncation`).
         pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             let len = self.encode_laid_out(address, buf)?;
-            rt::Ok(
-                TRUNCATION
-                    .travel(buf, len, &FRAME, |b| u32::from(checksum(rt::covered(b, 1)))),
-            )
+            rt::Ok(TRUNCATION.travel(buf, len, &FRAME, frame_sum))
         }
         /// The frame laid out with its whole payload, into `buf`.
         fn encode_laid_out(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
@@ -778,7 +780,7 @@ pub mod mavlink_v2 {
                     out.len()
                 }
             };
-            rt::seal(buf, len, |b| u32::from(checksum(rt::covered(b, 1))), 2, false);
+            FRAME.seal(buf, len, frame_sum);
             rt::Ok(len)
         }
         /// Decodes one whole frame: refuses one longer than the longest, checks its start byte,
@@ -808,13 +810,7 @@ pub mod mavlink_v2 {
             request: rt::Option<&Request>,
         ) -> rt::Result<Decoded<Response>, rt::DecodeError> {
             let mut laid = [0u8; 60];
-            let laid = TRUNCATION
-                .lay_out(
-                    frame,
-                    &mut laid,
-                    &FRAME,
-                    |b| u32::from(checksum(rt::covered(b, 1))),
-                )?;
+            let laid = TRUNCATION.lay_out(frame, &mut laid, &FRAME, frame_sum)?;
             Self::decode_for_laid_out(laid, request)
         }
         /// [`Self::decode_for`] of the frame with its whole payload.
@@ -822,14 +818,7 @@ pub mod mavlink_v2 {
             frame: &[u8],
             request: rt::Option<&Request>,
         ) -> rt::Result<Decoded<Response>, rt::DecodeError> {
-            let address = rt::check_frame(
-                frame,
-                17,
-                60,
-                0,
-                &FRAME,
-                |b| u32::from(checksum(rt::covered(b, 1))),
-            )?;
+            let address = RESPONSE_CHECKS.check(frame, frame_sum)?;
             LENGTH.check(frame)?;
             let message = Self::dispatch(frame)?;
             if let rt::Some(request) = request {
@@ -1386,14 +1375,7 @@ pub mod mavlink_v2 {
         }
         fn checksum_ok(frame: &[u8]) -> bool {
             match frame.len().checked_sub(2) {
-                rt::Some(n) if n > 0 => {
-                    rt::check_sum(
-                        frame,
-                        n,
-                        &FRAME,
-                        |b| u32::from(checksum(rt::covered(b, 1))),
-                    )
-                }
+                rt::Some(n) if n > 0 => rt::check_sum(frame, n, &FRAME, frame_sum),
                 _ => false,
             }
         }

@@ -115,6 +115,27 @@ pub mod mbus {
     pub fn checksum(bytes: &[u8]) -> u8 {
         rt::sum8(bytes)
     }
+    /// The checksum a frame carries, as the frame checks compare it: over the bytes before it from offset 4 on.
+    #[inline]
+    fn frame_sum(bytes: &[u8]) -> u32 {
+        u32::from(checksum(rt::covered(bytes, 4)))
+    }
+    /// The checks every request passes before its code is read: 8 to 9 bytes, then its sync bytes (68 at offset 0 and 68 at offset 3), its end bytes, its checksum, its address (offset 5).
+    const REQUEST_CHECKS: rt::FrameChecks = rt::FrameChecks {
+        sync: &[(0, &[0x68]), (3, &[0x68])],
+        frame: &FRAME,
+        min: 8,
+        max: 9,
+        address_at: 5,
+    };
+    /// The checks every response passes before its code is read: 27 bytes, then its sync bytes (68 at offset 0 and 68 at offset 3), its end bytes, its checksum, its address (offset 5).
+    const RESPONSE_CHECKS: rt::FrameChecks = rt::FrameChecks {
+        sync: &[(0, &[0x68]), (3, &[0x68])],
+        frame: &FRAME,
+        min: 27,
+        max: 27,
+        address_at: 5,
+    };
     ///A request (command), host to device.
     #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
     #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
@@ -186,7 +207,7 @@ pub mod mbus {
                         .len()
                 }
             };
-            rt::seal_end(buf, len, |b| u32::from(checksum(rt::covered(b, 4))), &FRAME);
+            FRAME.seal(buf, len, frame_sum);
             rt::Ok(len)
         }
         /// Decodes one whole frame: refuses one longer than the longest, checks its start byte,
@@ -201,16 +222,7 @@ pub mod mbus {
         fn decode_laid_out(
             frame: &[u8],
         ) -> rt::Result<Decoded<Request>, rt::DecodeError> {
-            rt::check_sync(frame, 9, 0, &[0x68])?;
-            rt::check_sync(frame, 9, 3, &[0x68])?;
-            let address = rt::check_frame(
-                frame,
-                8,
-                9,
-                5,
-                &FRAME,
-                |b| u32::from(checksum(rt::covered(b, 4))),
-            )?;
+            let address = REQUEST_CHECKS.check(frame, frame_sum)?;
             LENGTH.check(frame)?;
             LENGTH_AGAIN.check(frame)?;
             let message = Self::dispatch(frame)?;
@@ -219,7 +231,7 @@ pub mod mbus {
         /// The message of a frame that passed the checks every frame passes, by its code.
         #[inline]
         fn dispatch(frame: &[u8]) -> rt::DecodeResult<Self> {
-            match rt::code(frame, 4, 1) {
+            match frame[4] {
                 0x40 => {
                     rt::fixed::<8>(frame, &request::SndNke::DESC)
                         .map(|_| Self::SndNke(request::SndNke))
@@ -408,7 +420,7 @@ pub mod mbus {
                 }
                 Self::Ack(_) => return rt::put_frame(buf, &[0xE5]),
             };
-            rt::seal_end(buf, len, |b| u32::from(checksum(rt::covered(b, 4))), &FRAME);
+            FRAME.seal(buf, len, frame_sum);
             rt::Ok(len)
         }
         /// The bytes of a constant whole frame (`frame:` in the spec), `None` for a
@@ -470,16 +482,7 @@ pub mod mbus {
                 }
                 return rt::Ok(Decoded { address: 0, message });
             }
-            rt::check_sync(frame, 27, 0, &[0x68])?;
-            rt::check_sync(frame, 27, 3, &[0x68])?;
-            let address = rt::check_frame(
-                frame,
-                27,
-                27,
-                5,
-                &FRAME,
-                |b| u32::from(checksum(rt::covered(b, 4))),
-            )?;
+            let address = RESPONSE_CHECKS.check(frame, frame_sum)?;
             LENGTH.check(frame)?;
             LENGTH_AGAIN.check(frame)?;
             let message = Self::dispatch(frame)?;
@@ -493,7 +496,7 @@ pub mod mbus {
         /// The message of a frame that passed the checks every frame passes, by its code.
         #[inline]
         fn dispatch(frame: &[u8]) -> rt::DecodeResult<Self> {
-            match rt::code(frame, 4, 1) {
+            match frame[4] {
                 0x08 => {
                     let frame = rt::fixed::<27>(frame, &response::RspUd::DESC)?;
                     rt::equal(&response::RspUd::CI_DESC, 6, frame[6], 0x72)?;
@@ -682,14 +685,7 @@ pub mod mbus {
                 return false;
             };
             match frame.len().checked_sub(2) {
-                rt::Some(n) if n > 0 => {
-                    rt::check_sum(
-                        frame,
-                        n,
-                        &FRAME,
-                        |b| u32::from(checksum(rt::covered(b, 4))),
-                    )
-                }
+                rt::Some(n) if n > 0 => rt::check_sum(frame, n, &FRAME, frame_sum),
                 _ => false,
             }
         }

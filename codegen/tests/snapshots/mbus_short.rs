@@ -82,6 +82,19 @@ pub mod mbus_short {
     pub fn checksum(bytes: &[u8]) -> u8 {
         rt::sum8(bytes)
     }
+    /// The checksum a frame carries, as the frame checks compare it: over the bytes before it from offset 1 on.
+    #[inline]
+    fn frame_sum(bytes: &[u8]) -> u32 {
+        u32::from(checksum(rt::covered(bytes, 1)))
+    }
+    /// The checks every frame passes before its code is read: 5 bytes, then its start byte, its end bytes, its checksum, its address (offset 2).
+    const CHECKS: rt::FrameChecks = rt::FrameChecks {
+        sync: &[],
+        frame: &FRAME,
+        min: 5,
+        max: 5,
+        address_at: 2,
+    };
     ///A request (command), host to device.
     #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
     #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
@@ -132,28 +145,21 @@ pub mod mbus_short {
                     rt::head(out, &[0x10, 0x49, address]).len()
                 }
             };
-            rt::seal_end(buf, len, |b| u32::from(checksum(rt::covered(b, 1))), &FRAME);
+            FRAME.seal(buf, len, frame_sum);
             rt::Ok(len)
         }
         /// Decodes one whole frame: refuses one longer than the longest, checks its start byte,
         /// checksum and address, then its code, constants, repeated fields, the ranges the
         /// spec gives its fields and the command's broadcast rule.
         pub fn decode(frame: &[u8]) -> rt::Result<Decoded<Request>, rt::DecodeError> {
-            let address = rt::check_frame(
-                frame,
-                5,
-                5,
-                2,
-                &FRAME,
-                |b| u32::from(checksum(rt::covered(b, 1))),
-            )?;
+            let address = CHECKS.check(frame, frame_sum)?;
             let message = Self::dispatch(frame)?;
             rt::Ok(Decoded { address, message })
         }
         /// The message of a frame that passed the checks every frame passes, by its code.
         #[inline]
         fn dispatch(frame: &[u8]) -> rt::DecodeResult<Self> {
-            match rt::code(frame, 1, 1) {
+            match frame[1] {
                 0x40 => {
                     rt::fixed::<5>(frame, &request::SndNke::DESC)
                         .map(|_| Self::SndNke(request::SndNke))
@@ -286,7 +292,7 @@ pub mod mbus_short {
                 Self::StatusOfLink(_) => rt::head(out, &[0x10, 0x0B, address]).len(),
                 Self::Ack(_) => return rt::put_frame(buf, &[0xE5]),
             };
-            rt::seal_end(buf, len, |b| u32::from(checksum(rt::covered(b, 1))), &FRAME);
+            FRAME.seal(buf, len, frame_sum);
             rt::Ok(len)
         }
         /// The bytes of a constant whole frame (`frame:` in the spec), `None` for a
@@ -339,14 +345,7 @@ pub mod mbus_short {
                 }
                 return rt::Ok(Decoded { address: 0, message });
             }
-            let address = rt::check_frame(
-                frame,
-                5,
-                5,
-                2,
-                &FRAME,
-                |b| u32::from(checksum(rt::covered(b, 1))),
-            )?;
+            let address = CHECKS.check(frame, frame_sum)?;
             let message = Self::dispatch(frame)?;
             if let rt::Some(request) = request {
                 if request.replies() >> message.index() & 1 == 0 {
@@ -358,7 +357,7 @@ pub mod mbus_short {
         /// The message of a frame that passed the checks every frame passes, by its code.
         #[inline]
         fn dispatch(frame: &[u8]) -> rt::DecodeResult<Self> {
-            match rt::code(frame, 1, 1) {
+            match frame[1] {
                 0x0B => {
                     rt::fixed::<5>(frame, &response::StatusOfLink::DESC)
                         .map(|_| Self::StatusOfLink(response::StatusOfLink))
@@ -529,14 +528,7 @@ pub mod mbus_short {
         }
         fn checksum_ok(frame: &[u8]) -> bool {
             match frame.len().checked_sub(2) {
-                rt::Some(n) if n > 0 => {
-                    rt::check_sum(
-                        frame,
-                        n,
-                        &FRAME,
-                        |b| u32::from(checksum(rt::covered(b, 1))),
-                    )
-                }
+                rt::Some(n) if n > 0 => rt::check_sum(frame, n, &FRAME, frame_sum),
                 _ => false,
             }
         }

@@ -82,6 +82,27 @@ pub mod mini {
     pub fn checksum(bytes: &[u8]) -> u8 {
         rt::sum8(bytes)
     }
+    /// The checksum a frame carries, as the frame checks compare it: over every byte before it.
+    #[inline]
+    fn frame_sum(bytes: &[u8]) -> u32 {
+        u32::from(checksum(bytes))
+    }
+    /// The checks every request passes before its code is read: 6 to 9 bytes, then its start byte, its checksum, its address (offset 1).
+    const REQUEST_CHECKS: rt::FrameChecks = rt::FrameChecks {
+        sync: &[],
+        frame: &FRAME,
+        min: 6,
+        max: 9,
+        address_at: 1,
+    };
+    /// The checks every response passes before its code is read: 4 to 13 bytes, then its start byte, its checksum, its address (offset 1).
+    const RESPONSE_CHECKS: rt::FrameChecks = rt::FrameChecks {
+        sync: &[],
+        frame: &FRAME,
+        min: 4,
+        max: 13,
+        address_at: 1,
+    };
     /// capacitance
     ///
     /// Physical value = raw × 0.01.
@@ -370,21 +391,14 @@ pub mod mini {
         /// checksum and address, then its code, constants, repeated fields, the ranges the
         /// spec gives its fields and the command's broadcast rule.
         pub fn decode(frame: &[u8]) -> rt::Result<Decoded<Request>, rt::DecodeError> {
-            let address = rt::check_frame(
-                frame,
-                6,
-                9,
-                1,
-                &FRAME,
-                |b| u32::from(checksum(b)),
-            )?;
+            let address = REQUEST_CHECKS.check(frame, frame_sum)?;
             let message = Self::dispatch(frame)?;
             rt::Ok(Decoded { address, message })
         }
         /// The message of a frame that passed the checks every frame passes, by its code.
         #[inline]
         fn dispatch(frame: &[u8]) -> rt::DecodeResult<Self> {
-            match rt::code(frame, 2, 2) {
+            match u16::from_be_bytes([frame[2], frame[3]]) {
                 0x2000 => {
                     let frame = rt::fixed::<9>(frame, &request::GoTo::DESC)?;
                     let field_0: u32 = u32::from_le_bytes([
@@ -620,14 +634,7 @@ pub mod mini {
             frame: &[u8],
             request: rt::Option<&Request>,
         ) -> rt::Result<Decoded<Response>, rt::DecodeError> {
-            let address = rt::check_frame(
-                frame,
-                4,
-                13,
-                1,
-                &FRAME,
-                |b| u32::from(checksum(b)),
-            )?;
+            let address = RESPONSE_CHECKS.check(frame, frame_sum)?;
             let message = Self::dispatch(frame)?;
             if let rt::Some(request) = request {
                 if request.replies() >> message.index() & 1 == 0 {
@@ -640,7 +647,7 @@ pub mod mini {
         #[inline]
         fn dispatch(frame: &[u8]) -> rt::DecodeResult<Self> {
             if frame.len() >= 4 {
-                match rt::code(frame, 2, 1) {
+                match frame[2] {
                     0x50 => {
                         return rt::fixed::<4>(frame, &response::Started::DESC)
                             .map(|_| Self::Started(response::Started));
@@ -655,7 +662,7 @@ pub mod mini {
             if frame.len() < 5 {
                 return rt::Err(RESPONSE_CODE.unknown(frame));
             }
-            match rt::code(frame, 2, 2) {
+            match u16::from_be_bytes([frame[2], frame[3]]) {
                 0x3000 => {
                     rt::fixed::<5>(frame, &response::SetModeAck::DESC)
                         .map(|_| Self::SetModeAck(response::SetModeAck))
@@ -854,9 +861,7 @@ pub mod mini {
         }
         fn checksum_ok(frame: &[u8]) -> bool {
             match frame.len().checked_sub(1) {
-                rt::Some(n) if n > 0 => {
-                    rt::check_sum(frame, n, &FRAME, |b| u32::from(checksum(b)))
-                }
+                rt::Some(n) if n > 0 => rt::check_sum(frame, n, &FRAME, frame_sum),
                 _ => false,
             }
         }

@@ -94,6 +94,19 @@ pub mod mini_crc {
     pub fn checksum(bytes: &[u8]) -> u16 {
         CRC.checksum(bytes)
     }
+    /// The checksum a frame carries, as the frame checks compare it: over every byte before it.
+    #[inline]
+    fn frame_sum(bytes: &[u8]) -> u32 {
+        u32::from(checksum(bytes))
+    }
+    /// The checks every frame passes before its code is read: 6 bytes, then its checksum, its address (offset 1).
+    const CHECKS: rt::FrameChecks = rt::FrameChecks {
+        sync: &[],
+        frame: &FRAME,
+        min: 6,
+        max: 6,
+        address_at: 1,
+    };
     ///A request (command), host to device.
     #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
     #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
@@ -168,28 +181,21 @@ pub mod mini_crc {
                     out.len()
                 }
             };
-            rt::seal(buf, len, |b| u32::from(checksum(b)), 2, true);
+            FRAME.seal(buf, len, frame_sum);
             rt::Ok(len)
         }
         /// Decodes one whole frame: refuses one longer than the longest, checks its start byte,
         /// checksum and address, then its code, constants, repeated fields, the ranges the
         /// spec gives its fields and the command's broadcast rule.
         pub fn decode(frame: &[u8]) -> rt::Result<Decoded<Request>, rt::DecodeError> {
-            let address = rt::check_frame(
-                frame,
-                6,
-                6,
-                1,
-                &FRAME,
-                |b| u32::from(checksum(b)),
-            )?;
+            let address = CHECKS.check(frame, frame_sum)?;
             let message = Self::dispatch(frame)?;
             rt::Ok(Decoded { address, message })
         }
         /// The message of a frame that passed the checks every frame passes, by its code.
         #[inline]
         fn dispatch(frame: &[u8]) -> rt::DecodeResult<Self> {
-            match rt::code(frame, 0, 1) {
+            match frame[0] {
                 0x69 => {
                     let mut g = rt::Group::new(frame, 0x69, rt::None);
                     g.attempt(|frame: &[u8; 6]| {
@@ -397,7 +403,7 @@ pub mod mini_crc {
                     out.len()
                 }
             };
-            rt::seal(buf, len, |b| u32::from(checksum(b)), 2, true);
+            FRAME.seal(buf, len, frame_sum);
             rt::Ok(len)
         }
         /// Decodes one whole frame: refuses one longer than the longest, checks its start byte,
@@ -426,14 +432,7 @@ pub mod mini_crc {
             frame: &[u8],
             request: rt::Option<&Request>,
         ) -> rt::Result<Decoded<Response>, rt::DecodeError> {
-            let address = rt::check_frame(
-                frame,
-                6,
-                6,
-                1,
-                &FRAME,
-                |b| u32::from(checksum(b)),
-            )?;
+            let address = CHECKS.check(frame, frame_sum)?;
             let message = Self::dispatch(frame, request)?;
             if let rt::Some(request) = request {
                 if request.replies() >> message.index() & 1 == 0 {
@@ -449,7 +448,7 @@ pub mod mini_crc {
             request: rt::Option<&Request>,
         ) -> rt::DecodeResult<Self> {
             let asked: u64 = request.map_or(!0, Request::replies);
-            match rt::code(frame, 0, 1) {
+            match frame[0] {
                 0x22 => {
                     let mut g = rt::Group::new(frame, 0x22, request.map(Request::name));
                     g.ambiguous(
@@ -645,9 +644,7 @@ pub mod mini_crc {
         }
         fn checksum_ok(frame: &[u8]) -> bool {
             match frame.len().checked_sub(2) {
-                rt::Some(n) if n > 0 => {
-                    rt::check_sum(frame, n, &FRAME, |b| u32::from(checksum(b)))
-                }
+                rt::Some(n) if n > 0 => rt::check_sum(frame, n, &FRAME, frame_sum),
                 _ => false,
             }
         }

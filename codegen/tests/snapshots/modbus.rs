@@ -92,6 +92,27 @@ pub mod modbus {
     pub fn checksum(bytes: &[u8]) -> u16 {
         CRC.checksum(bytes)
     }
+    /// The checksum a frame carries, as the frame checks compare it: over every byte before it.
+    #[inline]
+    fn frame_sum(bytes: &[u8]) -> u32 {
+        u32::from(checksum(bytes))
+    }
+    /// The checks every request passes before its code is read: 8 to 255 bytes, then its checksum, its address (offset 0).
+    const REQUEST_CHECKS: rt::FrameChecks = rt::FrameChecks {
+        sync: &[],
+        frame: &FRAME,
+        min: 8,
+        max: 255,
+        address_at: 0,
+    };
+    /// The checks every response passes before its code is read: 5 to 255 bytes, then its checksum, its address (offset 0).
+    const RESPONSE_CHECKS: rt::FrameChecks = rt::FrameChecks {
+        sync: &[],
+        frame: &FRAME,
+        min: 5,
+        max: 255,
+        address_at: 0,
+    };
     /// The value of Write Single Coil: FF 00 requests ON, 00 00 OFF; all others are illegal (exception 03). (§6.5)
     ///
     /// Open: a value this revision does not list decodes as `Unknown(raw)` and re-encodes unchanged.
@@ -484,28 +505,21 @@ pub mod modbus {
                     out.len()
                 }
             };
-            rt::seal(buf, len, |b| u32::from(checksum(b)), 2, false);
+            FRAME.seal(buf, len, frame_sum);
             rt::Ok(len)
         }
         /// Decodes one whole frame: refuses one longer than the longest, checks its start byte,
         /// checksum and address, then its code, constants, repeated fields, the ranges the
         /// spec gives its fields and the command's broadcast rule.
         pub fn decode(frame: &[u8]) -> rt::Result<Decoded<Request>, rt::DecodeError> {
-            let address = rt::check_frame(
-                frame,
-                8,
-                255,
-                0,
-                &FRAME,
-                |b| u32::from(checksum(b)),
-            )?;
+            let address = REQUEST_CHECKS.check(frame, frame_sum)?;
             let message = Self::dispatch(frame)?;
             rt::Ok(Decoded { address, message })
         }
         /// The message of a frame that passed the checks every frame passes, by its code.
         #[inline]
         fn dispatch(frame: &[u8]) -> rt::DecodeResult<Self> {
-            match rt::code(frame, 1, 1) {
+            match frame[1] {
                 0x01 => {
                     let frame = rt::fixed::<8>(frame, &request::ReadCoils::DESC)?;
                     rt::no_broadcast(frame[0], 0x00, &request::ReadCoils::DESC)?;
@@ -1163,7 +1177,7 @@ pub mod modbus {
                     out.len()
                 }
             };
-            rt::seal(buf, len, |b| u32::from(checksum(b)), 2, false);
+            FRAME.seal(buf, len, frame_sum);
             rt::Ok(len)
         }
         /// Decodes one whole frame: refuses one longer than the longest, checks its start byte,
@@ -1192,14 +1206,7 @@ pub mod modbus {
             frame: &[u8],
             request: rt::Option<&Request>,
         ) -> rt::Result<Decoded<Response>, rt::DecodeError> {
-            let address = rt::check_frame(
-                frame,
-                5,
-                255,
-                0,
-                &FRAME,
-                |b| u32::from(checksum(b)),
-            )?;
+            let address = RESPONSE_CHECKS.check(frame, frame_sum)?;
             let message = Self::dispatch(frame)?;
             if let rt::Some(request) = request {
                 if request.replies() >> message.index() & 1 == 0 {
@@ -1212,7 +1219,7 @@ pub mod modbus {
         /// The message of a frame that passed the checks every frame passes, by its code.
         #[inline]
         fn dispatch(frame: &[u8]) -> rt::DecodeResult<Self> {
-            match rt::code(frame, 1, 1) {
+            match frame[1] {
                 0x01 => {
                     let (_, elements, count) = REPEAT_READ_COILS_REPLY
                         .split::<3>(frame)?;
@@ -1735,21 +1742,14 @@ pub mod modbus {
         /// checksum and address, then its code, constants, repeated fields, the ranges the
         /// spec gives its fields and the command's broadcast rule.
         pub fn decode(frame: &'a [u8]) -> rt::Result<Decoded<Self>, rt::DecodeError> {
-            let address = rt::check_frame(
-                frame,
-                8,
-                255,
-                0,
-                &FRAME,
-                |b| u32::from(checksum(b)),
-            )?;
+            let address = REQUEST_CHECKS.check(frame, frame_sum)?;
             let message = Self::dispatch(frame)?;
             rt::Ok(Decoded { address, message })
         }
         /// The message of a frame that passed the checks every frame passes, by its code.
         #[inline]
         fn dispatch(frame: &'a [u8]) -> rt::DecodeResult<Self> {
-            match rt::code(frame, 1, 1) {
+            match frame[1] {
                 0x01 => {
                     let frame = rt::fixed::<8>(frame, &request::ReadCoils::DESC)?;
                     rt::no_broadcast(frame[0], 0x00, &request::ReadCoils::DESC)?;
@@ -2041,14 +2041,7 @@ pub mod modbus {
             frame: &'a [u8],
             request: rt::Option<&Request>,
         ) -> rt::Result<Decoded<Self>, rt::DecodeError> {
-            let address = rt::check_frame(
-                frame,
-                5,
-                255,
-                0,
-                &FRAME,
-                |b| u32::from(checksum(b)),
-            )?;
+            let address = RESPONSE_CHECKS.check(frame, frame_sum)?;
             let message = Self::dispatch(frame)?;
             if let rt::Some(request) = request {
                 if request.replies() >> message.index() & 1 == 0 {
@@ -2061,7 +2054,7 @@ pub mod modbus {
         /// The message of a frame that passed the checks every frame passes, by its code.
         #[inline]
         fn dispatch(frame: &'a [u8]) -> rt::DecodeResult<Self> {
-            match rt::code(frame, 1, 1) {
+            match frame[1] {
                 0x01 => {
                     let (_, elements, count) = REPEAT_READ_COILS_REPLY
                         .split::<3>(frame)?;
@@ -2696,14 +2689,14 @@ pub mod modbus {
                     ),
                 );
             }
-            let address = rt::check_frame(
-                frame,
-                8,
-                255,
-                0,
-                &FRAME,
-                |b| u32::from(checksum(b)),
-            )?;
+            let address = rt::FrameChecks {
+                sync: &[],
+                frame: &FRAME,
+                min: 8,
+                max: 255,
+                address_at: 0,
+            }
+                .check(frame, frame_sum)?;
             RequestView::dispatch(frame)?;
             rt::Ok(
                 matches!(
@@ -2714,9 +2707,7 @@ pub mod modbus {
         }
         fn checksum_ok(frame: &[u8]) -> bool {
             match frame.len().checked_sub(2) {
-                rt::Some(n) if n > 0 => {
-                    rt::check_sum(frame, n, &FRAME, |b| u32::from(checksum(b)))
-                }
+                rt::Some(n) if n > 0 => rt::check_sum(frame, n, &FRAME, frame_sum),
                 _ => false,
             }
         }

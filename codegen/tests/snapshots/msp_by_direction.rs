@@ -90,6 +90,27 @@ pub mod msp_by_direction {
     pub fn checksum(bytes: &[u8]) -> u8 {
         rt::xor8(bytes)
     }
+    /// The checksum a frame carries, as the frame checks compare it: over the bytes before it from offset 3 on.
+    #[inline]
+    fn frame_sum(bytes: &[u8]) -> u32 {
+        u32::from(checksum(rt::covered(bytes, 3)))
+    }
+    /// The checks every request passes before its code is read: 6 bytes, then its sync bytes (24 4D 3C at offset 0), its checksum.
+    const REQUEST_CHECKS: rt::FrameChecks = rt::FrameChecks {
+        sync: &[(0, &[0x24, 0x4D, 0x3C])],
+        frame: &FRAME,
+        min: 6,
+        max: 6,
+        address_at: 0,
+    };
+    /// The checks every response passes before its code is read: 6 to 42 bytes, then its sync bytes (24 4D 3E at offset 0), its checksum.
+    const RESPONSE_CHECKS: rt::FrameChecks = rt::FrameChecks {
+        sync: &[(0, &[0x24, 0x4D, 0x3E])],
+        frame: &FRAME,
+        min: 6,
+        max: 42,
+        address_at: 0,
+    };
     /// decidegrees
     ///
     /// Physical value = raw × 0.1.
@@ -183,22 +204,14 @@ pub mod msp_by_direction {
                 Self::Rc(_) => rt::head(out, &[0x24, 0x4D, 0x3C, 0x00, 0x69]).len(),
                 Self::Attitude(_) => rt::head(out, &[0x24, 0x4D, 0x3C, 0x00, 0x6C]).len(),
             };
-            rt::seal(buf, len, |b| u32::from(checksum(rt::covered(b, 3))), 1, false);
+            FRAME.seal(buf, len, frame_sum);
             rt::Ok(len)
         }
         /// Decodes one whole frame: refuses one longer than the longest, checks its start byte,
         /// checksum and address, then its code, constants, repeated fields, the ranges the
         /// spec gives its fields and the command's broadcast rule.
         pub fn decode(frame: &[u8]) -> rt::Result<Decoded<Request>, rt::DecodeError> {
-            rt::check_sync(frame, 6, 0, &[0x24, 0x4D, 0x3C])?;
-            let address = rt::check_frame(
-                frame,
-                6,
-                6,
-                0,
-                &FRAME,
-                |b| u32::from(checksum(rt::covered(b, 3))),
-            )?;
+            let address = REQUEST_CHECKS.check(frame, frame_sum)?;
             LENGTH.check(frame)?;
             let message = Self::dispatch(frame)?;
             rt::Ok(Decoded { address, message })
@@ -206,7 +219,7 @@ pub mod msp_by_direction {
         /// The message of a frame that passed the checks every frame passes, by its code.
         #[inline]
         fn dispatch(frame: &[u8]) -> rt::DecodeResult<Self> {
-            match rt::code(frame, 4, 1) {
+            match frame[4] {
                 0x01 => {
                     rt::fixed::<6>(frame, &request::ApiVersion::DESC)
                         .map(|_| Self::ApiVersion(request::ApiVersion))
@@ -392,7 +405,7 @@ pub mod msp_by_direction {
                     out.len()
                 }
             };
-            rt::seal(buf, len, |b| u32::from(checksum(rt::covered(b, 3))), 1, false);
+            FRAME.seal(buf, len, frame_sum);
             rt::Ok(len)
         }
         /// Decodes one whole frame: refuses one longer than the longest, checks its start byte,
@@ -421,15 +434,7 @@ pub mod msp_by_direction {
             frame: &[u8],
             request: rt::Option<&Request>,
         ) -> rt::Result<Decoded<Response>, rt::DecodeError> {
-            rt::check_sync(frame, 42, 0, &[0x24, 0x4D, 0x3E])?;
-            let address = rt::check_frame(
-                frame,
-                6,
-                42,
-                0,
-                &FRAME,
-                |b| u32::from(checksum(rt::covered(b, 3))),
-            )?;
+            let address = RESPONSE_CHECKS.check(frame, frame_sum)?;
             LENGTH.check(frame)?;
             let message = Self::dispatch(frame)?;
             if let rt::Some(request) = request {
@@ -442,7 +447,7 @@ pub mod msp_by_direction {
         /// The message of a frame that passed the checks every frame passes, by its code.
         #[inline]
         fn dispatch(frame: &[u8]) -> rt::DecodeResult<Self> {
-            match rt::code(frame, 4, 1) {
+            match frame[4] {
                 0x01 => {
                     let frame = rt::fixed::<9>(frame, &response::ApiVersionReply::DESC)?;
                     rt::Ok(
@@ -583,15 +588,7 @@ pub mod msp_by_direction {
             frame: &'a [u8],
             request: rt::Option<&Request>,
         ) -> rt::Result<Decoded<Self>, rt::DecodeError> {
-            rt::check_sync(frame, 42, 0, &[0x24, 0x4D, 0x3E])?;
-            let address = rt::check_frame(
-                frame,
-                6,
-                42,
-                0,
-                &FRAME,
-                |b| u32::from(checksum(rt::covered(b, 3))),
-            )?;
+            let address = RESPONSE_CHECKS.check(frame, frame_sum)?;
             LENGTH.check(frame)?;
             let message = Self::dispatch(frame)?;
             if let rt::Some(request) = request {
@@ -604,7 +601,7 @@ pub mod msp_by_direction {
         /// The message of a frame that passed the checks every frame passes, by its code.
         #[inline]
         fn dispatch(frame: &'a [u8]) -> rt::DecodeResult<Self> {
-            match rt::code(frame, 4, 1) {
+            match frame[4] {
                 0x01 => {
                     let frame = rt::fixed::<9>(frame, &response::ApiVersionReply::DESC)?;
                     rt::Ok(Self::ApiVersionReply {
@@ -817,14 +814,7 @@ pub mod msp_by_direction {
         }
         fn checksum_ok(frame: &[u8]) -> bool {
             match frame.len().checked_sub(1) {
-                rt::Some(n) if n > 0 => {
-                    rt::check_sum(
-                        frame,
-                        n,
-                        &FRAME,
-                        |b| u32::from(checksum(rt::covered(b, 3))),
-                    )
-                }
+                rt::Some(n) if n > 0 => rt::check_sum(frame, n, &FRAME, frame_sum),
                 _ => false,
             }
         }

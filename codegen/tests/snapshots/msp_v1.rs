@@ -90,6 +90,27 @@ pub mod msp_v1 {
     pub fn checksum(bytes: &[u8]) -> u8 {
         rt::xor8(bytes)
     }
+    /// The checksum a frame carries, as the frame checks compare it: over the bytes before it from offset 3 on.
+    #[inline]
+    fn frame_sum(bytes: &[u8]) -> u32 {
+        u32::from(checksum(rt::covered(bytes, 3)))
+    }
+    /// The checks every request passes before its code is read: 6 bytes, then its sync bytes (24 4D at offset 0), its checksum.
+    const REQUEST_CHECKS: rt::FrameChecks = rt::FrameChecks {
+        sync: &[(0, &[0x24, 0x4D])],
+        frame: &FRAME,
+        min: 6,
+        max: 6,
+        address_at: 0,
+    };
+    /// The checks every response passes before its code is read: 6 to 12 bytes, then its sync bytes (24 4D at offset 0), its checksum.
+    const RESPONSE_CHECKS: rt::FrameChecks = rt::FrameChecks {
+        sync: &[(0, &[0x24, 0x4D])],
+        frame: &FRAME,
+        min: 6,
+        max: 12,
+        address_at: 0,
+    };
     /// decidegrees
     ///
     /// Physical value = raw × 0.1.
@@ -179,22 +200,14 @@ pub mod msp_v1 {
                 }
                 Self::Attitude(_) => rt::head(out, &[0x24, 0x4D, 0x3C, 0x00, 0x6C]).len(),
             };
-            rt::seal(buf, len, |b| u32::from(checksum(rt::covered(b, 3))), 1, false);
+            FRAME.seal(buf, len, frame_sum);
             rt::Ok(len)
         }
         /// Decodes one whole frame: refuses one longer than the longest, checks its start byte,
         /// checksum and address, then its code, constants, repeated fields, the ranges the
         /// spec gives its fields and the command's broadcast rule.
         pub fn decode(frame: &[u8]) -> rt::Result<Decoded<Request>, rt::DecodeError> {
-            rt::check_sync(frame, 6, 0, &[0x24, 0x4D])?;
-            let address = rt::check_frame(
-                frame,
-                6,
-                6,
-                0,
-                &FRAME,
-                |b| u32::from(checksum(rt::covered(b, 3))),
-            )?;
+            let address = REQUEST_CHECKS.check(frame, frame_sum)?;
             LENGTH.check(frame)?;
             let message = Self::dispatch(frame)?;
             rt::Ok(Decoded { address, message })
@@ -202,7 +215,7 @@ pub mod msp_v1 {
         /// The message of a frame that passed the checks every frame passes, by its code.
         #[inline]
         fn dispatch(frame: &[u8]) -> rt::DecodeResult<Self> {
-            match rt::code(frame, 2, 1) {
+            match frame[2] {
                 0x3C => {
                     let mut g = rt::Group::new(frame, 0x3C, rt::None);
                     g.attempt(|frame: &[u8; 6]| {
@@ -368,7 +381,7 @@ pub mod msp_v1 {
                     out.len()
                 }
             };
-            rt::seal(buf, len, |b| u32::from(checksum(rt::covered(b, 3))), 1, false);
+            FRAME.seal(buf, len, frame_sum);
             rt::Ok(len)
         }
         /// Decodes one whole frame: refuses one longer than the longest, checks its start byte,
@@ -397,15 +410,7 @@ pub mod msp_v1 {
             frame: &[u8],
             request: rt::Option<&Request>,
         ) -> rt::Result<Decoded<Response>, rt::DecodeError> {
-            rt::check_sync(frame, 12, 0, &[0x24, 0x4D])?;
-            let address = rt::check_frame(
-                frame,
-                6,
-                12,
-                0,
-                &FRAME,
-                |b| u32::from(checksum(rt::covered(b, 3))),
-            )?;
+            let address = RESPONSE_CHECKS.check(frame, frame_sum)?;
             LENGTH.check(frame)?;
             let message = Self::dispatch(frame, request)?;
             if let rt::Some(request) = request {
@@ -422,7 +427,7 @@ pub mod msp_v1 {
             frame: &[u8],
             request: rt::Option<&Request>,
         ) -> rt::DecodeResult<Self> {
-            match rt::code(frame, 2, 1) {
+            match frame[2] {
                 0x3E => {
                     let mut g = rt::Group::new(frame, 0x3E, request.map(Request::name));
                     g.attempt(|frame: &[u8; 9]| {
@@ -674,14 +679,7 @@ pub mod msp_v1 {
         }
         fn checksum_ok(frame: &[u8]) -> bool {
             match frame.len().checked_sub(1) {
-                rt::Some(n) if n > 0 => {
-                    rt::check_sum(
-                        frame,
-                        n,
-                        &FRAME,
-                        |b| u32::from(checksum(rt::covered(b, 3))),
-                    )
-                }
+                rt::Some(n) if n > 0 => rt::check_sum(frame, n, &FRAME, frame_sum),
                 _ => false,
             }
         }

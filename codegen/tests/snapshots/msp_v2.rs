@@ -102,6 +102,27 @@ pub mod msp_v2 {
     pub fn checksum(bytes: &[u8]) -> u8 {
         CRC.checksum(bytes)
     }
+    /// The checksum a frame carries, as the frame checks compare it: over the bytes before it from offset 3 on.
+    #[inline]
+    fn frame_sum(bytes: &[u8]) -> u32 {
+        u32::from(checksum(rt::covered(bytes, 3)))
+    }
+    /// The checks every request passes before its code is read: 9 bytes, then its sync bytes (24 58 3C at offset 0), its checksum.
+    const REQUEST_CHECKS: rt::FrameChecks = rt::FrameChecks {
+        sync: &[(0, &[0x24, 0x58, 0x3C])],
+        frame: &FRAME,
+        min: 9,
+        max: 9,
+        address_at: 0,
+    };
+    /// The checks every response passes before its code is read: 12 to 13 bytes, then its sync bytes (24 58 3E at offset 0), its checksum.
+    const RESPONSE_CHECKS: rt::FrameChecks = rt::FrameChecks {
+        sync: &[(0, &[0x24, 0x58, 0x3E])],
+        frame: &FRAME,
+        min: 12,
+        max: 13,
+        address_at: 0,
+    };
     ///A request (command), host to device.
     #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
     #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
@@ -166,22 +187,14 @@ pub mod msp_v2 {
                     out.len()
                 }
             };
-            rt::seal(buf, len, |b| u32::from(checksum(rt::covered(b, 3))), 1, false);
+            FRAME.seal(buf, len, frame_sum);
             rt::Ok(len)
         }
         /// Decodes one whole frame: refuses one longer than the longest, checks its start byte,
         /// checksum and address, then its code, constants, repeated fields, the ranges the
         /// spec gives its fields and the command's broadcast rule.
         pub fn decode(frame: &[u8]) -> rt::Result<Decoded<Request>, rt::DecodeError> {
-            rt::check_sync(frame, 9, 0, &[0x24, 0x58, 0x3C])?;
-            let address = rt::check_frame(
-                frame,
-                9,
-                9,
-                0,
-                &FRAME,
-                |b| u32::from(checksum(rt::covered(b, 3))),
-            )?;
+            let address = REQUEST_CHECKS.check(frame, frame_sum)?;
             LENGTH.check(frame)?;
             let message = Self::dispatch(frame)?;
             rt::Ok(Decoded { address, message })
@@ -189,7 +202,7 @@ pub mod msp_v2 {
         /// The message of a frame that passed the checks every frame passes, by its code.
         #[inline]
         fn dispatch(frame: &[u8]) -> rt::DecodeResult<Self> {
-            match rt::code(frame, 4, 2) {
+            match u16::from_be_bytes([frame[4], frame[5]]) {
                 0x0100 => {
                     let frame = rt::fixed::<9>(frame, &request::ApiVersion::DESC)?;
                     rt::equal(
@@ -388,7 +401,7 @@ pub mod msp_v2 {
                     out.len()
                 }
             };
-            rt::seal(buf, len, |b| u32::from(checksum(rt::covered(b, 3))), 1, false);
+            FRAME.seal(buf, len, frame_sum);
             rt::Ok(len)
         }
         /// Decodes one whole frame: refuses one longer than the longest, checks its start byte,
@@ -417,15 +430,7 @@ pub mod msp_v2 {
             frame: &[u8],
             request: rt::Option<&Request>,
         ) -> rt::Result<Decoded<Response>, rt::DecodeError> {
-            rt::check_sync(frame, 13, 0, &[0x24, 0x58, 0x3E])?;
-            let address = rt::check_frame(
-                frame,
-                12,
-                13,
-                0,
-                &FRAME,
-                |b| u32::from(checksum(rt::covered(b, 3))),
-            )?;
+            let address = RESPONSE_CHECKS.check(frame, frame_sum)?;
             LENGTH.check(frame)?;
             let message = Self::dispatch(frame)?;
             if let rt::Some(request) = request {
@@ -438,7 +443,7 @@ pub mod msp_v2 {
         /// The message of a frame that passed the checks every frame passes, by its code.
         #[inline]
         fn dispatch(frame: &[u8]) -> rt::DecodeResult<Self> {
-            match rt::code(frame, 4, 2) {
+            match u16::from_be_bytes([frame[4], frame[5]]) {
                 0x0100 => {
                     let frame = rt::fixed::<
                         12,
@@ -641,14 +646,7 @@ pub mod msp_v2 {
         }
         fn checksum_ok(frame: &[u8]) -> bool {
             match frame.len().checked_sub(1) {
-                rt::Some(n) if n > 0 => {
-                    rt::check_sum(
-                        frame,
-                        n,
-                        &FRAME,
-                        |b| u32::from(checksum(rt::covered(b, 3))),
-                    )
-                }
+                rt::Some(n) if n > 0 => rt::check_sum(frame, n, &FRAME, frame_sum),
                 _ => false,
             }
         }

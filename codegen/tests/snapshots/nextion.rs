@@ -63,13 +63,6 @@ pub mod nextion {
         end: &[0xFF, 0xFF, 0xFF],
         end_first: false,
     };
-    /// Where a request's code sits: from `at`, at most `longest` bytes, before `trailer` bytes.
-    const REQUEST_CODE: rt::CodeAt = rt::CodeAt {
-        at: 0,
-        longest: 0,
-        trailer: 3,
-        response: false,
-    };
     /// Where a response's code sits: from `at`, at most `longest` bytes, before `trailer` bytes.
     const RESPONSE_CODE: rt::CodeAt = rt::CodeAt {
         at: 0,
@@ -82,6 +75,27 @@ pub mod nextion {
     pub fn checksum(_bytes: &[u8]) -> u8 {
         0
     }
+    /// The checksum a frame carries, as the frame checks compare it: over every byte before it.
+    #[inline]
+    fn frame_sum(bytes: &[u8]) -> u32 {
+        u32::from(checksum(bytes))
+    }
+    /// The checks every request passes before its code is read: 4 to 203 bytes, then its end bytes.
+    const REQUEST_CHECKS: rt::FrameChecks = rt::FrameChecks {
+        sync: &[],
+        frame: &FRAME,
+        min: 4,
+        max: 203,
+        address_at: 0,
+    };
+    /// The checks every response passes before its code is read: 4 to 104 bytes, then its end bytes.
+    const RESPONSE_CHECKS: rt::FrameChecks = rt::FrameChecks {
+        sync: &[],
+        frame: &FRAME,
+        min: 4,
+        max: 104,
+        address_at: 0,
+    };
     ///  (§7)
     ///
     /// Open: a value this revision does not list decodes as `Unknown(raw)` and re-encodes unchanged.
@@ -201,38 +215,28 @@ pub mod nextion {
                     out.len()
                 }
             };
-            rt::seal_end(buf, len, |b| u32::from(checksum(b)), &FRAME);
+            FRAME.seal(buf, len, frame_sum);
             rt::Ok(len)
         }
         /// Decodes one whole frame: refuses one longer than the longest, checks its start byte,
         /// checksum and address, then its code, constants, repeated fields, the ranges the
         /// spec gives its fields and the command's broadcast rule.
         pub fn decode(frame: &[u8]) -> rt::Result<Decoded<Request>, rt::DecodeError> {
-            let address = rt::check_frame(
-                frame,
-                4,
-                203,
-                0,
-                &FRAME,
-                |b| u32::from(checksum(b)),
-            )?;
+            let address = REQUEST_CHECKS.check(frame, frame_sum)?;
             let message = Self::dispatch(frame)?;
             rt::Ok(Decoded { address, message })
         }
         /// The message of a frame that passed the checks every frame passes, by its code.
         #[inline]
         fn dispatch(frame: &[u8]) -> rt::DecodeResult<Self> {
-            match rt::code(frame, 0, 0) {
-                0u32 => {
-                    let (_, elements, _) = REPEAT_INSTRUCTION.split::<0>(frame)?;
-                    rt::Ok(
-                        Self::Instruction(request::Instruction {
-                            text: REPEAT_INSTRUCTION
-                                .elements::<u8, 200>(elements, true, false)?,
-                        }),
-                    )
-                }
-                _ => rt::Err(REQUEST_CODE.unknown(frame)),
+            {
+                let (_, elements, _) = REPEAT_INSTRUCTION.split::<0>(frame)?;
+                rt::Ok(
+                    Self::Instruction(request::Instruction {
+                        text: REPEAT_INSTRUCTION
+                            .elements::<u8, 200>(elements, true, false)?,
+                    }),
+                )
             }
         }
         /// The message called `name` in the spec, from each field's raw wire value by its spec
@@ -433,7 +437,7 @@ pub mod nextion {
                     out.len()
                 }
             };
-            rt::seal_end(buf, len, |b| u32::from(checksum(b)), &FRAME);
+            FRAME.seal(buf, len, frame_sum);
             rt::Ok(len)
         }
         /// Decodes one whole frame: refuses one longer than the longest, checks its start byte,
@@ -462,14 +466,7 @@ pub mod nextion {
             frame: &[u8],
             request: rt::Option<&Request>,
         ) -> rt::Result<Decoded<Response>, rt::DecodeError> {
-            let address = rt::check_frame(
-                frame,
-                4,
-                104,
-                0,
-                &FRAME,
-                |b| u32::from(checksum(b)),
-            )?;
+            let address = RESPONSE_CHECKS.check(frame, frame_sum)?;
             let message = Self::dispatch(frame)?;
             if let rt::Some(request) = request {
                 if request.replies() >> message.index() & 1 == 0 {
@@ -481,7 +478,7 @@ pub mod nextion {
         /// The message of a frame that passed the checks every frame passes, by its code.
         #[inline]
         fn dispatch(frame: &[u8]) -> rt::DecodeResult<Self> {
-            match rt::code(frame, 0, 1) {
+            match frame[0] {
                 0x00 => {
                     rt::fixed::<4>(frame, &response::InvalidInstruction::DESC)
                         .map(|_| Self::InvalidInstruction(response::InvalidInstruction))
@@ -633,28 +630,18 @@ pub mod nextion {
         /// checksum and address, then its code, constants, repeated fields, the ranges the
         /// spec gives its fields and the command's broadcast rule.
         pub fn decode(frame: &'a [u8]) -> rt::Result<Decoded<Self>, rt::DecodeError> {
-            let address = rt::check_frame(
-                frame,
-                4,
-                203,
-                0,
-                &FRAME,
-                |b| u32::from(checksum(b)),
-            )?;
+            let address = REQUEST_CHECKS.check(frame, frame_sum)?;
             let message = Self::dispatch(frame)?;
             rt::Ok(Decoded { address, message })
         }
         /// The message of a frame that passed the checks every frame passes, by its code.
         #[inline]
         fn dispatch(frame: &'a [u8]) -> rt::DecodeResult<Self> {
-            match rt::code(frame, 0, 0) {
-                0u32 => {
-                    let (_, elements, _) = REPEAT_INSTRUCTION.split::<0>(frame)?;
-                    rt::Ok(Self::Instruction {
-                        text: REPEAT_INSTRUCTION.view::<u8, 200>(elements, true, false)?,
-                    })
-                }
-                _ => rt::Err(REQUEST_CODE.unknown(frame)),
+            {
+                let (_, elements, _) = REPEAT_INSTRUCTION.split::<0>(frame)?;
+                rt::Ok(Self::Instruction {
+                    text: REPEAT_INSTRUCTION.view::<u8, 200>(elements, true, false)?,
+                })
             }
         }
         /// This message's row in the owned type's `MESSAGES`.
@@ -727,14 +714,7 @@ pub mod nextion {
             frame: &'a [u8],
             request: rt::Option<&Request>,
         ) -> rt::Result<Decoded<Self>, rt::DecodeError> {
-            let address = rt::check_frame(
-                frame,
-                4,
-                104,
-                0,
-                &FRAME,
-                |b| u32::from(checksum(b)),
-            )?;
+            let address = RESPONSE_CHECKS.check(frame, frame_sum)?;
             let message = Self::dispatch(frame)?;
             if let rt::Some(request) = request {
                 if request.replies() >> message.index() & 1 == 0 {
@@ -746,7 +726,7 @@ pub mod nextion {
         /// The message of a frame that passed the checks every frame passes, by its code.
         #[inline]
         fn dispatch(frame: &'a [u8]) -> rt::DecodeResult<Self> {
-            match rt::code(frame, 0, 1) {
+            match frame[0] {
                 0x00 => {
                     rt::fixed::<4>(frame, &response::InvalidInstruction::DESC)
                         .map(|_| Self::InvalidInstruction)
@@ -981,9 +961,7 @@ pub mod nextion {
         }
         fn checksum_ok(frame: &[u8]) -> bool {
             match frame.len().checked_sub(3) {
-                rt::Some(n) if n > 0 => {
-                    rt::check_sum(frame, n, &FRAME, |b| u32::from(checksum(b)))
-                }
+                rt::Some(n) if n > 0 => rt::check_sum(frame, n, &FRAME, frame_sum),
                 _ => false,
             }
         }

@@ -90,6 +90,27 @@ pub mod optional_sensor {
     pub fn checksum(bytes: &[u8]) -> u8 {
         rt::sum8(bytes)
     }
+    /// The checksum a frame carries, as the frame checks compare it: over the bytes before it from offset 1 on.
+    #[inline]
+    fn frame_sum(bytes: &[u8]) -> u32 {
+        u32::from(checksum(rt::covered(bytes, 1)))
+    }
+    /// The checks every request passes before its code is read: 5 bytes, then its start byte, its checksum, its address (offset 1).
+    const REQUEST_CHECKS: rt::FrameChecks = rt::FrameChecks {
+        sync: &[],
+        frame: &FRAME,
+        min: 5,
+        max: 5,
+        address_at: 1,
+    };
+    /// The checks every response passes before its code is read: 6 to 14 bytes, then its start byte, its checksum, its address (offset 1).
+    const RESPONSE_CHECKS: rt::FrameChecks = rt::FrameChecks {
+        sync: &[],
+        frame: &FRAME,
+        min: 6,
+        max: 14,
+        address_at: 1,
+    };
     /// decicelsius
     ///
     /// Physical value = raw × 0.1.
@@ -306,21 +327,14 @@ pub mod optional_sensor {
                 Self::Read(_) => rt::head(out, &[0xA5, address, 0x00, 0x01]).len(),
                 Self::LastEvent(_) => rt::head(out, &[0xA5, address, 0x00, 0x02]).len(),
             };
-            rt::seal(buf, len, |b| u32::from(checksum(rt::covered(b, 1))), 1, true);
+            FRAME.seal(buf, len, frame_sum);
             rt::Ok(len)
         }
         /// Decodes one whole frame: refuses one longer than the longest, checks its start byte,
         /// checksum and address, then its code, constants, repeated fields, the ranges the
         /// spec gives its fields and the command's broadcast rule.
         pub fn decode(frame: &[u8]) -> rt::Result<Decoded<Request>, rt::DecodeError> {
-            let address = rt::check_frame(
-                frame,
-                5,
-                5,
-                1,
-                &FRAME,
-                |b| u32::from(checksum(rt::covered(b, 1))),
-            )?;
+            let address = REQUEST_CHECKS.check(frame, frame_sum)?;
             LENGTH.check(frame)?;
             let message = Self::dispatch(frame)?;
             rt::Ok(Decoded { address, message })
@@ -328,7 +342,7 @@ pub mod optional_sensor {
         /// The message of a frame that passed the checks every frame passes, by its code.
         #[inline]
         fn dispatch(frame: &[u8]) -> rt::DecodeResult<Self> {
-            match rt::code(frame, 3, 1) {
+            match frame[3] {
                 0x01 => {
                     rt::fixed::<5>(frame, &request::Read::DESC)
                         .map(|_| Self::Read(request::Read))
@@ -594,7 +608,7 @@ pub mod optional_sensor {
                     out.len()
                 }
             };
-            rt::seal(buf, len, |b| u32::from(checksum(rt::covered(b, 1))), 1, true);
+            FRAME.seal(buf, len, frame_sum);
             rt::Ok(len)
         }
         /// Decodes one whole frame: refuses one longer than the longest, checks its start byte,
@@ -623,14 +637,7 @@ pub mod optional_sensor {
             frame: &[u8],
             request: rt::Option<&Request>,
         ) -> rt::Result<Decoded<Response>, rt::DecodeError> {
-            let address = rt::check_frame(
-                frame,
-                6,
-                14,
-                1,
-                &FRAME,
-                |b| u32::from(checksum(rt::covered(b, 1))),
-            )?;
+            let address = RESPONSE_CHECKS.check(frame, frame_sum)?;
             LENGTH.check(frame)?;
             let message = Self::dispatch(frame)?;
             if let rt::Some(request) = request {
@@ -643,7 +650,7 @@ pub mod optional_sensor {
         /// The message of a frame that passed the checks every frame passes, by its code.
         #[inline]
         fn dispatch(frame: &[u8]) -> rt::DecodeResult<Self> {
-            match rt::code(frame, 3, 1) {
+            match frame[3] {
                 0x81 => {
                     let s = OPTIONAL_READING.split::<14>(frame)?;
                     let frame = &s.frame;
@@ -894,14 +901,7 @@ pub mod optional_sensor {
         }
         fn checksum_ok(frame: &[u8]) -> bool {
             match frame.len().checked_sub(1) {
-                rt::Some(n) if n > 0 => {
-                    rt::check_sum(
-                        frame,
-                        n,
-                        &FRAME,
-                        |b| u32::from(checksum(rt::covered(b, 1))),
-                    )
-                }
+                rt::Some(n) if n > 0 => rt::check_sum(frame, n, &FRAME, frame_sum),
                 _ => false,
             }
         }

@@ -102,6 +102,27 @@ pub mod packed_channels {
     pub fn checksum(bytes: &[u8]) -> u8 {
         CRC.checksum(bytes)
     }
+    /// The checksum a frame carries, as the frame checks compare it: over the bytes before it from offset 2 on.
+    #[inline]
+    fn frame_sum(bytes: &[u8]) -> u32 {
+        u32::from(checksum(rt::covered(bytes, 2)))
+    }
+    /// The checks every request passes before its code is read: 7 to 40 bytes, then its start byte, its checksum.
+    const REQUEST_CHECKS: rt::FrameChecks = rt::FrameChecks {
+        sync: &[],
+        frame: &FRAME,
+        min: 7,
+        max: 40,
+        address_at: 0,
+    };
+    /// The checks every response passes before its code is read: 12 bytes, then its start byte, its checksum.
+    const RESPONSE_CHECKS: rt::FrameChecks = rt::FrameChecks {
+        sync: &[],
+        frame: &FRAME,
+        min: 12,
+        max: 12,
+        address_at: 0,
+    };
     /// Tenths of a degree.
     ///
     /// Physical value = raw × 0.1.
@@ -425,21 +446,14 @@ pub mod packed_channels {
                     out.len()
                 }
             };
-            rt::seal(buf, len, |b| u32::from(checksum(rt::covered(b, 2))), 1, true);
+            FRAME.seal(buf, len, frame_sum);
             rt::Ok(len)
         }
         /// Decodes one whole frame: refuses one longer than the longest, checks its start byte,
         /// checksum and address, then its code, constants, repeated fields, the ranges the
         /// spec gives its fields and the command's broadcast rule.
         pub fn decode(frame: &[u8]) -> rt::Result<Decoded<Request>, rt::DecodeError> {
-            let address = rt::check_frame(
-                frame,
-                7,
-                40,
-                0,
-                &FRAME,
-                |b| u32::from(checksum(rt::covered(b, 2))),
-            )?;
+            let address = REQUEST_CHECKS.check(frame, frame_sum)?;
             LENGTH.check(frame)?;
             let message = Self::dispatch(frame)?;
             rt::Ok(Decoded { address, message })
@@ -447,7 +461,7 @@ pub mod packed_channels {
         /// The message of a frame that passed the checks every frame passes, by its code.
         #[inline]
         fn dispatch(frame: &[u8]) -> rt::DecodeResult<Self> {
-            match rt::code(frame, 2, 1) {
+            match frame[2] {
                 0x16 => {
                     let frame = rt::fixed::<11>(frame, &request::Channels::DESC)?;
                     rt::equal(
@@ -803,7 +817,7 @@ pub mod packed_channels {
                     out.len()
                 }
             };
-            rt::seal(buf, len, |b| u32::from(checksum(rt::covered(b, 2))), 1, true);
+            FRAME.seal(buf, len, frame_sum);
             rt::Ok(len)
         }
         /// Decodes one whole frame: refuses one longer than the longest, checks its start byte,
@@ -832,14 +846,7 @@ pub mod packed_channels {
             frame: &[u8],
             request: rt::Option<&Request>,
         ) -> rt::Result<Decoded<Response>, rt::DecodeError> {
-            let address = rt::check_frame(
-                frame,
-                12,
-                12,
-                0,
-                &FRAME,
-                |b| u32::from(checksum(rt::covered(b, 2))),
-            )?;
+            let address = RESPONSE_CHECKS.check(frame, frame_sum)?;
             LENGTH.check(frame)?;
             let message = Self::dispatch(frame)?;
             if let rt::Some(request) = request {
@@ -852,7 +859,7 @@ pub mod packed_channels {
         /// The message of a frame that passed the checks every frame passes, by its code.
         #[inline]
         fn dispatch(frame: &[u8]) -> rt::DecodeResult<Self> {
-            match rt::code(frame, 2, 1) {
+            match frame[2] {
                 0x18 => {
                     let frame = rt::fixed::<12>(frame, &response::Readings::DESC)?;
                     rt::equal(
@@ -1027,14 +1034,7 @@ pub mod packed_channels {
         }
         fn checksum_ok(frame: &[u8]) -> bool {
             match frame.len().checked_sub(1) {
-                rt::Some(n) if n > 0 => {
-                    rt::check_sum(
-                        frame,
-                        n,
-                        &FRAME,
-                        |b| u32::from(checksum(rt::covered(b, 2))),
-                    )
-                }
+                rt::Some(n) if n > 0 => rt::check_sum(frame, n, &FRAME, frame_sum),
                 _ => false,
             }
         }

@@ -63,18 +63,32 @@ pub mod pelco_d2 {
         end: &[],
         end_first: false,
     };
-    /// Where a response's code sits: from `at`, at most `longest` bytes, before `trailer` bytes.
-    const RESPONSE_CODE: rt::CodeAt = rt::CodeAt {
-        at: 2,
-        longest: 0,
-        trailer: 1,
-        response: true,
-    };
     /// The frame checksum: 8-bit sum of every byte before it.
     #[inline]
     pub fn checksum(bytes: &[u8]) -> u8 {
         rt::sum8(bytes)
     }
+    /// The checksum a frame carries, as the frame checks compare it: over the bytes before it from offset 1 on.
+    #[inline]
+    fn frame_sum(bytes: &[u8]) -> u32 {
+        u32::from(checksum(rt::covered(bytes, 1)))
+    }
+    /// The checks every request passes before its code is read: 7 bytes, then its start byte, its checksum, its address (offset 1).
+    const REQUEST_CHECKS: rt::FrameChecks = rt::FrameChecks {
+        sync: &[],
+        frame: &FRAME,
+        min: 7,
+        max: 7,
+        address_at: 1,
+    };
+    /// The checks every response passes before its code is read: 4 bytes, then its start byte, its checksum, its address (offset 1).
+    const RESPONSE_CHECKS: rt::FrameChecks = rt::FrameChecks {
+        sync: &[],
+        frame: &FRAME,
+        min: 4,
+        max: 4,
+        address_at: 1,
+    };
     /// Alarm inputs reported by the receiver's general response. (§5)
     #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, Default)]
     #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
@@ -222,21 +236,14 @@ pub mod pelco_d2 {
                     out.len()
                 }
             };
-            rt::seal(buf, len, |b| u32::from(checksum(rt::covered(b, 1))), 1, true);
+            FRAME.seal(buf, len, frame_sum);
             rt::Ok(len)
         }
         /// Decodes one whole frame: refuses one longer than the longest, checks its start byte,
         /// checksum and address, then its code, constants, repeated fields, the ranges the
         /// spec gives its fields and the command's broadcast rule.
         pub fn decode(frame: &[u8]) -> rt::Result<Decoded<Request>, rt::DecodeError> {
-            let address = rt::check_frame(
-                frame,
-                7,
-                7,
-                1,
-                &FRAME,
-                |b| u32::from(checksum(rt::covered(b, 1))),
-            )?;
+            let address = REQUEST_CHECKS.check(frame, frame_sum)?;
             let message = Self::dispatch(frame)?;
             rt::Ok(Decoded { address, message })
         }
@@ -244,7 +251,7 @@ pub mod pelco_d2 {
         #[inline]
         fn dispatch(frame: &[u8]) -> rt::DecodeResult<Self> {
             if frame.len() >= 5 {
-                match rt::code(frame, 2, 2) {
+                match u16::from_be_bytes([frame[2], frame[3]]) {
                     0x0003 => {
                         return {
                             let mut g = rt::Group::new(frame, 0x0003, rt::None);
@@ -502,7 +509,7 @@ pub mod pelco_d2 {
                     out.len()
                 }
             };
-            rt::seal(buf, len, |b| u32::from(checksum(rt::covered(b, 1))), 1, true);
+            FRAME.seal(buf, len, frame_sum);
             rt::Ok(len)
         }
         /// Decodes one whole frame: refuses one longer than the longest, checks its start byte,
@@ -531,14 +538,7 @@ pub mod pelco_d2 {
             frame: &[u8],
             request: rt::Option<&Request>,
         ) -> rt::Result<Decoded<Response>, rt::DecodeError> {
-            let address = rt::check_frame(
-                frame,
-                4,
-                4,
-                1,
-                &FRAME,
-                |b| u32::from(checksum(rt::covered(b, 1))),
-            )?;
+            let address = RESPONSE_CHECKS.check(frame, frame_sum)?;
             let message = Self::dispatch(frame)?;
             if let rt::Some(request) = request {
                 if request.replies() >> message.index() & 1 == 0 {
@@ -550,16 +550,13 @@ pub mod pelco_d2 {
         /// The message of a frame that passed the checks every frame passes, by its code.
         #[inline]
         fn dispatch(frame: &[u8]) -> rt::DecodeResult<Self> {
-            match rt::code(frame, 2, 0) {
-                0u32 => {
-                    let frame = rt::fixed::<4>(frame, &response::GeneralResponse::DESC)?;
-                    rt::Ok(
-                        Self::GeneralResponse(response::GeneralResponse {
-                            alarms: Alarms::from_raw(frame[2]),
-                        }),
-                    )
-                }
-                _ => rt::Err(RESPONSE_CODE.unknown(frame)),
+            {
+                let frame = rt::fixed::<4>(frame, &response::GeneralResponse::DESC)?;
+                rt::Ok(
+                    Self::GeneralResponse(response::GeneralResponse {
+                        alarms: Alarms::from_raw(frame[2]),
+                    }),
+                )
             }
         }
         /// The message called `name` in the spec, from each field's raw wire value by its spec
@@ -716,14 +713,7 @@ pub mod pelco_d2 {
         }
         fn checksum_ok(frame: &[u8]) -> bool {
             match frame.len().checked_sub(1) {
-                rt::Some(n) if n > 0 => {
-                    rt::check_sum(
-                        frame,
-                        n,
-                        &FRAME,
-                        |b| u32::from(checksum(rt::covered(b, 1))),
-                    )
-                }
+                rt::Some(n) if n > 0 => rt::check_sum(frame, n, &FRAME, frame_sum),
                 _ => false,
             }
         }

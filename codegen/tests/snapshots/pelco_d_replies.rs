@@ -68,6 +68,27 @@ pub mod pelco_d_replies {
     pub fn checksum(bytes: &[u8]) -> u8 {
         rt::sum8(bytes)
     }
+    /// The checksum a frame carries, as the frame checks compare it: over the bytes before it from offset 1 on.
+    #[inline]
+    fn frame_sum(bytes: &[u8]) -> u32 {
+        u32::from(checksum(rt::covered(bytes, 1)))
+    }
+    /// The checks every request passes before its code is read: 7 bytes, then its start byte, its checksum, its address (offset 1).
+    const REQUEST_CHECKS: rt::FrameChecks = rt::FrameChecks {
+        sync: &[],
+        frame: &FRAME,
+        min: 7,
+        max: 7,
+        address_at: 1,
+    };
+    /// The checks every response passes before its code is read: 4 to 7 bytes, then its start byte, its checksum, its address (offset 1).
+    const RESPONSE_CHECKS: rt::FrameChecks = rt::FrameChecks {
+        sync: &[],
+        frame: &FRAME,
+        min: 4,
+        max: 7,
+        address_at: 1,
+    };
     /// The checksum of a reply that takes in its request's bytes
     /// (`checksum_over_request`): over `request`, the bytes the request's checksum
     /// covers, then over the reply's own `bytes`.
@@ -89,7 +110,7 @@ pub mod pelco_d_replies {
         rt::None
     }
     /// The checksum of a response frame, as the frame checks take it
-    /// (`rt::check_frame_with`): over the request's bytes `covered` first where the frame
+    /// (`RESPONSE_CHECKS.check_with`): over the request's bytes `covered` first where the frame
     /// is a reply that takes them in, refused without them.
     #[inline]
     fn response_sum(
@@ -98,10 +119,7 @@ pub mod pelco_d_replies {
         covered: rt::Option<&[u8]>,
     ) -> rt::Result<u32, rt::DecodeError> {
         match over_request(frame) {
-            rt::None => {
-                let own = |b| u32::from(checksum(rt::covered(b, 1)));
-                rt::Ok(own(b))
-            }
+            rt::None => rt::Ok(frame_sum(b)),
             rt::Some((from, message)) => {
                 match covered {
                     rt::Some(q) => {
@@ -311,21 +329,14 @@ pub mod pelco_d_replies {
                     out.len()
                 }
             };
-            rt::seal(buf, len, |b| u32::from(checksum(rt::covered(b, 1))), 1, true);
+            FRAME.seal(buf, len, frame_sum);
             rt::Ok(len)
         }
         /// Decodes one whole frame: refuses one longer than the longest, checks its start byte,
         /// checksum and address, then its code, constants, repeated fields, the ranges the
         /// spec gives its fields and the command's broadcast rule.
         pub fn decode(frame: &[u8]) -> rt::Result<Decoded<Request>, rt::DecodeError> {
-            let address = rt::check_frame(
-                frame,
-                7,
-                7,
-                1,
-                &FRAME,
-                |b| u32::from(checksum(rt::covered(b, 1))),
-            )?;
+            let address = REQUEST_CHECKS.check(frame, frame_sum)?;
             let message = Self::dispatch(frame)?;
             rt::Ok(Decoded { address, message })
         }
@@ -333,7 +344,7 @@ pub mod pelco_d_replies {
         #[inline]
         fn dispatch(frame: &[u8]) -> rt::DecodeResult<Self> {
             if frame.len() >= 5 {
-                match rt::code(frame, 2, 2) {
+                match u16::from_be_bytes([frame[2], frame[3]]) {
                     0x0009 => {
                         return {
                             let mut g = rt::Group::new(frame, 0x0009, rt::None);
@@ -663,7 +674,7 @@ pub mod pelco_d_replies {
                     out.len()
                 }
             };
-            rt::seal(buf, len, |b| u32::from(checksum(rt::covered(b, 1))), 1, true);
+            FRAME.seal(buf, len, frame_sum);
             rt::Ok(len)
         }
         /// Decodes one whole frame: refuses one longer than the longest, checks its start byte,
@@ -715,14 +726,8 @@ pub mod pelco_d_replies {
             request: rt::Option<&Request>,
             covered: rt::Option<&[u8]>,
         ) -> rt::Result<Decoded<Response>, rt::DecodeError> {
-            let address = rt::check_frame_with(
-                frame,
-                4,
-                7,
-                1,
-                &FRAME,
-                |b| response_sum(frame, b, covered),
-            )?;
+            let address = RESPONSE_CHECKS
+                .check_with(frame, |b| response_sum(frame, b, covered))?;
             let message = Self::dispatch(frame, request)?;
             if let rt::Some(request) = request {
                 if request.replies() >> message.index() & 1 == 0 {
@@ -738,7 +743,7 @@ pub mod pelco_d_replies {
             request: rt::Option<&Request>,
         ) -> rt::DecodeResult<Self> {
             if frame.len() >= 5 {
-                match rt::code(frame, 2, 2) {
+                match u16::from_be_bytes([frame[2], frame[3]]) {
                     0x0059 => {
                         return {
                             let mut g = rt::Group::new(
@@ -956,14 +961,7 @@ pub mod pelco_d_replies {
         }
         fn checksum_ok(frame: &[u8]) -> bool {
             match frame.len().checked_sub(1) {
-                rt::Some(n) if n > 0 => {
-                    rt::check_sum(
-                        frame,
-                        n,
-                        &FRAME,
-                        |b| u32::from(checksum(rt::covered(b, 1))),
-                    )
-                }
+                rt::Some(n) if n > 0 => rt::check_sum(frame, n, &FRAME, frame_sum),
                 _ => false,
             }
         }

@@ -78,13 +78,6 @@ pub mod roboclaw {
         trailer: 2,
         response: false,
     };
-    /// Where a response's code sits: from `at`, at most `longest` bytes, before `trailer` bytes.
-    const RESPONSE_CODE: rt::CodeAt = rt::CodeAt {
-        at: 0,
-        longest: 0,
-        trailer: 2,
-        response: true,
-    };
     /// CRC-16/XMODEM: the frame checksum, over every byte before it.
     pub const CRC_ALGORITHM: rt::crc::Algorithm<u16> = rt::crc::Algorithm {
         width: 16usize as u8,
@@ -102,6 +95,27 @@ pub mod roboclaw {
     pub fn checksum(bytes: &[u8]) -> u16 {
         CRC.checksum(bytes)
     }
+    /// The checksum a frame carries, as the frame checks compare it: over every byte before it.
+    #[inline]
+    fn frame_sum(bytes: &[u8]) -> u32 {
+        u32::from(checksum(bytes))
+    }
+    /// The checks every request passes before its code is read: 4 to 8 bytes, then its checksum, its address (offset 0).
+    const REQUEST_CHECKS: rt::FrameChecks = rt::FrameChecks {
+        sync: &[],
+        frame: &FRAME,
+        min: 4,
+        max: 8,
+        address_at: 0,
+    };
+    /// The checks every response passes before its code is read: 3 to 50 bytes, then its checksum.
+    const RESPONSE_CHECKS: rt::FrameChecks = rt::FrameChecks {
+        sync: &[],
+        frame: &FRAME_UNADDRESSED,
+        min: 3,
+        max: 50,
+        address_at: 0,
+    };
     /// The checksum of a reply that takes in its request's bytes
     /// (`checksum_over_request`): over `request`, the bytes the request's checksum
     /// covers, then over the reply's own `bytes`.
@@ -144,7 +158,7 @@ pub mod roboclaw {
         rt::None
     }
     /// The checksum of a response frame, as the frame checks take it
-    /// (`rt::check_frame_with`): over the request's bytes `covered` first where the frame
+    /// (`RESPONSE_CHECKS.check_with`): over the request's bytes `covered` first where the frame
     /// is a reply that takes them in, refused without them.
     #[inline]
     fn response_sum(
@@ -153,10 +167,7 @@ pub mod roboclaw {
         covered: rt::Option<&[u8]>,
     ) -> rt::Result<u32, rt::DecodeError> {
         match over_request(frame) {
-            rt::None => {
-                let own = |b| u32::from(checksum(b));
-                rt::Ok(own(b))
-            }
+            rt::None => rt::Ok(frame_sum(b)),
             rt::Some((from, message)) => {
                 match covered {
                     rt::Some(q) => {
@@ -189,14 +200,6 @@ pub mod roboclaw {
     fn unchecked_response(frame: &[u8]) -> bool {
         frame.len() == 1
     }
-    const UNCHECKED_FRAME: rt::Frame = rt::Frame {
-        checksum_len: 0,
-        ..FRAME
-    };
-    const UNCHECKED_FRAME_UNADDRESSED: rt::Frame = rt::Frame {
-        checksum_len: 0,
-        ..FRAME_UNADDRESSED
-    };
     /// decivolts
     ///
     /// Physical value = raw × 0.1.
@@ -637,7 +640,7 @@ pub mod roboclaw {
                     return rt::Ok(rt::frame_mut::<2>(buf, &[address, 0x5A])?.len());
                 }
             };
-            rt::seal(buf, len, |b| u32::from(checksum(b)), 2, true);
+            FRAME.seal(buf, len, frame_sum);
             rt::Ok(len)
         }
         /// Decodes one whole frame: refuses one longer than the longest, checks its start byte,
@@ -645,9 +648,9 @@ pub mod roboclaw {
         /// spec gives its fields and the command's broadcast rule.
         pub fn decode(frame: &[u8]) -> rt::Result<Decoded<Request>, rt::DecodeError> {
             let address = if unchecked_request(frame) {
-                rt::check_frame(frame, frame.len(), 8, 0, &UNCHECKED_FRAME, |_| 0)?
+                REQUEST_CHECKS.check_unsummed(frame)?
             } else {
-                rt::check_frame(frame, 4, 8, 0, &FRAME, |b| u32::from(checksum(b)))?
+                REQUEST_CHECKS.check(frame, frame_sum)?
             };
             let message = Self::dispatch(frame)?;
             rt::Ok(Decoded { address, message })
@@ -655,7 +658,7 @@ pub mod roboclaw {
         /// The message of a frame that passed the checks every frame passes, by its code.
         #[inline]
         fn dispatch(frame: &[u8]) -> rt::DecodeResult<Self> {
-            match rt::code(frame, 1, 1) {
+            match frame[1] {
                 0x00 => {
                     let frame = rt::fixed::<5>(frame, &request::DriveForwardM1::DESC)?;
                     rt::in_range(
@@ -1093,7 +1096,7 @@ pub mod roboclaw {
                     out.len()
                 }
             };
-            rt::seal(buf, len, |b| u32::from(checksum(b)), 2, true);
+            FRAME.seal(buf, len, frame_sum);
             rt::Ok(len)
         }
         /// Decodes one whole frame: refuses one longer than the longest, checks its start byte,
@@ -1146,23 +1149,9 @@ pub mod roboclaw {
             covered: rt::Option<&[u8]>,
         ) -> rt::Result<Decoded<Response>, rt::DecodeError> {
             let address = if unchecked_response(frame) {
-                rt::check_frame(
-                    frame,
-                    frame.len(),
-                    50,
-                    0,
-                    &UNCHECKED_FRAME_UNADDRESSED,
-                    |_| 0,
-                )?
+                RESPONSE_CHECKS.check_unsummed(frame)?
             } else {
-                rt::check_frame_with(
-                    frame,
-                    3,
-                    50,
-                    0,
-                    &FRAME_UNADDRESSED,
-                    |b| response_sum(frame, b, covered),
-                )?
+                RESPONSE_CHECKS.check_with(frame, |b| response_sum(frame, b, covered))?
             };
             let message = Self::dispatch(frame, request)?;
             if let rt::Some(request) = request {
@@ -1179,136 +1168,133 @@ pub mod roboclaw {
             request: rt::Option<&Request>,
         ) -> rt::DecodeResult<Self> {
             let asked: u64 = request.map_or(!0, Request::replies);
-            match rt::code(frame, 0, 0) {
-                0u32 => {
-                    let mut g = rt::Group::new(frame, 0u32, request.map(Request::name));
-                    g.attempt(|frame: &[u8; 1]| {
-                        rt::equal(&response::Ack::ACK_DESC, 0, frame[0], 0xFF)?;
-                        rt::Ok(Self::Ack(response::Ack))
-                    });
-                    g.ambiguous(
-                        asked >> 1 & 1 != 0,
-                        &response::EncoderM1::DESC,
-                        |frame: &[u8; 7]| {
-                            rt::Ok(
-                                Self::EncoderM1(response::EncoderM1 {
-                                    count: i32::from_be_bytes([
-                                        frame[0],
-                                        frame[1],
-                                        frame[2],
-                                        frame[3],
-                                    ]),
-                                    status: EncoderStatus::from_raw(frame[4]),
-                                }),
-                            )
-                        },
-                    );
-                    g.ambiguous(
-                        asked >> 2 & 1 != 0,
-                        &response::EncoderSpeedM1::DESC,
-                        |frame: &[u8; 7]| {
-                            rt::Ok(
-                                Self::EncoderSpeedM1(response::EncoderSpeedM1 {
-                                    speed: i32::from_be_bytes([
-                                        frame[0],
-                                        frame[1],
-                                        frame[2],
-                                        frame[3],
-                                    ]),
-                                    direction: Direction::from_raw(frame[4]),
-                                }),
-                            )
-                        },
-                    );
-                    g.ambiguous_lists::<
-                            2,
-                            1,
-                        >(
-                        asked >> 3 & 1 != 0,
-                        &response::FirmwareVersion::DESC,
-                        &LISTS_FIRMWARE_VERSION,
-                        |s: &rt::Split<'_, 2, 1>| {
-                            let frame = &s.frame;
-                            rt::Ok(
-                                Self::FirmwareVersion(response::FirmwareVersion {
-                                    version: s
-                                        .lists[0]
-                                        .elements::<u8, 47>(s.elements(0), false, false)?,
-                                }),
-                            )
-                        },
-                    );
-                    g.ambiguous(
-                        asked >> 4 & 1 != 0,
-                        &response::MainBattery::DESC,
-                        |frame: &[u8; 4]| {
-                            rt::Ok(
-                                Self::MainBattery(response::MainBattery {
-                                    voltage: Decivolts::from_raw(
-                                        u16::from_be_bytes([frame[0], frame[1]]),
-                                    ),
-                                }),
-                            )
-                        },
-                    );
-                    g.ambiguous(
-                        asked >> 5 & 1 != 0,
-                        &response::LogicBattery::DESC,
-                        |frame: &[u8; 4]| {
-                            rt::Ok(
-                                Self::LogicBattery(response::LogicBattery {
-                                    voltage: Decivolts::from_raw(
-                                        u16::from_be_bytes([frame[0], frame[1]]),
-                                    ),
-                                }),
-                            )
-                        },
-                    );
-                    g.ambiguous(
-                        asked >> 6 & 1 != 0,
-                        &response::Currents::DESC,
-                        |frame: &[u8; 6]| {
-                            rt::Ok(
-                                Self::Currents(response::Currents {
-                                    m1: Centiamps::from_raw(
-                                        i16::from_be_bytes([frame[0], frame[1]]),
-                                    ),
-                                    m2: Centiamps::from_raw(
-                                        i16::from_be_bytes([frame[2], frame[3]]),
-                                    ),
-                                }),
-                            )
-                        },
-                    );
-                    g.ambiguous(
-                        asked >> 7 & 1 != 0,
-                        &response::Temperature::DESC,
-                        |frame: &[u8; 4]| {
-                            rt::Ok(
-                                Self::Temperature(response::Temperature {
-                                    temperature: Decidegrees::from_raw(
-                                        u16::from_be_bytes([frame[0], frame[1]]),
-                                    ),
-                                }),
-                            )
-                        },
-                    );
-                    g.ambiguous(
-                        asked >> 8 & 1 != 0,
-                        &response::Status::DESC,
-                        |frame: &[u8; 6]| {
-                            rt::Ok(
-                                Self::Status(response::Status {
-                                    status: Status::from_raw(
-                                        u32::from_be_bytes([frame[0], frame[1], frame[2], frame[3]]),
-                                    ),
-                                }),
-                            )
-                        },
-                    );
-                    g.end(&response::Ack::DESC)
-                }
-                _ => rt::Err(RESPONSE_CODE.unknown(frame)),
+            {
+                let mut g = rt::Group::new(frame, 0u32, request.map(Request::name));
+                g.attempt(|frame: &[u8; 1]| {
+                    rt::equal(&response::Ack::ACK_DESC, 0, frame[0], 0xFF)?;
+                    rt::Ok(Self::Ack(response::Ack))
+                });
+                g.ambiguous(
+                    asked >> 1 & 1 != 0,
+                    &response::EncoderM1::DESC,
+                    |frame: &[u8; 7]| {
+                        rt::Ok(
+                            Self::EncoderM1(response::EncoderM1 {
+                                count: i32::from_be_bytes([
+                                    frame[0],
+                                    frame[1],
+                                    frame[2],
+                                    frame[3],
+                                ]),
+                                status: EncoderStatus::from_raw(frame[4]),
+                            }),
+                        )
+                    },
+                );
+                g.ambiguous(
+                    asked >> 2 & 1 != 0,
+                    &response::EncoderSpeedM1::DESC,
+                    |frame: &[u8; 7]| {
+                        rt::Ok(
+                            Self::EncoderSpeedM1(response::EncoderSpeedM1 {
+                                speed: i32::from_be_bytes([
+                                    frame[0],
+                                    frame[1],
+                                    frame[2],
+                                    frame[3],
+                                ]),
+                                direction: Direction::from_raw(frame[4]),
+                            }),
+                        )
+                    },
+                );
+                g.ambiguous_lists::<
+                        2,
+                        1,
+                    >(
+                    asked >> 3 & 1 != 0,
+                    &response::FirmwareVersion::DESC,
+                    &LISTS_FIRMWARE_VERSION,
+                    |s: &rt::Split<'_, 2, 1>| {
+                        let frame = &s.frame;
+                        rt::Ok(
+                            Self::FirmwareVersion(response::FirmwareVersion {
+                                version: s
+                                    .lists[0]
+                                    .elements::<u8, 47>(s.elements(0), false, false)?,
+                            }),
+                        )
+                    },
+                );
+                g.ambiguous(
+                    asked >> 4 & 1 != 0,
+                    &response::MainBattery::DESC,
+                    |frame: &[u8; 4]| {
+                        rt::Ok(
+                            Self::MainBattery(response::MainBattery {
+                                voltage: Decivolts::from_raw(
+                                    u16::from_be_bytes([frame[0], frame[1]]),
+                                ),
+                            }),
+                        )
+                    },
+                );
+                g.ambiguous(
+                    asked >> 5 & 1 != 0,
+                    &response::LogicBattery::DESC,
+                    |frame: &[u8; 4]| {
+                        rt::Ok(
+                            Self::LogicBattery(response::LogicBattery {
+                                voltage: Decivolts::from_raw(
+                                    u16::from_be_bytes([frame[0], frame[1]]),
+                                ),
+                            }),
+                        )
+                    },
+                );
+                g.ambiguous(
+                    asked >> 6 & 1 != 0,
+                    &response::Currents::DESC,
+                    |frame: &[u8; 6]| {
+                        rt::Ok(
+                            Self::Currents(response::Currents {
+                                m1: Centiamps::from_raw(
+                                    i16::from_be_bytes([frame[0], frame[1]]),
+                                ),
+                                m2: Centiamps::from_raw(
+                                    i16::from_be_bytes([frame[2], frame[3]]),
+                                ),
+                            }),
+                        )
+                    },
+                );
+                g.ambiguous(
+                    asked >> 7 & 1 != 0,
+                    &response::Temperature::DESC,
+                    |frame: &[u8; 4]| {
+                        rt::Ok(
+                            Self::Temperature(response::Temperature {
+                                temperature: Decidegrees::from_raw(
+                                    u16::from_be_bytes([frame[0], frame[1]]),
+                                ),
+                            }),
+                        )
+                    },
+                );
+                g.ambiguous(
+                    asked >> 8 & 1 != 0,
+                    &response::Status::DESC,
+                    |frame: &[u8; 6]| {
+                        rt::Ok(
+                            Self::Status(response::Status {
+                                status: Status::from_raw(
+                                    u32::from_be_bytes([frame[0], frame[1], frame[2], frame[3]]),
+                                ),
+                            }),
+                        )
+                    },
+                );
+                g.end(&response::Ack::DESC)
             }
         }
         /// The message called `name` in the spec, from each field's raw wire value by its spec
@@ -1478,23 +1464,9 @@ pub mod roboclaw {
             covered: rt::Option<&[u8]>,
         ) -> rt::Result<Decoded<Self>, rt::DecodeError> {
             let address = if unchecked_response(frame) {
-                rt::check_frame(
-                    frame,
-                    frame.len(),
-                    50,
-                    0,
-                    &UNCHECKED_FRAME_UNADDRESSED,
-                    |_| 0,
-                )?
+                RESPONSE_CHECKS.check_unsummed(frame)?
             } else {
-                rt::check_frame_with(
-                    frame,
-                    3,
-                    50,
-                    0,
-                    &FRAME_UNADDRESSED,
-                    |b| response_sum(frame, b, covered),
-                )?
+                RESPONSE_CHECKS.check_with(frame, |b| response_sum(frame, b, covered))?
             };
             let message = Self::dispatch(frame, request)?;
             if let rt::Some(request) = request {
@@ -1511,120 +1483,117 @@ pub mod roboclaw {
             request: rt::Option<&Request>,
         ) -> rt::DecodeResult<Self> {
             let asked: u64 = request.map_or(!0, Request::replies);
-            match rt::code(frame, 0, 0) {
-                0u32 => {
-                    let mut g = rt::Group::new(frame, 0u32, request.map(Request::name));
-                    g.attempt(|frame: &[u8; 1]| {
-                        rt::equal(&response::Ack::ACK_DESC, 0, frame[0], 0xFF)?;
-                        rt::Ok(Self::Ack)
-                    });
-                    g.ambiguous(
-                        asked >> 1 & 1 != 0,
-                        &response::EncoderM1::DESC,
-                        |frame: &[u8; 7]| {
-                            rt::Ok(Self::EncoderM1 {
-                                count: i32::from_be_bytes([
-                                    frame[0],
-                                    frame[1],
-                                    frame[2],
-                                    frame[3],
-                                ]),
-                                status: EncoderStatus::from_raw(frame[4]),
-                            })
-                        },
-                    );
-                    g.ambiguous(
-                        asked >> 2 & 1 != 0,
-                        &response::EncoderSpeedM1::DESC,
-                        |frame: &[u8; 7]| {
-                            rt::Ok(Self::EncoderSpeedM1 {
-                                speed: i32::from_be_bytes([
-                                    frame[0],
-                                    frame[1],
-                                    frame[2],
-                                    frame[3],
-                                ]),
-                                direction: Direction::from_raw(frame[4]),
-                            })
-                        },
-                    );
-                    g.ambiguous_lists::<
-                            2,
-                            1,
-                        >(
-                        asked >> 3 & 1 != 0,
-                        &response::FirmwareVersion::DESC,
-                        &LISTS_FIRMWARE_VERSION,
-                        |s: &rt::Split<'a, 2, 1>| {
-                            let frame = &s.frame;
-                            rt::Ok(Self::FirmwareVersion {
-                                version: s
-                                    .lists[0]
-                                    .view::<u8, 47>(s.elements(0), false, false)?,
-                            })
-                        },
-                    );
-                    g.ambiguous(
-                        asked >> 4 & 1 != 0,
-                        &response::MainBattery::DESC,
-                        |frame: &[u8; 4]| {
-                            rt::Ok(Self::MainBattery {
-                                voltage: Decivolts::from_raw(
-                                    u16::from_be_bytes([frame[0], frame[1]]),
-                                ),
-                            })
-                        },
-                    );
-                    g.ambiguous(
-                        asked >> 5 & 1 != 0,
-                        &response::LogicBattery::DESC,
-                        |frame: &[u8; 4]| {
-                            rt::Ok(Self::LogicBattery {
-                                voltage: Decivolts::from_raw(
-                                    u16::from_be_bytes([frame[0], frame[1]]),
-                                ),
-                            })
-                        },
-                    );
-                    g.ambiguous(
-                        asked >> 6 & 1 != 0,
-                        &response::Currents::DESC,
-                        |frame: &[u8; 6]| {
-                            rt::Ok(Self::Currents {
-                                m1: Centiamps::from_raw(
-                                    i16::from_be_bytes([frame[0], frame[1]]),
-                                ),
-                                m2: Centiamps::from_raw(
-                                    i16::from_be_bytes([frame[2], frame[3]]),
-                                ),
-                            })
-                        },
-                    );
-                    g.ambiguous(
-                        asked >> 7 & 1 != 0,
-                        &response::Temperature::DESC,
-                        |frame: &[u8; 4]| {
-                            rt::Ok(Self::Temperature {
-                                temperature: Decidegrees::from_raw(
-                                    u16::from_be_bytes([frame[0], frame[1]]),
-                                ),
-                            })
-                        },
-                    );
-                    g.ambiguous(
-                        asked >> 8 & 1 != 0,
-                        &response::Status::DESC,
-                        |frame: &[u8; 6]| {
-                            rt::Ok(Self::Status {
-                                status: Status::from_raw(
-                                    u32::from_be_bytes([frame[0], frame[1], frame[2], frame[3]]),
-                                ),
-                            })
-                        },
-                    );
-                    g.end(&response::Ack::DESC)
-                }
-                _ => rt::Err(RESPONSE_CODE.unknown(frame)),
+            {
+                let mut g = rt::Group::new(frame, 0u32, request.map(Request::name));
+                g.attempt(|frame: &[u8; 1]| {
+                    rt::equal(&response::Ack::ACK_DESC, 0, frame[0], 0xFF)?;
+                    rt::Ok(Self::Ack)
+                });
+                g.ambiguous(
+                    asked >> 1 & 1 != 0,
+                    &response::EncoderM1::DESC,
+                    |frame: &[u8; 7]| {
+                        rt::Ok(Self::EncoderM1 {
+                            count: i32::from_be_bytes([
+                                frame[0],
+                                frame[1],
+                                frame[2],
+                                frame[3],
+                            ]),
+                            status: EncoderStatus::from_raw(frame[4]),
+                        })
+                    },
+                );
+                g.ambiguous(
+                    asked >> 2 & 1 != 0,
+                    &response::EncoderSpeedM1::DESC,
+                    |frame: &[u8; 7]| {
+                        rt::Ok(Self::EncoderSpeedM1 {
+                            speed: i32::from_be_bytes([
+                                frame[0],
+                                frame[1],
+                                frame[2],
+                                frame[3],
+                            ]),
+                            direction: Direction::from_raw(frame[4]),
+                        })
+                    },
+                );
+                g.ambiguous_lists::<
+                        2,
+                        1,
+                    >(
+                    asked >> 3 & 1 != 0,
+                    &response::FirmwareVersion::DESC,
+                    &LISTS_FIRMWARE_VERSION,
+                    |s: &rt::Split<'a, 2, 1>| {
+                        let frame = &s.frame;
+                        rt::Ok(Self::FirmwareVersion {
+                            version: s
+                                .lists[0]
+                                .view::<u8, 47>(s.elements(0), false, false)?,
+                        })
+                    },
+                );
+                g.ambiguous(
+                    asked >> 4 & 1 != 0,
+                    &response::MainBattery::DESC,
+                    |frame: &[u8; 4]| {
+                        rt::Ok(Self::MainBattery {
+                            voltage: Decivolts::from_raw(
+                                u16::from_be_bytes([frame[0], frame[1]]),
+                            ),
+                        })
+                    },
+                );
+                g.ambiguous(
+                    asked >> 5 & 1 != 0,
+                    &response::LogicBattery::DESC,
+                    |frame: &[u8; 4]| {
+                        rt::Ok(Self::LogicBattery {
+                            voltage: Decivolts::from_raw(
+                                u16::from_be_bytes([frame[0], frame[1]]),
+                            ),
+                        })
+                    },
+                );
+                g.ambiguous(
+                    asked >> 6 & 1 != 0,
+                    &response::Currents::DESC,
+                    |frame: &[u8; 6]| {
+                        rt::Ok(Self::Currents {
+                            m1: Centiamps::from_raw(
+                                i16::from_be_bytes([frame[0], frame[1]]),
+                            ),
+                            m2: Centiamps::from_raw(
+                                i16::from_be_bytes([frame[2], frame[3]]),
+                            ),
+                        })
+                    },
+                );
+                g.ambiguous(
+                    asked >> 7 & 1 != 0,
+                    &response::Temperature::DESC,
+                    |frame: &[u8; 4]| {
+                        rt::Ok(Self::Temperature {
+                            temperature: Decidegrees::from_raw(
+                                u16::from_be_bytes([frame[0], frame[1]]),
+                            ),
+                        })
+                    },
+                );
+                g.ambiguous(
+                    asked >> 8 & 1 != 0,
+                    &response::Status::DESC,
+                    |frame: &[u8; 6]| {
+                        rt::Ok(Self::Status {
+                            status: Status::from_raw(
+                                u32::from_be_bytes([frame[0], frame[1], frame[2], frame[3]]),
+                            ),
+                        })
+                    },
+                );
+                g.end(&response::Ack::DESC)
             }
         }
         /// This message's row in the owned type's `MESSAGES`.
@@ -1839,9 +1808,7 @@ pub mod roboclaw {
                 return true;
             }
             match frame.len().checked_sub(2) {
-                rt::Some(n) if n > 0 => {
-                    rt::check_sum(frame, n, &FRAME, |b| u32::from(checksum(b)))
-                }
+                rt::Some(n) if n > 0 => rt::check_sum(frame, n, &FRAME, frame_sum),
                 _ => false,
             }
         }

@@ -71,13 +71,6 @@ pub mod rtcm3_frame {
         grows: true,
         k: -6,
     };
-    /// Where a request's code sits: from `at`, at most `longest` bytes, before `trailer` bytes.
-    const REQUEST_CODE: rt::CodeAt = rt::CodeAt {
-        at: 3,
-        longest: 0,
-        trailer: 3,
-        response: false,
-    };
     /// Where a response's code sits: from `at`, at most `longest` bytes, before `trailer` bytes.
     const RESPONSE_CODE: rt::CodeAt = rt::CodeAt {
         at: 3,
@@ -102,6 +95,27 @@ pub mod rtcm3_frame {
     pub fn checksum(bytes: &[u8]) -> u32 {
         CRC.checksum(bytes)
     }
+    /// The checksum a frame carries, as the frame checks compare it: over every byte before it.
+    #[inline]
+    fn frame_sum(bytes: &[u8]) -> u32 {
+        u32::from(checksum(bytes))
+    }
+    /// The checks every request passes before its code is read: 10 to 42 bytes, then its start byte, its checksum.
+    const REQUEST_CHECKS: rt::FrameChecks = rt::FrameChecks {
+        sync: &[],
+        frame: &FRAME,
+        min: 10,
+        max: 42,
+        address_at: 0,
+    };
+    /// The checks every response passes before its code is read: 0 bytes, then its start byte, its checksum.
+    const RESPONSE_CHECKS: rt::FrameChecks = rt::FrameChecks {
+        sync: &[],
+        frame: &FRAME,
+        min: 0,
+        max: 0,
+        address_at: 0,
+    };
     /// Where `station_arp.rest` sits in the frame and how its elements are counted.
     pub const REPEAT_STATION_ARP: rt::RepeatAt = rt::RepeatAt {
         field: &request::StationArp::REST_DESC,
@@ -205,21 +219,14 @@ pub mod rtcm3_frame {
                     out.len()
                 }
             };
-            rt::seal(buf, len, |b| u32::from(checksum(b)), 3, true);
+            FRAME.seal(buf, len, frame_sum);
             rt::Ok(len)
         }
         /// Decodes one whole frame: refuses one longer than the longest, checks its start byte,
         /// checksum and address, then its code, constants, repeated fields, the ranges the
         /// spec gives its fields and the command's broadcast rule.
         pub fn decode(frame: &[u8]) -> rt::Result<Decoded<Request>, rt::DecodeError> {
-            let address = rt::check_frame(
-                frame,
-                10,
-                42,
-                0,
-                &FRAME,
-                |b| u32::from(checksum(b)),
-            )?;
+            let address = REQUEST_CHECKS.check(frame, frame_sum)?;
             LENGTH.check(frame)?;
             let message = Self::dispatch(frame)?;
             rt::Ok(Decoded { address, message })
@@ -227,50 +234,47 @@ pub mod rtcm3_frame {
         /// The message of a frame that passed the checks every frame passes, by its code.
         #[inline]
         fn dispatch(frame: &[u8]) -> rt::DecodeResult<Self> {
-            match rt::code(frame, 3, 0) {
-                0u32 => {
-                    let mut g = rt::Group::new(frame, 0u32, rt::None);
-                    g.attempt_split(
-                        &REPEAT_STATION_ARP,
-                        |frame: &[u8; 5], elements: &[u8], _: usize| {
-                            let field_0: u16 = u16::from_be_bytes([frame[3], frame[4]]);
-                            rt::equal(
-                                &request::StationArp::NUMBER_DESC,
-                                3,
-                                field_0 >> 4,
-                                0x3ED,
-                            )?;
-                            rt::Ok(
-                                Self::StationArp(request::StationArp {
-                                    station_high: (field_0 & 0xF) as u8,
-                                    rest: REPEAT_STATION_ARP
-                                        .elements::<u8, 17>(elements, false, false)?,
-                                }),
-                            )
-                        },
-                    );
-                    g.attempt_split(
-                        &REPEAT_ANTENNA,
-                        |frame: &[u8; 5], elements: &[u8], _: usize| {
-                            let field_0: u16 = u16::from_be_bytes([frame[3], frame[4]]);
-                            rt::equal(
-                                &request::Antenna::NUMBER_DESC,
-                                3,
-                                field_0 >> 4,
-                                0x3EF,
-                            )?;
-                            rt::Ok(
-                                Self::Antenna(request::Antenna {
-                                    station_high: (field_0 & 0xF) as u8,
-                                    rest: REPEAT_ANTENNA
-                                        .elements::<u8, 34>(elements, false, false)?,
-                                }),
-                            )
-                        },
-                    );
-                    g.end(&request::StationArp::DESC)
-                }
-                _ => rt::Err(REQUEST_CODE.unknown(frame)),
+            {
+                let mut g = rt::Group::new(frame, 0u32, rt::None);
+                g.attempt_split(
+                    &REPEAT_STATION_ARP,
+                    |frame: &[u8; 5], elements: &[u8], _: usize| {
+                        let field_0: u16 = u16::from_be_bytes([frame[3], frame[4]]);
+                        rt::equal(
+                            &request::StationArp::NUMBER_DESC,
+                            3,
+                            field_0 >> 4,
+                            0x3ED,
+                        )?;
+                        rt::Ok(
+                            Self::StationArp(request::StationArp {
+                                station_high: (field_0 & 0xF) as u8,
+                                rest: REPEAT_STATION_ARP
+                                    .elements::<u8, 17>(elements, false, false)?,
+                            }),
+                        )
+                    },
+                );
+                g.attempt_split(
+                    &REPEAT_ANTENNA,
+                    |frame: &[u8; 5], elements: &[u8], _: usize| {
+                        let field_0: u16 = u16::from_be_bytes([frame[3], frame[4]]);
+                        rt::equal(
+                            &request::Antenna::NUMBER_DESC,
+                            3,
+                            field_0 >> 4,
+                            0x3EF,
+                        )?;
+                        rt::Ok(
+                            Self::Antenna(request::Antenna {
+                                station_high: (field_0 & 0xF) as u8,
+                                rest: REPEAT_ANTENNA
+                                    .elements::<u8, 34>(elements, false, false)?,
+                            }),
+                        )
+                    },
+                );
+                g.end(&request::StationArp::DESC)
             }
         }
         /// The message called `name` in the spec, from each field's raw wire value by its spec
@@ -408,7 +412,7 @@ pub mod rtcm3_frame {
         pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             rt::encode_address(address, &FRAME)?;
             let len = match *self {};
-            rt::seal(buf, len, |b| u32::from(checksum(b)), 3, true);
+            FRAME.seal(buf, len, frame_sum);
             rt::Ok(len)
         }
         /// Decodes one whole frame: refuses one longer than the longest, checks its start byte,
@@ -437,14 +441,7 @@ pub mod rtcm3_frame {
             frame: &[u8],
             request: rt::Option<&Request>,
         ) -> rt::Result<Decoded<Response>, rt::DecodeError> {
-            let address = rt::check_frame(
-                frame,
-                0,
-                0,
-                0,
-                &FRAME,
-                |b| u32::from(checksum(b)),
-            )?;
+            let address = RESPONSE_CHECKS.check(frame, frame_sum)?;
             LENGTH.check(frame)?;
             let message = Self::dispatch(frame)?;
             if let rt::Some(request) = request {
@@ -520,14 +517,7 @@ pub mod rtcm3_frame {
         /// checksum and address, then its code, constants, repeated fields, the ranges the
         /// spec gives its fields and the command's broadcast rule.
         pub fn decode(frame: &'a [u8]) -> rt::Result<Decoded<Self>, rt::DecodeError> {
-            let address = rt::check_frame(
-                frame,
-                10,
-                42,
-                0,
-                &FRAME,
-                |b| u32::from(checksum(b)),
-            )?;
+            let address = REQUEST_CHECKS.check(frame, frame_sum)?;
             LENGTH.check(frame)?;
             let message = Self::dispatch(frame)?;
             rt::Ok(Decoded { address, message })
@@ -535,45 +525,42 @@ pub mod rtcm3_frame {
         /// The message of a frame that passed the checks every frame passes, by its code.
         #[inline]
         fn dispatch(frame: &'a [u8]) -> rt::DecodeResult<Self> {
-            match rt::code(frame, 3, 0) {
-                0u32 => {
-                    let mut g = rt::Group::new(frame, 0u32, rt::None);
-                    g.attempt_split(
-                        &REPEAT_STATION_ARP,
-                        |frame: &'a [u8; 5], elements: &'a [u8], _: usize| {
-                            let field_0: u16 = u16::from_be_bytes([frame[3], frame[4]]);
-                            rt::equal(
-                                &request::StationArp::NUMBER_DESC,
-                                3,
-                                field_0 >> 4,
-                                0x3ED,
-                            )?;
-                            rt::Ok(Self::StationArp {
-                                station_high: (field_0 & 0xF) as u8,
-                                rest: REPEAT_STATION_ARP
-                                    .view::<u8, 17>(elements, false, false)?,
-                            })
-                        },
-                    );
-                    g.attempt_split(
-                        &REPEAT_ANTENNA,
-                        |frame: &'a [u8; 5], elements: &'a [u8], _: usize| {
-                            let field_0: u16 = u16::from_be_bytes([frame[3], frame[4]]);
-                            rt::equal(
-                                &request::Antenna::NUMBER_DESC,
-                                3,
-                                field_0 >> 4,
-                                0x3EF,
-                            )?;
-                            rt::Ok(Self::Antenna {
-                                station_high: (field_0 & 0xF) as u8,
-                                rest: REPEAT_ANTENNA.view::<u8, 34>(elements, false, false)?,
-                            })
-                        },
-                    );
-                    g.end(&request::StationArp::DESC)
-                }
-                _ => rt::Err(REQUEST_CODE.unknown(frame)),
+            {
+                let mut g = rt::Group::new(frame, 0u32, rt::None);
+                g.attempt_split(
+                    &REPEAT_STATION_ARP,
+                    |frame: &'a [u8; 5], elements: &'a [u8], _: usize| {
+                        let field_0: u16 = u16::from_be_bytes([frame[3], frame[4]]);
+                        rt::equal(
+                            &request::StationArp::NUMBER_DESC,
+                            3,
+                            field_0 >> 4,
+                            0x3ED,
+                        )?;
+                        rt::Ok(Self::StationArp {
+                            station_high: (field_0 & 0xF) as u8,
+                            rest: REPEAT_STATION_ARP
+                                .view::<u8, 17>(elements, false, false)?,
+                        })
+                    },
+                );
+                g.attempt_split(
+                    &REPEAT_ANTENNA,
+                    |frame: &'a [u8; 5], elements: &'a [u8], _: usize| {
+                        let field_0: u16 = u16::from_be_bytes([frame[3], frame[4]]);
+                        rt::equal(
+                            &request::Antenna::NUMBER_DESC,
+                            3,
+                            field_0 >> 4,
+                            0x3EF,
+                        )?;
+                        rt::Ok(Self::Antenna {
+                            station_high: (field_0 & 0xF) as u8,
+                            rest: REPEAT_ANTENNA.view::<u8, 34>(elements, false, false)?,
+                        })
+                    },
+                );
+                g.end(&request::StationArp::DESC)
             }
         }
         /// This message's row in the owned type's `MESSAGES`.
@@ -738,9 +725,7 @@ pub mod rtcm3_frame {
         }
         fn checksum_ok(frame: &[u8]) -> bool {
             match frame.len().checked_sub(3) {
-                rt::Some(n) if n > 0 => {
-                    rt::check_sum(frame, n, &FRAME, |b| u32::from(checksum(b)))
-                }
+                rt::Some(n) if n > 0 => rt::check_sum(frame, n, &FRAME, frame_sum),
                 _ => false,
             }
         }

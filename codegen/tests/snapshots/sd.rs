@@ -92,6 +92,19 @@ pub mod sd {
     pub fn checksum(bytes: &[u8]) -> u16 {
         CRC.checksum(bytes)
     }
+    /// The checksum a frame carries, as the frame checks compare it: over every byte before it.
+    #[inline]
+    fn frame_sum(bytes: &[u8]) -> u32 {
+        u32::from(checksum(bytes))
+    }
+    /// The checks every frame passes before its code is read: 6 bytes, then its checksum, its address (offset 1).
+    const CHECKS: rt::FrameChecks = rt::FrameChecks {
+        sync: &[],
+        frame: &FRAME,
+        min: 6,
+        max: 6,
+        address_at: 1,
+    };
     /// 12-bit two's-complement position, one digit = 360/4096 = 0.087890625° (the document rounds this to 0.088°); 0 = centre, positive = counter-clockwise, negative = clockwise (§3.1).
     ///
     /// Physical value = raw × 0.087890625.
@@ -863,28 +876,21 @@ pub mod sd {
                     rt::head(out, &[0xA9, address, 0x00, 0x00]).len()
                 }
             };
-            rt::seal(buf, len, |b| u32::from(checksum(b)), 2, true);
+            FRAME.seal(buf, len, frame_sum);
             rt::Ok(len)
         }
         /// Decodes one whole frame: refuses one longer than the longest, checks its start byte,
         /// checksum and address, then its code, constants, repeated fields, the ranges the
         /// spec gives its fields and the command's broadcast rule.
         pub fn decode(frame: &[u8]) -> rt::Result<Decoded<Request>, rt::DecodeError> {
-            let address = rt::check_frame(
-                frame,
-                6,
-                6,
-                1,
-                &FRAME,
-                |b| u32::from(checksum(b)),
-            )?;
+            let address = CHECKS.check(frame, frame_sum)?;
             let message = Self::dispatch(frame)?;
             rt::Ok(Decoded { address, message })
         }
         /// The message of a frame that passed the checks every frame passes, by its code.
         #[inline]
         fn dispatch(frame: &[u8]) -> rt::DecodeResult<Self> {
-            match rt::code(frame, 0, 1) {
+            match frame[0] {
                 0x76 => {
                     let frame = rt::fixed::<6>(frame, &request::SetPoint::DESC)?;
                     let field_0: u16 = u16::from_be_bytes([frame[2], frame[3]]);
@@ -2701,7 +2707,7 @@ pub mod sd {
                     out.len()
                 }
             };
-            rt::seal(buf, len, |b| u32::from(checksum(b)), 2, true);
+            FRAME.seal(buf, len, frame_sum);
             rt::Ok(len)
         }
         /// Decodes one whole frame: refuses one longer than the longest, checks its start byte,
@@ -2730,14 +2736,7 @@ pub mod sd {
             frame: &[u8],
             request: rt::Option<&Request>,
         ) -> rt::Result<Decoded<Response>, rt::DecodeError> {
-            let address = rt::check_frame(
-                frame,
-                6,
-                6,
-                1,
-                &FRAME,
-                |b| u32::from(checksum(b)),
-            )?;
+            let address = CHECKS.check(frame, frame_sum)?;
             let message = Self::dispatch(frame, request)?;
             if let rt::Some(request) = request {
                 if request.replies() >> message.index() & 1 == 0 {
@@ -2753,7 +2752,7 @@ pub mod sd {
             request: rt::Option<&Request>,
         ) -> rt::DecodeResult<Self> {
             let asked: u64 = request.map_or(!0, Request::replies);
-            match rt::code(frame, 0, 1) {
+            match frame[0] {
                 0x56 => {
                     let frame = rt::fixed::<6>(frame, &response::SetPointReply::DESC)?;
                     let field_0: u16 = u16::from_be_bytes([frame[2], frame[3]]);
@@ -3876,9 +3875,7 @@ pub mod sd {
         }
         fn checksum_ok(frame: &[u8]) -> bool {
             match frame.len().checked_sub(2) {
-                rt::Some(n) if n > 0 => {
-                    rt::check_sum(frame, n, &FRAME, |b| u32::from(checksum(b)))
-                }
+                rt::Some(n) if n > 0 => rt::check_sum(frame, n, &FRAME, frame_sum),
                 _ => false,
             }
         }

@@ -120,6 +120,27 @@ pub mod shdlc {
     pub fn checksum(bytes: &[u8]) -> u8 {
         rt::sum8_ones(bytes)
     }
+    /// The checksum a frame carries, as the frame checks compare it: over the bytes before it from offset 1 on.
+    #[inline]
+    fn frame_sum(bytes: &[u8]) -> u32 {
+        u32::from(checksum(rt::covered(bytes, 1)))
+    }
+    /// The checks every request passes before its code is read: 6 to 8 bytes, then its sync bytes (7E at offset 0), its end bytes, its checksum, its address (offset 1).
+    const REQUEST_CHECKS: rt::FrameChecks = rt::FrameChecks {
+        sync: &[(0, &[0x7E])],
+        frame: &FRAME,
+        min: 6,
+        max: 8,
+        address_at: 1,
+    };
+    /// The checks every response passes before its code is read: 7 to 47 bytes, then its sync bytes (7E at offset 0), its end bytes, its checksum, its address (offset 1).
+    const RESPONSE_CHECKS: rt::FrameChecks = rt::FrameChecks {
+        sync: &[(0, &[0x7E])],
+        frame: &FRAME,
+        min: 7,
+        max: 47,
+        address_at: 1,
+    };
     /// The MISO frame's state byte: the error of the command's execution. (§5.2)
     ///
     /// Open: a value this revision does not list decodes as `Unknown(raw)` and re-encodes unchanged.
@@ -368,12 +389,7 @@ pub mod shdlc {
         pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             let mut plain = [0u8; UNESCAPED_LEN];
             let len = self.encode_unescaped(address, &mut plain)?;
-            rt::escape_frame(
-                &ESCAPING,
-                &plain[..len],
-                buf,
-                |b| u32::from(checksum(rt::covered(b, 1))),
-            )
+            rt::escape_frame(&ESCAPING, &plain[..len], buf, frame_sum)
         }
         /// The frame before escaping, into `buf`.
         fn encode_unescaped(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
@@ -411,7 +427,7 @@ pub mod shdlc {
                     rt::frame_mut::<6>(buf, &[0x7E, address, 0xD3, 0x00])?.len()
                 }
             };
-            rt::seal_end(buf, len, |b| u32::from(checksum(rt::covered(b, 1))), &FRAME);
+            FRAME.seal(buf, len, frame_sum);
             rt::Ok(len)
         }
         /// Decodes one whole frame: refuses one longer than the longest, checks its start byte,
@@ -419,12 +435,7 @@ pub mod shdlc {
         /// spec gives its fields and the command's broadcast rule.
         pub fn decode(frame: &[u8]) -> rt::Result<Decoded<Request>, rt::DecodeError> {
             let mut plain = [0u8; UNESCAPED_LEN];
-            let un = rt::unescape_frame(
-                &ESCAPING,
-                frame,
-                &mut plain,
-                |b| u32::from(checksum(rt::covered(b, 1))),
-            )?;
+            let un = rt::unescape_frame(&ESCAPING, frame, &mut plain, frame_sum)?;
             let rt::Some(plain) = plain.get(..un.len) else {
                 return rt::Err(rt::DecodeError::TooLong {
                     max: 8,
@@ -437,15 +448,7 @@ pub mod shdlc {
         fn decode_unescaped(
             frame: &[u8],
         ) -> rt::Result<Decoded<Request>, rt::DecodeError> {
-            rt::check_sync(frame, 8, 0, &[0x7E])?;
-            let address = rt::check_frame(
-                frame,
-                6,
-                8,
-                1,
-                &FRAME,
-                |b| u32::from(checksum(rt::covered(b, 1))),
-            )?;
+            let address = REQUEST_CHECKS.check(frame, frame_sum)?;
             REQUEST_LENGTH.check(frame)?;
             let message = Self::dispatch(frame)?;
             rt::Ok(Decoded { address, message })
@@ -453,7 +456,7 @@ pub mod shdlc {
         /// The message of a frame that passed the checks every frame passes, by its code.
         #[inline]
         fn dispatch(frame: &[u8]) -> rt::DecodeResult<Self> {
-            match rt::code(frame, 2, 1) {
+            match frame[2] {
                 0x00 => {
                     let frame = rt::fixed::<8>(frame, &request::StartMeasurement::DESC)?;
                     rt::equal(
@@ -705,12 +708,7 @@ pub mod shdlc {
         pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             let mut plain = [0u8; UNESCAPED_LEN];
             let len = self.encode_unescaped(address, &mut plain)?;
-            rt::escape_frame(
-                &ESCAPING,
-                &plain[..len],
-                buf,
-                |b| u32::from(checksum(rt::covered(b, 1))),
-            )
+            rt::escape_frame(&ESCAPING, &plain[..len], buf, frame_sum)
         }
         /// The frame before escaping, into `buf`.
         fn encode_unescaped(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
@@ -841,7 +839,7 @@ pub mod shdlc {
                     out.len()
                 }
             };
-            rt::seal_end(buf, len, |b| u32::from(checksum(rt::covered(b, 1))), &FRAME);
+            FRAME.seal(buf, len, frame_sum);
             rt::Ok(len)
         }
         /// Decodes one whole frame: refuses one longer than the longest, checks its start byte,
@@ -871,12 +869,7 @@ pub mod shdlc {
             request: rt::Option<&Request>,
         ) -> rt::Result<Decoded<Response>, rt::DecodeError> {
             let mut plain = [0u8; UNESCAPED_LEN];
-            let un = rt::unescape_frame(
-                &ESCAPING,
-                frame,
-                &mut plain,
-                |b| u32::from(checksum(rt::covered(b, 1))),
-            )?;
+            let un = rt::unescape_frame(&ESCAPING, frame, &mut plain, frame_sum)?;
             let rt::Some(plain) = plain.get(..un.len) else {
                 return rt::Err(rt::DecodeError::TooLong {
                     max: 47,
@@ -890,15 +883,7 @@ pub mod shdlc {
             frame: &[u8],
             request: rt::Option<&Request>,
         ) -> rt::Result<Decoded<Response>, rt::DecodeError> {
-            rt::check_sync(frame, 47, 0, &[0x7E])?;
-            let address = rt::check_frame(
-                frame,
-                7,
-                47,
-                1,
-                &FRAME,
-                |b| u32::from(checksum(rt::covered(b, 1))),
-            )?;
+            let address = RESPONSE_CHECKS.check(frame, frame_sum)?;
             RESPONSE_LENGTH.check(frame)?;
             let message = Self::dispatch(frame, request)?;
             if let rt::Some(request) = request {
@@ -914,7 +899,7 @@ pub mod shdlc {
             frame: &[u8],
             request: rt::Option<&Request>,
         ) -> rt::DecodeResult<Self> {
-            match rt::code(frame, 2, 1) {
+            match frame[2] {
                 0x00 => {
                     let frame = rt::fixed::<
                         7,
@@ -1258,12 +1243,7 @@ pub mod shdlc {
         }
         fn checksum_ok(frame: &[u8]) -> bool {
             let mut plain = [0u8; UNESCAPED_LEN];
-            let un = match rt::unescape_frame(
-                &ESCAPING,
-                frame,
-                &mut plain,
-                |b| u32::from(checksum(rt::covered(b, 1))),
-            ) {
+            let un = match rt::unescape_frame(&ESCAPING, frame, &mut plain, frame_sum) {
                 rt::Ok(un) => un,
                 rt::Err(_) => return false,
             };
@@ -1271,14 +1251,7 @@ pub mod shdlc {
                 return false;
             };
             match frame.len().checked_sub(2) {
-                rt::Some(n) if n > 0 => {
-                    rt::check_sum(
-                        frame,
-                        n,
-                        &FRAME,
-                        |b| u32::from(checksum(rt::covered(b, 1))),
-                    )
-                }
+                rt::Some(n) if n > 0 => rt::check_sum(frame, n, &FRAME, frame_sum),
                 _ => false,
             }
         }

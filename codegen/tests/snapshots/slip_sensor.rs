@@ -116,6 +116,27 @@ pub mod slip_sensor {
     pub fn checksum(bytes: &[u8]) -> u16 {
         CRC.checksum(bytes)
     }
+    /// The checksum a frame carries, as the frame checks compare it: over every byte before it.
+    #[inline]
+    fn frame_sum(bytes: &[u8]) -> u32 {
+        u32::from(checksum(bytes))
+    }
+    /// The checks every request passes before its code is read: 4 to 6 bytes, then its end bytes, its checksum.
+    const REQUEST_CHECKS: rt::FrameChecks = rt::FrameChecks {
+        sync: &[],
+        frame: &FRAME,
+        min: 4,
+        max: 6,
+        address_at: 0,
+    };
+    /// The checks every response passes before its code is read: 4 to 12 bytes, then its end bytes, its checksum.
+    const RESPONSE_CHECKS: rt::FrameChecks = rt::FrameChecks {
+        sync: &[],
+        frame: &FRAME,
+        min: 4,
+        max: 12,
+        address_at: 0,
+    };
     /// Temperature in hundredths of a degree.
     ///
     /// Physical value = raw × 0.01.
@@ -210,7 +231,7 @@ pub mod slip_sensor {
         pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             let mut plain = [0u8; UNESCAPED_LEN];
             let len = self.encode_unescaped(address, &mut plain)?;
-            rt::escape_frame(&ESCAPING, &plain[..len], buf, |b| u32::from(checksum(b)))
+            rt::escape_frame(&ESCAPING, &plain[..len], buf, frame_sum)
         }
         /// The frame before escaping, into `buf`.
         fn encode_unescaped(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
@@ -224,7 +245,7 @@ pub mod slip_sensor {
                 }
                 Self::ReadSamples(_) => rt::frame_mut::<4>(buf, &[0x03])?.len(),
             };
-            rt::seal_end(buf, len, |b| u32::from(checksum(b)), &FRAME);
+            FRAME.seal(buf, len, frame_sum);
             rt::Ok(len)
         }
         /// Decodes one whole frame: refuses one longer than the longest, checks its start byte,
@@ -232,12 +253,7 @@ pub mod slip_sensor {
         /// spec gives its fields and the command's broadcast rule.
         pub fn decode(frame: &[u8]) -> rt::Result<Decoded<Request>, rt::DecodeError> {
             let mut plain = [0u8; UNESCAPED_LEN];
-            let un = rt::unescape_frame(
-                &ESCAPING,
-                frame,
-                &mut plain,
-                |b| u32::from(checksum(b)),
-            )?;
+            let un = rt::unescape_frame(&ESCAPING, frame, &mut plain, frame_sum)?;
             let rt::Some(plain) = plain.get(..un.len) else {
                 return rt::Err(rt::DecodeError::TooLong {
                     max: 6,
@@ -250,21 +266,14 @@ pub mod slip_sensor {
         fn decode_unescaped(
             frame: &[u8],
         ) -> rt::Result<Decoded<Request>, rt::DecodeError> {
-            let address = rt::check_frame(
-                frame,
-                4,
-                6,
-                0,
-                &FRAME,
-                |b| u32::from(checksum(b)),
-            )?;
+            let address = REQUEST_CHECKS.check(frame, frame_sum)?;
             let message = Self::dispatch(frame)?;
             rt::Ok(Decoded { address, message })
         }
         /// The message of a frame that passed the checks every frame passes, by its code.
         #[inline]
         fn dispatch(frame: &[u8]) -> rt::DecodeResult<Self> {
-            match rt::code(frame, 0, 1) {
+            match frame[0] {
                 0x01 => {
                     rt::fixed::<4>(frame, &request::ReadTemperature::DESC)
                         .map(|_| Self::ReadTemperature(request::ReadTemperature))
@@ -430,7 +439,7 @@ pub mod slip_sensor {
         pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             let mut plain = [0u8; UNESCAPED_LEN];
             let len = self.encode_unescaped(address, &mut plain)?;
-            rt::escape_frame(&ESCAPING, &plain[..len], buf, |b| u32::from(checksum(b)))
+            rt::escape_frame(&ESCAPING, &plain[..len], buf, frame_sum)
         }
         /// The frame before escaping, into `buf`.
         fn encode_unescaped(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
@@ -451,7 +460,7 @@ pub mod slip_sensor {
                     out.len()
                 }
             };
-            rt::seal_end(buf, len, |b| u32::from(checksum(b)), &FRAME);
+            FRAME.seal(buf, len, frame_sum);
             rt::Ok(len)
         }
         /// Decodes one whole frame: refuses one longer than the longest, checks its start byte,
@@ -481,12 +490,7 @@ pub mod slip_sensor {
             request: rt::Option<&Request>,
         ) -> rt::Result<Decoded<Response>, rt::DecodeError> {
             let mut plain = [0u8; UNESCAPED_LEN];
-            let un = rt::unescape_frame(
-                &ESCAPING,
-                frame,
-                &mut plain,
-                |b| u32::from(checksum(b)),
-            )?;
+            let un = rt::unescape_frame(&ESCAPING, frame, &mut plain, frame_sum)?;
             let rt::Some(plain) = plain.get(..un.len) else {
                 return rt::Err(rt::DecodeError::TooLong {
                     max: 12,
@@ -500,14 +504,7 @@ pub mod slip_sensor {
             frame: &[u8],
             request: rt::Option<&Request>,
         ) -> rt::Result<Decoded<Response>, rt::DecodeError> {
-            let address = rt::check_frame(
-                frame,
-                4,
-                12,
-                0,
-                &FRAME,
-                |b| u32::from(checksum(b)),
-            )?;
+            let address = RESPONSE_CHECKS.check(frame, frame_sum)?;
             let message = Self::dispatch(frame)?;
             if let rt::Some(request) = request {
                 if request.replies() >> message.index() & 1 == 0 {
@@ -519,7 +516,7 @@ pub mod slip_sensor {
         /// The message of a frame that passed the checks every frame passes, by its code.
         #[inline]
         fn dispatch(frame: &[u8]) -> rt::DecodeResult<Self> {
-            match rt::code(frame, 0, 1) {
+            match frame[0] {
                 0x81 => {
                     let frame = rt::fixed::<6>(frame, &response::Temperature::DESC)?;
                     rt::Ok(
@@ -681,12 +678,7 @@ pub mod slip_sensor {
         }
         fn checksum_ok(frame: &[u8]) -> bool {
             let mut plain = [0u8; UNESCAPED_LEN];
-            let un = match rt::unescape_frame(
-                &ESCAPING,
-                frame,
-                &mut plain,
-                |b| u32::from(checksum(b)),
-            ) {
+            let un = match rt::unescape_frame(&ESCAPING, frame, &mut plain, frame_sum) {
                 rt::Ok(un) => un,
                 rt::Err(_) => return false,
             };
@@ -694,9 +686,7 @@ pub mod slip_sensor {
                 return false;
             };
             match frame.len().checked_sub(3) {
-                rt::Some(n) if n > 0 => {
-                    rt::check_sum(frame, n, &FRAME, |b| u32::from(checksum(b)))
-                }
+                rt::Some(n) if n > 0 => rt::check_sum(frame, n, &FRAME, frame_sum),
                 _ => false,
             }
         }

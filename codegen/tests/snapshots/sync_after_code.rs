@@ -82,6 +82,27 @@ pub mod sync_after_code {
     pub fn checksum(bytes: &[u8]) -> u8 {
         rt::xor8(bytes)
     }
+    /// The checksum a frame carries, as the frame checks compare it: over every byte before it.
+    #[inline]
+    fn frame_sum(bytes: &[u8]) -> u32 {
+        u32::from(checksum(bytes))
+    }
+    /// The checks every request passes before its code is read: 6 bytes, then its sync bytes (7E at offset 0 and 7E at offset 3), its checksum.
+    const REQUEST_CHECKS: rt::FrameChecks = rt::FrameChecks {
+        sync: &[(0, &[0x7E]), (3, &[0x7E])],
+        frame: &FRAME,
+        min: 6,
+        max: 6,
+        address_at: 0,
+    };
+    /// The checks every response passes before its code is read: 7 bytes, then its sync bytes (7E at offset 0 and 7E at offset 3), its checksum.
+    const RESPONSE_CHECKS: rt::FrameChecks = rt::FrameChecks {
+        sync: &[(0, &[0x7E]), (3, &[0x7E])],
+        frame: &FRAME,
+        min: 7,
+        max: 7,
+        address_at: 0,
+    };
     ///A request (command), host to device.
     #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
     #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
@@ -133,30 +154,21 @@ pub mod sync_after_code {
                     out.len()
                 }
             };
-            rt::seal(buf, len, |b| u32::from(checksum(b)), 1, true);
+            FRAME.seal(buf, len, frame_sum);
             rt::Ok(len)
         }
         /// Decodes one whole frame: refuses one longer than the longest, checks its start byte,
         /// checksum and address, then its code, constants, repeated fields, the ranges the
         /// spec gives its fields and the command's broadcast rule.
         pub fn decode(frame: &[u8]) -> rt::Result<Decoded<Request>, rt::DecodeError> {
-            rt::check_sync(frame, 6, 0, &[0x7E])?;
-            rt::check_sync(frame, 6, 3, &[0x7E])?;
-            let address = rt::check_frame(
-                frame,
-                6,
-                6,
-                0,
-                &FRAME,
-                |b| u32::from(checksum(b)),
-            )?;
+            let address = REQUEST_CHECKS.check(frame, frame_sum)?;
             let message = Self::dispatch(frame)?;
             rt::Ok(Decoded { address, message })
         }
         /// The message of a frame that passed the checks every frame passes, by its code.
         #[inline]
         fn dispatch(frame: &[u8]) -> rt::DecodeResult<Self> {
-            match rt::code(frame, 1, 2) {
+            match u16::from_be_bytes([frame[1], frame[2]]) {
                 0x0102 => {
                     let frame = rt::fixed::<6>(frame, &request::Read::DESC)?;
                     rt::Ok(
@@ -291,7 +303,7 @@ pub mod sync_after_code {
                     out.len()
                 }
             };
-            rt::seal(buf, len, |b| u32::from(checksum(b)), 1, true);
+            FRAME.seal(buf, len, frame_sum);
             rt::Ok(len)
         }
         /// Decodes one whole frame: refuses one longer than the longest, checks its start byte,
@@ -320,16 +332,7 @@ pub mod sync_after_code {
             frame: &[u8],
             request: rt::Option<&Request>,
         ) -> rt::Result<Decoded<Response>, rt::DecodeError> {
-            rt::check_sync(frame, 7, 0, &[0x7E])?;
-            rt::check_sync(frame, 7, 3, &[0x7E])?;
-            let address = rt::check_frame(
-                frame,
-                7,
-                7,
-                0,
-                &FRAME,
-                |b| u32::from(checksum(b)),
-            )?;
+            let address = RESPONSE_CHECKS.check(frame, frame_sum)?;
             let message = Self::dispatch(frame)?;
             if let rt::Some(request) = request {
                 if request.replies() >> message.index() & 1 == 0 {
@@ -341,7 +344,7 @@ pub mod sync_after_code {
         /// The message of a frame that passed the checks every frame passes, by its code.
         #[inline]
         fn dispatch(frame: &[u8]) -> rt::DecodeResult<Self> {
-            match rt::code(frame, 1, 2) {
+            match u16::from_be_bytes([frame[1], frame[2]]) {
                 0x8102 => {
                     let frame = rt::fixed::<7>(frame, &response::Value::DESC)?;
                     rt::Ok(
@@ -507,9 +510,7 @@ pub mod sync_after_code {
         }
         fn checksum_ok(frame: &[u8]) -> bool {
             match frame.len().checked_sub(1) {
-                rt::Some(n) if n > 0 => {
-                    rt::check_sum(frame, n, &FRAME, |b| u32::from(checksum(b)))
-                }
+                rt::Some(n) if n > 0 => rt::check_sum(frame, n, &FRAME, frame_sum),
                 _ => false,
             }
         }

@@ -90,6 +90,27 @@ pub mod syncy {
     pub fn checksum(bytes: &[u8]) -> u8 {
         rt::sum8_ones(bytes)
     }
+    /// The checksum a frame carries, as the frame checks compare it: over the bytes before it from offset 2 on.
+    #[inline]
+    fn frame_sum(bytes: &[u8]) -> u32 {
+        u32::from(checksum(rt::covered(bytes, 2)))
+    }
+    /// The checks every request passes before its code is read: 6 to 10 bytes, then its sync bytes (FF FF at offset 0), its checksum, its address (offset 2).
+    const REQUEST_CHECKS: rt::FrameChecks = rt::FrameChecks {
+        sync: &[(0, &[0xFF, 0xFF])],
+        frame: &FRAME,
+        min: 6,
+        max: 10,
+        address_at: 2,
+    };
+    /// The checks every response passes before its code is read: 6 to 12 bytes, then its sync bytes (FF FF at offset 0), its checksum, its address (offset 2).
+    const RESPONSE_CHECKS: rt::FrameChecks = rt::FrameChecks {
+        sync: &[(0, &[0xFF, 0xFF])],
+        frame: &FRAME,
+        min: 6,
+        max: 12,
+        address_at: 2,
+    };
     /// millimetre
     ///
     /// Physical value = raw × 0.01.
@@ -222,22 +243,14 @@ pub mod syncy {
                     out.len()
                 }
             };
-            rt::seal(buf, len, |b| u32::from(checksum(rt::covered(b, 2))), 1, true);
+            FRAME.seal(buf, len, frame_sum);
             rt::Ok(len)
         }
         /// Decodes one whole frame: refuses one longer than the longest, checks its start byte,
         /// checksum and address, then its code, constants, repeated fields, the ranges the
         /// spec gives its fields and the command's broadcast rule.
         pub fn decode(frame: &[u8]) -> rt::Result<Decoded<Request>, rt::DecodeError> {
-            rt::check_sync(frame, 10, 0, &[0xFF, 0xFF])?;
-            let address = rt::check_frame(
-                frame,
-                6,
-                10,
-                2,
-                &FRAME,
-                |b| u32::from(checksum(rt::covered(b, 2))),
-            )?;
+            let address = REQUEST_CHECKS.check(frame, frame_sum)?;
             LENGTH.check(frame)?;
             let message = Self::dispatch(frame)?;
             rt::Ok(Decoded { address, message })
@@ -245,7 +258,7 @@ pub mod syncy {
         /// The message of a frame that passed the checks every frame passes, by its code.
         #[inline]
         fn dispatch(frame: &[u8]) -> rt::DecodeResult<Self> {
-            match rt::code(frame, 4, 1) {
+            match frame[4] {
                 0x03 => {
                     let frame = rt::fixed::<9>(frame, &request::MoveTo::DESC)?;
                     rt::no_broadcast(frame[2], 0xFE, &request::MoveTo::DESC)?;
@@ -471,7 +484,7 @@ pub mod syncy {
                     out.len()
                 }
             };
-            rt::seal(buf, len, |b| u32::from(checksum(rt::covered(b, 2))), 1, true);
+            FRAME.seal(buf, len, frame_sum);
             rt::Ok(len)
         }
         /// Decodes one whole frame: refuses one longer than the longest, checks its start byte,
@@ -500,15 +513,7 @@ pub mod syncy {
             frame: &[u8],
             request: rt::Option<&Request>,
         ) -> rt::Result<Decoded<Response>, rt::DecodeError> {
-            rt::check_sync(frame, 12, 0, &[0xFF, 0xFF])?;
-            let address = rt::check_frame(
-                frame,
-                6,
-                12,
-                2,
-                &FRAME,
-                |b| u32::from(checksum(rt::covered(b, 2))),
-            )?;
+            let address = RESPONSE_CHECKS.check(frame, frame_sum)?;
             LENGTH.check(frame)?;
             let message = Self::dispatch(frame)?;
             if let rt::Some(request) = request {
@@ -522,7 +527,7 @@ pub mod syncy {
         /// The message of a frame that passed the checks every frame passes, by its code.
         #[inline]
         fn dispatch(frame: &[u8]) -> rt::DecodeResult<Self> {
-            match rt::code(frame, 4, 1) {
+            match frame[4] {
                 0x00 => {
                     rt::fixed::<6>(frame, &response::Moving::DESC)
                         .map(|_| Self::Moving(response::Moving))
@@ -768,14 +773,7 @@ pub mod syncy {
         }
         fn checksum_ok(frame: &[u8]) -> bool {
             match frame.len().checked_sub(1) {
-                rt::Some(n) if n > 0 => {
-                    rt::check_sum(
-                        frame,
-                        n,
-                        &FRAME,
-                        |b| u32::from(checksum(rt::covered(b, 2))),
-                    )
-                }
+                rt::Some(n) if n > 0 => rt::check_sum(frame, n, &FRAME, frame_sum),
                 _ => false,
             }
         }

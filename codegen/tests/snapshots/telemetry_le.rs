@@ -90,6 +90,27 @@ pub mod telemetry_le {
     pub fn checksum(bytes: &[u8]) -> u8 {
         rt::xor8(bytes)
     }
+    /// The checksum a frame carries, as the frame checks compare it: over the bytes before it from offset 2 on.
+    #[inline]
+    fn frame_sum(bytes: &[u8]) -> u32 {
+        u32::from(checksum(rt::covered(bytes, 2)))
+    }
+    /// The checks every request passes before its code is read: 5 to 21 bytes, then its sync bytes (A5 5A at offset 0), its checksum.
+    const REQUEST_CHECKS: rt::FrameChecks = rt::FrameChecks {
+        sync: &[(0, &[0xA5, 0x5A])],
+        frame: &FRAME,
+        min: 5,
+        max: 21,
+        address_at: 0,
+    };
+    /// The checks every response passes before its code is read: 5 to 41 bytes, then its sync bytes (A5 5A at offset 0), its checksum.
+    const RESPONSE_CHECKS: rt::FrameChecks = rt::FrameChecks {
+        sync: &[(0, &[0xA5, 0x5A])],
+        frame: &FRAME,
+        min: 5,
+        max: 41,
+        address_at: 0,
+    };
     ///A request (command), host to device.
     #[derive(Debug, Clone, Copy, PartialEq)]
     #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
@@ -160,22 +181,14 @@ pub mod telemetry_le {
                     out.len()
                 }
             };
-            rt::seal(buf, len, |b| u32::from(checksum(rt::covered(b, 2))), 1, false);
+            FRAME.seal(buf, len, frame_sum);
             rt::Ok(len)
         }
         /// Decodes one whole frame: refuses one longer than the longest, checks its start byte,
         /// checksum and address, then its code, constants, repeated fields, the ranges the
         /// spec gives its fields and the command's broadcast rule.
         pub fn decode(frame: &[u8]) -> rt::Result<Decoded<Request>, rt::DecodeError> {
-            rt::check_sync(frame, 21, 0, &[0xA5, 0x5A])?;
-            let address = rt::check_frame(
-                frame,
-                5,
-                21,
-                0,
-                &FRAME,
-                |b| u32::from(checksum(rt::covered(b, 2))),
-            )?;
+            let address = REQUEST_CHECKS.check(frame, frame_sum)?;
             LENGTH.check(frame)?;
             let message = Self::dispatch(frame)?;
             rt::Ok(Decoded { address, message })
@@ -183,7 +196,7 @@ pub mod telemetry_le {
         /// The message of a frame that passed the checks every frame passes, by its code.
         #[inline]
         fn dispatch(frame: &[u8]) -> rt::DecodeResult<Self> {
-            match rt::code(frame, 3, 1) {
+            match frame[3] {
                 0x01 => {
                     rt::fixed::<5>(frame, &request::GetState::DESC)
                         .map(|_| Self::GetState(request::GetState))
@@ -390,7 +403,7 @@ pub mod telemetry_le {
                 }
                 Self::Ack(_) => rt::frame_mut::<5>(buf, &[0xA5, 0x5A, 0x01, 0x82])?.len(),
             };
-            rt::seal(buf, len, |b| u32::from(checksum(rt::covered(b, 2))), 1, false);
+            FRAME.seal(buf, len, frame_sum);
             rt::Ok(len)
         }
         /// Decodes one whole frame: refuses one longer than the longest, checks its start byte,
@@ -419,15 +432,7 @@ pub mod telemetry_le {
             frame: &[u8],
             request: rt::Option<&Request>,
         ) -> rt::Result<Decoded<Response>, rt::DecodeError> {
-            rt::check_sync(frame, 41, 0, &[0xA5, 0x5A])?;
-            let address = rt::check_frame(
-                frame,
-                5,
-                41,
-                0,
-                &FRAME,
-                |b| u32::from(checksum(rt::covered(b, 2))),
-            )?;
+            let address = RESPONSE_CHECKS.check(frame, frame_sum)?;
             LENGTH.check(frame)?;
             let message = Self::dispatch(frame)?;
             if let rt::Some(request) = request {
@@ -440,7 +445,7 @@ pub mod telemetry_le {
         /// The message of a frame that passed the checks every frame passes, by its code.
         #[inline]
         fn dispatch(frame: &[u8]) -> rt::DecodeResult<Self> {
-            match rt::code(frame, 3, 1) {
+            match frame[3] {
                 0x81 => {
                     let frame = rt::fixed::<41>(frame, &response::State::DESC)?;
                     let field_4: f32 = f32::from_le_bytes([
@@ -679,14 +684,7 @@ pub mod telemetry_le {
         }
         fn checksum_ok(frame: &[u8]) -> bool {
             match frame.len().checked_sub(1) {
-                rt::Some(n) if n > 0 => {
-                    rt::check_sum(
-                        frame,
-                        n,
-                        &FRAME,
-                        |b| u32::from(checksum(rt::covered(b, 2))),
-                    )
-                }
+                rt::Some(n) if n > 0 => rt::check_sum(frame, n, &FRAME, frame_sum),
                 _ => false,
             }
         }

@@ -82,6 +82,27 @@ pub mod text_counted {
     pub fn checksum(bytes: &[u8]) -> u8 {
         rt::xor8(bytes)
     }
+    /// The checksum a frame carries, as the frame checks compare it: over the bytes before it from offset 1 on.
+    #[inline]
+    fn frame_sum(bytes: &[u8]) -> u32 {
+        u32::from(checksum(rt::covered(bytes, 1)))
+    }
+    /// The checks every request passes before its code is read: 4 to 22 bytes, then its start byte, its checksum, its address (offset 1).
+    const REQUEST_CHECKS: rt::FrameChecks = rt::FrameChecks {
+        sync: &[],
+        frame: &FRAME,
+        min: 4,
+        max: 22,
+        address_at: 1,
+    };
+    /// The checks every response passes before its code is read: 5 to 26 bytes, then its start byte, its checksum, its address (offset 1).
+    const RESPONSE_CHECKS: rt::FrameChecks = rt::FrameChecks {
+        sync: &[],
+        frame: &FRAME,
+        min: 5,
+        max: 26,
+        address_at: 1,
+    };
     /// Where `set_name.name` sits in the frame and how its elements are counted.
     pub const REPEAT_SET_NAME: rt::RepeatAt = rt::RepeatAt {
         field: &request::SetName::NAME_DESC,
@@ -195,28 +216,21 @@ pub mod text_counted {
                     rt::frame_mut::<4>(buf, &[0x7E, address, 0x21])?.len()
                 }
             };
-            rt::seal(buf, len, |b| u32::from(checksum(rt::covered(b, 1))), 1, true);
+            FRAME.seal(buf, len, frame_sum);
             rt::Ok(len)
         }
         /// Decodes one whole frame: refuses one longer than the longest, checks its start byte,
         /// checksum and address, then its code, constants, repeated fields, the ranges the
         /// spec gives its fields and the command's broadcast rule.
         pub fn decode(frame: &[u8]) -> rt::Result<Decoded<Request>, rt::DecodeError> {
-            let address = rt::check_frame(
-                frame,
-                4,
-                22,
-                1,
-                &FRAME,
-                |b| u32::from(checksum(rt::covered(b, 1))),
-            )?;
+            let address = REQUEST_CHECKS.check(frame, frame_sum)?;
             let message = Self::dispatch(frame)?;
             rt::Ok(Decoded { address, message })
         }
         /// The message of a frame that passed the checks every frame passes, by its code.
         #[inline]
         fn dispatch(frame: &[u8]) -> rt::DecodeResult<Self> {
-            match rt::code(frame, 2, 1) {
+            match frame[2] {
                 0x20 => {
                     let s = LISTS_SET_NAME.split::<6, 1>(frame)?;
                     let frame = &s.frame;
@@ -440,7 +454,7 @@ pub mod text_counted {
                     out.len()
                 }
             };
-            rt::seal(buf, len, |b| u32::from(checksum(rt::covered(b, 1))), 1, true);
+            FRAME.seal(buf, len, frame_sum);
             rt::Ok(len)
         }
         /// Decodes one whole frame: refuses one longer than the longest, checks its start byte,
@@ -469,14 +483,7 @@ pub mod text_counted {
             frame: &[u8],
             request: rt::Option<&Request>,
         ) -> rt::Result<Decoded<Response>, rt::DecodeError> {
-            let address = rt::check_frame(
-                frame,
-                5,
-                26,
-                1,
-                &FRAME,
-                |b| u32::from(checksum(rt::covered(b, 1))),
-            )?;
+            let address = RESPONSE_CHECKS.check(frame, frame_sum)?;
             let message = Self::dispatch(frame)?;
             if let rt::Some(request) = request {
                 if request.replies() >> message.index() & 1 == 0 {
@@ -488,7 +495,7 @@ pub mod text_counted {
         /// The message of a frame that passed the checks every frame passes, by its code.
         #[inline]
         fn dispatch(frame: &[u8]) -> rt::DecodeResult<Self> {
-            match rt::code(frame, 2, 1) {
+            match frame[2] {
                 0x20 => {
                     let frame = rt::fixed::<5>(frame, &response::Ack::DESC)?;
                     rt::Ok(Self::Ack(response::Ack { status: frame[3] }))
@@ -587,21 +594,14 @@ pub mod text_counted {
         /// checksum and address, then its code, constants, repeated fields, the ranges the
         /// spec gives its fields and the command's broadcast rule.
         pub fn decode(frame: &'a [u8]) -> rt::Result<Decoded<Self>, rt::DecodeError> {
-            let address = rt::check_frame(
-                frame,
-                4,
-                22,
-                1,
-                &FRAME,
-                |b| u32::from(checksum(rt::covered(b, 1))),
-            )?;
+            let address = REQUEST_CHECKS.check(frame, frame_sum)?;
             let message = Self::dispatch(frame)?;
             rt::Ok(Decoded { address, message })
         }
         /// The message of a frame that passed the checks every frame passes, by its code.
         #[inline]
         fn dispatch(frame: &'a [u8]) -> rt::DecodeResult<Self> {
-            match rt::code(frame, 2, 1) {
+            match frame[2] {
                 0x20 => {
                     let s = LISTS_SET_NAME.split::<6, 1>(frame)?;
                     let frame = &s.frame;
@@ -682,14 +682,7 @@ pub mod text_counted {
             frame: &'a [u8],
             request: rt::Option<&Request>,
         ) -> rt::Result<Decoded<Self>, rt::DecodeError> {
-            let address = rt::check_frame(
-                frame,
-                5,
-                26,
-                1,
-                &FRAME,
-                |b| u32::from(checksum(rt::covered(b, 1))),
-            )?;
+            let address = RESPONSE_CHECKS.check(frame, frame_sum)?;
             let message = Self::dispatch(frame)?;
             if let rt::Some(request) = request {
                 if request.replies() >> message.index() & 1 == 0 {
@@ -701,7 +694,7 @@ pub mod text_counted {
         /// The message of a frame that passed the checks every frame passes, by its code.
         #[inline]
         fn dispatch(frame: &'a [u8]) -> rt::DecodeResult<Self> {
-            match rt::code(frame, 2, 1) {
+            match frame[2] {
                 0x20 => {
                     let frame = rt::fixed::<5>(frame, &response::Ack::DESC)?;
                     rt::Ok(Self::Ack { status: frame[3] })
@@ -883,14 +876,7 @@ pub mod text_counted {
         }
         fn checksum_ok(frame: &[u8]) -> bool {
             match frame.len().checked_sub(1) {
-                rt::Some(n) if n > 0 => {
-                    rt::check_sum(
-                        frame,
-                        n,
-                        &FRAME,
-                        |b| u32::from(checksum(rt::covered(b, 1))),
-                    )
-                }
+                rt::Some(n) if n > 0 => rt::check_sum(frame, n, &FRAME, frame_sum),
                 _ => false,
             }
         }

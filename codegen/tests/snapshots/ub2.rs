@@ -80,6 +80,27 @@ pub mod ub2 {
     pub fn checksum(bytes: &[u8]) -> u8 {
         rt::sum8(bytes)
     }
+    /// The checksum a frame carries, as the frame checks compare it: over every byte before it.
+    #[inline]
+    fn frame_sum(bytes: &[u8]) -> u32 {
+        u32::from(checksum(bytes))
+    }
+    /// The checks every request passes before its code is read: 5 to 9 bytes, then its start byte, its checksum, its address (offset 1).
+    const REQUEST_CHECKS: rt::FrameChecks = rt::FrameChecks {
+        sync: &[],
+        frame: &FRAME,
+        min: 5,
+        max: 9,
+        address_at: 1,
+    };
+    /// The checks every response passes before its code is read: 4 to 16 bytes, then its start byte, its checksum, its address (offset 1).
+    const RESPONSE_CHECKS: rt::FrameChecks = rt::FrameChecks {
+        sync: &[],
+        frame: &FRAME,
+        min: 4,
+        max: 16,
+        address_at: 1,
+    };
     /// Capacitance, transmitted multiplied by 100 as U32 (§3.1): raw 15000 = 150.00 pF.
     ///
     /// Physical value = raw × 0.01.
@@ -774,21 +795,14 @@ pub mod ub2 {
         /// checksum and address, then its code, constants, repeated fields, the ranges the
         /// spec gives its fields and the command's broadcast rule.
         pub fn decode(frame: &[u8]) -> rt::Result<Decoded<Request>, rt::DecodeError> {
-            let address = rt::check_frame(
-                frame,
-                5,
-                9,
-                1,
-                &FRAME,
-                |b| u32::from(checksum(b)),
-            )?;
+            let address = REQUEST_CHECKS.check(frame, frame_sum)?;
             let message = Self::dispatch(frame)?;
             rt::Ok(Decoded { address, message })
         }
         /// The message of a frame that passed the checks every frame passes, by its code.
         #[inline]
         fn dispatch(frame: &[u8]) -> rt::DecodeResult<Self> {
-            match rt::code(frame, 2, 2) {
+            match u16::from_be_bytes([frame[2], frame[3]]) {
                 0x1000 => {
                     rt::fixed::<5>(frame, &request::ReferenceRun::DESC)
                         .map(|_| Self::ReferenceRun(request::ReferenceRun))
@@ -1968,14 +1982,7 @@ pub mod ub2 {
             frame: &[u8],
             request: rt::Option<&Request>,
         ) -> rt::Result<Decoded<Response>, rt::DecodeError> {
-            let address = rt::check_frame(
-                frame,
-                4,
-                16,
-                1,
-                &FRAME,
-                |b| u32::from(checksum(b)),
-            )?;
+            let address = RESPONSE_CHECKS.check(frame, frame_sum)?;
             let message = Self::dispatch(frame, request)?;
             if let rt::Some(request) = request {
                 if request.replies() >> message.index() & 1 == 0 {
@@ -1991,7 +1998,7 @@ pub mod ub2 {
             request: rt::Option<&Request>,
         ) -> rt::DecodeResult<Self> {
             if frame.len() >= 4 {
-                match rt::code(frame, 2, 1) {
+                match frame[2] {
                     0x50 => {
                         return rt::fixed::<4>(frame, &response::MovementStarted::DESC)
                             .map(|_| Self::MovementStarted(response::MovementStarted));
@@ -2052,7 +2059,7 @@ pub mod ub2 {
             if frame.len() < 5 {
                 return rt::Err(RESPONSE_CODE.unknown(frame));
             }
-            match rt::code(frame, 2, 2) {
+            match u16::from_be_bytes([frame[2], frame[3]]) {
                 0x5400 => {
                     let frame = rt::fixed::<
                         9,
@@ -2850,9 +2857,7 @@ pub mod ub2 {
         }
         fn checksum_ok(frame: &[u8]) -> bool {
             match frame.len().checked_sub(1) {
-                rt::Some(n) if n > 0 => {
-                    rt::check_sum(frame, n, &FRAME, |b| u32::from(checksum(b)))
-                }
+                rt::Some(n) if n > 0 => rt::check_sum(frame, n, &FRAME, frame_sum),
                 _ => false,
             }
         }

@@ -90,6 +90,27 @@ pub mod ubx_fixed_blocks {
     pub fn checksum(bytes: &[u8]) -> u16 {
         rt::fletcher8(bytes)
     }
+    /// The checksum a frame carries, as the frame checks compare it: over the bytes before it from offset 2 on.
+    #[inline]
+    fn frame_sum(bytes: &[u8]) -> u32 {
+        u32::from(checksum(rt::covered(bytes, 2)))
+    }
+    /// The checks every request passes before its code is read: 8 to 23 bytes, then its sync bytes (B5 62 at offset 0), its checksum.
+    const REQUEST_CHECKS: rt::FrameChecks = rt::FrameChecks {
+        sync: &[(0, &[0xB5, 0x62])],
+        frame: &FRAME,
+        min: 8,
+        max: 23,
+        address_at: 0,
+    };
+    /// The checks every response passes before its code is read: 10 to 31 bytes, then its sync bytes (B5 62 at offset 0), its checksum.
+    const RESPONSE_CHECKS: rt::FrameChecks = rt::FrameChecks {
+        sync: &[(0, &[0xB5, 0x62])],
+        frame: &FRAME,
+        min: 10,
+        max: 31,
+        address_at: 0,
+    };
     /// volts
     ///
     /// Physical value = raw × 0.001.
@@ -402,22 +423,14 @@ pub mod ubx_fixed_blocks {
                     out.len()
                 }
             };
-            rt::seal(buf, len, |b| u32::from(checksum(rt::covered(b, 2))), 2, false);
+            FRAME.seal(buf, len, frame_sum);
             rt::Ok(len)
         }
         /// Decodes one whole frame: refuses one longer than the longest, checks its start byte,
         /// checksum and address, then its code, constants, repeated fields, the ranges the
         /// spec gives its fields and the command's broadcast rule.
         pub fn decode(frame: &[u8]) -> rt::Result<Decoded<Request>, rt::DecodeError> {
-            rt::check_sync(frame, 23, 0, &[0xB5, 0x62])?;
-            let address = rt::check_frame(
-                frame,
-                8,
-                23,
-                0,
-                &FRAME,
-                |b| u32::from(checksum(rt::covered(b, 2))),
-            )?;
+            let address = REQUEST_CHECKS.check(frame, frame_sum)?;
             LENGTH.check(frame)?;
             let message = Self::dispatch(frame)?;
             rt::Ok(Decoded { address, message })
@@ -425,7 +438,7 @@ pub mod ubx_fixed_blocks {
         /// The message of a frame that passed the checks every frame passes, by its code.
         #[inline]
         fn dispatch(frame: &[u8]) -> rt::DecodeResult<Self> {
-            match rt::code(frame, 2, 2) {
+            match u16::from_be_bytes([frame[2], frame[3]]) {
                 0x0136 => {
                     rt::fixed::<8>(frame, &request::PollSatBlocks::DESC)
                         .map(|_| Self::PollSatBlocks(request::PollSatBlocks))
@@ -770,7 +783,7 @@ pub mod ubx_fixed_blocks {
                     out.len()
                 }
             };
-            rt::seal(buf, len, |b| u32::from(checksum(rt::covered(b, 2))), 2, false);
+            FRAME.seal(buf, len, frame_sum);
             rt::Ok(len)
         }
         /// Decodes one whole frame: refuses one longer than the longest, checks its start byte,
@@ -799,15 +812,7 @@ pub mod ubx_fixed_blocks {
             frame: &[u8],
             request: rt::Option<&Request>,
         ) -> rt::Result<Decoded<Response>, rt::DecodeError> {
-            rt::check_sync(frame, 31, 0, &[0xB5, 0x62])?;
-            let address = rt::check_frame(
-                frame,
-                10,
-                31,
-                0,
-                &FRAME,
-                |b| u32::from(checksum(rt::covered(b, 2))),
-            )?;
+            let address = RESPONSE_CHECKS.check(frame, frame_sum)?;
             LENGTH.check(frame)?;
             let message = Self::dispatch(frame)?;
             if let rt::Some(request) = request {
@@ -820,7 +825,7 @@ pub mod ubx_fixed_blocks {
         /// The message of a frame that passed the checks every frame passes, by its code.
         #[inline]
         fn dispatch(frame: &[u8]) -> rt::DecodeResult<Self> {
-            match rt::code(frame, 2, 2) {
+            match u16::from_be_bytes([frame[2], frame[3]]) {
                 0x0136 => {
                     let s = LISTS_SAT_BLOCKS.split::<13, 1>(frame)?;
                     let frame = &s.frame;
@@ -929,15 +934,7 @@ pub mod ubx_fixed_blocks {
         /// checksum and address, then its code, constants, repeated fields, the ranges the
         /// spec gives its fields and the command's broadcast rule.
         pub fn decode(frame: &'a [u8]) -> rt::Result<Decoded<Self>, rt::DecodeError> {
-            rt::check_sync(frame, 23, 0, &[0xB5, 0x62])?;
-            let address = rt::check_frame(
-                frame,
-                8,
-                23,
-                0,
-                &FRAME,
-                |b| u32::from(checksum(rt::covered(b, 2))),
-            )?;
+            let address = REQUEST_CHECKS.check(frame, frame_sum)?;
             LENGTH.check(frame)?;
             let message = Self::dispatch(frame)?;
             rt::Ok(Decoded { address, message })
@@ -945,7 +942,7 @@ pub mod ubx_fixed_blocks {
         /// The message of a frame that passed the checks every frame passes, by its code.
         #[inline]
         fn dispatch(frame: &'a [u8]) -> rt::DecodeResult<Self> {
-            match rt::code(frame, 2, 2) {
+            match u16::from_be_bytes([frame[2], frame[3]]) {
                 0x0136 => {
                     rt::fixed::<8>(frame, &request::PollSatBlocks::DESC)
                         .map(|_| Self::PollSatBlocks)
@@ -1142,14 +1139,7 @@ pub mod ubx_fixed_blocks {
         }
         fn checksum_ok(frame: &[u8]) -> bool {
             match frame.len().checked_sub(2) {
-                rt::Some(n) if n > 0 => {
-                    rt::check_sum(
-                        frame,
-                        n,
-                        &FRAME,
-                        |b| u32::from(checksum(rt::covered(b, 2))),
-                    )
-                }
+                rt::Some(n) if n > 0 => rt::check_sum(frame, n, &FRAME, frame_sum),
                 _ => false,
             }
         }

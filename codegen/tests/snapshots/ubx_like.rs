@@ -90,6 +90,27 @@ pub mod ubx_like {
     pub fn checksum(bytes: &[u8]) -> u16 {
         rt::fletcher8(bytes)
     }
+    /// The checksum a frame carries, as the frame checks compare it: over the bytes before it from offset 2 on.
+    #[inline]
+    fn frame_sum(bytes: &[u8]) -> u32 {
+        u32::from(checksum(rt::covered(bytes, 2)))
+    }
+    /// The checks every request passes before its code is read: 8 to 14 bytes, then its sync bytes (B5 62 at offset 0), its checksum.
+    const REQUEST_CHECKS: rt::FrameChecks = rt::FrameChecks {
+        sync: &[(0, &[0xB5, 0x62])],
+        frame: &FRAME,
+        min: 8,
+        max: 14,
+        address_at: 0,
+    };
+    /// The checks every response passes before its code is read: 10 to 976 bytes, then its sync bytes (B5 62 at offset 0), its checksum.
+    const RESPONSE_CHECKS: rt::FrameChecks = rt::FrameChecks {
+        sync: &[(0, &[0xB5, 0x62])],
+        frame: &FRAME,
+        min: 10,
+        max: 976,
+        address_at: 0,
+    };
     /// meters
     ///
     /// Physical value = raw × 0.1.
@@ -257,22 +278,14 @@ pub mod ubx_like {
                     rt::frame_mut::<8>(buf, &[0xB5, 0x62, 0x01, 0x35, 0x00, 0x00])?.len()
                 }
             };
-            rt::seal(buf, len, |b| u32::from(checksum(rt::covered(b, 2))), 2, false);
+            FRAME.seal(buf, len, frame_sum);
             rt::Ok(len)
         }
         /// Decodes one whole frame: refuses one longer than the longest, checks its start byte,
         /// checksum and address, then its code, constants, repeated fields, the ranges the
         /// spec gives its fields and the command's broadcast rule.
         pub fn decode(frame: &[u8]) -> rt::Result<Decoded<Request>, rt::DecodeError> {
-            rt::check_sync(frame, 14, 0, &[0xB5, 0x62])?;
-            let address = rt::check_frame(
-                frame,
-                8,
-                14,
-                0,
-                &FRAME,
-                |b| u32::from(checksum(rt::covered(b, 2))),
-            )?;
+            let address = REQUEST_CHECKS.check(frame, frame_sum)?;
             LENGTH.check(frame)?;
             let message = Self::dispatch(frame)?;
             rt::Ok(Decoded { address, message })
@@ -280,7 +293,7 @@ pub mod ubx_like {
         /// The message of a frame that passed the checks every frame passes, by its code.
         #[inline]
         fn dispatch(frame: &[u8]) -> rt::DecodeResult<Self> {
-            match rt::code(frame, 2, 2) {
+            match u16::from_be_bytes([frame[2], frame[3]]) {
                 0x0608 => {
                     let mut g = rt::Group::new(frame, 0x0608, rt::None);
                     g.attempt(|_: &[u8; 8]| rt::Ok(Self::PollRate(request::PollRate)));
@@ -684,7 +697,7 @@ pub mod ubx_like {
                     out.len()
                 }
             };
-            rt::seal(buf, len, |b| u32::from(checksum(rt::covered(b, 2))), 2, false);
+            FRAME.seal(buf, len, frame_sum);
             rt::Ok(len)
         }
         /// Decodes one whole frame: refuses one longer than the longest, checks its start byte,
@@ -713,15 +726,7 @@ pub mod ubx_like {
             frame: &[u8],
             request: rt::Option<&Request>,
         ) -> rt::Result<Decoded<Response>, rt::DecodeError> {
-            rt::check_sync(frame, 976, 0, &[0xB5, 0x62])?;
-            let address = rt::check_frame(
-                frame,
-                10,
-                976,
-                0,
-                &FRAME,
-                |b| u32::from(checksum(rt::covered(b, 2))),
-            )?;
+            let address = RESPONSE_CHECKS.check(frame, frame_sum)?;
             LENGTH.check(frame)?;
             let message = Self::dispatch(frame)?;
             if let rt::Some(request) = request {
@@ -734,7 +739,7 @@ pub mod ubx_like {
         /// The message of a frame that passed the checks every frame passes, by its code.
         #[inline]
         fn dispatch(frame: &[u8]) -> rt::DecodeResult<Self> {
-            match rt::code(frame, 2, 2) {
+            match u16::from_be_bytes([frame[2], frame[3]]) {
                 0x0608 => {
                     let frame = rt::fixed::<14>(frame, &response::Rate::DESC)?;
                     rt::Ok(
@@ -991,14 +996,7 @@ pub mod ubx_like {
         }
         fn checksum_ok(frame: &[u8]) -> bool {
             match frame.len().checked_sub(2) {
-                rt::Some(n) if n > 0 => {
-                    rt::check_sum(
-                        frame,
-                        n,
-                        &FRAME,
-                        |b| u32::from(checksum(rt::covered(b, 2))),
-                    )
-                }
+                rt::Some(n) if n > 0 => rt::check_sum(frame, n, &FRAME, frame_sum),
                 _ => false,
             }
         }

@@ -90,6 +90,27 @@ pub mod unaddressed {
     pub fn checksum(bytes: &[u8]) -> u8 {
         rt::xor8(bytes)
     }
+    /// The checksum a frame carries, as the frame checks compare it: over the bytes before it from offset 2 on.
+    #[inline]
+    fn frame_sum(bytes: &[u8]) -> u32 {
+        u32::from(checksum(rt::covered(bytes, 2)))
+    }
+    /// The checks every request passes before its code is read: 5 to 7 bytes, then its sync bytes (A5 5A at offset 0), its checksum.
+    const REQUEST_CHECKS: rt::FrameChecks = rt::FrameChecks {
+        sync: &[(0, &[0xA5, 0x5A])],
+        frame: &FRAME,
+        min: 5,
+        max: 7,
+        address_at: 0,
+    };
+    /// The checks every response passes before its code is read: 5 to 9 bytes, then its sync bytes (A5 5A at offset 0), its checksum.
+    const RESPONSE_CHECKS: rt::FrameChecks = rt::FrameChecks {
+        sync: &[(0, &[0xA5, 0x5A])],
+        frame: &FRAME,
+        min: 5,
+        max: 9,
+        address_at: 0,
+    };
     /// Temperature in hundredths of a degree.
     ///
     /// Physical value = raw × 0.01.
@@ -194,22 +215,14 @@ pub mod unaddressed {
                     rt::frame_mut::<5>(buf, &[0xA5, 0x5A, 0x01, 0x30])?.len()
                 }
             };
-            rt::seal(buf, len, |b| u32::from(checksum(rt::covered(b, 2))), 1, false);
+            FRAME.seal(buf, len, frame_sum);
             rt::Ok(len)
         }
         /// Decodes one whole frame: refuses one longer than the longest, checks its start byte,
         /// checksum and address, then its code, constants, repeated fields, the ranges the
         /// spec gives its fields and the command's broadcast rule.
         pub fn decode(frame: &[u8]) -> rt::Result<Decoded<Request>, rt::DecodeError> {
-            rt::check_sync(frame, 7, 0, &[0xA5, 0x5A])?;
-            let address = rt::check_frame(
-                frame,
-                5,
-                7,
-                0,
-                &FRAME,
-                |b| u32::from(checksum(rt::covered(b, 2))),
-            )?;
+            let address = REQUEST_CHECKS.check(frame, frame_sum)?;
             LENGTH.check(frame)?;
             let message = Self::dispatch(frame)?;
             rt::Ok(Decoded { address, message })
@@ -217,7 +230,7 @@ pub mod unaddressed {
         /// The message of a frame that passed the checks every frame passes, by its code.
         #[inline]
         fn dispatch(frame: &[u8]) -> rt::DecodeResult<Self> {
-            match rt::code(frame, 3, 1) {
+            match frame[3] {
                 0x10 => {
                     rt::fixed::<5>(frame, &request::ReadTemperature::DESC)
                         .map(|_| Self::ReadTemperature(request::ReadTemperature))
@@ -383,7 +396,7 @@ pub mod unaddressed {
                     out.len()
                 }
             };
-            rt::seal(buf, len, |b| u32::from(checksum(rt::covered(b, 2))), 1, false);
+            FRAME.seal(buf, len, frame_sum);
             rt::Ok(len)
         }
         /// Decodes one whole frame: refuses one longer than the longest, checks its start byte,
@@ -412,15 +425,7 @@ pub mod unaddressed {
             frame: &[u8],
             request: rt::Option<&Request>,
         ) -> rt::Result<Decoded<Response>, rt::DecodeError> {
-            rt::check_sync(frame, 9, 0, &[0xA5, 0x5A])?;
-            let address = rt::check_frame(
-                frame,
-                5,
-                9,
-                0,
-                &FRAME,
-                |b| u32::from(checksum(rt::covered(b, 2))),
-            )?;
+            let address = RESPONSE_CHECKS.check(frame, frame_sum)?;
             LENGTH.check(frame)?;
             let message = Self::dispatch(frame)?;
             if let rt::Some(request) = request {
@@ -433,7 +438,7 @@ pub mod unaddressed {
         /// The message of a frame that passed the checks every frame passes, by its code.
         #[inline]
         fn dispatch(frame: &[u8]) -> rt::DecodeResult<Self> {
-            match rt::code(frame, 3, 1) {
+            match frame[3] {
                 0x90 => {
                     let frame = rt::fixed::<7>(frame, &response::Temperature::DESC)?;
                     let field_0: i16 = i16::from_le_bytes([frame[4], frame[5]]);
@@ -635,14 +640,7 @@ pub mod unaddressed {
         }
         fn checksum_ok(frame: &[u8]) -> bool {
             match frame.len().checked_sub(1) {
-                rt::Some(n) if n > 0 => {
-                    rt::check_sum(
-                        frame,
-                        n,
-                        &FRAME,
-                        |b| u32::from(checksum(rt::covered(b, 2))),
-                    )
-                }
+                rt::Some(n) if n > 0 => rt::check_sum(frame, n, &FRAME, frame_sum),
                 _ => false,
             }
         }

@@ -90,6 +90,27 @@ pub mod vario {
     pub fn checksum(bytes: &[u8]) -> u8 {
         rt::xor8(bytes)
     }
+    /// The checksum a frame carries, as the frame checks compare it: over the bytes before it from offset 2 on.
+    #[inline]
+    fn frame_sum(bytes: &[u8]) -> u32 {
+        u32::from(checksum(rt::covered(bytes, 2)))
+    }
+    /// The checks every request passes before its code is read: 9 to 40 bytes, then its sync bytes (A5 5A at offset 0), its checksum, its address (offset 2).
+    const REQUEST_CHECKS: rt::FrameChecks = rt::FrameChecks {
+        sync: &[(0, &[0xA5, 0x5A])],
+        frame: &FRAME,
+        min: 9,
+        max: 40,
+        address_at: 2,
+    };
+    /// The checks every response passes before its code is read: 7 to 38 bytes, then its sync bytes (A5 5A at offset 0), its checksum, its address (offset 2).
+    const RESPONSE_CHECKS: rt::FrameChecks = rt::FrameChecks {
+        sync: &[(0, &[0xA5, 0x5A])],
+        frame: &FRAME,
+        min: 7,
+        max: 38,
+        address_at: 2,
+    };
     /// Where `write.values` sits in the frame and how its elements are counted.
     pub const REPEAT_WRITE: rt::RepeatAt = rt::RepeatAt {
         field: &request::Write::VALUES_DESC,
@@ -206,22 +227,14 @@ pub mod vario {
                     out.len()
                 }
             };
-            rt::seal(buf, len, |b| u32::from(checksum(rt::covered(b, 2))), 1, true);
+            FRAME.seal(buf, len, frame_sum);
             rt::Ok(len)
         }
         /// Decodes one whole frame: refuses one longer than the longest, checks its start byte,
         /// checksum and address, then its code, constants, repeated fields, the ranges the
         /// spec gives its fields and the command's broadcast rule.
         pub fn decode(frame: &[u8]) -> rt::Result<Decoded<Request>, rt::DecodeError> {
-            rt::check_sync(frame, 40, 0, &[0xA5, 0x5A])?;
-            let address = rt::check_frame(
-                frame,
-                9,
-                40,
-                2,
-                &FRAME,
-                |b| u32::from(checksum(rt::covered(b, 2))),
-            )?;
+            let address = REQUEST_CHECKS.check(frame, frame_sum)?;
             LENGTH.check(frame)?;
             let message = Self::dispatch(frame)?;
             rt::Ok(Decoded { address, message })
@@ -229,7 +242,7 @@ pub mod vario {
         /// The message of a frame that passed the checks every frame passes, by its code.
         #[inline]
         fn dispatch(frame: &[u8]) -> rt::DecodeResult<Self> {
-            match rt::code(frame, 4, 1) {
+            match frame[4] {
                 0x01 => {
                     let frame = rt::fixed::<9>(frame, &request::Read::DESC)?;
                     rt::in_range(&request::Read::QUANTITY_DESC, 7, frame[7], 1, 16)?;
@@ -447,7 +460,7 @@ pub mod vario {
                     out.len()
                 }
             };
-            rt::seal(buf, len, |b| u32::from(checksum(rt::covered(b, 2))), 1, true);
+            FRAME.seal(buf, len, frame_sum);
             rt::Ok(len)
         }
         /// Decodes one whole frame: refuses one longer than the longest, checks its start byte,
@@ -476,15 +489,7 @@ pub mod vario {
             frame: &[u8],
             request: rt::Option<&Request>,
         ) -> rt::Result<Decoded<Response>, rt::DecodeError> {
-            rt::check_sync(frame, 38, 0, &[0xA5, 0x5A])?;
-            let address = rt::check_frame(
-                frame,
-                7,
-                38,
-                2,
-                &FRAME,
-                |b| u32::from(checksum(rt::covered(b, 2))),
-            )?;
+            let address = RESPONSE_CHECKS.check(frame, frame_sum)?;
             LENGTH.check(frame)?;
             let message = Self::dispatch(frame)?;
             if let rt::Some(request) = request {
@@ -498,7 +503,7 @@ pub mod vario {
         /// The message of a frame that passed the checks every frame passes, by its code.
         #[inline]
         fn dispatch(frame: &[u8]) -> rt::DecodeResult<Self> {
-            match rt::code(frame, 4, 1) {
+            match frame[4] {
                 0x01 => {
                     let (_, elements, _) = REPEAT_READ_REPLY.split::<5>(frame)?;
                     rt::Ok(
@@ -624,15 +629,7 @@ pub mod vario {
         /// checksum and address, then its code, constants, repeated fields, the ranges the
         /// spec gives its fields and the command's broadcast rule.
         pub fn decode(frame: &'a [u8]) -> rt::Result<Decoded<Self>, rt::DecodeError> {
-            rt::check_sync(frame, 40, 0, &[0xA5, 0x5A])?;
-            let address = rt::check_frame(
-                frame,
-                9,
-                40,
-                2,
-                &FRAME,
-                |b| u32::from(checksum(rt::covered(b, 2))),
-            )?;
+            let address = REQUEST_CHECKS.check(frame, frame_sum)?;
             LENGTH.check(frame)?;
             let message = Self::dispatch(frame)?;
             rt::Ok(Decoded { address, message })
@@ -640,7 +637,7 @@ pub mod vario {
         /// The message of a frame that passed the checks every frame passes, by its code.
         #[inline]
         fn dispatch(frame: &'a [u8]) -> rt::DecodeResult<Self> {
-            match rt::code(frame, 4, 1) {
+            match frame[4] {
                 0x01 => {
                     let frame = rt::fixed::<9>(frame, &request::Read::DESC)?;
                     rt::in_range(&request::Read::QUANTITY_DESC, 7, frame[7], 1, 16)?;
@@ -739,15 +736,7 @@ pub mod vario {
             frame: &'a [u8],
             request: rt::Option<&Request>,
         ) -> rt::Result<Decoded<Self>, rt::DecodeError> {
-            rt::check_sync(frame, 38, 0, &[0xA5, 0x5A])?;
-            let address = rt::check_frame(
-                frame,
-                7,
-                38,
-                2,
-                &FRAME,
-                |b| u32::from(checksum(rt::covered(b, 2))),
-            )?;
+            let address = RESPONSE_CHECKS.check(frame, frame_sum)?;
             LENGTH.check(frame)?;
             let message = Self::dispatch(frame)?;
             if let rt::Some(request) = request {
@@ -761,7 +750,7 @@ pub mod vario {
         /// The message of a frame that passed the checks every frame passes, by its code.
         #[inline]
         fn dispatch(frame: &'a [u8]) -> rt::DecodeResult<Self> {
-            match rt::code(frame, 4, 1) {
+            match frame[4] {
                 0x01 => {
                     let (_, elements, _) = REPEAT_READ_REPLY.split::<5>(frame)?;
                     rt::Ok(Self::ReadReply {
@@ -992,14 +981,7 @@ pub mod vario {
         }
         fn checksum_ok(frame: &[u8]) -> bool {
             match frame.len().checked_sub(1) {
-                rt::Some(n) if n > 0 => {
-                    rt::check_sum(
-                        frame,
-                        n,
-                        &FRAME,
-                        |b| u32::from(checksum(rt::covered(b, 2))),
-                    )
-                }
+                rt::Some(n) if n > 0 => rt::check_sum(frame, n, &FRAME, frame_sum),
                 _ => false,
             }
         }

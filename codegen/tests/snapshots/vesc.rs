@@ -116,6 +116,27 @@ pub mod vesc {
     pub fn checksum(bytes: &[u8]) -> u16 {
         CRC.checksum(bytes)
     }
+    /// The checksum a frame carries, as the frame checks compare it: over the bytes before it from offset 3 on.
+    #[inline]
+    fn frame_sum(bytes: &[u8]) -> u32 {
+        u32::from(checksum(rt::covered(bytes, 3)))
+    }
+    /// The checks every request passes before its code is read: 7 to 523 bytes, then its start byte, its end bytes, its checksum.
+    const REQUEST_CHECKS: rt::FrameChecks = rt::FrameChecks {
+        sync: &[],
+        frame: &FRAME,
+        min: 7,
+        max: 523,
+        address_at: 0,
+    };
+    /// The checks every response passes before its code is read: 9 to 69 bytes, then its start byte, its end bytes, its checksum.
+    const RESPONSE_CHECKS: rt::FrameChecks = rt::FrameChecks {
+        sync: &[],
+        frame: &FRAME,
+        min: 9,
+        max: 69,
+        address_at: 0,
+    };
     /// duty
     ///
     /// Physical value = raw × 0.00001.
@@ -622,7 +643,7 @@ pub mod vesc {
                     rt::frame_mut::<7>(buf, &[0x02, 0x00, 0x01, 0x1E])?.len()
                 }
             };
-            rt::seal_end(buf, len, |b| u32::from(checksum(rt::covered(b, 3))), &FRAME);
+            FRAME.seal(buf, len, frame_sum);
             rt::Ok(len)
         }
         /// Decodes one whole frame: refuses one longer than the longest, checks its start byte,
@@ -637,14 +658,7 @@ pub mod vesc {
         fn decode_laid_out(
             frame: &[u8],
         ) -> rt::Result<Decoded<Request>, rt::DecodeError> {
-            let address = rt::check_frame(
-                frame,
-                7,
-                523,
-                0,
-                &FRAME,
-                |b| u32::from(checksum(rt::covered(b, 3))),
-            )?;
+            let address = REQUEST_CHECKS.check(frame, frame_sum)?;
             LENGTH.check(frame)?;
             let message = Self::dispatch(frame)?;
             rt::Ok(Decoded { address, message })
@@ -652,7 +666,7 @@ pub mod vesc {
         /// The message of a frame that passed the checks every frame passes, by its code.
         #[inline]
         fn dispatch(frame: &[u8]) -> rt::DecodeResult<Self> {
-            match rt::code(frame, 3, 1) {
+            match frame[3] {
                 0x00 => {
                     rt::fixed::<7>(frame, &request::FwVersion::DESC)
                         .map(|_| Self::FwVersion(request::FwVersion))
@@ -1003,7 +1017,7 @@ pub mod vesc {
                     out.len()
                 }
             };
-            rt::seal_end(buf, len, |b| u32::from(checksum(rt::covered(b, 3))), &FRAME);
+            FRAME.seal(buf, len, frame_sum);
             rt::Ok(len)
         }
         /// Decodes one whole frame: refuses one longer than the longest, checks its start byte,
@@ -1041,14 +1055,7 @@ pub mod vesc {
             frame: &[u8],
             request: rt::Option<&Request>,
         ) -> rt::Result<Decoded<Response>, rt::DecodeError> {
-            let address = rt::check_frame(
-                frame,
-                9,
-                69,
-                0,
-                &FRAME,
-                |b| u32::from(checksum(rt::covered(b, 3))),
-            )?;
+            let address = RESPONSE_CHECKS.check(frame, frame_sum)?;
             LENGTH.check(frame)?;
             let message = Self::dispatch(frame)?;
             if let rt::Some(request) = request {
@@ -1061,7 +1068,7 @@ pub mod vesc {
         /// The message of a frame that passed the checks every frame passes, by its code.
         #[inline]
         fn dispatch(frame: &[u8]) -> rt::DecodeResult<Self> {
-            match rt::code(frame, 3, 1) {
+            match frame[3] {
                 0x00 => {
                     let (frame, elements, _) = REPEAT_FW_VERSION_REPLY
                         .split::<6>(frame)?;
@@ -1388,14 +1395,7 @@ pub mod vesc {
                 return false;
             };
             match frame.len().checked_sub(3) {
-                rt::Some(n) if n > 0 => {
-                    rt::check_sum(
-                        frame,
-                        n,
-                        &FRAME,
-                        |b| u32::from(checksum(rt::covered(b, 3))),
-                    )
-                }
+                rt::Some(n) if n > 0 => rt::check_sum(frame, n, &FRAME, frame_sum),
                 _ => false,
             }
         }

@@ -112,6 +112,27 @@ pub mod xbee_api2 {
     pub fn checksum(bytes: &[u8]) -> u8 {
         rt::sum8_ones(bytes)
     }
+    /// The checksum a frame carries, as the frame checks compare it: over the bytes before it from offset 3 on.
+    #[inline]
+    fn frame_sum(bytes: &[u8]) -> u32 {
+        u32::from(checksum(rt::covered(bytes, 3)))
+    }
+    /// The checks every request passes before its code is read: 8 to 90 bytes, then its start byte, its checksum.
+    const REQUEST_CHECKS: rt::FrameChecks = rt::FrameChecks {
+        sync: &[],
+        frame: &FRAME,
+        min: 8,
+        max: 90,
+        address_at: 0,
+    };
+    /// The checks every response passes before its code is read: 6 to 88 bytes, then its start byte, its checksum.
+    const RESPONSE_CHECKS: rt::FrameChecks = rt::FrameChecks {
+        sync: &[],
+        frame: &FRAME,
+        min: 6,
+        max: 88,
+        address_at: 0,
+    };
     ///  (§0x88 AT Command Response)
     ///
     /// Open: a value this revision does not list decodes as `Unknown(raw)` and re-encodes unchanged.
@@ -384,12 +405,7 @@ pub mod xbee_api2 {
         pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             let mut plain = [0u8; UNESCAPED_LEN];
             let len = self.encode_unescaped(address, &mut plain)?;
-            rt::escape_frame(
-                &ESCAPING,
-                &plain[..len],
-                buf,
-                |b| u32::from(checksum(rt::covered(b, 3))),
-            )
+            rt::escape_frame(&ESCAPING, &plain[..len], buf, frame_sum)
         }
         /// The frame before escaping, into `buf`.
         fn encode_unescaped(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
@@ -434,7 +450,7 @@ pub mod xbee_api2 {
                     out.len()
                 }
             };
-            rt::seal(buf, len, |b| u32::from(checksum(rt::covered(b, 3))), 1, true);
+            FRAME.seal(buf, len, frame_sum);
             rt::Ok(len)
         }
         /// Decodes one whole frame: refuses one longer than the longest, checks its start byte,
@@ -442,12 +458,7 @@ pub mod xbee_api2 {
         /// spec gives its fields and the command's broadcast rule.
         pub fn decode(frame: &[u8]) -> rt::Result<Decoded<Request>, rt::DecodeError> {
             let mut plain = [0u8; UNESCAPED_LEN];
-            let un = rt::unescape_frame(
-                &ESCAPING,
-                frame,
-                &mut plain,
-                |b| u32::from(checksum(rt::covered(b, 3))),
-            )?;
+            let un = rt::unescape_frame(&ESCAPING, frame, &mut plain, frame_sum)?;
             let rt::Some(plain) = plain.get(..un.len) else {
                 return rt::Err(rt::DecodeError::TooLong {
                     max: 90,
@@ -460,14 +471,7 @@ pub mod xbee_api2 {
         fn decode_unescaped(
             frame: &[u8],
         ) -> rt::Result<Decoded<Request>, rt::DecodeError> {
-            let address = rt::check_frame(
-                frame,
-                8,
-                90,
-                0,
-                &FRAME,
-                |b| u32::from(checksum(rt::covered(b, 3))),
-            )?;
+            let address = REQUEST_CHECKS.check(frame, frame_sum)?;
             LENGTH.check(frame)?;
             let message = Self::dispatch(frame)?;
             rt::Ok(Decoded { address, message })
@@ -475,7 +479,7 @@ pub mod xbee_api2 {
         /// The message of a frame that passed the checks every frame passes, by its code.
         #[inline]
         fn dispatch(frame: &[u8]) -> rt::DecodeResult<Self> {
-            match rt::code(frame, 3, 1) {
+            match frame[3] {
                 0x08 => {
                     let (frame, elements, _) = REPEAT_AT_COMMAND.split::<7>(frame)?;
                     rt::Ok(
@@ -691,12 +695,7 @@ pub mod xbee_api2 {
         pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             let mut plain = [0u8; UNESCAPED_LEN];
             let len = self.encode_unescaped(address, &mut plain)?;
-            rt::escape_frame(
-                &ESCAPING,
-                &plain[..len],
-                buf,
-                |b| u32::from(checksum(rt::covered(b, 3))),
-            )
+            rt::escape_frame(&ESCAPING, &plain[..len], buf, frame_sum)
         }
         /// The frame before escaping, into `buf`.
         fn encode_unescaped(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
@@ -761,7 +760,7 @@ pub mod xbee_api2 {
                     out.len()
                 }
             };
-            rt::seal(buf, len, |b| u32::from(checksum(rt::covered(b, 3))), 1, true);
+            FRAME.seal(buf, len, frame_sum);
             rt::Ok(len)
         }
         /// Decodes one whole frame: refuses one longer than the longest, checks its start byte,
@@ -791,12 +790,7 @@ pub mod xbee_api2 {
             request: rt::Option<&Request>,
         ) -> rt::Result<Decoded<Response>, rt::DecodeError> {
             let mut plain = [0u8; UNESCAPED_LEN];
-            let un = rt::unescape_frame(
-                &ESCAPING,
-                frame,
-                &mut plain,
-                |b| u32::from(checksum(rt::covered(b, 3))),
-            )?;
+            let un = rt::unescape_frame(&ESCAPING, frame, &mut plain, frame_sum)?;
             let rt::Some(plain) = plain.get(..un.len) else {
                 return rt::Err(rt::DecodeError::TooLong {
                     max: 88,
@@ -810,14 +804,7 @@ pub mod xbee_api2 {
             frame: &[u8],
             request: rt::Option<&Request>,
         ) -> rt::Result<Decoded<Response>, rt::DecodeError> {
-            let address = rt::check_frame(
-                frame,
-                6,
-                88,
-                0,
-                &FRAME,
-                |b| u32::from(checksum(rt::covered(b, 3))),
-            )?;
+            let address = RESPONSE_CHECKS.check(frame, frame_sum)?;
             LENGTH.check(frame)?;
             let message = Self::dispatch(frame)?;
             if let rt::Some(request) = request {
@@ -830,7 +817,7 @@ pub mod xbee_api2 {
         /// The message of a frame that passed the checks every frame passes, by its code.
         #[inline]
         fn dispatch(frame: &[u8]) -> rt::DecodeResult<Self> {
-            match rt::code(frame, 3, 1) {
+            match frame[3] {
                 0x88 => {
                     let (frame, elements, _) = REPEAT_AT_RESPONSE.split::<8>(frame)?;
                     rt::Ok(
@@ -1041,12 +1028,7 @@ pub mod xbee_api2 {
         }
         fn checksum_ok(frame: &[u8]) -> bool {
             let mut plain = [0u8; UNESCAPED_LEN];
-            let un = match rt::unescape_frame(
-                &ESCAPING,
-                frame,
-                &mut plain,
-                |b| u32::from(checksum(rt::covered(b, 3))),
-            ) {
+            let un = match rt::unescape_frame(&ESCAPING, frame, &mut plain, frame_sum) {
                 rt::Ok(un) => un,
                 rt::Err(_) => return false,
             };
@@ -1054,14 +1036,7 @@ pub mod xbee_api2 {
                 return false;
             };
             match frame.len().checked_sub(1) {
-                rt::Some(n) if n > 0 => {
-                    rt::check_sum(
-                        frame,
-                        n,
-                        &FRAME,
-                        |b| u32::from(checksum(rt::covered(b, 3))),
-                    )
-                }
+                rt::Some(n) if n > 0 => rt::check_sum(frame, n, &FRAME, frame_sum),
                 _ => false,
             }
         }
