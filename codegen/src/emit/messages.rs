@@ -238,28 +238,24 @@ fn struct_fields(ctx: &Ctx, m: &Message, ls: &[Leaf]) -> Vec<TokenStream> {
         .collect()
 }
 
-/// The doc of message `m`'s struct: its section, title, code or constant frame, and length.
+/// The doc of message `m`'s struct: its title, section, code or constant frame, and length:
+/// `Read (§Read; code `0x02`, 8 bytes). …`.
 fn message_doc(m: &Message) -> TokenStream {
     let size = match len_range(m) {
         (lo, hi) if lo == hi => format!("{lo} bytes"),
         (lo, hi) => format!("{lo} to {hi} bytes"),
     };
-    match &m.frame {
-        Some(bytes) => doc(&format!(
-            "§{} {} (constant frame `{}`, {size}). {}",
-            m.section,
-            m.title,
-            hex_spaced(bytes),
-            m.doc
-        )),
-        None => doc(&format!(
-            "§{} {} (code `{}`, {size}). {}",
-            m.section,
-            m.title,
-            m.code_hex(),
-            m.doc
-        )),
-    }
+    let what = match &m.frame {
+        Some(bytes) => format!("constant frame `{}`", hex_spaced(bytes)),
+        None if m.code.is_empty() => "no code".to_string(),
+        None => format!("code `{}`", m.code_hex()),
+    };
+    let section = if m.section.is_empty() {
+        String::new()
+    } else {
+        format!("§{}; ", m.section)
+    };
+    doc(&format!("{} ({section}{what}, {size}). {}", m.title, m.doc))
 }
 
 /// `frame_len`'s arm for message `m` where its length varies (optional fields, lists).

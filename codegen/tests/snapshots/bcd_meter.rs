@@ -699,12 +699,12 @@ pub mod bcd_meter {
     /// refusals do: name, code and the frame lengths of its code; `QUANTITY_DESC`, each
     /// field a refusal names) and methods are in the `impl` of each.
     pub mod request {
-        /// §3.1 Read the energy register (code `0x11`, 5 bytes).
+        /// Read the energy register (§3.1; code `0x11`, 5 bytes).
         #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
         #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
         #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]
         pub struct ReadEnergy;
-        /// §3.2 Set the clock (code `0x08`, 9 bytes).
+        /// Set the clock (§3.2; code `0x08`, 9 bytes).
         #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
         #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
         #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]
@@ -720,7 +720,7 @@ pub mod bcd_meter {
     }
     /// Each response as a struct of its own.
     pub mod response {
-        /// §4.1 Energy register (code `0x91`, 10 bytes).
+        /// Energy register (§4.1; code `0x91`, 10 bytes).
         #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
         #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
         #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]
@@ -731,7 +731,7 @@ pub mod bcd_meter {
             /// Valid raw range 1..=4.
             pub tariff: u8,
         }
-        /// §4.2 Acknowledge (code `0x88`, 5 bytes).
+        /// Acknowledge (§4.2; code `0x88`, 5 bytes).
         #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
         #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
         #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]

@@ -732,12 +732,12 @@ pub mod cobs_link {
     /// refusals do: name, code and the frame lengths of its code; `QUANTITY_DESC`, each
     /// field a refusal names) and methods are in the `impl` of each.
     pub mod request {
-        /// §3.1 Read position (code `0x10`, 4 bytes).
+        /// Read position (§3.1; code `0x10`, 4 bytes).
         #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
         #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
         #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]
         pub struct ReadPosition;
-        /// §3.2 Set speed (code `0x20`, 6 bytes).
+        /// Set speed (§3.2; code `0x20`, 6 bytes).
         #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
         #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
         #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]
@@ -745,7 +745,7 @@ pub mod cobs_link {
         pub struct SetSpeed {
             pub speed: u16,
         }
-        /// §3.3 Read the log (code `0x30`, 4 bytes).
+        /// Read the log (§3.3; code `0x30`, 4 bytes).
         #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
         #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
         #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]
@@ -753,7 +753,7 @@ pub mod cobs_link {
     }
     /// Each response as a struct of its own.
     pub mod response {
-        /// §4.1 Position (code `0x90`, 8 bytes).
+        /// Position (§4.1; code `0x90`, 8 bytes).
         #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
         #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
         #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]
@@ -762,12 +762,12 @@ pub mod cobs_link {
             /// \[steps\]
             pub position: i32,
         }
-        /// §4.2 Acknowledge (code `0xA0`, 4 bytes).
+        /// Acknowledge (§4.2; code `0xA0`, 4 bytes).
         #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
         #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
         #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]
         pub struct Ack;
-        /// §4.3 Log bytes (code `0xB0`, 4 to 258 bytes).
+        /// Log bytes (§4.3; code `0xB0`, 4 to 258 bytes).
         #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
         #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
         #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]

@@ -658,12 +658,12 @@ pub mod codeless {
     /// refusals do: name, code and the frame lengths of its code; `QUANTITY_DESC`, each
     /// field a refusal names) and methods are in the `impl` of each.
     pub mod request {
-        /// §1 Ping (code `0x01`, 6 bytes).
+        /// Ping (§1; code `0x01`, 6 bytes).
         #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
         #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
         #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]
         pub struct Ping;
-        /// §2 Read (code `0x02`, 7 bytes).
+        /// Read (§2; code `0x02`, 7 bytes).
         #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
         #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
         #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]
@@ -674,7 +674,7 @@ pub mod codeless {
     }
     /// Each response as a struct of its own.
     pub mod response {
-        /// §3 Status (code `0x`, 6 bytes).
+        /// Status (§3; no code, 6 bytes).
         #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
         #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
         #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]
@@ -682,7 +682,7 @@ pub mod codeless {
         pub struct Status {
             pub error: super::Errors,
         }
-        /// §4 Status with a value (code `0x`, 8 bytes).
+        /// Status with a value (§4; no code, 8 bytes).
         #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
         #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
         #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]

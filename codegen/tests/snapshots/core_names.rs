@@ -945,7 +945,7 @@ pub mod clash {
     /// refusals do: name, code and the frame lengths of its code; `QUANTITY_DESC`, each
     /// field a refusal names) and methods are in the `impl` of each.
     pub mod request {
-        /// §1 Option (code `0x10`, 7 bytes).
+        /// Option (§1; code `0x10`, 7 bytes).
         #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
         #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
         #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]
@@ -955,7 +955,7 @@ pub mod clash {
             /// \[O\] Valid raw range 0..=1000.
             pub core: super::Option,
         }
-        /// §2 u8 (code `0x11`, 5 bytes).
+        /// u8 (§2; code `0x11`, 5 bytes).
         #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
         #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
         #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]
@@ -964,7 +964,7 @@ pub mod clash {
             /// \[S\]
             pub frame: super::Some,
         }
-        /// §3 core (code `0x12`, 7 bytes).
+        /// core (§3; code `0x12`, 7 bytes).
         #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
         #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
         #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]
@@ -973,7 +973,7 @@ pub mod clash {
             pub address: u8,
             pub out: i8,
         }
-        /// §4 rt (code `0x13`, 6 bytes).
+        /// rt (§4; code `0x13`, 6 bytes).
         #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
         #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
         #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]
@@ -984,17 +984,17 @@ pub mod clash {
     }
     /// Each response as a struct of its own.
     pub mod response {
-        /// §5 Ok (code `0x50`, 4 bytes).
+        /// Ok (§5; code `0x50`, 4 bytes).
         #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
         #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
         #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]
         pub struct Ok;
-        /// §6 Err (code `0x90`, 4 bytes).
+        /// Err (§6; code `0x90`, 4 bytes).
         #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
         #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
         #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]
         pub struct Err;
-        /// §7 Result (code `0x51`, 7 bytes).
+        /// Result (§7; code `0x51`, 7 bytes).
         #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
         #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
         #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]
@@ -1004,7 +1004,7 @@ pub mod clash {
             /// \[O\]
             pub usize: super::Option,
         }
-        /// §8 usize (code `0x52`, 7 bytes).
+        /// usize (§8; code `0x52`, 7 bytes).
         #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
         #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
         #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]

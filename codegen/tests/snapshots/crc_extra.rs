@@ -811,7 +811,7 @@ pub mod crc_extra {
     /// refusals do: name, code and the frame lengths of its code; `QUANTITY_DESC`, each
     /// field a refusal names) and methods are in the `impl` of each.
     pub mod request {
-        /// §3.1 PING (4) (code `0x04`, 19 bytes).
+        /// PING (4) (§3.1; code `0x04`, 19 bytes).
         #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
         #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
         #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]
@@ -823,7 +823,7 @@ pub mod crc_extra {
             pub target_system: u8,
             pub target_component: u8,
         }
-        /// §3.2 REQUEST_DATA_STREAM (66) (code `0x42`, 11 bytes).
+        /// REQUEST_DATA_STREAM (66) (§3.2; code `0x42`, 11 bytes).
         #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
         #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
         #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]
@@ -840,7 +840,7 @@ pub mod crc_extra {
     }
     /// Each response as a struct of its own.
     pub mod response {
-        /// §3.1 PING (4), answered (code `0x04`, 19 bytes).
+        /// PING (4), answered (§3.1; code `0x04`, 19 bytes).
         #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
         #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
         #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]
@@ -852,7 +852,7 @@ pub mod crc_extra {
             pub target_system: u8,
             pub target_component: u8,
         }
-        /// §3.3 HEARTBEAT (0) (code `0x00`, 14 bytes).
+        /// HEARTBEAT (0) (§3.3; code `0x00`, 14 bytes).
         #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
         #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
         #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]

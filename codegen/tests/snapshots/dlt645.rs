@@ -1023,7 +1023,7 @@ pub mod dlt645 {
     /// refusals do: name, code and the frame lengths of its code; `QUANTITY_DESC`, each
     /// field a refusal names) and methods are in the `impl` of each.
     pub mod request {
-        /// §7.9 Read the communication address (control code 13H) (code `0x13`, 12 bytes).
+        /// Read the communication address (control code 13H) (§7.9; code `0x13`, 12 bytes).
         #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
         #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
         #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]
@@ -1034,7 +1034,7 @@ pub mod dlt645 {
             /// Address bytes A3..A5 (AA AA AA: every meter)
             pub address_high: u32,
         }
-        /// §7.2 Read data (control code 11H) (code `0x11`, 16 bytes).
+        /// Read data (control code 11H) (§7.2; code `0x11`, 16 bytes).
         #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
         #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
         #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]
@@ -1050,7 +1050,7 @@ pub mod dlt645 {
     }
     /// Each response as a struct of its own.
     pub mod response {
-        /// §7.9 Address reply (control code 93H) (code `0x93`, 18 bytes).
+        /// Address reply (control code 93H) (§7.9; code `0x93`, 18 bytes).
         #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
         #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
         #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]
@@ -1065,7 +1065,7 @@ pub mod dlt645 {
             /// The meter's address bytes A3..A5 (BCD digits)
             pub meter_high: u32,
         }
-        /// §7.2 Read data reply, a 4-byte value (control code 91H) (code `0x91`, 20 bytes).
+        /// Read data reply, a 4-byte value (control code 91H) (§7.2; code `0x91`, 20 bytes).
         #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
         #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
         #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]
@@ -1080,7 +1080,7 @@ pub mod dlt645 {
             /// The value, 8 BCD digits (its decimal point as the data identifier says) Valid raw range 0..=99999999.
             pub value: u32,
         }
-        /// §7.2 Read data reply, the meter number 04000402 (control code 91H) (code `0x91`, 22 bytes).
+        /// Read data reply, the meter number 04000402 (control code 91H) (§7.2; code `0x91`, 22 bytes).
         #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
         #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
         #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]

@@ -1275,12 +1275,12 @@ pub mod dynamixel {
     /// refusals do: name, code and the frame lengths of its code; `QUANTITY_DESC`, each
     /// field a refusal names) and methods are in the `impl` of each.
     pub mod request {
-        /// §Ping Ping (0x01) (code `0x01`, 6 bytes). Asks for a status packet; nothing else happens.
+        /// Ping (0x01) (§Ping; code `0x01`, 6 bytes). Asks for a status packet; nothing else happens.
         #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
         #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
         #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]
         pub struct Ping;
-        /// §Read Read (0x02) (code `0x02`, 8 bytes). Reads `length` bytes of the control table from `address`.
+        /// Read (0x02) (§Read; code `0x02`, 8 bytes). Reads `length` bytes of the control table from `address`.
         #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
         #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
         #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]
@@ -1291,7 +1291,7 @@ pub mod dynamixel {
             /// Length of the data to be read Valid raw range 1..=253.
             pub length: u8,
         }
-        /// §Write Write (0x03) (code `0x03`, 8 to 259 bytes). Writes `data` to the control table from `address`.
+        /// Write (0x03) (§Write; code `0x03`, 8 to 259 bytes). Writes `data` to the control table from `address`.
         #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
         #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
         #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]
@@ -1302,7 +1302,7 @@ pub mod dynamixel {
             /// Data to be written
             pub data: super::rt::Repeated<u8, 252>,
         }
-        /// §Reg Write Reg Write (0x04) (code `0x04`, 8 to 259 bytes). Registers `data` for `address`, to be written at the next ACTION.
+        /// Reg Write (0x04) (§Reg Write; code `0x04`, 8 to 259 bytes). Registers `data` for `address`, to be written at the next ACTION.
         #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
         #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
         #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]
@@ -1313,17 +1313,17 @@ pub mod dynamixel {
             /// Data to be written
             pub data: super::rt::Repeated<u8, 252>,
         }
-        /// §Action Action (0x05) (code `0x05`, 6 bytes). Executes the registered REG_WRITE.
+        /// Action (0x05) (§Action; code `0x05`, 6 bytes). Executes the registered REG_WRITE.
         #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
         #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
         #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]
         pub struct Action;
-        /// §Factory Reset Factory Reset (0x06) (code `0x06`, 6 bytes). Resets the control table to the factory defaults.
+        /// Factory Reset (0x06) (§Factory Reset; code `0x06`, 6 bytes). Resets the control table to the factory defaults.
         #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
         #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
         #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]
         pub struct Reset;
-        /// §Sync Write Sync Write (0x83) (code `0x83`, 10 to 259 bytes). Writes `data_length` bytes at `address` on several devices at once, sent to the broadcast ID. `blocks` holds, for each device, its ID followed by its `data_length` bytes of data (the spec language cannot yet say "records of 1 + data_length bytes", so the blocks are one list of bytes).
+        /// Sync Write (0x83) (§Sync Write; code `0x83`, 10 to 259 bytes). Writes `data_length` bytes at `address` on several devices at once, sent to the broadcast ID. `blocks` holds, for each device, its ID followed by its `data_length` bytes of data (the spec language cannot yet say "records of 1 + data_length bytes", so the blocks are one list of bytes).
         #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
         #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
         #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]
@@ -1339,7 +1339,7 @@ pub mod dynamixel {
     }
     /// Each response as a struct of its own.
     pub mod response {
-        /// §Status Packet Status Packet (code `0x`, 6 bytes). The answer to every instruction but READ: the error byte alone.
+        /// Status Packet (§Status Packet; no code, 6 bytes). The answer to every instruction but READ: the error byte alone.
         #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
         #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
         #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]
@@ -1347,7 +1347,7 @@ pub mod dynamixel {
         pub struct Status {
             pub error: super::StatusError,
         }
-        /// §Read Status Packet (Read) (code `0x`, 7 to 259 bytes). The answer to READ: the error byte and as many bytes as the request asked for.
+        /// Status Packet (Read) (§Read; no code, 7 to 259 bytes). The answer to READ: the error byte and as many bytes as the request asked for.
         #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
         #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
         #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]

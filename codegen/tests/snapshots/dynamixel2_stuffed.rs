@@ -766,12 +766,12 @@ pub mod dynamixel2_stuffed {
     /// refusals do: name, code and the frame lengths of its code; `QUANTITY_DESC`, each
     /// field a refusal names) and methods are in the `impl` of each.
     pub mod request {
-        /// §Ping Ping (code `0x01`, 10 bytes).
+        /// Ping (§Ping; code `0x01`, 10 bytes).
         #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
         #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
         #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]
         pub struct Ping;
-        /// §Write Write (4 bytes) (code `0x03`, 16 bytes).
+        /// Write (4 bytes) (§Write; code `0x03`, 16 bytes).
         #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
         #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
         #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]
@@ -783,7 +783,7 @@ pub mod dynamixel2_stuffed {
     }
     /// Each response as a struct of its own.
     pub mod response {
-        /// §Ping Status packet answering Ping (code `0x55`, 14 bytes).
+        /// Status packet answering Ping (§Ping; code `0x55`, 14 bytes).
         #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
         #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
         #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]
@@ -793,7 +793,7 @@ pub mod dynamixel2_stuffed {
             pub model_number: u16,
             pub firmware_version: u8,
         }
-        /// §Status Packet Status packet without parameters (code `0x55`, 11 bytes).
+        /// Status packet without parameters (§Status Packet; code `0x55`, 11 bytes).
         #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
         #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
         #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]

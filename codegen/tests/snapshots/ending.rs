@@ -1036,7 +1036,7 @@ pub mod ending {
     /// refusals do: name, code and the frame lengths of its code; `QUANTITY_DESC`, each
     /// field a refusal names) and methods are in the `impl` of each.
     pub mod request {
-        /// §1 Read (code `0x01`, 8 bytes).
+        /// Read (§1; code `0x01`, 8 bytes).
         #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
         #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
         #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]
@@ -1046,7 +1046,7 @@ pub mod ending {
             /// Valid raw range 1..=16.
             pub quantity: u8,
         }
-        /// §2 Write (code `0x02`, 9 to 39 bytes).
+        /// Write (§2; code `0x02`, 9 to 39 bytes).
         #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
         #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
         #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]
@@ -1056,7 +1056,7 @@ pub mod ending {
             pub quantity: u8,
             pub values: super::rt::Repeated<u16, 16>,
         }
-        /// §3 Stamp (code `0x03`, 8 bytes).
+        /// Stamp (§3; code `0x03`, 8 bytes).
         #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
         #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
         #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]
@@ -1067,7 +1067,7 @@ pub mod ending {
     }
     /// Each response as a struct of its own.
     pub mod response {
-        /// §1 Read reply (code `0x01`, 7 to 37 bytes).
+        /// Read reply (§1; code `0x01`, 7 to 37 bytes).
         #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
         #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
         #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]
@@ -1075,7 +1075,7 @@ pub mod ending {
         pub struct ReadReply {
             pub values: super::rt::Repeated<u16, 16>,
         }
-        /// §1 Read error (code `0x81`, 6 bytes).
+        /// Read error (§1; code `0x81`, 6 bytes).
         #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
         #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
         #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]
@@ -1083,7 +1083,7 @@ pub mod ending {
         pub struct ReadError {
             pub reason: u8,
         }
-        /// §2 Write reply (code `0x02`, 6 bytes).
+        /// Write reply (§2; code `0x02`, 6 bytes).
         #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
         #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
         #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]

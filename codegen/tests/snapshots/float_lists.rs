@@ -1023,7 +1023,7 @@ pub mod float_lists {
     /// refusals do: name, code and the frame lengths of its code; `QUANTITY_DESC`, each
     /// field a refusal names) and methods are in the `impl` of each.
     pub mod request {
-        /// §3.1 Read a block of float registers (code `0x03`, 8 bytes).
+        /// Read a block of float registers (§3.1; code `0x03`, 8 bytes).
         #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
         #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
         #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]
@@ -1033,12 +1033,12 @@ pub mod float_lists {
             /// Valid raw range 2..=16.
             pub quantity: u16,
         }
-        /// §3.2 Read the energy totals and clock drifts (code `0x41`, 4 bytes).
+        /// Read the energy totals and clock drifts (§3.2; code `0x41`, 4 bytes).
         #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
         #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
         #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]
         pub struct ReadCounters;
-        /// §3.3 Read the temperature samples (code `0x42`, 4 bytes).
+        /// Read the temperature samples (§3.3; code `0x42`, 4 bytes).
         #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
         #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
         #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]
@@ -1046,7 +1046,7 @@ pub mod float_lists {
     }
     /// Each response as a struct of its own.
     pub mod response {
-        /// §4.1 A block of float registers (code `0x03`, 5 to 37 bytes).
+        /// A block of float registers (§4.1; code `0x03`, 5 to 37 bytes).
         #[derive(Debug, Clone, Copy, PartialEq)]
         #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
         #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]
@@ -1055,7 +1055,7 @@ pub mod float_lists {
             /// Each float in two registers, the low one first. \[V\] Valid raw range -1000.0..=1000.0. Its 16-bit words travel swapped.
             pub values: super::rt::Repeated<f32, 8>,
         }
-        /// §4.2 Energy totals and clock drifts (code `0x41`, 6 to 54 bytes).
+        /// Energy totals and clock drifts (§4.2; code `0x41`, 6 to 54 bytes).
         #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
         #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
         #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]
@@ -1066,7 +1066,7 @@ pub mod float_lists {
             /// \[ns\] Valid raw range -9000000000000..=9000000000000.
             pub drifts: super::rt::Repeated<i64, 2>,
         }
-        /// §4.3 Temperature samples (code `0x42`, 13 to 37 bytes).
+        /// Temperature samples (§4.3; code `0x42`, 13 to 37 bytes).
         #[derive(Debug, Clone, Copy, PartialEq)]
         #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
         #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]

@@ -612,22 +612,22 @@ pub mod ft12_fixed {
     /// refusals do: name, code and the frame lengths of its code; `QUANTITY_DESC`, each
     /// field a refusal names) and methods are in the `impl` of each.
     pub mod request {
-        /// §3 Reset of remote link (SND_NKE) (code `0x40`, 5 bytes).
+        /// Reset of remote link (SND_NKE) (§3; code `0x40`, 5 bytes).
         #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
         #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
         #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]
         pub struct ResetRemoteLink;
-        /// §3 Request status of link (code `0x49`, 5 bytes).
+        /// Request status of link (§3; code `0x49`, 5 bytes).
         #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
         #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
         #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]
         pub struct RequestStatusOfLink;
-        /// §3 Request user data class 2 (REQ_UD2), frame count bit clear (code `0x5B`, 5 bytes).
+        /// Request user data class 2 (REQ_UD2), frame count bit clear (§3; code `0x5B`, 5 bytes).
         #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
         #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
         #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]
         pub struct RequestClass2;
-        /// §3 Request user data class 2 (REQ_UD2), frame count bit set (code `0x7B`, 5 bytes).
+        /// Request user data class 2 (REQ_UD2), frame count bit set (§3; code `0x7B`, 5 bytes).
         #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
         #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
         #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]
@@ -635,17 +635,17 @@ pub mod ft12_fixed {
     }
     /// Each response as a struct of its own.
     pub mod response {
-        /// §4 Positive acknowledgement (code `0x00`, 5 bytes).
+        /// Positive acknowledgement (§4; code `0x00`, 5 bytes).
         #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
         #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
         #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]
         pub struct Ack;
-        /// §4 Message not accepted, link busy (code `0x01`, 5 bytes).
+        /// Message not accepted, link busy (§4; code `0x01`, 5 bytes).
         #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
         #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
         #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]
         pub struct Nack;
-        /// §4 Status of link (code `0x0B`, 5 bytes).
+        /// Status of link (§4; code `0x0B`, 5 bytes).
         #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
         #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
         #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]

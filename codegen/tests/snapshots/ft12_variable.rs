@@ -667,12 +667,12 @@ pub mod ft12_variable {
     /// refusals do: name, code and the frame lengths of its code; `QUANTITY_DESC`, each
     /// field a refusal names) and methods are in the `impl` of each.
     pub mod request {
-        /// §3.1 SND_UD: application reset (code `0x53`, 9 bytes).
+        /// SND_UD: application reset (§3.1; code `0x53`, 9 bytes).
         #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
         #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
         #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]
         pub struct Reset;
-        /// §3.2 Read user data (this fixture's long-frame request) (code `0x7B`, 9 bytes).
+        /// Read user data (this fixture's long-frame request) (§3.2; code `0x7B`, 9 bytes).
         #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
         #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
         #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]
@@ -680,7 +680,7 @@ pub mod ft12_variable {
     }
     /// Each response as a struct of its own.
     pub mod response {
-        /// §3.2 RSP_UD: user data, one instantaneous volume record (code `0x08`, 27 bytes).
+        /// RSP_UD: user data, one instantaneous volume record (§3.2; code `0x08`, 27 bytes).
         #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
         #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
         #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]

@@ -660,12 +660,12 @@ pub mod hdlc_like {
     /// refusals do: name, code and the frame lengths of its code; `QUANTITY_DESC`, each
     /// field a refusal names) and methods are in the `impl` of each.
     pub mod request {
-        /// §3.1 Read status (code `0x10`, 6 bytes).
+        /// Read status (§3.1; code `0x10`, 6 bytes).
         #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
         #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
         #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]
         pub struct ReadStatus;
-        /// §3.2 Write a register (code `0x20`, 10 bytes).
+        /// Write a register (§3.2; code `0x20`, 10 bytes).
         #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
         #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
         #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]
@@ -677,7 +677,7 @@ pub mod hdlc_like {
     }
     /// Each response as a struct of its own.
     pub mod response {
-        /// §4.1 Status (code `0x90`, 8 bytes).
+        /// Status (§4.1; code `0x90`, 8 bytes).
         #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
         #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
         #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]
@@ -685,7 +685,7 @@ pub mod hdlc_like {
         pub struct Status {
             pub state: u16,
         }
-        /// §4.2 Acknowledge (code `0xA0`, 6 bytes).
+        /// Acknowledge (§4.2; code `0xA0`, 6 bytes).
         #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
         #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
         #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]

@@ -1640,7 +1640,7 @@ pub mod jbd_bms {
     /// refusals do: name, code and the frame lengths of its code; `QUANTITY_DESC`, each
     /// field a refusal names) and methods are in the `impl` of each.
     pub mod request {
-        /// §3 Read basic information and status (03) (code `0x03`, 7 bytes).
+        /// Read basic information and status (03) (§3; code `0x03`, 7 bytes).
         #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
         #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
         #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]
@@ -1649,7 +1649,7 @@ pub mod jbd_bms {
             /// Read (0xA5) or write (0x5A).
             pub state: super::State,
         }
-        /// §3 Read cell voltages (04) (code `0x04`, 7 bytes).
+        /// Read cell voltages (04) (§3; code `0x04`, 7 bytes).
         #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
         #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
         #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]
@@ -1658,7 +1658,7 @@ pub mod jbd_bms {
             /// Read (0xA5) or write (0x5A).
             pub state: super::State,
         }
-        /// §3 Read the hardware version (05) (code `0x05`, 7 bytes).
+        /// Read the hardware version (05) (§3; code `0x05`, 7 bytes).
         #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
         #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
         #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]
@@ -1670,7 +1670,7 @@ pub mod jbd_bms {
     }
     /// Each response as a struct of its own.
     pub mod response {
-        /// §3 Basic information and status (code `0x03`, 30 to 46 bytes).
+        /// Basic information and status (§3; code `0x03`, 30 to 46 bytes).
         #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
         #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
         #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]
@@ -1705,7 +1705,7 @@ pub mod jbd_bms {
             /// \[°C\]
             pub temperatures: super::rt::Repeated<super::DeciKelvin, 8>,
         }
-        /// §3 Cell voltages (code `0x04`, 9 to 71 bytes).
+        /// Cell voltages (§3; code `0x04`, 9 to 71 bytes).
         #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
         #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
         #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]
@@ -1716,7 +1716,7 @@ pub mod jbd_bms {
             /// \[mV\]
             pub cell_voltages: super::rt::Repeated<u16, 32>,
         }
-        /// §3 Hardware version (code `0x05`, 8 to 39 bytes).
+        /// Hardware version (§3; code `0x05`, 8 to 39 bytes).
         #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
         #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
         #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]
@@ -1726,7 +1726,7 @@ pub mod jbd_bms {
             pub status: super::Status,
             pub version: super::rt::Repeated<u8, 32>,
         }
-        /// §3 Basic information not read (status 80) (code `0x03`, 7 bytes).
+        /// Basic information not read (status 80) (§3; code `0x03`, 7 bytes).
         #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
         #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
         #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]
@@ -1735,7 +1735,7 @@ pub mod jbd_bms {
             /// 0x00 where the register was read, 0x80 where it was not.
             pub status: super::Status,
         }
-        /// §3 Cell voltages not read (status 80) (code `0x04`, 7 bytes).
+        /// Cell voltages not read (status 80) (§3; code `0x04`, 7 bytes).
         #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
         #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
         #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]
@@ -1744,7 +1744,7 @@ pub mod jbd_bms {
             /// 0x00 where the register was read, 0x80 where it was not.
             pub status: super::Status,
         }
-        /// §3 Hardware version not read (status 80) (code `0x05`, 7 bytes).
+        /// Hardware version not read (status 80) (§3; code `0x05`, 7 bytes).
         #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
         #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
         #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]

@@ -1136,7 +1136,7 @@ pub mod lists_after {
     /// refusals do: name, code and the frame lengths of its code; `QUANTITY_DESC`, each
     /// field a refusal names) and methods are in the `impl` of each.
     pub mod request {
-        /// §1 Read block (code `0x10`, 7 bytes).
+        /// Read block (§1; code `0x10`, 7 bytes).
         #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
         #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
         #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]
@@ -1146,7 +1146,7 @@ pub mod lists_after {
             /// Valid raw range 1..=8.
             pub quantity: u8,
         }
-        /// §2 Write block (code `0x11`, 9 to 23 bytes).
+        /// Write block (§2; code `0x11`, 9 to 23 bytes).
         #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
         #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
         #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]
@@ -1156,7 +1156,7 @@ pub mod lists_after {
             /// Valid raw range 0..=255.
             pub flags: u16,
         }
-        /// §3 Copy (code `0x12`, 7 to 19 bytes).
+        /// Copy (§3; code `0x12`, 7 to 19 bytes).
         #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
         #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
         #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]
@@ -1169,7 +1169,7 @@ pub mod lists_after {
     }
     /// Each response as a struct of its own.
     pub mod response {
-        /// §1 Block reply (code `0x10`, 8 to 22 bytes).
+        /// Block reply (§1; code `0x10`, 8 to 22 bytes).
         #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
         #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
         #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]
@@ -1178,7 +1178,7 @@ pub mod lists_after {
             pub values: super::rt::Repeated<u16, 8>,
             pub status: u16,
         }
-        /// §2 Acknowledge (code `0x11`, 5 bytes).
+        /// Acknowledge (§2; code `0x11`, 5 bytes).
         #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
         #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
         #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]

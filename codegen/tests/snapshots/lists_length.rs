@@ -926,7 +926,7 @@ pub mod lists_length {
     /// refusals do: name, code and the frame lengths of its code; `QUANTITY_DESC`, each
     /// field a refusal names) and methods are in the `impl` of each.
     pub mod request {
-        /// §1 Log samples (code `0x20`, 9 to 25 bytes).
+        /// Log samples (§1; code `0x20`, 9 to 25 bytes).
         #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
         #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
         #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]
@@ -938,7 +938,7 @@ pub mod lists_length {
             pub samples: super::rt::Repeated<super::Millivolts, 6>,
             pub seq: u16,
         }
-        /// §2 Set outputs (code `0x21`, 8 to 9 bytes).
+        /// Set outputs (§2; code `0x21`, 8 to 9 bytes).
         #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
         #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
         #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]
@@ -950,7 +950,7 @@ pub mod lists_length {
     }
     /// Each response as a struct of its own.
     pub mod response {
-        /// §1 Log acknowledged (code `0x20`, 6 bytes).
+        /// Log acknowledged (§1; code `0x20`, 6 bytes).
         #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
         #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
         #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]

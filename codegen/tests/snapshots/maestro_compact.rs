@@ -669,7 +669,7 @@ pub mod maestro_compact {
     /// refusals do: name, code and the frame lengths of its code; `QUANTITY_DESC`, each
     /// field a refusal names) and methods are in the `impl` of each.
     pub mod request {
-        /// §5.e Set Target (code `0x84`, 4 bytes).
+        /// Set Target (§5.e; code `0x84`, 4 bytes).
         #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
         #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
         #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]
@@ -682,7 +682,7 @@ pub mod maestro_compact {
             /// \[µs\]
             pub target_low: super::QuarterMicroseconds,
         }
-        /// §5.e Get Position (code `0x90`, 2 bytes).
+        /// Get Position (§5.e; code `0x90`, 2 bytes).
         #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
         #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
         #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]
@@ -694,7 +694,7 @@ pub mod maestro_compact {
     }
     /// Each response as a struct of its own.
     pub mod response {
-        /// §5.e Position (code `0x`, 2 bytes). The reply to Get Position: the channel's position, low byte first.
+        /// Position (§5.e; no code, 2 bytes). The reply to Get Position: the channel's position, low byte first.
         #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
         #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
         #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]

@@ -1190,7 +1190,7 @@ pub mod mavlink_v1 {
     /// refusals do: name, code and the frame lengths of its code; `QUANTITY_DESC`, each
     /// field a refusal names) and methods are in the `impl` of each.
     pub mod request {
-        /// §3.1 PING (4) (code `0x04`, 22 bytes).
+        /// PING (4) (§3.1; code `0x04`, 22 bytes).
         #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
         #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
         #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]
@@ -1208,7 +1208,7 @@ pub mod mavlink_v1 {
             pub target_system: u8,
             pub target_component: u8,
         }
-        /// §3.2 REQUEST_DATA_STREAM (66) (code `0x42`, 14 bytes).
+        /// REQUEST_DATA_STREAM (66) (§3.2; code `0x42`, 14 bytes).
         #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
         #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
         #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]
@@ -1231,7 +1231,7 @@ pub mod mavlink_v1 {
     }
     /// Each response as a struct of its own.
     pub mod response {
-        /// §3.1 PING (4), answered (code `0x04`, 22 bytes).
+        /// PING (4), answered (§3.1; code `0x04`, 22 bytes).
         #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
         #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
         #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]
@@ -1249,7 +1249,7 @@ pub mod mavlink_v1 {
             pub target_system: u8,
             pub target_component: u8,
         }
-        /// §3.3 HEARTBEAT (0) (code `0x00`, 17 bytes).
+        /// HEARTBEAT (0) (§3.3; code `0x00`, 17 bytes).
         #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
         #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
         #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]
@@ -1268,7 +1268,7 @@ pub mod mavlink_v1 {
             pub system_status: u8,
             pub mavlink_version: u8,
         }
-        /// §3.4 SYS_STATUS (1) (code `0x01`, 39 bytes).
+        /// SYS_STATUS (1) (§3.4; code `0x01`, 39 bytes).
         #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
         #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
         #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]
@@ -1298,7 +1298,7 @@ pub mod mavlink_v1 {
             /// \[%\]
             pub battery_remaining: i8,
         }
-        /// §3.5 ATTITUDE (30) (code `0x1E`, 36 bytes).
+        /// ATTITUDE (30) (§3.5; code `0x1E`, 36 bytes).
         #[derive(Debug, Clone, Copy, PartialEq)]
         #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
         #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]

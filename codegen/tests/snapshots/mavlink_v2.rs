@@ -1717,7 +1717,7 @@ pub mod mavlink_v2 {
     /// refusals do: name, code and the frame lengths of its code; `QUANTITY_DESC`, each
     /// field a refusal names) and methods are in the `impl` of each.
     pub mod request {
-        /// §3.1 PING (4) (code `0x040000`, 26 bytes).
+        /// PING (4) (§3.1; code `0x040000`, 26 bytes).
         #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
         #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
         #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]
@@ -1739,7 +1739,7 @@ pub mod mavlink_v2 {
             pub target_system: u8,
             pub target_component: u8,
         }
-        /// §3.2 REQUEST_DATA_STREAM (66) (code `0x420000`, 18 bytes).
+        /// REQUEST_DATA_STREAM (66) (§3.2; code `0x420000`, 18 bytes).
         #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
         #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
         #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]
@@ -1766,7 +1766,7 @@ pub mod mavlink_v2 {
     }
     /// Each response as a struct of its own.
     pub mod response {
-        /// §3.1 PING (4), answered (code `0x040000`, 26 bytes).
+        /// PING (4), answered (§3.1; code `0x040000`, 26 bytes).
         #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
         #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
         #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]
@@ -1788,7 +1788,7 @@ pub mod mavlink_v2 {
             pub target_system: u8,
             pub target_component: u8,
         }
-        /// §3.3 HEARTBEAT (0) (code `0x000000`, 21 bytes).
+        /// HEARTBEAT (0) (§3.3; code `0x000000`, 21 bytes).
         #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
         #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
         #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]
@@ -1811,7 +1811,7 @@ pub mod mavlink_v2 {
             pub system_status: u8,
             pub mavlink_version: u8,
         }
-        /// §3.4 SYS_STATUS (1) (code `0x010000`, 55 bytes).
+        /// SYS_STATUS (1) (§3.4; code `0x010000`, 55 bytes).
         #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
         #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
         #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]
@@ -1851,7 +1851,7 @@ pub mod mavlink_v2 {
             /// An extension field (MAVLink 2 only).
             pub onboard_control_sensors_health_extended: u32,
         }
-        /// §3.5 ATTITUDE (30) (code `0x1E0000`, 40 bytes).
+        /// ATTITUDE (30) (§3.5; code `0x1E0000`, 40 bytes).
         #[derive(Debug, Clone, Copy, PartialEq)]
         #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
         #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]
@@ -1882,7 +1882,7 @@ pub mod mavlink_v2 {
             /// \[rad/s\]
             pub yawspeed: f32,
         }
-        /// §3.7 ATTITUDE_QUATERNION (31) (code `0x1F0000`, 60 bytes).
+        /// ATTITUDE_QUATERNION (31) (§3.7; code `0x1F0000`, 60 bytes).
         #[derive(Debug, Clone, Copy, PartialEq)]
         #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
         #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]
@@ -1917,7 +1917,7 @@ pub mod mavlink_v2 {
             /// An extension field (MAVLink 2 only), float\[4\]: the rotation offset by which the attitude quaternion and angular speed vector should be rotated for user display (w, x, y, z; zero-rotation \[1, 0, 0, 0\]; all 0 if unused).
             pub repr_offset_q: super::rt::Repeated<f32, 4>,
         }
-        /// §3.6 RAW_RPM (339) (code `0x530100`, 17 bytes).
+        /// RAW_RPM (339) (§3.6; code `0x530100`, 17 bytes).
         #[derive(Debug, Clone, Copy, PartialEq)]
         #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
         #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]

@@ -768,17 +768,17 @@ pub mod mbus {
     /// refusals do: name, code and the frame lengths of its code; `QUANTITY_DESC`, each
     /// field a refusal names) and methods are in the `impl` of each.
     pub mod request {
-        /// §5.5 SND_NKE: initialisation of the slave (short frame) (code `0x40`, 8 bytes).
+        /// SND_NKE: initialisation of the slave (short frame) (§5.5; code `0x40`, 8 bytes).
         #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
         #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
         #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]
         pub struct SndNke;
-        /// §5.5 REQ_UD2: request for class 2 data (short frame) (code `0x5B`, 8 bytes).
+        /// REQ_UD2: request for class 2 data (short frame) (§5.5; code `0x5B`, 8 bytes).
         #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
         #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
         #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]
         pub struct ReqUd2;
-        /// §6.1 SND_UD: application reset (long frame, CI 50) (code `0x53`, 9 bytes).
+        /// SND_UD: application reset (long frame, CI 50) (§6.1; code `0x53`, 9 bytes).
         #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
         #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
         #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]
@@ -786,7 +786,7 @@ pub mod mbus {
     }
     /// Each response as a struct of its own.
     pub mod response {
-        /// §6.2 RSP_UD: user data, one instantaneous volume record (long frame) (code `0x08`, 27 bytes).
+        /// RSP_UD: user data, one instantaneous volume record (long frame) (§6.2; code `0x08`, 27 bytes).
         #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
         #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
         #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]
@@ -804,7 +804,7 @@ pub mod mbus {
             /// \[l\]
             pub volume: u32,
         }
-        /// §5.4 Single character E5: acknowledgement (constant frame `E5`, 1 bytes). The single character: the whole frame is the one byte E5, without start, address, checksum or stop.
+        /// Single character E5: acknowledgement (§5.4; constant frame `E5`, 1 bytes). The single character: the whole frame is the one byte E5, without start, address, checksum or stop.
         #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
         #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
         #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]

@@ -576,12 +576,12 @@ pub mod mbus_short {
     /// refusals do: name, code and the frame lengths of its code; `QUANTITY_DESC`, each
     /// field a refusal names) and methods are in the `impl` of each.
     pub mod request {
-        /// §5.5 SND_NKE: initialisation of the slave (code `0x40`, 5 bytes).
+        /// SND_NKE: initialisation of the slave (§5.5; code `0x40`, 5 bytes).
         #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
         #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
         #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]
         pub struct SndNke;
-        /// §5.5 REQ_SKE: request status of link (code `0x49`, 5 bytes).
+        /// REQ_SKE: request status of link (§5.5; code `0x49`, 5 bytes).
         #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
         #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
         #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]
@@ -589,12 +589,12 @@ pub mod mbus_short {
     }
     /// Each response as a struct of its own.
     pub mod response {
-        /// §5.5 RSP_SKE: status of link (code `0x0B`, 5 bytes).
+        /// RSP_SKE: status of link (§5.5; code `0x0B`, 5 bytes).
         #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
         #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
         #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]
         pub struct StatusOfLink;
-        /// §5.4 Single character E5: acknowledgement (constant frame `E5`, 1 bytes). The single character: the whole frame is the one byte E5, without start, address, checksum or stop.
+        /// Single character E5: acknowledgement (§5.4; constant frame `E5`, 1 bytes). The single character: the whole frame is the one byte E5, without start, address, checksum or stop.
         #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
         #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
         #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]

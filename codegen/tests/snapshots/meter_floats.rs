@@ -823,12 +823,12 @@ pub mod meter_floats {
     /// refusals do: name, code and the frame lengths of its code; `QUANTITY_DESC`, each
     /// field a refusal names) and methods are in the `impl` of each.
     pub mod request {
-        /// §3.1 Read the readings (code `0x04`, 4 bytes).
+        /// Read the readings (§3.1; code `0x04`, 4 bytes).
         #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
         #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
         #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]
         pub struct ReadReadings;
-        /// §3.2 Set the voltage limit and the serial number (code `0x10`, 16 bytes).
+        /// Set the voltage limit and the serial number (§3.2; code `0x10`, 16 bytes).
         #[derive(Debug, Clone, Copy, PartialEq)]
         #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
         #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]
@@ -841,7 +841,7 @@ pub mod meter_floats {
     }
     /// Each response as a struct of its own.
     pub mod response {
-        /// §4.1 Readings (code `0x04`, 52 bytes).
+        /// Readings (§4.1; code `0x04`, 52 bytes).
         #[derive(Debug, Clone, Copy, PartialEq)]
         #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
         #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]
@@ -863,7 +863,7 @@ pub mod meter_floats {
             /// \[°C\] Its 16-bit words travel swapped.
             pub temperature: i32,
         }
-        /// §4.2 Limits set (code `0x10`, 12 bytes).
+        /// Limits set (§4.2; code `0x10`, 12 bytes).
         #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
         #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
         #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]

@@ -962,7 +962,7 @@ pub mod mini {
     /// refusals do: name, code and the frame lengths of its code; `QUANTITY_DESC`, each
     /// field a refusal names) and methods are in the `impl` of each.
     pub mod request {
-        /// §4.1 Go to capacitance (code `0x2000`, 9 bytes).
+        /// Go to capacitance (§4.1; code `0x2000`, 9 bytes).
         #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
         #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
         #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]
@@ -971,7 +971,7 @@ pub mod mini {
             /// \[pF\] Valid raw range 0..=100000.
             pub target: super::Capacitance,
         }
-        /// §4.2 Set mode (code `0x3000`, 6 bytes).
+        /// Set mode (§4.2; code `0x3000`, 6 bytes).
         #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
         #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
         #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]
@@ -979,7 +979,7 @@ pub mod mini {
         pub struct SetMode {
             pub mode: super::Mode,
         }
-        /// §4.3 Get status (code `0x4000`, 6 bytes).
+        /// Get status (§4.3; code `0x4000`, 6 bytes).
         #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
         #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
         #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]
@@ -991,22 +991,22 @@ pub mod mini {
     }
     /// Each response as a struct of its own.
     pub mod response {
-        /// §5.1 Movement started (code `0x50`, 4 bytes).
+        /// Movement started (§5.1; code `0x50`, 4 bytes).
         #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
         #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
         #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]
         pub struct Started;
-        /// §5.2 Not acknowledged (code `0x90`, 4 bytes).
+        /// Not acknowledged (§5.2; code `0x90`, 4 bytes).
         #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
         #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
         #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]
         pub struct Nak;
-        /// §5.3 Mode set (code `0x3000`, 5 bytes).
+        /// Mode set (§5.3; code `0x3000`, 5 bytes).
         #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
         #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
         #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]
         pub struct SetModeAck;
-        /// §5.4 Status (code `0x4000`, 13 bytes).
+        /// Status (§5.4; code `0x4000`, 13 bytes).
         #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
         #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
         #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]

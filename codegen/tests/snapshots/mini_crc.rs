@@ -735,17 +735,17 @@ pub mod mini_crc {
     /// refusals do: name, code and the frame lengths of its code; `QUANTITY_DESC`, each
     /// field a refusal names) and methods are in the `impl` of each.
     pub mod request {
-        /// §3.1 Read run-time hours (code `0x69`, 6 bytes).
+        /// Read run-time hours (§3.1; code `0x69`, 6 bytes).
         #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
         #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
         #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]
         pub struct ReadRuntimeHours;
-        /// §3.2 Read run-time minutes and seconds (code `0x69`, 6 bytes).
+        /// Read run-time minutes and seconds (§3.2; code `0x69`, 6 bytes).
         #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
         #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
         #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]
         pub struct ReadRuntimeMinSec;
-        /// §3.3 Set counter (code `0x70`, 6 bytes).
+        /// Set counter (§3.3; code `0x70`, 6 bytes).
         #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
         #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
         #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]
@@ -756,7 +756,7 @@ pub mod mini_crc {
     }
     /// Each response as a struct of its own.
     pub mod response {
-        /// §3.1 Run-time hours (code `0x22`, 6 bytes).
+        /// Run-time hours (§3.1; code `0x22`, 6 bytes).
         #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
         #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
         #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]
@@ -765,7 +765,7 @@ pub mod mini_crc {
             /// \[h\]
             pub hours: u16,
         }
-        /// §3.2 Run-time minutes and seconds (code `0x22`, 6 bytes).
+        /// Run-time minutes and seconds (§3.2; code `0x22`, 6 bytes).
         #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
         #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
         #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]
@@ -776,7 +776,7 @@ pub mod mini_crc {
             /// \[s\] Valid raw range 0..=59.
             pub seconds: u8,
         }
-        /// §3.3 Counter echo (code `0x70`, 6 bytes).
+        /// Counter echo (§3.3; code `0x70`, 6 bytes).
         #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
         #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
         #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]

@@ -3104,7 +3104,7 @@ pub mod modbus {
     /// refusals do: name, code and the frame lengths of its code; `QUANTITY_DESC`, each
     /// field a refusal names) and methods are in the `impl` of each.
     pub mod request {
-        /// §6.1 01 (0x01) Read Coils (code `0x01`, 8 bytes). Read 1 to 2000 contiguous coils.
+        /// 01 (0x01) Read Coils (§6.1; code `0x01`, 8 bytes). Read 1 to 2000 contiguous coils.
         #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
         #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
         #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]
@@ -3114,7 +3114,7 @@ pub mod modbus {
             /// Quantity of coils, 1 to 2000 (0x7D0) Valid raw range 1..=2000.
             pub quantity: u16,
         }
-        /// §6.2 02 (0x02) Read Discrete Inputs (code `0x02`, 8 bytes). Read 1 to 2000 contiguous discrete inputs.
+        /// 02 (0x02) Read Discrete Inputs (§6.2; code `0x02`, 8 bytes). Read 1 to 2000 contiguous discrete inputs.
         #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
         #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
         #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]
@@ -3124,7 +3124,7 @@ pub mod modbus {
             /// Quantity of inputs, 1 to 2000 (0x7D0) Valid raw range 1..=2000.
             pub quantity: u16,
         }
-        /// §6.3 03 (0x03) Read Holding Registers (code `0x03`, 8 bytes). Read 1 to 125 contiguous holding registers.
+        /// 03 (0x03) Read Holding Registers (§6.3; code `0x03`, 8 bytes). Read 1 to 125 contiguous holding registers.
         #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
         #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
         #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]
@@ -3134,7 +3134,7 @@ pub mod modbus {
             /// Quantity of registers, 1 to 125 (0x7D) Valid raw range 1..=125.
             pub quantity: u16,
         }
-        /// §6.4 04 (0x04) Read Input Registers (code `0x04`, 8 bytes). Read 1 to 125 contiguous input registers.
+        /// 04 (0x04) Read Input Registers (§6.4; code `0x04`, 8 bytes). Read 1 to 125 contiguous input registers.
         #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
         #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
         #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]
@@ -3144,7 +3144,7 @@ pub mod modbus {
             /// Quantity of input registers, 1 to 125 (0x7D) Valid raw range 1..=125.
             pub quantity: u16,
         }
-        /// §6.5 05 (0x05) Write Single Coil (code `0x05`, 8 bytes). Force one coil ON or OFF. The normal response echoes the request.
+        /// 05 (0x05) Write Single Coil (§6.5; code `0x05`, 8 bytes). Force one coil ON or OFF. The normal response echoes the request.
         #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
         #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
         #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]
@@ -3153,7 +3153,7 @@ pub mod modbus {
             pub output_address: u16,
             pub output_value: super::CoilState,
         }
-        /// §6.6 06 (0x06) Write Single Register (code `0x06`, 8 bytes). Write one holding register. The normal response echoes the request.
+        /// 06 (0x06) Write Single Register (§6.6; code `0x06`, 8 bytes). Write one holding register. The normal response echoes the request.
         #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
         #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
         #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]
@@ -3162,7 +3162,7 @@ pub mod modbus {
             pub register_address: u16,
             pub register_value: u16,
         }
-        /// §6.11 15 (0x0F) Write Multiple Coils (code `0x0F`, 10 to 255 bytes). Force 1 to 1968 contiguous coils; bit 0 of the first byte is the coil at the starting address, unused bits of the last byte are zero.
+        /// 15 (0x0F) Write Multiple Coils (§6.11; code `0x0F`, 10 to 255 bytes). Force 1 to 1968 contiguous coils; bit 0 of the first byte is the coil at the starting address, unused bits of the last byte are zero.
         #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
         #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
         #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]
@@ -3174,7 +3174,7 @@ pub mod modbus {
             /// Outputs value, least significant bit first
             pub outputs: super::rt::Bits<246>,
         }
-        /// §6.12 16 (0x10) Write Multiple registers (code `0x10`, 11 to 255 bytes). Write 1 to 123 contiguous holding registers.
+        /// 16 (0x10) Write Multiple registers (§6.12; code `0x10`, 11 to 255 bytes). Write 1 to 123 contiguous holding registers.
         #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
         #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
         #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]
@@ -3189,7 +3189,7 @@ pub mod modbus {
     }
     /// Each response as a struct of its own.
     pub mod response {
-        /// §6.1 Read Coils response (code `0x01`, 6 to 255 bytes). Coil status, eight to a byte, the first coil in bit 0 of the first byte; the last byte padded with zeros.
+        /// Read Coils response (§6.1; code `0x01`, 6 to 255 bytes). Coil status, eight to a byte, the first coil in bit 0 of the first byte; the last byte padded with zeros.
         #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
         #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
         #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]
@@ -3198,7 +3198,7 @@ pub mod modbus {
             /// Coil status
             pub coils: super::rt::Bits<250>,
         }
-        /// §6.1 Read Coils error (code `0x81`, 5 bytes). Error code 0x81 (function code + 0x80).
+        /// Read Coils error (§6.1; code `0x81`, 5 bytes). Error code 0x81 (function code + 0x80).
         #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
         #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
         #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]
@@ -3206,7 +3206,7 @@ pub mod modbus {
         pub struct ReadCoilsException {
             pub exception_code: super::ExceptionCode,
         }
-        /// §6.2 Read Discrete Inputs response (code `0x02`, 6 to 255 bytes). Input status, eight to a byte, the first input in bit 0 of the first byte; the last byte padded with zeros.
+        /// Read Discrete Inputs response (§6.2; code `0x02`, 6 to 255 bytes). Input status, eight to a byte, the first input in bit 0 of the first byte; the last byte padded with zeros.
         #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
         #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
         #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]
@@ -3215,7 +3215,7 @@ pub mod modbus {
             /// Input status
             pub inputs: super::rt::Bits<250>,
         }
-        /// §6.2 Read Discrete Inputs error (code `0x82`, 5 bytes). Error code 0x82.
+        /// Read Discrete Inputs error (§6.2; code `0x82`, 5 bytes). Error code 0x82.
         #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
         #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
         #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]
@@ -3223,7 +3223,7 @@ pub mod modbus {
         pub struct ReadDiscreteInputsException {
             pub exception_code: super::ExceptionCode,
         }
-        /// §6.3 Read Holding Registers response (code `0x03`, 7 to 255 bytes). Register values, two bytes each.
+        /// Read Holding Registers response (§6.3; code `0x03`, 7 to 255 bytes). Register values, two bytes each.
         #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
         #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
         #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]
@@ -3232,7 +3232,7 @@ pub mod modbus {
             /// Register value
             pub registers: super::rt::Repeated<u16, 125>,
         }
-        /// §6.3 Read Holding Registers error (code `0x83`, 5 bytes). Error code 0x83.
+        /// Read Holding Registers error (§6.3; code `0x83`, 5 bytes). Error code 0x83.
         #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
         #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
         #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]
@@ -3240,7 +3240,7 @@ pub mod modbus {
         pub struct ReadHoldingRegistersException {
             pub exception_code: super::ExceptionCode,
         }
-        /// §6.4 Read Input Registers response (code `0x04`, 7 to 255 bytes). Input register values, two bytes each.
+        /// Read Input Registers response (§6.4; code `0x04`, 7 to 255 bytes). Input register values, two bytes each.
         #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
         #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
         #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]
@@ -3249,7 +3249,7 @@ pub mod modbus {
             /// Input Registers
             pub registers: super::rt::Repeated<u16, 125>,
         }
-        /// §6.4 Read Input Registers error (code `0x84`, 5 bytes). Error code 0x84.
+        /// Read Input Registers error (§6.4; code `0x84`, 5 bytes). Error code 0x84.
         #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
         #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
         #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]
@@ -3257,7 +3257,7 @@ pub mod modbus {
         pub struct ReadInputRegistersException {
             pub exception_code: super::ExceptionCode,
         }
-        /// §6.5 Write Single Coil response (code `0x05`, 8 bytes). The normal response is an echo of the request.
+        /// Write Single Coil response (§6.5; code `0x05`, 8 bytes). The normal response is an echo of the request.
         #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
         #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
         #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]
@@ -3266,7 +3266,7 @@ pub mod modbus {
             pub output_address: u16,
             pub output_value: super::CoilState,
         }
-        /// §6.5 Write Single Coil error (code `0x85`, 5 bytes). Error code 0x85.
+        /// Write Single Coil error (§6.5; code `0x85`, 5 bytes). Error code 0x85.
         #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
         #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
         #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]
@@ -3274,7 +3274,7 @@ pub mod modbus {
         pub struct WriteSingleCoilException {
             pub exception_code: super::ExceptionCode,
         }
-        /// §6.6 Write Single Register response (code `0x06`, 8 bytes). The normal response is an echo of the request.
+        /// Write Single Register response (§6.6; code `0x06`, 8 bytes). The normal response is an echo of the request.
         #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
         #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
         #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]
@@ -3283,7 +3283,7 @@ pub mod modbus {
             pub register_address: u16,
             pub register_value: u16,
         }
-        /// §6.6 Write Single Register error (code `0x86`, 5 bytes). Error code 0x86.
+        /// Write Single Register error (§6.6; code `0x86`, 5 bytes). Error code 0x86.
         #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
         #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
         #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]
@@ -3291,7 +3291,7 @@ pub mod modbus {
         pub struct WriteSingleRegisterException {
             pub exception_code: super::ExceptionCode,
         }
-        /// §6.11 Write Multiple Coils response (code `0x0F`, 8 bytes). Function code, starting address and quantity of coils forced.
+        /// Write Multiple Coils response (§6.11; code `0x0F`, 8 bytes). Function code, starting address and quantity of coils forced.
         #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
         #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
         #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]
@@ -3300,7 +3300,7 @@ pub mod modbus {
             pub starting_address: u16,
             pub quantity: u16,
         }
-        /// §6.11 Write Multiple Coils error (code `0x8F`, 5 bytes). Error code 0x8F.
+        /// Write Multiple Coils error (§6.11; code `0x8F`, 5 bytes). Error code 0x8F.
         #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
         #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
         #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]
@@ -3308,7 +3308,7 @@ pub mod modbus {
         pub struct WriteMultipleCoilsException {
             pub exception_code: super::ExceptionCode,
         }
-        /// §6.12 Write Multiple registers response (code `0x10`, 8 bytes). Function code, starting address and quantity of registers written.
+        /// Write Multiple registers response (§6.12; code `0x10`, 8 bytes). Function code, starting address and quantity of registers written.
         #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
         #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
         #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]
@@ -3317,7 +3317,7 @@ pub mod modbus {
             pub starting_address: u16,
             pub quantity: u16,
         }
-        /// §6.12 Write Multiple registers error (code `0x90`, 5 bytes). Error code 0x90.
+        /// Write Multiple registers error (§6.12; code `0x90`, 5 bytes). Error code 0x90.
         #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
         #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
         #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]

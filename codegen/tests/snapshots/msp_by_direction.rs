@@ -902,17 +902,17 @@ pub mod msp_by_direction {
     /// refusals do: name, code and the frame lengths of its code; `QUANTITY_DESC`, each
     /// field a refusal names) and methods are in the `impl` of each.
     pub mod request {
-        /// §3 MSP_API_VERSION (code `0x01`, 6 bytes).
+        /// MSP_API_VERSION (§3; code `0x01`, 6 bytes).
         #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
         #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
         #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]
         pub struct ApiVersion;
-        /// §3 MSP_RC (code `0x69`, 6 bytes).
+        /// MSP_RC (§3; code `0x69`, 6 bytes).
         #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
         #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
         #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]
         pub struct Rc;
-        /// §3 MSP_ATTITUDE (code `0x6C`, 6 bytes).
+        /// MSP_ATTITUDE (§3; code `0x6C`, 6 bytes).
         #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
         #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
         #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]
@@ -920,7 +920,7 @@ pub mod msp_by_direction {
     }
     /// Each response as a struct of its own.
     pub mod response {
-        /// §3 MSP_API_VERSION reply (code `0x01`, 9 bytes).
+        /// MSP_API_VERSION reply (§3; code `0x01`, 9 bytes).
         #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
         #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
         #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]
@@ -930,7 +930,7 @@ pub mod msp_by_direction {
             pub api_major: u8,
             pub api_minor: u8,
         }
-        /// §3 MSP_RC reply: each channel's pulse width (code `0x69`, 6 to 42 bytes).
+        /// MSP_RC reply: each channel's pulse width (§3; code `0x69`, 6 to 42 bytes).
         #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
         #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
         #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]
@@ -939,7 +939,7 @@ pub mod msp_by_direction {
             /// \[µs\]
             pub channels: super::rt::Repeated<u16, 18>,
         }
-        /// §3 MSP_ATTITUDE reply (code `0x6C`, 12 bytes).
+        /// MSP_ATTITUDE reply (§3; code `0x6C`, 12 bytes).
         #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
         #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
         #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]

@@ -762,12 +762,12 @@ pub mod msp_v1 {
     /// refusals do: name, code and the frame lengths of its code; `QUANTITY_DESC`, each
     /// field a refusal names) and methods are in the `impl` of each.
     pub mod request {
-        /// §3 MSP_API_VERSION (code `0x3C`, 6 bytes).
+        /// MSP_API_VERSION (§3; code `0x3C`, 6 bytes).
         #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
         #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
         #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]
         pub struct ApiVersion;
-        /// §3 MSP_ATTITUDE (code `0x3C`, 6 bytes).
+        /// MSP_ATTITUDE (§3; code `0x3C`, 6 bytes).
         #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
         #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
         #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]
@@ -775,7 +775,7 @@ pub mod msp_v1 {
     }
     /// Each response as a struct of its own.
     pub mod response {
-        /// §3 MSP_API_VERSION reply (code `0x3E`, 9 bytes).
+        /// MSP_API_VERSION reply (§3; code `0x3E`, 9 bytes).
         #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
         #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
         #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]
@@ -785,7 +785,7 @@ pub mod msp_v1 {
             pub api_major: u8,
             pub api_minor: u8,
         }
-        /// §3 MSP_ATTITUDE reply (code `0x3E`, 12 bytes).
+        /// MSP_ATTITUDE reply (§3; code `0x3E`, 12 bytes).
         #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
         #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
         #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]
@@ -798,7 +798,7 @@ pub mod msp_v1 {
             /// \[°\]
             pub yaw: i16,
         }
-        /// §2 Error: the command is not supported (code `0x21`, 6 bytes).
+        /// Error: the command is not supported (§2; code `0x21`, 6 bytes).
         #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
         #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
         #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]

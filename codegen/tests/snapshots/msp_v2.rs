@@ -731,7 +731,7 @@ pub mod msp_v2 {
     /// refusals do: name, code and the frame lengths of its code; `QUANTITY_DESC`, each
     /// field a refusal names) and methods are in the `impl` of each.
     pub mod request {
-        /// §3 MSP_API_VERSION (1) (code `0x0100`, 9 bytes).
+        /// MSP_API_VERSION (1) (§3; code `0x0100`, 9 bytes).
         #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
         #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
         #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]
@@ -739,7 +739,7 @@ pub mod msp_v2 {
         pub struct ApiVersion {
             pub dont_reply: bool,
         }
-        /// §3 MSP_FC_VARIANT (2) (code `0x0200`, 9 bytes).
+        /// MSP_FC_VARIANT (2) (§3; code `0x0200`, 9 bytes).
         #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
         #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
         #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]
@@ -750,7 +750,7 @@ pub mod msp_v2 {
     }
     /// Each response as a struct of its own.
     pub mod response {
-        /// §3 MSP_API_VERSION (1), answered (code `0x0100`, 12 bytes).
+        /// MSP_API_VERSION (1), answered (§3; code `0x0100`, 12 bytes).
         #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
         #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
         #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]
@@ -761,7 +761,7 @@ pub mod msp_v2 {
             pub api_major: u8,
             pub api_minor: u8,
         }
-        /// §3 MSP_FC_VARIANT (2), answered (code `0x0200`, 13 bytes).
+        /// MSP_FC_VARIANT (2), answered (§3; code `0x0200`, 13 bytes).
         #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
         #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
         #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]

@@ -1090,7 +1090,7 @@ pub mod nextion {
     /// refusals do: name, code and the frame lengths of its code; `QUANTITY_DESC`, each
     /// field a refusal names) and methods are in the `impl` of each.
     pub mod request {
-        /// §1 An instruction, as text (code `0x`, 4 to 203 bytes).
+        /// An instruction, as text (§1; no code, 4 to 203 bytes).
         #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
         #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
         #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]
@@ -1101,32 +1101,32 @@ pub mod nextion {
     }
     /// Each response as a struct of its own.
     pub mod response {
-        /// §7 Invalid instruction (code `0x00`, 4 bytes).
+        /// Invalid instruction (§7; code `0x00`, 4 bytes).
         #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
         #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
         #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]
         pub struct InvalidInstruction;
-        /// §7 Instruction successful (code `0x01`, 4 bytes).
+        /// Instruction successful (§7; code `0x01`, 4 bytes).
         #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
         #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
         #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]
         pub struct Success;
-        /// §7 Invalid component ID (code `0x02`, 4 bytes).
+        /// Invalid component ID (§7; code `0x02`, 4 bytes).
         #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
         #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
         #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]
         pub struct InvalidComponent;
-        /// §7 Invalid page ID (code `0x03`, 4 bytes).
+        /// Invalid page ID (§7; code `0x03`, 4 bytes).
         #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
         #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
         #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]
         pub struct InvalidPage;
-        /// §7 Invalid variable name or attribute (code `0x1A`, 4 bytes).
+        /// Invalid variable name or attribute (§7; code `0x1A`, 4 bytes).
         #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
         #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
         #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]
         pub struct InvalidVariable;
-        /// §7 Touch event (code `0x65`, 7 bytes).
+        /// Touch event (§7; code `0x65`, 7 bytes).
         #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
         #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
         #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]
@@ -1136,7 +1136,7 @@ pub mod nextion {
             pub component: u8,
             pub event: super::Touch,
         }
-        /// §7 Current page number (code `0x66`, 5 bytes).
+        /// Current page number (§7; code `0x66`, 5 bytes).
         #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
         #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
         #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]
@@ -1144,7 +1144,7 @@ pub mod nextion {
         pub struct CurrentPage {
             pub page: u8,
         }
-        /// §7 String data enclosed (code `0x70`, 4 to 104 bytes).
+        /// String data enclosed (§7; code `0x70`, 4 to 104 bytes).
         #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
         #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
         #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]
@@ -1152,7 +1152,7 @@ pub mod nextion {
         pub struct String {
             pub text: super::rt::Repeated<u8, 100>,
         }
-        /// §7 Numeric data enclosed (signed 32-bit, little-endian) (code `0x71`, 8 bytes).
+        /// Numeric data enclosed (signed 32-bit, little-endian) (§7; code `0x71`, 8 bytes).
         #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
         #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
         #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]

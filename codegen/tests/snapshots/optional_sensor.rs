@@ -972,12 +972,12 @@ pub mod optional_sensor {
     /// refusals do: name, code and the frame lengths of its code; `QUANTITY_DESC`, each
     /// field a refusal names) and methods are in the `impl` of each.
     pub mod request {
-        /// §3 Read the sensor (code `0x01`, 5 bytes).
+        /// Read the sensor (§3; code `0x01`, 5 bytes).
         #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
         #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
         #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]
         pub struct Read;
-        /// §4 Read the last event (code `0x02`, 5 bytes).
+        /// Read the last event (§4; code `0x02`, 5 bytes).
         #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
         #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
         #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]
@@ -985,7 +985,7 @@ pub mod optional_sensor {
     }
     /// Each response as a struct of its own.
     pub mod response {
-        /// §3 Reading (code `0x81`, 8 to 14 bytes).
+        /// Reading (§3; code `0x81`, 8 to 14 bytes).
         #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
         #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
         #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]
@@ -999,7 +999,7 @@ pub mod optional_sensor {
             /// \[Pa\] On the wire only when bit 1 of `status` is set; `None` where it is not.
             pub pressure: super::rt::Option<u32>,
         }
-        /// §4 Last event (code `0x82`, 6 to 8 bytes).
+        /// Last event (§4; code `0x82`, 6 to 8 bytes).
         #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
         #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
         #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]

@@ -1139,7 +1139,7 @@ pub mod packed_channels {
     /// refusals do: name, code and the frame lengths of its code; `QUANTITY_DESC`, each
     /// field a refusal names) and methods are in the `impl` of each.
     pub mod request {
-        /// §3.1 Channels (code `0x16`, 11 bytes).
+        /// Channels (§3.1; code `0x16`, 11 bytes).
         #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
         #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
         #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]
@@ -1149,7 +1149,7 @@ pub mod packed_channels {
             pub channels: super::rt::Repeated<u16, 4>,
             pub flags: u8,
         }
-        /// §3.2 Levels (code `0x17`, 7 bytes).
+        /// Levels (§3.2; code `0x17`, 7 bytes).
         #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
         #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
         #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]
@@ -1159,7 +1159,7 @@ pub mod packed_channels {
             /// Valid raw range 0..=6.
             pub levels: super::rt::Repeated<u8, 5>,
         }
-        /// §3.3 Calibrate (code `0x19`, 12 bytes).
+        /// Calibrate (§3.3; code `0x19`, 12 bytes).
         #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
         #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
         #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]
@@ -1169,7 +1169,7 @@ pub mod packed_channels {
             /// Valid raw range 1..=9.
             pub gains: super::rt::Repeated<u8, 2>,
         }
-        /// §3.4 Trim (code `0x1A`, 40 bytes).
+        /// Trim (§3.4; code `0x1A`, 40 bytes).
         #[derive(Debug, Clone, Copy, PartialEq)]
         #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
         #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]
@@ -1188,7 +1188,7 @@ pub mod packed_channels {
     }
     /// Each response as a struct of its own.
     pub mod response {
-        /// §4.1 Readings (code `0x18`, 12 bytes).
+        /// Readings (§4.1; code `0x18`, 12 bytes).
         #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
         #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
         #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]

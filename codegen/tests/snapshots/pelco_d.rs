@@ -803,7 +803,7 @@ pub mod pelco_d2 {
     /// refusals do: name, code and the frame lengths of its code; `QUANTITY_DESC`, each
     /// field a refusal names) and methods are in the `impl` of each.
     pub mod request {
-        /// §3 Pan, tilt, zoom, focus, iris (standard command) (code `0x`, 7 bytes).
+        /// Pan, tilt, zoom, focus, iris (standard command) (§3; no code, 7 bytes).
         #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
         #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
         #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]
@@ -840,7 +840,7 @@ pub mod pelco_d2 {
             /// \[step\] Valid raw range 0..=63.
             pub tilt_speed: u8,
         }
-        /// §4 Set preset (code `0x0003`, 7 bytes).
+        /// Set preset (§4; code `0x0003`, 7 bytes).
         #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
         #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
         #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]
@@ -849,7 +849,7 @@ pub mod pelco_d2 {
             /// \[#\] Valid raw range 1..=255.
             pub preset: u8,
         }
-        /// §4 Go to preset (code `0x0007`, 7 bytes).
+        /// Go to preset (§4; code `0x0007`, 7 bytes).
         #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
         #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
         #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]
@@ -861,7 +861,7 @@ pub mod pelco_d2 {
     }
     /// Each response as a struct of its own.
     pub mod response {
-        /// §5 General response (code `0x`, 4 bytes). FF, address, alarm bits, checksum: sent by receivers that acknowledge commands.
+        /// General response (§5; no code, 4 bytes). FF, address, alarm bits, checksum: sent by receivers that acknowledge commands.
         #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
         #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
         #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]

@@ -1074,7 +1074,7 @@ pub mod pelco_d_replies {
     /// refusals do: name, code and the frame lengths of its code; `QUANTITY_DESC`, each
     /// field a refusal names) and methods are in the `impl` of each.
     pub mod request {
-        /// §3 Pan, tilt, zoom, focus, iris (standard command) (code `0x`, 7 bytes).
+        /// Pan, tilt, zoom, focus, iris (standard command) (§3; no code, 7 bytes).
         #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
         #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
         #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]
@@ -1111,7 +1111,7 @@ pub mod pelco_d_replies {
             /// \[step\] Valid raw range 0..=63.
             pub tilt_speed: u8,
         }
-        /// §4 Set auxiliary (code `0x0009`, 7 bytes).
+        /// Set auxiliary (§4; code `0x0009`, 7 bytes).
         #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
         #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
         #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]
@@ -1120,12 +1120,12 @@ pub mod pelco_d_replies {
             /// \[#\] Valid raw range 1..=8.
             pub auxiliary: u8,
         }
-        /// §6 Query pan position (code `0x0051`, 7 bytes).
+        /// Query pan position (§6; code `0x0051`, 7 bytes).
         #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
         #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
         #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]
         pub struct QueryPanPosition;
-        /// §4 Go to preset (code `0x0007`, 7 bytes).
+        /// Go to preset (§4; code `0x0007`, 7 bytes).
         #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
         #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
         #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]
@@ -1137,7 +1137,7 @@ pub mod pelco_d_replies {
     }
     /// Each response as a struct of its own.
     pub mod response {
-        /// §5 General response (code `0x`, 4 bytes). FF, address, alarm bits, checksum: sent by receivers that acknowledge commands. Its checksum is the request's plus the alarm byte ("the transmitted check sum added to the alarm information"): the request's address, command and data bytes, then its own alarm byte, not its address.
+        /// General response (§5; no code, 4 bytes). FF, address, alarm bits, checksum: sent by receivers that acknowledge commands. Its checksum is the request's plus the alarm byte ("the transmitted check sum added to the alarm information"): the request's address, command and data bytes, then its own alarm byte, not its address.
         #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
         #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
         #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]
@@ -1145,7 +1145,7 @@ pub mod pelco_d_replies {
         pub struct GeneralResponse {
             pub alarms: super::Alarms,
         }
-        /// §6 Query pan position response (code `0x0059`, 7 bytes). An extended response: a frame of its own whose checksum is its own bytes' sum.
+        /// Query pan position response (§6; code `0x0059`, 7 bytes). An extended response: a frame of its own whose checksum is its own bytes' sum.
         #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
         #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
         #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]

@@ -725,7 +725,7 @@ pub mod pelco_p {
     /// refusals do: name, code and the frame lengths of its code; `QUANTITY_DESC`, each
     /// field a refusal names) and methods are in the `impl` of each.
     pub mod request {
-        /// §3 Pan, tilt, zoom, focus, iris (code `0x`, 8 bytes).
+        /// Pan, tilt, zoom, focus, iris (§3; no code, 8 bytes).
         #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
         #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
         #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]
@@ -762,7 +762,7 @@ pub mod pelco_p {
             /// \[step\] Valid raw range 0..=63.
             pub tilt_speed: u8,
         }
-        /// §4 Set preset (code `0x0003`, 8 bytes).
+        /// Set preset (§4; code `0x0003`, 8 bytes).
         #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
         #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
         #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]
@@ -771,7 +771,7 @@ pub mod pelco_p {
             /// \[#\] Valid raw range 1..=255.
             pub preset: u8,
         }
-        /// §4 Go to preset (code `0x0007`, 8 bytes).
+        /// Go to preset (§4; code `0x0007`, 8 bytes).
         #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
         #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
         #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]

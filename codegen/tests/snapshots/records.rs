@@ -1225,7 +1225,7 @@ pub mod records {
     /// refusals do: name, code and the frame lengths of its code; `QUANTITY_DESC`, each
     /// field a refusal names) and methods are in the `impl` of each.
     pub mod request {
-        /// §1 Synchronised write (code `0x83`, 10 to 38 bytes).
+        /// Synchronised write (§1; code `0x83`, 10 to 38 bytes).
         #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
         #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
         #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]
@@ -1235,7 +1235,7 @@ pub mod records {
             pub blocks: super::rt::Repeated<super::SyncWriteBlocks, 8>,
             pub flags: u8,
         }
-        /// §2 Write register pairs (code `0x84`, 5 to 20 bytes).
+        /// Write register pairs (§2; code `0x84`, 5 to 20 bytes).
         #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
         #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
         #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]
@@ -1243,7 +1243,7 @@ pub mod records {
         pub struct WritePairs {
             pub pairs: super::rt::Repeated<super::WritePairsPairs, 3>,
         }
-        /// §3 Read channels (code `0x85`, 5 bytes).
+        /// Read channels (§3; code `0x85`, 5 bytes).
         #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
         #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
         #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]
@@ -1255,7 +1255,7 @@ pub mod records {
     }
     /// Each response as a struct of its own.
     pub mod response {
-        /// §1 Acknowledge (code `0x80`, 5 bytes).
+        /// Acknowledge (§1; code `0x80`, 5 bytes).
         #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
         #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
         #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]
@@ -1263,7 +1263,7 @@ pub mod records {
         pub struct Ack {
             pub status: u8,
         }
-        /// §3 Channels (code `0x85`, 8 to 28 bytes).
+        /// Channels (§3; code `0x85`, 8 to 28 bytes).
         #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
         #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
         #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]

@@ -961,7 +961,7 @@ pub mod records_sized {
     /// refusals do: name, code and the frame lengths of its code; `QUANTITY_DESC`, each
     /// field a refusal names) and methods are in the `impl` of each.
     pub mod request {
-        /// §1 Synchronised write (code `0x83`, 11 to 39 bytes).
+        /// Synchronised write (§1; code `0x83`, 11 to 39 bytes).
         #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
         #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
         #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]
@@ -972,7 +972,7 @@ pub mod records_sized {
             /// One servo's ID and its data, `data_length` bytes.
             pub blocks: super::rt::Repeated<super::SyncWriteBlocks, 6>,
         }
-        /// §2 Trim offsets (code `0x84`, 6 to 18 bytes).
+        /// Trim offsets (§2; code `0x84`, 6 to 18 bytes).
         #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
         #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
         #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]
@@ -984,7 +984,7 @@ pub mod records_sized {
     }
     /// Each response as a struct of its own.
     pub mod response {
-        /// §1 Acknowledge (code `0x55`, 6 bytes).
+        /// Acknowledge (§1; code `0x55`, 6 bytes).
         #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
         #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
         #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]

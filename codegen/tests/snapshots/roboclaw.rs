@@ -2078,7 +2078,7 @@ pub mod roboclaw {
     /// refusals do: name, code and the frame lengths of its code; `QUANTITY_DESC`, each
     /// field a refusal names) and methods are in the `impl` of each.
     pub mod request {
-        /// §0 Drive forward M1 (code `0x00`, 5 bytes).
+        /// Drive forward M1 (§0; code `0x00`, 5 bytes).
         #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
         #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
         #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]
@@ -2087,7 +2087,7 @@ pub mod roboclaw {
             /// Valid raw range 0..=127.
             pub speed: u8,
         }
-        /// §1 Drive backwards M1 (code `0x01`, 5 bytes).
+        /// Drive backwards M1 (§1; code `0x01`, 5 bytes).
         #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
         #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
         #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]
@@ -2096,37 +2096,37 @@ pub mod roboclaw {
             /// Valid raw range 0..=127.
             pub speed: u8,
         }
-        /// §16 Read encoder count M1 (code `0x10`, 2 bytes).
+        /// Read encoder count M1 (§16; code `0x10`, 2 bytes).
         #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
         #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
         #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]
         pub struct ReadEncoderM1;
-        /// §18 Read encoder speed M1 (code `0x12`, 2 bytes).
+        /// Read encoder speed M1 (§18; code `0x12`, 2 bytes).
         #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
         #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
         #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]
         pub struct ReadSpeedM1;
-        /// §20 Reset quadrature encoder counters (code `0x14`, 4 bytes).
+        /// Reset quadrature encoder counters (§20; code `0x14`, 4 bytes).
         #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
         #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
         #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]
         pub struct ResetEncoders;
-        /// §21 Read firmware version (code `0x15`, 2 bytes).
+        /// Read firmware version (§21; code `0x15`, 2 bytes).
         #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
         #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
         #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]
         pub struct ReadFirmwareVersion;
-        /// §24 Read main battery voltage (code `0x18`, 2 bytes).
+        /// Read main battery voltage (§24; code `0x18`, 2 bytes).
         #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
         #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
         #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]
         pub struct ReadMainBattery;
-        /// §25 Read logic battery voltage (code `0x19`, 2 bytes).
+        /// Read logic battery voltage (§25; code `0x19`, 2 bytes).
         #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
         #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
         #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]
         pub struct ReadLogicBattery;
-        /// §32 Drive M1 with signed duty cycle (code `0x20`, 6 bytes).
+        /// Drive M1 with signed duty cycle (§32; code `0x20`, 6 bytes).
         #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
         #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
         #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]
@@ -2135,7 +2135,7 @@ pub mod roboclaw {
             /// Valid raw range -32767..=32767.
             pub duty: i16,
         }
-        /// §35 Drive M1 with signed speed (code `0x23`, 8 bytes).
+        /// Drive M1 with signed speed (§35; code `0x23`, 8 bytes).
         #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
         #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
         #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]
@@ -2144,17 +2144,17 @@ pub mod roboclaw {
             /// \[pulse/s\]
             pub speed: i32,
         }
-        /// §49 Read motor currents (code `0x31`, 2 bytes).
+        /// Read motor currents (§49; code `0x31`, 2 bytes).
         #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
         #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
         #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]
         pub struct ReadCurrents;
-        /// §82 Read temperature (code `0x52`, 2 bytes).
+        /// Read temperature (§82; code `0x52`, 2 bytes).
         #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
         #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
         #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]
         pub struct ReadTemperature;
-        /// §90 Read status (code `0x5A`, 2 bytes).
+        /// Read status (§90; code `0x5A`, 2 bytes).
         #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
         #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
         #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]
@@ -2162,12 +2162,12 @@ pub mod roboclaw {
     }
     /// Each response as a struct of its own.
     pub mod response {
-        /// §Packet Serial Write acknowledged (code `0x`, 1 bytes). The controller answers a write whose CRC it accepted with the single byte FF.
+        /// Write acknowledged (§Packet Serial; no code, 1 bytes). The controller answers a write whose CRC it accepted with the single byte FF.
         #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
         #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
         #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]
         pub struct Ack;
-        /// §16 Encoder count M1 (code `0x`, 7 bytes).
+        /// Encoder count M1 (§16; no code, 7 bytes).
         #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
         #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
         #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]
@@ -2177,7 +2177,7 @@ pub mod roboclaw {
             pub count: i32,
             pub status: super::EncoderStatus,
         }
-        /// §18 Encoder speed M1 (code `0x`, 7 bytes).
+        /// Encoder speed M1 (§18; no code, 7 bytes).
         #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
         #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
         #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]
@@ -2187,7 +2187,7 @@ pub mod roboclaw {
             pub speed: i32,
             pub direction: super::Direction,
         }
-        /// §21 Firmware version (code `0x`, 3 to 50 bytes). The product name and firmware version, ending in a line feed, then a NUL: up to 48 bytes with it. The reply has no length: only the NUL tells where the text ends and the CRC begins.
+        /// Firmware version (§21; no code, 3 to 50 bytes). The product name and firmware version, ending in a line feed, then a NUL: up to 48 bytes with it. The reply has no length: only the NUL tells where the text ends and the CRC begins.
         #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
         #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
         #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]
@@ -2195,7 +2195,7 @@ pub mod roboclaw {
         pub struct FirmwareVersion {
             pub version: super::rt::Repeated<u8, 47>,
         }
-        /// §24 Main battery voltage (code `0x`, 4 bytes).
+        /// Main battery voltage (§24; no code, 4 bytes).
         #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
         #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
         #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]
@@ -2204,7 +2204,7 @@ pub mod roboclaw {
             /// \[V\]
             pub voltage: super::Decivolts,
         }
-        /// §25 Logic battery voltage (code `0x`, 4 bytes).
+        /// Logic battery voltage (§25; no code, 4 bytes).
         #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
         #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
         #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]
@@ -2213,7 +2213,7 @@ pub mod roboclaw {
             /// \[V\]
             pub voltage: super::Decivolts,
         }
-        /// §49 Motor currents (code `0x`, 6 bytes).
+        /// Motor currents (§49; no code, 6 bytes).
         #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
         #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
         #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]
@@ -2224,7 +2224,7 @@ pub mod roboclaw {
             /// \[A\]
             pub m2: super::Centiamps,
         }
-        /// §82 Temperature (code `0x`, 4 bytes).
+        /// Temperature (§82; no code, 4 bytes).
         #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
         #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
         #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]
@@ -2233,7 +2233,7 @@ pub mod roboclaw {
             /// \[°C\]
             pub temperature: super::Decidegrees,
         }
-        /// §90 Status (code `0x`, 6 bytes).
+        /// Status (§90; no code, 6 bytes).
         #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
         #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
         #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]

@@ -769,7 +769,7 @@ pub mod rtcm3_frame {
     /// refusals do: name, code and the frame lengths of its code; `QUANTITY_DESC`, each
     /// field a refusal names) and methods are in the `impl` of each.
     pub mod request {
-        /// §3.5.3 Stationary RTK reference station ARP (1005) (code `0x`, 25 bytes).
+        /// Stationary RTK reference station ARP (1005) (§3.5.3; no code, 25 bytes).
         #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
         #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
         #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]
@@ -778,7 +778,7 @@ pub mod rtcm3_frame {
             pub station_high: u8,
             pub rest: super::rt::Repeated<u8, 17>,
         }
-        /// §3.5.3 Antenna descriptor (1007) (code `0x`, 10 to 42 bytes).
+        /// Antenna descriptor (1007) (§3.5.3; no code, 10 to 42 bytes).
         #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
         #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
         #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]

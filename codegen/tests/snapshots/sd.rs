@@ -5067,7 +5067,7 @@ pub mod sd {
     /// refusals do: name, code and the frame lengths of its code; `QUANTITY_DESC`, each
     /// field a refusal names) and methods are in the `impl` of each.
     pub mod request {
-        /// §3.1 Set Point Command (code `0x76`, 6 bytes). Set point: move to the given position. The host increments the 4-bit host data freshness counter with every set point command; the actuator checks it against its configured "Freshness Counter Threshold" (0 = no count may be skipped, 1 = one count may be skipped, ..., >= 15 = check disabled) and on a violation loads its set point from the configured "Fail-Safe Position" (erratum sd-e09).
+        /// Set Point Command (§3.1; code `0x76`, 6 bytes). Set point: move to the given position. The host increments the 4-bit host data freshness counter with every set point command; the actuator checks it against its configured "Freshness Counter Threshold" (0 = no count may be skipped, 1 = one count may be skipped, ..., >= 15 = check disabled) and on a violation loads its set point from the configured "Fail-Safe Position" (erratum sd-e09).
         #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
         #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
         #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]
@@ -5078,12 +5078,12 @@ pub mod sd {
             /// ABC = set point position (12-bit two's complement) \[°\]
             pub position: super::Angle,
         }
-        /// §3.2 Read Actual Position Command (code `0x69`, 6 bytes). Readout actual position.
+        /// Read Actual Position Command (§3.2; code `0x69`, 6 bytes). Readout actual position.
         #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
         #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
         #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]
         pub struct ReadActualPosition;
-        /// §3.3 Set Velocity (code `0x77`, 6 bytes). Set velocity. Set velocity = velocity \[Deg/sec\] * 10, 16-bit two's complement (footnote 1, erratum sd-e10).
+        /// Set Velocity (§3.3; code `0x77`, 6 bytes). Set velocity. Set velocity = velocity \[Deg/sec\] * 10, 16-bit two's complement (footnote 1, erratum sd-e10).
         #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
         #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
         #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]
@@ -5092,12 +5092,12 @@ pub mod sd {
             /// Set velocity, high byte first (footnote 1: 16-bit two's complement). \[°/s\]
             pub set_velocity: super::Velocity,
         }
-        /// §3.4 Read Actual Velocity (code `0x68`, 6 bytes). Readout actual velocity.
+        /// Read Actual Velocity (§3.4; code `0x68`, 6 bytes). Readout actual velocity.
         #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
         #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
         #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]
         pub struct ReadActualVelocity;
-        /// §3.5 Set Servo ID Command (code `0xAA`, 6 bytes). Set servo ID: give the actuator a new ID (0x01..0x1E), sent twice. Accepts the broadcast ID; the document does not say whether it answers a broadcast (erratum sd-e11).
+        /// Set Servo ID Command (§3.5; code `0xAA`, 6 bytes). Set servo ID: give the actuator a new ID (0x01..0x1E), sent twice. Accepts the broadcast ID; the document does not say whether it answers a broadcast (erratum sd-e11).
         #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
         #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
         #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]
@@ -5106,77 +5106,77 @@ pub mod sd {
             /// New ID: 0x01 ... 0x1E Valid raw range 1..=30.
             pub new_id: u8,
         }
-        /// §3.6 Read Servo ID Command (code `0xDA`, 6 bytes). Read servo ID. Accepts the broadcast ID, which is how a host learns the ID of a single actuator on the bus; the document does not say whether it answers a broadcast (erratum sd-e11).
+        /// Read Servo ID Command (§3.6; code `0xDA`, 6 bytes). Read servo ID. Accepts the broadcast ID, which is how a host learns the ID of a single actuator on the bus; the document does not say whether it answers a broadcast (erratum sd-e11).
         #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
         #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
         #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]
         pub struct ReadServoId;
-        /// §3.7 Read Current Consumption (code `0xB0`, 6 bytes). Read current consumption (maximum value 5.1 A; above that use read_extended_current_consumption).
+        /// Read Current Consumption (§3.7; code `0xB0`, 6 bytes). Read current consumption (maximum value 5.1 A; above that use read_extended_current_consumption).
         #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
         #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
         #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]
         pub struct ReadCurrentConsumption;
-        /// §3.8 Read Bus Voltages (code `0xB1`, 6 bytes). Read bus voltages of power bus 1 (X1) and power bus 2 (X2).
+        /// Read Bus Voltages (§3.8; code `0xB1`, 6 bytes). Read bus voltages of power bus 1 (X1) and power bus 2 (X2).
         #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
         #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
         #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]
         pub struct ReadBusVoltages;
-        /// §3.9 Read Extended Current Consumption (code `0xB2`, 6 bytes). Read extended current consumption; used if the current consumption exceeds 5.1 A.
+        /// Read Extended Current Consumption (§3.9; code `0xB2`, 6 bytes). Read extended current consumption; used if the current consumption exceeds 5.1 A.
         #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
         #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
         #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]
         pub struct ReadExtendedCurrentConsumption;
-        /// §3.10 Read Temperatures (code `0xA0`, 6 bytes). Readout of temperature: motor and PCB temperature.
+        /// Read Temperatures (§3.10; code `0xA0`, 6 bytes). Readout of temperature: motor and PCB temperature.
         #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
         #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
         #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]
         pub struct ReadTemperatures;
-        /// §3.11 Read Humidity (code `0xA1`, 6 bytes). Readout of humidity.
+        /// Read Humidity (§3.11; code `0xA1`, 6 bytes). Readout of humidity.
         #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
         #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
         #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]
         pub struct ReadHumidity;
-        /// §3.12 Read Skipped Frames Counter (code `0x37`, 6 bytes). Read skipped frames counter: the host freshness counter and the number of dropped (skipped) set point frames. Shares code 0x37 with reset_dropped_frames_counter; argument 2 (0x01) selects the readout (erratum sd-e13).
+        /// Read Skipped Frames Counter (§3.12; code `0x37`, 6 bytes). Read skipped frames counter: the host freshness counter and the number of dropped (skipped) set point frames. Shares code 0x37 with reset_dropped_frames_counter; argument 2 (0x01) selects the readout (erratum sd-e13).
         #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
         #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
         #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]
         pub struct ReadSkippedFramesCounter;
-        /// §3.13 Reset of the Dropped Frames Counter (code `0x37`, 6 bytes). Reset the dropped frames counter. Argument 2 = 0x02 selects the reset. (The document's description line "Readout the role (master/slave)" is a copy-paste slip, erratum sd-e14.)
+        /// Reset of the Dropped Frames Counter (§3.13; code `0x37`, 6 bytes). Reset the dropped frames counter. Argument 2 = 0x02 selects the reset. (The document's description line "Readout the role (master/slave)" is a copy-paste slip, erratum sd-e14.)
         #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
         #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
         #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]
         pub struct ResetDroppedFramesCounter;
-        /// §3.14 Read Actuator Status Word (code `0x40`, 6 bytes). Readout actuator status word. Shares code 0x40 with reset_actuator_status_word; argument 2 (0x02) selects the readout.
+        /// Read Actuator Status Word (§3.14; code `0x40`, 6 bytes). Readout actuator status word. Shares code 0x40 with reset_actuator_status_word; argument 2 (0x02) selects the readout.
         #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
         #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
         #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]
         pub struct ReadActuatorStatusWord;
-        /// §3.15 Reset Actuator Status Word (code `0x40`, 6 bytes). Reset of actuator status word. Argument 2 (0x52) selects the reset.
+        /// Reset Actuator Status Word (§3.15; code `0x40`, 6 bytes). Reset of actuator status word. Argument 2 (0x52) selects the reset.
         #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
         #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
         #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]
         pub struct ResetActuatorStatusWord;
-        /// §3.16 Reset Default Role and Reset Error Flags (code `0xB4`, 6 bytes). Reset default role and reset error flags ("Access to special actuator features"). The arguments are the fixed key 0x41 0x53, echoed in the reply (erratum sd-e18).
+        /// Reset Default Role and Reset Error Flags (§3.16; code `0xB4`, 6 bytes). Reset default role and reset error flags ("Access to special actuator features"). The arguments are the fixed key 0x41 0x53, echoed in the reply (erratum sd-e18).
         #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
         #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
         #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]
         pub struct ResetDefaultRoleAndErrorFlags;
-        /// §3.17 Set Current Position As Zero (code `0x99`, 6 bytes). Set current position as zero; the reply carries the resulting offset relative to the real zero of the encoder.
+        /// Set Current Position As Zero (§3.17; code `0x99`, 6 bytes). Set current position as zero; the reply carries the resulting offset relative to the real zero of the encoder.
         #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
         #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
         #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]
         pub struct SetCurrentPositionAsZero;
-        /// §3.18 Read Current Zero Offset (code `0x95`, 6 bytes). Report of zero position: the offset relative to the real zero of the encoder.
+        /// Read Current Zero Offset (§3.18; code `0x95`, 6 bytes). Report of zero position: the offset relative to the real zero of the encoder.
         #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
         #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
         #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]
         pub struct ReadCurrentZeroOffset;
-        /// §3.19 Reset Zero Offset (code `0x98`, 6 bytes). Reset zero offset.
+        /// Reset Zero Offset (§3.19; code `0x98`, 6 bytes). Reset zero offset.
         #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
         #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
         #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]
         pub struct ResetZeroOffset;
-        /// §3.20 Readout of Electronic Serial Number (code `0xF0`, 6 bytes). Readout of electronic serial number, one character per request (erratum sd-e21).
+        /// Readout of Electronic Serial Number (§3.20; code `0xF0`, 6 bytes). Readout of electronic serial number, one character per request (erratum sd-e21).
         #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
         #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
         #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]
@@ -5185,7 +5185,7 @@ pub mod sd {
             /// Number of byte (0x00...0x1F) Valid raw range 0..=31.
             pub byte_number: u8,
         }
-        /// §3.21 Readout of Product Description (code `0xF1`, 6 bytes). Readout of product description, one character per request (erratum sd-e21).
+        /// Readout of Product Description (§3.21; code `0xF1`, 6 bytes). Readout of product description, one character per request (erratum sd-e21).
         #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
         #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
         #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]
@@ -5194,7 +5194,7 @@ pub mod sd {
             /// Number of byte (0x00...0x1F) Valid raw range 0..=31.
             pub byte_number: u8,
         }
-        /// §3.22 Readout of Software Revision Number (code `0xF2`, 6 bytes). Readout of software revision number, one character per request (erratum sd-e21).
+        /// Readout of Software Revision Number (§3.22; code `0xF2`, 6 bytes). Readout of software revision number, one character per request (erratum sd-e21).
         #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
         #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
         #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]
@@ -5203,7 +5203,7 @@ pub mod sd {
             /// Number of byte (0x00...0x1F) Valid raw range 0..=31.
             pub byte_number: u8,
         }
-        /// §3.23 Readout of Hardware Revision Number (code `0xF3`, 6 bytes). Readout of hardware revision number, one character per request (erratum sd-e21).
+        /// Readout of Hardware Revision Number (§3.23; code `0xF3`, 6 bytes). Readout of hardware revision number, one character per request (erratum sd-e21).
         #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
         #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
         #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]
@@ -5212,102 +5212,102 @@ pub mod sd {
             /// Number of byte (0x00...0x1F) Valid raw range 0..=31.
             pub byte_number: u8,
         }
-        /// §3.24 Readout Total Run-time Counter (code `0xA2`, 6 bytes). Readout total run-time counter, hours part (arguments 0x00 0x00) (erratum sd-e19).
+        /// Readout Total Run-time Counter (§3.24; code `0xA2`, 6 bytes). Readout total run-time counter, hours part (arguments 0x00 0x00) (erratum sd-e19).
         #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
         #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
         #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]
         pub struct ReadTotalRuntimeHours;
-        /// §3.24 Readout Total Run-time Counter (code `0xA2`, 6 bytes). Readout total run-time counter, minutes and seconds part (arguments 0x00 0x01) (erratum sd-e19).
+        /// Readout Total Run-time Counter (§3.24; code `0xA2`, 6 bytes). Readout total run-time counter, minutes and seconds part (arguments 0x00 0x01) (erratum sd-e19).
         #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
         #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
         #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]
         pub struct ReadTotalRuntimeMinSec;
-        /// §3.25 Readout 0%...24% Load Run-time Counter (code `0xA3`, 6 bytes). Readout 0%...24% load run-time counter, hours part (arguments 0x00 0x00) (erratum sd-e19).
+        /// Readout 0%...24% Load Run-time Counter (§3.25; code `0xA3`, 6 bytes). Readout 0%...24% load run-time counter, hours part (arguments 0x00 0x00) (erratum sd-e19).
         #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
         #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
         #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]
         pub struct ReadLoadRuntime024Hours;
-        /// §3.25 Readout 0%...24% Load Run-time Counter (code `0xA3`, 6 bytes). Readout 0%...24% load run-time counter, minutes and seconds part (arguments 0x00 0x01) (erratum sd-e19).
+        /// Readout 0%...24% Load Run-time Counter (§3.25; code `0xA3`, 6 bytes). Readout 0%...24% load run-time counter, minutes and seconds part (arguments 0x00 0x01) (erratum sd-e19).
         #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
         #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
         #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]
         pub struct ReadLoadRuntime024MinSec;
-        /// §3.26 Reset 0%...24% Load Run-time Counter (code `0xA3`, 6 bytes). Reset 0%...24% load run-time counter (arguments 0xAA 0x55); replies with the hours before the reset.
+        /// Reset 0%...24% Load Run-time Counter (§3.26; code `0xA3`, 6 bytes). Reset 0%...24% load run-time counter (arguments 0xAA 0x55); replies with the hours before the reset.
         #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
         #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
         #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]
         pub struct ResetLoadRuntime024;
-        /// §3.27 Readout 25%...49% Load Run-time Counter (code `0xA4`, 6 bytes). Readout 25%...49% load run-time counter, hours part (arguments 0x00 0x00) (erratum sd-e19).
+        /// Readout 25%...49% Load Run-time Counter (§3.27; code `0xA4`, 6 bytes). Readout 25%...49% load run-time counter, hours part (arguments 0x00 0x00) (erratum sd-e19).
         #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
         #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
         #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]
         pub struct ReadLoadRuntime2549Hours;
-        /// §3.27 Readout 25%...49% Load Run-time Counter (code `0xA4`, 6 bytes). Readout 25%...49% load run-time counter, minutes and seconds part (arguments 0x00 0x01) (erratum sd-e19).
+        /// Readout 25%...49% Load Run-time Counter (§3.27; code `0xA4`, 6 bytes). Readout 25%...49% load run-time counter, minutes and seconds part (arguments 0x00 0x01) (erratum sd-e19).
         #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
         #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
         #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]
         pub struct ReadLoadRuntime2549MinSec;
-        /// §3.28 Reset 25%...49% Load Run-time Counter (code `0xA4`, 6 bytes). Reset 25%...49% load run-time counter (arguments 0xAA 0x55); replies with the hours before the reset. The document's heading says "Readout" (erratum sd-e20); the title here is its description line.
+        /// Reset 25%...49% Load Run-time Counter (§3.28; code `0xA4`, 6 bytes). Reset 25%...49% load run-time counter (arguments 0xAA 0x55); replies with the hours before the reset. The document's heading says "Readout" (erratum sd-e20); the title here is its description line.
         #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
         #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
         #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]
         pub struct ResetLoadRuntime2549;
-        /// §3.29 Readout 50%...74% Load Run-time Counter (code `0xA5`, 6 bytes). Readout 50%...74% load run-time counter, hours part (arguments 0x00 0x00) (erratum sd-e19).
+        /// Readout 50%...74% Load Run-time Counter (§3.29; code `0xA5`, 6 bytes). Readout 50%...74% load run-time counter, hours part (arguments 0x00 0x00) (erratum sd-e19).
         #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
         #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
         #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]
         pub struct ReadLoadRuntime5074Hours;
-        /// §3.29 Readout 50%...74% Load Run-time Counter (code `0xA5`, 6 bytes). Readout 50%...74% load run-time counter, minutes and seconds part (arguments 0x00 0x01) (erratum sd-e19).
+        /// Readout 50%...74% Load Run-time Counter (§3.29; code `0xA5`, 6 bytes). Readout 50%...74% load run-time counter, minutes and seconds part (arguments 0x00 0x01) (erratum sd-e19).
         #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
         #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
         #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]
         pub struct ReadLoadRuntime5074MinSec;
-        /// §3.30 Reset 50%...74% Load Run-time Counter (code `0xA5`, 6 bytes). Reset 50%...74% load run-time counter (arguments 0xAA 0x55); replies with the hours before the reset.
+        /// Reset 50%...74% Load Run-time Counter (§3.30; code `0xA5`, 6 bytes). Reset 50%...74% load run-time counter (arguments 0xAA 0x55); replies with the hours before the reset.
         #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
         #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
         #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]
         pub struct ResetLoadRuntime5074;
-        /// §3.31 Readout 75%...99% Load Run-time Counter (code `0xA6`, 6 bytes). Readout 75%...99% load run-time counter, hours part (arguments 0x00 0x00) (erratum sd-e19).
+        /// Readout 75%...99% Load Run-time Counter (§3.31; code `0xA6`, 6 bytes). Readout 75%...99% load run-time counter, hours part (arguments 0x00 0x00) (erratum sd-e19).
         #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
         #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
         #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]
         pub struct ReadLoadRuntime7599Hours;
-        /// §3.31 Readout 75%...99% Load Run-time Counter (code `0xA6`, 6 bytes). Readout 75%...99% load run-time counter, minutes and seconds part (arguments 0x00 0x01) (erratum sd-e19).
+        /// Readout 75%...99% Load Run-time Counter (§3.31; code `0xA6`, 6 bytes). Readout 75%...99% load run-time counter, minutes and seconds part (arguments 0x00 0x01) (erratum sd-e19).
         #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
         #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
         #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]
         pub struct ReadLoadRuntime7599MinSec;
-        /// §3.32 Reset 75%...99% Load Run-time Counter (code `0xA6`, 6 bytes). Reset 75%...99% load run-time counter (arguments 0xAA 0x55); replies with the hours before the reset.
+        /// Reset 75%...99% Load Run-time Counter (§3.32; code `0xA6`, 6 bytes). Reset 75%...99% load run-time counter (arguments 0xAA 0x55); replies with the hours before the reset.
         #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
         #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
         #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]
         pub struct ResetLoadRuntime7599;
-        /// §3.33 Readout of 100% Load Run-time Counter (code `0xA7`, 6 bytes). Readout of 100% load run-time counter, hours part (arguments 0x00 0x00) (erratum sd-e19).
+        /// Readout of 100% Load Run-time Counter (§3.33; code `0xA7`, 6 bytes). Readout of 100% load run-time counter, hours part (arguments 0x00 0x00) (erratum sd-e19).
         #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
         #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
         #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]
         pub struct ReadLoadRuntime100Hours;
-        /// §3.33 Readout of 100% Load Run-time Counter (code `0xA7`, 6 bytes). Readout of 100% load run-time counter, minutes and seconds part (arguments 0x00 0x01) (erratum sd-e19).
+        /// Readout of 100% Load Run-time Counter (§3.33; code `0xA7`, 6 bytes). Readout of 100% load run-time counter, minutes and seconds part (arguments 0x00 0x01) (erratum sd-e19).
         #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
         #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
         #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]
         pub struct ReadLoadRuntime100MinSec;
-        /// §3.34 Reset of 100% Load Run-time Counter (code `0xA7`, 6 bytes). Reset of 100% load run-time counter (arguments 0xAA 0x55); replies with the hours before the reset.
+        /// Reset of 100% Load Run-time Counter (§3.34; code `0xA7`, 6 bytes). Reset of 100% load run-time counter (arguments 0xAA 0x55); replies with the hours before the reset.
         #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
         #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
         #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]
         pub struct ResetLoadRuntime100;
-        /// §3.35 Readout Stall Event Counter (code `0xA8`, 6 bytes). Readout stall event counter (arguments 0x00 0x00).
+        /// Readout Stall Event Counter (§3.35; code `0xA8`, 6 bytes). Readout stall event counter (arguments 0x00 0x00).
         #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
         #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
         #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]
         pub struct ReadStallEventCounter;
-        /// §3.36 Reset Stall Event Counter (code `0xA8`, 6 bytes). Reset stall event counter (arguments 0xAA 0x55); replies with the count before the reset.
+        /// Reset Stall Event Counter (§3.36; code `0xA8`, 6 bytes). Reset stall event counter (arguments 0xAA 0x55); replies with the count before the reset.
         #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
         #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
         #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]
         pub struct ResetStallEventCounter;
-        /// §3.37 Readout of Number of Power Up Cycles (code `0xA9`, 6 bytes). Readout of number of power up cycles.
+        /// Readout of Number of Power Up Cycles (§3.37; code `0xA9`, 6 bytes). Readout of number of power up cycles.
         #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
         #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
         #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]
@@ -5315,7 +5315,7 @@ pub mod sd {
     }
     /// Each response as a struct of its own.
     pub mod response {
-        /// §3.1 Set point response: actuator data freshness counter and actual position (code `0x56`, 6 bytes). Reply to set_point. The actuator data freshness counter is a 4-bit counter decremented by the servo for each reply (erratum sd-e09); the actual position has the set point's format.
+        /// Set point response: actuator data freshness counter and actual position (§3.1; code `0x56`, 6 bytes). Reply to set_point. The actuator data freshness counter is a 4-bit counter decremented by the servo for each reply (erratum sd-e09); the actual position has the set point's format.
         #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
         #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
         #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]
@@ -5326,7 +5326,7 @@ pub mod sd {
             /// ABC = actual position (12-bit two's complement) \[°\]
             pub position: super::Angle,
         }
-        /// §3.2 Actual position (code `0x49`, 6 bytes). Actual position, 0000AAAABBBBCCCC (bit 15...0): 4 zero bits, then the 12-bit two's-complement position.
+        /// Actual position (§3.2; code `0x49`, 6 bytes). Actual position, 0000AAAABBBBCCCC (bit 15...0): 4 zero bits, then the 12-bit two's-complement position.
         #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
         #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
         #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]
@@ -5335,7 +5335,7 @@ pub mod sd {
             /// ABC = actual position (12-bit two's complement) \[°\]
             pub position: super::Angle,
         }
-        /// §3.3 Set velocity response: actual velocity (code `0x57`, 6 bytes). Reply to set_velocity: actual velocity = (Arg. 1 * 256 + Arg. 2) * 0.1 \[Deg/sec\], 16-bit two's complement (erratum sd-e10).
+        /// Set velocity response: actual velocity (§3.3; code `0x57`, 6 bytes). Reply to set_velocity: actual velocity = (Arg. 1 * 256 + Arg. 2) * 0.1 \[Deg/sec\], 16-bit two's complement (erratum sd-e10).
         #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
         #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
         #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]
@@ -5344,7 +5344,7 @@ pub mod sd {
             /// Actual velocity, high byte first (footnote 1: 16-bit two's complement). \[°/s\]
             pub actual_velocity: super::Velocity,
         }
-        /// §3.4 Actual velocity (code `0x48`, 6 bytes). Actual velocity = (Arg. 1 * 256 + Arg. 2) * 0.1 \[Deg/sec\], 16-bit two's complement (erratum sd-e10).
+        /// Actual velocity (§3.4; code `0x48`, 6 bytes). Actual velocity = (Arg. 1 * 256 + Arg. 2) * 0.1 \[Deg/sec\], 16-bit two's complement (erratum sd-e10).
         #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
         #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
         #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]
@@ -5353,7 +5353,7 @@ pub mod sd {
             /// Actual velocity, high byte first (footnote 1: 16-bit two's complement). \[°/s\]
             pub actual_velocity: super::Velocity,
         }
-        /// §3.5 Set servo ID response: new ID (code `0x55`, 6 bytes). Reply to set_servo_id: the new ID, sent twice (erratum sd-e04 on the ID in byte 2).
+        /// Set servo ID response: new ID (§3.5; code `0x55`, 6 bytes). Reply to set_servo_id: the new ID, sent twice (erratum sd-e04 on the ID in byte 2).
         #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
         #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
         #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]
@@ -5362,7 +5362,7 @@ pub mod sd {
             /// New ID: 0x01 ... 0x1E Valid raw range 1..=30.
             pub new_id: u8,
         }
-        /// §3.6 Servo ID (code `0x6D`, 6 bytes). The actuator's ID, sent twice.
+        /// Servo ID (§3.6; code `0x6D`, 6 bytes). The actuator's ID, sent twice.
         #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
         #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
         #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]
@@ -5371,7 +5371,7 @@ pub mod sd {
             /// ID: 0x01 ... 0x1E Valid raw range 1..=30.
             pub id: u8,
         }
-        /// §3.7 Current consumption (code `0x30`, 6 bytes). Current consumption = Arg. 1 * 0.02 \[A\], sent twice; maximum current value 5.1 A (raw 0xFF).
+        /// Current consumption (§3.7; code `0x30`, 6 bytes). Current consumption = Arg. 1 * 0.02 \[A\], sent twice; maximum current value 5.1 A (raw 0xFF).
         #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
         #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
         #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]
@@ -5380,7 +5380,7 @@ pub mod sd {
             /// Current consumption = Arg. 1 * 0.02 \[A\] \[A\]
             pub current: super::Current,
         }
-        /// §3.8 Bus voltages (code `0x31`, 6 bytes). Voltages of power bus 1 (X1) and power bus 2 (X2).
+        /// Bus voltages (§3.8; code `0x31`, 6 bytes). Voltages of power bus 1 (X1) and power bus 2 (X2).
         #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
         #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
         #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]
@@ -5391,7 +5391,7 @@ pub mod sd {
             /// Power Bus 2 (X2) Voltage = Arg. 2 * 0.2 \[V\] \[V\]
             pub power_bus_2_voltage: super::Voltage,
         }
-        /// §3.9 Extended current consumption (code `0x32`, 6 bytes). Current consumption = (Arg. 1 * 256 + Arg. 2) * 0.02 \[A\].
+        /// Extended current consumption (§3.9; code `0x32`, 6 bytes). Current consumption = (Arg. 1 * 256 + Arg. 2) * 0.02 \[A\].
         #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
         #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
         #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]
@@ -5400,7 +5400,7 @@ pub mod sd {
             /// Current consumption, high byte first \[A\]
             pub current: super::Current,
         }
-        /// §3.10 Temperatures (code `0x20`, 6 bytes). Motor and PCB temperature, \[°C\] = Arg - 50. Valid values are -49 to +204 °C (raw 0x01..0xFE); 0x00 (-50 °C) means no sensor available or below -49 °C, 0xFF (205 °C) means the sensor is defective (erratum sd-e22).
+        /// Temperatures (§3.10; code `0x20`, 6 bytes). Motor and PCB temperature, \[°C\] = Arg - 50. Valid values are -49 to +204 °C (raw 0x01..0xFE); 0x00 (-50 °C) means no sensor available or below -49 °C, 0xFF (205 °C) means the sensor is defective (erratum sd-e22).
         #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
         #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
         #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]
@@ -5411,7 +5411,7 @@ pub mod sd {
             /// PCB temperature \[°C\] = Arg. 2 - 50 \[°C\] Valid raw range 1..=254. Raw 0 = no_sensor (-50 °C: no sensor available (or the measured temperature is below -49 °C)). Raw 255 = defective (205 °C: the sensor is defective).
             pub pcb_temperature: super::Temperature,
         }
-        /// §3.11 Humidity (code `0x21`, 6 bytes). Humidity reading 1...100, sent twice; 0 means no sensor available. The document's table shows Arg. 1 as a fixed 0x00 (erratum sd-e12).
+        /// Humidity (§3.11; code `0x21`, 6 bytes). Humidity reading 1...100, sent twice; 0 means no sensor available. The document's table shows Arg. 1 as a fixed 0x00 (erratum sd-e12).
         #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
         #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
         #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]
@@ -5420,7 +5420,7 @@ pub mod sd {
             /// Humidity reading, valid 1...100 \[%\] Valid raw range 1..=100. Raw 0 = no_sensor (no sensor available).
             pub humidity: u8,
         }
-        /// §3.12 Skipped frames counter (code `0x38`, 6 bytes). Reply to read_skipped_frames_counter. Same code and length as the reply to reset_dropped_frames_counter; only the request tells them apart (erratum sd-e19).
+        /// Skipped frames counter (§3.12; code `0x38`, 6 bytes). Reply to read_skipped_frames_counter. Same code and length as the reply to reset_dropped_frames_counter; only the request tells them apart (erratum sd-e19).
         #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
         #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
         #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]
@@ -5431,7 +5431,7 @@ pub mod sd {
             /// Number of dropped frames
             pub dropped_frames: u8,
         }
-        /// §3.13 Dropped frames counter reset (code `0x38`, 6 bytes). Reply to reset_dropped_frames_counter: the host freshness counter and 0x00. Same code and length as skipped_frames_counter (a read with no dropped frames looks identical); only the request tells them apart.
+        /// Dropped frames counter reset (§3.13; code `0x38`, 6 bytes). Reply to reset_dropped_frames_counter: the host freshness counter and 0x00. Same code and length as skipped_frames_counter (a read with no dropped frames looks identical); only the request tells them apart.
         #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
         #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
         #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]
@@ -5440,7 +5440,7 @@ pub mod sd {
             /// Value of host freshness counter
             pub host_freshness_counter: u8,
         }
-        /// §3.14 Actuator status word (code `0x41`, 6 bytes). Actuator status word, reply to both read_actuator_status_word and reset_actuator_status_word. Argument 1 holds the status bits; argument 2 is marked "See below" but never described (erratum sd-e15).
+        /// Actuator status word (§3.14; code `0x41`, 6 bytes). Actuator status word, reply to both read_actuator_status_word and reset_actuator_status_word. Argument 1 holds the status bits; argument 2 is marked "See below" but never described (erratum sd-e15).
         #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
         #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
         #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]
@@ -5451,12 +5451,12 @@ pub mod sd {
             /// Argument 2: not described by the document; kept raw
             pub status_arg2: u8,
         }
-        /// §3.16 Reset default role and error flags response (code `0x5A`, 6 bytes). Reply to reset_default_role_and_error_flags: echoes 0x41 0x53.
+        /// Reset default role and error flags response (§3.16; code `0x5A`, 6 bytes). Reply to reset_default_role_and_error_flags: echoes 0x41 0x53.
         #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
         #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
         #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]
         pub struct ResetDefaultRoleAndErrorFlagsReply;
-        /// §3.17 Set current position as zero response: zero offset (code `0x4C`, 6 bytes). 0000AAAABBBBCCCC (bit 15...0): 4 zero bits, then the offset relative to the real zero of the encoder (12-bit two's complement).
+        /// Set current position as zero response: zero offset (§3.17; code `0x4C`, 6 bytes). 0000AAAABBBBCCCC (bit 15...0): 4 zero bits, then the offset relative to the real zero of the encoder (12-bit two's complement).
         #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
         #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
         #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]
@@ -5465,7 +5465,7 @@ pub mod sd {
             /// ABC = offset relative to the real zero of the encoder (12-bit two's complement; unit of §3.1 positions assumed, erratum sd-e23) \[°\]
             pub zero_offset: super::Angle,
         }
-        /// §3.18 Current zero offset (code `0x65`, 6 bytes). 0000AAAABBBBCCCC (bit 15...0): 4 zero bits, then the offset relative to the real zero of the encoder (12-bit two's complement).
+        /// Current zero offset (§3.18; code `0x65`, 6 bytes). 0000AAAABBBBCCCC (bit 15...0): 4 zero bits, then the offset relative to the real zero of the encoder (12-bit two's complement).
         #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
         #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
         #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]
@@ -5474,12 +5474,12 @@ pub mod sd {
             /// ABC = offset relative to the real zero of the encoder (12-bit two's complement; unit of §3.1 positions assumed, erratum sd-e23) \[°\]
             pub zero_offset: super::Angle,
         }
-        /// §3.19 Reset zero offset response (code `0x64`, 6 bytes). Reply to reset_zero_offset: 0x00 0x00.
+        /// Reset zero offset response (§3.19; code `0x64`, 6 bytes). Reply to reset_zero_offset: 0x00 0x00.
         #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
         #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
         #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]
         pub struct ResetZeroOffsetReply;
-        /// §3.20 Character of serial number string (code `0x10`, 6 bytes). One character of the electronic serial number string and the string's length.
+        /// Character of serial number string (§3.20; code `0x10`, 6 bytes). One character of the electronic serial number string and the string's length.
         #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
         #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
         #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]
@@ -5490,7 +5490,7 @@ pub mod sd {
             /// Length of the string (0x00...0x20) Valid raw range 0..=32.
             pub string_length: u8,
         }
-        /// §3.21 Character of product description string (code `0x11`, 6 bytes). One character of the product description string and the string's length.
+        /// Character of product description string (§3.21; code `0x11`, 6 bytes). One character of the product description string and the string's length.
         #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
         #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
         #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]
@@ -5501,7 +5501,7 @@ pub mod sd {
             /// Length of the string (0x00...0x20) Valid raw range 0..=32.
             pub string_length: u8,
         }
-        /// §3.22 Character of software revision number string (code `0x12`, 6 bytes). One character of the software revision number string and the string's length.
+        /// Character of software revision number string (§3.22; code `0x12`, 6 bytes). One character of the software revision number string and the string's length.
         #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
         #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
         #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]
@@ -5512,7 +5512,7 @@ pub mod sd {
             /// Length of the string (0x00...0x20) Valid raw range 0..=32.
             pub string_length: u8,
         }
-        /// §3.23 Character of hardware revision number string (code `0x13`, 6 bytes). One character of the hardware revision number string and the string's length.
+        /// Character of hardware revision number string (§3.23; code `0x13`, 6 bytes). One character of the hardware revision number string and the string's length.
         #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
         #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
         #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]
@@ -5523,7 +5523,7 @@ pub mod sd {
             /// Length of the string (0x00...0x20) Valid raw range 0..=32.
             pub string_length: u8,
         }
-        /// §3.24 Total run-time counter \[hours\] (code `0x22`, 6 bytes). Total run-time counter, hours. Same code and length as total_runtime_min_sec (erratum sd-e19).
+        /// Total run-time counter \[hours\] (§3.24; code `0x22`, 6 bytes). Total run-time counter, hours. Same code and length as total_runtime_min_sec (erratum sd-e19).
         #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
         #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
         #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]
@@ -5532,7 +5532,7 @@ pub mod sd {
             /// Total run-time counter \[hours\], high byte first \[h\]
             pub runtime_hours: u16,
         }
-        /// §3.24 Total run-time counter \[min.\] \[sec.\] (code `0x22`, 6 bytes). Total run-time counter, minutes and seconds. Same code and length as total_runtime_hours (erratum sd-e19).
+        /// Total run-time counter \[min.\] \[sec.\] (§3.24; code `0x22`, 6 bytes). Total run-time counter, minutes and seconds. Same code and length as total_runtime_hours (erratum sd-e19).
         #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
         #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
         #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]
@@ -5543,7 +5543,7 @@ pub mod sd {
             /// Total run-time counter \[sec.\] (0x00-0x3B) \[s\] Valid raw range 0..=59.
             pub runtime_seconds: u8,
         }
-        /// §3.25 0%...24% load run-time counter \[hours\] (code `0x23`, 6 bytes). 0%...24% load run-time counter, hours. Same code and length as the other 0x23 replies (erratum sd-e19).
+        /// 0%...24% load run-time counter \[hours\] (§3.25; code `0x23`, 6 bytes). 0%...24% load run-time counter, hours. Same code and length as the other 0x23 replies (erratum sd-e19).
         #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
         #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
         #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]
@@ -5552,7 +5552,7 @@ pub mod sd {
             /// 0%...24% load run-time counter \[hours\], high byte first \[h\]
             pub runtime_hours: u16,
         }
-        /// §3.25 0%...24% load run-time counter \[min.\] \[sec.\] (code `0x23`, 6 bytes). 0%...24% load run-time counter, minutes and seconds. Same code and length as the other 0x23 replies (erratum sd-e19).
+        /// 0%...24% load run-time counter \[min.\] \[sec.\] (§3.25; code `0x23`, 6 bytes). 0%...24% load run-time counter, minutes and seconds. Same code and length as the other 0x23 replies (erratum sd-e19).
         #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
         #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
         #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]
@@ -5563,7 +5563,7 @@ pub mod sd {
             /// 0%...24% load run-time counter \[sec.\] (0x00-0x3B) \[s\] Valid raw range 0..=59.
             pub runtime_seconds: u8,
         }
-        /// §3.26 0%...24% load run-time counter \[h\] (before reset) (code `0x23`, 6 bytes). Reply to reset_load_runtime_0_24: the hours before the reset. Same code and length as the other 0x23 replies (erratum sd-e19).
+        /// 0%...24% load run-time counter \[h\] (before reset) (§3.26; code `0x23`, 6 bytes). Reply to reset_load_runtime_0_24: the hours before the reset. Same code and length as the other 0x23 replies (erratum sd-e19).
         #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
         #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
         #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]
@@ -5572,7 +5572,7 @@ pub mod sd {
             /// 0%...24% load run-time counter \[h\] (before reset), high byte first \[h\]
             pub runtime_hours_before_reset: u16,
         }
-        /// §3.27 25%...49% load run-time counter \[hours\] (code `0x24`, 6 bytes). 25%...49% load run-time counter, hours. Same code and length as the other 0x24 replies (erratum sd-e19).
+        /// 25%...49% load run-time counter \[hours\] (§3.27; code `0x24`, 6 bytes). 25%...49% load run-time counter, hours. Same code and length as the other 0x24 replies (erratum sd-e19).
         #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
         #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
         #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]
@@ -5581,7 +5581,7 @@ pub mod sd {
             /// 25%...49% load run-time counter \[hours\], high byte first \[h\]
             pub runtime_hours: u16,
         }
-        /// §3.27 25%...49% load run-time counter \[min.\] \[sec.\] (code `0x24`, 6 bytes). 25%...49% load run-time counter, minutes and seconds. Same code and length as the other 0x24 replies (erratum sd-e19).
+        /// 25%...49% load run-time counter \[min.\] \[sec.\] (§3.27; code `0x24`, 6 bytes). 25%...49% load run-time counter, minutes and seconds. Same code and length as the other 0x24 replies (erratum sd-e19).
         #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
         #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
         #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]
@@ -5592,7 +5592,7 @@ pub mod sd {
             /// 25%...49% load run-time counter \[sec.\] (0x00-0x3B) \[s\] Valid raw range 0..=59.
             pub runtime_seconds: u8,
         }
-        /// §3.28 25%...49% load run-time counter \[h\] (before reset) (code `0x24`, 6 bytes). Reply to reset_load_runtime_25_49: the hours before the reset. Same code and length as the other 0x24 replies (erratum sd-e19).
+        /// 25%...49% load run-time counter \[h\] (before reset) (§3.28; code `0x24`, 6 bytes). Reply to reset_load_runtime_25_49: the hours before the reset. Same code and length as the other 0x24 replies (erratum sd-e19).
         #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
         #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
         #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]
@@ -5601,7 +5601,7 @@ pub mod sd {
             /// 25%...49% load run-time counter \[h\] (before reset), high byte first \[h\]
             pub runtime_hours_before_reset: u16,
         }
-        /// §3.29 50%...74% load run-time counter \[hours\] (code `0x25`, 6 bytes). 50%...74% load run-time counter, hours. Same code and length as the other 0x25 replies (erratum sd-e19).
+        /// 50%...74% load run-time counter \[hours\] (§3.29; code `0x25`, 6 bytes). 50%...74% load run-time counter, hours. Same code and length as the other 0x25 replies (erratum sd-e19).
         #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
         #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
         #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]
@@ -5610,7 +5610,7 @@ pub mod sd {
             /// 50%...74% load run-time counter \[hours\], high byte first \[h\]
             pub runtime_hours: u16,
         }
-        /// §3.29 50%...74% load run-time counter \[min.\] \[sec.\] (code `0x25`, 6 bytes). 50%...74% load run-time counter, minutes and seconds. Same code and length as the other 0x25 replies (erratum sd-e19).
+        /// 50%...74% load run-time counter \[min.\] \[sec.\] (§3.29; code `0x25`, 6 bytes). 50%...74% load run-time counter, minutes and seconds. Same code and length as the other 0x25 replies (erratum sd-e19).
         #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
         #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
         #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]
@@ -5621,7 +5621,7 @@ pub mod sd {
             /// 50%...74% load run-time counter \[sec.\] (0x00-0x3B) \[s\] Valid raw range 0..=59.
             pub runtime_seconds: u8,
         }
-        /// §3.30 50%...74% load run-time counter \[h\] (before reset) (code `0x25`, 6 bytes). Reply to reset_load_runtime_50_74: the hours before the reset. Same code and length as the other 0x25 replies (erratum sd-e19).
+        /// 50%...74% load run-time counter \[h\] (before reset) (§3.30; code `0x25`, 6 bytes). Reply to reset_load_runtime_50_74: the hours before the reset. Same code and length as the other 0x25 replies (erratum sd-e19).
         #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
         #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
         #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]
@@ -5630,7 +5630,7 @@ pub mod sd {
             /// 50%...74% load run-time counter \[h\] (before reset), high byte first \[h\]
             pub runtime_hours_before_reset: u16,
         }
-        /// §3.31 75%...99% load run-time counter \[hours\] (code `0x26`, 6 bytes). 75%...99% load run-time counter, hours. Same code and length as the other 0x26 replies (erratum sd-e19).
+        /// 75%...99% load run-time counter \[hours\] (§3.31; code `0x26`, 6 bytes). 75%...99% load run-time counter, hours. Same code and length as the other 0x26 replies (erratum sd-e19).
         #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
         #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
         #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]
@@ -5639,7 +5639,7 @@ pub mod sd {
             /// 75%...99% load run-time counter \[hours\], high byte first \[h\]
             pub runtime_hours: u16,
         }
-        /// §3.31 75%...99% load run-time counter \[min.\] \[sec.\] (code `0x26`, 6 bytes). 75%...99% load run-time counter, minutes and seconds. Same code and length as the other 0x26 replies (erratum sd-e19).
+        /// 75%...99% load run-time counter \[min.\] \[sec.\] (§3.31; code `0x26`, 6 bytes). 75%...99% load run-time counter, minutes and seconds. Same code and length as the other 0x26 replies (erratum sd-e19).
         #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
         #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
         #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]
@@ -5650,7 +5650,7 @@ pub mod sd {
             /// 75%...99% load run-time counter \[sec.\] (0x00-0x3B) \[s\] Valid raw range 0..=59.
             pub runtime_seconds: u8,
         }
-        /// §3.32 75%...99% load run-time counter \[h\] (before reset) (code `0x26`, 6 bytes). Reply to reset_load_runtime_75_99: the hours before the reset. Same code and length as the other 0x26 replies (erratum sd-e19).
+        /// 75%...99% load run-time counter \[h\] (before reset) (§3.32; code `0x26`, 6 bytes). Reply to reset_load_runtime_75_99: the hours before the reset. Same code and length as the other 0x26 replies (erratum sd-e19).
         #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
         #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
         #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]
@@ -5659,7 +5659,7 @@ pub mod sd {
             /// 75%...99% load run-time counter \[h\] (before reset), high byte first \[h\]
             pub runtime_hours_before_reset: u16,
         }
-        /// §3.33 100% load run-time counter \[hours\] (code `0x27`, 6 bytes). 100% load run-time counter, hours. Same code and length as the other 0x27 replies (erratum sd-e19).
+        /// 100% load run-time counter \[hours\] (§3.33; code `0x27`, 6 bytes). 100% load run-time counter, hours. Same code and length as the other 0x27 replies (erratum sd-e19).
         #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
         #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
         #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]
@@ -5668,7 +5668,7 @@ pub mod sd {
             /// 100% load run-time counter \[hours\], high byte first \[h\]
             pub runtime_hours: u16,
         }
-        /// §3.33 100% load run-time counter \[min.\] \[sec.\] (code `0x27`, 6 bytes). 100% load run-time counter, minutes and seconds. Same code and length as the other 0x27 replies (erratum sd-e19).
+        /// 100% load run-time counter \[min.\] \[sec.\] (§3.33; code `0x27`, 6 bytes). 100% load run-time counter, minutes and seconds. Same code and length as the other 0x27 replies (erratum sd-e19).
         #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
         #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
         #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]
@@ -5679,7 +5679,7 @@ pub mod sd {
             /// 100% load run-time counter \[sec.\] (0x00-0x3B) \[s\] Valid raw range 0..=59.
             pub runtime_seconds: u8,
         }
-        /// §3.34 100% load run-time counter \[h\] (before reset) (code `0x27`, 6 bytes). Reply to reset_load_runtime_100: the hours before the reset. Same code and length as the other 0x27 replies (erratum sd-e19).
+        /// 100% load run-time counter \[h\] (before reset) (§3.34; code `0x27`, 6 bytes). Reply to reset_load_runtime_100: the hours before the reset. Same code and length as the other 0x27 replies (erratum sd-e19).
         #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
         #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
         #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]
@@ -5688,7 +5688,7 @@ pub mod sd {
             /// 100% load run-time counter \[h\] (before reset), high byte first \[h\]
             pub runtime_hours_before_reset: u16,
         }
-        /// §3.35 Stall event counter (code `0x28`, 6 bytes). Stall event counter. Same code and length as stall_event_counter_before_reset (erratum sd-e19).
+        /// Stall event counter (§3.35; code `0x28`, 6 bytes). Stall event counter. Same code and length as stall_event_counter_before_reset (erratum sd-e19).
         #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
         #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
         #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]
@@ -5697,7 +5697,7 @@ pub mod sd {
             /// Stall event counter, high byte first
             pub stall_events: u16,
         }
-        /// §3.36 Stall event counter (before reset) (code `0x28`, 6 bytes). Reply to reset_stall_event_counter: the count before the reset. Same code and length as stall_event_counter (erratum sd-e19).
+        /// Stall event counter (before reset) (§3.36; code `0x28`, 6 bytes). Reply to reset_stall_event_counter: the count before the reset. Same code and length as stall_event_counter (erratum sd-e19).
         #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
         #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
         #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]
@@ -5706,7 +5706,7 @@ pub mod sd {
             /// Stall event counter (before reset), high byte first
             pub stall_events_before_reset: u16,
         }
-        /// §3.37 Number of power up cycles (code `0x29`, 6 bytes). Number of power up cycles.
+        /// Number of power up cycles (§3.37; code `0x29`, 6 bytes). Number of power up cycles.
         #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
         #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
         #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]

@@ -1496,7 +1496,7 @@ pub mod shdlc {
     /// refusals do: name, code and the frame lengths of its code; `QUANTITY_DESC`, each
     /// field a refusal names) and methods are in the `impl` of each.
     pub mod request {
-        /// §5.3.1 Start measurement (0x00) (code `0x00`, 8 bytes).
+        /// Start measurement (0x00) (§5.3.1; code `0x00`, 8 bytes).
         #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
         #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
         #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]
@@ -1504,27 +1504,27 @@ pub mod shdlc {
         pub struct StartMeasurement {
             pub output_format: super::OutputFormat,
         }
-        /// §5.3.2 Stop measurement (0x01) (code `0x01`, 6 bytes).
+        /// Stop measurement (0x01) (§5.3.2; code `0x01`, 6 bytes).
         #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
         #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
         #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]
         pub struct StopMeasurement;
-        /// §5.3.3 Read measured values (0x03) (code `0x03`, 6 bytes).
+        /// Read measured values (0x03) (§5.3.3; code `0x03`, 6 bytes).
         #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
         #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
         #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]
         pub struct ReadMeasuredValues;
-        /// §5.3.4 Sleep (0x10) (code `0x10`, 6 bytes).
+        /// Sleep (0x10) (§5.3.4; code `0x10`, 6 bytes).
         #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
         #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
         #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]
         pub struct Sleep;
-        /// §5.3.5 Wake-up (0x11) (code `0x11`, 6 bytes).
+        /// Wake-up (0x11) (§5.3.5; code `0x11`, 6 bytes).
         #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
         #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
         #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]
         pub struct WakeUp;
-        /// §5.3.8 Device information (0xD0) (code `0xD0`, 7 bytes).
+        /// Device information (0xD0) (§5.3.8; code `0xD0`, 7 bytes).
         #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
         #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
         #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]
@@ -1532,7 +1532,7 @@ pub mod shdlc {
         pub struct DeviceInformation {
             pub information: super::Information,
         }
-        /// §5.3.11 Device reset (0xD3) (code `0xD3`, 6 bytes).
+        /// Device reset (0xD3) (§5.3.11; code `0xD3`, 6 bytes).
         #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
         #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
         #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]
@@ -1540,7 +1540,7 @@ pub mod shdlc {
     }
     /// Each response as a struct of its own.
     pub mod response {
-        /// §5.3.1 Measurement started (code `0x00`, 7 bytes).
+        /// Measurement started (§5.3.1; code `0x00`, 7 bytes).
         #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
         #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
         #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]
@@ -1549,7 +1549,7 @@ pub mod shdlc {
             /// The execution error of the command, 0 where it was executed.
             pub state: super::State,
         }
-        /// §5.3.2 Measurement stopped (code `0x01`, 7 bytes).
+        /// Measurement stopped (§5.3.2; code `0x01`, 7 bytes).
         #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
         #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
         #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]
@@ -1558,7 +1558,7 @@ pub mod shdlc {
             /// The execution error of the command, 0 where it was executed.
             pub state: super::State,
         }
-        /// §5.3.3 Measured values, as floats (code `0x03`, 47 bytes).
+        /// Measured values, as floats (§5.3.3; code `0x03`, 47 bytes).
         #[derive(Debug, Clone, Copy, PartialEq)]
         #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
         #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]
@@ -1587,7 +1587,7 @@ pub mod shdlc {
             /// \[µm\]
             pub typical_size: f32,
         }
-        /// §5.3.3 Measured values, as unsigned 16-bit integers (code `0x03`, 27 bytes).
+        /// Measured values, as unsigned 16-bit integers (§5.3.3; code `0x03`, 27 bytes).
         #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
         #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
         #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]
@@ -1616,7 +1616,7 @@ pub mod shdlc {
             /// \[nm\]
             pub typical_size: u16,
         }
-        /// §5.3.3 No new measured values (code `0x03`, 7 bytes). An empty reply: no measurement since the last read.
+        /// No new measured values (§5.3.3; code `0x03`, 7 bytes). An empty reply: no measurement since the last read.
         #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
         #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
         #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]
@@ -1625,7 +1625,7 @@ pub mod shdlc {
             /// The execution error of the command, 0 where it was executed.
             pub state: super::State,
         }
-        /// §5.3.4 Asleep (code `0x10`, 7 bytes).
+        /// Asleep (§5.3.4; code `0x10`, 7 bytes).
         #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
         #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
         #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]
@@ -1634,7 +1634,7 @@ pub mod shdlc {
             /// The execution error of the command, 0 where it was executed.
             pub state: super::State,
         }
-        /// §5.3.5 Awake (code `0x11`, 7 bytes).
+        /// Awake (§5.3.5; code `0x11`, 7 bytes).
         #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
         #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
         #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]
@@ -1643,7 +1643,7 @@ pub mod shdlc {
             /// The execution error of the command, 0 where it was executed.
             pub state: super::State,
         }
-        /// §5.3.8 Device information (code `0xD0`, 8 to 40 bytes).
+        /// Device information (§5.3.8; code `0xD0`, 8 to 40 bytes).
         #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
         #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
         #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]
@@ -1654,7 +1654,7 @@ pub mod shdlc {
             /// A null-terminated string.
             pub text: super::rt::Repeated<u8, 32>,
         }
-        /// §5.3.11 Reset (code `0xD3`, 7 bytes).
+        /// Reset (§5.3.11; code `0xD3`, 7 bytes).
         #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
         #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
         #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]

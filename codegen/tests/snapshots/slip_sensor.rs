@@ -766,12 +766,12 @@ pub mod slip_sensor {
     /// refusals do: name, code and the frame lengths of its code; `QUANTITY_DESC`, each
     /// field a refusal names) and methods are in the `impl` of each.
     pub mod request {
-        /// §3.1 Read temperature (code `0x01`, 4 bytes).
+        /// Read temperature (§3.1; code `0x01`, 4 bytes).
         #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
         #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
         #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]
         pub struct ReadTemperature;
-        /// §3.2 Set the alarm threshold (code `0x02`, 6 bytes).
+        /// Set the alarm threshold (§3.2; code `0x02`, 6 bytes).
         #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
         #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
         #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]
@@ -779,7 +779,7 @@ pub mod slip_sensor {
         pub struct SetThreshold {
             pub threshold: u16,
         }
-        /// §3.3 Read the latest samples (code `0x03`, 4 bytes).
+        /// Read the latest samples (§3.3; code `0x03`, 4 bytes).
         #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
         #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
         #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]
@@ -787,7 +787,7 @@ pub mod slip_sensor {
     }
     /// Each response as a struct of its own.
     pub mod response {
-        /// §4.1 Temperature (code `0x81`, 6 bytes).
+        /// Temperature (§4.1; code `0x81`, 6 bytes).
         #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
         #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
         #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]
@@ -796,12 +796,12 @@ pub mod slip_sensor {
             /// \[°C\]
             pub temperature: super::Centidegrees,
         }
-        /// §4.2 Acknowledge (code `0x82`, 4 bytes).
+        /// Acknowledge (§4.2; code `0x82`, 4 bytes).
         #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
         #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
         #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]
         pub struct Ack;
-        /// §4.3 Samples (code `0x83`, 4 to 12 bytes).
+        /// Samples (§4.3; code `0x83`, 4 to 12 bytes).
         #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
         #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
         #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]

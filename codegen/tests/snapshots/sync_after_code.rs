@@ -549,7 +549,7 @@ pub mod sync_after_code {
     /// refusals do: name, code and the frame lengths of its code; `QUANTITY_DESC`, each
     /// field a refusal names) and methods are in the `impl` of each.
     pub mod request {
-        /// §1 Read (code `0x0102`, 6 bytes).
+        /// Read (§1; code `0x0102`, 6 bytes).
         #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
         #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
         #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]
@@ -560,7 +560,7 @@ pub mod sync_after_code {
     }
     /// Each response as a struct of its own.
     pub mod response {
-        /// §2 Value (code `0x8102`, 7 bytes).
+        /// Value (§2; code `0x8102`, 7 bytes).
         #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
         #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
         #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]

@@ -880,7 +880,7 @@ pub mod syncy {
     /// refusals do: name, code and the frame lengths of its code; `QUANTITY_DESC`, each
     /// field a refusal names) and methods are in the `impl` of each.
     pub mod request {
-        /// §1 Move to (code `0x03`, 9 bytes).
+        /// Move to (§1; code `0x03`, 9 bytes).
         #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
         #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
         #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]
@@ -889,12 +889,12 @@ pub mod syncy {
             /// \[mm\] Valid raw range -1000000..=1000000.
             pub target: super::Millimetre,
         }
-        /// §2 Get counter (code `0x04`, 6 bytes).
+        /// Get counter (§2; code `0x04`, 6 bytes).
         #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
         #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
         #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]
         pub struct GetCounter;
-        /// §5 Set pair (code `0x05`, 10 bytes).
+        /// Set pair (§5; code `0x05`, 10 bytes).
         #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
         #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
         #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]
@@ -907,12 +907,12 @@ pub mod syncy {
     }
     /// Each response as a struct of its own.
     pub mod response {
-        /// §3 Moving (code `0x00`, 6 bytes).
+        /// Moving (§3; code `0x00`, 6 bytes).
         #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
         #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
         #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]
         pub struct Moving;
-        /// §4 Counter (code `0x01`, 12 bytes).
+        /// Counter (§4; code `0x01`, 12 bytes).
         #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
         #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
         #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]
@@ -922,7 +922,7 @@ pub mod syncy {
             pub tag: u8,
             pub offset: i32,
         }
-        /// §6 Pair set (code `0x05`, 8 bytes).
+        /// Pair set (§6; code `0x05`, 8 bytes).
         #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
         #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
         #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]
@@ -931,7 +931,7 @@ pub mod syncy {
             pub quantity: u8,
             pub groups: u8,
         }
-        /// §7 Pair not set (code `0x85`, 7 bytes).
+        /// Pair not set (§7; code `0x85`, 7 bytes).
         #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
         #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
         #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]

@@ -756,12 +756,12 @@ pub mod telemetry_le {
     /// refusals do: name, code and the frame lengths of its code; `QUANTITY_DESC`, each
     /// field a refusal names) and methods are in the `impl` of each.
     pub mod request {
-        /// §3.1 Get the state (code `0x01`, 5 bytes).
+        /// Get the state (§3.1; code `0x01`, 5 bytes).
         #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
         #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
         #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]
         pub struct GetState;
-        /// §3.2 Set the home position (code `0x02`, 21 bytes).
+        /// Set the home position (§3.2; code `0x02`, 21 bytes).
         #[derive(Debug, Clone, Copy, PartialEq)]
         #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
         #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]
@@ -775,7 +775,7 @@ pub mod telemetry_le {
     }
     /// Each response as a struct of its own.
     pub mod response {
-        /// §4.1 State (code `0x81`, 41 bytes).
+        /// State (§4.1; code `0x81`, 41 bytes).
         #[derive(Debug, Clone, Copy, PartialEq)]
         #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
         #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]
@@ -793,7 +793,7 @@ pub mod telemetry_le {
             /// Its 16-bit words travel swapped.
             pub total: u32,
         }
-        /// §4.2 Acknowledge (code `0x82`, 5 bytes).
+        /// Acknowledge (§4.2; code `0x82`, 5 bytes).
         #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
         #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
         #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]

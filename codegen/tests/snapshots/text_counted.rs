@@ -943,7 +943,7 @@ pub mod text_counted {
     /// refusals do: name, code and the frame lengths of its code; `QUANTITY_DESC`, each
     /// field a refusal names) and methods are in the `impl` of each.
     pub mod request {
-        /// §1 Set the device name (code `0x20`, 6 to 22 bytes).
+        /// Set the device name (§1; code `0x20`, 6 to 22 bytes).
         #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
         #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
         #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]
@@ -953,7 +953,7 @@ pub mod text_counted {
             /// Valid raw range 0..=7.
             pub channel: u8,
         }
-        /// §2 Read the device information (code `0x21`, 4 bytes).
+        /// Read the device information (§2; code `0x21`, 4 bytes).
         #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
         #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
         #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]
@@ -961,7 +961,7 @@ pub mod text_counted {
     }
     /// Each response as a struct of its own.
     pub mod response {
-        /// §1 Acknowledge (code `0x20`, 5 bytes).
+        /// Acknowledge (§1; code `0x20`, 5 bytes).
         #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
         #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
         #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]
@@ -969,7 +969,7 @@ pub mod text_counted {
         pub struct Ack {
             pub status: u8,
         }
-        /// §2 Device information (code `0x21`, 11 to 26 bytes).
+        /// Device information (§2; code `0x21`, 11 to 26 bytes).
         #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
         #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
         #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]

@@ -1223,12 +1223,12 @@ pub mod text_terminated {
     /// refusals do: name, code and the frame lengths of its code; `QUANTITY_DESC`, each
     /// field a refusal names) and methods are in the `impl` of each.
     pub mod request {
-        /// §1 Ask for the device information (code `0x28`, 4 bytes).
+        /// Ask for the device information (§1; code `0x28`, 4 bytes).
         #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
         #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
         #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]
         pub struct Ping;
-        /// §2 Set the device name (code `0x2A`, 6 to 22 bytes).
+        /// Set the device name (§2; code `0x2A`, 6 to 22 bytes).
         #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
         #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
         #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]
@@ -1238,7 +1238,7 @@ pub mod text_terminated {
             /// Valid raw range 0..=7.
             pub channel: u8,
         }
-        /// §3 Read a parameter entry (code `0x2C`, 5 bytes).
+        /// Read a parameter entry (§3; code `0x2C`, 5 bytes).
         #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
         #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
         #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]
@@ -1249,7 +1249,7 @@ pub mod text_terminated {
     }
     /// Each response as a struct of its own.
     pub mod response {
-        /// §1 Device information (code `0x29`, 20 to 43 bytes).
+        /// Device information (§1; code `0x29`, 20 to 43 bytes).
         #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
         #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
         #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]
@@ -1262,7 +1262,7 @@ pub mod text_terminated {
             pub parameters: u8,
             pub version: u8,
         }
-        /// §2 Acknowledge (code `0x2A`, 5 bytes).
+        /// Acknowledge (§2; code `0x2A`, 5 bytes).
         #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
         #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
         #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]
@@ -1270,7 +1270,7 @@ pub mod text_terminated {
         pub struct Ack {
             pub status: u8,
         }
-        /// §3 A parameter entry: its name and its unit, each up to a NUL (code `0x2B`, 9 to 33 bytes).
+        /// A parameter entry: its name and its unit, each up to a NUL (§3; code `0x2B`, 9 to 33 bytes).
         #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
         #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
         #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]

@@ -3841,17 +3841,17 @@ pub mod ub2 {
     /// refusals do: name, code and the frame lengths of its code; `QUANTITY_DESC`, each
     /// field a refusal names) and methods are in the `impl` of each.
     pub mod request {
-        /// §4.1.1 Triggering the “reference run” (code `0x1000`, 5 bytes). Triggers a full reference run (→ Preset → Cmin → Preset). The preset is a fixed firmware position between Cmin-nom and Cmax-nom; its capacitance and full-step position are read with 0x4073 00 / 0x4073 01 (the document says 0x4070 / 0x4071, ub2-e06).
+        /// Triggering the “reference run” (§4.1.1; code `0x1000`, 5 bytes). Triggers a full reference run (→ Preset → Cmin → Preset). The preset is a fixed firmware position between Cmin-nom and Cmax-nom; its capacitance and full-step position are read with 0x4073 00 / 0x4073 01 (the document says 0x4070 / 0x4071, ub2-e06).
         #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
         #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
         #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]
         pub struct ReferenceRun;
-        /// §4.1.2 Check if “reference run” is completed (code `0x1001`, 5 bytes). Checks whether the full reference run (→ Preset → Cmin → Preset) is completed. May be sent while the capacitor is still moving. Unlike the other checks, the document lists no step-loss reply 0x5400 here (ub2-e31).
+        /// Check if “reference run” is completed (§4.1.2; code `0x1001`, 5 bytes). Checks whether the full reference run (→ Preset → Cmin → Preset) is completed. May be sent while the capacitor is still moving. Unlike the other checks, the document lists no step-loss reply 0x5400 here (ub2-e31).
         #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
         #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
         #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]
         pub struct ReferenceRunStatus;
-        /// §4.2.1 Triggering the movement “Go-To-Capacitance” (code `0x2000`, 9 bytes). Triggers the motorized capacitor to run to the given capacitance.
+        /// Triggering the movement “Go-To-Capacitance” (§4.2.1; code `0x2000`, 9 bytes). Triggers the motorized capacitor to run to the given capacitance.
         #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
         #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
         #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]
@@ -3860,12 +3860,12 @@ pub mod ub2 {
             /// Target capacitance C \[0.01 pF\] \[pF\]
             pub target: super::Capacitance,
         }
-        /// §4.2.2 Check if “Go-To-Capacitance” is completed (code `0x2001`, 5 bytes). Checks whether the movement Go-To-Capacitance is completed. May be sent while the capacitor is still moving.
+        /// Check if “Go-To-Capacitance” is completed (§4.2.2; code `0x2001`, 5 bytes). Checks whether the movement Go-To-Capacitance is completed. May be sent while the capacitor is still moving.
         #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
         #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
         #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]
         pub struct GoToCapacitanceStatus;
-        /// §4.3.1 Triggering the movement “Go-To-Full-Step-Position” (code `0x2100`, 7 bytes). Triggers the motorized capacitor to run to the given absolute full-step position (U16, §3.2).
+        /// Triggering the movement “Go-To-Full-Step-Position” (§4.3.1; code `0x2100`, 7 bytes). Triggers the motorized capacitor to run to the given absolute full-step position (U16, §3.2).
         #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
         #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
         #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]
@@ -3874,12 +3874,12 @@ pub mod ub2 {
             /// Absolute full-step position; 0 = Lower Factory Limit \[full-steps\]
             pub target: u16,
         }
-        /// §4.3.2 Check if “Go-To-Full-Step-Position” is completed (code `0x2101`, 5 bytes). Checks whether the movement Go-To-Full-Step-Position is completed. May be sent while the capacitor is still moving.
+        /// Check if “Go-To-Full-Step-Position” is completed (§4.3.2; code `0x2101`, 5 bytes). Checks whether the movement Go-To-Full-Step-Position is completed. May be sent while the capacitor is still moving.
         #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
         #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
         #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]
         pub struct GoToFullStepPositionStatus;
-        /// §4.4.1 Triggering the movement “Move-Full-Steps” (code `0x2200`, 7 bytes). Triggers the motorized capacitor to move the given number of full-steps (I16, §3.2). Positive full-steps run towards Cmax, negative towards Cmin.
+        /// Triggering the movement “Move-Full-Steps” (§4.4.1; code `0x2200`, 7 bytes). Triggers the motorized capacitor to move the given number of full-steps (I16, §3.2). Positive full-steps run towards Cmax, negative towards Cmin.
         #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
         #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
         #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]
@@ -3888,32 +3888,32 @@ pub mod ub2 {
             /// Relative full-steps; positive towards Cmax, negative towards Cmin \[full-steps\]
             pub steps: i16,
         }
-        /// §4.4.2 Check if “Move-Full-Steps” is completed (code `0x2201`, 5 bytes). Checks whether the movement Move-Full-Steps is completed. May be sent while the capacitor is still moving.
+        /// Check if “Move-Full-Steps” is completed (§4.4.2; code `0x2201`, 5 bytes). Checks whether the movement Move-Full-Steps is completed. May be sent while the capacitor is still moving.
         #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
         #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
         #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]
         pub struct MoveFullStepsStatus;
-        /// §4.5.1 Triggering the movement “Go-To-Cmin” (code `0x2300`, 5 bytes). Triggers the motorized capacitor to run to the Lower-Customer-Limit (not to the C-curve minimum the name suggests, ub2-e25).
+        /// Triggering the movement “Go-To-Cmin” (§4.5.1; code `0x2300`, 5 bytes). Triggers the motorized capacitor to run to the Lower-Customer-Limit (not to the C-curve minimum the name suggests, ub2-e25).
         #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
         #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
         #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]
         pub struct GoToCmin;
-        /// §4.5.2 Check if “Go-To-Cmin” is completed (code `0x2301`, 5 bytes). Checks whether the movement Go-To-Cmin is completed. May be sent while the capacitor is still moving.
+        /// Check if “Go-To-Cmin” is completed (§4.5.2; code `0x2301`, 5 bytes). Checks whether the movement Go-To-Cmin is completed. May be sent while the capacitor is still moving.
         #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
         #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
         #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]
         pub struct GoToCminStatus;
-        /// §4.6.1 Triggering the movement “Go-To-Cmax” (code `0x2400`, 5 bytes). Triggers the motorized capacitor to run to the Upper-Customer-Limit (not to the C-curve maximum the name suggests, ub2-e25).
+        /// Triggering the movement “Go-To-Cmax” (§4.6.1; code `0x2400`, 5 bytes). Triggers the motorized capacitor to run to the Upper-Customer-Limit (not to the C-curve maximum the name suggests, ub2-e25).
         #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
         #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
         #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]
         pub struct GoToCmax;
-        /// §4.6.2 Check if “Go-To-Cmax” is completed (code `0x2401`, 5 bytes). Checks whether the movement Go-To-Cmax is completed. May be sent while the capacitor is still moving.
+        /// Check if “Go-To-Cmax” is completed (§4.6.2; code `0x2401`, 5 bytes). Checks whether the movement Go-To-Cmax is completed. May be sent while the capacitor is still moving.
         #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
         #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
         #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]
         pub struct GoToCmaxStatus;
-        /// §4.7.1 Triggering the movement “Go-To-Micro-Step-Position” (code `0x2500`, 9 bytes). Triggers the motorized capacitor to run to the given absolute micro-step position (U32, §3.3).
+        /// Triggering the movement “Go-To-Micro-Step-Position” (§4.7.1; code `0x2500`, 9 bytes). Triggers the motorized capacitor to run to the given absolute micro-step position (U32, §3.3).
         #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
         #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
         #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]
@@ -3922,12 +3922,12 @@ pub mod ub2 {
             /// Absolute micro-step position; 0 = Lower Factory Limit \[micro-steps\]
             pub target: u32,
         }
-        /// §4.7.2 Check if “Go-To-Micro-Step-Position” is completed (code `0x2501`, 5 bytes). Checks whether the movement Go-To-Micro-Step-Position is completed. May be sent while the capacitor is still moving.
+        /// Check if “Go-To-Micro-Step-Position” is completed (§4.7.2; code `0x2501`, 5 bytes). Checks whether the movement Go-To-Micro-Step-Position is completed. May be sent while the capacitor is still moving.
         #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
         #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
         #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]
         pub struct GoToMicroStepPositionStatus;
-        /// §4.8.1 Triggering the movement “Move-Micro-Steps” (code `0x2600`, 9 bytes). Triggers the motorized capacitor to move the given number of micro-steps (I32, §3.3). Positive micro-steps run towards Cmax, negative towards Cmin.
+        /// Triggering the movement “Move-Micro-Steps” (§4.8.1; code `0x2600`, 9 bytes). Triggers the motorized capacitor to move the given number of micro-steps (I32, §3.3). Positive micro-steps run towards Cmax, negative towards Cmin.
         #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
         #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
         #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]
@@ -3936,12 +3936,12 @@ pub mod ub2 {
             /// Relative micro-steps; positive towards Cmax, negative towards Cmin \[micro-steps\]
             pub steps: i32,
         }
-        /// §4.8.2 Check if “Move-Micro-Steps” is completed (code `0x2601`, 5 bytes). Checks whether the movement Move-Micro-Steps is completed. May be sent while the capacitor is still moving.
+        /// Check if “Move-Micro-Steps” is completed (§4.8.2; code `0x2601`, 5 bytes). Checks whether the movement Move-Micro-Steps is completed. May be sent while the capacitor is still moving.
         #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
         #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
         #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]
         pub struct MoveMicroStepsStatus;
-        /// §4.9.1 Triggering movement “Go-To-Stored-Position” (code `0x2700`, 6 bytes). Triggers the motorized capacitor to move to the given stored position (stored with Store-Indexed-Position 0x7500, §5.7).
+        /// Triggering movement “Go-To-Stored-Position” (§4.9.1; code `0x2700`, 6 bytes). Triggers the motorized capacitor to move to the given stored position (stored with Store-Indexed-Position 0x7500, §5.7).
         #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
         #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
         #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]
@@ -3950,12 +3950,12 @@ pub mod ub2 {
             /// Index of stored position \[0 .. 9\] Valid raw range 0..=9.
             pub index: u8,
         }
-        /// §4.9.2 Check if “Go-To-Stored-Position” is completed (code `0x2701`, 5 bytes). Checks whether the movement Go-To-Stored-Position is completed. May be sent while the capacitor is still moving. The document prints no TX example (ub2-e30).
+        /// Check if “Go-To-Stored-Position” is completed (§4.9.2; code `0x2701`, 5 bytes). Checks whether the movement Go-To-Stored-Position is completed. May be sent while the capacitor is still moving. The document prints no TX example (ub2-e30).
         #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
         #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
         #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]
         pub struct GoToStoredPositionStatus;
-        /// §5.1 Set-Acceleration-Speed-Index (code `0x4300`, 7 bytes). Selects the indexed values within the 19-value acceleration and drive-speed vectors \[0...18\] (e.g. index = 4 selects the fifth vector value). Read back with Get-Acceleration-Speed (0x4021).
+        /// Set-Acceleration-Speed-Index (§5.1; code `0x4300`, 7 bytes). Selects the indexed values within the 19-value acceleration and drive-speed vectors \[0...18\] (e.g. index = 4 selects the fifth vector value). Read back with Get-Acceleration-Speed (0x4021).
         #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
         #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
         #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]
@@ -3966,7 +3966,7 @@ pub mod ub2 {
             /// Second data byte: driving speed, 0 (lowest) ... 18 (highest) Valid raw range 0..=18.
             pub speed_index: u8,
         }
-        /// §5.2 Set-Current (code `0x4500`, 7 bytes). Sets idle and drive current of the stepper motor. Each can be set from 0 (lowest) to its upper limit I-idle-max / I-drive-max, fixed firmware parameters in \[1...255\]. The reply to a current above its limit is not given (ub2-e08).
+        /// Set-Current (§5.2; code `0x4500`, 7 bytes). Sets idle and drive current of the stepper motor. Each can be set from 0 (lowest) to its upper limit I-idle-max / I-drive-max, fixed firmware parameters in \[1...255\]. The reply to a current above its limit is not given (ub2-e08).
         #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
         #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
         #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]
@@ -3977,7 +3977,7 @@ pub mod ub2 {
             /// Byte 2: drive current \[0..I-drive-max\]
             pub drive_current: u8,
         }
-        /// §5.3 Set-Slave-Address (code `0x6000`, 6 bytes). Sets the address of the connected slave. The document's example ACK still comes from the old address (0x21). Range 0x21..0x40 per §2.2/§2.3; §5.3 says 0x41 (ub2-e02).
+        /// Set-Slave-Address (§5.3; code `0x6000`, 6 bytes). Sets the address of the connected slave. The document's example ACK still comes from the old address (0x21). Range 0x21..0x40 per §2.2/§2.3; §5.3 says 0x41 (ub2-e02).
         #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
         #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
         #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]
@@ -3986,7 +3986,7 @@ pub mod ub2 {
             /// New slave address \[0x21 ... 0x40\] (document: 0x41, ub2-e02) Valid raw range 33..=64.
             pub address: u8,
         }
-        /// §5.4 Set-Baud-Rate (code `0x6100`, 6 bytes). Sets the RS485 baud rate of the connected module by index (0..7 → 9'600..115'200). The document does not say whether the ACK is sent at the old or the new rate.
+        /// Set-Baud-Rate (§5.4; code `0x6100`, 6 bytes). Sets the RS485 baud rate of the connected module by index (0..7 → 9'600..115'200). The document does not say whether the ACK is sent at the old or the new rate.
         #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
         #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
         #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]
@@ -3995,7 +3995,7 @@ pub mod ub2 {
             /// Baud rate index RS485 \[0 ... 7\]
             pub baud_rate: super::BaudRateIndex,
         }
-        /// §5.5 Set-Lower-Customer-Limit (code `0x7201`, 9 bytes). Sets the Lower-Customer-Limit of the capacitor; it can only be set within the factory limits (read them with 0x4072 03 / 04). (The command table sits under the heading 5.5.1 'Illustration of factory and customer limits', whose figure is not in the text.)
+        /// Set-Lower-Customer-Limit (§5.5; code `0x7201`, 9 bytes). Sets the Lower-Customer-Limit of the capacitor; it can only be set within the factory limits (read them with 0x4072 03 / 04). (The command table sits under the heading 5.5.1 'Illustration of factory and customer limits', whose figure is not in the text.)
         #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
         #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
         #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]
@@ -4004,7 +4004,7 @@ pub mod ub2 {
             /// Lower customer limit C \[0.01 pF\] \[pF\]
             pub limit: super::Capacitance,
         }
-        /// §5.6 Set-Upper-Customer-Limit (code `0x7202`, 9 bytes). Sets the Upper-Customer-Limit of the capacitor; it can only be set within the factory limits (read them with 0x4072 03 / 04).
+        /// Set-Upper-Customer-Limit (§5.6; code `0x7202`, 9 bytes). Sets the Upper-Customer-Limit of the capacitor; it can only be set within the factory limits (read them with 0x4072 03 / 04).
         #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
         #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
         #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]
@@ -4013,7 +4013,7 @@ pub mod ub2 {
             /// Upper customer limit C \[0.01 pF\] \[pF\]
             pub limit: super::Capacitance,
         }
-        /// §5.7 Store-Indexed-Position (code `0x7500`, 8 bytes). Stores an indexed full-step position of the capacitor, later used by Go-To-Stored-Position (0x2700) and read by Get-Stored-Full-Step-Position (0x4075).
+        /// Store-Indexed-Position (§5.7; code `0x7500`, 8 bytes). Stores an indexed full-step position of the capacitor, later used by Go-To-Stored-Position (0x2700) and read by Get-Stored-Full-Step-Position (0x4075).
         #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
         #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
         #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]
@@ -4024,7 +4024,7 @@ pub mod ub2 {
             /// Bytes 2&3: full-step position \[full-steps\]
             pub position: u16,
         }
-        /// §5.8 Set-Mode-Of-Operation (code `0x8000`, 6 bytes). Sets the Mode-Of-Operation of the motorized capacitor; only while the module is idle (not moving).
+        /// Set-Mode-Of-Operation (§5.8; code `0x8000`, 6 bytes). Sets the Mode-Of-Operation of the motorized capacitor; only while the module is idle (not moving).
         #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
         #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
         #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]
@@ -4033,37 +4033,37 @@ pub mod ub2 {
             /// 0x00 encoder disabled, 0x01 close-loop-control, 0x02 open-loop-control (default)
             pub mode: super::ModeOfOperation,
         }
-        /// §6.1 Get-Actual-Capacitance (code `0x4001`, 5 bytes). Returns the actual capacitance \[0.01 pF\].
+        /// Get-Actual-Capacitance (§6.1; code `0x4001`, 5 bytes). Returns the actual capacitance \[0.01 pF\].
         #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
         #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
         #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]
         pub struct GetActualCapacitance;
-        /// §6.2 Get-Actual-Full-Step-Position (code `0x4002`, 5 bytes). Returns the actual full-step position.
+        /// Get-Actual-Full-Step-Position (§6.2; code `0x4002`, 5 bytes). Returns the actual full-step position.
         #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
         #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
         #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]
         pub struct GetActualFullStepPosition;
-        /// §6.3 Get-Minimum-Capacitance (code `0x4010`, 5 bytes). Returns the minimum capacitance \[0.01 pF\] as per the stored C-curve.
+        /// Get-Minimum-Capacitance (§6.3; code `0x4010`, 5 bytes). Returns the minimum capacitance \[0.01 pF\] as per the stored C-curve.
         #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
         #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
         #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]
         pub struct GetMinimumCapacitance;
-        /// §6.4 Get-Maximum-Capacitance (code `0x4011`, 5 bytes). Returns the maximum capacitance \[0.01 pF\] as per the stored C-curve.
+        /// Get-Maximum-Capacitance (§6.4; code `0x4011`, 5 bytes). Returns the maximum capacitance \[0.01 pF\] as per the stored C-curve.
         #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
         #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
         #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]
         pub struct GetMaximumCapacitance;
-        /// §6.5 Get-Acceleration-Speed (code `0x4021`, 5 bytes). Returns the acceleration and speed index of the motorized capacitor (set with 0x4300).
+        /// Get-Acceleration-Speed (§6.5; code `0x4021`, 5 bytes). Returns the acceleration and speed index of the motorized capacitor (set with 0x4300).
         #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
         #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
         #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]
         pub struct GetAccelerationSpeed;
-        /// §6.6 Get-Status (code `0x4022`, 5 bytes). Returns the status (error byte, §6.6.1) of the motorized capacitor. The table header calls it a 'Protected Command', a term the document never defines (ub2-e13). No example is printed (ub2-e30).
+        /// Get-Status (§6.6; code `0x4022`, 5 bytes). Returns the status (error byte, §6.6.1) of the motorized capacitor. The table header calls it a 'Protected Command', a term the document never defines (ub2-e13). No example is printed (ub2-e30).
         #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
         #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
         #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]
         pub struct GetStatus;
-        /// §6.7 Get-C-curve-Indexed-Full-Step-Capacitance (code `0x4030`, 7 bytes). Returns the indexed tuple (full-step position and capacitance) of the C-curve table from EPROM. The C-curve has at most 500 entries.
+        /// Get-C-curve-Indexed-Full-Step-Capacitance (§6.7; code `0x4030`, 7 bytes). Returns the indexed tuple (full-step position and capacitance) of the C-curve table from EPROM. The C-curve has at most 500 entries.
         #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
         #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
         #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]
@@ -4072,67 +4072,67 @@ pub mod ub2 {
             /// Index in table \[0...x\]; at most 500 entries, so x ≤ 499 (ub2-e29) Valid raw range 0..=499.
             pub index: u16,
         }
-        /// §6.8 Get-Controller-Temperature (code `0x4032`, 5 bytes). Returns the temperature of the controller-internal temperature sensor (one U8 data byte; conversion formula missing in the document, ub2-e15).
+        /// Get-Controller-Temperature (§6.8; code `0x4032`, 5 bytes). Returns the temperature of the controller-internal temperature sensor (one U8 data byte; conversion formula missing in the document, ub2-e15).
         #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
         #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
         #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]
         pub struct GetControllerTemperature;
-        /// §6.9 Get-Micro-Step-Position (code `0x4036`, 5 bytes). Returns the current micro-step position.
+        /// Get-Micro-Step-Position (§6.9; code `0x4036`, 5 bytes). Returns the current micro-step position.
         #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
         #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
         #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]
         pub struct GetMicroStepPosition;
-        /// §6.10 Get-Firmware Version (code `0x4061`, 5 bytes). Returns the firmware version of the motorized capacitor as 11 ASCII characters.
+        /// Get-Firmware Version (§6.10; code `0x4061`, 5 bytes). Returns the firmware version of the motorized capacitor as 11 ASCII characters.
         #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
         #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
         #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]
         pub struct GetFirmwareVersion;
-        /// §6.11 Get-Serial-Number of Capacitor (code `0x4062`, 5 bytes). Returns the serial number of the motorized capacitor as 8 ASCII characters.
+        /// Get-Serial-Number of Capacitor (§6.11; code `0x4062`, 5 bytes). Returns the serial number of the motorized capacitor as 8 ASCII characters.
         #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
         #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
         #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]
         pub struct GetSerialNumber;
-        /// §6.12 Get-C_{min}-nom (code `0x4070`, 5 bytes). Returns the Cmin-nom value (nominal minimum capacitance) \[0.01 pF\].
+        /// Get-C_{min}-nom (§6.12; code `0x4070`, 5 bytes). Returns the Cmin-nom value (nominal minimum capacitance) \[0.01 pF\].
         #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
         #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
         #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]
         pub struct GetCminNom;
-        /// §6.13 Get-C_{max}-nom (code `0x4071`, 5 bytes). Returns the Cmax-nom value (nominal maximum capacitance) \[0.01 pF\].
+        /// Get-C_{max}-nom (§6.13; code `0x4071`, 5 bytes). Returns the Cmax-nom value (nominal maximum capacitance) \[0.01 pF\].
         #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
         #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
         #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]
         pub struct GetCmaxNom;
-        /// §6.14 Get-Lower-Customer-Limit (code `0x4072`, 6 bytes). Returns the capacitance value at the Lower Customer Limit (0x4072 with index 0x01).
+        /// Get-Lower-Customer-Limit (§6.14; code `0x4072`, 6 bytes). Returns the capacitance value at the Lower Customer Limit (0x4072 with index 0x01).
         #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
         #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
         #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]
         pub struct GetLowerCustomerLimit;
-        /// §6.15 Get-Upper- Customer -Limit (code `0x4072`, 6 bytes). Returns the capacitance value at the Upper Customer Limit (0x4072 with index 0x02).
+        /// Get-Upper- Customer -Limit (§6.15; code `0x4072`, 6 bytes). Returns the capacitance value at the Upper Customer Limit (0x4072 with index 0x02).
         #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
         #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
         #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]
         pub struct GetUpperCustomerLimit;
-        /// §6.16 Get-Lower-Factory-Limit (code `0x4072`, 6 bytes). Returns the capacitance value at the Lower Factory Limit (0x4072 with index 0x03); full-step and micro-step position 0 are at this limit.
+        /// Get-Lower-Factory-Limit (§6.16; code `0x4072`, 6 bytes). Returns the capacitance value at the Lower Factory Limit (0x4072 with index 0x03); full-step and micro-step position 0 are at this limit.
         #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
         #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
         #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]
         pub struct GetLowerFactoryLimit;
-        /// §6.17 Get-Upper-Factory-Limit (code `0x4072`, 6 bytes). Returns the capacitance value at the Upper Factory Limit (0x4072 with index 0x04).
+        /// Get-Upper-Factory-Limit (§6.17; code `0x4072`, 6 bytes). Returns the capacitance value at the Upper Factory Limit (0x4072 with index 0x04).
         #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
         #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
         #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]
         pub struct GetUpperFactoryLimit;
-        /// §6.18 Get-Preset-Capacitance (code `0x4073`, 6 bytes). Returns the equivalent capacitance at the preset position (0x4073 with index 0x00).
+        /// Get-Preset-Capacitance (§6.18; code `0x4073`, 6 bytes). Returns the equivalent capacitance at the preset position (0x4073 with index 0x00).
         #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
         #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
         #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]
         pub struct GetPresetCapacitance;
-        /// §6.19 Get-Preset-Full-Step-Position (code `0x4073`, 6 bytes). Returns the equivalent full-step position at the preset position (0x4073 with index 0x01).
+        /// Get-Preset-Full-Step-Position (§6.19; code `0x4073`, 6 bytes). Returns the equivalent full-step position at the preset position (0x4073 with index 0x01).
         #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
         #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
         #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]
         pub struct GetPresetFullStepPosition;
-        /// §6.20 Get-Stored-Full-Step-Position (code `0x4075`, 6 bytes). Returns the stored indexed full-step position (stored with 0x7500) for the requested index.
+        /// Get-Stored-Full-Step-Position (§6.20; code `0x4075`, 6 bytes). Returns the stored indexed full-step position (stored with 0x7500) for the requested index.
         #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
         #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
         #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]
@@ -4141,7 +4141,7 @@ pub mod ub2 {
             /// Index \[0 .. 9\] Valid raw range 0..=9.
             pub index: u8,
         }
-        /// §6.21 Get-Mode-Of-Operation (code `0x4080`, 5 bytes). Returns the actual Mode-Of-Operation. The request has no data (the example comment 'for index = 2' is copied from §6.20, ub2-e20).
+        /// Get-Mode-Of-Operation (§6.21; code `0x4080`, 5 bytes). Returns the actual Mode-Of-Operation. The request has no data (the example comment 'for index = 2' is copied from §6.20, ub2-e20).
         #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
         #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
         #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]
@@ -4149,27 +4149,27 @@ pub mod ub2 {
     }
     /// Each response as a struct of its own.
     pub mod response {
-        /// §4.1.1 Command approved Movement started (code `0x50`, 4 bytes). Reply to a movement trigger: command approved, movement started.
+        /// Command approved Movement started (§4.1.1; code `0x50`, 4 bytes). Reply to a movement trigger: command approved, movement started.
         #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
         #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
         #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]
         pub struct MovementStarted;
-        /// §4.1.2 Command approved & Movement completed (code `0x51`, 4 bytes). Reply to a completion check: command approved and the movement is completed.
+        /// Command approved & Movement completed (§4.1.2; code `0x51`, 4 bytes). Reply to a completion check: command approved and the movement is completed.
         #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
         #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
         #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]
         pub struct MovementCompleted;
-        /// §4.1.2 Command approved & Movement not yet completed (code `0x52`, 4 bytes). Reply to a completion check: command approved, the movement is not yet completed.
+        /// Command approved & Movement not yet completed (§4.1.2; code `0x52`, 4 bytes). Reply to a completion check: command approved, the movement is not yet completed.
         #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
         #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
         #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]
         pub struct MovementNotCompleted;
-        /// §4.1.2 Movement has not been triggered (code `0x53`, 4 bytes). Reply to a completion check: the movement has not been triggered.
+        /// Movement has not been triggered (§4.1.2; code `0x53`, 4 bytes). Reply to a completion check: the movement has not been triggered.
         #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
         #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
         #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]
         pub struct MovementNotTriggered;
-        /// §4.2.2 Movement completed with step-loss (code `0x5400`, 9 bytes). Reply to a completion check: the movement is completed, but steps were lost. The document calls the code 0x5400 (two bytes) and gives no signedness for the 4-byte count; U32 is assumed as for absolute micro-step values (§3.3).
+        /// Movement completed with step-loss (§4.2.2; code `0x5400`, 9 bytes). Reply to a completion check: the movement is completed, but steps were lost. The document calls the code 0x5400 (two bytes) and gives no signedness for the 4-byte count; U32 is assumed as for absolute micro-step values (§3.3).
         #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
         #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
         #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]
@@ -4178,72 +4178,72 @@ pub mod ub2 {
             /// Number of lost micro-steps \[micro-steps\]
             pub lost_micro_steps: u32,
         }
-        /// §7.1 Not acknowledged / Unknown command (code `0x90`, 4 bytes). The command code (byte 3&4) is not defined.
+        /// Not acknowledged / Unknown command (§7.1; code `0x90`, 4 bytes). The command code (byte 3&4) is not defined.
         #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
         #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
         #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]
         pub struct NakUnknownCommand;
-        /// §7.1 Not acknowledged / Incompatible status (code `0x91`, 4 bytes). Current status is not compatible with this command (e.g. §5.8: module not in idle state).
+        /// Not acknowledged / Incompatible status (§7.1; code `0x91`, 4 bytes). Current status is not compatible with this command (e.g. §5.8: module not in idle state).
         #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
         #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
         #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]
         pub struct NakIncompatibleStatus;
-        /// §7.1 Not acknowledged / Checksum error (code `0x92`, 4 bytes). The checksum is not correct.
+        /// Not acknowledged / Checksum error (§7.1; code `0x92`, 4 bytes). The checksum is not correct.
         #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
         #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
         #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]
         pub struct NakChecksumError;
-        /// §7.2 Not acknowledged / Limit reached (code `0x93`, 4 bytes). Target position outside of customer limits. For movements the command is nevertheless approved and the cap runs till the customer limit; for the limit setters 0x7201/0x7202 it means the requested limit is outside the factory limits and the command is ignored (ub2-e23, ub2-e24). See each command's response_meanings.
+        /// Not acknowledged / Limit reached (§7.2; code `0x93`, 4 bytes). Target position outside of customer limits. For movements the command is nevertheless approved and the cap runs till the customer limit; for the limit setters 0x7201/0x7202 it means the requested limit is outside the factory limits and the command is ignored (ub2-e23, ub2-e24). See each command's response_meanings.
         #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
         #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
         #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]
         pub struct NakLimitReached;
-        /// §7.1 Not acknowledged / Index out of range (code `0x94`, 4 bytes). The given index is outside of the defined / allowed range (also used for an out-of-range address, baud-rate index or mode). §7.1 lists it for all commands, so it is a common response; the commands whose sections name it say what it means for them (ub2-e22).
+        /// Not acknowledged / Index out of range (§7.1; code `0x94`, 4 bytes). The given index is outside of the defined / allowed range (also used for an out-of-range address, baud-rate index or mode). §7.1 lists it for all commands, so it is a common response; the commands whose sections name it say what it means for them (ub2-e22).
         #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
         #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
         #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]
         pub struct NakIndexOutOfRange;
-        /// §5.1 Command approved (code `0x4300`, 5 bytes). Set-Acceleration-Speed-Index approved; echoes the command code, no data. No example printed (ub2-e30).
+        /// Command approved (§5.1; code `0x4300`, 5 bytes). Set-Acceleration-Speed-Index approved; echoes the command code, no data. No example printed (ub2-e30).
         #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
         #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
         #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]
         pub struct SetAccelerationSpeedIndexAck;
-        /// §5.2 Command approved (code `0x4500`, 5 bytes). Set-Current approved; echoes the command code, no data.
+        /// Command approved (§5.2; code `0x4500`, 5 bytes). Set-Current approved; echoes the command code, no data.
         #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
         #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
         #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]
         pub struct SetCurrentAck;
-        /// §5.3 Command approved (code `0x6000`, 5 bytes). Set-Slave-Address approved; echoes the command code, no data. The example is sent from the old address.
+        /// Command approved (§5.3; code `0x6000`, 5 bytes). Set-Slave-Address approved; echoes the command code, no data. The example is sent from the old address.
         #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
         #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
         #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]
         pub struct SetSlaveAddressAck;
-        /// §5.4 Command approved (code `0x6100`, 5 bytes). Set-Baud-Rate approved; echoes the command code, no data.
+        /// Command approved (§5.4; code `0x6100`, 5 bytes). Set-Baud-Rate approved; echoes the command code, no data.
         #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
         #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
         #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]
         pub struct SetBaudRateAck;
-        /// §5.5 Command approved (requested limit inside factory limits) (code `0x7201`, 5 bytes). Set-Lower-Customer-Limit approved (requested limit inside factory limits); echoes the command code, no data.
+        /// Command approved (requested limit inside factory limits) (§5.5; code `0x7201`, 5 bytes). Set-Lower-Customer-Limit approved (requested limit inside factory limits); echoes the command code, no data.
         #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
         #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
         #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]
         pub struct SetLowerCustomerLimitAck;
-        /// §5.6 Command approved (code `0x7202`, 5 bytes). Set-Upper-Customer-Limit approved; echoes the command code, no data.
+        /// Command approved (§5.6; code `0x7202`, 5 bytes). Set-Upper-Customer-Limit approved; echoes the command code, no data.
         #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
         #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
         #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]
         pub struct SetUpperCustomerLimitAck;
-        /// §5.7 Command approved (code `0x7500`, 5 bytes). Store-Indexed-Position approved; echoes the command code, no data.
+        /// Command approved (§5.7; code `0x7500`, 5 bytes). Store-Indexed-Position approved; echoes the command code, no data.
         #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
         #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
         #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]
         pub struct StoreIndexedPositionAck;
-        /// §5.8 Command approved (code `0x8000`, 5 bytes). Set-Mode-Of-Operation approved; echoes the command code, no data.
+        /// Command approved (§5.8; code `0x8000`, 5 bytes). Set-Mode-Of-Operation approved; echoes the command code, no data.
         #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
         #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
         #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]
         pub struct SetModeOfOperationAck;
-        /// §6.1 Command approved (actual capacitance) (code `0x4101`, 9 bytes). Actual capacitance.
+        /// Command approved (actual capacitance) (§6.1; code `0x4101`, 9 bytes). Actual capacitance.
         #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
         #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
         #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]
@@ -4252,7 +4252,7 @@ pub mod ub2 {
             /// C \[0.01 pF\] \[pF\]
             pub capacitance: super::Capacitance,
         }
-        /// §6.2 Command approved (actual full-step position) (code `0x4102`, 7 bytes). Actual full-step position.
+        /// Command approved (actual full-step position) (§6.2; code `0x4102`, 7 bytes). Actual full-step position.
         #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
         #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
         #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]
@@ -4261,7 +4261,7 @@ pub mod ub2 {
             /// Full-steps \[full-steps\]
             pub full_steps: u16,
         }
-        /// §6.3 Command approved (minimum capacitance) (code `0x4110`, 9 bytes). Minimum capacitance Cmin as per the stored C-curve.
+        /// Command approved (minimum capacitance) (§6.3; code `0x4110`, 9 bytes). Minimum capacitance Cmin as per the stored C-curve.
         #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
         #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
         #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]
@@ -4270,7 +4270,7 @@ pub mod ub2 {
             /// Cmin \[0.01 pF\] \[pF\]
             pub capacitance: super::Capacitance,
         }
-        /// §6.4 Command approved (maximum capacitance) (code `0x4111`, 9 bytes). Maximum capacitance Cmax as per the stored C-curve.
+        /// Command approved (maximum capacitance) (§6.4; code `0x4111`, 9 bytes). Maximum capacitance Cmax as per the stored C-curve.
         #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
         #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
         #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]
@@ -4279,7 +4279,7 @@ pub mod ub2 {
             /// Cmax \[0.01 pF\] \[pF\]
             pub capacitance: super::Capacitance,
         }
-        /// §6.5 Command approved (acceleration and speed index) (code `0x4121`, 7 bytes). Acceleration and drive-speed index.
+        /// Command approved (acceleration and speed index) (§6.5; code `0x4121`, 7 bytes). Acceleration and drive-speed index.
         #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
         #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
         #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]
@@ -4290,7 +4290,7 @@ pub mod ub2 {
             /// Byte 2: drive-speed \[0...18\] Valid raw range 0..=18.
             pub speed_index: u8,
         }
-        /// §6.6 Command approved (status) (code `0x4122`, 7 bytes). Status: '2 Byte', byte 1 = error bits (§6.6.1), byte 2 n/a (ub2-e13).
+        /// Command approved (status) (§6.6; code `0x4122`, 7 bytes). Status: '2 Byte', byte 1 = error bits (§6.6.1), byte 2 n/a (ub2-e13).
         #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
         #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
         #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]
@@ -4301,7 +4301,7 @@ pub mod ub2 {
             /// Byte 2: n/a (not defined by the document)
             pub reserved: u8,
         }
-        /// §6.7 Command approved (C-curve entry) (code `0x4130`, 13 bytes). Indexed C-curve tuple: index, full-step position, capacitance.
+        /// Command approved (C-curve entry) (§6.7; code `0x4130`, 13 bytes). Indexed C-curve tuple: index, full-step position, capacitance.
         #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
         #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
         #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]
@@ -4314,7 +4314,7 @@ pub mod ub2 {
             /// Byte 5 to 8: C \[0.01 pF\] \[pF\]
             pub capacitance: super::Capacitance,
         }
-        /// §6.8 Command approved (controller temperature) (code `0x4132`, 6 bytes). Controller-internal temperature; one data byte converted to U8 (the text also says U16 and omits the formula, ub2-e15).
+        /// Command approved (controller temperature) (§6.8; code `0x4132`, 6 bytes). Controller-internal temperature; one data byte converted to U8 (the text also says U16 and omits the formula, ub2-e15).
         #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
         #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
         #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]
@@ -4323,7 +4323,7 @@ pub mod ub2 {
             /// Temperature \[°C\] \[°C\]
             pub temperature: u8,
         }
-        /// §6.9 Command approved (micro-step position) (code `0x4136`, 9 bytes). Current micro-step position.
+        /// Command approved (micro-step position) (§6.9; code `0x4136`, 9 bytes). Current micro-step position.
         #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
         #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
         #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]
@@ -4332,7 +4332,7 @@ pub mod ub2 {
             /// MicroStep-Position \[micro-steps\]
             pub micro_steps: u32,
         }
-        /// §6.10 Command approved (firmware version) (code `0x4161`, 16 bytes). Firmware version, 11 ASCII characters (e.g. "20100433.00").
+        /// Command approved (firmware version) (§6.10; code `0x4161`, 16 bytes). Firmware version, 11 ASCII characters (e.g. "20100433.00").
         #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
         #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
         #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]
@@ -4341,7 +4341,7 @@ pub mod ub2 {
             /// 11 bytes \[ASCII character\]
             pub firmware_version: super::rt::Ascii<11>,
         }
-        /// §6.11 Command approved (serial number) (code `0x4162`, 13 bytes). Serial number of the capacitor, 8 ASCII characters (e.g. "##654321").
+        /// Command approved (serial number) (§6.11; code `0x4162`, 13 bytes). Serial number of the capacitor, 8 ASCII characters (e.g. "##654321").
         #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
         #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
         #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]
@@ -4350,7 +4350,7 @@ pub mod ub2 {
             /// 8 bytes \[ASCII character\]
             pub serial_number: super::rt::Ascii<8>,
         }
-        /// §6.12 Command approved (Cmin-nom) (code `0x4170`, 9 bytes). Nominal minimum capacitance Cmin-nom.
+        /// Command approved (Cmin-nom) (§6.12; code `0x4170`, 9 bytes). Nominal minimum capacitance Cmin-nom.
         #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
         #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
         #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]
@@ -4359,7 +4359,7 @@ pub mod ub2 {
             /// Cmin-nom \[0.01 pF\] \[pF\]
             pub capacitance: super::Capacitance,
         }
-        /// §6.13 Command approved (Cmax-nom) (code `0x4171`, 9 bytes). Nominal maximum capacitance Cmax-nom (the data column says C_min-nom, ub2-e16).
+        /// Command approved (Cmax-nom) (§6.13; code `0x4171`, 9 bytes). Nominal maximum capacitance Cmax-nom (the data column says C_min-nom, ub2-e16).
         #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
         #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
         #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]
@@ -4368,7 +4368,7 @@ pub mod ub2 {
             /// Cmax-nom \[0.01 pF\] \[pF\]
             pub capacitance: super::Capacitance,
         }
-        /// §6.14 Command approved (lower customer limit) (code `0x4172`, 10 bytes). Capacitance at the Lower Customer Limit: index byte 0x01, then C.
+        /// Command approved (lower customer limit) (§6.14; code `0x4172`, 10 bytes). Capacitance at the Lower Customer Limit: index byte 0x01, then C.
         #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
         #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
         #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]
@@ -4377,7 +4377,7 @@ pub mod ub2 {
             /// Byte 2 to 5: C \[0.01 pF\] \[pF\]
             pub capacitance: super::Capacitance,
         }
-        /// §6.15 Command approved (upper customer limit) (code `0x4172`, 10 bytes). Capacitance at the Upper Customer Limit: index byte 0x02, then C.
+        /// Command approved (upper customer limit) (§6.15; code `0x4172`, 10 bytes). Capacitance at the Upper Customer Limit: index byte 0x02, then C.
         #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
         #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
         #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]
@@ -4386,7 +4386,7 @@ pub mod ub2 {
             /// Byte 2 to 5: C \[0.01 pF\] \[pF\]
             pub capacitance: super::Capacitance,
         }
-        /// §6.16 Command approved (lower factory limit) (code `0x4172`, 10 bytes). Capacitance at the Lower Factory Limit: index byte 0x03, then C.
+        /// Command approved (lower factory limit) (§6.16; code `0x4172`, 10 bytes). Capacitance at the Lower Factory Limit: index byte 0x03, then C.
         #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
         #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
         #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]
@@ -4395,7 +4395,7 @@ pub mod ub2 {
             /// Byte 2 to 5: C \[0.01 pF\] \[pF\]
             pub capacitance: super::Capacitance,
         }
-        /// §6.17 Command approved (upper factory limit) (code `0x4172`, 10 bytes). Capacitance at the Upper Factory Limit: index byte 0x04, then C.
+        /// Command approved (upper factory limit) (§6.17; code `0x4172`, 10 bytes). Capacitance at the Upper Factory Limit: index byte 0x04, then C.
         #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
         #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
         #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]
@@ -4404,7 +4404,7 @@ pub mod ub2 {
             /// Byte 2 to 5: C \[0.01 pF\] \[pF\]
             pub capacitance: super::Capacitance,
         }
-        /// §6.18 Command approved (preset capacitance) (code `0x4173`, 10 bytes). Equivalent capacitance at the preset position: index byte 0x00, then Preset-C.
+        /// Command approved (preset capacitance) (§6.18; code `0x4173`, 10 bytes). Equivalent capacitance at the preset position: index byte 0x00, then Preset-C.
         #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
         #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
         #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]
@@ -4413,7 +4413,7 @@ pub mod ub2 {
             /// Bytes 2 to 5: Preset-C \[0.01 pF\] \[pF\]
             pub capacitance: super::Capacitance,
         }
-        /// §6.19 Command approved (preset full-step position) (code `0x4173`, 10 bytes). Equivalent full-step position at the preset position: index byte 0x01, then the full-steps in 4 bytes (U32, unlike the 2-byte full-step values of §3.2; ub2-e19).
+        /// Command approved (preset full-step position) (§6.19; code `0x4173`, 10 bytes). Equivalent full-step position at the preset position: index byte 0x01, then the full-steps in 4 bytes (U32, unlike the 2-byte full-step values of §3.2; ub2-e19).
         #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
         #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
         #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]
@@ -4422,7 +4422,7 @@ pub mod ub2 {
             /// Bytes 2 to 5: full-steps \[full-steps\]
             pub full_steps: u32,
         }
-        /// §6.20 Command approved (stored full-step position) (code `0x4175`, 8 bytes). Stored indexed full-step position: the requested index, then the full-steps.
+        /// Command approved (stored full-step position) (§6.20; code `0x4175`, 8 bytes). Stored indexed full-step position: the requested index, then the full-steps.
         #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
         #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
         #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]
@@ -4433,7 +4433,7 @@ pub mod ub2 {
             /// Bytes 2&3: full-steps \[full-steps\]
             pub full_steps: u16,
         }
-        /// §6.21 Command approved (Mode-Of-Operation) (code `0x4180`, 6 bytes). The actual Mode-Of-Operation.
+        /// Command approved (Mode-Of-Operation) (§6.21; code `0x4180`, 6 bytes). The actual Mode-Of-Operation.
         #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
         #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
         #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]

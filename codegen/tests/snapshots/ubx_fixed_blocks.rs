@@ -1216,12 +1216,12 @@ pub mod ubx_fixed_blocks {
     /// refusals do: name, code and the frame lengths of its code; `QUANTITY_DESC`, each
     /// field a refusal names) and methods are in the `impl` of each.
     pub mod request {
-        /// §3 Poll the three tracked satellites (code `0x0136`, 8 bytes).
+        /// Poll the three tracked satellites (§3; code `0x0136`, 8 bytes).
         #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
         #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
         #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]
         pub struct PollSatBlocks;
-        /// §3 Set the two antenna ports and the pins to watch (code `0x0613`, 15 to 23 bytes).
+        /// Set the two antenna ports and the pins to watch (§3; code `0x0613`, 15 to 23 bytes).
         #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
         #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
         #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]
@@ -1234,7 +1234,7 @@ pub mod ubx_fixed_blocks {
     }
     /// Each response as a struct of its own.
     pub mod response {
-        /// §3 Three tracked satellites (code `0x0136`, 31 bytes).
+        /// Three tracked satellites (§3; code `0x0136`, 31 bytes).
         #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
         #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
         #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]
@@ -1246,7 +1246,7 @@ pub mod ubx_fixed_blocks {
             pub blocks: super::rt::Repeated<super::SatBlocksBlocks, 3>,
             pub flags: u8,
         }
-        /// §4 Message acknowledged (ACK-ACK) (code `0x0501`, 10 bytes).
+        /// Message acknowledged (ACK-ACK) (§4; code `0x0501`, 10 bytes).
         #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
         #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
         #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]

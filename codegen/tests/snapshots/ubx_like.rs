@@ -1112,12 +1112,12 @@ pub mod ubx_like {
     /// refusals do: name, code and the frame lengths of its code; `QUANTITY_DESC`, each
     /// field a refusal names) and methods are in the `impl` of each.
     pub mod request {
-        /// §3 Poll the navigation rate (CFG-RATE) (code `0x0608`, 8 bytes).
+        /// Poll the navigation rate (CFG-RATE) (§3; code `0x0608`, 8 bytes).
         #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
         #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
         #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]
         pub struct PollRate;
-        /// §3 Set the navigation rate (CFG-RATE) (code `0x0608`, 14 bytes).
+        /// Set the navigation rate (CFG-RATE) (§3; code `0x0608`, 14 bytes).
         #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
         #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
         #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]
@@ -1129,7 +1129,7 @@ pub mod ubx_like {
             pub nav_rate: u16,
             pub time_ref: super::TimeRef,
         }
-        /// §3 Poll the satellite information (NAV-SAT) (code `0x0135`, 8 bytes).
+        /// Poll the satellite information (NAV-SAT) (§3; code `0x0135`, 8 bytes).
         #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
         #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
         #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]
@@ -1137,7 +1137,7 @@ pub mod ubx_like {
     }
     /// Each response as a struct of its own.
     pub mod response {
-        /// §3 Navigation rate (CFG-RATE) (code `0x0608`, 14 bytes).
+        /// Navigation rate (CFG-RATE) (§3; code `0x0608`, 14 bytes).
         #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
         #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
         #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]
@@ -1149,7 +1149,7 @@ pub mod ubx_like {
             pub nav_rate: u16,
             pub time_ref: super::TimeRef,
         }
-        /// §4 Message acknowledged (ACK-ACK) (code `0x0501`, 10 bytes).
+        /// Message acknowledged (ACK-ACK) (§4; code `0x0501`, 10 bytes).
         #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
         #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
         #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]
@@ -1160,7 +1160,7 @@ pub mod ubx_like {
             /// \[cycles\]
             pub msg_id: u8,
         }
-        /// §4 Message not acknowledged (ACK-NAK) (code `0x0500`, 10 bytes).
+        /// Message not acknowledged (ACK-NAK) (§4; code `0x0500`, 10 bytes).
         #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
         #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
         #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]
@@ -1171,7 +1171,7 @@ pub mod ubx_like {
             /// \[cycles\]
             pub msg_id: u8,
         }
-        /// §3 Satellite information (NAV-SAT) (code `0x0135`, 16 to 976 bytes).
+        /// Satellite information (NAV-SAT) (§3; code `0x0135`, 16 to 976 bytes).
         #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
         #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
         #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]

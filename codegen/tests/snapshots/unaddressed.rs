@@ -721,12 +721,12 @@ pub mod unaddressed {
     /// refusals do: name, code and the frame lengths of its code; `QUANTITY_DESC`, each
     /// field a refusal names) and methods are in the `impl` of each.
     pub mod request {
-        /// §3.1 Read temperature (code `0x10`, 5 bytes).
+        /// Read temperature (§3.1; code `0x10`, 5 bytes).
         #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
         #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
         #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]
         pub struct ReadTemperature;
-        /// §3.2 Set the sample rate (code `0x20`, 7 bytes).
+        /// Set the sample rate (§3.2; code `0x20`, 7 bytes).
         #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
         #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
         #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]
@@ -735,7 +735,7 @@ pub mod unaddressed {
             /// \[Hz\] Valid raw range 1..=1000.
             pub rate: u16,
         }
-        /// §3.3 Read the firmware version (code `0x30`, 5 bytes).
+        /// Read the firmware version (§3.3; code `0x30`, 5 bytes).
         #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
         #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
         #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]
@@ -743,7 +743,7 @@ pub mod unaddressed {
     }
     /// Each response as a struct of its own.
     pub mod response {
-        /// §4.1 Temperature (code `0x90`, 7 bytes).
+        /// Temperature (§4.1; code `0x90`, 7 bytes).
         #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
         #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
         #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]
@@ -752,12 +752,12 @@ pub mod unaddressed {
             /// \[°C\] Valid raw range -4000..=12500.
             pub temperature: super::Centidegrees,
         }
-        /// §4.2 Acknowledge (code `0xA0`, 5 bytes).
+        /// Acknowledge (§4.2; code `0xA0`, 5 bytes).
         #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
         #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
         #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]
         pub struct Ack;
-        /// §4.3 Firmware version (code `0xB0`, 9 bytes).
+        /// Firmware version (§4.3; code `0xB0`, 9 bytes).
         #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
         #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
         #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]

@@ -1081,7 +1081,7 @@ pub mod vario {
     /// refusals do: name, code and the frame lengths of its code; `QUANTITY_DESC`, each
     /// field a refusal names) and methods are in the `impl` of each.
     pub mod request {
-        /// §1 Read (code `0x01`, 9 bytes).
+        /// Read (§1; code `0x01`, 9 bytes).
         #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
         #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
         #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]
@@ -1091,7 +1091,7 @@ pub mod vario {
             /// Valid raw range 1..=16.
             pub quantity: u8,
         }
-        /// §2 Write (code `0x02`, 10 to 40 bytes).
+        /// Write (§2; code `0x02`, 10 to 40 bytes).
         #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
         #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
         #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]
@@ -1101,7 +1101,7 @@ pub mod vario {
             pub quantity: u8,
             pub values: super::rt::Repeated<u16, 16>,
         }
-        /// §3 Stamp (code `0x03`, 9 bytes).
+        /// Stamp (§3; code `0x03`, 9 bytes).
         #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
         #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
         #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]
@@ -1112,7 +1112,7 @@ pub mod vario {
     }
     /// Each response as a struct of its own.
     pub mod response {
-        /// §1 Read reply (code `0x01`, 8 to 38 bytes).
+        /// Read reply (§1; code `0x01`, 8 to 38 bytes).
         #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
         #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
         #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]
@@ -1120,7 +1120,7 @@ pub mod vario {
         pub struct ReadReply {
             pub values: super::rt::Repeated<u16, 16>,
         }
-        /// §1 Read error (code `0x81`, 7 bytes).
+        /// Read error (§1; code `0x81`, 7 bytes).
         #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
         #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
         #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]
@@ -1128,7 +1128,7 @@ pub mod vario {
         pub struct ReadError {
             pub reason: u8,
         }
-        /// §2 Write reply (code `0x02`, 7 bytes).
+        /// Write reply (§2; code `0x02`, 7 bytes).
         #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
         #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
         #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]

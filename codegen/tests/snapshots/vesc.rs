@@ -1599,12 +1599,12 @@ pub mod vesc {
     /// refusals do: name, code and the frame lengths of its code; `QUANTITY_DESC`, each
     /// field a refusal names) and methods are in the `impl` of each.
     pub mod request {
-        /// §commands.c COMM_FW_VERSION (0) (code `0x00`, 7 bytes).
+        /// COMM_FW_VERSION (0) (§commands.c; code `0x00`, 7 bytes).
         #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
         #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
         #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]
         pub struct FwVersion;
-        /// §commands.c COMM_WRITE_NEW_APP_DATA (3) (code `0x03`, 11 to 523 bytes). A chunk of a firmware image, written at an offset of the new-application flash area: long frames for chunks over 250 bytes.
+        /// COMM_WRITE_NEW_APP_DATA (3) (§commands.c; code `0x03`, 11 to 523 bytes). A chunk of a firmware image, written at an offset of the new-application flash area: long frames for chunks over 250 bytes.
         #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
         #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
         #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]
@@ -1613,12 +1613,12 @@ pub mod vesc {
             pub offset: u32,
             pub data: super::rt::Repeated<u8, 512>,
         }
-        /// §commands.c COMM_GET_VALUES (4) (code `0x04`, 7 bytes).
+        /// COMM_GET_VALUES (4) (§commands.c; code `0x04`, 7 bytes).
         #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
         #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
         #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]
         pub struct GetValues;
-        /// §commands.c COMM_SET_DUTY (5) (code `0x05`, 11 bytes).
+        /// COMM_SET_DUTY (5) (§commands.c; code `0x05`, 11 bytes).
         #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
         #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
         #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]
@@ -1626,7 +1626,7 @@ pub mod vesc {
         pub struct SetDuty {
             pub duty: super::Duty,
         }
-        /// §commands.c COMM_SET_CURRENT (6) (code `0x06`, 11 bytes).
+        /// COMM_SET_CURRENT (6) (§commands.c; code `0x06`, 11 bytes).
         #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
         #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
         #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]
@@ -1635,7 +1635,7 @@ pub mod vesc {
             /// \[A\]
             pub current: super::Milliamps,
         }
-        /// §commands.c COMM_SET_CURRENT_BRAKE (7) (code `0x07`, 11 bytes).
+        /// COMM_SET_CURRENT_BRAKE (7) (§commands.c; code `0x07`, 11 bytes).
         #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
         #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
         #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]
@@ -1644,7 +1644,7 @@ pub mod vesc {
             /// \[A\]
             pub current: super::Milliamps,
         }
-        /// §commands.c COMM_SET_RPM (8) (code `0x08`, 11 bytes).
+        /// COMM_SET_RPM (8) (§commands.c; code `0x08`, 11 bytes).
         #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
         #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
         #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]
@@ -1653,7 +1653,7 @@ pub mod vesc {
             /// \[ERPM\]
             pub rpm: i32,
         }
-        /// §commands.c COMM_SET_POS (9) (code `0x09`, 11 bytes).
+        /// COMM_SET_POS (9) (§commands.c; code `0x09`, 11 bytes).
         #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
         #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
         #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]
@@ -1662,7 +1662,7 @@ pub mod vesc {
             /// \[°\]
             pub pos: super::MicroDegrees,
         }
-        /// §commands.c COMM_ALIVE (30) (code `0x1E`, 7 bytes). Keeps the motor running: without a packet for the timeout, the firmware stops it.
+        /// COMM_ALIVE (30) (§commands.c; code `0x1E`, 7 bytes). Keeps the motor running: without a packet for the timeout, the firmware stops it.
         #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
         #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
         #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]
@@ -1670,7 +1670,7 @@ pub mod vesc {
     }
     /// Each response as a struct of its own.
     pub mod response {
-        /// §commands.c COMM_FW_VERSION (0), answered (code `0x00`, 9 to 69 bytes).
+        /// COMM_FW_VERSION (0), answered (§commands.c; code `0x00`, 9 to 69 bytes).
         #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
         #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
         #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]
@@ -1681,7 +1681,7 @@ pub mod vesc {
             /// The hardware name (NUL-terminated) and what newer firmware adds, as bytes.
             pub rest: super::rt::Repeated<u8, 60>,
         }
-        /// §commands.c COMM_WRITE_NEW_APP_DATA (3), answered (code `0x03`, 12 bytes).
+        /// COMM_WRITE_NEW_APP_DATA (3), answered (§commands.c; code `0x03`, 12 bytes).
         #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
         #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
         #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]
@@ -1691,7 +1691,7 @@ pub mod vesc {
             pub ok: u8,
             pub offset: u32,
         }
-        /// §commands.c COMM_GET_VALUES (4), answered (code `0x04`, 62 bytes).
+        /// COMM_GET_VALUES (4), answered (§commands.c; code `0x04`, 62 bytes).
         #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
         #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
         #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]

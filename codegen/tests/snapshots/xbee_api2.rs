@@ -1165,7 +1165,7 @@ pub mod xbee_api2 {
     /// refusals do: name, code and the frame lengths of its code; `QUANTITY_DESC`, each
     /// field a refusal names) and methods are in the `impl` of each.
     pub mod request {
-        /// §0x08 AT Command AT Command (0x08) (code `0x08`, 8 to 28 bytes).
+        /// AT Command (0x08) (§0x08 AT Command; code `0x08`, 8 to 28 bytes).
         #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
         #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
         #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]
@@ -1178,7 +1178,7 @@ pub mod xbee_api2 {
             /// Sets the parameter; none queries it.
             pub parameter: super::rt::Repeated<u8, 20>,
         }
-        /// §0x10 Transmit Request Transmit Request (0x10) (code `0x10`, 18 to 90 bytes).
+        /// Transmit Request (0x10) (§0x10 Transmit Request; code `0x10`, 18 to 90 bytes).
         #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
         #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
         #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]
@@ -1197,7 +1197,7 @@ pub mod xbee_api2 {
     }
     /// Each response as a struct of its own.
     pub mod response {
-        /// §0x88 AT Command Response AT Command Response (0x88) (code `0x88`, 9 to 29 bytes).
+        /// AT Command Response (0x88) (§0x88 AT Command Response; code `0x88`, 9 to 29 bytes).
         #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
         #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
         #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]
@@ -1208,7 +1208,7 @@ pub mod xbee_api2 {
             pub status: super::AtStatus,
             pub data: super::rt::Repeated<u8, 20>,
         }
-        /// §0x8B Transmit Status Transmit Status (0x8B) (code `0x8B`, 11 bytes).
+        /// Transmit Status (0x8B) (§0x8B Transmit Status; code `0x8B`, 11 bytes).
         #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
         #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
         #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]
@@ -1220,7 +1220,7 @@ pub mod xbee_api2 {
             pub delivery: super::DeliveryStatus,
             pub discovery: u8,
         }
-        /// §0x8A Modem Status Modem Status (0x8A) (code `0x8A`, 6 bytes).
+        /// Modem Status (0x8A) (§0x8A Modem Status; code `0x8A`, 6 bytes).
         #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
         #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
         #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]
@@ -1228,7 +1228,7 @@ pub mod xbee_api2 {
         pub struct ModemStatus {
             pub status: super::ModemStatus,
         }
-        /// §0x90 Receive Packet Receive Packet (0x90) (code `0x90`, 16 to 88 bytes).
+        /// Receive Packet (0x90) (§0x90 Receive Packet; code `0x90`, 16 to 88 bytes).
         #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
         #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
         #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]
