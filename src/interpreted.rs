@@ -632,6 +632,17 @@ fn encode_error(e: interp::EncodeError) -> EncodeError {
             index,
             terminator,
         },
+        I::WrongCount {
+            field,
+            min,
+            max,
+            found,
+        } => EncodeError::WrongCount {
+            field: keep(&field),
+            min,
+            max,
+            found,
+        },
         I::HoldsEnd { field, offset, .. } => EncodeError::HoldsEnd {
             field: keep(&field),
             offset,

@@ -1053,3 +1053,47 @@ fn strict_decode_accepts_only_what_encode_writes_back_sd() {
     assert!(accepted > 10_000, "only {accepted} frames accepted");
     random_messages::<sd::Sd>(50_000, 15);
 }
+
+/// A list with fewer elements than its spec allows is refused by both encoders in the same
+/// words: Dynamixel's `read_status` carries 1 to 253 data bytes. (The generated encoder
+/// worded it as a value out of range, `data = 0 is outside its range 1..=253`, until both
+/// said what the interpreter says.)
+#[test]
+fn a_wrong_count_is_refused_in_the_same_words_by_both_encoders() {
+    use busspec_protocols::dynamixel;
+    let generated = dynamixel::Response::ReadStatus(dynamixel::response::ReadStatus {
+        error: dynamixel::StatusError(0),
+        data: busspec_runtime::Repeated::new(),
+    })
+    .encode(1, &mut [0; dynamixel::MAX_FRAME_LEN])
+    .unwrap_err();
+    assert_eq!(
+        generated,
+        EncodeError::WrongCount {
+            field: "data",
+            min: 1,
+            max: 253,
+            found: 0,
+        }
+    );
+    let p = spec::<dynamixel::Dynamixel>();
+    let read_status = p.find("read_status").unwrap();
+    let interpreted = interp::encode(
+        &p,
+        read_status,
+        1,
+        &[
+            Value {
+                name: "error".into(),
+                raw: Raw::Int(0),
+            },
+            Value {
+                name: "data".into(),
+                raw: Raw::List(vec![]),
+            },
+        ],
+    )
+    .unwrap_err();
+    assert_eq!(generated.to_string(), interpreted.to_string());
+    assert_eq!(generated.to_string(), "data takes 1..=253 elements, got 0");
+}

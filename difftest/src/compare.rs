@@ -245,6 +245,7 @@ fn encode_class(g: &GenEncodeError) -> &'static str {
         GenEncodeError::Fields(F::UnknownMessage) => "unknown message",
         GenEncodeError::Encode(EncodeError::OutOfRange { .. }) => "out of range",
         GenEncodeError::Encode(EncodeError::NotInRange { .. }) => "not in range",
+        GenEncodeError::Encode(EncodeError::WrongCount { .. }) => "count",
         GenEncodeError::Encode(EncodeError::BadAddress { .. }) => "bad address",
         GenEncodeError::Encode(EncodeError::Unaddressed { .. }) => "unaddressed",
         GenEncodeError::Encode(EncodeError::BroadcastNotAccepted { .. }) => "broadcast",

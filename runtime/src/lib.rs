@@ -1251,6 +1251,14 @@ pub enum EncodeError {
         /// How the three raw values read as numbers.
         kind: NumKind,
     },
+    /// A list holds `found` elements (records, characters), outside the `min..=max` its
+    /// spec allows.
+    WrongCount {
+        field: &'static str,
+        min: usize,
+        max: usize,
+        found: usize,
+    },
     /// The address is outside the device range `min..=max` and is neither the broadcast
     /// address nor the host address (where the protocol has them).
     BadAddress { address: u8, min: u8, max: u8 },
@@ -1315,6 +1323,12 @@ impl fmt::Display for EncodeError {
                 Num(kind, min),
                 Num(kind, max)
             ),
+            EncodeError::WrongCount {
+                field,
+                min,
+                max,
+                found,
+            } => write!(f, "{field} takes {min}..={max} elements, got {found}"),
             EncodeError::BadAddress { address, min, max } => write!(
                 f,
                 "address 0x{address:02X} is outside the device range 0x{min:02X}..=0x{max:02X} and is not the broadcast or host address"

@@ -539,7 +539,8 @@ impl RepeatAt {
 
     /// The length of a frame of records whose last field's bytes a field gives, holding
     /// `held` records with that field `width` bytes wide: [`EncodeError::NotInRange`] for a
-    /// width outside `1..=most` (naming that field) or a count outside the bounds. Any other
+    /// width outside `1..=most` (naming that field), [`EncodeError::WrongCount`] for a count
+    /// outside the bounds. Any other
     /// list: [`Self::encode_len`].
     #[inline]
     pub fn encode_len_sized(&self, held: usize, width: u64) -> Result<usize, EncodeError> {
@@ -556,12 +557,11 @@ impl RepeatAt {
             });
         }
         if held < self.min || held > self.max {
-            return Err(EncodeError::NotInRange {
+            return Err(EncodeError::WrongCount {
                 field: self.field.name,
-                value: held as i64,
-                min: self.min as i64,
-                max: self.max as i64,
-                kind: crate::NumKind::Int,
+                min: self.min,
+                max: self.max,
+                found: held,
             });
         }
         Ok(self.base + held * (s.fixed + width as usize))
@@ -1141,7 +1141,7 @@ impl RepeatAt {
 
     /// The length of the frame holding `held` elements, which must lie in the spec's bounds
     /// (bits: up to the whole bytes `max` fills, as decode reads them):
-    /// [`EncodeError::NotInRange`] with the count otherwise.
+    /// [`EncodeError::WrongCount`] otherwise, worded as the interpreter words it.
     #[inline]
     pub fn encode_len(&self, held: usize) -> Result<usize, EncodeError> {
         let hi = if self.width == 0 {
@@ -1150,12 +1150,11 @@ impl RepeatAt {
             self.max
         };
         if held < self.min || held > hi {
-            return Err(EncodeError::NotInRange {
+            return Err(EncodeError::WrongCount {
                 field: self.field.name,
-                value: held as i64,
-                min: self.min as i64,
-                max: hi as i64,
-                kind: crate::NumKind::Int,
+                min: self.min,
+                max: hi,
+                found: held,
             });
         }
         Ok(self.base + self.bytes_of(held))
