@@ -560,6 +560,13 @@ enum Refusal {
         min: i64,
         max: i64,
     },
+    /// A list with a count its spec does not allow.
+    Count {
+        field: String,
+        min: usize,
+        max: usize,
+        found: usize,
+    },
 }
 
 impl Refusal {
@@ -584,6 +591,17 @@ impl Refusal {
                 min,
                 max,
             },
+            EncodeError::WrongCount {
+                field,
+                min,
+                max,
+                found,
+            } => Refusal::Count {
+                field: field.to_owned(),
+                min,
+                max,
+                found,
+            },
             _ => return None,
         })
     }
@@ -607,6 +625,17 @@ impl Refusal {
                 value: *value,
                 min: *min,
                 max: *max,
+            },
+            interp::EncodeError::WrongCount {
+                field,
+                min,
+                max,
+                found,
+            } => Refusal::Count {
+                field: field.clone(),
+                min: *min,
+                max: *max,
+                found: *found,
             },
             _ => return None,
         })
