@@ -515,3 +515,65 @@ fn decodes_both_ways_is_each_direction_asked_apart() {
     run::<Crsf>(37);
     run::<Dynamixel2>(38);
 }
+
+/// A Modbus request candidate longer than another candidate whose checks past the framing
+/// fail (`Framing::request_may_decode`) is passed over, its checksum not computed: a short
+/// read-coils reply, whose 8-byte request candidate takes in the next frame's first bytes,
+/// is decided by the fast path as the reply; where the request's checksum holds (a request
+/// out of range) and the reply does not decode, the request is out of spec, which the fast
+/// path leaves to the full rule.
+#[test]
+fn a_modbus_request_candidate_passed_over_is_the_rule() {
+    use busspec_protocols::modbus::checksum;
+    let cap = <Modbus as Protocol>::MAX_FRAME_LEN;
+    let seal = |f: &mut Vec<u8>| {
+        let c = checksum(f).to_le_bytes();
+        f.extend_from_slice(&c);
+    };
+    let fresh = StreamDecoder::<Modbus>::new(None);
+    // A read-coils reply of one byte of coils: 6 bytes, then the next frame's.
+    let mut decided = 0;
+    for coils in 0..=255u8 {
+        let mut reply = vec![0x01, 0x01, 0x01, coils];
+        seal(&mut reply);
+        let mut w = reply.clone();
+        w.extend_from_slice(&[0x01, 0x03]);
+        let quantity = u16::from_be_bytes([w[4], w[5]]);
+        let w = window(&w, cap);
+        let [fast, full] = fresh
+            .fast_and_full(&w, 0)
+            .expect("the fast path decides a reply whose request candidate it passes over");
+        assert_eq!(fast, full, "{w:02X?}");
+        // The request candidate's quantity (the reply's checksum) out of its range: passed
+        // over; in it, decoded whole and refused by its checksum. A reply either way.
+        assert!(
+            matches!(fast.event, Some(Event::Response { len: 6, .. })),
+            "{:?}",
+            fast.event
+        );
+        decided += usize::from(!(1..=2000).contains(&quantity));
+    }
+    assert!(decided > 200, "{decided}");
+    // A read-coils request of quantity 0 (out of range) whose checksum holds, its third byte
+    // counting a one-byte reply, which does not decode: out of spec, by the full rule.
+    let mut request = vec![0x01, 0x01, 0x01, 0x00, 0x00, 0x00];
+    seal(&mut request);
+    let w = window(&request, cap);
+    assert!(
+        fresh.fast_and_full(&w, 0).is_none(),
+        "left to the full rule"
+    );
+    let mut d = StreamDecoder::<Modbus>::new(None);
+    let events: Vec<_> = d.feed(&w).collect();
+    assert!(
+        matches!(
+            events.first(),
+            Some(Event::OutOfSpec {
+                offset: 0,
+                len: 8,
+                ..
+            })
+        ),
+        "{events:?}"
+    );
+}

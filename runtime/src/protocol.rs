@@ -391,6 +391,19 @@ pub trait Framing {
         Self::decode_request(frame).map(|_| ())
     }
 
+    /// Whether `frame` may decode as a request as far as what follows its framing says (its
+    /// code, constants, lengths, the ranges of its fields, the broadcast rule), its checksum
+    /// not computed: `false` only where [`Self::request_decodes`] fails whatever its framing.
+    /// The stream decoder asks it of a request candidate longer than another candidate, which
+    /// it then tries first (a short Modbus coil reply is not tried as an 8-byte request through
+    /// a whole decode). Generated code answers through the request view's `dispatch` where the
+    /// framing checks leave it nothing to rely on; `true` (no claim) otherwise.
+    #[inline]
+    fn request_may_decode(frame: &[u8]) -> bool {
+        let _ = frame;
+        true
+    }
+
     /// [`ResponseMessage::decode_as_reply_over`]'s answer without its value, as
     /// [`Self::request_decodes`] gives [`Protocol::decode_request`]'s.
     #[inline]

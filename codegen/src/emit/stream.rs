@@ -446,6 +446,7 @@ fn view_checks(p: &Protocol) -> (TokenStream, TokenStream) {
         }
     };
     let both_ways = both_ways_check(p);
+    let may_decode = request_may_decode(p);
     let views =
         if no_view(p, Direction::Request).is_none() || no_view(p, Direction::Response).is_none() {
             quote!(
@@ -454,7 +455,46 @@ fn view_checks(p: &Protocol) -> (TokenStream, TokenStream) {
         } else {
             quote!()
         };
-    (views, quote!(#request_decodes #response_decodes #both_ways))
+    (
+        views,
+        quote!(#request_decodes #response_decodes #both_ways #may_decode),
+    )
+}
+
+/// `request_may_decode`, where requests have a view whose framing checks are only
+/// `rt::check_frame` (no sync byte, length field or preamble) and a request's shortest frame
+/// reaches past its address and holds its checksum and end bytes: for a frame of a request's
+/// length bounds, the view's `dispatch` (what its decoder checks after the framing, which the
+/// framing's failing would not make pass). Otherwise the trait's default (`true`).
+fn request_may_decode(p: &Protocol) -> TokenStream {
+    use super::dispatch::{address_at, frame_bounds, framing_checks};
+    if no_view(p, Direction::Request).is_some() || p.framing.preamble.is_some() {
+        return quote!();
+    }
+    let (min, max) = frame_bounds(p, Direction::Request);
+    if min <= address_at(p, Direction::Request) || min < p.framing.trailer_len() {
+        return quote!();
+    }
+    // Only the frame check: `dispatch` then relies on nothing but the frame's length bounds.
+    if !framing_checks(p, Direction::Request, None)
+        .to_string()
+        .trim_start()
+        .starts_with("let address = rt :: check_frame")
+        || framing_checks(p, Direction::Request, None)
+            .to_string()
+            .matches(';')
+            .count()
+            != 1
+    {
+        return quote!();
+    }
+    let (min, max) = (usize_lit(min), usize_lit(max));
+    quote! {
+        #[inline]
+        fn request_may_decode(frame: &[u8]) -> bool {
+            !(#min..=#max).contains(&frame.len()) || RequestView::dispatch(frame).is_ok()
+        }
+    }
 }
 
 /// `decodes_both_ways`, where both directions have a view, no response needs its request

@@ -1044,6 +1044,10 @@ pub mod lists_after {
         ) -> rt::Result<(), rt::DecodeError> {
             ResponseView::decode_for(frame, request).map(|_| ())
         }
+        #[inline]
+        fn request_may_decode(frame: &[u8]) -> bool {
+            !(7..=23).contains(&frame.len()) || RequestView::dispatch(frame).is_ok()
+        }
         fn checksum_ok(frame: &[u8]) -> bool {
             match frame.len().checked_sub(1) {
                 rt::Some(n) if n > 0 => rt::check_sum(frame, n, &FRAME, frame_sum),

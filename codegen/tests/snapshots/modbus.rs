@@ -2705,6 +2705,10 @@ pub mod modbus {
                 ),
             )
         }
+        #[inline]
+        fn request_may_decode(frame: &[u8]) -> bool {
+            !(8..=255).contains(&frame.len()) || RequestView::dispatch(frame).is_ok()
+        }
         fn checksum_ok(frame: &[u8]) -> bool {
             match frame.len().checked_sub(2) {
                 rt::Some(n) if n > 0 => rt::check_sum(frame, n, &FRAME, frame_sum),

@@ -959,6 +959,10 @@ pub mod nextion {
         ) -> rt::Result<(), rt::DecodeError> {
             ResponseView::decode_for(frame, request).map(|_| ())
         }
+        #[inline]
+        fn request_may_decode(frame: &[u8]) -> bool {
+            !(4..=203).contains(&frame.len()) || RequestView::dispatch(frame).is_ok()
+        }
         fn checksum_ok(frame: &[u8]) -> bool {
             match frame.len().checked_sub(3) {
                 rt::Some(n) if n > 0 => rt::check_sum(frame, n, &FRAME, frame_sum),
