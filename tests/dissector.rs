@@ -95,8 +95,6 @@ fn cases() -> Vec<Case> {
         spec("model/tests/fixtures/valid/minimal_variable.yaml"),
         // Escaped frames: the dissector unescapes them into a tvb of their own.
         spec("model/tests/fixtures/valid/slip_sensor.yaml"),
-        // KISS: no length field, data frames of up to 1024 bytes (an example of 316).
-        spec("model/tests/fixtures/valid/kiss.yaml"),
         spec("model/tests/fixtures/valid/hdlc_like.yaml"),
         spec("model/tests/fixtures/valid/cobs_link.yaml"),
         spec("model/tests/fixtures/valid/dynamixel2_stuffed.yaml"),
