@@ -475,6 +475,7 @@ fn escaped_specs_generate_their_snapshots() {
         "dynamixel2_stuffed.rs",
     );
     check("model/tests/fixtures/valid/xbee_api2.yaml", "xbee_api2.rs");
+    check("model/tests/fixtures/valid/kiss.yaml", "kiss.rs");
 }
 
 /// A preamble of wake-up bytes (`framing.preamble`, DL/T 645's `FE FE FE FE`):

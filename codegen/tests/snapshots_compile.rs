@@ -31,6 +31,7 @@ include!("snapshots/hdlc_like.rs");
 include!("snapshots/cobs_link.rs");
 include!("snapshots/dynamixel2_stuffed.rs");
 include!("snapshots/xbee_api2.rs");
+include!("snapshots/kiss.rs");
 include!("snapshots/lists_after.rs");
 include!("snapshots/lists_length.rs");
 include!("snapshots/packed_channels.rs");
@@ -2045,8 +2046,15 @@ fn escaped_snapshots_agree_with_the_interpreter() {
         0x7D33,
         "transmit_request",
     );
+    let kiss = escaped_agree::<kiss::Kiss>(
+        "model/tests/fixtures/valid/kiss.yaml",
+        0xC0DB,
+        // A data frame reads alike both ways (a stream reports it ambiguous): count TXDELAY.
+        "tx_delay",
+    );
     for (name, (accepted, refused, found)) in [
         ("slip", slip),
+        ("kiss", kiss),
         ("hdlc", hdlc),
         ("cobs", cobs),
         ("dxl", dxl),

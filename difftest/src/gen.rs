@@ -2667,12 +2667,15 @@ fn random_spec_without_examples(seed: u64) -> (String, usize) {
         }
     }
 
-    // Payloads longer than 255 bytes (UBX's NAV-SAT, MSP v2's long replies): where frames
-    // have a length field, in about half the specs with an eligible list, a list to the end (of numbers, text or
-    // records) may hold enough elements to pass 255 bytes, up to 4096, and the length field
-    // is two bytes wide. Drawn by a generator of its own, so every spec drawn without it is as
-    // it was.
-    let big = has_length && {
+    // Payloads longer than 255 bytes (UBX's NAV-SAT, MSP v2's long replies, KISS's data
+    // frames): where frames have a length field, or none and an end byte frames them (escaped,
+    // SLIP, KISS, COBS; or end bytes alone), in about half the specs with an eligible list, a
+    // list to the end (of numbers, text or records) may hold enough elements to pass 255
+    // bytes, up to 4096, and a length field is two bytes wide. Drawn by a generator of its
+    // own, so every spec drawn without it is as it was.
+    let framed_by_end =
+        !has_length && !end.is_empty() && (escaping != Escaping::None || csum_len == 0);
+    let big = (has_length || framed_by_end) && {
         let mut rng = own_rng(seed, Own::BigPayload);
         // Only in a message whose code no other message of its direction has: messages that
         // share a code (or have none) are told apart by their lengths, which it would blur.
@@ -3450,6 +3453,10 @@ pub fn constructs(p: &ir::Protocol) -> Vec<&'static str> {
     add(
         f.request.payload_max > 255 || f.response.payload_max > 255,
         "payload over 255 bytes",
+    );
+    add(
+        (f.request.payload_max > 255 || f.response.payload_max > 255) && f.length.is_none(),
+        "payload over 255 bytes without a length field",
     );
     add(
         fields

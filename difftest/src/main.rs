@@ -228,13 +228,14 @@ fn main() {
     // The constructs the language added last, over the whole run.
     let count = |k: &str| f.coverage.get(k).copied().unwrap_or(0);
     println!(
-        "  specs with optional fields {}, with a preamble {}, with counted text {}, with a long length form {}, with text up to a terminator {}, with a payload over 255 bytes {}",
+        "  specs with optional fields {}, with a preamble {}, with counted text {}, with a long length form {}, with text up to a terminator {}, with a payload over 255 bytes {} ({} without a length field)",
         count("optional fields"),
         count("preamble"),
         count("counted text"),
         count("long length form"),
         count("text up to a terminator"),
-        count("payload over 255 bytes")
+        count("payload over 255 bytes"),
+        count("payload over 255 bytes without a length field")
     );
     println!(
         "  specs with a reply's checksum over its request's bytes {}, such replies both engines accepted {}",

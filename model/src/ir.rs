@@ -1287,7 +1287,8 @@ impl Message {
     /// The frame lengths a stream decoder lists for this message beforehand: its length, or
     /// for a repeat to the end of the frame without a length field every length a whole number
     /// of elements gives; none where a length or count field gives each frame's length (the
-    /// stream decoder reads it from the frame).
+    /// stream decoder reads it from the frame), where end bytes alone delimit the frame, or
+    /// where the frame is escaped (its end byte or length field frames it).
     pub fn listed_lengths(&self, framing: &Framing) -> Vec<usize> {
         if self.has_optional() {
             // A length field gives each frame's length (the validator requires one).
@@ -1296,8 +1297,14 @@ impl Message {
         let Some((f, r)) = self.repeat() else {
             return vec![self.layout.len];
         };
-        // End bytes alone delimit it: the stream decoder finds them in the frame.
-        if framing.length.is_some() || r.count != Count::ToEnd || framing.end_delimited() {
+        // End bytes alone delimit it: the stream decoder finds them in the frame. Escaped
+        // frames are framed by their end byte or length field as they unescape
+        // (`rt::escaped_lens`), so a KISS data frame of up to 1024 bytes lists no lengths.
+        if framing.length.is_some()
+            || r.count != Count::ToEnd
+            || framing.end_delimited()
+            || framing.escaping.is_some()
+        {
             return Vec::new();
         }
         let step = if f.ty == FieldType::Bit {

@@ -1761,18 +1761,23 @@ fn framing_plain(
                 lens.push(l as usize);
             }
         }
-        // A two-byte length field, or a long length form (`framing.length.long`), carries
-        // longer payloads.
-        let wide = f
+        // A one-byte length field (without a long form) holds at most 255, so its frames carry
+        // at most 255 payload bytes. A two-byte length field or a long length form
+        // (`framing.length.long`) carries up to `MAX_LONG_PAYLOAD`; so does a frame without a
+        // length field (ended by end bytes, escaping, COBS, or its lists' counts): nothing on
+        // the wire caps it, and this bound is what keeps every decoder's buffer finite.
+        let one_byte = f
             .length
             .as_ref()
-            .is_some_and(|l| l.long.is_some() || l.width == 2);
-        let most = if wide { MAX_LONG_PAYLOAD } else { 255 };
+            .is_some_and(|l| l.long.is_none() && l.width != 2);
+        let most = if one_byte { 255 } else { MAX_LONG_PAYLOAD };
         if d.payload.min < 0 || d.payload.max < d.payload.min || d.payload.max > most {
-            let why = if wide {
-                ""
+            let why = if one_byte {
+                "; a one-byte length field counts at most 255 bytes, a two-byte one or a long form (`framing.length.long`) up to 4096"
+            } else if f.length.is_none() {
+                "; a frame without a length field is bounded by this range, and every decoder's buffer by it"
             } else {
-                "; a two-byte length field carries payloads up to 4096 bytes"
+                ""
             };
             sink.error(
                 join(&dpath, "payload"),
@@ -2264,8 +2269,9 @@ fn l_has_long(spec: &model::Framing) -> bool {
     spec.length.as_ref().is_some_and(|l| l.long.is_some())
 }
 
-/// The longest payload of a framing with a two-byte length field or a long length form
-/// (`framing.length.long`); 255 without one.
+/// The longest payload of any framing: one with a two-byte length field, a long length form
+/// (`framing.length.long`), or no length field (ended by end bytes, escaping, COBS, or its
+/// lists' counts). A one-byte length field caps its payloads at 255.
 pub const MAX_LONG_PAYLOAD: i64 = 4096;
 
 /// The most preamble bytes a spec may send or accept.

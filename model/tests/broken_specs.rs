@@ -280,8 +280,12 @@ const CASES: &[(&str, &[(&str, &str)])] = &[
         &[("commands.calibrate.fields.gains.repeat", "missing field `max` (the most elements a frame may carry; only a fixed count, `count: 4`, needs none)")],
     ),
     (
+        "escaped_payload_too_long",
+        &[("framing.response.payload", "payload length range 0..=5000 is invalid (0 <= min <= max <= 4096; a frame without a length field is bounded by this range, and every decoder's buffer by it)")],
+    ),
+    (
         "payload_past_one_byte_length",
-        &[("framing.response.payload", "payload length range 1..=300 is invalid (0 <= min <= max <= 255; a two-byte length field carries payloads up to 4096 bytes)")],
+        &[("framing.response.payload", "payload length range 1..=300 is invalid (0 <= min <= max <= 255; a one-byte length field counts at most 255 bytes, a two-byte one or a long form (`framing.length.long`) up to 4096)")],
     ),
     // ---- a short form of the frame (made from valid/mbus, without its examples)
     (
