@@ -355,7 +355,7 @@ pub(super) fn dispatch_groups(p: &Protocol, d: Direction) -> Vec<Vec<&Message>> 
 /// sequence's first byte is `FRAME.start`'s, the others are checked first. Start bytes that
 /// differ by direction, or come twice, are all checked here (`FRAME.start` is `None`), in the
 /// order the interpreter checks them.
-fn syncs(p: &Protocol, d: Direction) -> Vec<(usize, &[u8])> {
+pub(super) fn syncs(p: &Protocol, d: Direction) -> Vec<(usize, &[u8])> {
     let by_direction = starts_by_direction(p);
     // The direction's own layout: a second start after the code sits after its one length.
     let code_len = p

@@ -467,7 +467,7 @@ fn view_checks(p: &Protocol) -> (TokenStream, TokenStream) {
 /// length bounds, the view's `dispatch` (what its decoder checks after the framing, which the
 /// framing's failing would not make pass). Otherwise the trait's default (`true`).
 fn request_may_decode(p: &Protocol) -> TokenStream {
-    use super::dispatch::{address_at, frame_bounds, framing_checks};
+    use super::dispatch::{address_at, frame_bounds, length_check, syncs};
     if no_view(p, Direction::Request).is_some() || p.framing.preamble.is_some() {
         return quote!();
     }
@@ -475,16 +475,12 @@ fn request_may_decode(p: &Protocol) -> TokenStream {
     if min <= address_at(p, Direction::Request) || min < p.framing.trailer_len() {
         return quote!();
     }
-    // Only the frame check: `dispatch` then relies on nothing but the frame's length bounds.
-    if !framing_checks(p, Direction::Request, None)
-        .to_string()
-        .trim_start()
-        .starts_with("let address = rt :: check_frame")
-        || framing_checks(p, Direction::Request, None)
-            .to_string()
-            .matches(';')
-            .count()
-            != 1
+    // Only the frame check (no sync sequence, length field or message without a checksum):
+    // `dispatch` then relies on nothing but the frame's length bounds.
+    let d = Direction::Request;
+    if !syncs(p, d).is_empty()
+        || !length_check(p, d).is_empty()
+        || p.framed(d).iter().any(|m| m.unchecked)
     {
         return quote!();
     }

@@ -104,6 +104,19 @@ pub mod kiss {
     pub fn checksum(_bytes: &[u8]) -> u8 {
         0
     }
+    /// The checksum a frame carries, as the frame checks compare it: over every byte before it.
+    #[inline]
+    fn frame_sum(bytes: &[u8]) -> u32 {
+        u32::from(checksum(bytes))
+    }
+    /// The checks every frame passes before its code is read: 3 to 1027 bytes, then its start byte, its end bytes.
+    const CHECKS: rt::FrameChecks = rt::FrameChecks {
+        sync: &[],
+        frame: &FRAME,
+        min: 3,
+        max: 1027,
+        address_at: 0,
+    };
     /// Where `data_frame.frame` sits in the frame and how its elements are counted.
     pub const REPEAT_DATA_FRAME: rt::RepeatAt = rt::RepeatAt {
         field: &request::DataFrame::FRAME_DESC,
@@ -207,7 +220,7 @@ pub mod kiss {
         pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             let mut plain = [0u8; UNESCAPED_LEN];
             let len = self.encode_unescaped(address, &mut plain)?;
-            rt::escape_frame(&ESCAPING, &plain[..len], buf, |b| u32::from(checksum(b)))
+            rt::escape_frame(&ESCAPING, &plain[..len], buf, frame_sum)
         }
         /// The frame before escaping, into `buf`.
         fn encode_unescaped(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
@@ -252,7 +265,7 @@ pub mod kiss {
                 }
                 Self::ReturnFromKiss(_) => rt::frame_mut::<3>(buf, &[0xC0, 0xFF])?.len(),
             };
-            rt::seal_end(buf, len, |b| u32::from(checksum(b)), &FRAME);
+            FRAME.seal(buf, len, frame_sum);
             rt::Ok(len)
         }
         /// Decodes one whole frame: refuses one longer than the longest, checks its start byte,
@@ -260,12 +273,7 @@ pub mod kiss {
         /// spec gives its fields and the command's broadcast rule.
         pub fn decode(frame: &[u8]) -> rt::Result<Decoded<Request>, rt::DecodeError> {
             let mut plain = [0u8; UNESCAPED_LEN];
-            let un = rt::unescape_frame(
-                &ESCAPING,
-                frame,
-                &mut plain,
-                |b| u32::from(checksum(b)),
-            )?;
+            let un = rt::unescape_frame(&ESCAPING, frame, &mut plain, frame_sum)?;
             let rt::Some(plain) = plain.get(..un.len) else {
                 return rt::Err(rt::DecodeError::TooLong {
                     max: 1027,
@@ -278,21 +286,14 @@ pub mod kiss {
         fn decode_unescaped(
             frame: &[u8],
         ) -> rt::Result<Decoded<Request>, rt::DecodeError> {
-            let address = rt::check_frame(
-                frame,
-                3,
-                1027,
-                0,
-                &FRAME,
-                |b| u32::from(checksum(b)),
-            )?;
+            let address = CHECKS.check(frame, frame_sum)?;
             let message = Self::dispatch(frame)?;
             rt::Ok(Decoded { address, message })
         }
         /// The message of a frame that passed the checks every frame passes, by its code.
         #[inline]
         fn dispatch(frame: &[u8]) -> rt::DecodeResult<Self> {
-            match rt::code(frame, 1, 1) {
+            match frame[1] {
                 0x00 => {
                     let (frame, elements, _) = REPEAT_DATA_FRAME.split::<2>(frame)?;
                     rt::Ok(
@@ -537,7 +538,7 @@ pub mod kiss {
         pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             let mut plain = [0u8; UNESCAPED_LEN];
             let len = self.encode_unescaped(address, &mut plain)?;
-            rt::escape_frame(&ESCAPING, &plain[..len], buf, |b| u32::from(checksum(b)))
+            rt::escape_frame(&ESCAPING, &plain[..len], buf, frame_sum)
         }
         /// The frame before escaping, into `buf`.
         fn encode_unescaped(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
@@ -550,7 +551,7 @@ pub mod kiss {
                     out.len()
                 }
             };
-            rt::seal_end(buf, len, |b| u32::from(checksum(b)), &FRAME);
+            FRAME.seal(buf, len, frame_sum);
             rt::Ok(len)
         }
         /// Decodes one whole frame: refuses one longer than the longest, checks its start byte,
@@ -580,12 +581,7 @@ pub mod kiss {
             request: rt::Option<&Request>,
         ) -> rt::Result<Decoded<Response>, rt::DecodeError> {
             let mut plain = [0u8; UNESCAPED_LEN];
-            let un = rt::unescape_frame(
-                &ESCAPING,
-                frame,
-                &mut plain,
-                |b| u32::from(checksum(b)),
-            )?;
+            let un = rt::unescape_frame(&ESCAPING, frame, &mut plain, frame_sum)?;
             let rt::Some(plain) = plain.get(..un.len) else {
                 return rt::Err(rt::DecodeError::TooLong {
                     max: 1027,
@@ -599,14 +595,7 @@ pub mod kiss {
             frame: &[u8],
             request: rt::Option<&Request>,
         ) -> rt::Result<Decoded<Response>, rt::DecodeError> {
-            let address = rt::check_frame(
-                frame,
-                3,
-                1027,
-                0,
-                &FRAME,
-                |b| u32::from(checksum(b)),
-            )?;
+            let address = CHECKS.check(frame, frame_sum)?;
             let message = Self::dispatch(frame)?;
             if let rt::Some(request) = request {
                 if request.replies() >> message.index() & 1 == 0 {
@@ -618,7 +607,7 @@ pub mod kiss {
         /// The message of a frame that passed the checks every frame passes, by its code.
         #[inline]
         fn dispatch(frame: &[u8]) -> rt::DecodeResult<Self> {
-            match rt::code(frame, 1, 1) {
+            match frame[1] {
                 0x00 => {
                     let (frame, elements, _) = REPEAT_RECEIVED_FRAME.split::<2>(frame)?;
                     rt::Ok(
@@ -759,12 +748,7 @@ pub mod kiss {
         }
         fn checksum_ok(frame: &[u8]) -> bool {
             let mut plain = [0u8; UNESCAPED_LEN];
-            let un = match rt::unescape_frame(
-                &ESCAPING,
-                frame,
-                &mut plain,
-                |b| u32::from(checksum(b)),
-            ) {
+            let un = match rt::unescape_frame(&ESCAPING, frame, &mut plain, frame_sum) {
                 rt::Ok(un) => un,
                 rt::Err(_) => return false,
             };
@@ -772,9 +756,7 @@ pub mod kiss {
                 return false;
             };
             match frame.len().checked_sub(1) {
-                rt::Some(n) if n > 0 => {
-                    rt::check_sum(frame, n, &FRAME, |b| u32::from(checksum(b)))
-                }
+                rt::Some(n) if n > 0 => rt::check_sum(frame, n, &FRAME, frame_sum),
                 _ => false,
             }
         }
@@ -903,7 +885,7 @@ pub mod kiss {
     /// refusals do: name, code and the frame lengths of its code; `QUANTITY_DESC`, each
     /// field a refusal names) and methods are in the `impl` of each.
     pub mod request {
-        /// §Commands Data frame (code `0x00`, 3 to 1027 bytes). The rest of the frame is data to be sent on the HDLC channel: an AX.25 frame without its FCS.
+        /// Data frame (§Commands; code `0x00`, 3 to 1027 bytes). The rest of the frame is data to be sent on the HDLC channel: an AX.25 frame without its FCS.
         #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
         #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
         #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]
@@ -911,7 +893,7 @@ pub mod kiss {
         pub struct DataFrame {
             pub frame: super::rt::Repeated<u8, 1024>,
         }
-        /// §Commands TXDELAY (code `0x01`, 4 bytes). Transmitter keyup delay, in 10 ms units.
+        /// TXDELAY (§Commands; code `0x01`, 4 bytes). Transmitter keyup delay, in 10 ms units.
         #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
         #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
         #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]
@@ -919,7 +901,7 @@ pub mod kiss {
         pub struct TxDelay {
             pub txdelay: u8,
         }
-        /// §Commands P (code `0x02`, 4 bytes). The persistence parameter p, scaled 0 to 255 (p = (P+1)/256).
+        /// P (§Commands; code `0x02`, 4 bytes). The persistence parameter p, scaled 0 to 255 (p = (P+1)/256).
         #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
         #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
         #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]
@@ -927,7 +909,7 @@ pub mod kiss {
         pub struct Persistence {
             pub p: u8,
         }
-        /// §Commands SlotTime (code `0x03`, 4 bytes). Slot interval, in 10 ms units.
+        /// SlotTime (§Commands; code `0x03`, 4 bytes). Slot interval, in 10 ms units.
         #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
         #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
         #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]
@@ -935,7 +917,7 @@ pub mod kiss {
         pub struct SlotTime {
             pub slot: u8,
         }
-        /// §Commands TXtail (code `0x04`, 4 bytes). Time to hold the transmitter up after the FCS, in 10 ms units (obsolete).
+        /// TXtail (§Commands; code `0x04`, 4 bytes). Time to hold the transmitter up after the FCS, in 10 ms units (obsolete).
         #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
         #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
         #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]
@@ -943,7 +925,7 @@ pub mod kiss {
         pub struct TxTail {
             pub tail: u8,
         }
-        /// §Commands FullDuplex (code `0x05`, 4 bytes). 0: half duplex, anything else: full duplex.
+        /// FullDuplex (§Commands; code `0x05`, 4 bytes). 0: half duplex, anything else: full duplex.
         #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
         #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
         #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]
@@ -951,7 +933,7 @@ pub mod kiss {
         pub struct FullDuplex {
             pub duplex: u8,
         }
-        /// §Commands SetHardware (code `0x06`, 3 to 1027 bytes). Specific to each TNC: the bytes mean what the TNC's manual says.
+        /// SetHardware (§Commands; code `0x06`, 3 to 1027 bytes). Specific to each TNC: the bytes mean what the TNC's manual says.
         #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
         #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
         #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]
@@ -959,7 +941,7 @@ pub mod kiss {
         pub struct SetHardware {
             pub data: super::rt::Repeated<u8, 1024>,
         }
-        /// §Commands Return (code `0xFF`, 3 bytes). Exit KISS mode and return to the TNC's ordinary command interpreter; the byte FF is the whole command byte (no port).
+        /// Return (§Commands; code `0xFF`, 3 bytes). Exit KISS mode and return to the TNC's ordinary command interpreter; the byte FF is the whole command byte (no port).
         #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
         #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
         #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]
@@ -967,7 +949,7 @@ pub mod kiss {
     }
     /// Each response as a struct of its own.
     pub mod response {
-        /// §Commands Data frame (received) (code `0x00`, 3 to 1027 bytes). An AX.25 frame the TNC heard on the air, without its FCS, passed to the host.
+        /// Data frame (received) (§Commands; code `0x00`, 3 to 1027 bytes). An AX.25 frame the TNC heard on the air, without its FCS, passed to the host.
         #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
         #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
         #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]
