@@ -101,12 +101,11 @@ fn modbus_coils_and_registers() {
     });
     assert!(matches!(
         wrong.encode(0x11, &mut buf),
-        Err(EncodeError::NotInRange {
+        Err(EncodeError::WrongCount {
             field: "values",
-            value: 2,
             min: 3,
             max: 3,
-            kind: busspec_runtime::NumKind::Int,
+            found: 2,
         })
     ));
 }

@@ -484,12 +484,11 @@ fn variable_snapshot_replays_and_agrees_with_the_interpreter() {
     });
     assert_eq!(
         short.encode(3, &mut buf),
-        Err(EncodeError::NotInRange {
+        Err(EncodeError::WrongCount {
             field: "values",
-            value: 2,
             min: 3,
             max: 3,
-            kind: busspec_runtime::NumKind::Int,
+            found: 2,
         })
     );
     let empty = vario::Request::Write(vario::request::Write {
@@ -498,12 +497,11 @@ fn variable_snapshot_replays_and_agrees_with_the_interpreter() {
     });
     assert_eq!(
         empty.encode(3, &mut buf),
-        Err(EncodeError::NotInRange {
+        Err(EncodeError::WrongCount {
             field: "values",
-            value: 0,
             min: 1,
             max: 16,
-            kind: busspec_runtime::NumKind::Int,
+            found: 0,
         })
     );
     // A byte count that lies about the frame's length.

@@ -1161,7 +1161,7 @@ impl RepeatAt {
     }
 
     /// A count field computed from another field (`follows`) agrees with the `held` elements
-    /// being encoded: [`EncodeError::NotInRange`] with the element count and the counts that
+    /// being encoded: [`EncodeError::WrongCount`] with the element count and the counts that
     /// would agree otherwise.
     #[inline]
     pub fn encode_agrees(&self, held: usize, count: u64) -> Result<(), EncodeError> {
@@ -1169,12 +1169,11 @@ impl RepeatAt {
             return Ok(());
         }
         let (min, max) = self.elements_for(count);
-        Err(EncodeError::NotInRange {
+        Err(EncodeError::WrongCount {
             field: self.field.name,
-            value: held as i64,
-            min,
-            max,
-            kind: crate::NumKind::Int,
+            min: usize::try_from(min).unwrap_or(usize::MAX),
+            max: usize::try_from(max).unwrap_or(usize::MAX),
+            found: held,
         })
     }
 
