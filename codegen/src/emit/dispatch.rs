@@ -593,26 +593,50 @@ fn frame_check(p: &Protocol, d: Direction, checks: &TokenStream) -> TokenStream 
     }
 }
 
-/// Direction `d`'s frame checks as an `rt::FrameChecks` value: its sync sequences, its frame
-/// constant, its shortest (or `shortest`) and longest frame, its address's offset.
-fn checks_value(p: &Protocol, d: Direction, shortest: Option<usize>) -> TokenStream {
+/// What direction `d`'s frames are checked by before their code is read ([`checks_of`]).
+#[derive(PartialEq)]
+struct Checks<'p> {
+    syncs: Vec<(usize, &'p [u8])>,
+    frame: String,
+    min: usize,
+    max: usize,
+    address_at: usize,
+}
+
+/// Direction `d`'s frame checks: its sync sequences, its frame constant, its shortest (or
+/// `shortest`) and longest frame, its address's offset.
+fn checks_of(p: &Protocol, d: Direction, shortest: Option<usize>) -> Checks<'_> {
     let (min, max) = frame_bounds(p, d);
-    let (min, max) = (usize_lit(shortest.unwrap_or(min)), usize_lit(max));
-    let at = usize_lit(address_at(p, d));
+    Checks {
+        syncs: syncs(p, d),
+        frame: frame_of(p, d).to_string(),
+        min: shortest.unwrap_or(min),
+        max,
+        address_at: address_at(p, d),
+    }
+}
+
+/// Direction `d`'s frame checks ([`checks_of`]) as an `rt::FrameChecks` value.
+fn checks_value(p: &Protocol, d: Direction, shortest: Option<usize>) -> TokenStream {
+    let c = checks_of(p, d, shortest);
+    let (min, max, at) = (usize_lit(c.min), usize_lit(c.max), usize_lit(c.address_at));
     let frame = frame_of(p, d);
-    let sync = syncs(p, d).into_iter().map(|(at, bytes)| {
+    let sync = c.syncs.into_iter().map(|(at, bytes)| {
         let (at, bytes) = (usize_lit(at), bytes.iter().map(|b| hex_u8(*b)));
         quote!((#at, &[#(#bytes),*]))
     });
     quote!(rt::FrameChecks { sync: &[#(#sync),*], frame: &#frame, min: #min, max: #max, address_at: #at })
 }
 
+/// Whether both directions check frames alike (one `CHECKS` constant).
+fn checks_alike(p: &Protocol) -> bool {
+    checks_of(p, Direction::Request, None) == checks_of(p, Direction::Response, None)
+}
+
 /// The name of direction `d`'s frame checks constant ([`emit_frame_checks`]): `CHECKS` where
 /// both directions check frames alike.
 pub(super) fn checks_name(p: &Protocol, d: Direction) -> TokenStream {
-    let same = checks_value(p, Direction::Request, None).to_string()
-        == checks_value(p, Direction::Response, None).to_string();
-    match (same, d) {
+    match (checks_alike(p), d) {
         (true, _) => quote!(CHECKS),
         (false, Direction::Request) => quote!(REQUEST_CHECKS),
         (false, Direction::Response) => quote!(RESPONSE_CHECKS),
@@ -622,7 +646,8 @@ pub(super) fn checks_name(p: &Protocol, d: Direction) -> TokenStream {
 /// The constants [`checks_name`] names: what each direction's frames are checked by before
 /// their code is read.
 pub(super) fn emit_frame_checks(p: &Protocol) -> TokenStream {
-    let dirs = if checks_name(p, Direction::Request).to_string() == "CHECKS" {
+    let alike = checks_alike(p);
+    let dirs = if alike {
         &[Direction::Request][..]
     } else {
         &[Direction::Request, Direction::Response][..]
@@ -630,8 +655,8 @@ pub(super) fn emit_frame_checks(p: &Protocol) -> TokenStream {
     let consts = dirs.iter().map(|&d| {
         let (name, value) = (checks_name(p, d), checks_value(p, d, None));
         let (min, max) = frame_bounds(p, d);
-        let whose = match (name.to_string().as_str(), d) {
-            ("CHECKS", _) => "every frame",
+        let whose = match (alike, d) {
+            (true, _) => "every frame",
             (_, Direction::Request) => "every request",
             (_, Direction::Response) => "every response",
         };
