@@ -136,6 +136,12 @@ pub(super) struct Ctx<'a> {
     /// Whether a decoder of each direction (request, response) quotes an unknown code, so
     /// the module defines its `REQUEST_CODE`/`RESPONSE_CODE` (`dispatch::code_consts`).
     pub(super) codes_used: std::cell::Cell<[bool; 2]>,
+    /// Set while a message's fields are decoded inside its own `impl` (`from_frame`,
+    /// [`super::dispatch::from_frame`]): its descriptors are named through `Self`.
+    pub(super) own: std::cell::Cell<bool>,
+    /// Each message's `from_frame` (its direction and name, the function), emitted in its
+    /// `impl` by `emit_descs`.
+    pub(super) readers: std::cell::RefCell<Vec<(Direction, String, TokenStream)>>,
 }
 
 impl<'a> Ctx<'a> {
@@ -219,6 +225,8 @@ impl<'a> Ctx<'a> {
             impls: std::cell::RefCell::new(Vec::new()),
             view: std::cell::Cell::new(false),
             codes_used: std::cell::Cell::new([false; 2]),
+            own: std::cell::Cell::new(false),
+            readers: std::cell::RefCell::new(Vec::new()),
         }
     }
 
@@ -234,7 +242,11 @@ impl<'a> Ctx<'a> {
             .iter()
             .find(|(d, mn, f, _)| *d == m.direction && *mn == m.name && f == name);
         if let Some((.., c)) = found {
-            return quote!(&#dir::#v::#c);
+            return if self.own.get() {
+                quote!(&Self::#c)
+            } else {
+                quote!(&#dir::#v::#c)
+            };
         }
         let upper = name.to_uppercase().replace('.', "_");
         let mut c = format!("{upper}_DESC");
@@ -250,6 +262,9 @@ impl<'a> Ctx<'a> {
         }
         let c = ident(&c);
         descs.push((m.direction, m.name.clone(), name.to_owned(), c.clone()));
+        if self.own.get() {
+            return quote!(&Self::#c);
+        }
         quote!(&#dir::#v::#c)
     }
 

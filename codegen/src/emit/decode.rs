@@ -183,7 +183,11 @@ pub(super) fn decode_body(ctx: &Ctx, m: &Message) -> (Vec<TokenStream>, TokenStr
     let v = variant(m);
     let mut stmts = Vec::new();
     if let (Some(b), Some(at)) = (refuses_broadcast(p, m), o.address) {
-        let desc = message_desc(m);
+        let desc = if ctx.own.get() {
+            quote!(&Self::DESC)
+        } else {
+            message_desc(m)
+        };
         let (at, b) = (usize_lit(at), hex_u8(b));
         stmts.push(quote!(rt::no_broadcast(frame[#at], #b, #desc)?;));
     }
@@ -316,6 +320,14 @@ pub(super) fn decode_body(ctx: &Ctx, m: &Message) -> (Vec<TokenStream>, TokenStr
     }
     let fields = values.iter().map(|(n, v)| quote!(#n: #v));
     let dm = direction_module(m.direction);
+    if ctx.own.get() {
+        let build = if ls.is_empty() {
+            quote!(Self)
+        } else {
+            quote!(Self { #(#fields),* })
+        };
+        return (stmts, build);
+    }
     let build = match (ls.is_empty(), ctx.view.get()) {
         (true, true) => quote!(Self::#v),
         (true, false) => quote!(Self::#v(#dm::#v)),

@@ -10,7 +10,12 @@ use super::*;
 pub(super) fn emit_descs(ctx: &Ctx) -> TokenStream {
     let fields = ctx.field_descs.borrow();
     let impls = ctx.impls.borrow();
+    let readers = ctx.readers.borrow();
     let impls = impls.iter().map(|(d, name, path, consts, fns)| {
+        let read = readers
+            .iter()
+            .filter(|(rd, rn, _)| rd == d && rn == name)
+            .map(|(.., f)| f);
         let descs = fields
             .iter()
             .filter(|(fd, mn, ..)| fd == d && mn == name)
@@ -20,6 +25,7 @@ pub(super) fn emit_descs(ctx: &Ctx) -> TokenStream {
                 #consts
                 #(#descs)*
                 #fns
+                #(#read)*
             }
         }
     });

@@ -892,6 +892,45 @@ pub(super) fn emit_codeless_fns(ctx: &Ctx, codeless: &[&Message]) -> TokenStream
     quote!(#(#fns)*)
 }
 
+/// `request::ReadCoils::from_frame`: the owned decoder of fixed-length message `m`'s fields,
+/// a function of its struct (emitted in its `impl` by `emit_descs`), which checks the frame's
+/// length and then each field's rule, naming its descriptors through `Self`; `None` in a view
+/// (whose variants are no structs) and for a message with nothing to check or read, which the
+/// arm decodes in one line.
+fn from_frame(ctx: &Ctx, m: &Message) -> Option<TokenStream> {
+    if ctx.view.get() || m.is_variable() {
+        return None;
+    }
+    ctx.own.set(true);
+    let (stmts, build) = decode_body(ctx, m);
+    ctx.own.set(false);
+    if stmts.is_empty() && !mentions_frame(&build) {
+        return None;
+    }
+    let (v, dm) = (variant(m), direction_module(m.direction));
+    let mut readers = ctx.readers.borrow_mut();
+    if !readers
+        .iter()
+        .any(|(d, n, _)| *d == m.direction && *n == m.name)
+    {
+        let len = usize_lit(ctx.p.frame_len(m));
+        readers.push((
+            m.direction,
+            m.name.clone(),
+            quote! {
+                /// Reads this message from a frame whose framing and code are checked.
+                #[inline(always)]
+                fn from_frame(frame: &[u8]) -> rt::DecodeResult<Self> {
+                    let frame = rt::fixed::<#len>(frame, &Self::DESC)?;
+                    #(#stmts)*
+                    rt::Ok(#build)
+                }
+            },
+        ));
+    }
+    Some(quote!(#dm::#v::from_frame))
+}
+
 /// The dispatch arm for the messages of one code: a lone message is decoded in the arm;
 /// several are tried in spec order by `rt::Group`, each decoder a closure over the frame as an
 /// array of its length. `shared`: code-less messages are decoded by their own function
@@ -952,6 +991,10 @@ pub(super) fn emit_group(
         if let Some(f) = by_fn(m) {
             return quote!(#frame.and_then(Self::#f));
         }
+        if let Some(read) = from_frame(ctx, m) {
+            let v = variant(m);
+            return quote!(#read(frame).map(Self::#v));
+        }
         let (stmts, build) = decode_body(ctx, m);
         if stmts.is_empty() && !build.to_string().contains("frame") {
             return quote!(#frame.map(|_| #build));
@@ -970,6 +1013,13 @@ pub(super) fn emit_group(
         let decode = match by_fn(m) {
             Some(f) => quote!(Self::#f),
             None => {
+                if let Some(read) = (!m.is_variable()).then(|| from_frame(ctx, m)).flatten() {
+                    let v = variant(m);
+                    return match ambiguous {
+                        false => quote!(g.attempt(|frame: &[u8; #len]| #read(frame).map(Self::#v));),
+                        true => quote!(g.ambiguous(#a, #name, |frame: &[u8; #len]| #read(frame).map(Self::#v));),
+                    };
+                }
                 let (stmts, build) = decode_body(ctx, m);
                 if m.is_variable() {
                     let params = split_params(ctx, m, &stmts, &build);

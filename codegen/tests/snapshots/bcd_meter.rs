@@ -229,34 +229,7 @@ pub mod bcd_meter {
                     rt::fixed::<5>(frame, &request::ReadEnergy::DESC)
                         .map(|_| Self::ReadEnergy(request::ReadEnergy))
                 }
-                0x08 => {
-                    let frame = rt::fixed::<9>(frame, &request::SetClock::DESC)?;
-                    let field_0: u8 = rt::bcd(
-                        &request::SetClock::HOUR_DESC,
-                        3,
-                        frame[3] as u64,
-                    )? as u8;
-                    rt::in_range(&request::SetClock::HOUR_DESC, 3, field_0, 0, 23)?;
-                    let field_1: u8 = rt::bcd(
-                        &request::SetClock::MINUTE_DESC,
-                        4,
-                        frame[4] as u64,
-                    )? as u8;
-                    rt::in_range(&request::SetClock::MINUTE_DESC, 4, field_1, 0, 59)?;
-                    let field_2: u16 = rt::bcd(
-                        &request::SetClock::YEAR_DESC,
-                        5,
-                        u16::from_le_bytes([frame[5], frame[6]]) as u64,
-                    )? as u16;
-                    rt::in_range(&request::SetClock::YEAR_DESC, 5, field_2, 0, 9999)?;
-                    rt::Ok(
-                        Self::SetClock(request::SetClock {
-                            hour: field_0,
-                            minute: field_1,
-                            year: field_2,
-                        }),
-                    )
-                }
+                0x08 => request::SetClock::from_frame(frame).map(Self::SetClock),
                 _ => rt::Err(REQUEST_CODE.unknown(frame)),
             }
         }
@@ -441,34 +414,7 @@ pub mod bcd_meter {
         #[inline]
         fn dispatch(frame: &[u8]) -> rt::DecodeResult<Self> {
             match frame[2] {
-                0x91 => {
-                    let frame = rt::fixed::<10>(frame, &response::Energy::DESC)?;
-                    let field_0: u32 = rt::bcd(
-                        &response::Energy::ENERGY_DESC,
-                        3,
-                        u32::from_le_bytes([frame[3], frame[4], frame[5], frame[6]])
-                            as u64,
-                    )? as u32;
-                    rt::in_range(
-                        &response::Energy::ENERGY_DESC,
-                        3,
-                        field_0,
-                        0,
-                        99999999,
-                    )?;
-                    let field_1: u8 = rt::bcd(
-                        &response::Energy::TARIFF_DESC,
-                        7,
-                        frame[7] as u64,
-                    )? as u8;
-                    rt::in_range(&response::Energy::TARIFF_DESC, 7, field_1, 1, 4)?;
-                    rt::Ok(
-                        Self::Energy(response::Energy {
-                            energy: KilowattHours::from_raw(field_0),
-                            tariff: field_1,
-                        }),
-                    )
-                }
+                0x91 => response::Energy::from_frame(frame).map(Self::Energy),
                 0x88 => {
                     rt::fixed::<5>(frame, &response::Ack::DESC)
                         .map(|_| Self::Ack(response::Ack))
@@ -668,6 +614,26 @@ pub mod bcd_meter {
         pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             Request::SetClock(*self).encode(address, buf)
         }
+        /// Reads this message from a frame whose framing and code are checked.
+        #[inline(always)]
+        fn from_frame(frame: &[u8]) -> rt::DecodeResult<Self> {
+            let frame = rt::fixed::<9>(frame, &Self::DESC)?;
+            let field_0: u8 = rt::bcd(&Self::HOUR_DESC, 3, frame[3] as u64)? as u8;
+            rt::in_range(&Self::HOUR_DESC, 3, field_0, 0, 23)?;
+            let field_1: u8 = rt::bcd(&Self::MINUTE_DESC, 4, frame[4] as u64)? as u8;
+            rt::in_range(&Self::MINUTE_DESC, 4, field_1, 0, 59)?;
+            let field_2: u16 = rt::bcd(
+                &Self::YEAR_DESC,
+                5,
+                u16::from_le_bytes([frame[5], frame[6]]) as u64,
+            )? as u16;
+            rt::in_range(&Self::YEAR_DESC, 5, field_2, 0, 9999)?;
+            rt::Ok(Self {
+                hour: field_0,
+                minute: field_1,
+                year: field_2,
+            })
+        }
     }
     impl response::Energy {
         pub const NAME: &'static str = "energy";
@@ -684,6 +650,23 @@ pub mod bcd_meter {
         }
         pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             Response::Energy(*self).encode(address, buf)
+        }
+        /// Reads this message from a frame whose framing and code are checked.
+        #[inline(always)]
+        fn from_frame(frame: &[u8]) -> rt::DecodeResult<Self> {
+            let frame = rt::fixed::<10>(frame, &Self::DESC)?;
+            let field_0: u32 = rt::bcd(
+                &Self::ENERGY_DESC,
+                3,
+                u32::from_le_bytes([frame[3], frame[4], frame[5], frame[6]]) as u64,
+            )? as u32;
+            rt::in_range(&Self::ENERGY_DESC, 3, field_0, 0, 99999999)?;
+            let field_1: u8 = rt::bcd(&Self::TARIFF_DESC, 7, frame[7] as u64)? as u8;
+            rt::in_range(&Self::TARIFF_DESC, 7, field_1, 1, 4)?;
+            rt::Ok(Self {
+                energy: KilowattHours::from_raw(field_0),
+                tariff: field_1,
+            })
         }
     }
     impl response::Ack {

@@ -244,14 +244,7 @@ pub mod cobs_link {
                     rt::fixed::<4>(frame, &request::ReadPosition::DESC)
                         .map(|_| Self::ReadPosition(request::ReadPosition))
                 }
-                0x20 => {
-                    let frame = rt::fixed::<6>(frame, &request::SetSpeed::DESC)?;
-                    rt::Ok(
-                        Self::SetSpeed(request::SetSpeed {
-                            speed: u16::from_le_bytes([frame[2], frame[3]]),
-                        }),
-                    )
-                }
+                0x20 => request::SetSpeed::from_frame(frame).map(Self::SetSpeed),
                 0x30 => {
                     rt::fixed::<4>(frame, &request::ReadLog::DESC)
                         .map(|_| Self::ReadLog(request::ReadLog))
@@ -482,19 +475,7 @@ pub mod cobs_link {
         #[inline]
         fn dispatch(frame: &[u8]) -> rt::DecodeResult<Self> {
             match frame[1] {
-                0x90 => {
-                    let frame = rt::fixed::<8>(frame, &response::Position::DESC)?;
-                    rt::Ok(
-                        Self::Position(response::Position {
-                            position: i32::from_le_bytes([
-                                frame[2],
-                                frame[3],
-                                frame[4],
-                                frame[5],
-                            ]),
-                        }),
-                    )
-                }
+                0x90 => response::Position::from_frame(frame).map(Self::Position),
                 0xA0 => {
                     rt::fixed::<4>(frame, &response::Ack::DESC)
                         .map(|_| Self::Ack(response::Ack))
@@ -682,6 +663,14 @@ pub mod cobs_link {
         pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             Request::SetSpeed(*self).encode(address, buf)
         }
+        /// Reads this message from a frame whose framing and code are checked.
+        #[inline(always)]
+        fn from_frame(frame: &[u8]) -> rt::DecodeResult<Self> {
+            let frame = rt::fixed::<6>(frame, &Self::DESC)?;
+            rt::Ok(Self {
+                speed: u16::from_le_bytes([frame[2], frame[3]]),
+            })
+        }
     }
     impl request::ReadLog {
         pub const NAME: &'static str = "read_log";
@@ -703,6 +692,14 @@ pub mod cobs_link {
         }
         pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             Response::Position(*self).encode(address, buf)
+        }
+        /// Reads this message from a frame whose framing and code are checked.
+        #[inline(always)]
+        fn from_frame(frame: &[u8]) -> rt::DecodeResult<Self> {
+            let frame = rt::fixed::<8>(frame, &Self::DESC)?;
+            rt::Ok(Self {
+                position: i32::from_le_bytes([frame[2], frame[3], frame[4], frame[5]]),
+            })
         }
     }
     impl response::Ack {

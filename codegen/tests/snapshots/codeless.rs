@@ -215,14 +215,7 @@ pub mod codeless {
                     rt::fixed::<6>(frame, &request::Ping::DESC)
                         .map(|_| Self::Ping(request::Ping))
                 }
-                0x02 => {
-                    let frame = rt::fixed::<7>(frame, &request::Read::DESC)?;
-                    rt::Ok(
-                        Self::Read(request::Read {
-                            register: frame[5],
-                        }),
-                    )
-                }
+                0x02 => request::Read::from_frame(frame).map(Self::Read),
                 _ => rt::Err(REQUEST_CODE.unknown(frame)),
             }
         }
@@ -410,19 +403,10 @@ pub mod codeless {
             {
                 let mut g = rt::Group::new(frame, 0u32, request.map(Request::name));
                 g.attempt(|frame: &[u8; 6]| {
-                    rt::Ok(
-                        Self::Status(response::Status {
-                            error: Errors::from_raw(frame[4]),
-                        }),
-                    )
+                    response::Status::from_frame(frame).map(Self::Status)
                 });
                 g.attempt(|frame: &[u8; 8]| {
-                    rt::Ok(
-                        Self::ReadStatus(response::ReadStatus {
-                            error: Errors::from_raw(frame[4]),
-                            value: u16::from_le_bytes([frame[5], frame[6]]),
-                        }),
-                    )
+                    response::ReadStatus::from_frame(frame).map(Self::ReadStatus)
                 });
                 g.end(&response::Status::DESC)
             }
@@ -625,6 +609,12 @@ pub mod codeless {
         pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             Request::Read(*self).encode(address, buf)
         }
+        /// Reads this message from a frame whose framing and code are checked.
+        #[inline(always)]
+        fn from_frame(frame: &[u8]) -> rt::DecodeResult<Self> {
+            let frame = rt::fixed::<7>(frame, &Self::DESC)?;
+            rt::Ok(Self { register: frame[5] })
+        }
     }
     impl response::Status {
         pub const NAME: &'static str = "status";
@@ -637,6 +627,14 @@ pub mod codeless {
         }
         pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             Response::Status(*self).encode(address, buf)
+        }
+        /// Reads this message from a frame whose framing and code are checked.
+        #[inline(always)]
+        fn from_frame(frame: &[u8]) -> rt::DecodeResult<Self> {
+            let frame = rt::fixed::<6>(frame, &Self::DESC)?;
+            rt::Ok(Self {
+                error: Errors::from_raw(frame[4]),
+            })
         }
     }
     impl response::ReadStatus {
@@ -652,6 +650,15 @@ pub mod codeless {
         }
         pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             Response::ReadStatus(*self).encode(address, buf)
+        }
+        /// Reads this message from a frame whose framing and code are checked.
+        #[inline(always)]
+        fn from_frame(frame: &[u8]) -> rt::DecodeResult<Self> {
+            let frame = rt::fixed::<8>(frame, &Self::DESC)?;
+            rt::Ok(Self {
+                error: Errors::from_raw(frame[4]),
+                value: u16::from_le_bytes([frame[5], frame[6]]),
+            })
         }
     }
     /// Each request as a struct of its own; its constants (`DESC`, which names it as

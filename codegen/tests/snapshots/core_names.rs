@@ -371,43 +371,10 @@ pub mod clash {
         #[inline]
         fn dispatch(frame: &[u8]) -> rt::DecodeResult<Self> {
             match frame[2] {
-                0x10 => {
-                    let frame = rt::fixed::<7>(frame, &request::Option::DESC)?;
-                    rt::no_broadcast(frame[1], 0x00, &request::Option::DESC)?;
-                    let field_1: u16 = u16::from_le_bytes([frame[4], frame[5]]);
-                    rt::in_range(&request::Option::CORE_DESC, 4, field_1, 0, 1000)?;
-                    rt::Ok(
-                        Self::Option(request::Option {
-                            some: Result::from_raw(frame[3]),
-                            core: Option::from_raw(field_1),
-                        }),
-                    )
-                }
-                0x11 => {
-                    let frame = rt::fixed::<5>(frame, &request::U8::DESC)?;
-                    rt::no_broadcast(frame[1], 0x00, &request::U8::DESC)?;
-                    rt::Ok(
-                        Self::U8(request::U8 {
-                            frame: Some::from_raw(frame[3] as i16),
-                        }),
-                    )
-                }
-                0x12 => {
-                    let frame = rt::fixed::<7>(frame, &request::Core::DESC)?;
-                    rt::equal(&request::Core::BUF_DESC, 4, frame[4], 0x0)?;
-                    rt::Ok(
-                        Self::Core(request::Core {
-                            address: frame[3],
-                            out: frame[5] as i8,
-                        }),
-                    )
-                }
-                0x13 => {
-                    let frame = rt::fixed::<6>(frame, &request::Rt::DESC)?;
-                    rt::no_broadcast(frame[1], 0x00, &request::Rt::DESC)?;
-                    rt::same(&request::Rt::FIELD_DESC, 4, frame[4], "f", frame[3])?;
-                    rt::Ok(Self::Rt(request::Rt { f: frame[3] }))
-                }
+                0x10 => request::Option::from_frame(frame).map(Self::Option),
+                0x11 => request::U8::from_frame(frame).map(Self::U8),
+                0x12 => request::Core::from_frame(frame).map(Self::Core),
+                0x13 => request::Rt::from_frame(frame).map(Self::Rt),
                 _ => rt::Err(REQUEST_CODE.unknown(frame)),
             }
         }
@@ -634,29 +601,8 @@ pub mod clash {
                     rt::fixed::<4>(frame, &response::Err::DESC)
                         .map(|_| Self::Err(response::Err))
                 }
-                0x51 => {
-                    let frame = rt::fixed::<7>(frame, &response::Result::DESC)?;
-                    rt::Ok(
-                        Self::Result(response::Result {
-                            g: Ok::from_raw(frame[3]),
-                            usize: Option::from_raw(
-                                u16::from_le_bytes([frame[4], frame[5]]),
-                            ),
-                        }),
-                    )
-                }
-                0x52 => {
-                    let frame = rt::fixed::<7>(frame, &response::Usize::DESC)?;
-                    rt::Ok(
-                        Self::Usize(response::Usize {
-                            asked: rt::Ascii(frame[3..5].try_into().unwrap_or([0; 2])),
-                            none: (frame[5] >> 4) as u8,
-                            some: Some::from_raw(
-                                ((((frame[5] & 0xF) as u8) << 4) as i8 >> 4) as i16,
-                            ),
-                        }),
-                    )
-                }
+                0x51 => response::Result::from_frame(frame).map(Self::Result),
+                0x52 => response::Usize::from_frame(frame).map(Self::Usize),
                 _ => rt::Err(RESPONSE_CODE.unknown(frame)),
             }
         }
@@ -849,6 +795,18 @@ pub mod clash {
         pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             Request::Option(*self).encode(address, buf)
         }
+        /// Reads this message from a frame whose framing and code are checked.
+        #[inline(always)]
+        fn from_frame(frame: &[u8]) -> rt::DecodeResult<Self> {
+            let frame = rt::fixed::<7>(frame, &Self::DESC)?;
+            rt::no_broadcast(frame[1], 0x00, &Self::DESC)?;
+            let field_1: u16 = u16::from_le_bytes([frame[4], frame[5]]);
+            rt::in_range(&Self::CORE_DESC, 4, field_1, 0, 1000)?;
+            rt::Ok(Self {
+                some: Result::from_raw(frame[3]),
+                core: Option::from_raw(field_1),
+            })
+        }
     }
     impl request::U8 {
         pub const NAME: &'static str = "u8";
@@ -861,6 +819,15 @@ pub mod clash {
         }
         pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             Request::U8(*self).encode(address, buf)
+        }
+        /// Reads this message from a frame whose framing and code are checked.
+        #[inline(always)]
+        fn from_frame(frame: &[u8]) -> rt::DecodeResult<Self> {
+            let frame = rt::fixed::<5>(frame, &Self::DESC)?;
+            rt::no_broadcast(frame[1], 0x00, &Self::DESC)?;
+            rt::Ok(Self {
+                frame: Some::from_raw(frame[3] as i16),
+            })
         }
     }
     impl request::Core {
@@ -878,6 +845,16 @@ pub mod clash {
         pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             Request::Core(*self).encode(address, buf)
         }
+        /// Reads this message from a frame whose framing and code are checked.
+        #[inline(always)]
+        fn from_frame(frame: &[u8]) -> rt::DecodeResult<Self> {
+            let frame = rt::fixed::<7>(frame, &Self::DESC)?;
+            rt::equal(&Self::BUF_DESC, 4, frame[4], 0x0)?;
+            rt::Ok(Self {
+                address: frame[3],
+                out: frame[5] as i8,
+            })
+        }
     }
     impl request::Rt {
         pub const NAME: &'static str = "rt";
@@ -891,6 +868,14 @@ pub mod clash {
         }
         pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             Request::Rt(*self).encode(address, buf)
+        }
+        /// Reads this message from a frame whose framing and code are checked.
+        #[inline(always)]
+        fn from_frame(frame: &[u8]) -> rt::DecodeResult<Self> {
+            let frame = rt::fixed::<6>(frame, &Self::DESC)?;
+            rt::no_broadcast(frame[1], 0x00, &Self::DESC)?;
+            rt::same(&Self::FIELD_DESC, 4, frame[4], "f", frame[3])?;
+            rt::Ok(Self { f: frame[3] })
         }
     }
     impl response::Ok {
@@ -925,6 +910,15 @@ pub mod clash {
         pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             Response::Result(*self).encode(address, buf)
         }
+        /// Reads this message from a frame whose framing and code are checked.
+        #[inline(always)]
+        fn from_frame(frame: &[u8]) -> rt::DecodeResult<Self> {
+            let frame = rt::fixed::<7>(frame, &Self::DESC)?;
+            rt::Ok(Self {
+                g: Ok::from_raw(frame[3]),
+                usize: Option::from_raw(u16::from_le_bytes([frame[4], frame[5]])),
+            })
+        }
     }
     impl response::Usize {
         pub const NAME: &'static str = "usize";
@@ -939,6 +933,16 @@ pub mod clash {
         }
         pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             Response::Usize(*self).encode(address, buf)
+        }
+        /// Reads this message from a frame whose framing and code are checked.
+        #[inline(always)]
+        fn from_frame(frame: &[u8]) -> rt::DecodeResult<Self> {
+            let frame = rt::fixed::<7>(frame, &Self::DESC)?;
+            rt::Ok(Self {
+                asked: rt::Ascii(frame[3..5].try_into().unwrap_or([0; 2])),
+                none: (frame[5] >> 4) as u8,
+                some: Some::from_raw(((((frame[5] & 0xF) as u8) << 4) as i8 >> 4) as i16),
+            })
         }
     }
     /// Each request as a struct of its own; its constants (`DESC`, which names it as

@@ -240,51 +240,10 @@ pub mod crc_extra {
         #[inline]
         fn dispatch(frame: &[u8]) -> rt::DecodeResult<Self> {
             match frame[2] {
-                0x04 => {
-                    let frame = rt::fixed::<19>(frame, &request::Ping::DESC)?;
-                    rt::Ok(
-                        Self::Ping(request::Ping {
-                            time_usec: u64::from_le_bytes([
-                                frame[3],
-                                frame[4],
-                                frame[5],
-                                frame[6],
-                                frame[7],
-                                frame[8],
-                                frame[9],
-                                frame[10],
-                            ]),
-                            seq: u32::from_le_bytes([
-                                frame[11],
-                                frame[12],
-                                frame[13],
-                                frame[14],
-                            ]),
-                            target_system: frame[15],
-                            target_component: frame[16],
-                        }),
-                    )
-                }
+                0x04 => request::Ping::from_frame(frame).map(Self::Ping),
                 0x42 => {
-                    let frame = rt::fixed::<
-                        11,
-                    >(frame, &request::RequestDataStream::DESC)?;
-                    rt::in_range(
-                        &request::RequestDataStream::START_STOP_DESC,
-                        8,
-                        frame[8],
-                        0,
-                        1,
-                    )?;
-                    rt::Ok(
-                        Self::RequestDataStream(request::RequestDataStream {
-                            req_message_rate: u16::from_le_bytes([frame[3], frame[4]]),
-                            target_system: frame[5],
-                            target_component: frame[6],
-                            req_stream_id: frame[7],
-                            start_stop: frame[8],
-                        }),
-                    )
+                    request::RequestDataStream::from_frame(frame)
+                        .map(Self::RequestDataStream)
                 }
                 _ => rt::Err(REQUEST_CODE.unknown(frame)),
             }
@@ -503,49 +462,8 @@ pub mod crc_extra {
         #[inline]
         fn dispatch(frame: &[u8]) -> rt::DecodeResult<Self> {
             match frame[2] {
-                0x04 => {
-                    let frame = rt::fixed::<19>(frame, &response::PingReply::DESC)?;
-                    rt::Ok(
-                        Self::PingReply(response::PingReply {
-                            time_usec: u64::from_le_bytes([
-                                frame[3],
-                                frame[4],
-                                frame[5],
-                                frame[6],
-                                frame[7],
-                                frame[8],
-                                frame[9],
-                                frame[10],
-                            ]),
-                            seq: u32::from_le_bytes([
-                                frame[11],
-                                frame[12],
-                                frame[13],
-                                frame[14],
-                            ]),
-                            target_system: frame[15],
-                            target_component: frame[16],
-                        }),
-                    )
-                }
-                0x00 => {
-                    let frame = rt::fixed::<14>(frame, &response::Heartbeat::DESC)?;
-                    rt::Ok(
-                        Self::Heartbeat(response::Heartbeat {
-                            custom_mode: u32::from_le_bytes([
-                                frame[3],
-                                frame[4],
-                                frame[5],
-                                frame[6],
-                            ]),
-                            vehicle_type: frame[7],
-                            autopilot: frame[8],
-                            base_mode: frame[9],
-                            system_status: frame[10],
-                            mavlink_version: frame[11],
-                        }),
-                    )
-                }
+                0x04 => response::PingReply::from_frame(frame).map(Self::PingReply),
+                0x00 => response::Heartbeat::from_frame(frame).map(Self::Heartbeat),
                 _ => rt::Err(RESPONSE_CODE.unknown(frame)),
             }
         }
@@ -742,6 +660,26 @@ pub mod crc_extra {
         pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             Request::Ping(*self).encode(address, buf)
         }
+        /// Reads this message from a frame whose framing and code are checked.
+        #[inline(always)]
+        fn from_frame(frame: &[u8]) -> rt::DecodeResult<Self> {
+            let frame = rt::fixed::<19>(frame, &Self::DESC)?;
+            rt::Ok(Self {
+                time_usec: u64::from_le_bytes([
+                    frame[3],
+                    frame[4],
+                    frame[5],
+                    frame[6],
+                    frame[7],
+                    frame[8],
+                    frame[9],
+                    frame[10],
+                ]),
+                seq: u32::from_le_bytes([frame[11], frame[12], frame[13], frame[14]]),
+                target_system: frame[15],
+                target_component: frame[16],
+            })
+        }
     }
     impl request::RequestDataStream {
         pub const NAME: &'static str = "request_data_stream";
@@ -764,6 +702,19 @@ pub mod crc_extra {
         pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             Request::RequestDataStream(*self).encode(address, buf)
         }
+        /// Reads this message from a frame whose framing and code are checked.
+        #[inline(always)]
+        fn from_frame(frame: &[u8]) -> rt::DecodeResult<Self> {
+            let frame = rt::fixed::<11>(frame, &Self::DESC)?;
+            rt::in_range(&Self::START_STOP_DESC, 8, frame[8], 0, 1)?;
+            rt::Ok(Self {
+                req_message_rate: u16::from_le_bytes([frame[3], frame[4]]),
+                target_system: frame[5],
+                target_component: frame[6],
+                req_stream_id: frame[7],
+                start_stop: frame[8],
+            })
+        }
     }
     impl response::PingReply {
         pub const NAME: &'static str = "ping_reply";
@@ -782,6 +733,26 @@ pub mod crc_extra {
         }
         pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             Response::PingReply(*self).encode(address, buf)
+        }
+        /// Reads this message from a frame whose framing and code are checked.
+        #[inline(always)]
+        fn from_frame(frame: &[u8]) -> rt::DecodeResult<Self> {
+            let frame = rt::fixed::<19>(frame, &Self::DESC)?;
+            rt::Ok(Self {
+                time_usec: u64::from_le_bytes([
+                    frame[3],
+                    frame[4],
+                    frame[5],
+                    frame[6],
+                    frame[7],
+                    frame[8],
+                    frame[9],
+                    frame[10],
+                ]),
+                seq: u32::from_le_bytes([frame[11], frame[12], frame[13], frame[14]]),
+                target_system: frame[15],
+                target_component: frame[16],
+            })
         }
     }
     impl response::Heartbeat {
@@ -805,6 +776,24 @@ pub mod crc_extra {
         }
         pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             Response::Heartbeat(*self).encode(address, buf)
+        }
+        /// Reads this message from a frame whose framing and code are checked.
+        #[inline(always)]
+        fn from_frame(frame: &[u8]) -> rt::DecodeResult<Self> {
+            let frame = rt::fixed::<14>(frame, &Self::DESC)?;
+            rt::Ok(Self {
+                custom_mode: u32::from_le_bytes([
+                    frame[3],
+                    frame[4],
+                    frame[5],
+                    frame[6],
+                ]),
+                vehicle_type: frame[7],
+                autopilot: frame[8],
+                base_mode: frame[9],
+                system_status: frame[10],
+                mavlink_version: frame[11],
+            })
         }
     }
     /// Each request as a struct of its own; its constants (`DESC`, which names it as

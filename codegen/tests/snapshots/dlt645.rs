@@ -254,30 +254,8 @@ pub mod dlt645 {
         #[inline]
         fn dispatch(frame: &[u8]) -> rt::DecodeResult<Self> {
             match frame[8] {
-                0x13 => {
-                    let frame = rt::fixed::<12>(frame, &request::ReadAddress::DESC)?;
-                    rt::Ok(
-                        Self::ReadAddress(request::ReadAddress {
-                            address_low: rt::u24([frame[1], frame[2], frame[3]], true),
-                            address_high: rt::u24([frame[4], frame[5], frame[6]], true),
-                        }),
-                    )
-                }
-                0x11 => {
-                    let frame = rt::fixed::<16>(frame, &request::ReadData::DESC)?;
-                    rt::Ok(
-                        Self::ReadData(request::ReadData {
-                            address_low: rt::u24([frame[1], frame[2], frame[3]], true),
-                            address_high: rt::u24([frame[4], frame[5], frame[6]], true),
-                            data_id: u32::from_le_bytes([
-                                frame[10],
-                                frame[11],
-                                frame[12],
-                                frame[13],
-                            ]),
-                        }),
-                    )
-                }
+                0x13 => request::ReadAddress::from_frame(frame).map(Self::ReadAddress),
+                0x11 => request::ReadData::from_frame(frame).map(Self::ReadData),
                 _ => rt::Err(REQUEST_CODE.unknown(frame)),
             }
         }
@@ -617,77 +595,15 @@ pub mod dlt645 {
             request: rt::Option<&Request>,
         ) -> rt::DecodeResult<Self> {
             match frame[8] {
-                0x93 => {
-                    let frame = rt::fixed::<18>(frame, &response::AddressReply::DESC)?;
-                    rt::Ok(
-                        Self::AddressReply(response::AddressReply {
-                            address_low: rt::u24([frame[1], frame[2], frame[3]], true),
-                            address_high: rt::u24([frame[4], frame[5], frame[6]], true),
-                            meter_low: rt::u24([frame[10], frame[11], frame[12]], true),
-                            meter_high: rt::u24([frame[13], frame[14], frame[15]], true),
-                        }),
-                    )
-                }
+                0x93 => response::AddressReply::from_frame(frame).map(Self::AddressReply),
                 0x91 => {
                     let mut g = rt::Group::new(frame, 0x91, request.map(Request::name));
                     g.attempt(|frame: &[u8; 20]| {
-                        let field_3: u32 = rt::bcd(
-                            &response::DataReply::VALUE_DESC,
-                            14,
-                            u32::from_le_bytes([
-                                frame[14],
-                                frame[15],
-                                frame[16],
-                                frame[17],
-                            ]) as u64,
-                        )? as u32;
-                        rt::in_range(
-                            &response::DataReply::VALUE_DESC,
-                            14,
-                            field_3,
-                            0,
-                            99999999,
-                        )?;
-                        rt::Ok(
-                            Self::DataReply(response::DataReply {
-                                address_low: rt::u24([frame[1], frame[2], frame[3]], true),
-                                address_high: rt::u24([frame[4], frame[5], frame[6]], true),
-                                data_id: u32::from_le_bytes([
-                                    frame[10],
-                                    frame[11],
-                                    frame[12],
-                                    frame[13],
-                                ]),
-                                value: field_3,
-                            }),
-                        )
+                        response::DataReply::from_frame(frame).map(Self::DataReply)
                     });
                     g.attempt(|frame: &[u8; 22]| {
-                        rt::equal(
-                            &response::MeterNumberReply::DATA_ID_DESC,
-                            10,
-                            u32::from_le_bytes([
-                                frame[10],
-                                frame[11],
-                                frame[12],
-                                frame[13],
-                            ]),
-                            0x4000402,
-                        )?;
-                        rt::Ok(
-                            Self::MeterNumberReply(response::MeterNumberReply {
-                                address_low: rt::u24([frame[1], frame[2], frame[3]], true),
-                                address_high: rt::u24([frame[4], frame[5], frame[6]], true),
-                                number_low: rt::u24(
-                                    [frame[14], frame[15], frame[16]],
-                                    true,
-                                ),
-                                number_high: rt::u24(
-                                    [frame[17], frame[18], frame[19]],
-                                    true,
-                                ),
-                            }),
-                        )
+                        response::MeterNumberReply::from_frame(frame)
+                            .map(Self::MeterNumberReply)
                     });
                     g.end(&response::DataReply::DESC)
                 }
@@ -942,6 +858,15 @@ pub mod dlt645 {
         pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             Request::ReadAddress(*self).encode(address, buf)
         }
+        /// Reads this message from a frame whose framing and code are checked.
+        #[inline(always)]
+        fn from_frame(frame: &[u8]) -> rt::DecodeResult<Self> {
+            let frame = rt::fixed::<12>(frame, &Self::DESC)?;
+            rt::Ok(Self {
+                address_low: rt::u24([frame[1], frame[2], frame[3]], true),
+                address_high: rt::u24([frame[4], frame[5], frame[6]], true),
+            })
+        }
     }
     impl request::ReadData {
         pub const NAME: &'static str = "read_data";
@@ -958,6 +883,16 @@ pub mod dlt645 {
         }
         pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             Request::ReadData(*self).encode(address, buf)
+        }
+        /// Reads this message from a frame whose framing and code are checked.
+        #[inline(always)]
+        fn from_frame(frame: &[u8]) -> rt::DecodeResult<Self> {
+            let frame = rt::fixed::<16>(frame, &Self::DESC)?;
+            rt::Ok(Self {
+                address_low: rt::u24([frame[1], frame[2], frame[3]], true),
+                address_high: rt::u24([frame[4], frame[5], frame[6]], true),
+                data_id: u32::from_le_bytes([frame[10], frame[11], frame[12], frame[13]]),
+            })
         }
     }
     impl response::AddressReply {
@@ -977,6 +912,17 @@ pub mod dlt645 {
         }
         pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             Response::AddressReply(*self).encode(address, buf)
+        }
+        /// Reads this message from a frame whose framing and code are checked.
+        #[inline(always)]
+        fn from_frame(frame: &[u8]) -> rt::DecodeResult<Self> {
+            let frame = rt::fixed::<18>(frame, &Self::DESC)?;
+            rt::Ok(Self {
+                address_low: rt::u24([frame[1], frame[2], frame[3]], true),
+                address_high: rt::u24([frame[4], frame[5], frame[6]], true),
+                meter_low: rt::u24([frame[10], frame[11], frame[12]], true),
+                meter_high: rt::u24([frame[13], frame[14], frame[15]], true),
+            })
         }
     }
     impl response::DataReply {
@@ -998,6 +944,28 @@ pub mod dlt645 {
         pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             Response::DataReply(*self).encode(address, buf)
         }
+        /// Reads this message from a frame whose framing and code are checked.
+        #[inline(always)]
+        fn from_frame(frame: &[u8]) -> rt::DecodeResult<Self> {
+            let frame = rt::fixed::<20>(frame, &Self::DESC)?;
+            let field_3: u32 = rt::bcd(
+                &Self::VALUE_DESC,
+                14,
+                u32::from_le_bytes([frame[14], frame[15], frame[16], frame[17]]) as u64,
+            )? as u32;
+            rt::in_range(&Self::VALUE_DESC, 14, field_3, 0, 99999999)?;
+            rt::Ok(Self {
+                address_low: rt::u24([frame[1], frame[2], frame[3]], true),
+                address_high: rt::u24([frame[4], frame[5], frame[6]], true),
+                data_id: u32::from_le_bytes([
+                    frame[10],
+                    frame[11],
+                    frame[12],
+                    frame[13],
+                ]),
+                value: field_3,
+            })
+        }
     }
     impl response::MeterNumberReply {
         pub const NAME: &'static str = "meter_number_reply";
@@ -1017,6 +985,23 @@ pub mod dlt645 {
         }
         pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             Response::MeterNumberReply(*self).encode(address, buf)
+        }
+        /// Reads this message from a frame whose framing and code are checked.
+        #[inline(always)]
+        fn from_frame(frame: &[u8]) -> rt::DecodeResult<Self> {
+            let frame = rt::fixed::<22>(frame, &Self::DESC)?;
+            rt::equal(
+                &Self::DATA_ID_DESC,
+                10,
+                u32::from_le_bytes([frame[10], frame[11], frame[12], frame[13]]),
+                0x4000402,
+            )?;
+            rt::Ok(Self {
+                address_low: rt::u24([frame[1], frame[2], frame[3]], true),
+                address_high: rt::u24([frame[4], frame[5], frame[6]], true),
+                number_low: rt::u24([frame[14], frame[15], frame[16]], true),
+                number_high: rt::u24([frame[17], frame[18], frame[19]], true),
+            })
         }
     }
     /// Each request as a struct of its own; its constants (`DESC`, which names it as

@@ -319,22 +319,8 @@ pub mod dynamixel {
         #[inline]
         fn dispatch(frame: &[u8]) -> rt::DecodeResult<Self> {
             match frame[4] {
-                0x01 => {
-                    let frame = rt::fixed::<6>(frame, &request::Ping::DESC)?;
-                    rt::no_broadcast(frame[2], 0xFE, &request::Ping::DESC)?;
-                    rt::Ok(Self::Ping(request::Ping))
-                }
-                0x02 => {
-                    let frame = rt::fixed::<8>(frame, &request::Read::DESC)?;
-                    rt::no_broadcast(frame[2], 0xFE, &request::Read::DESC)?;
-                    rt::in_range(&request::Read::LENGTH_DESC, 6, frame[6], 1, 253)?;
-                    rt::Ok(
-                        Self::Read(request::Read {
-                            address: frame[5],
-                            length: frame[6],
-                        }),
-                    )
-                }
+                0x01 => request::Ping::from_frame(frame).map(Self::Ping),
+                0x02 => request::Read::from_frame(frame).map(Self::Read),
                 0x03 => {
                     let (frame, elements, _) = REPEAT_WRITE.split::<6>(frame)?;
                     rt::Ok(
@@ -606,11 +592,7 @@ pub mod dynamixel {
             {
                 let mut g = rt::Group::new(frame, 0u32, request.map(Request::name));
                 g.attempt(|frame: &[u8; 6]| {
-                    rt::Ok(
-                        Self::Status(response::Status {
-                            error: StatusError::from_raw(frame[4]),
-                        }),
-                    )
+                    response::Status::from_frame(frame).map(Self::Status)
                 });
                 g.attempt_split(
                     &REPEAT_READ_STATUS,
@@ -1157,6 +1139,13 @@ pub mod dynamixel {
         pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             Request::Ping(*self).encode(address, buf)
         }
+        /// Reads this message from a frame whose framing and code are checked.
+        #[inline(always)]
+        fn from_frame(frame: &[u8]) -> rt::DecodeResult<Self> {
+            let frame = rt::fixed::<6>(frame, &Self::DESC)?;
+            rt::no_broadcast(frame[2], 0xFE, &Self::DESC)?;
+            rt::Ok(Self)
+        }
     }
     impl request::Read {
         pub const NAME: &'static str = "read";
@@ -1172,6 +1161,17 @@ pub mod dynamixel {
         }
         pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             Request::Read(*self).encode(address, buf)
+        }
+        /// Reads this message from a frame whose framing and code are checked.
+        #[inline(always)]
+        fn from_frame(frame: &[u8]) -> rt::DecodeResult<Self> {
+            let frame = rt::fixed::<8>(frame, &Self::DESC)?;
+            rt::no_broadcast(frame[2], 0xFE, &Self::DESC)?;
+            rt::in_range(&Self::LENGTH_DESC, 6, frame[6], 1, 253)?;
+            rt::Ok(Self {
+                address: frame[5],
+                length: frame[6],
+            })
         }
     }
     impl request::Write {
@@ -1253,6 +1253,14 @@ pub mod dynamixel {
         }
         pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             Response::Status(*self).encode(address, buf)
+        }
+        /// Reads this message from a frame whose framing and code are checked.
+        #[inline(always)]
+        fn from_frame(frame: &[u8]) -> rt::DecodeResult<Self> {
+            let frame = rt::fixed::<6>(frame, &Self::DESC)?;
+            rt::Ok(Self {
+                error: StatusError::from_raw(frame[4]),
+            })
         }
     }
     impl response::ReadStatus {

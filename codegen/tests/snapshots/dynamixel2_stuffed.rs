@@ -301,20 +301,7 @@ pub mod dynamixel2_stuffed {
                     rt::fixed::<10>(frame, &request::Ping::DESC)
                         .map(|_| Self::Ping(request::Ping))
                 }
-                0x03 => {
-                    let frame = rt::fixed::<16>(frame, &request::Write4::DESC)?;
-                    rt::Ok(
-                        Self::Write4(request::Write4 {
-                            address: u16::from_le_bytes([frame[8], frame[9]]),
-                            value: u32::from_le_bytes([
-                                frame[10],
-                                frame[11],
-                                frame[12],
-                                frame[13],
-                            ]),
-                        }),
-                    )
-                }
+                0x03 => request::Write4::from_frame(frame).map(Self::Write4),
                 _ => rt::Err(REQUEST_CODE.unknown(frame)),
             }
         }
@@ -537,20 +524,10 @@ pub mod dynamixel2_stuffed {
                 0x55 => {
                     let mut g = rt::Group::new(frame, 0x55, request.map(Request::name));
                     g.attempt(|frame: &[u8; 14]| {
-                        rt::Ok(
-                            Self::PingStatus(response::PingStatus {
-                                error: StatusError::from_raw(frame[8]),
-                                model_number: u16::from_le_bytes([frame[9], frame[10]]),
-                                firmware_version: frame[11],
-                            }),
-                        )
+                        response::PingStatus::from_frame(frame).map(Self::PingStatus)
                     });
                     g.attempt(|frame: &[u8; 11]| {
-                        rt::Ok(
-                            Self::Status(response::Status {
-                                error: StatusError::from_raw(frame[8]),
-                            }),
-                        )
+                        response::Status::from_frame(frame).map(Self::Status)
                     });
                     g.end(&response::PingStatus::DESC)
                 }
@@ -731,6 +708,15 @@ pub mod dynamixel2_stuffed {
         pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             Request::Write4(*self).encode(address, buf)
         }
+        /// Reads this message from a frame whose framing and code are checked.
+        #[inline(always)]
+        fn from_frame(frame: &[u8]) -> rt::DecodeResult<Self> {
+            let frame = rt::fixed::<16>(frame, &Self::DESC)?;
+            rt::Ok(Self {
+                address: u16::from_le_bytes([frame[8], frame[9]]),
+                value: u32::from_le_bytes([frame[10], frame[11], frame[12], frame[13]]),
+            })
+        }
     }
     impl response::PingStatus {
         pub const NAME: &'static str = "ping_status";
@@ -748,6 +734,16 @@ pub mod dynamixel2_stuffed {
         pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             Response::PingStatus(*self).encode(address, buf)
         }
+        /// Reads this message from a frame whose framing and code are checked.
+        #[inline(always)]
+        fn from_frame(frame: &[u8]) -> rt::DecodeResult<Self> {
+            let frame = rt::fixed::<14>(frame, &Self::DESC)?;
+            rt::Ok(Self {
+                error: StatusError::from_raw(frame[8]),
+                model_number: u16::from_le_bytes([frame[9], frame[10]]),
+                firmware_version: frame[11],
+            })
+        }
     }
     impl response::Status {
         pub const NAME: &'static str = "status";
@@ -760,6 +756,14 @@ pub mod dynamixel2_stuffed {
         }
         pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             Response::Status(*self).encode(address, buf)
+        }
+        /// Reads this message from a frame whose framing and code are checked.
+        #[inline(always)]
+        fn from_frame(frame: &[u8]) -> rt::DecodeResult<Self> {
+            let frame = rt::fixed::<11>(frame, &Self::DESC)?;
+            rt::Ok(Self {
+                error: StatusError::from_raw(frame[8]),
+            })
         }
     }
     /// Each request as a struct of its own; its constants (`DESC`, which names it as

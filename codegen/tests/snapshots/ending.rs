@@ -232,16 +232,7 @@ pub mod ending {
         #[inline]
         fn dispatch(frame: &[u8]) -> rt::DecodeResult<Self> {
             match frame[3] {
-                0x01 => {
-                    let frame = rt::fixed::<8>(frame, &request::Read::DESC)?;
-                    rt::in_range(&request::Read::QUANTITY_DESC, 6, frame[6], 1, 16)?;
-                    rt::Ok(
-                        Self::Read(request::Read {
-                            first: u16::from_be_bytes([frame[4], frame[5]]),
-                            quantity: frame[6],
-                        }),
-                    )
-                }
+                0x01 => request::Read::from_frame(frame).map(Self::Read),
                 0x02 => {
                     let (frame, elements, _) = REPEAT_WRITE.split::<6>(frame)?;
                     rt::in_range(&request::Write::QUANTITY_DESC, 4, frame[4], 1, 16)?;
@@ -261,14 +252,7 @@ pub mod ending {
                         }),
                     )
                 }
-                0x03 => {
-                    let frame = rt::fixed::<8>(frame, &request::Stamp::DESC)?;
-                    rt::Ok(
-                        Self::Stamp(request::Stamp {
-                            ticks: rt::u24([frame[4], frame[5], frame[6]], false),
-                        }),
-                    )
-                }
+                0x03 => request::Stamp::from_frame(frame).map(Self::Stamp),
                 _ => rt::Err(REQUEST_CODE.unknown(frame)),
             }
         }
@@ -499,22 +483,8 @@ pub mod ending {
                         }),
                     )
                 }
-                0x81 => {
-                    let frame = rt::fixed::<6>(frame, &response::ReadError::DESC)?;
-                    rt::Ok(
-                        Self::ReadError(response::ReadError {
-                            reason: frame[4],
-                        }),
-                    )
-                }
-                0x02 => {
-                    let frame = rt::fixed::<6>(frame, &response::WriteReply::DESC)?;
-                    rt::Ok(
-                        Self::WriteReply(response::WriteReply {
-                            status: frame[4],
-                        }),
-                    )
-                }
+                0x81 => response::ReadError::from_frame(frame).map(Self::ReadError),
+                0x02 => response::WriteReply::from_frame(frame).map(Self::WriteReply),
                 _ => rt::Err(RESPONSE_CODE.unknown(frame)),
             }
         }
@@ -960,6 +930,16 @@ pub mod ending {
         pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             Request::Read(*self).encode(address, buf)
         }
+        /// Reads this message from a frame whose framing and code are checked.
+        #[inline(always)]
+        fn from_frame(frame: &[u8]) -> rt::DecodeResult<Self> {
+            let frame = rt::fixed::<8>(frame, &Self::DESC)?;
+            rt::in_range(&Self::QUANTITY_DESC, 6, frame[6], 1, 16)?;
+            rt::Ok(Self {
+                first: u16::from_be_bytes([frame[4], frame[5]]),
+                quantity: frame[6],
+            })
+        }
     }
     impl request::Write {
         pub const NAME: &'static str = "write";
@@ -991,6 +971,14 @@ pub mod ending {
         pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             Request::Stamp(*self).encode(address, buf)
         }
+        /// Reads this message from a frame whose framing and code are checked.
+        #[inline(always)]
+        fn from_frame(frame: &[u8]) -> rt::DecodeResult<Self> {
+            let frame = rt::fixed::<8>(frame, &Self::DESC)?;
+            rt::Ok(Self {
+                ticks: rt::u24([frame[4], frame[5], frame[6]], false),
+            })
+        }
     }
     impl response::ReadReply {
         pub const NAME: &'static str = "read_reply";
@@ -1018,6 +1006,12 @@ pub mod ending {
         pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             Response::ReadError(*self).encode(address, buf)
         }
+        /// Reads this message from a frame whose framing and code are checked.
+        #[inline(always)]
+        fn from_frame(frame: &[u8]) -> rt::DecodeResult<Self> {
+            let frame = rt::fixed::<6>(frame, &Self::DESC)?;
+            rt::Ok(Self { reason: frame[4] })
+        }
     }
     impl response::WriteReply {
         pub const NAME: &'static str = "write_reply";
@@ -1030,6 +1024,12 @@ pub mod ending {
         }
         pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             Response::WriteReply(*self).encode(address, buf)
+        }
+        /// Reads this message from a frame whose framing and code are checked.
+        #[inline(always)]
+        fn from_frame(frame: &[u8]) -> rt::DecodeResult<Self> {
+            let frame = rt::fixed::<6>(frame, &Self::DESC)?;
+            rt::Ok(Self { status: frame[4] })
         }
     }
     /// Each request as a struct of its own; its constants (`DESC`, which names it as

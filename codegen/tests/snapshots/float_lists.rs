@@ -200,34 +200,9 @@ pub mod float_lists {
         #[inline]
         fn dispatch(frame: &[u8]) -> rt::DecodeResult<Self> {
             match frame[1] {
-                0x03 => {
-                    let frame = rt::fixed::<8>(frame, &request::ReadFloats::DESC)?;
-                    rt::no_broadcast(frame[0], 0x00, &request::ReadFloats::DESC)?;
-                    let field_1: u16 = u16::from_be_bytes([frame[4], frame[5]]);
-                    rt::in_range(
-                        &request::ReadFloats::QUANTITY_DESC,
-                        4,
-                        field_1,
-                        2,
-                        16,
-                    )?;
-                    rt::Ok(
-                        Self::ReadFloats(request::ReadFloats {
-                            start: u16::from_be_bytes([frame[2], frame[3]]),
-                            quantity: field_1,
-                        }),
-                    )
-                }
-                0x41 => {
-                    let frame = rt::fixed::<4>(frame, &request::ReadCounters::DESC)?;
-                    rt::no_broadcast(frame[0], 0x00, &request::ReadCounters::DESC)?;
-                    rt::Ok(Self::ReadCounters(request::ReadCounters))
-                }
-                0x42 => {
-                    let frame = rt::fixed::<4>(frame, &request::ReadSamples::DESC)?;
-                    rt::no_broadcast(frame[0], 0x00, &request::ReadSamples::DESC)?;
-                    rt::Ok(Self::ReadSamples(request::ReadSamples))
-                }
+                0x03 => request::ReadFloats::from_frame(frame).map(Self::ReadFloats),
+                0x41 => request::ReadCounters::from_frame(frame).map(Self::ReadCounters),
+                0x42 => request::ReadSamples::from_frame(frame).map(Self::ReadSamples),
                 _ => rt::Err(REQUEST_CODE.unknown(frame)),
             }
         }
@@ -956,6 +931,18 @@ pub mod float_lists {
         pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             Request::ReadFloats(*self).encode(address, buf)
         }
+        /// Reads this message from a frame whose framing and code are checked.
+        #[inline(always)]
+        fn from_frame(frame: &[u8]) -> rt::DecodeResult<Self> {
+            let frame = rt::fixed::<8>(frame, &Self::DESC)?;
+            rt::no_broadcast(frame[0], 0x00, &Self::DESC)?;
+            let field_1: u16 = u16::from_be_bytes([frame[4], frame[5]]);
+            rt::in_range(&Self::QUANTITY_DESC, 4, field_1, 2, 16)?;
+            rt::Ok(Self {
+                start: u16::from_be_bytes([frame[2], frame[3]]),
+                quantity: field_1,
+            })
+        }
     }
     impl request::ReadCounters {
         pub const NAME: &'static str = "read_counters";
@@ -965,6 +952,13 @@ pub mod float_lists {
         pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             Request::ReadCounters(*self).encode(address, buf)
         }
+        /// Reads this message from a frame whose framing and code are checked.
+        #[inline(always)]
+        fn from_frame(frame: &[u8]) -> rt::DecodeResult<Self> {
+            let frame = rt::fixed::<4>(frame, &Self::DESC)?;
+            rt::no_broadcast(frame[0], 0x00, &Self::DESC)?;
+            rt::Ok(Self)
+        }
     }
     impl request::ReadSamples {
         pub const NAME: &'static str = "read_samples";
@@ -973,6 +967,13 @@ pub mod float_lists {
         pub const DESC: rt::MessageDesc = rt::desc(Self::NAME, 0x42, 1, &[4]);
         pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             Request::ReadSamples(*self).encode(address, buf)
+        }
+        /// Reads this message from a frame whose framing and code are checked.
+        #[inline(always)]
+        fn from_frame(frame: &[u8]) -> rt::DecodeResult<Self> {
+            let frame = rt::fixed::<4>(frame, &Self::DESC)?;
+            rt::no_broadcast(frame[0], 0x00, &Self::DESC)?;
+            rt::Ok(Self)
         }
     }
     impl response::Floats {

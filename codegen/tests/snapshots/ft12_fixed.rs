@@ -187,25 +187,15 @@ pub mod ft12_fixed {
                         .map(|_| Self::ResetRemoteLink(request::ResetRemoteLink))
                 }
                 0x49 => {
-                    let frame = rt::fixed::<
-                        5,
-                    >(frame, &request::RequestStatusOfLink::DESC)?;
-                    rt::no_broadcast(
-                        frame[2],
-                        0xFF,
-                        &request::RequestStatusOfLink::DESC,
-                    )?;
-                    rt::Ok(Self::RequestStatusOfLink(request::RequestStatusOfLink))
+                    request::RequestStatusOfLink::from_frame(frame)
+                        .map(Self::RequestStatusOfLink)
                 }
                 0x5B => {
-                    let frame = rt::fixed::<5>(frame, &request::RequestClass2::DESC)?;
-                    rt::no_broadcast(frame[2], 0xFF, &request::RequestClass2::DESC)?;
-                    rt::Ok(Self::RequestClass2(request::RequestClass2))
+                    request::RequestClass2::from_frame(frame).map(Self::RequestClass2)
                 }
                 0x7B => {
-                    let frame = rt::fixed::<5>(frame, &request::RequestClass2Fcb::DESC)?;
-                    rt::no_broadcast(frame[2], 0xFF, &request::RequestClass2Fcb::DESC)?;
-                    rt::Ok(Self::RequestClass2Fcb(request::RequestClass2Fcb))
+                    request::RequestClass2Fcb::from_frame(frame)
+                        .map(Self::RequestClass2Fcb)
                 }
                 _ => rt::Err(REQUEST_CODE.unknown(frame)),
             }
@@ -562,6 +552,13 @@ pub mod ft12_fixed {
         pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             Request::RequestStatusOfLink(*self).encode(address, buf)
         }
+        /// Reads this message from a frame whose framing and code are checked.
+        #[inline(always)]
+        fn from_frame(frame: &[u8]) -> rt::DecodeResult<Self> {
+            let frame = rt::fixed::<5>(frame, &Self::DESC)?;
+            rt::no_broadcast(frame[2], 0xFF, &Self::DESC)?;
+            rt::Ok(Self)
+        }
     }
     impl request::RequestClass2 {
         pub const NAME: &'static str = "request_class_2";
@@ -571,6 +568,13 @@ pub mod ft12_fixed {
         pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             Request::RequestClass2(*self).encode(address, buf)
         }
+        /// Reads this message from a frame whose framing and code are checked.
+        #[inline(always)]
+        fn from_frame(frame: &[u8]) -> rt::DecodeResult<Self> {
+            let frame = rt::fixed::<5>(frame, &Self::DESC)?;
+            rt::no_broadcast(frame[2], 0xFF, &Self::DESC)?;
+            rt::Ok(Self)
+        }
     }
     impl request::RequestClass2Fcb {
         pub const NAME: &'static str = "request_class_2_fcb";
@@ -579,6 +583,13 @@ pub mod ft12_fixed {
         pub const DESC: rt::MessageDesc = rt::desc(Self::NAME, 0x7B, 1, &[5]);
         pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             Request::RequestClass2Fcb(*self).encode(address, buf)
+        }
+        /// Reads this message from a frame whose framing and code are checked.
+        #[inline(always)]
+        fn from_frame(frame: &[u8]) -> rt::DecodeResult<Self> {
+            let frame = rt::fixed::<5>(frame, &Self::DESC)?;
+            rt::no_broadcast(frame[2], 0xFF, &Self::DESC)?;
+            rt::Ok(Self)
         }
     }
     impl response::Ack {

@@ -188,17 +188,8 @@ pub mod ft12_variable {
         #[inline]
         fn dispatch(frame: &[u8]) -> rt::DecodeResult<Self> {
             match frame[4] {
-                0x53 => {
-                    let frame = rt::fixed::<9>(frame, &request::Reset::DESC)?;
-                    rt::equal(&request::Reset::CI_DESC, 6, frame[6], 0x50)?;
-                    rt::Ok(Self::Reset(request::Reset))
-                }
-                0x7B => {
-                    let frame = rt::fixed::<9>(frame, &request::ReadData::DESC)?;
-                    rt::no_broadcast(frame[5], 0xFE, &request::ReadData::DESC)?;
-                    rt::equal(&request::ReadData::CI_DESC, 6, frame[6], 0x5B)?;
-                    rt::Ok(Self::ReadData(request::ReadData))
-                }
+                0x53 => request::Reset::from_frame(frame).map(Self::Reset),
+                0x7B => request::ReadData::from_frame(frame).map(Self::ReadData),
                 _ => rt::Err(REQUEST_CODE.unknown(frame)),
             }
         }
@@ -401,42 +392,7 @@ pub mod ft12_variable {
         #[inline]
         fn dispatch(frame: &[u8]) -> rt::DecodeResult<Self> {
             match frame[4] {
-                0x08 => {
-                    let frame = rt::fixed::<27>(frame, &response::RspUd::DESC)?;
-                    rt::equal(&response::RspUd::CI_DESC, 6, frame[6], 0x72)?;
-                    let field_1: u32 = rt::bcd(
-                        &response::RspUd::IDENTIFICATION_DESC,
-                        7,
-                        u32::from_le_bytes([frame[7], frame[8], frame[9], frame[10]])
-                            as u64,
-                    )? as u32;
-                    rt::in_range(
-                        &response::RspUd::IDENTIFICATION_DESC,
-                        7,
-                        field_1,
-                        0,
-                        99999999,
-                    )?;
-                    rt::equal(&response::RspUd::DIF_DESC, 19, frame[19], 0x4)?;
-                    rt::equal(&response::RspUd::VIF_DESC, 20, frame[20], 0x13)?;
-                    rt::Ok(
-                        Self::RspUd(response::RspUd {
-                            identification: field_1,
-                            manufacturer: u16::from_le_bytes([frame[11], frame[12]]),
-                            version: frame[13],
-                            medium: frame[14],
-                            access: frame[15],
-                            status: frame[16],
-                            signature: u16::from_le_bytes([frame[17], frame[18]]),
-                            volume: u32::from_le_bytes([
-                                frame[21],
-                                frame[22],
-                                frame[23],
-                                frame[24],
-                            ]),
-                        }),
-                    )
-                }
+                0x08 => response::RspUd::from_frame(frame).map(Self::RspUd),
                 _ => rt::Err(RESPONSE_CODE.unknown(frame)),
             }
         }
@@ -618,6 +574,13 @@ pub mod ft12_variable {
         pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             Request::Reset(*self).encode(address, buf)
         }
+        /// Reads this message from a frame whose framing and code are checked.
+        #[inline(always)]
+        fn from_frame(frame: &[u8]) -> rt::DecodeResult<Self> {
+            let frame = rt::fixed::<9>(frame, &Self::DESC)?;
+            rt::equal(&Self::CI_DESC, 6, frame[6], 0x50)?;
+            rt::Ok(Self)
+        }
     }
     impl request::ReadData {
         pub const NAME: &'static str = "read_data";
@@ -627,6 +590,14 @@ pub mod ft12_variable {
         pub const CI_DESC: rt::FieldDesc = rt::field(Self::NAME, "ci");
         pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             Request::ReadData(*self).encode(address, buf)
+        }
+        /// Reads this message from a frame whose framing and code are checked.
+        #[inline(always)]
+        fn from_frame(frame: &[u8]) -> rt::DecodeResult<Self> {
+            let frame = rt::fixed::<9>(frame, &Self::DESC)?;
+            rt::no_broadcast(frame[5], 0xFE, &Self::DESC)?;
+            rt::equal(&Self::CI_DESC, 6, frame[6], 0x5B)?;
+            rt::Ok(Self)
         }
     }
     impl response::RspUd {
@@ -661,6 +632,30 @@ pub mod ft12_variable {
         }
         pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             Response::RspUd(*self).encode(address, buf)
+        }
+        /// Reads this message from a frame whose framing and code are checked.
+        #[inline(always)]
+        fn from_frame(frame: &[u8]) -> rt::DecodeResult<Self> {
+            let frame = rt::fixed::<27>(frame, &Self::DESC)?;
+            rt::equal(&Self::CI_DESC, 6, frame[6], 0x72)?;
+            let field_1: u32 = rt::bcd(
+                &Self::IDENTIFICATION_DESC,
+                7,
+                u32::from_le_bytes([frame[7], frame[8], frame[9], frame[10]]) as u64,
+            )? as u32;
+            rt::in_range(&Self::IDENTIFICATION_DESC, 7, field_1, 0, 99999999)?;
+            rt::equal(&Self::DIF_DESC, 19, frame[19], 0x4)?;
+            rt::equal(&Self::VIF_DESC, 20, frame[20], 0x13)?;
+            rt::Ok(Self {
+                identification: field_1,
+                manufacturer: u16::from_le_bytes([frame[11], frame[12]]),
+                version: frame[13],
+                medium: frame[14],
+                access: frame[15],
+                status: frame[16],
+                signature: u16::from_le_bytes([frame[17], frame[18]]),
+                volume: u32::from_le_bytes([frame[21], frame[22], frame[23], frame[24]]),
+            })
         }
     }
     /// Each request as a struct of its own; its constants (`DESC`, which names it as

@@ -236,19 +236,9 @@ pub mod hdlc_like {
         #[inline]
         fn dispatch(frame: &[u8]) -> rt::DecodeResult<Self> {
             match frame[2] {
-                0x10 => {
-                    let frame = rt::fixed::<6>(frame, &request::ReadStatus::DESC)?;
-                    rt::no_broadcast(frame[1], 0xFF, &request::ReadStatus::DESC)?;
-                    rt::Ok(Self::ReadStatus(request::ReadStatus))
-                }
+                0x10 => request::ReadStatus::from_frame(frame).map(Self::ReadStatus),
                 0x20 => {
-                    let frame = rt::fixed::<10>(frame, &request::WriteRegister::DESC)?;
-                    rt::Ok(
-                        Self::WriteRegister(request::WriteRegister {
-                            register: u16::from_le_bytes([frame[3], frame[4]]),
-                            value: u16::from_le_bytes([frame[5], frame[6]]),
-                        }),
-                    )
+                    request::WriteRegister::from_frame(frame).map(Self::WriteRegister)
                 }
                 _ => rt::Err(REQUEST_CODE.unknown(frame)),
             }
@@ -449,14 +439,7 @@ pub mod hdlc_like {
         #[inline]
         fn dispatch(frame: &[u8]) -> rt::DecodeResult<Self> {
             match frame[2] {
-                0x90 => {
-                    let frame = rt::fixed::<8>(frame, &response::Status::DESC)?;
-                    rt::Ok(
-                        Self::Status(response::Status {
-                            state: u16::from_le_bytes([frame[3], frame[4]]),
-                        }),
-                    )
-                }
+                0x90 => response::Status::from_frame(frame).map(Self::Status),
                 0xA0 => {
                     rt::fixed::<6>(frame, &response::Ack::DESC)
                         .map(|_| Self::Ack(response::Ack))
@@ -618,6 +601,13 @@ pub mod hdlc_like {
         pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             Request::ReadStatus(*self).encode(address, buf)
         }
+        /// Reads this message from a frame whose framing and code are checked.
+        #[inline(always)]
+        fn from_frame(frame: &[u8]) -> rt::DecodeResult<Self> {
+            let frame = rt::fixed::<6>(frame, &Self::DESC)?;
+            rt::no_broadcast(frame[1], 0xFF, &Self::DESC)?;
+            rt::Ok(Self)
+        }
     }
     impl request::WriteRegister {
         pub const NAME: &'static str = "write_register";
@@ -633,6 +623,15 @@ pub mod hdlc_like {
         pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             Request::WriteRegister(*self).encode(address, buf)
         }
+        /// Reads this message from a frame whose framing and code are checked.
+        #[inline(always)]
+        fn from_frame(frame: &[u8]) -> rt::DecodeResult<Self> {
+            let frame = rt::fixed::<10>(frame, &Self::DESC)?;
+            rt::Ok(Self {
+                register: u16::from_le_bytes([frame[3], frame[4]]),
+                value: u16::from_le_bytes([frame[5], frame[6]]),
+            })
+        }
     }
     impl response::Status {
         pub const NAME: &'static str = "status";
@@ -645,6 +644,14 @@ pub mod hdlc_like {
         }
         pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             Response::Status(*self).encode(address, buf)
+        }
+        /// Reads this message from a frame whose framing and code are checked.
+        #[inline(always)]
+        fn from_frame(frame: &[u8]) -> rt::DecodeResult<Self> {
+            let frame = rt::fixed::<8>(frame, &Self::DESC)?;
+            rt::Ok(Self {
+                state: u16::from_le_bytes([frame[3], frame[4]]),
+            })
         }
     }
     impl response::Ack {

@@ -481,29 +481,13 @@ pub mod jbd_bms {
         fn dispatch(frame: &[u8]) -> rt::DecodeResult<Self> {
             match frame[2] {
                 0x03 => {
-                    let frame = rt::fixed::<7>(frame, &request::ReadBasicInfo::DESC)?;
-                    rt::Ok(
-                        Self::ReadBasicInfo(request::ReadBasicInfo {
-                            state: State::from_raw(frame[1]),
-                        }),
-                    )
+                    request::ReadBasicInfo::from_frame(frame).map(Self::ReadBasicInfo)
                 }
                 0x04 => {
-                    let frame = rt::fixed::<7>(frame, &request::ReadCellVoltages::DESC)?;
-                    rt::Ok(
-                        Self::ReadCellVoltages(request::ReadCellVoltages {
-                            state: State::from_raw(frame[1]),
-                        }),
-                    )
+                    request::ReadCellVoltages::from_frame(frame)
+                        .map(Self::ReadCellVoltages)
                 }
-                0x05 => {
-                    let frame = rt::fixed::<7>(frame, &request::ReadVersion::DESC)?;
-                    rt::Ok(
-                        Self::ReadVersion(request::ReadVersion {
-                            state: State::from_raw(frame[1]),
-                        }),
-                    )
-                }
+                0x05 => request::ReadVersion::from_frame(frame).map(Self::ReadVersion),
                 _ => rt::Err(REQUEST_CODE.unknown(frame)),
             }
         }
@@ -896,11 +880,8 @@ pub mod jbd_bms {
                         },
                     );
                     g.attempt(|frame: &[u8; 7]| {
-                        rt::Ok(
-                            Self::BasicInfoError(response::BasicInfoError {
-                                status: Status::from_raw(frame[2]),
-                            }),
-                        )
+                        response::BasicInfoError::from_frame(frame)
+                            .map(Self::BasicInfoError)
                     });
                     g.end(&response::BasicInfo::DESC)
                 }
@@ -919,11 +900,8 @@ pub mod jbd_bms {
                         },
                     );
                     g.attempt(|frame: &[u8; 7]| {
-                        rt::Ok(
-                            Self::CellVoltagesError(response::CellVoltagesError {
-                                status: Status::from_raw(frame[2]),
-                            }),
-                        )
+                        response::CellVoltagesError::from_frame(frame)
+                            .map(Self::CellVoltagesError)
                     });
                     g.end(&response::CellVoltages::DESC)
                 }
@@ -942,11 +920,7 @@ pub mod jbd_bms {
                         },
                     );
                     g.attempt(|frame: &[u8; 7]| {
-                        rt::Ok(
-                            Self::VersionError(response::VersionError {
-                                status: Status::from_raw(frame[2]),
-                            }),
-                        )
+                        response::VersionError::from_frame(frame).map(Self::VersionError)
                     });
                     g.end(&response::Version::DESC)
                 }
@@ -1489,6 +1463,14 @@ pub mod jbd_bms {
         pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             Request::ReadBasicInfo(*self).encode(address, buf)
         }
+        /// Reads this message from a frame whose framing and code are checked.
+        #[inline(always)]
+        fn from_frame(frame: &[u8]) -> rt::DecodeResult<Self> {
+            let frame = rt::fixed::<7>(frame, &Self::DESC)?;
+            rt::Ok(Self {
+                state: State::from_raw(frame[1]),
+            })
+        }
     }
     impl request::ReadCellVoltages {
         pub const NAME: &'static str = "read_cell_voltages";
@@ -1502,6 +1484,14 @@ pub mod jbd_bms {
         pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             Request::ReadCellVoltages(*self).encode(address, buf)
         }
+        /// Reads this message from a frame whose framing and code are checked.
+        #[inline(always)]
+        fn from_frame(frame: &[u8]) -> rt::DecodeResult<Self> {
+            let frame = rt::fixed::<7>(frame, &Self::DESC)?;
+            rt::Ok(Self {
+                state: State::from_raw(frame[1]),
+            })
+        }
     }
     impl request::ReadVersion {
         pub const NAME: &'static str = "read_version";
@@ -1514,6 +1504,14 @@ pub mod jbd_bms {
         }
         pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             Request::ReadVersion(*self).encode(address, buf)
+        }
+        /// Reads this message from a frame whose framing and code are checked.
+        #[inline(always)]
+        fn from_frame(frame: &[u8]) -> rt::DecodeResult<Self> {
+            let frame = rt::fixed::<7>(frame, &Self::DESC)?;
+            rt::Ok(Self {
+                state: State::from_raw(frame[1]),
+            })
         }
     }
     impl response::BasicInfo {
@@ -1609,6 +1607,14 @@ pub mod jbd_bms {
         pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             Response::BasicInfoError(*self).encode(address, buf)
         }
+        /// Reads this message from a frame whose framing and code are checked.
+        #[inline(always)]
+        fn from_frame(frame: &[u8]) -> rt::DecodeResult<Self> {
+            let frame = rt::fixed::<7>(frame, &Self::DESC)?;
+            rt::Ok(Self {
+                status: Status::from_raw(frame[2]),
+            })
+        }
     }
     impl response::CellVoltagesError {
         pub const NAME: &'static str = "cell_voltages_error";
@@ -1622,6 +1628,14 @@ pub mod jbd_bms {
         pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             Response::CellVoltagesError(*self).encode(address, buf)
         }
+        /// Reads this message from a frame whose framing and code are checked.
+        #[inline(always)]
+        fn from_frame(frame: &[u8]) -> rt::DecodeResult<Self> {
+            let frame = rt::fixed::<7>(frame, &Self::DESC)?;
+            rt::Ok(Self {
+                status: Status::from_raw(frame[2]),
+            })
+        }
     }
     impl response::VersionError {
         pub const NAME: &'static str = "version_error";
@@ -1634,6 +1648,14 @@ pub mod jbd_bms {
         }
         pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             Response::VersionError(*self).encode(address, buf)
+        }
+        /// Reads this message from a frame whose framing and code are checked.
+        #[inline(always)]
+        fn from_frame(frame: &[u8]) -> rt::DecodeResult<Self> {
+            let frame = rt::fixed::<7>(frame, &Self::DESC)?;
+            rt::Ok(Self {
+                status: Status::from_raw(frame[2]),
+            })
         }
     }
     /// Each request as a struct of its own; its constants (`DESC`, which names it as

@@ -303,42 +303,11 @@ pub mod kiss {
                         }),
                     )
                 }
-                0x01 => {
-                    let frame = rt::fixed::<4>(frame, &request::TxDelay::DESC)?;
-                    rt::Ok(
-                        Self::TxDelay(request::TxDelay {
-                            txdelay: frame[2],
-                        }),
-                    )
-                }
-                0x02 => {
-                    let frame = rt::fixed::<4>(frame, &request::Persistence::DESC)?;
-                    rt::Ok(
-                        Self::Persistence(request::Persistence {
-                            p: frame[2],
-                        }),
-                    )
-                }
-                0x03 => {
-                    let frame = rt::fixed::<4>(frame, &request::SlotTime::DESC)?;
-                    rt::Ok(
-                        Self::SlotTime(request::SlotTime {
-                            slot: frame[2],
-                        }),
-                    )
-                }
-                0x04 => {
-                    let frame = rt::fixed::<4>(frame, &request::TxTail::DESC)?;
-                    rt::Ok(Self::TxTail(request::TxTail { tail: frame[2] }))
-                }
-                0x05 => {
-                    let frame = rt::fixed::<4>(frame, &request::FullDuplex::DESC)?;
-                    rt::Ok(
-                        Self::FullDuplex(request::FullDuplex {
-                            duplex: frame[2],
-                        }),
-                    )
-                }
+                0x01 => request::TxDelay::from_frame(frame).map(Self::TxDelay),
+                0x02 => request::Persistence::from_frame(frame).map(Self::Persistence),
+                0x03 => request::SlotTime::from_frame(frame).map(Self::SlotTime),
+                0x04 => request::TxTail::from_frame(frame).map(Self::TxTail),
+                0x05 => request::FullDuplex::from_frame(frame).map(Self::FullDuplex),
                 0x06 => {
                     let (_, elements, _) = REPEAT_SET_HARDWARE.split::<2>(frame)?;
                     rt::Ok(
@@ -791,6 +760,12 @@ pub mod kiss {
         pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             Request::TxDelay(*self).encode(address, buf)
         }
+        /// Reads this message from a frame whose framing and code are checked.
+        #[inline(always)]
+        fn from_frame(frame: &[u8]) -> rt::DecodeResult<Self> {
+            let frame = rt::fixed::<4>(frame, &Self::DESC)?;
+            rt::Ok(Self { txdelay: frame[2] })
+        }
     }
     impl request::Persistence {
         pub const NAME: &'static str = "persistence";
@@ -803,6 +778,12 @@ pub mod kiss {
         }
         pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             Request::Persistence(*self).encode(address, buf)
+        }
+        /// Reads this message from a frame whose framing and code are checked.
+        #[inline(always)]
+        fn from_frame(frame: &[u8]) -> rt::DecodeResult<Self> {
+            let frame = rt::fixed::<4>(frame, &Self::DESC)?;
+            rt::Ok(Self { p: frame[2] })
         }
     }
     impl request::SlotTime {
@@ -817,6 +798,12 @@ pub mod kiss {
         pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             Request::SlotTime(*self).encode(address, buf)
         }
+        /// Reads this message from a frame whose framing and code are checked.
+        #[inline(always)]
+        fn from_frame(frame: &[u8]) -> rt::DecodeResult<Self> {
+            let frame = rt::fixed::<4>(frame, &Self::DESC)?;
+            rt::Ok(Self { slot: frame[2] })
+        }
     }
     impl request::TxTail {
         pub const NAME: &'static str = "tx_tail";
@@ -830,6 +817,12 @@ pub mod kiss {
         pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             Request::TxTail(*self).encode(address, buf)
         }
+        /// Reads this message from a frame whose framing and code are checked.
+        #[inline(always)]
+        fn from_frame(frame: &[u8]) -> rt::DecodeResult<Self> {
+            let frame = rt::fixed::<4>(frame, &Self::DESC)?;
+            rt::Ok(Self { tail: frame[2] })
+        }
     }
     impl request::FullDuplex {
         pub const NAME: &'static str = "full_duplex";
@@ -842,6 +835,12 @@ pub mod kiss {
         }
         pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             Request::FullDuplex(*self).encode(address, buf)
+        }
+        /// Reads this message from a frame whose framing and code are checked.
+        #[inline(always)]
+        fn from_frame(frame: &[u8]) -> rt::DecodeResult<Self> {
+            let frame = rt::fixed::<4>(frame, &Self::DESC)?;
+            rt::Ok(Self { duplex: frame[2] })
         }
     }
     impl request::SetHardware {

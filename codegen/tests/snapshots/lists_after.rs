@@ -331,16 +331,7 @@ pub mod lists_after {
         #[inline]
         fn dispatch(frame: &[u8]) -> rt::DecodeResult<Self> {
             match frame[2] {
-                0x10 => {
-                    let frame = rt::fixed::<7>(frame, &request::ReadBlock::DESC)?;
-                    rt::in_range(&request::ReadBlock::QUANTITY_DESC, 5, frame[5], 1, 8)?;
-                    rt::Ok(
-                        Self::ReadBlock(request::ReadBlock {
-                            first: u16::from_be_bytes([frame[3], frame[4]]),
-                            quantity: frame[5],
-                        }),
-                    )
-                }
+                0x10 => request::ReadBlock::from_frame(frame).map(Self::ReadBlock),
                 0x11 => {
                     let s = LISTS_WRITE_BLOCK.split::<7, 1>(frame)?;
                     let frame = &s.frame;
@@ -624,10 +615,7 @@ pub mod lists_after {
                         }),
                     )
                 }
-                0x11 => {
-                    let frame = rt::fixed::<5>(frame, &response::Ack::DESC)?;
-                    rt::Ok(Self::Ack(response::Ack { status: frame[3] }))
-                }
+                0x11 => response::Ack::from_frame(frame).map(Self::Ack),
                 _ => rt::Err(RESPONSE_CODE.unknown(frame)),
             }
         }
@@ -1074,6 +1062,16 @@ pub mod lists_after {
         pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             Request::ReadBlock(*self).encode(address, buf)
         }
+        /// Reads this message from a frame whose framing and code are checked.
+        #[inline(always)]
+        fn from_frame(frame: &[u8]) -> rt::DecodeResult<Self> {
+            let frame = rt::fixed::<7>(frame, &Self::DESC)?;
+            rt::in_range(&Self::QUANTITY_DESC, 5, frame[5], 1, 8)?;
+            rt::Ok(Self {
+                first: u16::from_be_bytes([frame[3], frame[4]]),
+                quantity: frame[5],
+            })
+        }
     }
     impl request::WriteBlock {
         pub const NAME: &'static str = "write_block";
@@ -1134,6 +1132,12 @@ pub mod lists_after {
         }
         pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             Response::Ack(*self).encode(address, buf)
+        }
+        /// Reads this message from a frame whose framing and code are checked.
+        #[inline(always)]
+        fn from_frame(frame: &[u8]) -> rt::DecodeResult<Self> {
+            let frame = rt::fixed::<5>(frame, &Self::DESC)?;
+            rt::Ok(Self { status: frame[3] })
         }
     }
     /// Each request as a struct of its own; its constants (`DESC`, which names it as

@@ -589,14 +589,7 @@ pub mod lists_length {
         #[inline]
         fn dispatch(frame: &[u8]) -> rt::DecodeResult<Self> {
             match frame[2] {
-                0x20 => {
-                    let frame = rt::fixed::<6>(frame, &response::LogAck::DESC)?;
-                    rt::Ok(
-                        Self::LogAck(response::LogAck {
-                            seq: u16::from_le_bytes([frame[3], frame[4]]),
-                        }),
-                    )
-                }
+                0x20 => response::LogAck::from_frame(frame).map(Self::LogAck),
                 _ => rt::Err(RESPONSE_CODE.unknown(frame)),
             }
         }
@@ -920,6 +913,14 @@ pub mod lists_length {
         }
         pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             Response::LogAck(*self).encode(address, buf)
+        }
+        /// Reads this message from a frame whose framing and code are checked.
+        #[inline(always)]
+        fn from_frame(frame: &[u8]) -> rt::DecodeResult<Self> {
+            let frame = rt::fixed::<6>(frame, &Self::DESC)?;
+            rt::Ok(Self {
+                seq: u16::from_le_bytes([frame[3], frame[4]]),
+            })
         }
     }
     /// Each request as a struct of its own; its constants (`DESC`, which names it as

@@ -227,49 +227,8 @@ pub mod maestro_compact {
         #[inline]
         fn dispatch(frame: &[u8]) -> rt::DecodeResult<Self> {
             match frame[0] {
-                0x84 => {
-                    let frame = rt::fixed::<4>(frame, &request::SetTarget::DESC)?;
-                    rt::in_range(&request::SetTarget::CHANNEL_DESC, 1, frame[1], 0, 23)?;
-                    let field_1: u16 = u16::from_le_bytes([frame[2], frame[3]]);
-                    rt::equal(
-                        &request::SetTarget::ZERO_HIGH_DESC,
-                        2,
-                        field_1 >> 15,
-                        0x0,
-                    )?;
-                    rt::equal(
-                        &request::SetTarget::ZERO_LOW_DESC,
-                        2,
-                        (field_1 >> 7) & 0x1,
-                        0x0,
-                    )?;
-                    rt::Ok(
-                        Self::SetTarget(request::SetTarget {
-                            channel: frame[1],
-                            target_high: QuarterMicroseconds::from_raw(
-                                (((field_1 >> 8) & 0x7F) as u8) as u16,
-                            ),
-                            target_low: QuarterMicroseconds::from_raw(
-                                ((field_1 & 0x7F) as u8) as u16,
-                            ),
-                        }),
-                    )
-                }
-                0x90 => {
-                    let frame = rt::fixed::<2>(frame, &request::GetPosition::DESC)?;
-                    rt::in_range(
-                        &request::GetPosition::CHANNEL_DESC,
-                        1,
-                        frame[1],
-                        0,
-                        23,
-                    )?;
-                    rt::Ok(
-                        Self::GetPosition(request::GetPosition {
-                            channel: frame[1],
-                        }),
-                    )
-                }
+                0x84 => request::SetTarget::from_frame(frame).map(Self::SetTarget),
+                0x90 => request::GetPosition::from_frame(frame).map(Self::GetPosition),
                 _ => rt::Err(REQUEST_CODE.unknown(frame)),
             }
         }
@@ -454,16 +413,7 @@ pub mod maestro_compact {
         /// The message of a frame that passed the checks every frame passes, by its code.
         #[inline]
         fn dispatch(frame: &[u8]) -> rt::DecodeResult<Self> {
-            {
-                let frame = rt::fixed::<2>(frame, &response::Position::DESC)?;
-                rt::Ok(
-                    Self::Position(response::Position {
-                        position: QuarterMicroseconds::from_raw(
-                            u16::from_le_bytes([frame[0], frame[1]]),
-                        ),
-                    }),
-                )
-            }
+            response::Position::from_frame(frame).map(Self::Position)
         }
         /// The message called `name` in the spec, from each field's raw wire value by its spec
         /// name, as [`Self::visit`] gives them (`None`: no value); constant and repeated fields
@@ -637,6 +587,24 @@ pub mod maestro_compact {
         pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             Request::SetTarget(*self).encode(address, buf)
         }
+        /// Reads this message from a frame whose framing and code are checked.
+        #[inline(always)]
+        fn from_frame(frame: &[u8]) -> rt::DecodeResult<Self> {
+            let frame = rt::fixed::<4>(frame, &Self::DESC)?;
+            rt::in_range(&Self::CHANNEL_DESC, 1, frame[1], 0, 23)?;
+            let field_1: u16 = u16::from_le_bytes([frame[2], frame[3]]);
+            rt::equal(&Self::ZERO_HIGH_DESC, 2, field_1 >> 15, 0x0)?;
+            rt::equal(&Self::ZERO_LOW_DESC, 2, (field_1 >> 7) & 0x1, 0x0)?;
+            rt::Ok(Self {
+                channel: frame[1],
+                target_high: QuarterMicroseconds::from_raw(
+                    (((field_1 >> 8) & 0x7F) as u8) as u16,
+                ),
+                target_low: QuarterMicroseconds::from_raw(
+                    ((field_1 & 0x7F) as u8) as u16,
+                ),
+            })
+        }
     }
     impl request::GetPosition {
         pub const NAME: &'static str = "get_position";
@@ -651,6 +619,13 @@ pub mod maestro_compact {
         pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             Request::GetPosition(*self).encode(address, buf)
         }
+        /// Reads this message from a frame whose framing and code are checked.
+        #[inline(always)]
+        fn from_frame(frame: &[u8]) -> rt::DecodeResult<Self> {
+            let frame = rt::fixed::<2>(frame, &Self::DESC)?;
+            rt::in_range(&Self::CHANNEL_DESC, 1, frame[1], 0, 23)?;
+            rt::Ok(Self { channel: frame[1] })
+        }
     }
     impl response::Position {
         pub const NAME: &'static str = "position";
@@ -663,6 +638,16 @@ pub mod maestro_compact {
         }
         pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             Response::Position(*self).encode(address, buf)
+        }
+        /// Reads this message from a frame whose framing and code are checked.
+        #[inline(always)]
+        fn from_frame(frame: &[u8]) -> rt::DecodeResult<Self> {
+            let frame = rt::fixed::<2>(frame, &Self::DESC)?;
+            rt::Ok(Self {
+                position: QuarterMicroseconds::from_raw(
+                    u16::from_le_bytes([frame[0], frame[1]]),
+                ),
+            })
         }
     }
     /// Each request as a struct of its own; its constants (`DESC`, which names it as

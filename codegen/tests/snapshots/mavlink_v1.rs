@@ -256,57 +256,10 @@ pub mod mavlink_v1 {
         #[inline]
         fn dispatch(frame: &[u8]) -> rt::DecodeResult<Self> {
             match frame[5] {
-                0x04 => {
-                    let frame = rt::fixed::<22>(frame, &request::Ping::DESC)?;
-                    rt::Ok(
-                        Self::Ping(request::Ping {
-                            sequence: frame[2],
-                            sysid: frame[3],
-                            compid: frame[4],
-                            time_usec: u64::from_le_bytes([
-                                frame[6],
-                                frame[7],
-                                frame[8],
-                                frame[9],
-                                frame[10],
-                                frame[11],
-                                frame[12],
-                                frame[13],
-                            ]),
-                            seq: u32::from_le_bytes([
-                                frame[14],
-                                frame[15],
-                                frame[16],
-                                frame[17],
-                            ]),
-                            target_system: frame[18],
-                            target_component: frame[19],
-                        }),
-                    )
-                }
+                0x04 => request::Ping::from_frame(frame).map(Self::Ping),
                 0x42 => {
-                    let frame = rt::fixed::<
-                        14,
-                    >(frame, &request::RequestDataStream::DESC)?;
-                    rt::in_range(
-                        &request::RequestDataStream::START_STOP_DESC,
-                        11,
-                        frame[11],
-                        0,
-                        1,
-                    )?;
-                    rt::Ok(
-                        Self::RequestDataStream(request::RequestDataStream {
-                            sequence: frame[2],
-                            sysid: frame[3],
-                            compid: frame[4],
-                            req_message_rate: u16::from_le_bytes([frame[6], frame[7]]),
-                            target_system: frame[8],
-                            target_component: frame[9],
-                            req_stream_id: frame[10],
-                            start_stop: frame[11],
-                        }),
-                    )
+                    request::RequestDataStream::from_frame(frame)
+                        .map(Self::RequestDataStream)
                 }
                 _ => rt::Err(REQUEST_CODE.unknown(frame)),
             }
@@ -630,145 +583,10 @@ pub mod mavlink_v1 {
         #[inline]
         fn dispatch(frame: &[u8]) -> rt::DecodeResult<Self> {
             match frame[5] {
-                0x04 => {
-                    let frame = rt::fixed::<22>(frame, &response::PingReply::DESC)?;
-                    rt::Ok(
-                        Self::PingReply(response::PingReply {
-                            sequence: frame[2],
-                            sysid: frame[3],
-                            compid: frame[4],
-                            time_usec: u64::from_le_bytes([
-                                frame[6],
-                                frame[7],
-                                frame[8],
-                                frame[9],
-                                frame[10],
-                                frame[11],
-                                frame[12],
-                                frame[13],
-                            ]),
-                            seq: u32::from_le_bytes([
-                                frame[14],
-                                frame[15],
-                                frame[16],
-                                frame[17],
-                            ]),
-                            target_system: frame[18],
-                            target_component: frame[19],
-                        }),
-                    )
-                }
-                0x00 => {
-                    let frame = rt::fixed::<17>(frame, &response::Heartbeat::DESC)?;
-                    rt::Ok(
-                        Self::Heartbeat(response::Heartbeat {
-                            sequence: frame[2],
-                            sysid: frame[3],
-                            compid: frame[4],
-                            custom_mode: u32::from_le_bytes([
-                                frame[6],
-                                frame[7],
-                                frame[8],
-                                frame[9],
-                            ]),
-                            vehicle_type: frame[10],
-                            autopilot: frame[11],
-                            base_mode: frame[12],
-                            system_status: frame[13],
-                            mavlink_version: frame[14],
-                        }),
-                    )
-                }
-                0x01 => {
-                    let frame = rt::fixed::<39>(frame, &response::SysStatus::DESC)?;
-                    rt::Ok(
-                        Self::SysStatus(response::SysStatus {
-                            sequence: frame[2],
-                            sysid: frame[3],
-                            compid: frame[4],
-                            onboard_control_sensors_present: u32::from_le_bytes([
-                                frame[6],
-                                frame[7],
-                                frame[8],
-                                frame[9],
-                            ]),
-                            onboard_control_sensors_enabled: u32::from_le_bytes([
-                                frame[10],
-                                frame[11],
-                                frame[12],
-                                frame[13],
-                            ]),
-                            onboard_control_sensors_health: u32::from_le_bytes([
-                                frame[14],
-                                frame[15],
-                                frame[16],
-                                frame[17],
-                            ]),
-                            load: u16::from_le_bytes([frame[18], frame[19]]),
-                            voltage_battery: u16::from_le_bytes([frame[20], frame[21]]),
-                            current_battery: i16::from_le_bytes([frame[22], frame[23]]),
-                            drop_rate_comm: u16::from_le_bytes([frame[24], frame[25]]),
-                            errors_comm: u16::from_le_bytes([frame[26], frame[27]]),
-                            errors_count1: u16::from_le_bytes([frame[28], frame[29]]),
-                            errors_count2: u16::from_le_bytes([frame[30], frame[31]]),
-                            errors_count3: u16::from_le_bytes([frame[32], frame[33]]),
-                            errors_count4: u16::from_le_bytes([frame[34], frame[35]]),
-                            battery_remaining: frame[36] as i8,
-                        }),
-                    )
-                }
-                0x1E => {
-                    let frame = rt::fixed::<36>(frame, &response::Attitude::DESC)?;
-                    rt::Ok(
-                        Self::Attitude(response::Attitude {
-                            sequence: frame[2],
-                            sysid: frame[3],
-                            compid: frame[4],
-                            time_boot_ms: u32::from_le_bytes([
-                                frame[6],
-                                frame[7],
-                                frame[8],
-                                frame[9],
-                            ]),
-                            roll: f32::from_le_bytes([
-                                frame[10],
-                                frame[11],
-                                frame[12],
-                                frame[13],
-                            ]),
-                            pitch: f32::from_le_bytes([
-                                frame[14],
-                                frame[15],
-                                frame[16],
-                                frame[17],
-                            ]),
-                            yaw: f32::from_le_bytes([
-                                frame[18],
-                                frame[19],
-                                frame[20],
-                                frame[21],
-                            ]),
-                            rollspeed: f32::from_le_bytes([
-                                frame[22],
-                                frame[23],
-                                frame[24],
-                                frame[25],
-                            ]),
-                            pitchspeed: f32::from_le_bytes([
-                                frame[26],
-                                frame[27],
-                                frame[28],
-                                frame[29],
-                            ]),
-                            yawspeed: f32::from_le_bytes([
-                                frame[30],
-                                frame[31],
-                                frame[32],
-                                frame[33],
-                            ]),
-                        }),
-                    )
-                }
+                0x04 => response::PingReply::from_frame(frame).map(Self::PingReply),
+                0x00 => response::Heartbeat::from_frame(frame).map(Self::Heartbeat),
+                0x01 => response::SysStatus::from_frame(frame).map(Self::SysStatus),
+                0x1E => response::Attitude::from_frame(frame).map(Self::Attitude),
                 _ => rt::Err(RESPONSE_CODE.unknown(frame)),
             }
         }
@@ -1020,6 +838,29 @@ pub mod mavlink_v1 {
         pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             Request::Ping(*self).encode(address, buf)
         }
+        /// Reads this message from a frame whose framing and code are checked.
+        #[inline(always)]
+        fn from_frame(frame: &[u8]) -> rt::DecodeResult<Self> {
+            let frame = rt::fixed::<22>(frame, &Self::DESC)?;
+            rt::Ok(Self {
+                sequence: frame[2],
+                sysid: frame[3],
+                compid: frame[4],
+                time_usec: u64::from_le_bytes([
+                    frame[6],
+                    frame[7],
+                    frame[8],
+                    frame[9],
+                    frame[10],
+                    frame[11],
+                    frame[12],
+                    frame[13],
+                ]),
+                seq: u32::from_le_bytes([frame[14], frame[15], frame[16], frame[17]]),
+                target_system: frame[18],
+                target_component: frame[19],
+            })
+        }
     }
     impl request::RequestDataStream {
         pub const NAME: &'static str = "request_data_stream";
@@ -1048,6 +889,22 @@ pub mod mavlink_v1 {
         pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             Request::RequestDataStream(*self).encode(address, buf)
         }
+        /// Reads this message from a frame whose framing and code are checked.
+        #[inline(always)]
+        fn from_frame(frame: &[u8]) -> rt::DecodeResult<Self> {
+            let frame = rt::fixed::<14>(frame, &Self::DESC)?;
+            rt::in_range(&Self::START_STOP_DESC, 11, frame[11], 0, 1)?;
+            rt::Ok(Self {
+                sequence: frame[2],
+                sysid: frame[3],
+                compid: frame[4],
+                req_message_rate: u16::from_le_bytes([frame[6], frame[7]]),
+                target_system: frame[8],
+                target_component: frame[9],
+                req_stream_id: frame[10],
+                start_stop: frame[11],
+            })
+        }
     }
     impl response::PingReply {
         pub const NAME: &'static str = "ping_reply";
@@ -1072,6 +929,29 @@ pub mod mavlink_v1 {
         }
         pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             Response::PingReply(*self).encode(address, buf)
+        }
+        /// Reads this message from a frame whose framing and code are checked.
+        #[inline(always)]
+        fn from_frame(frame: &[u8]) -> rt::DecodeResult<Self> {
+            let frame = rt::fixed::<22>(frame, &Self::DESC)?;
+            rt::Ok(Self {
+                sequence: frame[2],
+                sysid: frame[3],
+                compid: frame[4],
+                time_usec: u64::from_le_bytes([
+                    frame[6],
+                    frame[7],
+                    frame[8],
+                    frame[9],
+                    frame[10],
+                    frame[11],
+                    frame[12],
+                    frame[13],
+                ]),
+                seq: u32::from_le_bytes([frame[14], frame[15], frame[16], frame[17]]),
+                target_system: frame[18],
+                target_component: frame[19],
+            })
         }
     }
     impl response::Heartbeat {
@@ -1101,6 +981,27 @@ pub mod mavlink_v1 {
         }
         pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             Response::Heartbeat(*self).encode(address, buf)
+        }
+        /// Reads this message from a frame whose framing and code are checked.
+        #[inline(always)]
+        fn from_frame(frame: &[u8]) -> rt::DecodeResult<Self> {
+            let frame = rt::fixed::<17>(frame, &Self::DESC)?;
+            rt::Ok(Self {
+                sequence: frame[2],
+                sysid: frame[3],
+                compid: frame[4],
+                custom_mode: u32::from_le_bytes([
+                    frame[6],
+                    frame[7],
+                    frame[8],
+                    frame[9],
+                ]),
+                vehicle_type: frame[10],
+                autopilot: frame[11],
+                base_mode: frame[12],
+                system_status: frame[13],
+                mavlink_version: frame[14],
+            })
         }
     }
     impl response::SysStatus {
@@ -1154,6 +1055,44 @@ pub mod mavlink_v1 {
         pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             Response::SysStatus(*self).encode(address, buf)
         }
+        /// Reads this message from a frame whose framing and code are checked.
+        #[inline(always)]
+        fn from_frame(frame: &[u8]) -> rt::DecodeResult<Self> {
+            let frame = rt::fixed::<39>(frame, &Self::DESC)?;
+            rt::Ok(Self {
+                sequence: frame[2],
+                sysid: frame[3],
+                compid: frame[4],
+                onboard_control_sensors_present: u32::from_le_bytes([
+                    frame[6],
+                    frame[7],
+                    frame[8],
+                    frame[9],
+                ]),
+                onboard_control_sensors_enabled: u32::from_le_bytes([
+                    frame[10],
+                    frame[11],
+                    frame[12],
+                    frame[13],
+                ]),
+                onboard_control_sensors_health: u32::from_le_bytes([
+                    frame[14],
+                    frame[15],
+                    frame[16],
+                    frame[17],
+                ]),
+                load: u16::from_le_bytes([frame[18], frame[19]]),
+                voltage_battery: u16::from_le_bytes([frame[20], frame[21]]),
+                current_battery: i16::from_le_bytes([frame[22], frame[23]]),
+                drop_rate_comm: u16::from_le_bytes([frame[24], frame[25]]),
+                errors_comm: u16::from_le_bytes([frame[26], frame[27]]),
+                errors_count1: u16::from_le_bytes([frame[28], frame[29]]),
+                errors_count2: u16::from_le_bytes([frame[30], frame[31]]),
+                errors_count3: u16::from_le_bytes([frame[32], frame[33]]),
+                errors_count4: u16::from_le_bytes([frame[34], frame[35]]),
+                battery_remaining: frame[36] as i8,
+            })
+        }
     }
     impl response::Attitude {
         pub const NAME: &'static str = "attitude";
@@ -1184,6 +1123,43 @@ pub mod mavlink_v1 {
         }
         pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             Response::Attitude(*self).encode(address, buf)
+        }
+        /// Reads this message from a frame whose framing and code are checked.
+        #[inline(always)]
+        fn from_frame(frame: &[u8]) -> rt::DecodeResult<Self> {
+            let frame = rt::fixed::<36>(frame, &Self::DESC)?;
+            rt::Ok(Self {
+                sequence: frame[2],
+                sysid: frame[3],
+                compid: frame[4],
+                time_boot_ms: u32::from_le_bytes([
+                    frame[6],
+                    frame[7],
+                    frame[8],
+                    frame[9],
+                ]),
+                roll: f32::from_le_bytes([frame[10], frame[11], frame[12], frame[13]]),
+                pitch: f32::from_le_bytes([frame[14], frame[15], frame[16], frame[17]]),
+                yaw: f32::from_le_bytes([frame[18], frame[19], frame[20], frame[21]]),
+                rollspeed: f32::from_le_bytes([
+                    frame[22],
+                    frame[23],
+                    frame[24],
+                    frame[25],
+                ]),
+                pitchspeed: f32::from_le_bytes([
+                    frame[26],
+                    frame[27],
+                    frame[28],
+                    frame[29],
+                ]),
+                yawspeed: f32::from_le_bytes([
+                    frame[30],
+                    frame[31],
+                    frame[32],
+                    frame[33],
+                ]),
+            })
         }
     }
     /// Each request as a struct of its own; its constants (`DESC`, which names it as

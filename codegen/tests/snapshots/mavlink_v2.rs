@@ -308,75 +308,10 @@ pub mod mavlink_v2 {
         #[inline]
         fn dispatch(frame: &[u8]) -> rt::DecodeResult<Self> {
             match rt::code(frame, 7, 3) {
-                0x040000 => {
-                    let frame = rt::fixed::<26>(frame, &request::Ping::DESC)?;
-                    rt::in_range(
-                        &request::Ping::INCOMPAT_FLAGS_DESC,
-                        2,
-                        frame[2],
-                        0,
-                        0,
-                    )?;
-                    rt::Ok(
-                        Self::Ping(request::Ping {
-                            incompat_flags: frame[2],
-                            compat_flags: frame[3],
-                            sequence: frame[4],
-                            sysid: frame[5],
-                            compid: frame[6],
-                            time_usec: u64::from_le_bytes([
-                                frame[10],
-                                frame[11],
-                                frame[12],
-                                frame[13],
-                                frame[14],
-                                frame[15],
-                                frame[16],
-                                frame[17],
-                            ]),
-                            seq: u32::from_le_bytes([
-                                frame[18],
-                                frame[19],
-                                frame[20],
-                                frame[21],
-                            ]),
-                            target_system: frame[22],
-                            target_component: frame[23],
-                        }),
-                    )
-                }
+                0x040000 => request::Ping::from_frame(frame).map(Self::Ping),
                 0x420000 => {
-                    let frame = rt::fixed::<
-                        18,
-                    >(frame, &request::RequestDataStream::DESC)?;
-                    rt::in_range(
-                        &request::RequestDataStream::INCOMPAT_FLAGS_DESC,
-                        2,
-                        frame[2],
-                        0,
-                        0,
-                    )?;
-                    rt::in_range(
-                        &request::RequestDataStream::START_STOP_DESC,
-                        15,
-                        frame[15],
-                        0,
-                        1,
-                    )?;
-                    rt::Ok(
-                        Self::RequestDataStream(request::RequestDataStream {
-                            incompat_flags: frame[2],
-                            compat_flags: frame[3],
-                            sequence: frame[4],
-                            sysid: frame[5],
-                            compid: frame[6],
-                            req_message_rate: u16::from_le_bytes([frame[10], frame[11]]),
-                            target_system: frame[12],
-                            target_component: frame[13],
-                            req_stream_id: frame[14],
-                            start_stop: frame[15],
-                        }),
-                    )
+                    request::RequestDataStream::from_frame(frame)
+                        .map(Self::RequestDataStream)
                 }
                 _ => rt::Err(REQUEST_CODE.unknown(frame)),
             }
@@ -832,305 +767,15 @@ pub mod mavlink_v2 {
         #[inline]
         fn dispatch(frame: &[u8]) -> rt::DecodeResult<Self> {
             match rt::code(frame, 7, 3) {
-                0x040000 => {
-                    let frame = rt::fixed::<26>(frame, &response::PingReply::DESC)?;
-                    rt::in_range(
-                        &response::PingReply::INCOMPAT_FLAGS_DESC,
-                        2,
-                        frame[2],
-                        0,
-                        0,
-                    )?;
-                    rt::Ok(
-                        Self::PingReply(response::PingReply {
-                            incompat_flags: frame[2],
-                            compat_flags: frame[3],
-                            sequence: frame[4],
-                            sysid: frame[5],
-                            compid: frame[6],
-                            time_usec: u64::from_le_bytes([
-                                frame[10],
-                                frame[11],
-                                frame[12],
-                                frame[13],
-                                frame[14],
-                                frame[15],
-                                frame[16],
-                                frame[17],
-                            ]),
-                            seq: u32::from_le_bytes([
-                                frame[18],
-                                frame[19],
-                                frame[20],
-                                frame[21],
-                            ]),
-                            target_system: frame[22],
-                            target_component: frame[23],
-                        }),
-                    )
-                }
-                0x000000 => {
-                    let frame = rt::fixed::<21>(frame, &response::Heartbeat::DESC)?;
-                    rt::in_range(
-                        &response::Heartbeat::INCOMPAT_FLAGS_DESC,
-                        2,
-                        frame[2],
-                        0,
-                        0,
-                    )?;
-                    rt::Ok(
-                        Self::Heartbeat(response::Heartbeat {
-                            incompat_flags: frame[2],
-                            compat_flags: frame[3],
-                            sequence: frame[4],
-                            sysid: frame[5],
-                            compid: frame[6],
-                            custom_mode: u32::from_le_bytes([
-                                frame[10],
-                                frame[11],
-                                frame[12],
-                                frame[13],
-                            ]),
-                            vehicle_type: frame[14],
-                            autopilot: frame[15],
-                            base_mode: frame[16],
-                            system_status: frame[17],
-                            mavlink_version: frame[18],
-                        }),
-                    )
-                }
-                0x010000 => {
-                    let frame = rt::fixed::<55>(frame, &response::SysStatus::DESC)?;
-                    rt::in_range(
-                        &response::SysStatus::INCOMPAT_FLAGS_DESC,
-                        2,
-                        frame[2],
-                        0,
-                        0,
-                    )?;
-                    rt::Ok(
-                        Self::SysStatus(response::SysStatus {
-                            incompat_flags: frame[2],
-                            compat_flags: frame[3],
-                            sequence: frame[4],
-                            sysid: frame[5],
-                            compid: frame[6],
-                            onboard_control_sensors_present: u32::from_le_bytes([
-                                frame[10],
-                                frame[11],
-                                frame[12],
-                                frame[13],
-                            ]),
-                            onboard_control_sensors_enabled: u32::from_le_bytes([
-                                frame[14],
-                                frame[15],
-                                frame[16],
-                                frame[17],
-                            ]),
-                            onboard_control_sensors_health: u32::from_le_bytes([
-                                frame[18],
-                                frame[19],
-                                frame[20],
-                                frame[21],
-                            ]),
-                            load: u16::from_le_bytes([frame[22], frame[23]]),
-                            voltage_battery: u16::from_le_bytes([frame[24], frame[25]]),
-                            current_battery: i16::from_le_bytes([frame[26], frame[27]]),
-                            drop_rate_comm: u16::from_le_bytes([frame[28], frame[29]]),
-                            errors_comm: u16::from_le_bytes([frame[30], frame[31]]),
-                            errors_count1: u16::from_le_bytes([frame[32], frame[33]]),
-                            errors_count2: u16::from_le_bytes([frame[34], frame[35]]),
-                            errors_count3: u16::from_le_bytes([frame[36], frame[37]]),
-                            errors_count4: u16::from_le_bytes([frame[38], frame[39]]),
-                            battery_remaining: frame[40] as i8,
-                            onboard_control_sensors_present_extended: u32::from_le_bytes([
-                                frame[41],
-                                frame[42],
-                                frame[43],
-                                frame[44],
-                            ]),
-                            onboard_control_sensors_enabled_extended: u32::from_le_bytes([
-                                frame[45],
-                                frame[46],
-                                frame[47],
-                                frame[48],
-                            ]),
-                            onboard_control_sensors_health_extended: u32::from_le_bytes([
-                                frame[49],
-                                frame[50],
-                                frame[51],
-                                frame[52],
-                            ]),
-                        }),
-                    )
-                }
-                0x1E0000 => {
-                    let frame = rt::fixed::<40>(frame, &response::Attitude::DESC)?;
-                    rt::in_range(
-                        &response::Attitude::INCOMPAT_FLAGS_DESC,
-                        2,
-                        frame[2],
-                        0,
-                        0,
-                    )?;
-                    rt::Ok(
-                        Self::Attitude(response::Attitude {
-                            incompat_flags: frame[2],
-                            compat_flags: frame[3],
-                            sequence: frame[4],
-                            sysid: frame[5],
-                            compid: frame[6],
-                            time_boot_ms: u32::from_le_bytes([
-                                frame[10],
-                                frame[11],
-                                frame[12],
-                                frame[13],
-                            ]),
-                            roll: f32::from_le_bytes([
-                                frame[14],
-                                frame[15],
-                                frame[16],
-                                frame[17],
-                            ]),
-                            pitch: f32::from_le_bytes([
-                                frame[18],
-                                frame[19],
-                                frame[20],
-                                frame[21],
-                            ]),
-                            yaw: f32::from_le_bytes([
-                                frame[22],
-                                frame[23],
-                                frame[24],
-                                frame[25],
-                            ]),
-                            rollspeed: f32::from_le_bytes([
-                                frame[26],
-                                frame[27],
-                                frame[28],
-                                frame[29],
-                            ]),
-                            pitchspeed: f32::from_le_bytes([
-                                frame[30],
-                                frame[31],
-                                frame[32],
-                                frame[33],
-                            ]),
-                            yawspeed: f32::from_le_bytes([
-                                frame[34],
-                                frame[35],
-                                frame[36],
-                                frame[37],
-                            ]),
-                        }),
-                    )
-                }
+                0x040000 => response::PingReply::from_frame(frame).map(Self::PingReply),
+                0x000000 => response::Heartbeat::from_frame(frame).map(Self::Heartbeat),
+                0x010000 => response::SysStatus::from_frame(frame).map(Self::SysStatus),
+                0x1E0000 => response::Attitude::from_frame(frame).map(Self::Attitude),
                 0x1F0000 => {
-                    let frame = rt::fixed::<
-                        60,
-                    >(frame, &response::AttitudeQuaternion::DESC)?;
-                    rt::in_range(
-                        &response::AttitudeQuaternion::INCOMPAT_FLAGS_DESC,
-                        2,
-                        frame[2],
-                        0,
-                        0,
-                    )?;
-                    rt::equal(
-                        &response::AttitudeQuaternion::REPR_OFFSET_Q_DESC,
-                        42 + 15,
-                        rt::packed_padding(&frame[42..58], 4, 32, true),
-                        0,
-                    )?;
-                    let v_repr_offset_q = rt::fixed_elements::<
-                        f32,
-                        4,
-                    >(&frame[42..58], 4, true, false, false);
-                    rt::Ok(
-                        Self::AttitudeQuaternion(response::AttitudeQuaternion {
-                            incompat_flags: frame[2],
-                            compat_flags: frame[3],
-                            sequence: frame[4],
-                            sysid: frame[5],
-                            compid: frame[6],
-                            time_boot_ms: u32::from_le_bytes([
-                                frame[10],
-                                frame[11],
-                                frame[12],
-                                frame[13],
-                            ]),
-                            q1: f32::from_le_bytes([
-                                frame[14],
-                                frame[15],
-                                frame[16],
-                                frame[17],
-                            ]),
-                            q2: f32::from_le_bytes([
-                                frame[18],
-                                frame[19],
-                                frame[20],
-                                frame[21],
-                            ]),
-                            q3: f32::from_le_bytes([
-                                frame[22],
-                                frame[23],
-                                frame[24],
-                                frame[25],
-                            ]),
-                            q4: f32::from_le_bytes([
-                                frame[26],
-                                frame[27],
-                                frame[28],
-                                frame[29],
-                            ]),
-                            rollspeed: f32::from_le_bytes([
-                                frame[30],
-                                frame[31],
-                                frame[32],
-                                frame[33],
-                            ]),
-                            pitchspeed: f32::from_le_bytes([
-                                frame[34],
-                                frame[35],
-                                frame[36],
-                                frame[37],
-                            ]),
-                            yawspeed: f32::from_le_bytes([
-                                frame[38],
-                                frame[39],
-                                frame[40],
-                                frame[41],
-                            ]),
-                            repr_offset_q: v_repr_offset_q,
-                        }),
-                    )
+                    response::AttitudeQuaternion::from_frame(frame)
+                        .map(Self::AttitudeQuaternion)
                 }
-                0x530100 => {
-                    let frame = rt::fixed::<17>(frame, &response::RawRpm::DESC)?;
-                    rt::in_range(
-                        &response::RawRpm::INCOMPAT_FLAGS_DESC,
-                        2,
-                        frame[2],
-                        0,
-                        0,
-                    )?;
-                    rt::Ok(
-                        Self::RawRpm(response::RawRpm {
-                            incompat_flags: frame[2],
-                            compat_flags: frame[3],
-                            sequence: frame[4],
-                            sysid: frame[5],
-                            compid: frame[6],
-                            frequency: f32::from_le_bytes([
-                                frame[10],
-                                frame[11],
-                                frame[12],
-                                frame[13],
-                            ]),
-                            index: frame[14],
-                        }),
-                    )
-                }
+                0x530100 => response::RawRpm::from_frame(frame).map(Self::RawRpm),
                 _ => rt::Err(RESPONSE_CODE.unknown(frame)),
             }
         }
@@ -1416,6 +1061,32 @@ pub mod mavlink_v2 {
         pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             Request::Ping(*self).encode(address, buf)
         }
+        /// Reads this message from a frame whose framing and code are checked.
+        #[inline(always)]
+        fn from_frame(frame: &[u8]) -> rt::DecodeResult<Self> {
+            let frame = rt::fixed::<26>(frame, &Self::DESC)?;
+            rt::in_range(&Self::INCOMPAT_FLAGS_DESC, 2, frame[2], 0, 0)?;
+            rt::Ok(Self {
+                incompat_flags: frame[2],
+                compat_flags: frame[3],
+                sequence: frame[4],
+                sysid: frame[5],
+                compid: frame[6],
+                time_usec: u64::from_le_bytes([
+                    frame[10],
+                    frame[11],
+                    frame[12],
+                    frame[13],
+                    frame[14],
+                    frame[15],
+                    frame[16],
+                    frame[17],
+                ]),
+                seq: u32::from_le_bytes([frame[18], frame[19], frame[20], frame[21]]),
+                target_system: frame[22],
+                target_component: frame[23],
+            })
+        }
     }
     impl request::RequestDataStream {
         pub const NAME: &'static str = "request_data_stream";
@@ -1452,6 +1123,25 @@ pub mod mavlink_v2 {
         pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             Request::RequestDataStream(*self).encode(address, buf)
         }
+        /// Reads this message from a frame whose framing and code are checked.
+        #[inline(always)]
+        fn from_frame(frame: &[u8]) -> rt::DecodeResult<Self> {
+            let frame = rt::fixed::<18>(frame, &Self::DESC)?;
+            rt::in_range(&Self::INCOMPAT_FLAGS_DESC, 2, frame[2], 0, 0)?;
+            rt::in_range(&Self::START_STOP_DESC, 15, frame[15], 0, 1)?;
+            rt::Ok(Self {
+                incompat_flags: frame[2],
+                compat_flags: frame[3],
+                sequence: frame[4],
+                sysid: frame[5],
+                compid: frame[6],
+                req_message_rate: u16::from_le_bytes([frame[10], frame[11]]),
+                target_system: frame[12],
+                target_component: frame[13],
+                req_stream_id: frame[14],
+                start_stop: frame[15],
+            })
+        }
     }
     impl response::PingReply {
         pub const NAME: &'static str = "ping_reply";
@@ -1484,6 +1174,32 @@ pub mod mavlink_v2 {
         }
         pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             Response::PingReply(*self).encode(address, buf)
+        }
+        /// Reads this message from a frame whose framing and code are checked.
+        #[inline(always)]
+        fn from_frame(frame: &[u8]) -> rt::DecodeResult<Self> {
+            let frame = rt::fixed::<26>(frame, &Self::DESC)?;
+            rt::in_range(&Self::INCOMPAT_FLAGS_DESC, 2, frame[2], 0, 0)?;
+            rt::Ok(Self {
+                incompat_flags: frame[2],
+                compat_flags: frame[3],
+                sequence: frame[4],
+                sysid: frame[5],
+                compid: frame[6],
+                time_usec: u64::from_le_bytes([
+                    frame[10],
+                    frame[11],
+                    frame[12],
+                    frame[13],
+                    frame[14],
+                    frame[15],
+                    frame[16],
+                    frame[17],
+                ]),
+                seq: u32::from_le_bytes([frame[18], frame[19], frame[20], frame[21]]),
+                target_system: frame[22],
+                target_component: frame[23],
+            })
         }
     }
     impl response::Heartbeat {
@@ -1521,6 +1237,30 @@ pub mod mavlink_v2 {
         }
         pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             Response::Heartbeat(*self).encode(address, buf)
+        }
+        /// Reads this message from a frame whose framing and code are checked.
+        #[inline(always)]
+        fn from_frame(frame: &[u8]) -> rt::DecodeResult<Self> {
+            let frame = rt::fixed::<21>(frame, &Self::DESC)?;
+            rt::in_range(&Self::INCOMPAT_FLAGS_DESC, 2, frame[2], 0, 0)?;
+            rt::Ok(Self {
+                incompat_flags: frame[2],
+                compat_flags: frame[3],
+                sequence: frame[4],
+                sysid: frame[5],
+                compid: frame[6],
+                custom_mode: u32::from_le_bytes([
+                    frame[10],
+                    frame[11],
+                    frame[12],
+                    frame[13],
+                ]),
+                vehicle_type: frame[14],
+                autopilot: frame[15],
+                base_mode: frame[16],
+                system_status: frame[17],
+                mavlink_version: frame[18],
+            })
         }
     }
     impl response::SysStatus {
@@ -1597,6 +1337,65 @@ pub mod mavlink_v2 {
         pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             Response::SysStatus(*self).encode(address, buf)
         }
+        /// Reads this message from a frame whose framing and code are checked.
+        #[inline(always)]
+        fn from_frame(frame: &[u8]) -> rt::DecodeResult<Self> {
+            let frame = rt::fixed::<55>(frame, &Self::DESC)?;
+            rt::in_range(&Self::INCOMPAT_FLAGS_DESC, 2, frame[2], 0, 0)?;
+            rt::Ok(Self {
+                incompat_flags: frame[2],
+                compat_flags: frame[3],
+                sequence: frame[4],
+                sysid: frame[5],
+                compid: frame[6],
+                onboard_control_sensors_present: u32::from_le_bytes([
+                    frame[10],
+                    frame[11],
+                    frame[12],
+                    frame[13],
+                ]),
+                onboard_control_sensors_enabled: u32::from_le_bytes([
+                    frame[14],
+                    frame[15],
+                    frame[16],
+                    frame[17],
+                ]),
+                onboard_control_sensors_health: u32::from_le_bytes([
+                    frame[18],
+                    frame[19],
+                    frame[20],
+                    frame[21],
+                ]),
+                load: u16::from_le_bytes([frame[22], frame[23]]),
+                voltage_battery: u16::from_le_bytes([frame[24], frame[25]]),
+                current_battery: i16::from_le_bytes([frame[26], frame[27]]),
+                drop_rate_comm: u16::from_le_bytes([frame[28], frame[29]]),
+                errors_comm: u16::from_le_bytes([frame[30], frame[31]]),
+                errors_count1: u16::from_le_bytes([frame[32], frame[33]]),
+                errors_count2: u16::from_le_bytes([frame[34], frame[35]]),
+                errors_count3: u16::from_le_bytes([frame[36], frame[37]]),
+                errors_count4: u16::from_le_bytes([frame[38], frame[39]]),
+                battery_remaining: frame[40] as i8,
+                onboard_control_sensors_present_extended: u32::from_le_bytes([
+                    frame[41],
+                    frame[42],
+                    frame[43],
+                    frame[44],
+                ]),
+                onboard_control_sensors_enabled_extended: u32::from_le_bytes([
+                    frame[45],
+                    frame[46],
+                    frame[47],
+                    frame[48],
+                ]),
+                onboard_control_sensors_health_extended: u32::from_le_bytes([
+                    frame[49],
+                    frame[50],
+                    frame[51],
+                    frame[52],
+                ]),
+            })
+        }
     }
     impl response::Attitude {
         pub const NAME: &'static str = "attitude";
@@ -1635,6 +1434,46 @@ pub mod mavlink_v2 {
         }
         pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             Response::Attitude(*self).encode(address, buf)
+        }
+        /// Reads this message from a frame whose framing and code are checked.
+        #[inline(always)]
+        fn from_frame(frame: &[u8]) -> rt::DecodeResult<Self> {
+            let frame = rt::fixed::<40>(frame, &Self::DESC)?;
+            rt::in_range(&Self::INCOMPAT_FLAGS_DESC, 2, frame[2], 0, 0)?;
+            rt::Ok(Self {
+                incompat_flags: frame[2],
+                compat_flags: frame[3],
+                sequence: frame[4],
+                sysid: frame[5],
+                compid: frame[6],
+                time_boot_ms: u32::from_le_bytes([
+                    frame[10],
+                    frame[11],
+                    frame[12],
+                    frame[13],
+                ]),
+                roll: f32::from_le_bytes([frame[14], frame[15], frame[16], frame[17]]),
+                pitch: f32::from_le_bytes([frame[18], frame[19], frame[20], frame[21]]),
+                yaw: f32::from_le_bytes([frame[22], frame[23], frame[24], frame[25]]),
+                rollspeed: f32::from_le_bytes([
+                    frame[26],
+                    frame[27],
+                    frame[28],
+                    frame[29],
+                ]),
+                pitchspeed: f32::from_le_bytes([
+                    frame[30],
+                    frame[31],
+                    frame[32],
+                    frame[33],
+                ]),
+                yawspeed: f32::from_le_bytes([
+                    frame[34],
+                    frame[35],
+                    frame[36],
+                    frame[37],
+                ]),
+            })
         }
     }
     impl response::AttitudeQuaternion {
@@ -1683,6 +1522,58 @@ pub mod mavlink_v2 {
         pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             Response::AttitudeQuaternion(*self).encode(address, buf)
         }
+        /// Reads this message from a frame whose framing and code are checked.
+        #[inline(always)]
+        fn from_frame(frame: &[u8]) -> rt::DecodeResult<Self> {
+            let frame = rt::fixed::<60>(frame, &Self::DESC)?;
+            rt::in_range(&Self::INCOMPAT_FLAGS_DESC, 2, frame[2], 0, 0)?;
+            rt::equal(
+                &Self::REPR_OFFSET_Q_DESC,
+                42 + 15,
+                rt::packed_padding(&frame[42..58], 4, 32, true),
+                0,
+            )?;
+            let v_repr_offset_q = rt::fixed_elements::<
+                f32,
+                4,
+            >(&frame[42..58], 4, true, false, false);
+            rt::Ok(Self {
+                incompat_flags: frame[2],
+                compat_flags: frame[3],
+                sequence: frame[4],
+                sysid: frame[5],
+                compid: frame[6],
+                time_boot_ms: u32::from_le_bytes([
+                    frame[10],
+                    frame[11],
+                    frame[12],
+                    frame[13],
+                ]),
+                q1: f32::from_le_bytes([frame[14], frame[15], frame[16], frame[17]]),
+                q2: f32::from_le_bytes([frame[18], frame[19], frame[20], frame[21]]),
+                q3: f32::from_le_bytes([frame[22], frame[23], frame[24], frame[25]]),
+                q4: f32::from_le_bytes([frame[26], frame[27], frame[28], frame[29]]),
+                rollspeed: f32::from_le_bytes([
+                    frame[30],
+                    frame[31],
+                    frame[32],
+                    frame[33],
+                ]),
+                pitchspeed: f32::from_le_bytes([
+                    frame[34],
+                    frame[35],
+                    frame[36],
+                    frame[37],
+                ]),
+                yawspeed: f32::from_le_bytes([
+                    frame[38],
+                    frame[39],
+                    frame[40],
+                    frame[41],
+                ]),
+                repr_offset_q: v_repr_offset_q,
+            })
+        }
     }
     impl response::RawRpm {
         pub const NAME: &'static str = "raw_rpm";
@@ -1711,6 +1602,26 @@ pub mod mavlink_v2 {
         }
         pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             Response::RawRpm(*self).encode(address, buf)
+        }
+        /// Reads this message from a frame whose framing and code are checked.
+        #[inline(always)]
+        fn from_frame(frame: &[u8]) -> rt::DecodeResult<Self> {
+            let frame = rt::fixed::<17>(frame, &Self::DESC)?;
+            rt::in_range(&Self::INCOMPAT_FLAGS_DESC, 2, frame[2], 0, 0)?;
+            rt::Ok(Self {
+                incompat_flags: frame[2],
+                compat_flags: frame[3],
+                sequence: frame[4],
+                sysid: frame[5],
+                compid: frame[6],
+                frequency: f32::from_le_bytes([
+                    frame[10],
+                    frame[11],
+                    frame[12],
+                    frame[13],
+                ]),
+                index: frame[14],
+            })
         }
     }
     /// Each request as a struct of its own; its constants (`DESC`, which names it as

@@ -236,16 +236,8 @@ pub mod mbus {
                     rt::fixed::<8>(frame, &request::SndNke::DESC)
                         .map(|_| Self::SndNke(request::SndNke))
                 }
-                0x5B => {
-                    let frame = rt::fixed::<8>(frame, &request::ReqUd2::DESC)?;
-                    rt::no_broadcast(frame[5], 0xFF, &request::ReqUd2::DESC)?;
-                    rt::Ok(Self::ReqUd2(request::ReqUd2))
-                }
-                0x53 => {
-                    let frame = rt::fixed::<9>(frame, &request::SndUdReset::DESC)?;
-                    rt::equal(&request::SndUdReset::CI_DESC, 6, frame[6], 0x50)?;
-                    rt::Ok(Self::SndUdReset(request::SndUdReset))
-                }
+                0x5B => request::ReqUd2::from_frame(frame).map(Self::ReqUd2),
+                0x53 => request::SndUdReset::from_frame(frame).map(Self::SndUdReset),
                 _ => rt::Err(REQUEST_CODE.unknown(frame)),
             }
         }
@@ -497,42 +489,7 @@ pub mod mbus {
         #[inline]
         fn dispatch(frame: &[u8]) -> rt::DecodeResult<Self> {
             match frame[4] {
-                0x08 => {
-                    let frame = rt::fixed::<27>(frame, &response::RspUd::DESC)?;
-                    rt::equal(&response::RspUd::CI_DESC, 6, frame[6], 0x72)?;
-                    let field_1: u32 = rt::bcd(
-                        &response::RspUd::IDENTIFICATION_DESC,
-                        7,
-                        u32::from_le_bytes([frame[7], frame[8], frame[9], frame[10]])
-                            as u64,
-                    )? as u32;
-                    rt::in_range(
-                        &response::RspUd::IDENTIFICATION_DESC,
-                        7,
-                        field_1,
-                        0,
-                        99999999,
-                    )?;
-                    rt::equal(&response::RspUd::DIF_DESC, 19, frame[19], 0x4)?;
-                    rt::equal(&response::RspUd::VIF_DESC, 20, frame[20], 0x13)?;
-                    rt::Ok(
-                        Self::RspUd(response::RspUd {
-                            identification: field_1,
-                            manufacturer: u16::from_le_bytes([frame[11], frame[12]]),
-                            version: frame[13],
-                            medium: frame[14],
-                            access: frame[15],
-                            status: frame[16],
-                            signature: u16::from_le_bytes([frame[17], frame[18]]),
-                            volume: u32::from_le_bytes([
-                                frame[21],
-                                frame[22],
-                                frame[23],
-                                frame[24],
-                            ]),
-                        }),
-                    )
-                }
+                0x08 => response::RspUd::from_frame(frame).map(Self::RspUd),
                 _ => rt::Err(RESPONSE_CODE.unknown(frame)),
             }
         }
@@ -711,6 +668,13 @@ pub mod mbus {
         pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             Request::ReqUd2(*self).encode(address, buf)
         }
+        /// Reads this message from a frame whose framing and code are checked.
+        #[inline(always)]
+        fn from_frame(frame: &[u8]) -> rt::DecodeResult<Self> {
+            let frame = rt::fixed::<8>(frame, &Self::DESC)?;
+            rt::no_broadcast(frame[5], 0xFF, &Self::DESC)?;
+            rt::Ok(Self)
+        }
     }
     impl request::SndUdReset {
         pub const NAME: &'static str = "snd_ud_reset";
@@ -720,6 +684,13 @@ pub mod mbus {
         pub const CI_DESC: rt::FieldDesc = rt::field(Self::NAME, "ci");
         pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             Request::SndUdReset(*self).encode(address, buf)
+        }
+        /// Reads this message from a frame whose framing and code are checked.
+        #[inline(always)]
+        fn from_frame(frame: &[u8]) -> rt::DecodeResult<Self> {
+            let frame = rt::fixed::<9>(frame, &Self::DESC)?;
+            rt::equal(&Self::CI_DESC, 6, frame[6], 0x50)?;
+            rt::Ok(Self)
         }
     }
     impl response::RspUd {
@@ -754,6 +725,30 @@ pub mod mbus {
         }
         pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             Response::RspUd(*self).encode(address, buf)
+        }
+        /// Reads this message from a frame whose framing and code are checked.
+        #[inline(always)]
+        fn from_frame(frame: &[u8]) -> rt::DecodeResult<Self> {
+            let frame = rt::fixed::<27>(frame, &Self::DESC)?;
+            rt::equal(&Self::CI_DESC, 6, frame[6], 0x72)?;
+            let field_1: u32 = rt::bcd(
+                &Self::IDENTIFICATION_DESC,
+                7,
+                u32::from_le_bytes([frame[7], frame[8], frame[9], frame[10]]) as u64,
+            )? as u32;
+            rt::in_range(&Self::IDENTIFICATION_DESC, 7, field_1, 0, 99999999)?;
+            rt::equal(&Self::DIF_DESC, 19, frame[19], 0x4)?;
+            rt::equal(&Self::VIF_DESC, 20, frame[20], 0x13)?;
+            rt::Ok(Self {
+                identification: field_1,
+                manufacturer: u16::from_le_bytes([frame[11], frame[12]]),
+                version: frame[13],
+                medium: frame[14],
+                access: frame[15],
+                status: frame[16],
+                signature: u16::from_le_bytes([frame[17], frame[18]]),
+                volume: u32::from_le_bytes([frame[21], frame[22], frame[23], frame[24]]),
+            })
         }
     }
     impl response::Ack {

@@ -164,11 +164,7 @@ pub mod mbus_short {
                     rt::fixed::<5>(frame, &request::SndNke::DESC)
                         .map(|_| Self::SndNke(request::SndNke))
                 }
-                0x49 => {
-                    let frame = rt::fixed::<5>(frame, &request::ReqSke::DESC)?;
-                    rt::no_broadcast(frame[2], 0xFF, &request::ReqSke::DESC)?;
-                    rt::Ok(Self::ReqSke(request::ReqSke))
-                }
+                0x49 => request::ReqSke::from_frame(frame).map(Self::ReqSke),
                 _ => rt::Err(REQUEST_CODE.unknown(frame)),
             }
         }
@@ -553,6 +549,13 @@ pub mod mbus_short {
         pub const DESC: rt::MessageDesc = rt::desc(Self::NAME, 0x49, 1, &[5]);
         pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             Request::ReqSke(*self).encode(address, buf)
+        }
+        /// Reads this message from a frame whose framing and code are checked.
+        #[inline(always)]
+        fn from_frame(frame: &[u8]) -> rt::DecodeResult<Self> {
+            let frame = rt::fixed::<5>(frame, &Self::DESC)?;
+            rt::no_broadcast(frame[2], 0xFF, &Self::DESC)?;
+            rt::Ok(Self)
         }
     }
     impl response::StatusOfLink {

@@ -201,43 +201,8 @@ pub mod meter_floats {
         #[inline]
         fn dispatch(frame: &[u8]) -> rt::DecodeResult<Self> {
             match frame[1] {
-                0x04 => {
-                    let frame = rt::fixed::<4>(frame, &request::ReadReadings::DESC)?;
-                    rt::no_broadcast(frame[0], 0x00, &request::ReadReadings::DESC)?;
-                    rt::Ok(Self::ReadReadings(request::ReadReadings))
-                }
-                0x10 => {
-                    let frame = rt::fixed::<16>(frame, &request::SetLimits::DESC)?;
-                    rt::no_broadcast(frame[0], 0x00, &request::SetLimits::DESC)?;
-                    let field_0: f32 = f32::from_be_bytes([
-                        frame[2],
-                        frame[3],
-                        frame[4],
-                        frame[5],
-                    ]);
-                    rt::in_range(
-                        &request::SetLimits::VOLTAGE_LIMIT_DESC,
-                        2,
-                        field_0,
-                        rt::f32_raw(0f32),
-                        rt::f32_raw(300.5f32),
-                    )?;
-                    rt::Ok(
-                        Self::SetLimits(request::SetLimits {
-                            voltage_limit: field_0,
-                            serial: u64::from_be_bytes([
-                                frame[6],
-                                frame[7],
-                                frame[8],
-                                frame[9],
-                                frame[10],
-                                frame[11],
-                                frame[12],
-                                frame[13],
-                            ]),
-                        }),
-                    )
-                }
+                0x04 => request::ReadReadings::from_frame(frame).map(Self::ReadReadings),
+                0x10 => request::SetLimits::from_frame(frame).map(Self::SetLimits),
                 _ => rt::Err(REQUEST_CODE.unknown(frame)),
             }
         }
@@ -468,118 +433,8 @@ pub mod meter_floats {
         #[inline]
         fn dispatch(frame: &[u8]) -> rt::DecodeResult<Self> {
             match frame[1] {
-                0x04 => {
-                    let frame = rt::fixed::<52>(frame, &response::Readings::DESC)?;
-                    let field_1: f32 = f32::from_be_bytes([
-                        frame[6],
-                        frame[7],
-                        frame[8],
-                        frame[9],
-                    ]);
-                    rt::in_range(
-                        &response::Readings::FREQUENCY_DESC,
-                        6,
-                        field_1,
-                        rt::f32_raw(45f32),
-                        rt::f32_raw(65f32),
-                    )?;
-                    let field_5: i64 = i64::from_be_bytes([
-                        frame[34],
-                        frame[35],
-                        frame[36],
-                        frame[37],
-                        frame[38],
-                        frame[39],
-                        frame[40],
-                        frame[41],
-                    ]);
-                    rt::in_range(
-                        &response::Readings::DRIFT_DESC,
-                        34,
-                        field_5,
-                        -9000000000000,
-                        9000000000000,
-                    )?;
-                    rt::Ok(
-                        Self::Readings(response::Readings {
-                            voltage: f32::from_be_bytes([
-                                frame[4],
-                                frame[5],
-                                frame[2],
-                                frame[3],
-                            ]),
-                            frequency: field_1,
-                            energy: f64::from_be_bytes([
-                                frame[10],
-                                frame[11],
-                                frame[12],
-                                frame[13],
-                                frame[14],
-                                frame[15],
-                                frame[16],
-                                frame[17],
-                            ]),
-                            energy_swapped: f64::from_be_bytes([
-                                frame[24],
-                                frame[25],
-                                frame[22],
-                                frame[23],
-                                frame[20],
-                                frame[21],
-                                frame[18],
-                                frame[19],
-                            ]),
-                            pulses: u64::from_be_bytes([
-                                frame[26],
-                                frame[27],
-                                frame[28],
-                                frame[29],
-                                frame[30],
-                                frame[31],
-                                frame[32],
-                                frame[33],
-                            ]),
-                            drift: field_5,
-                            counter: u32::from_be_bytes([
-                                frame[44],
-                                frame[45],
-                                frame[42],
-                                frame[43],
-                            ]),
-                            temperature: i32::from_be_bytes([
-                                frame[48],
-                                frame[49],
-                                frame[46],
-                                frame[47],
-                            ]),
-                        }),
-                    )
-                }
-                0x10 => {
-                    let frame = rt::fixed::<12>(frame, &response::LimitsSet::DESC)?;
-                    let field_0: u64 = u64::from_be_bytes([
-                        frame[2],
-                        frame[3],
-                        frame[4],
-                        frame[5],
-                        frame[6],
-                        frame[7],
-                        frame[8],
-                        frame[9],
-                    ]);
-                    rt::in_range(
-                        &response::LimitsSet::SERIAL_DESC,
-                        2,
-                        field_0,
-                        rt::u64_raw(1u64),
-                        rt::u64_raw(18446744073709551615u64),
-                    )?;
-                    rt::Ok(
-                        Self::LimitsSet(response::LimitsSet {
-                            serial: field_0,
-                        }),
-                    )
-                }
+                0x04 => response::Readings::from_frame(frame).map(Self::Readings),
+                0x10 => response::LimitsSet::from_frame(frame).map(Self::LimitsSet),
                 _ => rt::Err(RESPONSE_CODE.unknown(frame)),
             }
         }
@@ -756,6 +611,13 @@ pub mod meter_floats {
         pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             Request::ReadReadings(*self).encode(address, buf)
         }
+        /// Reads this message from a frame whose framing and code are checked.
+        #[inline(always)]
+        fn from_frame(frame: &[u8]) -> rt::DecodeResult<Self> {
+            let frame = rt::fixed::<4>(frame, &Self::DESC)?;
+            rt::no_broadcast(frame[0], 0x00, &Self::DESC)?;
+            rt::Ok(Self)
+        }
     }
     impl request::SetLimits {
         pub const NAME: &'static str = "set_limits";
@@ -774,6 +636,38 @@ pub mod meter_floats {
         }
         pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             Request::SetLimits(*self).encode(address, buf)
+        }
+        /// Reads this message from a frame whose framing and code are checked.
+        #[inline(always)]
+        fn from_frame(frame: &[u8]) -> rt::DecodeResult<Self> {
+            let frame = rt::fixed::<16>(frame, &Self::DESC)?;
+            rt::no_broadcast(frame[0], 0x00, &Self::DESC)?;
+            let field_0: f32 = f32::from_be_bytes([
+                frame[2],
+                frame[3],
+                frame[4],
+                frame[5],
+            ]);
+            rt::in_range(
+                &Self::VOLTAGE_LIMIT_DESC,
+                2,
+                field_0,
+                rt::f32_raw(0f32),
+                rt::f32_raw(300.5f32),
+            )?;
+            rt::Ok(Self {
+                voltage_limit: field_0,
+                serial: u64::from_be_bytes([
+                    frame[6],
+                    frame[7],
+                    frame[8],
+                    frame[9],
+                    frame[10],
+                    frame[11],
+                    frame[12],
+                    frame[13],
+                ]),
+            })
         }
     }
     impl response::Readings {
@@ -804,6 +698,82 @@ pub mod meter_floats {
         pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             Response::Readings(*self).encode(address, buf)
         }
+        /// Reads this message from a frame whose framing and code are checked.
+        #[inline(always)]
+        fn from_frame(frame: &[u8]) -> rt::DecodeResult<Self> {
+            let frame = rt::fixed::<52>(frame, &Self::DESC)?;
+            let field_1: f32 = f32::from_be_bytes([
+                frame[6],
+                frame[7],
+                frame[8],
+                frame[9],
+            ]);
+            rt::in_range(
+                &Self::FREQUENCY_DESC,
+                6,
+                field_1,
+                rt::f32_raw(45f32),
+                rt::f32_raw(65f32),
+            )?;
+            let field_5: i64 = i64::from_be_bytes([
+                frame[34],
+                frame[35],
+                frame[36],
+                frame[37],
+                frame[38],
+                frame[39],
+                frame[40],
+                frame[41],
+            ]);
+            rt::in_range(&Self::DRIFT_DESC, 34, field_5, -9000000000000, 9000000000000)?;
+            rt::Ok(Self {
+                voltage: f32::from_be_bytes([frame[4], frame[5], frame[2], frame[3]]),
+                frequency: field_1,
+                energy: f64::from_be_bytes([
+                    frame[10],
+                    frame[11],
+                    frame[12],
+                    frame[13],
+                    frame[14],
+                    frame[15],
+                    frame[16],
+                    frame[17],
+                ]),
+                energy_swapped: f64::from_be_bytes([
+                    frame[24],
+                    frame[25],
+                    frame[22],
+                    frame[23],
+                    frame[20],
+                    frame[21],
+                    frame[18],
+                    frame[19],
+                ]),
+                pulses: u64::from_be_bytes([
+                    frame[26],
+                    frame[27],
+                    frame[28],
+                    frame[29],
+                    frame[30],
+                    frame[31],
+                    frame[32],
+                    frame[33],
+                ]),
+                drift: field_5,
+                counter: u32::from_be_bytes([
+                    frame[44],
+                    frame[45],
+                    frame[42],
+                    frame[43],
+                ]),
+                temperature: i32::from_be_bytes([
+                    frame[48],
+                    frame[49],
+                    frame[46],
+                    frame[47],
+                ]),
+            })
+        }
     }
     impl response::LimitsSet {
         pub const NAME: &'static str = "limits_set";
@@ -817,6 +787,29 @@ pub mod meter_floats {
         }
         pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             Response::LimitsSet(*self).encode(address, buf)
+        }
+        /// Reads this message from a frame whose framing and code are checked.
+        #[inline(always)]
+        fn from_frame(frame: &[u8]) -> rt::DecodeResult<Self> {
+            let frame = rt::fixed::<12>(frame, &Self::DESC)?;
+            let field_0: u64 = u64::from_be_bytes([
+                frame[2],
+                frame[3],
+                frame[4],
+                frame[5],
+                frame[6],
+                frame[7],
+                frame[8],
+                frame[9],
+            ]);
+            rt::in_range(
+                &Self::SERIAL_DESC,
+                2,
+                field_0,
+                rt::u64_raw(1u64),
+                rt::u64_raw(18446744073709551615u64),
+            )?;
+            rt::Ok(Self { serial: field_0 })
         }
     }
     /// Each request as a struct of its own; its constants (`DESC`, which names it as

@@ -399,38 +399,9 @@ pub mod mini {
         #[inline]
         fn dispatch(frame: &[u8]) -> rt::DecodeResult<Self> {
             match u16::from_be_bytes([frame[2], frame[3]]) {
-                0x2000 => {
-                    let frame = rt::fixed::<9>(frame, &request::GoTo::DESC)?;
-                    let field_0: u32 = u32::from_le_bytes([
-                        frame[4],
-                        frame[5],
-                        frame[6],
-                        frame[7],
-                    ]);
-                    rt::in_range(&request::GoTo::TARGET_DESC, 4, field_0, 0, 100000)?;
-                    rt::Ok(
-                        Self::GoTo(request::GoTo {
-                            target: Capacitance::from_raw(field_0),
-                        }),
-                    )
-                }
-                0x3000 => {
-                    let frame = rt::fixed::<6>(frame, &request::SetMode::DESC)?;
-                    rt::Ok(
-                        Self::SetMode(request::SetMode {
-                            mode: Mode::from_raw(frame[4]),
-                        }),
-                    )
-                }
-                0x4000 => {
-                    let frame = rt::fixed::<6>(frame, &request::GetStatus::DESC)?;
-                    rt::in_range(&request::GetStatus::CHANNEL_DESC, 4, frame[4], 0, 3)?;
-                    rt::Ok(
-                        Self::GetStatus(request::GetStatus {
-                            channel: frame[4],
-                        }),
-                    )
-                }
+                0x2000 => request::GoTo::from_frame(frame).map(Self::GoTo),
+                0x3000 => request::SetMode::from_frame(frame).map(Self::SetMode),
+                0x4000 => request::GetStatus::from_frame(frame).map(Self::GetStatus),
                 _ => rt::Err(REQUEST_CODE.unknown(frame)),
             }
         }
@@ -667,24 +638,7 @@ pub mod mini {
                     rt::fixed::<5>(frame, &response::SetModeAck::DESC)
                         .map(|_| Self::SetModeAck(response::SetModeAck))
                 }
-                0x4000 => {
-                    let frame = rt::fixed::<13>(frame, &response::Status::DESC)?;
-                    let field_1: u16 = u16::from_le_bytes([frame[5], frame[6]]);
-                    rt::equal(&response::Status::RESERVED_DESC, 11, frame[11], 0x0)?;
-                    rt::Ok(
-                        Self::Status(response::Status {
-                            error_bits: StatusBits::from_raw(frame[4]),
-                            freshness: (field_1 >> 12) as u8,
-                            position: Angle::from_raw(
-                                (((field_1 & 0xFFF) as u16) << 4) as i16 >> 4,
-                            ),
-                            firmware: rt::Ascii(
-                                frame[7..10].try_into().unwrap_or([0; 3]),
-                            ),
-                            temperature: Celsius::from_raw(frame[10]),
-                        }),
-                    )
-                }
+                0x4000 => response::Status::from_frame(frame).map(Self::Status),
                 _ => rt::Err(RESPONSE_CODE.unknown(frame)),
             }
         }
@@ -883,6 +837,21 @@ pub mod mini {
         pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             Request::GoTo(*self).encode(address, buf)
         }
+        /// Reads this message from a frame whose framing and code are checked.
+        #[inline(always)]
+        fn from_frame(frame: &[u8]) -> rt::DecodeResult<Self> {
+            let frame = rt::fixed::<9>(frame, &Self::DESC)?;
+            let field_0: u32 = u32::from_le_bytes([
+                frame[4],
+                frame[5],
+                frame[6],
+                frame[7],
+            ]);
+            rt::in_range(&Self::TARGET_DESC, 4, field_0, 0, 100000)?;
+            rt::Ok(Self {
+                target: Capacitance::from_raw(field_0),
+            })
+        }
     }
     impl request::SetMode {
         pub const NAME: &'static str = "set_mode";
@@ -895,6 +864,14 @@ pub mod mini {
         }
         pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             Request::SetMode(*self).encode(address, buf)
+        }
+        /// Reads this message from a frame whose framing and code are checked.
+        #[inline(always)]
+        fn from_frame(frame: &[u8]) -> rt::DecodeResult<Self> {
+            let frame = rt::fixed::<6>(frame, &Self::DESC)?;
+            rt::Ok(Self {
+                mode: Mode::from_raw(frame[4]),
+            })
         }
     }
     impl request::GetStatus {
@@ -909,6 +886,13 @@ pub mod mini {
         }
         pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             Request::GetStatus(*self).encode(address, buf)
+        }
+        /// Reads this message from a frame whose framing and code are checked.
+        #[inline(always)]
+        fn from_frame(frame: &[u8]) -> rt::DecodeResult<Self> {
+            let frame = rt::fixed::<6>(frame, &Self::DESC)?;
+            rt::in_range(&Self::CHANNEL_DESC, 4, frame[4], 0, 3)?;
+            rt::Ok(Self { channel: frame[4] })
         }
     }
     impl response::Started {
@@ -956,6 +940,20 @@ pub mod mini {
         }
         pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             Response::Status(*self).encode(address, buf)
+        }
+        /// Reads this message from a frame whose framing and code are checked.
+        #[inline(always)]
+        fn from_frame(frame: &[u8]) -> rt::DecodeResult<Self> {
+            let frame = rt::fixed::<13>(frame, &Self::DESC)?;
+            let field_1: u16 = u16::from_le_bytes([frame[5], frame[6]]);
+            rt::equal(&Self::RESERVED_DESC, 11, frame[11], 0x0)?;
+            rt::Ok(Self {
+                error_bits: StatusBits::from_raw(frame[4]),
+                freshness: (field_1 >> 12) as u8,
+                position: Angle::from_raw((((field_1 & 0xFFF) as u16) << 4) as i16 >> 4),
+                firmware: rt::Ascii(frame[7..10].try_into().unwrap_or([0; 3])),
+                temperature: Celsius::from_raw(frame[10]),
+            })
         }
     }
     /// Each request as a struct of its own; its constants (`DESC`, which names it as

@@ -199,55 +199,16 @@ pub mod mini_crc {
                 0x69 => {
                     let mut g = rt::Group::new(frame, 0x69, rt::None);
                     g.attempt(|frame: &[u8; 6]| {
-                        rt::no_broadcast(
-                            frame[1],
-                            0x1F,
-                            &request::ReadRuntimeHours::DESC,
-                        )?;
-                        rt::equal(
-                            &request::ReadRuntimeHours::SELECTOR_DESC,
-                            2,
-                            frame[2],
-                            0x1,
-                        )?;
-                        rt::equal(
-                            &request::ReadRuntimeHours::ARG2_DESC,
-                            3,
-                            frame[3],
-                            0x0,
-                        )?;
-                        rt::Ok(Self::ReadRuntimeHours(request::ReadRuntimeHours))
+                        request::ReadRuntimeHours::from_frame(frame)
+                            .map(Self::ReadRuntimeHours)
                     });
                     g.attempt(|frame: &[u8; 6]| {
-                        rt::no_broadcast(
-                            frame[1],
-                            0x1F,
-                            &request::ReadRuntimeMinSec::DESC,
-                        )?;
-                        rt::equal(
-                            &request::ReadRuntimeMinSec::SELECTOR_DESC,
-                            2,
-                            frame[2],
-                            0x2,
-                        )?;
-                        rt::equal(
-                            &request::ReadRuntimeMinSec::ARG2_DESC,
-                            3,
-                            frame[3],
-                            0x0,
-                        )?;
-                        rt::Ok(Self::ReadRuntimeMinSec(request::ReadRuntimeMinSec))
+                        request::ReadRuntimeMinSec::from_frame(frame)
+                            .map(Self::ReadRuntimeMinSec)
                     });
                     g.end(&request::ReadRuntimeHours::DESC)
                 }
-                0x70 => {
-                    let frame = rt::fixed::<6>(frame, &request::SetCounter::DESC)?;
-                    rt::Ok(
-                        Self::SetCounter(request::SetCounter {
-                            counter: u16::from_be_bytes([frame[2], frame[3]]),
-                        }),
-                    )
-                }
+                0x70 => request::SetCounter::from_frame(frame).map(Self::SetCounter),
                 _ => rt::Err(REQUEST_CODE.unknown(frame)),
             }
         }
@@ -455,49 +416,21 @@ pub mod mini_crc {
                         asked & 1 != 0,
                         &response::RuntimeHours::DESC,
                         |frame: &[u8; 6]| {
-                            rt::Ok(
-                                Self::RuntimeHours(response::RuntimeHours {
-                                    hours: u16::from_be_bytes([frame[2], frame[3]]),
-                                }),
-                            )
+                            response::RuntimeHours::from_frame(frame)
+                                .map(Self::RuntimeHours)
                         },
                     );
                     g.ambiguous(
                         asked >> 1 & 1 != 0,
                         &response::RuntimeMinSec::DESC,
                         |frame: &[u8; 6]| {
-                            rt::in_range(
-                                &response::RuntimeMinSec::MINUTES_DESC,
-                                2,
-                                frame[2],
-                                0,
-                                59,
-                            )?;
-                            rt::in_range(
-                                &response::RuntimeMinSec::SECONDS_DESC,
-                                3,
-                                frame[3],
-                                0,
-                                59,
-                            )?;
-                            rt::Ok(
-                                Self::RuntimeMinSec(response::RuntimeMinSec {
-                                    minutes: frame[2],
-                                    seconds: frame[3],
-                                }),
-                            )
+                            response::RuntimeMinSec::from_frame(frame)
+                                .map(Self::RuntimeMinSec)
                         },
                     );
                     g.end(&response::RuntimeHours::DESC)
                 }
-                0x70 => {
-                    let frame = rt::fixed::<6>(frame, &response::CounterEcho::DESC)?;
-                    rt::Ok(
-                        Self::CounterEcho(response::CounterEcho {
-                            counter: u16::from_be_bytes([frame[2], frame[3]]),
-                        }),
-                    )
-                }
+                0x70 => response::CounterEcho::from_frame(frame).map(Self::CounterEcho),
                 _ => rt::Err(RESPONSE_CODE.unknown(frame)),
             }
         }
@@ -663,6 +596,15 @@ pub mod mini_crc {
         pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             Request::ReadRuntimeHours(*self).encode(address, buf)
         }
+        /// Reads this message from a frame whose framing and code are checked.
+        #[inline(always)]
+        fn from_frame(frame: &[u8]) -> rt::DecodeResult<Self> {
+            let frame = rt::fixed::<6>(frame, &Self::DESC)?;
+            rt::no_broadcast(frame[1], 0x1F, &Self::DESC)?;
+            rt::equal(&Self::SELECTOR_DESC, 2, frame[2], 0x1)?;
+            rt::equal(&Self::ARG2_DESC, 3, frame[3], 0x0)?;
+            rt::Ok(Self)
+        }
     }
     impl request::ReadRuntimeMinSec {
         pub const NAME: &'static str = "read_runtime_min_sec";
@@ -673,6 +615,15 @@ pub mod mini_crc {
         pub const ARG2_DESC: rt::FieldDesc = rt::field(Self::NAME, "arg2");
         pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             Request::ReadRuntimeMinSec(*self).encode(address, buf)
+        }
+        /// Reads this message from a frame whose framing and code are checked.
+        #[inline(always)]
+        fn from_frame(frame: &[u8]) -> rt::DecodeResult<Self> {
+            let frame = rt::fixed::<6>(frame, &Self::DESC)?;
+            rt::no_broadcast(frame[1], 0x1F, &Self::DESC)?;
+            rt::equal(&Self::SELECTOR_DESC, 2, frame[2], 0x2)?;
+            rt::equal(&Self::ARG2_DESC, 3, frame[3], 0x0)?;
+            rt::Ok(Self)
         }
     }
     impl request::SetCounter {
@@ -687,6 +638,14 @@ pub mod mini_crc {
         pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             Request::SetCounter(*self).encode(address, buf)
         }
+        /// Reads this message from a frame whose framing and code are checked.
+        #[inline(always)]
+        fn from_frame(frame: &[u8]) -> rt::DecodeResult<Self> {
+            let frame = rt::fixed::<6>(frame, &Self::DESC)?;
+            rt::Ok(Self {
+                counter: u16::from_be_bytes([frame[2], frame[3]]),
+            })
+        }
     }
     impl response::RuntimeHours {
         pub const NAME: &'static str = "runtime_hours";
@@ -699,6 +658,14 @@ pub mod mini_crc {
         }
         pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             Response::RuntimeHours(*self).encode(address, buf)
+        }
+        /// Reads this message from a frame whose framing and code are checked.
+        #[inline(always)]
+        fn from_frame(frame: &[u8]) -> rt::DecodeResult<Self> {
+            let frame = rt::fixed::<6>(frame, &Self::DESC)?;
+            rt::Ok(Self {
+                hours: u16::from_be_bytes([frame[2], frame[3]]),
+            })
         }
     }
     impl response::RuntimeMinSec {
@@ -717,6 +684,17 @@ pub mod mini_crc {
         pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             Response::RuntimeMinSec(*self).encode(address, buf)
         }
+        /// Reads this message from a frame whose framing and code are checked.
+        #[inline(always)]
+        fn from_frame(frame: &[u8]) -> rt::DecodeResult<Self> {
+            let frame = rt::fixed::<6>(frame, &Self::DESC)?;
+            rt::in_range(&Self::MINUTES_DESC, 2, frame[2], 0, 59)?;
+            rt::in_range(&Self::SECONDS_DESC, 3, frame[3], 0, 59)?;
+            rt::Ok(Self {
+                minutes: frame[2],
+                seconds: frame[3],
+            })
+        }
     }
     impl response::CounterEcho {
         pub const NAME: &'static str = "counter_echo";
@@ -729,6 +707,14 @@ pub mod mini_crc {
         }
         pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             Response::CounterEcho(*self).encode(address, buf)
+        }
+        /// Reads this message from a frame whose framing and code are checked.
+        #[inline(always)]
+        fn from_frame(frame: &[u8]) -> rt::DecodeResult<Self> {
+            let frame = rt::fixed::<6>(frame, &Self::DESC)?;
+            rt::Ok(Self {
+                counter: u16::from_be_bytes([frame[2], frame[3]]),
+            })
         }
     }
     /// Each request as a struct of its own; its constants (`DESC`, which names it as

@@ -520,117 +520,26 @@ pub mod modbus {
         #[inline]
         fn dispatch(frame: &[u8]) -> rt::DecodeResult<Self> {
             match frame[1] {
-                0x01 => {
-                    let frame = rt::fixed::<8>(frame, &request::ReadCoils::DESC)?;
-                    rt::no_broadcast(frame[0], 0x00, &request::ReadCoils::DESC)?;
-                    let field_1: u16 = u16::from_be_bytes([frame[4], frame[5]]);
-                    rt::in_range(
-                        &request::ReadCoils::QUANTITY_DESC,
-                        4,
-                        field_1,
-                        1,
-                        2000,
-                    )?;
-                    rt::Ok(
-                        Self::ReadCoils(request::ReadCoils {
-                            starting_address: u16::from_be_bytes([frame[2], frame[3]]),
-                            quantity: field_1,
-                        }),
-                    )
-                }
+                0x01 => request::ReadCoils::from_frame(frame).map(Self::ReadCoils),
                 0x02 => {
-                    let frame = rt::fixed::<
-                        8,
-                    >(frame, &request::ReadDiscreteInputs::DESC)?;
-                    rt::no_broadcast(
-                        frame[0],
-                        0x00,
-                        &request::ReadDiscreteInputs::DESC,
-                    )?;
-                    let field_1: u16 = u16::from_be_bytes([frame[4], frame[5]]);
-                    rt::in_range(
-                        &request::ReadDiscreteInputs::QUANTITY_DESC,
-                        4,
-                        field_1,
-                        1,
-                        2000,
-                    )?;
-                    rt::Ok(
-                        Self::ReadDiscreteInputs(request::ReadDiscreteInputs {
-                            starting_address: u16::from_be_bytes([frame[2], frame[3]]),
-                            quantity: field_1,
-                        }),
-                    )
+                    request::ReadDiscreteInputs::from_frame(frame)
+                        .map(Self::ReadDiscreteInputs)
                 }
                 0x03 => {
-                    let frame = rt::fixed::<
-                        8,
-                    >(frame, &request::ReadHoldingRegisters::DESC)?;
-                    rt::no_broadcast(
-                        frame[0],
-                        0x00,
-                        &request::ReadHoldingRegisters::DESC,
-                    )?;
-                    let field_1: u16 = u16::from_be_bytes([frame[4], frame[5]]);
-                    rt::in_range(
-                        &request::ReadHoldingRegisters::QUANTITY_DESC,
-                        4,
-                        field_1,
-                        1,
-                        125,
-                    )?;
-                    rt::Ok(
-                        Self::ReadHoldingRegisters(request::ReadHoldingRegisters {
-                            starting_address: u16::from_be_bytes([frame[2], frame[3]]),
-                            quantity: field_1,
-                        }),
-                    )
+                    request::ReadHoldingRegisters::from_frame(frame)
+                        .map(Self::ReadHoldingRegisters)
                 }
                 0x04 => {
-                    let frame = rt::fixed::<
-                        8,
-                    >(frame, &request::ReadInputRegisters::DESC)?;
-                    rt::no_broadcast(
-                        frame[0],
-                        0x00,
-                        &request::ReadInputRegisters::DESC,
-                    )?;
-                    let field_1: u16 = u16::from_be_bytes([frame[4], frame[5]]);
-                    rt::in_range(
-                        &request::ReadInputRegisters::QUANTITY_DESC,
-                        4,
-                        field_1,
-                        1,
-                        125,
-                    )?;
-                    rt::Ok(
-                        Self::ReadInputRegisters(request::ReadInputRegisters {
-                            starting_address: u16::from_be_bytes([frame[2], frame[3]]),
-                            quantity: field_1,
-                        }),
-                    )
+                    request::ReadInputRegisters::from_frame(frame)
+                        .map(Self::ReadInputRegisters)
                 }
                 0x05 => {
-                    let frame = rt::fixed::<8>(frame, &request::WriteSingleCoil::DESC)?;
-                    rt::Ok(
-                        Self::WriteSingleCoil(request::WriteSingleCoil {
-                            output_address: u16::from_be_bytes([frame[2], frame[3]]),
-                            output_value: CoilState::from_raw(
-                                u16::from_be_bytes([frame[4], frame[5]]),
-                            ),
-                        }),
-                    )
+                    request::WriteSingleCoil::from_frame(frame)
+                        .map(Self::WriteSingleCoil)
                 }
                 0x06 => {
-                    let frame = rt::fixed::<
-                        8,
-                    >(frame, &request::WriteSingleRegister::DESC)?;
-                    rt::Ok(
-                        Self::WriteSingleRegister(request::WriteSingleRegister {
-                            register_address: u16::from_be_bytes([frame[2], frame[3]]),
-                            register_value: u16::from_be_bytes([frame[4], frame[5]]),
-                        }),
-                    )
+                    request::WriteSingleRegister::from_frame(frame)
+                        .map(Self::WriteSingleRegister)
                 }
                 0x0F => {
                     let (frame, elements, count) = REPEAT_WRITE_MULTIPLE_COILS
@@ -1230,14 +1139,8 @@ pub mod modbus {
                     )
                 }
                 0x81 => {
-                    let frame = rt::fixed::<
-                        5,
-                    >(frame, &response::ReadCoilsException::DESC)?;
-                    rt::Ok(
-                        Self::ReadCoilsException(response::ReadCoilsException {
-                            exception_code: ExceptionCode::from_raw(frame[2]),
-                        }),
-                    )
+                    response::ReadCoilsException::from_frame(frame)
+                        .map(Self::ReadCoilsException)
                 }
                 0x02 => {
                     let (_, elements, count) = REPEAT_READ_DISCRETE_INPUTS_REPLY
@@ -1250,14 +1153,8 @@ pub mod modbus {
                     )
                 }
                 0x82 => {
-                    let frame = rt::fixed::<
-                        5,
-                    >(frame, &response::ReadDiscreteInputsException::DESC)?;
-                    rt::Ok(
-                        Self::ReadDiscreteInputsException(response::ReadDiscreteInputsException {
-                            exception_code: ExceptionCode::from_raw(frame[2]),
-                        }),
-                    )
+                    response::ReadDiscreteInputsException::from_frame(frame)
+                        .map(Self::ReadDiscreteInputsException)
                 }
                 0x03 => {
                     let (_, elements, _) = REPEAT_READ_HOLDING_REGISTERS_REPLY
@@ -1270,14 +1167,8 @@ pub mod modbus {
                     )
                 }
                 0x83 => {
-                    let frame = rt::fixed::<
-                        5,
-                    >(frame, &response::ReadHoldingRegistersException::DESC)?;
-                    rt::Ok(
-                        Self::ReadHoldingRegistersException(response::ReadHoldingRegistersException {
-                            exception_code: ExceptionCode::from_raw(frame[2]),
-                        }),
-                    )
+                    response::ReadHoldingRegistersException::from_frame(frame)
+                        .map(Self::ReadHoldingRegistersException)
                 }
                 0x04 => {
                     let (_, elements, _) = REPEAT_READ_INPUT_REGISTERS_REPLY
@@ -1290,106 +1181,40 @@ pub mod modbus {
                     )
                 }
                 0x84 => {
-                    let frame = rt::fixed::<
-                        5,
-                    >(frame, &response::ReadInputRegistersException::DESC)?;
-                    rt::Ok(
-                        Self::ReadInputRegistersException(response::ReadInputRegistersException {
-                            exception_code: ExceptionCode::from_raw(frame[2]),
-                        }),
-                    )
+                    response::ReadInputRegistersException::from_frame(frame)
+                        .map(Self::ReadInputRegistersException)
                 }
                 0x05 => {
-                    let frame = rt::fixed::<
-                        8,
-                    >(frame, &response::WriteSingleCoilReply::DESC)?;
-                    let field_0: u16 = u16::from_be_bytes([frame[2], frame[3]]);
-                    let field_1: u16 = u16::from_be_bytes([frame[4], frame[5]]);
-                    rt::Ok(
-                        Self::WriteSingleCoilReply(response::WriteSingleCoilReply {
-                            output_address: field_0,
-                            output_value: CoilState::from_raw(field_1),
-                        }),
-                    )
+                    response::WriteSingleCoilReply::from_frame(frame)
+                        .map(Self::WriteSingleCoilReply)
                 }
                 0x85 => {
-                    let frame = rt::fixed::<
-                        5,
-                    >(frame, &response::WriteSingleCoilException::DESC)?;
-                    rt::Ok(
-                        Self::WriteSingleCoilException(response::WriteSingleCoilException {
-                            exception_code: ExceptionCode::from_raw(frame[2]),
-                        }),
-                    )
+                    response::WriteSingleCoilException::from_frame(frame)
+                        .map(Self::WriteSingleCoilException)
                 }
                 0x06 => {
-                    let frame = rt::fixed::<
-                        8,
-                    >(frame, &response::WriteSingleRegisterReply::DESC)?;
-                    let field_0: u16 = u16::from_be_bytes([frame[2], frame[3]]);
-                    let field_1: u16 = u16::from_be_bytes([frame[4], frame[5]]);
-                    rt::Ok(
-                        Self::WriteSingleRegisterReply(response::WriteSingleRegisterReply {
-                            register_address: field_0,
-                            register_value: field_1,
-                        }),
-                    )
+                    response::WriteSingleRegisterReply::from_frame(frame)
+                        .map(Self::WriteSingleRegisterReply)
                 }
                 0x86 => {
-                    let frame = rt::fixed::<
-                        5,
-                    >(frame, &response::WriteSingleRegisterException::DESC)?;
-                    rt::Ok(
-                        Self::WriteSingleRegisterException(response::WriteSingleRegisterException {
-                            exception_code: ExceptionCode::from_raw(frame[2]),
-                        }),
-                    )
+                    response::WriteSingleRegisterException::from_frame(frame)
+                        .map(Self::WriteSingleRegisterException)
                 }
                 0x0F => {
-                    let frame = rt::fixed::<
-                        8,
-                    >(frame, &response::WriteMultipleCoilsReply::DESC)?;
-                    let field_0: u16 = u16::from_be_bytes([frame[2], frame[3]]);
-                    let field_1: u16 = u16::from_be_bytes([frame[4], frame[5]]);
-                    rt::Ok(
-                        Self::WriteMultipleCoilsReply(response::WriteMultipleCoilsReply {
-                            starting_address: field_0,
-                            quantity: field_1,
-                        }),
-                    )
+                    response::WriteMultipleCoilsReply::from_frame(frame)
+                        .map(Self::WriteMultipleCoilsReply)
                 }
                 0x8F => {
-                    let frame = rt::fixed::<
-                        5,
-                    >(frame, &response::WriteMultipleCoilsException::DESC)?;
-                    rt::Ok(
-                        Self::WriteMultipleCoilsException(response::WriteMultipleCoilsException {
-                            exception_code: ExceptionCode::from_raw(frame[2]),
-                        }),
-                    )
+                    response::WriteMultipleCoilsException::from_frame(frame)
+                        .map(Self::WriteMultipleCoilsException)
                 }
                 0x10 => {
-                    let frame = rt::fixed::<
-                        8,
-                    >(frame, &response::WriteMultipleRegistersReply::DESC)?;
-                    let field_0: u16 = u16::from_be_bytes([frame[2], frame[3]]);
-                    let field_1: u16 = u16::from_be_bytes([frame[4], frame[5]]);
-                    rt::Ok(
-                        Self::WriteMultipleRegistersReply(response::WriteMultipleRegistersReply {
-                            starting_address: field_0,
-                            quantity: field_1,
-                        }),
-                    )
+                    response::WriteMultipleRegistersReply::from_frame(frame)
+                        .map(Self::WriteMultipleRegistersReply)
                 }
                 0x90 => {
-                    let frame = rt::fixed::<
-                        5,
-                    >(frame, &response::WriteMultipleRegistersException::DESC)?;
-                    rt::Ok(
-                        Self::WriteMultipleRegistersException(response::WriteMultipleRegistersException {
-                            exception_code: ExceptionCode::from_raw(frame[2]),
-                        }),
-                    )
+                    response::WriteMultipleRegistersException::from_frame(frame)
+                        .map(Self::WriteMultipleRegistersException)
                 }
                 _ => rt::Err(RESPONSE_CODE.unknown(frame)),
             }
@@ -2735,6 +2560,18 @@ pub mod modbus {
         pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             Request::ReadCoils(*self).encode(address, buf)
         }
+        /// Reads this message from a frame whose framing and code are checked.
+        #[inline(always)]
+        fn from_frame(frame: &[u8]) -> rt::DecodeResult<Self> {
+            let frame = rt::fixed::<8>(frame, &Self::DESC)?;
+            rt::no_broadcast(frame[0], 0x00, &Self::DESC)?;
+            let field_1: u16 = u16::from_be_bytes([frame[4], frame[5]]);
+            rt::in_range(&Self::QUANTITY_DESC, 4, field_1, 1, 2000)?;
+            rt::Ok(Self {
+                starting_address: u16::from_be_bytes([frame[2], frame[3]]),
+                quantity: field_1,
+            })
+        }
     }
     impl request::ReadDiscreteInputs {
         pub const NAME: &'static str = "read_discrete_inputs";
@@ -2750,6 +2587,18 @@ pub mod modbus {
         }
         pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             Request::ReadDiscreteInputs(*self).encode(address, buf)
+        }
+        /// Reads this message from a frame whose framing and code are checked.
+        #[inline(always)]
+        fn from_frame(frame: &[u8]) -> rt::DecodeResult<Self> {
+            let frame = rt::fixed::<8>(frame, &Self::DESC)?;
+            rt::no_broadcast(frame[0], 0x00, &Self::DESC)?;
+            let field_1: u16 = u16::from_be_bytes([frame[4], frame[5]]);
+            rt::in_range(&Self::QUANTITY_DESC, 4, field_1, 1, 2000)?;
+            rt::Ok(Self {
+                starting_address: u16::from_be_bytes([frame[2], frame[3]]),
+                quantity: field_1,
+            })
         }
     }
     impl request::ReadHoldingRegisters {
@@ -2767,6 +2616,18 @@ pub mod modbus {
         pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             Request::ReadHoldingRegisters(*self).encode(address, buf)
         }
+        /// Reads this message from a frame whose framing and code are checked.
+        #[inline(always)]
+        fn from_frame(frame: &[u8]) -> rt::DecodeResult<Self> {
+            let frame = rt::fixed::<8>(frame, &Self::DESC)?;
+            rt::no_broadcast(frame[0], 0x00, &Self::DESC)?;
+            let field_1: u16 = u16::from_be_bytes([frame[4], frame[5]]);
+            rt::in_range(&Self::QUANTITY_DESC, 4, field_1, 1, 125)?;
+            rt::Ok(Self {
+                starting_address: u16::from_be_bytes([frame[2], frame[3]]),
+                quantity: field_1,
+            })
+        }
     }
     impl request::ReadInputRegisters {
         pub const NAME: &'static str = "read_input_registers";
@@ -2783,6 +2644,18 @@ pub mod modbus {
         pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             Request::ReadInputRegisters(*self).encode(address, buf)
         }
+        /// Reads this message from a frame whose framing and code are checked.
+        #[inline(always)]
+        fn from_frame(frame: &[u8]) -> rt::DecodeResult<Self> {
+            let frame = rt::fixed::<8>(frame, &Self::DESC)?;
+            rt::no_broadcast(frame[0], 0x00, &Self::DESC)?;
+            let field_1: u16 = u16::from_be_bytes([frame[4], frame[5]]);
+            rt::in_range(&Self::QUANTITY_DESC, 4, field_1, 1, 125)?;
+            rt::Ok(Self {
+                starting_address: u16::from_be_bytes([frame[2], frame[3]]),
+                quantity: field_1,
+            })
+        }
     }
     impl request::WriteSingleCoil {
         pub const NAME: &'static str = "write_single_coil";
@@ -2798,6 +2671,17 @@ pub mod modbus {
         pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             Request::WriteSingleCoil(*self).encode(address, buf)
         }
+        /// Reads this message from a frame whose framing and code are checked.
+        #[inline(always)]
+        fn from_frame(frame: &[u8]) -> rt::DecodeResult<Self> {
+            let frame = rt::fixed::<8>(frame, &Self::DESC)?;
+            rt::Ok(Self {
+                output_address: u16::from_be_bytes([frame[2], frame[3]]),
+                output_value: CoilState::from_raw(
+                    u16::from_be_bytes([frame[4], frame[5]]),
+                ),
+            })
+        }
     }
     impl request::WriteSingleRegister {
         pub const NAME: &'static str = "write_single_register";
@@ -2812,6 +2696,15 @@ pub mod modbus {
         }
         pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             Request::WriteSingleRegister(*self).encode(address, buf)
+        }
+        /// Reads this message from a frame whose framing and code are checked.
+        #[inline(always)]
+        fn from_frame(frame: &[u8]) -> rt::DecodeResult<Self> {
+            let frame = rt::fixed::<8>(frame, &Self::DESC)?;
+            rt::Ok(Self {
+                register_address: u16::from_be_bytes([frame[2], frame[3]]),
+                register_value: u16::from_be_bytes([frame[4], frame[5]]),
+            })
         }
     }
     impl request::WriteMultipleCoils {
@@ -2881,6 +2774,14 @@ pub mod modbus {
         pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             Response::ReadCoilsException(*self).encode(address, buf)
         }
+        /// Reads this message from a frame whose framing and code are checked.
+        #[inline(always)]
+        fn from_frame(frame: &[u8]) -> rt::DecodeResult<Self> {
+            let frame = rt::fixed::<5>(frame, &Self::DESC)?;
+            rt::Ok(Self {
+                exception_code: ExceptionCode::from_raw(frame[2]),
+            })
+        }
     }
     impl response::ReadDiscreteInputsReply {
         pub const NAME: &'static str = "read_discrete_inputs_reply";
@@ -2908,6 +2809,14 @@ pub mod modbus {
         }
         pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             Response::ReadDiscreteInputsException(*self).encode(address, buf)
+        }
+        /// Reads this message from a frame whose framing and code are checked.
+        #[inline(always)]
+        fn from_frame(frame: &[u8]) -> rt::DecodeResult<Self> {
+            let frame = rt::fixed::<5>(frame, &Self::DESC)?;
+            rt::Ok(Self {
+                exception_code: ExceptionCode::from_raw(frame[2]),
+            })
         }
     }
     impl response::ReadHoldingRegistersReply {
@@ -2937,6 +2846,14 @@ pub mod modbus {
         pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             Response::ReadHoldingRegistersException(*self).encode(address, buf)
         }
+        /// Reads this message from a frame whose framing and code are checked.
+        #[inline(always)]
+        fn from_frame(frame: &[u8]) -> rt::DecodeResult<Self> {
+            let frame = rt::fixed::<5>(frame, &Self::DESC)?;
+            rt::Ok(Self {
+                exception_code: ExceptionCode::from_raw(frame[2]),
+            })
+        }
     }
     impl response::ReadInputRegistersReply {
         pub const NAME: &'static str = "read_input_registers_reply";
@@ -2965,6 +2882,14 @@ pub mod modbus {
         pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             Response::ReadInputRegistersException(*self).encode(address, buf)
         }
+        /// Reads this message from a frame whose framing and code are checked.
+        #[inline(always)]
+        fn from_frame(frame: &[u8]) -> rt::DecodeResult<Self> {
+            let frame = rt::fixed::<5>(frame, &Self::DESC)?;
+            rt::Ok(Self {
+                exception_code: ExceptionCode::from_raw(frame[2]),
+            })
+        }
     }
     impl response::WriteSingleCoilReply {
         pub const NAME: &'static str = "write_single_coil_reply";
@@ -2988,6 +2913,17 @@ pub mod modbus {
         pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             Response::WriteSingleCoilReply(*self).encode(address, buf)
         }
+        /// Reads this message from a frame whose framing and code are checked.
+        #[inline(always)]
+        fn from_frame(frame: &[u8]) -> rt::DecodeResult<Self> {
+            let frame = rt::fixed::<8>(frame, &Self::DESC)?;
+            let field_0: u16 = u16::from_be_bytes([frame[2], frame[3]]);
+            let field_1: u16 = u16::from_be_bytes([frame[4], frame[5]]);
+            rt::Ok(Self {
+                output_address: field_0,
+                output_value: CoilState::from_raw(field_1),
+            })
+        }
     }
     impl response::WriteSingleCoilException {
         pub const NAME: &'static str = "write_single_coil_exception";
@@ -3000,6 +2936,14 @@ pub mod modbus {
         }
         pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             Response::WriteSingleCoilException(*self).encode(address, buf)
+        }
+        /// Reads this message from a frame whose framing and code are checked.
+        #[inline(always)]
+        fn from_frame(frame: &[u8]) -> rt::DecodeResult<Self> {
+            let frame = rt::fixed::<5>(frame, &Self::DESC)?;
+            rt::Ok(Self {
+                exception_code: ExceptionCode::from_raw(frame[2]),
+            })
         }
     }
     impl response::WriteSingleRegisterReply {
@@ -3024,6 +2968,17 @@ pub mod modbus {
         pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             Response::WriteSingleRegisterReply(*self).encode(address, buf)
         }
+        /// Reads this message from a frame whose framing and code are checked.
+        #[inline(always)]
+        fn from_frame(frame: &[u8]) -> rt::DecodeResult<Self> {
+            let frame = rt::fixed::<8>(frame, &Self::DESC)?;
+            let field_0: u16 = u16::from_be_bytes([frame[2], frame[3]]);
+            let field_1: u16 = u16::from_be_bytes([frame[4], frame[5]]);
+            rt::Ok(Self {
+                register_address: field_0,
+                register_value: field_1,
+            })
+        }
     }
     impl response::WriteSingleRegisterException {
         pub const NAME: &'static str = "write_single_register_exception";
@@ -3036,6 +2991,14 @@ pub mod modbus {
         }
         pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             Response::WriteSingleRegisterException(*self).encode(address, buf)
+        }
+        /// Reads this message from a frame whose framing and code are checked.
+        #[inline(always)]
+        fn from_frame(frame: &[u8]) -> rt::DecodeResult<Self> {
+            let frame = rt::fixed::<5>(frame, &Self::DESC)?;
+            rt::Ok(Self {
+                exception_code: ExceptionCode::from_raw(frame[2]),
+            })
         }
     }
     impl response::WriteMultipleCoilsReply {
@@ -3057,6 +3020,17 @@ pub mod modbus {
         pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             Response::WriteMultipleCoilsReply(*self).encode(address, buf)
         }
+        /// Reads this message from a frame whose framing and code are checked.
+        #[inline(always)]
+        fn from_frame(frame: &[u8]) -> rt::DecodeResult<Self> {
+            let frame = rt::fixed::<8>(frame, &Self::DESC)?;
+            let field_0: u16 = u16::from_be_bytes([frame[2], frame[3]]);
+            let field_1: u16 = u16::from_be_bytes([frame[4], frame[5]]);
+            rt::Ok(Self {
+                starting_address: field_0,
+                quantity: field_1,
+            })
+        }
     }
     impl response::WriteMultipleCoilsException {
         pub const NAME: &'static str = "write_multiple_coils_exception";
@@ -3069,6 +3043,14 @@ pub mod modbus {
         }
         pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             Response::WriteMultipleCoilsException(*self).encode(address, buf)
+        }
+        /// Reads this message from a frame whose framing and code are checked.
+        #[inline(always)]
+        fn from_frame(frame: &[u8]) -> rt::DecodeResult<Self> {
+            let frame = rt::fixed::<5>(frame, &Self::DESC)?;
+            rt::Ok(Self {
+                exception_code: ExceptionCode::from_raw(frame[2]),
+            })
         }
     }
     impl response::WriteMultipleRegistersReply {
@@ -3090,6 +3072,17 @@ pub mod modbus {
         pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             Response::WriteMultipleRegistersReply(*self).encode(address, buf)
         }
+        /// Reads this message from a frame whose framing and code are checked.
+        #[inline(always)]
+        fn from_frame(frame: &[u8]) -> rt::DecodeResult<Self> {
+            let frame = rt::fixed::<8>(frame, &Self::DESC)?;
+            let field_0: u16 = u16::from_be_bytes([frame[2], frame[3]]);
+            let field_1: u16 = u16::from_be_bytes([frame[4], frame[5]]);
+            rt::Ok(Self {
+                starting_address: field_0,
+                quantity: field_1,
+            })
+        }
     }
     impl response::WriteMultipleRegistersException {
         pub const NAME: &'static str = "write_multiple_registers_exception";
@@ -3102,6 +3095,14 @@ pub mod modbus {
         }
         pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             Response::WriteMultipleRegistersException(*self).encode(address, buf)
+        }
+        /// Reads this message from a frame whose framing and code are checked.
+        #[inline(always)]
+        fn from_frame(frame: &[u8]) -> rt::DecodeResult<Self> {
+            let frame = rt::fixed::<5>(frame, &Self::DESC)?;
+            rt::Ok(Self {
+                exception_code: ExceptionCode::from_raw(frame[2]),
+            })
         }
     }
     /// Each request as a struct of its own; its constants (`DESC`, which names it as

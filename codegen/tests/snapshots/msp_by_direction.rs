@@ -449,14 +449,8 @@ pub mod msp_by_direction {
         fn dispatch(frame: &[u8]) -> rt::DecodeResult<Self> {
             match frame[4] {
                 0x01 => {
-                    let frame = rt::fixed::<9>(frame, &response::ApiVersionReply::DESC)?;
-                    rt::Ok(
-                        Self::ApiVersionReply(response::ApiVersionReply {
-                            protocol_version: frame[5],
-                            api_major: frame[6],
-                            api_minor: frame[7],
-                        }),
-                    )
+                    response::ApiVersionReply::from_frame(frame)
+                        .map(Self::ApiVersionReply)
                 }
                 0x69 => {
                     let (_, elements, _) = REPEAT_RC_REPLY.split::<5>(frame)?;
@@ -468,18 +462,7 @@ pub mod msp_by_direction {
                     )
                 }
                 0x6C => {
-                    let frame = rt::fixed::<12>(frame, &response::AttitudeReply::DESC)?;
-                    rt::Ok(
-                        Self::AttitudeReply(response::AttitudeReply {
-                            roll: Decidegrees::from_raw(
-                                i16::from_le_bytes([frame[5], frame[6]]),
-                            ),
-                            pitch: Decidegrees::from_raw(
-                                i16::from_le_bytes([frame[7], frame[8]]),
-                            ),
-                            yaw: i16::from_le_bytes([frame[9], frame[10]]),
-                        }),
-                    )
+                    response::AttitudeReply::from_frame(frame).map(Self::AttitudeReply)
                 }
                 _ => rt::Err(RESPONSE_CODE.unknown(frame)),
             }
@@ -866,6 +849,16 @@ pub mod msp_by_direction {
         pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             Response::ApiVersionReply(*self).encode(address, buf)
         }
+        /// Reads this message from a frame whose framing and code are checked.
+        #[inline(always)]
+        fn from_frame(frame: &[u8]) -> rt::DecodeResult<Self> {
+            let frame = rt::fixed::<9>(frame, &Self::DESC)?;
+            rt::Ok(Self {
+                protocol_version: frame[5],
+                api_major: frame[6],
+                api_minor: frame[7],
+            })
+        }
     }
     impl response::RcReply {
         pub const NAME: &'static str = "rc_reply";
@@ -896,6 +889,16 @@ pub mod msp_by_direction {
         }
         pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             Response::AttitudeReply(*self).encode(address, buf)
+        }
+        /// Reads this message from a frame whose framing and code are checked.
+        #[inline(always)]
+        fn from_frame(frame: &[u8]) -> rt::DecodeResult<Self> {
+            let frame = rt::fixed::<12>(frame, &Self::DESC)?;
+            rt::Ok(Self {
+                roll: Decidegrees::from_raw(i16::from_le_bytes([frame[5], frame[6]])),
+                pitch: Decidegrees::from_raw(i16::from_le_bytes([frame[7], frame[8]])),
+                yaw: i16::from_le_bytes([frame[9], frame[10]]),
+            })
         }
     }
     /// Each request as a struct of its own; its constants (`DESC`, which names it as

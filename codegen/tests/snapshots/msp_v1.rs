@@ -219,12 +219,10 @@ pub mod msp_v1 {
                 0x3C => {
                     let mut g = rt::Group::new(frame, 0x3C, rt::None);
                     g.attempt(|frame: &[u8; 6]| {
-                        rt::equal(&request::ApiVersion::CMD_DESC, 4, frame[4], 0x1)?;
-                        rt::Ok(Self::ApiVersion(request::ApiVersion))
+                        request::ApiVersion::from_frame(frame).map(Self::ApiVersion)
                     });
                     g.attempt(|frame: &[u8; 6]| {
-                        rt::equal(&request::Attitude::CMD_DESC, 4, frame[4], 0x6C)?;
-                        rt::Ok(Self::Attitude(request::Attitude))
+                        request::Attitude::from_frame(frame).map(Self::Attitude)
                     });
                     g.end(&request::ApiVersion::DESC)
                 }
@@ -431,45 +429,16 @@ pub mod msp_v1 {
                 0x3E => {
                     let mut g = rt::Group::new(frame, 0x3E, request.map(Request::name));
                     g.attempt(|frame: &[u8; 9]| {
-                        rt::equal(
-                            &response::ApiVersionReply::CMD_DESC,
-                            4,
-                            frame[4],
-                            0x1,
-                        )?;
-                        rt::Ok(
-                            Self::ApiVersionReply(response::ApiVersionReply {
-                                protocol_version: frame[5],
-                                api_major: frame[6],
-                                api_minor: frame[7],
-                            }),
-                        )
+                        response::ApiVersionReply::from_frame(frame)
+                            .map(Self::ApiVersionReply)
                     });
                     g.attempt(|frame: &[u8; 12]| {
-                        rt::equal(
-                            &response::AttitudeReply::CMD_DESC,
-                            4,
-                            frame[4],
-                            0x6C,
-                        )?;
-                        rt::Ok(
-                            Self::AttitudeReply(response::AttitudeReply {
-                                roll: Decidegrees::from_raw(
-                                    i16::from_le_bytes([frame[5], frame[6]]),
-                                ),
-                                pitch: Decidegrees::from_raw(
-                                    i16::from_le_bytes([frame[7], frame[8]]),
-                                ),
-                                yaw: i16::from_le_bytes([frame[9], frame[10]]),
-                            }),
-                        )
+                        response::AttitudeReply::from_frame(frame)
+                            .map(Self::AttitudeReply)
                     });
                     g.end(&response::ApiVersionReply::DESC)
                 }
-                0x21 => {
-                    let frame = rt::fixed::<6>(frame, &response::Error::DESC)?;
-                    rt::Ok(Self::Error(response::Error { cmd: frame[4] }))
-                }
+                0x21 => response::Error::from_frame(frame).map(Self::Error),
                 _ => rt::Err(RESPONSE_CODE.unknown(frame)),
             }
         }
@@ -697,6 +666,13 @@ pub mod msp_v1 {
         pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             Request::ApiVersion(*self).encode(address, buf)
         }
+        /// Reads this message from a frame whose framing and code are checked.
+        #[inline(always)]
+        fn from_frame(frame: &[u8]) -> rt::DecodeResult<Self> {
+            let frame = rt::fixed::<6>(frame, &Self::DESC)?;
+            rt::equal(&Self::CMD_DESC, 4, frame[4], 0x1)?;
+            rt::Ok(Self)
+        }
     }
     impl request::Attitude {
         pub const NAME: &'static str = "attitude";
@@ -706,6 +682,13 @@ pub mod msp_v1 {
         pub const CMD_DESC: rt::FieldDesc = rt::field(Self::NAME, "cmd");
         pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             Request::Attitude(*self).encode(address, buf)
+        }
+        /// Reads this message from a frame whose framing and code are checked.
+        #[inline(always)]
+        fn from_frame(frame: &[u8]) -> rt::DecodeResult<Self> {
+            let frame = rt::fixed::<6>(frame, &Self::DESC)?;
+            rt::equal(&Self::CMD_DESC, 4, frame[4], 0x6C)?;
+            rt::Ok(Self)
         }
     }
     impl response::ApiVersionReply {
@@ -725,6 +708,17 @@ pub mod msp_v1 {
         pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             Response::ApiVersionReply(*self).encode(address, buf)
         }
+        /// Reads this message from a frame whose framing and code are checked.
+        #[inline(always)]
+        fn from_frame(frame: &[u8]) -> rt::DecodeResult<Self> {
+            let frame = rt::fixed::<9>(frame, &Self::DESC)?;
+            rt::equal(&Self::CMD_DESC, 4, frame[4], 0x1)?;
+            rt::Ok(Self {
+                protocol_version: frame[5],
+                api_major: frame[6],
+                api_minor: frame[7],
+            })
+        }
     }
     impl response::AttitudeReply {
         pub const NAME: &'static str = "attitude_reply";
@@ -743,6 +737,17 @@ pub mod msp_v1 {
         pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             Response::AttitudeReply(*self).encode(address, buf)
         }
+        /// Reads this message from a frame whose framing and code are checked.
+        #[inline(always)]
+        fn from_frame(frame: &[u8]) -> rt::DecodeResult<Self> {
+            let frame = rt::fixed::<12>(frame, &Self::DESC)?;
+            rt::equal(&Self::CMD_DESC, 4, frame[4], 0x6C)?;
+            rt::Ok(Self {
+                roll: Decidegrees::from_raw(i16::from_le_bytes([frame[5], frame[6]])),
+                pitch: Decidegrees::from_raw(i16::from_le_bytes([frame[7], frame[8]])),
+                yaw: i16::from_le_bytes([frame[9], frame[10]]),
+            })
+        }
     }
     impl response::Error {
         pub const NAME: &'static str = "error";
@@ -756,6 +761,12 @@ pub mod msp_v1 {
         }
         pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             Response::Error(*self).encode(address, buf)
+        }
+        /// Reads this message from a frame whose framing and code are checked.
+        #[inline(always)]
+        fn from_frame(frame: &[u8]) -> rt::DecodeResult<Self> {
+            let frame = rt::fixed::<6>(frame, &Self::DESC)?;
+            rt::Ok(Self { cmd: frame[4] })
         }
     }
     /// Each request as a struct of its own; its constants (`DESC`, which names it as

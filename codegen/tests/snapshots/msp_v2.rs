@@ -203,34 +203,8 @@ pub mod msp_v2 {
         #[inline]
         fn dispatch(frame: &[u8]) -> rt::DecodeResult<Self> {
             match u16::from_be_bytes([frame[4], frame[5]]) {
-                0x0100 => {
-                    let frame = rt::fixed::<9>(frame, &request::ApiVersion::DESC)?;
-                    rt::equal(
-                        &request::ApiVersion::RESERVED_FLAGS_DESC,
-                        3,
-                        frame[3] >> 1,
-                        0x0,
-                    )?;
-                    rt::Ok(
-                        Self::ApiVersion(request::ApiVersion {
-                            dont_reply: (frame[3] & 0x1) != 0,
-                        }),
-                    )
-                }
-                0x0200 => {
-                    let frame = rt::fixed::<9>(frame, &request::FcVariant::DESC)?;
-                    rt::equal(
-                        &request::FcVariant::RESERVED_FLAGS_DESC,
-                        3,
-                        frame[3] >> 1,
-                        0x0,
-                    )?;
-                    rt::Ok(
-                        Self::FcVariant(request::FcVariant {
-                            dont_reply: (frame[3] & 0x1) != 0,
-                        }),
-                    )
-                }
+                0x0100 => request::ApiVersion::from_frame(frame).map(Self::ApiVersion),
+                0x0200 => request::FcVariant::from_frame(frame).map(Self::FcVariant),
                 _ => rt::Err(REQUEST_CODE.unknown(frame)),
             }
         }
@@ -445,38 +419,11 @@ pub mod msp_v2 {
         fn dispatch(frame: &[u8]) -> rt::DecodeResult<Self> {
             match u16::from_be_bytes([frame[4], frame[5]]) {
                 0x0100 => {
-                    let frame = rt::fixed::<
-                        12,
-                    >(frame, &response::ApiVersionReply::DESC)?;
-                    rt::equal(
-                        &response::ApiVersionReply::RESERVED_FLAGS_DESC,
-                        3,
-                        frame[3] >> 1,
-                        0x0,
-                    )?;
-                    rt::Ok(
-                        Self::ApiVersionReply(response::ApiVersionReply {
-                            dont_reply: (frame[3] & 0x1) != 0,
-                            protocol_version: frame[8],
-                            api_major: frame[9],
-                            api_minor: frame[10],
-                        }),
-                    )
+                    response::ApiVersionReply::from_frame(frame)
+                        .map(Self::ApiVersionReply)
                 }
                 0x0200 => {
-                    let frame = rt::fixed::<13>(frame, &response::FcVariantReply::DESC)?;
-                    rt::equal(
-                        &response::FcVariantReply::RESERVED_FLAGS_DESC,
-                        3,
-                        frame[3] >> 1,
-                        0x0,
-                    )?;
-                    rt::Ok(
-                        Self::FcVariantReply(response::FcVariantReply {
-                            dont_reply: (frame[3] & 0x1) != 0,
-                            variant: rt::Ascii(frame[8..12].try_into().unwrap_or([0; 4])),
-                        }),
-                    )
+                    response::FcVariantReply::from_frame(frame).map(Self::FcVariantReply)
                 }
                 _ => rt::Err(RESPONSE_CODE.unknown(frame)),
             }
@@ -670,6 +617,15 @@ pub mod msp_v2 {
         pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             Request::ApiVersion(*self).encode(address, buf)
         }
+        /// Reads this message from a frame whose framing and code are checked.
+        #[inline(always)]
+        fn from_frame(frame: &[u8]) -> rt::DecodeResult<Self> {
+            let frame = rt::fixed::<9>(frame, &Self::DESC)?;
+            rt::equal(&Self::RESERVED_FLAGS_DESC, 3, frame[3] >> 1, 0x0)?;
+            rt::Ok(Self {
+                dont_reply: (frame[3] & 0x1) != 0,
+            })
+        }
     }
     impl request::FcVariant {
         pub const NAME: &'static str = "fc_variant";
@@ -685,6 +641,15 @@ pub mod msp_v2 {
         }
         pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             Request::FcVariant(*self).encode(address, buf)
+        }
+        /// Reads this message from a frame whose framing and code are checked.
+        #[inline(always)]
+        fn from_frame(frame: &[u8]) -> rt::DecodeResult<Self> {
+            let frame = rt::fixed::<9>(frame, &Self::DESC)?;
+            rt::equal(&Self::RESERVED_FLAGS_DESC, 3, frame[3] >> 1, 0x0)?;
+            rt::Ok(Self {
+                dont_reply: (frame[3] & 0x1) != 0,
+            })
         }
     }
     impl response::ApiVersionReply {
@@ -708,6 +673,18 @@ pub mod msp_v2 {
         pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             Response::ApiVersionReply(*self).encode(address, buf)
         }
+        /// Reads this message from a frame whose framing and code are checked.
+        #[inline(always)]
+        fn from_frame(frame: &[u8]) -> rt::DecodeResult<Self> {
+            let frame = rt::fixed::<12>(frame, &Self::DESC)?;
+            rt::equal(&Self::RESERVED_FLAGS_DESC, 3, frame[3] >> 1, 0x0)?;
+            rt::Ok(Self {
+                dont_reply: (frame[3] & 0x1) != 0,
+                protocol_version: frame[8],
+                api_major: frame[9],
+                api_minor: frame[10],
+            })
+        }
     }
     impl response::FcVariantReply {
         pub const NAME: &'static str = "fc_variant_reply";
@@ -725,6 +702,16 @@ pub mod msp_v2 {
         }
         pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             Response::FcVariantReply(*self).encode(address, buf)
+        }
+        /// Reads this message from a frame whose framing and code are checked.
+        #[inline(always)]
+        fn from_frame(frame: &[u8]) -> rt::DecodeResult<Self> {
+            let frame = rt::fixed::<13>(frame, &Self::DESC)?;
+            rt::equal(&Self::RESERVED_FLAGS_DESC, 3, frame[3] >> 1, 0x0)?;
+            rt::Ok(Self {
+                dont_reply: (frame[3] & 0x1) != 0,
+                variant: rt::Ascii(frame[8..12].try_into().unwrap_or([0; 4])),
+            })
         }
     }
     /// Each request as a struct of its own; its constants (`DESC`, which names it as

@@ -499,24 +499,8 @@ pub mod nextion {
                     rt::fixed::<4>(frame, &response::InvalidVariable::DESC)
                         .map(|_| Self::InvalidVariable(response::InvalidVariable))
                 }
-                0x65 => {
-                    let frame = rt::fixed::<7>(frame, &response::TouchEvent::DESC)?;
-                    rt::Ok(
-                        Self::TouchEvent(response::TouchEvent {
-                            page: frame[1],
-                            component: frame[2],
-                            event: Touch::from_raw(frame[3]),
-                        }),
-                    )
-                }
-                0x66 => {
-                    let frame = rt::fixed::<5>(frame, &response::CurrentPage::DESC)?;
-                    rt::Ok(
-                        Self::CurrentPage(response::CurrentPage {
-                            page: frame[1],
-                        }),
-                    )
-                }
+                0x65 => response::TouchEvent::from_frame(frame).map(Self::TouchEvent),
+                0x66 => response::CurrentPage::from_frame(frame).map(Self::CurrentPage),
                 0x70 => {
                     let (_, elements, _) = REPEAT_STRING.split::<1>(frame)?;
                     rt::Ok(
@@ -526,19 +510,7 @@ pub mod nextion {
                         }),
                     )
                 }
-                0x71 => {
-                    let frame = rt::fixed::<8>(frame, &response::Number::DESC)?;
-                    rt::Ok(
-                        Self::Number(response::Number {
-                            value: i32::from_le_bytes([
-                                frame[1],
-                                frame[2],
-                                frame[3],
-                                frame[4],
-                            ]),
-                        }),
-                    )
-                }
+                0x71 => response::Number::from_frame(frame).map(Self::Number),
                 _ => rt::Err(RESPONSE_CODE.unknown(frame)),
             }
         }
@@ -1049,6 +1021,16 @@ pub mod nextion {
         pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             Response::TouchEvent(*self).encode(address, buf)
         }
+        /// Reads this message from a frame whose framing and code are checked.
+        #[inline(always)]
+        fn from_frame(frame: &[u8]) -> rt::DecodeResult<Self> {
+            let frame = rt::fixed::<7>(frame, &Self::DESC)?;
+            rt::Ok(Self {
+                page: frame[1],
+                component: frame[2],
+                event: Touch::from_raw(frame[3]),
+            })
+        }
     }
     impl response::CurrentPage {
         pub const NAME: &'static str = "current_page";
@@ -1061,6 +1043,12 @@ pub mod nextion {
         }
         pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             Response::CurrentPage(*self).encode(address, buf)
+        }
+        /// Reads this message from a frame whose framing and code are checked.
+        #[inline(always)]
+        fn from_frame(frame: &[u8]) -> rt::DecodeResult<Self> {
+            let frame = rt::fixed::<5>(frame, &Self::DESC)?;
+            rt::Ok(Self { page: frame[1] })
         }
     }
     impl response::String {
@@ -1088,6 +1076,14 @@ pub mod nextion {
         }
         pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             Response::Number(*self).encode(address, buf)
+        }
+        /// Reads this message from a frame whose framing and code are checked.
+        #[inline(always)]
+        fn from_frame(frame: &[u8]) -> rt::DecodeResult<Self> {
+            let frame = rt::fixed::<8>(frame, &Self::DESC)?;
+            rt::Ok(Self {
+                value: i32::from_le_bytes([frame[1], frame[2], frame[3], frame[4]]),
+            })
         }
     }
     /// Each request as a struct of its own; its constants (`DESC`, which names it as

@@ -462,171 +462,10 @@ pub mod packed_channels {
         #[inline]
         fn dispatch(frame: &[u8]) -> rt::DecodeResult<Self> {
             match frame[2] {
-                0x16 => {
-                    let frame = rt::fixed::<11>(frame, &request::Channels::DESC)?;
-                    rt::equal(
-                        &request::Channels::CHANNELS_DESC,
-                        3 + 5,
-                        rt::packed_padding(&frame[3..9], 4, 11, true),
-                        0,
-                    )?;
-                    let v_channels = rt::unpack::<u16, 4>(&frame[3..9], 11, true);
-                    rt::packed_in_range(
-                        &request::Channels::CHANNELS_DESC,
-                        3,
-                        11,
-                        v_channels.as_slice(),
-                        0,
-                        1999,
-                    )?;
-                    rt::Ok(
-                        Self::Channels(request::Channels {
-                            channels: v_channels,
-                            flags: frame[9],
-                        }),
-                    )
-                }
-                0x17 => {
-                    let frame = rt::fixed::<7>(frame, &request::Levels::DESC)?;
-                    rt::equal(
-                        &request::Levels::LEVELS_DESC,
-                        4 + 1,
-                        rt::packed_padding(&frame[4..6], 5, 3, false),
-                        0,
-                    )?;
-                    let v_levels = rt::unpack::<u8, 5>(&frame[4..6], 3, false);
-                    rt::packed_in_range(
-                        &request::Levels::LEVELS_DESC,
-                        4,
-                        3,
-                        v_levels.as_slice(),
-                        0,
-                        6,
-                    )?;
-                    rt::Ok(
-                        Self::Levels(request::Levels {
-                            bank: frame[3],
-                            levels: v_levels,
-                        }),
-                    )
-                }
-                0x19 => {
-                    let frame = rt::fixed::<12>(frame, &request::Calibrate::DESC)?;
-                    rt::equal(
-                        &request::Calibrate::OFFSETS_DESC,
-                        3 + 5,
-                        rt::packed_padding(&frame[3..9], 3, 16, false),
-                        0,
-                    )?;
-                    let v_offsets = rt::unpack::<u16, 3>(&frame[3..9], 16, false);
-                    rt::equal(
-                        &request::Calibrate::GAINS_DESC,
-                        9 + 1,
-                        rt::packed_padding(&frame[9..11], 2, 8, false),
-                        0,
-                    )?;
-                    let v_gains = rt::unpack::<u8, 2>(&frame[9..11], 8, false);
-                    rt::packed_in_range(
-                        &request::Calibrate::GAINS_DESC,
-                        9,
-                        8,
-                        v_gains.as_slice(),
-                        1,
-                        9,
-                    )?;
-                    rt::Ok(
-                        Self::Calibrate(request::Calibrate {
-                            offsets: v_offsets,
-                            gains: v_gains,
-                        }),
-                    )
-                }
-                0x1A => {
-                    let frame = rt::fixed::<40>(frame, &request::Trim::DESC)?;
-                    rt::equal(
-                        &request::Trim::DELTAS_DESC,
-                        3 + 3,
-                        rt::packed_padding(&frame[3..7], 2, 16, false),
-                        0,
-                    )?;
-                    let v_deltas = rt::fixed_elements::<
-                        TenthDegree,
-                        2,
-                    >(&frame[3..7], 2, false, false, true);
-                    rt::packed_in_range(
-                        &request::Trim::DELTAS_DESC,
-                        3,
-                        16,
-                        v_deltas.as_slice(),
-                        -900,
-                        900,
-                    )?;
-                    rt::equal(
-                        &request::Trim::FACTORS_DESC,
-                        7 + 7,
-                        rt::packed_padding(&frame[7..15], 2, 32, false),
-                        0,
-                    )?;
-                    let v_factors = rt::fixed_elements::<
-                        f32,
-                        2,
-                    >(&frame[7..15], 4, false, false, false);
-                    rt::packed_in_range(
-                        &request::Trim::FACTORS_DESC,
-                        7,
-                        32,
-                        v_factors.as_slice(),
-                        3221225472,
-                        1073741824,
-                    )?;
-                    rt::equal(
-                        &request::Trim::MODES_DESC,
-                        15 + 1,
-                        rt::packed_padding(&frame[15..17], 2, 8, false),
-                        0,
-                    )?;
-                    let v_modes = rt::unpack::<Mode, 2>(&frame[15..17], 8, false);
-                    rt::equal(
-                        &request::Trim::TRIMS_DESC,
-                        17 + 5,
-                        rt::packed_padding(&frame[17..23], 2, 24, false),
-                        0,
-                    )?;
-                    let v_trims = rt::fixed_elements::<
-                        i32,
-                        2,
-                    >(&frame[17..23], 3, false, false, true);
-                    rt::equal(
-                        &request::Trim::STAMP_DESC,
-                        23 + 7,
-                        rt::packed_padding(&frame[23..31], 1, 64, false),
-                        0,
-                    )?;
-                    let v_stamp = rt::fixed_elements::<
-                        u64,
-                        1,
-                    >(&frame[23..31], 8, false, false, false);
-                    rt::equal(
-                        &request::Trim::SCALE_DESC,
-                        31 + 7,
-                        rt::packed_padding(&frame[31..39], 1, 64, false),
-                        0,
-                    )?;
-                    let v_scale = rt::fixed_elements::<
-                        f64,
-                        1,
-                    >(&frame[31..39], 8, false, true, false);
-                    rt::Ok(
-                        Self::Trim(request::Trim {
-                            deltas: v_deltas,
-                            factors: v_factors,
-                            modes: v_modes,
-                            trims: v_trims,
-                            stamp: v_stamp,
-                            scale: v_scale,
-                        }),
-                    )
-                }
+                0x16 => request::Channels::from_frame(frame).map(Self::Channels),
+                0x17 => request::Levels::from_frame(frame).map(Self::Levels),
+                0x19 => request::Calibrate::from_frame(frame).map(Self::Calibrate),
+                0x1A => request::Trim::from_frame(frame).map(Self::Trim),
                 _ => rt::Err(REQUEST_CODE.unknown(frame)),
             }
         }
@@ -860,21 +699,7 @@ pub mod packed_channels {
         #[inline]
         fn dispatch(frame: &[u8]) -> rt::DecodeResult<Self> {
             match frame[2] {
-                0x18 => {
-                    let frame = rt::fixed::<12>(frame, &response::Readings::DESC)?;
-                    rt::equal(
-                        &response::Readings::READINGS_DESC,
-                        3 + 7,
-                        rt::packed_padding(&frame[3..11], 3, 20, false),
-                        0,
-                    )?;
-                    let v_readings = rt::unpack::<u32, 3>(&frame[3..11], 20, false);
-                    rt::Ok(
-                        Self::Readings(response::Readings {
-                            readings: v_readings,
-                        }),
-                    )
-                }
+                0x18 => response::Readings::from_frame(frame).map(Self::Readings),
                 _ => rt::Err(RESPONSE_CODE.unknown(frame)),
             }
         }
@@ -1058,6 +883,30 @@ pub mod packed_channels {
         pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             Request::Channels(*self).encode(address, buf)
         }
+        /// Reads this message from a frame whose framing and code are checked.
+        #[inline(always)]
+        fn from_frame(frame: &[u8]) -> rt::DecodeResult<Self> {
+            let frame = rt::fixed::<11>(frame, &Self::DESC)?;
+            rt::equal(
+                &Self::CHANNELS_DESC,
+                3 + 5,
+                rt::packed_padding(&frame[3..9], 4, 11, true),
+                0,
+            )?;
+            let v_channels = rt::unpack::<u16, 4>(&frame[3..9], 11, true);
+            rt::packed_in_range(
+                &Self::CHANNELS_DESC,
+                3,
+                11,
+                v_channels.as_slice(),
+                0,
+                1999,
+            )?;
+            rt::Ok(Self {
+                channels: v_channels,
+                flags: frame[9],
+            })
+        }
     }
     impl request::Levels {
         pub const NAME: &'static str = "levels";
@@ -1073,6 +922,23 @@ pub mod packed_channels {
         }
         pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             Request::Levels(*self).encode(address, buf)
+        }
+        /// Reads this message from a frame whose framing and code are checked.
+        #[inline(always)]
+        fn from_frame(frame: &[u8]) -> rt::DecodeResult<Self> {
+            let frame = rt::fixed::<7>(frame, &Self::DESC)?;
+            rt::equal(
+                &Self::LEVELS_DESC,
+                4 + 1,
+                rt::packed_padding(&frame[4..6], 5, 3, false),
+                0,
+            )?;
+            let v_levels = rt::unpack::<u8, 5>(&frame[4..6], 3, false);
+            rt::packed_in_range(&Self::LEVELS_DESC, 4, 3, v_levels.as_slice(), 0, 6)?;
+            rt::Ok(Self {
+                bank: frame[3],
+                levels: v_levels,
+            })
         }
     }
     impl request::Calibrate {
@@ -1090,6 +956,30 @@ pub mod packed_channels {
         }
         pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             Request::Calibrate(*self).encode(address, buf)
+        }
+        /// Reads this message from a frame whose framing and code are checked.
+        #[inline(always)]
+        fn from_frame(frame: &[u8]) -> rt::DecodeResult<Self> {
+            let frame = rt::fixed::<12>(frame, &Self::DESC)?;
+            rt::equal(
+                &Self::OFFSETS_DESC,
+                3 + 5,
+                rt::packed_padding(&frame[3..9], 3, 16, false),
+                0,
+            )?;
+            let v_offsets = rt::unpack::<u16, 3>(&frame[3..9], 16, false);
+            rt::equal(
+                &Self::GAINS_DESC,
+                9 + 1,
+                rt::packed_padding(&frame[9..11], 2, 8, false),
+                0,
+            )?;
+            let v_gains = rt::unpack::<u8, 2>(&frame[9..11], 8, false);
+            rt::packed_in_range(&Self::GAINS_DESC, 9, 8, v_gains.as_slice(), 1, 9)?;
+            rt::Ok(Self {
+                offsets: v_offsets,
+                gains: v_gains,
+            })
         }
     }
     impl request::Trim {
@@ -1120,6 +1010,92 @@ pub mod packed_channels {
         pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             Request::Trim(*self).encode(address, buf)
         }
+        /// Reads this message from a frame whose framing and code are checked.
+        #[inline(always)]
+        fn from_frame(frame: &[u8]) -> rt::DecodeResult<Self> {
+            let frame = rt::fixed::<40>(frame, &Self::DESC)?;
+            rt::equal(
+                &Self::DELTAS_DESC,
+                3 + 3,
+                rt::packed_padding(&frame[3..7], 2, 16, false),
+                0,
+            )?;
+            let v_deltas = rt::fixed_elements::<
+                TenthDegree,
+                2,
+            >(&frame[3..7], 2, false, false, true);
+            rt::packed_in_range(
+                &Self::DELTAS_DESC,
+                3,
+                16,
+                v_deltas.as_slice(),
+                -900,
+                900,
+            )?;
+            rt::equal(
+                &Self::FACTORS_DESC,
+                7 + 7,
+                rt::packed_padding(&frame[7..15], 2, 32, false),
+                0,
+            )?;
+            let v_factors = rt::fixed_elements::<
+                f32,
+                2,
+            >(&frame[7..15], 4, false, false, false);
+            rt::packed_in_range(
+                &Self::FACTORS_DESC,
+                7,
+                32,
+                v_factors.as_slice(),
+                3221225472,
+                1073741824,
+            )?;
+            rt::equal(
+                &Self::MODES_DESC,
+                15 + 1,
+                rt::packed_padding(&frame[15..17], 2, 8, false),
+                0,
+            )?;
+            let v_modes = rt::unpack::<Mode, 2>(&frame[15..17], 8, false);
+            rt::equal(
+                &Self::TRIMS_DESC,
+                17 + 5,
+                rt::packed_padding(&frame[17..23], 2, 24, false),
+                0,
+            )?;
+            let v_trims = rt::fixed_elements::<
+                i32,
+                2,
+            >(&frame[17..23], 3, false, false, true);
+            rt::equal(
+                &Self::STAMP_DESC,
+                23 + 7,
+                rt::packed_padding(&frame[23..31], 1, 64, false),
+                0,
+            )?;
+            let v_stamp = rt::fixed_elements::<
+                u64,
+                1,
+            >(&frame[23..31], 8, false, false, false);
+            rt::equal(
+                &Self::SCALE_DESC,
+                31 + 7,
+                rt::packed_padding(&frame[31..39], 1, 64, false),
+                0,
+            )?;
+            let v_scale = rt::fixed_elements::<
+                f64,
+                1,
+            >(&frame[31..39], 8, false, true, false);
+            rt::Ok(Self {
+                deltas: v_deltas,
+                factors: v_factors,
+                modes: v_modes,
+                trims: v_trims,
+                stamp: v_stamp,
+                scale: v_scale,
+            })
+        }
     }
     impl response::Readings {
         pub const NAME: &'static str = "readings";
@@ -1133,6 +1109,19 @@ pub mod packed_channels {
         }
         pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             Response::Readings(*self).encode(address, buf)
+        }
+        /// Reads this message from a frame whose framing and code are checked.
+        #[inline(always)]
+        fn from_frame(frame: &[u8]) -> rt::DecodeResult<Self> {
+            let frame = rt::fixed::<12>(frame, &Self::DESC)?;
+            rt::equal(
+                &Self::READINGS_DESC,
+                3 + 7,
+                rt::packed_padding(&frame[3..11], 3, 20, false),
+                0,
+            )?;
+            let v_readings = rt::unpack::<u32, 3>(&frame[3..11], 20, false);
+            rt::Ok(Self { readings: v_readings })
         }
     }
     /// Each request as a struct of its own; its constants (`DESC`, which names it as

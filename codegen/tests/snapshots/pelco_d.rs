@@ -256,24 +256,7 @@ pub mod pelco_d2 {
                         return {
                             let mut g = rt::Group::new(frame, 0x0003, rt::None);
                             g.attempt(|frame: &[u8; 7]| {
-                                rt::equal(
-                                    &request::SetPreset::DATA1_DESC,
-                                    4,
-                                    frame[4],
-                                    0x0,
-                                )?;
-                                rt::in_range(
-                                    &request::SetPreset::PRESET_DESC,
-                                    5,
-                                    frame[5],
-                                    1,
-                                    255,
-                                )?;
-                                rt::Ok(
-                                    Self::SetPreset(request::SetPreset {
-                                        preset: frame[5],
-                                    }),
-                                )
+                                request::SetPreset::from_frame(frame).map(Self::SetPreset)
                             });
                             g.attempt(Self::codeless_ptz);
                             g.end(&request::SetPreset::DESC)
@@ -283,24 +266,7 @@ pub mod pelco_d2 {
                         return {
                             let mut g = rt::Group::new(frame, 0x0007, rt::None);
                             g.attempt(|frame: &[u8; 7]| {
-                                rt::equal(
-                                    &request::GoToPreset::DATA1_DESC,
-                                    4,
-                                    frame[4],
-                                    0x0,
-                                )?;
-                                rt::in_range(
-                                    &request::GoToPreset::PRESET_DESC,
-                                    5,
-                                    frame[5],
-                                    1,
-                                    255,
-                                )?;
-                                rt::Ok(
-                                    Self::GoToPreset(request::GoToPreset {
-                                        preset: frame[5],
-                                    }),
-                                )
+                                request::GoToPreset::from_frame(frame).map(Self::GoToPreset)
                             });
                             g.attempt(Self::codeless_ptz);
                             g.end(&request::GoToPreset::DESC)
@@ -550,14 +516,7 @@ pub mod pelco_d2 {
         /// The message of a frame that passed the checks every frame passes, by its code.
         #[inline]
         fn dispatch(frame: &[u8]) -> rt::DecodeResult<Self> {
-            {
-                let frame = rt::fixed::<4>(frame, &response::GeneralResponse::DESC)?;
-                rt::Ok(
-                    Self::GeneralResponse(response::GeneralResponse {
-                        alarms: Alarms::from_raw(frame[2]),
-                    }),
-                )
-            }
+            response::GeneralResponse::from_frame(frame).map(Self::GeneralResponse)
         }
         /// The message called `name` in the spec, from each field's raw wire value by its spec
         /// name, as [`Self::visit`] gives them (`None`: no value); constant and repeated fields
@@ -770,6 +729,14 @@ pub mod pelco_d2 {
         pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             Request::SetPreset(*self).encode(address, buf)
         }
+        /// Reads this message from a frame whose framing and code are checked.
+        #[inline(always)]
+        fn from_frame(frame: &[u8]) -> rt::DecodeResult<Self> {
+            let frame = rt::fixed::<7>(frame, &Self::DESC)?;
+            rt::equal(&Self::DATA1_DESC, 4, frame[4], 0x0)?;
+            rt::in_range(&Self::PRESET_DESC, 5, frame[5], 1, 255)?;
+            rt::Ok(Self { preset: frame[5] })
+        }
     }
     impl request::GoToPreset {
         pub const NAME: &'static str = "go_to_preset";
@@ -785,6 +752,14 @@ pub mod pelco_d2 {
         pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             Request::GoToPreset(*self).encode(address, buf)
         }
+        /// Reads this message from a frame whose framing and code are checked.
+        #[inline(always)]
+        fn from_frame(frame: &[u8]) -> rt::DecodeResult<Self> {
+            let frame = rt::fixed::<7>(frame, &Self::DESC)?;
+            rt::equal(&Self::DATA1_DESC, 4, frame[4], 0x0)?;
+            rt::in_range(&Self::PRESET_DESC, 5, frame[5], 1, 255)?;
+            rt::Ok(Self { preset: frame[5] })
+        }
     }
     impl response::GeneralResponse {
         pub const NAME: &'static str = "general_response";
@@ -797,6 +772,14 @@ pub mod pelco_d2 {
         }
         pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             Response::GeneralResponse(*self).encode(address, buf)
+        }
+        /// Reads this message from a frame whose framing and code are checked.
+        #[inline(always)]
+        fn from_frame(frame: &[u8]) -> rt::DecodeResult<Self> {
+            let frame = rt::fixed::<4>(frame, &Self::DESC)?;
+            rt::Ok(Self {
+                alarms: Alarms::from_raw(frame[2]),
+            })
         }
     }
     /// Each request as a struct of its own; its constants (`DESC`, which names it as

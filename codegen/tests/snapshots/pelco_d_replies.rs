@@ -349,24 +349,8 @@ pub mod pelco_d_replies {
                         return {
                             let mut g = rt::Group::new(frame, 0x0009, rt::None);
                             g.attempt(|frame: &[u8; 7]| {
-                                rt::equal(
-                                    &request::SetAuxiliary::DATA1_DESC,
-                                    4,
-                                    frame[4],
-                                    0x0,
-                                )?;
-                                rt::in_range(
-                                    &request::SetAuxiliary::AUXILIARY_DESC,
-                                    5,
-                                    frame[5],
-                                    1,
-                                    8,
-                                )?;
-                                rt::Ok(
-                                    Self::SetAuxiliary(request::SetAuxiliary {
-                                        auxiliary: frame[5],
-                                    }),
-                                )
+                                request::SetAuxiliary::from_frame(frame)
+                                    .map(Self::SetAuxiliary)
                             });
                             g.attempt(Self::codeless_ptz);
                             g.end(&request::SetAuxiliary::DESC)
@@ -376,13 +360,8 @@ pub mod pelco_d_replies {
                         return {
                             let mut g = rt::Group::new(frame, 0x0051, rt::None);
                             g.attempt(|frame: &[u8; 7]| {
-                                rt::equal(
-                                    &request::QueryPanPosition::DATA_DESC,
-                                    4,
-                                    u16::from_be_bytes([frame[4], frame[5]]),
-                                    0x0,
-                                )?;
-                                rt::Ok(Self::QueryPanPosition(request::QueryPanPosition))
+                                request::QueryPanPosition::from_frame(frame)
+                                    .map(Self::QueryPanPosition)
                             });
                             g.attempt(Self::codeless_ptz);
                             g.end(&request::QueryPanPosition::DESC)
@@ -392,24 +371,7 @@ pub mod pelco_d_replies {
                         return {
                             let mut g = rt::Group::new(frame, 0x0007, rt::None);
                             g.attempt(|frame: &[u8; 7]| {
-                                rt::equal(
-                                    &request::GoToPreset::DATA1_DESC,
-                                    4,
-                                    frame[4],
-                                    0x0,
-                                )?;
-                                rt::in_range(
-                                    &request::GoToPreset::PRESET_DESC,
-                                    5,
-                                    frame[5],
-                                    1,
-                                    255,
-                                )?;
-                                rt::Ok(
-                                    Self::GoToPreset(request::GoToPreset {
-                                        preset: frame[5],
-                                    }),
-                                )
+                                request::GoToPreset::from_frame(frame).map(Self::GoToPreset)
                             });
                             g.attempt(Self::codeless_ptz);
                             g.end(&request::GoToPreset::DESC)
@@ -752,13 +714,8 @@ pub mod pelco_d_replies {
                                 request.map(Request::name),
                             );
                             g.attempt(|frame: &[u8; 7]| {
-                                rt::Ok(
-                                    Self::PanPositionResponse(response::PanPositionResponse {
-                                        position: Hundredths::from_raw(
-                                            u16::from_be_bytes([frame[4], frame[5]]),
-                                        ),
-                                    }),
-                                )
+                                response::PanPositionResponse::from_frame(frame)
+                                    .map(Self::PanPositionResponse)
                             });
                             g.attempt(Self::codeless_general_response);
                             g.end(&response::PanPositionResponse::DESC)
@@ -1018,6 +975,14 @@ pub mod pelco_d_replies {
         pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             Request::SetAuxiliary(*self).encode(address, buf)
         }
+        /// Reads this message from a frame whose framing and code are checked.
+        #[inline(always)]
+        fn from_frame(frame: &[u8]) -> rt::DecodeResult<Self> {
+            let frame = rt::fixed::<7>(frame, &Self::DESC)?;
+            rt::equal(&Self::DATA1_DESC, 4, frame[4], 0x0)?;
+            rt::in_range(&Self::AUXILIARY_DESC, 5, frame[5], 1, 8)?;
+            rt::Ok(Self { auxiliary: frame[5] })
+        }
     }
     impl request::QueryPanPosition {
         pub const NAME: &'static str = "query_pan_position";
@@ -1027,6 +992,18 @@ pub mod pelco_d_replies {
         pub const DATA_DESC: rt::FieldDesc = rt::field(Self::NAME, "data");
         pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             Request::QueryPanPosition(*self).encode(address, buf)
+        }
+        /// Reads this message from a frame whose framing and code are checked.
+        #[inline(always)]
+        fn from_frame(frame: &[u8]) -> rt::DecodeResult<Self> {
+            let frame = rt::fixed::<7>(frame, &Self::DESC)?;
+            rt::equal(
+                &Self::DATA_DESC,
+                4,
+                u16::from_be_bytes([frame[4], frame[5]]),
+                0x0,
+            )?;
+            rt::Ok(Self)
         }
     }
     impl request::GoToPreset {
@@ -1042,6 +1019,14 @@ pub mod pelco_d_replies {
         }
         pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             Request::GoToPreset(*self).encode(address, buf)
+        }
+        /// Reads this message from a frame whose framing and code are checked.
+        #[inline(always)]
+        fn from_frame(frame: &[u8]) -> rt::DecodeResult<Self> {
+            let frame = rt::fixed::<7>(frame, &Self::DESC)?;
+            rt::equal(&Self::DATA1_DESC, 4, frame[4], 0x0)?;
+            rt::in_range(&Self::PRESET_DESC, 5, frame[5], 1, 255)?;
+            rt::Ok(Self { preset: frame[5] })
         }
     }
     impl response::GeneralResponse {
@@ -1068,6 +1053,14 @@ pub mod pelco_d_replies {
         }
         pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             Response::PanPositionResponse(*self).encode(address, buf)
+        }
+        /// Reads this message from a frame whose framing and code are checked.
+        #[inline(always)]
+        fn from_frame(frame: &[u8]) -> rt::DecodeResult<Self> {
+            let frame = rt::fixed::<7>(frame, &Self::DESC)?;
+            rt::Ok(Self {
+                position: Hundredths::from_raw(u16::from_be_bytes([frame[4], frame[5]])),
+            })
         }
     }
     /// Each request as a struct of its own; its constants (`DESC`, which names it as

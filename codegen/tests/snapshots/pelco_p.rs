@@ -216,24 +216,7 @@ pub mod pelco_p {
                         return {
                             let mut g = rt::Group::new(frame, 0x0003, rt::None);
                             g.attempt(|frame: &[u8; 8]| {
-                                rt::equal(
-                                    &request::SetPreset::DATA3_DESC,
-                                    4,
-                                    frame[4],
-                                    0x0,
-                                )?;
-                                rt::in_range(
-                                    &request::SetPreset::PRESET_DESC,
-                                    5,
-                                    frame[5],
-                                    1,
-                                    255,
-                                )?;
-                                rt::Ok(
-                                    Self::SetPreset(request::SetPreset {
-                                        preset: frame[5],
-                                    }),
-                                )
+                                request::SetPreset::from_frame(frame).map(Self::SetPreset)
                             });
                             g.attempt(Self::codeless_ptz);
                             g.end(&request::SetPreset::DESC)
@@ -243,24 +226,7 @@ pub mod pelco_p {
                         return {
                             let mut g = rt::Group::new(frame, 0x0007, rt::None);
                             g.attempt(|frame: &[u8; 8]| {
-                                rt::equal(
-                                    &request::GoToPreset::DATA3_DESC,
-                                    4,
-                                    frame[4],
-                                    0x0,
-                                )?;
-                                rt::in_range(
-                                    &request::GoToPreset::PRESET_DESC,
-                                    5,
-                                    frame[5],
-                                    1,
-                                    255,
-                                )?;
-                                rt::Ok(
-                                    Self::GoToPreset(request::GoToPreset {
-                                        preset: frame[5],
-                                    }),
-                                )
+                                request::GoToPreset::from_frame(frame).map(Self::GoToPreset)
                             });
                             g.attempt(Self::codeless_ptz);
                             g.end(&request::GoToPreset::DESC)
@@ -705,6 +671,14 @@ pub mod pelco_p {
         pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             Request::SetPreset(*self).encode(address, buf)
         }
+        /// Reads this message from a frame whose framing and code are checked.
+        #[inline(always)]
+        fn from_frame(frame: &[u8]) -> rt::DecodeResult<Self> {
+            let frame = rt::fixed::<8>(frame, &Self::DESC)?;
+            rt::equal(&Self::DATA3_DESC, 4, frame[4], 0x0)?;
+            rt::in_range(&Self::PRESET_DESC, 5, frame[5], 1, 255)?;
+            rt::Ok(Self { preset: frame[5] })
+        }
     }
     impl request::GoToPreset {
         pub const NAME: &'static str = "go_to_preset";
@@ -719,6 +693,14 @@ pub mod pelco_p {
         }
         pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             Request::GoToPreset(*self).encode(address, buf)
+        }
+        /// Reads this message from a frame whose framing and code are checked.
+        #[inline(always)]
+        fn from_frame(frame: &[u8]) -> rt::DecodeResult<Self> {
+            let frame = rt::fixed::<8>(frame, &Self::DESC)?;
+            rt::equal(&Self::DATA3_DESC, 4, frame[4], 0x0)?;
+            rt::in_range(&Self::PRESET_DESC, 5, frame[5], 1, 255)?;
+            rt::Ok(Self { preset: frame[5] })
         }
     }
     /// Each request as a struct of its own; its constants (`DESC`, which names it as

@@ -612,21 +612,7 @@ pub mod records {
                         }),
                     )
                 }
-                0x85 => {
-                    let frame = rt::fixed::<5>(frame, &request::ReadStatus::DESC)?;
-                    rt::in_range(
-                        &request::ReadStatus::QUANTITY_DESC,
-                        3,
-                        frame[3],
-                        1,
-                        6,
-                    )?;
-                    rt::Ok(
-                        Self::ReadStatus(request::ReadStatus {
-                            quantity: frame[3],
-                        }),
-                    )
-                }
+                0x85 => request::ReadStatus::from_frame(frame).map(Self::ReadStatus),
                 _ => rt::Err(REQUEST_CODE.unknown(frame)),
             }
         }
@@ -917,10 +903,7 @@ pub mod records {
         #[inline]
         fn dispatch(frame: &[u8]) -> rt::DecodeResult<Self> {
             match frame[2] {
-                0x80 => {
-                    let frame = rt::fixed::<5>(frame, &response::Ack::DESC)?;
-                    rt::Ok(Self::Ack(response::Ack { status: frame[3] }))
-                }
+                0x80 => response::Ack::from_frame(frame).map(Self::Ack),
                 0x85 => {
                     let (_, elements, _) = REPEAT_STATUS_REPLY.split::<3>(frame)?;
                     let mut v_readings = rt::Repeated::<StatusReplyReadings, 6>::new();
@@ -1193,6 +1176,13 @@ pub mod records {
         pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             Request::ReadStatus(*self).encode(address, buf)
         }
+        /// Reads this message from a frame whose framing and code are checked.
+        #[inline(always)]
+        fn from_frame(frame: &[u8]) -> rt::DecodeResult<Self> {
+            let frame = rt::fixed::<5>(frame, &Self::DESC)?;
+            rt::in_range(&Self::QUANTITY_DESC, 3, frame[3], 1, 6)?;
+            rt::Ok(Self { quantity: frame[3] })
+        }
     }
     impl response::Ack {
         pub const NAME: &'static str = "ack";
@@ -1205,6 +1195,12 @@ pub mod records {
         }
         pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             Response::Ack(*self).encode(address, buf)
+        }
+        /// Reads this message from a frame whose framing and code are checked.
+        #[inline(always)]
+        fn from_frame(frame: &[u8]) -> rt::DecodeResult<Self> {
+            let frame = rt::fixed::<5>(frame, &Self::DESC)?;
+            rt::Ok(Self { status: frame[3] })
         }
     }
     impl response::StatusReply {

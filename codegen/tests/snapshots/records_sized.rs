@@ -708,10 +708,7 @@ pub mod records_sized {
         #[inline]
         fn dispatch(frame: &[u8]) -> rt::DecodeResult<Self> {
             match frame[3] {
-                0x55 => {
-                    let frame = rt::fixed::<6>(frame, &response::Ack::DESC)?;
-                    rt::Ok(Self::Ack(response::Ack { error: frame[4] }))
-                }
+                0x55 => response::Ack::from_frame(frame).map(Self::Ack),
                 _ => rt::Err(RESPONSE_CODE.unknown(frame)),
             }
         }
@@ -955,6 +952,12 @@ pub mod records_sized {
         }
         pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             Response::Ack(*self).encode(address, buf)
+        }
+        /// Reads this message from a frame whose framing and code are checked.
+        #[inline(always)]
+        fn from_frame(frame: &[u8]) -> rt::DecodeResult<Self> {
+            let frame = rt::fixed::<6>(frame, &Self::DESC)?;
+            rt::Ok(Self { error: frame[4] })
         }
     }
     /// Each request as a struct of its own; its constants (`DESC`, which names it as

@@ -660,34 +660,11 @@ pub mod roboclaw {
         fn dispatch(frame: &[u8]) -> rt::DecodeResult<Self> {
             match frame[1] {
                 0x00 => {
-                    let frame = rt::fixed::<5>(frame, &request::DriveForwardM1::DESC)?;
-                    rt::in_range(
-                        &request::DriveForwardM1::SPEED_DESC,
-                        2,
-                        frame[2],
-                        0,
-                        127,
-                    )?;
-                    rt::Ok(
-                        Self::DriveForwardM1(request::DriveForwardM1 {
-                            speed: frame[2],
-                        }),
-                    )
+                    request::DriveForwardM1::from_frame(frame).map(Self::DriveForwardM1)
                 }
                 0x01 => {
-                    let frame = rt::fixed::<5>(frame, &request::DriveBackwardM1::DESC)?;
-                    rt::in_range(
-                        &request::DriveBackwardM1::SPEED_DESC,
-                        2,
-                        frame[2],
-                        0,
-                        127,
-                    )?;
-                    rt::Ok(
-                        Self::DriveBackwardM1(request::DriveBackwardM1 {
-                            speed: frame[2],
-                        }),
-                    )
+                    request::DriveBackwardM1::from_frame(frame)
+                        .map(Self::DriveBackwardM1)
                 }
                 0x10 => {
                     rt::fixed::<2>(frame, &request::ReadEncoderM1::DESC)
@@ -713,31 +690,8 @@ pub mod roboclaw {
                     rt::fixed::<2>(frame, &request::ReadLogicBattery::DESC)
                         .map(|_| Self::ReadLogicBattery(request::ReadLogicBattery))
                 }
-                0x20 => {
-                    let frame = rt::fixed::<6>(frame, &request::DutyM1::DESC)?;
-                    let field_0: i16 = i16::from_be_bytes([frame[2], frame[3]]);
-                    rt::in_range(
-                        &request::DutyM1::DUTY_DESC,
-                        2,
-                        field_0,
-                        -32767,
-                        32767,
-                    )?;
-                    rt::Ok(Self::DutyM1(request::DutyM1 { duty: field_0 }))
-                }
-                0x23 => {
-                    let frame = rt::fixed::<8>(frame, &request::SpeedM1::DESC)?;
-                    rt::Ok(
-                        Self::SpeedM1(request::SpeedM1 {
-                            speed: i32::from_be_bytes([
-                                frame[2],
-                                frame[3],
-                                frame[4],
-                                frame[5],
-                            ]),
-                        }),
-                    )
-                }
+                0x20 => request::DutyM1::from_frame(frame).map(Self::DutyM1),
+                0x23 => request::SpeedM1::from_frame(frame).map(Self::SpeedM1),
                 0x31 => {
                     rt::fixed::<2>(frame, &request::ReadCurrents::DESC)
                         .map(|_| Self::ReadCurrents(request::ReadCurrents))
@@ -1171,41 +1125,21 @@ pub mod roboclaw {
             {
                 let mut g = rt::Group::new(frame, 0u32, request.map(Request::name));
                 g.attempt(|frame: &[u8; 1]| {
-                    rt::equal(&response::Ack::ACK_DESC, 0, frame[0], 0xFF)?;
-                    rt::Ok(Self::Ack(response::Ack))
+                    response::Ack::from_frame(frame).map(Self::Ack)
                 });
                 g.ambiguous(
                     asked >> 1 & 1 != 0,
                     &response::EncoderM1::DESC,
                     |frame: &[u8; 7]| {
-                        rt::Ok(
-                            Self::EncoderM1(response::EncoderM1 {
-                                count: i32::from_be_bytes([
-                                    frame[0],
-                                    frame[1],
-                                    frame[2],
-                                    frame[3],
-                                ]),
-                                status: EncoderStatus::from_raw(frame[4]),
-                            }),
-                        )
+                        response::EncoderM1::from_frame(frame).map(Self::EncoderM1)
                     },
                 );
                 g.ambiguous(
                     asked >> 2 & 1 != 0,
                     &response::EncoderSpeedM1::DESC,
                     |frame: &[u8; 7]| {
-                        rt::Ok(
-                            Self::EncoderSpeedM1(response::EncoderSpeedM1 {
-                                speed: i32::from_be_bytes([
-                                    frame[0],
-                                    frame[1],
-                                    frame[2],
-                                    frame[3],
-                                ]),
-                                direction: Direction::from_raw(frame[4]),
-                            }),
-                        )
+                        response::EncoderSpeedM1::from_frame(frame)
+                            .map(Self::EncoderSpeedM1)
                     },
                 );
                 g.ambiguous_lists::<
@@ -1230,68 +1164,35 @@ pub mod roboclaw {
                     asked >> 4 & 1 != 0,
                     &response::MainBattery::DESC,
                     |frame: &[u8; 4]| {
-                        rt::Ok(
-                            Self::MainBattery(response::MainBattery {
-                                voltage: Decivolts::from_raw(
-                                    u16::from_be_bytes([frame[0], frame[1]]),
-                                ),
-                            }),
-                        )
+                        response::MainBattery::from_frame(frame).map(Self::MainBattery)
                     },
                 );
                 g.ambiguous(
                     asked >> 5 & 1 != 0,
                     &response::LogicBattery::DESC,
                     |frame: &[u8; 4]| {
-                        rt::Ok(
-                            Self::LogicBattery(response::LogicBattery {
-                                voltage: Decivolts::from_raw(
-                                    u16::from_be_bytes([frame[0], frame[1]]),
-                                ),
-                            }),
-                        )
+                        response::LogicBattery::from_frame(frame).map(Self::LogicBattery)
                     },
                 );
                 g.ambiguous(
                     asked >> 6 & 1 != 0,
                     &response::Currents::DESC,
                     |frame: &[u8; 6]| {
-                        rt::Ok(
-                            Self::Currents(response::Currents {
-                                m1: Centiamps::from_raw(
-                                    i16::from_be_bytes([frame[0], frame[1]]),
-                                ),
-                                m2: Centiamps::from_raw(
-                                    i16::from_be_bytes([frame[2], frame[3]]),
-                                ),
-                            }),
-                        )
+                        response::Currents::from_frame(frame).map(Self::Currents)
                     },
                 );
                 g.ambiguous(
                     asked >> 7 & 1 != 0,
                     &response::Temperature::DESC,
                     |frame: &[u8; 4]| {
-                        rt::Ok(
-                            Self::Temperature(response::Temperature {
-                                temperature: Decidegrees::from_raw(
-                                    u16::from_be_bytes([frame[0], frame[1]]),
-                                ),
-                            }),
-                        )
+                        response::Temperature::from_frame(frame).map(Self::Temperature)
                     },
                 );
                 g.ambiguous(
                     asked >> 8 & 1 != 0,
                     &response::Status::DESC,
                     |frame: &[u8; 6]| {
-                        rt::Ok(
-                            Self::Status(response::Status {
-                                status: Status::from_raw(
-                                    u32::from_be_bytes([frame[0], frame[1], frame[2], frame[3]]),
-                                ),
-                            }),
-                        )
+                        response::Status::from_frame(frame).map(Self::Status)
                     },
                 );
                 g.end(&response::Ack::DESC)
@@ -1830,6 +1731,13 @@ pub mod roboclaw {
         pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             Request::DriveForwardM1(*self).encode(address, buf)
         }
+        /// Reads this message from a frame whose framing and code are checked.
+        #[inline(always)]
+        fn from_frame(frame: &[u8]) -> rt::DecodeResult<Self> {
+            let frame = rt::fixed::<5>(frame, &Self::DESC)?;
+            rt::in_range(&Self::SPEED_DESC, 2, frame[2], 0, 127)?;
+            rt::Ok(Self { speed: frame[2] })
+        }
     }
     impl request::DriveBackwardM1 {
         pub const NAME: &'static str = "drive_backward_m1";
@@ -1843,6 +1751,13 @@ pub mod roboclaw {
         }
         pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             Request::DriveBackwardM1(*self).encode(address, buf)
+        }
+        /// Reads this message from a frame whose framing and code are checked.
+        #[inline(always)]
+        fn from_frame(frame: &[u8]) -> rt::DecodeResult<Self> {
+            let frame = rt::fixed::<5>(frame, &Self::DESC)?;
+            rt::in_range(&Self::SPEED_DESC, 2, frame[2], 0, 127)?;
+            rt::Ok(Self { speed: frame[2] })
         }
     }
     impl request::ReadEncoderM1 {
@@ -1912,6 +1827,14 @@ pub mod roboclaw {
         pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             Request::DutyM1(*self).encode(address, buf)
         }
+        /// Reads this message from a frame whose framing and code are checked.
+        #[inline(always)]
+        fn from_frame(frame: &[u8]) -> rt::DecodeResult<Self> {
+            let frame = rt::fixed::<6>(frame, &Self::DESC)?;
+            let field_0: i16 = i16::from_be_bytes([frame[2], frame[3]]);
+            rt::in_range(&Self::DUTY_DESC, 2, field_0, -32767, 32767)?;
+            rt::Ok(Self { duty: field_0 })
+        }
     }
     impl request::SpeedM1 {
         pub const NAME: &'static str = "speed_m1";
@@ -1924,6 +1847,14 @@ pub mod roboclaw {
         }
         pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             Request::SpeedM1(*self).encode(address, buf)
+        }
+        /// Reads this message from a frame whose framing and code are checked.
+        #[inline(always)]
+        fn from_frame(frame: &[u8]) -> rt::DecodeResult<Self> {
+            let frame = rt::fixed::<8>(frame, &Self::DESC)?;
+            rt::Ok(Self {
+                speed: i32::from_be_bytes([frame[2], frame[3], frame[4], frame[5]]),
+            })
         }
     }
     impl request::ReadCurrents {
@@ -1962,6 +1893,13 @@ pub mod roboclaw {
         pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             Response::Ack(*self).encode(address, buf)
         }
+        /// Reads this message from a frame whose framing and code are checked.
+        #[inline(always)]
+        fn from_frame(frame: &[u8]) -> rt::DecodeResult<Self> {
+            let frame = rt::fixed::<1>(frame, &Self::DESC)?;
+            rt::equal(&Self::ACK_DESC, 0, frame[0], 0xFF)?;
+            rt::Ok(Self)
+        }
     }
     impl response::EncoderM1 {
         pub const NAME: &'static str = "encoder_m1";
@@ -1977,6 +1915,15 @@ pub mod roboclaw {
         pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             Response::EncoderM1(*self).encode(address, buf)
         }
+        /// Reads this message from a frame whose framing and code are checked.
+        #[inline(always)]
+        fn from_frame(frame: &[u8]) -> rt::DecodeResult<Self> {
+            let frame = rt::fixed::<7>(frame, &Self::DESC)?;
+            rt::Ok(Self {
+                count: i32::from_be_bytes([frame[0], frame[1], frame[2], frame[3]]),
+                status: EncoderStatus::from_raw(frame[4]),
+            })
+        }
     }
     impl response::EncoderSpeedM1 {
         pub const NAME: &'static str = "encoder_speed_m1";
@@ -1991,6 +1938,15 @@ pub mod roboclaw {
         }
         pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             Response::EncoderSpeedM1(*self).encode(address, buf)
+        }
+        /// Reads this message from a frame whose framing and code are checked.
+        #[inline(always)]
+        fn from_frame(frame: &[u8]) -> rt::DecodeResult<Self> {
+            let frame = rt::fixed::<7>(frame, &Self::DESC)?;
+            rt::Ok(Self {
+                speed: i32::from_be_bytes([frame[0], frame[1], frame[2], frame[3]]),
+                direction: Direction::from_raw(frame[4]),
+            })
         }
     }
     impl response::FirmwareVersion {
@@ -2019,6 +1975,14 @@ pub mod roboclaw {
         pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             Response::MainBattery(*self).encode(address, buf)
         }
+        /// Reads this message from a frame whose framing and code are checked.
+        #[inline(always)]
+        fn from_frame(frame: &[u8]) -> rt::DecodeResult<Self> {
+            let frame = rt::fixed::<4>(frame, &Self::DESC)?;
+            rt::Ok(Self {
+                voltage: Decivolts::from_raw(u16::from_be_bytes([frame[0], frame[1]])),
+            })
+        }
     }
     impl response::LogicBattery {
         pub const NAME: &'static str = "logic_battery";
@@ -2031,6 +1995,14 @@ pub mod roboclaw {
         }
         pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             Response::LogicBattery(*self).encode(address, buf)
+        }
+        /// Reads this message from a frame whose framing and code are checked.
+        #[inline(always)]
+        fn from_frame(frame: &[u8]) -> rt::DecodeResult<Self> {
+            let frame = rt::fixed::<4>(frame, &Self::DESC)?;
+            rt::Ok(Self {
+                voltage: Decivolts::from_raw(u16::from_be_bytes([frame[0], frame[1]])),
+            })
         }
     }
     impl response::Currents {
@@ -2047,6 +2019,15 @@ pub mod roboclaw {
         pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             Response::Currents(*self).encode(address, buf)
         }
+        /// Reads this message from a frame whose framing and code are checked.
+        #[inline(always)]
+        fn from_frame(frame: &[u8]) -> rt::DecodeResult<Self> {
+            let frame = rt::fixed::<6>(frame, &Self::DESC)?;
+            rt::Ok(Self {
+                m1: Centiamps::from_raw(i16::from_be_bytes([frame[0], frame[1]])),
+                m2: Centiamps::from_raw(i16::from_be_bytes([frame[2], frame[3]])),
+            })
+        }
     }
     impl response::Temperature {
         pub const NAME: &'static str = "temperature";
@@ -2060,6 +2041,16 @@ pub mod roboclaw {
         pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             Response::Temperature(*self).encode(address, buf)
         }
+        /// Reads this message from a frame whose framing and code are checked.
+        #[inline(always)]
+        fn from_frame(frame: &[u8]) -> rt::DecodeResult<Self> {
+            let frame = rt::fixed::<4>(frame, &Self::DESC)?;
+            rt::Ok(Self {
+                temperature: Decidegrees::from_raw(
+                    u16::from_be_bytes([frame[0], frame[1]]),
+                ),
+            })
+        }
     }
     impl response::Status {
         pub const NAME: &'static str = "status";
@@ -2072,6 +2063,16 @@ pub mod roboclaw {
         }
         pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             Response::Status(*self).encode(address, buf)
+        }
+        /// Reads this message from a frame whose framing and code are checked.
+        #[inline(always)]
+        fn from_frame(frame: &[u8]) -> rt::DecodeResult<Self> {
+            let frame = rt::fixed::<6>(frame, &Self::DESC)?;
+            rt::Ok(Self {
+                status: Status::from_raw(
+                    u32::from_be_bytes([frame[0], frame[1], frame[2], frame[3]]),
+                ),
+            })
         }
     }
     /// Each request as a struct of its own; its constants (`DESC`, which names it as

@@ -891,917 +891,198 @@ pub mod sd {
         #[inline]
         fn dispatch(frame: &[u8]) -> rt::DecodeResult<Self> {
             match frame[0] {
-                0x76 => {
-                    let frame = rt::fixed::<6>(frame, &request::SetPoint::DESC)?;
-                    let field_0: u16 = u16::from_be_bytes([frame[2], frame[3]]);
-                    rt::Ok(
-                        Self::SetPoint(request::SetPoint {
-                            freshness: (field_0 >> 12) as u8,
-                            position: Angle::from_raw(
-                                (((field_0 & 0xFFF) as u16) << 4) as i16 >> 4,
-                            ),
-                        }),
-                    )
-                }
+                0x76 => request::SetPoint::from_frame(frame).map(Self::SetPoint),
                 0x69 => {
-                    let frame = rt::fixed::<
-                        6,
-                    >(frame, &request::ReadActualPosition::DESC)?;
-                    rt::equal(
-                        &request::ReadActualPosition::ARG1_DESC,
-                        2,
-                        frame[2],
-                        0x0,
-                    )?;
-                    rt::equal(
-                        &request::ReadActualPosition::ARG2_DESC,
-                        3,
-                        frame[3],
-                        0x0,
-                    )?;
-                    rt::Ok(Self::ReadActualPosition(request::ReadActualPosition))
+                    request::ReadActualPosition::from_frame(frame)
+                        .map(Self::ReadActualPosition)
                 }
-                0x77 => {
-                    let frame = rt::fixed::<6>(frame, &request::SetVelocity::DESC)?;
-                    rt::Ok(
-                        Self::SetVelocity(request::SetVelocity {
-                            set_velocity: Velocity::from_raw(
-                                i16::from_be_bytes([frame[2], frame[3]]),
-                            ),
-                        }),
-                    )
-                }
+                0x77 => request::SetVelocity::from_frame(frame).map(Self::SetVelocity),
                 0x68 => {
-                    let frame = rt::fixed::<
-                        6,
-                    >(frame, &request::ReadActualVelocity::DESC)?;
-                    rt::equal(
-                        &request::ReadActualVelocity::ARG1_DESC,
-                        2,
-                        frame[2],
-                        0x0,
-                    )?;
-                    rt::equal(
-                        &request::ReadActualVelocity::ARG2_DESC,
-                        3,
-                        frame[3],
-                        0x0,
-                    )?;
-                    rt::Ok(Self::ReadActualVelocity(request::ReadActualVelocity))
+                    request::ReadActualVelocity::from_frame(frame)
+                        .map(Self::ReadActualVelocity)
                 }
-                0xAA => {
-                    let frame = rt::fixed::<6>(frame, &request::SetServoId::DESC)?;
-                    rt::in_range(&request::SetServoId::NEW_ID_DESC, 2, frame[2], 1, 30)?;
-                    rt::same(
-                        &request::SetServoId::NEW_ID_REPEAT_DESC,
-                        3,
-                        frame[3],
-                        "new_id",
-                        frame[2],
-                    )?;
-                    rt::Ok(
-                        Self::SetServoId(request::SetServoId {
-                            new_id: frame[2],
-                        }),
-                    )
-                }
-                0xDA => {
-                    let frame = rt::fixed::<6>(frame, &request::ReadServoId::DESC)?;
-                    rt::equal(&request::ReadServoId::ARG1_DESC, 2, frame[2], 0x0)?;
-                    rt::equal(&request::ReadServoId::ARG2_DESC, 3, frame[3], 0x0)?;
-                    rt::Ok(Self::ReadServoId(request::ReadServoId))
-                }
+                0xAA => request::SetServoId::from_frame(frame).map(Self::SetServoId),
+                0xDA => request::ReadServoId::from_frame(frame).map(Self::ReadServoId),
                 0xB0 => {
-                    let frame = rt::fixed::<
-                        6,
-                    >(frame, &request::ReadCurrentConsumption::DESC)?;
-                    rt::no_broadcast(
-                        frame[1],
-                        0x1F,
-                        &request::ReadCurrentConsumption::DESC,
-                    )?;
-                    rt::equal(
-                        &request::ReadCurrentConsumption::ARG1_DESC,
-                        2,
-                        frame[2],
-                        0x0,
-                    )?;
-                    rt::equal(
-                        &request::ReadCurrentConsumption::ARG2_DESC,
-                        3,
-                        frame[3],
-                        0x0,
-                    )?;
-                    rt::Ok(Self::ReadCurrentConsumption(request::ReadCurrentConsumption))
+                    request::ReadCurrentConsumption::from_frame(frame)
+                        .map(Self::ReadCurrentConsumption)
                 }
                 0xB1 => {
-                    let frame = rt::fixed::<6>(frame, &request::ReadBusVoltages::DESC)?;
-                    rt::no_broadcast(frame[1], 0x1F, &request::ReadBusVoltages::DESC)?;
-                    rt::equal(&request::ReadBusVoltages::ARG1_DESC, 2, frame[2], 0x0)?;
-                    rt::equal(&request::ReadBusVoltages::ARG2_DESC, 3, frame[3], 0x0)?;
-                    rt::Ok(Self::ReadBusVoltages(request::ReadBusVoltages))
+                    request::ReadBusVoltages::from_frame(frame)
+                        .map(Self::ReadBusVoltages)
                 }
                 0xB2 => {
-                    let frame = rt::fixed::<
-                        6,
-                    >(frame, &request::ReadExtendedCurrentConsumption::DESC)?;
-                    rt::no_broadcast(
-                        frame[1],
-                        0x1F,
-                        &request::ReadExtendedCurrentConsumption::DESC,
-                    )?;
-                    rt::equal(
-                        &request::ReadExtendedCurrentConsumption::ARG1_DESC,
-                        2,
-                        frame[2],
-                        0x0,
-                    )?;
-                    rt::equal(
-                        &request::ReadExtendedCurrentConsumption::ARG2_DESC,
-                        3,
-                        frame[3],
-                        0x0,
-                    )?;
-                    rt::Ok(
-                        Self::ReadExtendedCurrentConsumption(
-                            request::ReadExtendedCurrentConsumption,
-                        ),
-                    )
+                    request::ReadExtendedCurrentConsumption::from_frame(frame)
+                        .map(Self::ReadExtendedCurrentConsumption)
                 }
                 0xA0 => {
-                    let frame = rt::fixed::<6>(frame, &request::ReadTemperatures::DESC)?;
-                    rt::no_broadcast(frame[1], 0x1F, &request::ReadTemperatures::DESC)?;
-                    rt::equal(&request::ReadTemperatures::ARG1_DESC, 2, frame[2], 0x0)?;
-                    rt::equal(&request::ReadTemperatures::ARG2_DESC, 3, frame[3], 0x0)?;
-                    rt::Ok(Self::ReadTemperatures(request::ReadTemperatures))
+                    request::ReadTemperatures::from_frame(frame)
+                        .map(Self::ReadTemperatures)
                 }
-                0xA1 => {
-                    let frame = rt::fixed::<6>(frame, &request::ReadHumidity::DESC)?;
-                    rt::no_broadcast(frame[1], 0x1F, &request::ReadHumidity::DESC)?;
-                    rt::equal(&request::ReadHumidity::ARG1_DESC, 2, frame[2], 0x0)?;
-                    rt::equal(&request::ReadHumidity::ARG2_DESC, 3, frame[3], 0x0)?;
-                    rt::Ok(Self::ReadHumidity(request::ReadHumidity))
-                }
+                0xA1 => request::ReadHumidity::from_frame(frame).map(Self::ReadHumidity),
                 0x37 => {
                     let mut g = rt::Group::new(frame, 0x37, rt::None);
                     g.attempt(|frame: &[u8; 6]| {
-                        rt::no_broadcast(
-                            frame[1],
-                            0x1F,
-                            &request::ReadSkippedFramesCounter::DESC,
-                        )?;
-                        rt::equal(
-                            &request::ReadSkippedFramesCounter::ARG1_DESC,
-                            2,
-                            frame[2],
-                            0x0,
-                        )?;
-                        rt::equal(
-                            &request::ReadSkippedFramesCounter::ARG2_DESC,
-                            3,
-                            frame[3],
-                            0x1,
-                        )?;
-                        rt::Ok(
-                            Self::ReadSkippedFramesCounter(
-                                request::ReadSkippedFramesCounter,
-                            ),
-                        )
+                        request::ReadSkippedFramesCounter::from_frame(frame)
+                            .map(Self::ReadSkippedFramesCounter)
                     });
                     g.attempt(|frame: &[u8; 6]| {
-                        rt::no_broadcast(
-                            frame[1],
-                            0x1F,
-                            &request::ResetDroppedFramesCounter::DESC,
-                        )?;
-                        rt::equal(
-                            &request::ResetDroppedFramesCounter::ARG1_DESC,
-                            2,
-                            frame[2],
-                            0x0,
-                        )?;
-                        rt::equal(
-                            &request::ResetDroppedFramesCounter::ARG2_DESC,
-                            3,
-                            frame[3],
-                            0x2,
-                        )?;
-                        rt::Ok(
-                            Self::ResetDroppedFramesCounter(
-                                request::ResetDroppedFramesCounter,
-                            ),
-                        )
+                        request::ResetDroppedFramesCounter::from_frame(frame)
+                            .map(Self::ResetDroppedFramesCounter)
                     });
                     g.end(&request::ReadSkippedFramesCounter::DESC)
                 }
                 0x40 => {
                     let mut g = rt::Group::new(frame, 0x40, rt::None);
                     g.attempt(|frame: &[u8; 6]| {
-                        rt::no_broadcast(
-                            frame[1],
-                            0x1F,
-                            &request::ReadActuatorStatusWord::DESC,
-                        )?;
-                        rt::equal(
-                            &request::ReadActuatorStatusWord::ARG1_DESC,
-                            2,
-                            frame[2],
-                            0xAA,
-                        )?;
-                        rt::equal(
-                            &request::ReadActuatorStatusWord::ARG2_DESC,
-                            3,
-                            frame[3],
-                            0x2,
-                        )?;
-                        rt::Ok(
-                            Self::ReadActuatorStatusWord(request::ReadActuatorStatusWord),
-                        )
+                        request::ReadActuatorStatusWord::from_frame(frame)
+                            .map(Self::ReadActuatorStatusWord)
                     });
                     g.attempt(|frame: &[u8; 6]| {
-                        rt::no_broadcast(
-                            frame[1],
-                            0x1F,
-                            &request::ResetActuatorStatusWord::DESC,
-                        )?;
-                        rt::equal(
-                            &request::ResetActuatorStatusWord::ARG1_DESC,
-                            2,
-                            frame[2],
-                            0xAA,
-                        )?;
-                        rt::equal(
-                            &request::ResetActuatorStatusWord::ARG2_DESC,
-                            3,
-                            frame[3],
-                            0x52,
-                        )?;
-                        rt::Ok(
-                            Self::ResetActuatorStatusWord(
-                                request::ResetActuatorStatusWord,
-                            ),
-                        )
+                        request::ResetActuatorStatusWord::from_frame(frame)
+                            .map(Self::ResetActuatorStatusWord)
                     });
                     g.end(&request::ReadActuatorStatusWord::DESC)
                 }
                 0xB4 => {
-                    let frame = rt::fixed::<
-                        6,
-                    >(frame, &request::ResetDefaultRoleAndErrorFlags::DESC)?;
-                    rt::no_broadcast(
-                        frame[1],
-                        0x1F,
-                        &request::ResetDefaultRoleAndErrorFlags::DESC,
-                    )?;
-                    rt::equal(
-                        &request::ResetDefaultRoleAndErrorFlags::ARG1_DESC,
-                        2,
-                        frame[2],
-                        0x41,
-                    )?;
-                    rt::equal(
-                        &request::ResetDefaultRoleAndErrorFlags::ARG2_DESC,
-                        3,
-                        frame[3],
-                        0x53,
-                    )?;
-                    rt::Ok(
-                        Self::ResetDefaultRoleAndErrorFlags(
-                            request::ResetDefaultRoleAndErrorFlags,
-                        ),
-                    )
+                    request::ResetDefaultRoleAndErrorFlags::from_frame(frame)
+                        .map(Self::ResetDefaultRoleAndErrorFlags)
                 }
                 0x99 => {
-                    let frame = rt::fixed::<
-                        6,
-                    >(frame, &request::SetCurrentPositionAsZero::DESC)?;
-                    rt::no_broadcast(
-                        frame[1],
-                        0x1F,
-                        &request::SetCurrentPositionAsZero::DESC,
-                    )?;
-                    rt::equal(
-                        &request::SetCurrentPositionAsZero::ARG1_DESC,
-                        2,
-                        frame[2],
-                        0x0,
-                    )?;
-                    rt::equal(
-                        &request::SetCurrentPositionAsZero::ARG2_DESC,
-                        3,
-                        frame[3],
-                        0x0,
-                    )?;
-                    rt::Ok(
-                        Self::SetCurrentPositionAsZero(request::SetCurrentPositionAsZero),
-                    )
+                    request::SetCurrentPositionAsZero::from_frame(frame)
+                        .map(Self::SetCurrentPositionAsZero)
                 }
                 0x95 => {
-                    let frame = rt::fixed::<
-                        6,
-                    >(frame, &request::ReadCurrentZeroOffset::DESC)?;
-                    rt::no_broadcast(
-                        frame[1],
-                        0x1F,
-                        &request::ReadCurrentZeroOffset::DESC,
-                    )?;
-                    rt::equal(
-                        &request::ReadCurrentZeroOffset::ARG1_DESC,
-                        2,
-                        frame[2],
-                        0x0,
-                    )?;
-                    rt::equal(
-                        &request::ReadCurrentZeroOffset::ARG2_DESC,
-                        3,
-                        frame[3],
-                        0x0,
-                    )?;
-                    rt::Ok(Self::ReadCurrentZeroOffset(request::ReadCurrentZeroOffset))
+                    request::ReadCurrentZeroOffset::from_frame(frame)
+                        .map(Self::ReadCurrentZeroOffset)
                 }
                 0x98 => {
-                    let frame = rt::fixed::<6>(frame, &request::ResetZeroOffset::DESC)?;
-                    rt::no_broadcast(frame[1], 0x1F, &request::ResetZeroOffset::DESC)?;
-                    rt::equal(&request::ResetZeroOffset::ARG1_DESC, 2, frame[2], 0x0)?;
-                    rt::equal(&request::ResetZeroOffset::ARG2_DESC, 3, frame[3], 0x0)?;
-                    rt::Ok(Self::ResetZeroOffset(request::ResetZeroOffset))
+                    request::ResetZeroOffset::from_frame(frame)
+                        .map(Self::ResetZeroOffset)
                 }
                 0xF0 => {
-                    let frame = rt::fixed::<
-                        6,
-                    >(frame, &request::ReadElectronicSerialNumber::DESC)?;
-                    rt::no_broadcast(
-                        frame[1],
-                        0x1F,
-                        &request::ReadElectronicSerialNumber::DESC,
-                    )?;
-                    rt::equal(
-                        &request::ReadElectronicSerialNumber::ARG1_DESC,
-                        2,
-                        frame[2],
-                        0x0,
-                    )?;
-                    rt::in_range(
-                        &request::ReadElectronicSerialNumber::BYTE_NUMBER_DESC,
-                        3,
-                        frame[3],
-                        0,
-                        31,
-                    )?;
-                    rt::Ok(
-                        Self::ReadElectronicSerialNumber(request::ReadElectronicSerialNumber {
-                            byte_number: frame[3],
-                        }),
-                    )
+                    request::ReadElectronicSerialNumber::from_frame(frame)
+                        .map(Self::ReadElectronicSerialNumber)
                 }
                 0xF1 => {
-                    let frame = rt::fixed::<
-                        6,
-                    >(frame, &request::ReadProductDescription::DESC)?;
-                    rt::no_broadcast(
-                        frame[1],
-                        0x1F,
-                        &request::ReadProductDescription::DESC,
-                    )?;
-                    rt::equal(
-                        &request::ReadProductDescription::ARG1_DESC,
-                        2,
-                        frame[2],
-                        0x0,
-                    )?;
-                    rt::in_range(
-                        &request::ReadProductDescription::BYTE_NUMBER_DESC,
-                        3,
-                        frame[3],
-                        0,
-                        31,
-                    )?;
-                    rt::Ok(
-                        Self::ReadProductDescription(request::ReadProductDescription {
-                            byte_number: frame[3],
-                        }),
-                    )
+                    request::ReadProductDescription::from_frame(frame)
+                        .map(Self::ReadProductDescription)
                 }
                 0xF2 => {
-                    let frame = rt::fixed::<
-                        6,
-                    >(frame, &request::ReadSoftwareRevision::DESC)?;
-                    rt::no_broadcast(
-                        frame[1],
-                        0x1F,
-                        &request::ReadSoftwareRevision::DESC,
-                    )?;
-                    rt::equal(
-                        &request::ReadSoftwareRevision::ARG1_DESC,
-                        2,
-                        frame[2],
-                        0x0,
-                    )?;
-                    rt::in_range(
-                        &request::ReadSoftwareRevision::BYTE_NUMBER_DESC,
-                        3,
-                        frame[3],
-                        0,
-                        31,
-                    )?;
-                    rt::Ok(
-                        Self::ReadSoftwareRevision(request::ReadSoftwareRevision {
-                            byte_number: frame[3],
-                        }),
-                    )
+                    request::ReadSoftwareRevision::from_frame(frame)
+                        .map(Self::ReadSoftwareRevision)
                 }
                 0xF3 => {
-                    let frame = rt::fixed::<
-                        6,
-                    >(frame, &request::ReadHardwareRevision::DESC)?;
-                    rt::no_broadcast(
-                        frame[1],
-                        0x1F,
-                        &request::ReadHardwareRevision::DESC,
-                    )?;
-                    rt::equal(
-                        &request::ReadHardwareRevision::ARG1_DESC,
-                        2,
-                        frame[2],
-                        0x0,
-                    )?;
-                    rt::in_range(
-                        &request::ReadHardwareRevision::BYTE_NUMBER_DESC,
-                        3,
-                        frame[3],
-                        0,
-                        31,
-                    )?;
-                    rt::Ok(
-                        Self::ReadHardwareRevision(request::ReadHardwareRevision {
-                            byte_number: frame[3],
-                        }),
-                    )
+                    request::ReadHardwareRevision::from_frame(frame)
+                        .map(Self::ReadHardwareRevision)
                 }
                 0xA2 => {
                     let mut g = rt::Group::new(frame, 0xA2, rt::None);
                     g.attempt(|frame: &[u8; 6]| {
-                        rt::no_broadcast(
-                            frame[1],
-                            0x1F,
-                            &request::ReadTotalRuntimeHours::DESC,
-                        )?;
-                        rt::equal(
-                            &request::ReadTotalRuntimeHours::ARG1_DESC,
-                            2,
-                            frame[2],
-                            0x0,
-                        )?;
-                        rt::equal(
-                            &request::ReadTotalRuntimeHours::ARG2_DESC,
-                            3,
-                            frame[3],
-                            0x0,
-                        )?;
-                        rt::Ok(
-                            Self::ReadTotalRuntimeHours(request::ReadTotalRuntimeHours),
-                        )
+                        request::ReadTotalRuntimeHours::from_frame(frame)
+                            .map(Self::ReadTotalRuntimeHours)
                     });
                     g.attempt(|frame: &[u8; 6]| {
-                        rt::no_broadcast(
-                            frame[1],
-                            0x1F,
-                            &request::ReadTotalRuntimeMinSec::DESC,
-                        )?;
-                        rt::equal(
-                            &request::ReadTotalRuntimeMinSec::ARG1_DESC,
-                            2,
-                            frame[2],
-                            0x0,
-                        )?;
-                        rt::equal(
-                            &request::ReadTotalRuntimeMinSec::ARG2_DESC,
-                            3,
-                            frame[3],
-                            0x1,
-                        )?;
-                        rt::Ok(
-                            Self::ReadTotalRuntimeMinSec(request::ReadTotalRuntimeMinSec),
-                        )
+                        request::ReadTotalRuntimeMinSec::from_frame(frame)
+                            .map(Self::ReadTotalRuntimeMinSec)
                     });
                     g.end(&request::ReadTotalRuntimeHours::DESC)
                 }
                 0xA3 => {
                     let mut g = rt::Group::new(frame, 0xA3, rt::None);
                     g.attempt(|frame: &[u8; 6]| {
-                        rt::no_broadcast(
-                            frame[1],
-                            0x1F,
-                            &request::ReadLoadRuntime024Hours::DESC,
-                        )?;
-                        rt::equal(
-                            &request::ReadLoadRuntime024Hours::ARG1_DESC,
-                            2,
-                            frame[2],
-                            0x0,
-                        )?;
-                        rt::equal(
-                            &request::ReadLoadRuntime024Hours::ARG2_DESC,
-                            3,
-                            frame[3],
-                            0x0,
-                        )?;
-                        rt::Ok(
-                            Self::ReadLoadRuntime024Hours(
-                                request::ReadLoadRuntime024Hours,
-                            ),
-                        )
+                        request::ReadLoadRuntime024Hours::from_frame(frame)
+                            .map(Self::ReadLoadRuntime024Hours)
                     });
                     g.attempt(|frame: &[u8; 6]| {
-                        rt::no_broadcast(
-                            frame[1],
-                            0x1F,
-                            &request::ReadLoadRuntime024MinSec::DESC,
-                        )?;
-                        rt::equal(
-                            &request::ReadLoadRuntime024MinSec::ARG1_DESC,
-                            2,
-                            frame[2],
-                            0x0,
-                        )?;
-                        rt::equal(
-                            &request::ReadLoadRuntime024MinSec::ARG2_DESC,
-                            3,
-                            frame[3],
-                            0x1,
-                        )?;
-                        rt::Ok(
-                            Self::ReadLoadRuntime024MinSec(
-                                request::ReadLoadRuntime024MinSec,
-                            ),
-                        )
+                        request::ReadLoadRuntime024MinSec::from_frame(frame)
+                            .map(Self::ReadLoadRuntime024MinSec)
                     });
                     g.attempt(|frame: &[u8; 6]| {
-                        rt::no_broadcast(
-                            frame[1],
-                            0x1F,
-                            &request::ResetLoadRuntime024::DESC,
-                        )?;
-                        rt::equal(
-                            &request::ResetLoadRuntime024::ARG1_DESC,
-                            2,
-                            frame[2],
-                            0xAA,
-                        )?;
-                        rt::equal(
-                            &request::ResetLoadRuntime024::ARG2_DESC,
-                            3,
-                            frame[3],
-                            0x55,
-                        )?;
-                        rt::Ok(Self::ResetLoadRuntime024(request::ResetLoadRuntime024))
+                        request::ResetLoadRuntime024::from_frame(frame)
+                            .map(Self::ResetLoadRuntime024)
                     });
                     g.end(&request::ReadLoadRuntime024Hours::DESC)
                 }
                 0xA4 => {
                     let mut g = rt::Group::new(frame, 0xA4, rt::None);
                     g.attempt(|frame: &[u8; 6]| {
-                        rt::no_broadcast(
-                            frame[1],
-                            0x1F,
-                            &request::ReadLoadRuntime2549Hours::DESC,
-                        )?;
-                        rt::equal(
-                            &request::ReadLoadRuntime2549Hours::ARG1_DESC,
-                            2,
-                            frame[2],
-                            0x0,
-                        )?;
-                        rt::equal(
-                            &request::ReadLoadRuntime2549Hours::ARG2_DESC,
-                            3,
-                            frame[3],
-                            0x0,
-                        )?;
-                        rt::Ok(
-                            Self::ReadLoadRuntime2549Hours(
-                                request::ReadLoadRuntime2549Hours,
-                            ),
-                        )
+                        request::ReadLoadRuntime2549Hours::from_frame(frame)
+                            .map(Self::ReadLoadRuntime2549Hours)
                     });
                     g.attempt(|frame: &[u8; 6]| {
-                        rt::no_broadcast(
-                            frame[1],
-                            0x1F,
-                            &request::ReadLoadRuntime2549MinSec::DESC,
-                        )?;
-                        rt::equal(
-                            &request::ReadLoadRuntime2549MinSec::ARG1_DESC,
-                            2,
-                            frame[2],
-                            0x0,
-                        )?;
-                        rt::equal(
-                            &request::ReadLoadRuntime2549MinSec::ARG2_DESC,
-                            3,
-                            frame[3],
-                            0x1,
-                        )?;
-                        rt::Ok(
-                            Self::ReadLoadRuntime2549MinSec(
-                                request::ReadLoadRuntime2549MinSec,
-                            ),
-                        )
+                        request::ReadLoadRuntime2549MinSec::from_frame(frame)
+                            .map(Self::ReadLoadRuntime2549MinSec)
                     });
                     g.attempt(|frame: &[u8; 6]| {
-                        rt::no_broadcast(
-                            frame[1],
-                            0x1F,
-                            &request::ResetLoadRuntime2549::DESC,
-                        )?;
-                        rt::equal(
-                            &request::ResetLoadRuntime2549::ARG1_DESC,
-                            2,
-                            frame[2],
-                            0xAA,
-                        )?;
-                        rt::equal(
-                            &request::ResetLoadRuntime2549::ARG2_DESC,
-                            3,
-                            frame[3],
-                            0x55,
-                        )?;
-                        rt::Ok(Self::ResetLoadRuntime2549(request::ResetLoadRuntime2549))
+                        request::ResetLoadRuntime2549::from_frame(frame)
+                            .map(Self::ResetLoadRuntime2549)
                     });
                     g.end(&request::ReadLoadRuntime2549Hours::DESC)
                 }
                 0xA5 => {
                     let mut g = rt::Group::new(frame, 0xA5, rt::None);
                     g.attempt(|frame: &[u8; 6]| {
-                        rt::no_broadcast(
-                            frame[1],
-                            0x1F,
-                            &request::ReadLoadRuntime5074Hours::DESC,
-                        )?;
-                        rt::equal(
-                            &request::ReadLoadRuntime5074Hours::ARG1_DESC,
-                            2,
-                            frame[2],
-                            0x0,
-                        )?;
-                        rt::equal(
-                            &request::ReadLoadRuntime5074Hours::ARG2_DESC,
-                            3,
-                            frame[3],
-                            0x0,
-                        )?;
-                        rt::Ok(
-                            Self::ReadLoadRuntime5074Hours(
-                                request::ReadLoadRuntime5074Hours,
-                            ),
-                        )
+                        request::ReadLoadRuntime5074Hours::from_frame(frame)
+                            .map(Self::ReadLoadRuntime5074Hours)
                     });
                     g.attempt(|frame: &[u8; 6]| {
-                        rt::no_broadcast(
-                            frame[1],
-                            0x1F,
-                            &request::ReadLoadRuntime5074MinSec::DESC,
-                        )?;
-                        rt::equal(
-                            &request::ReadLoadRuntime5074MinSec::ARG1_DESC,
-                            2,
-                            frame[2],
-                            0x0,
-                        )?;
-                        rt::equal(
-                            &request::ReadLoadRuntime5074MinSec::ARG2_DESC,
-                            3,
-                            frame[3],
-                            0x1,
-                        )?;
-                        rt::Ok(
-                            Self::ReadLoadRuntime5074MinSec(
-                                request::ReadLoadRuntime5074MinSec,
-                            ),
-                        )
+                        request::ReadLoadRuntime5074MinSec::from_frame(frame)
+                            .map(Self::ReadLoadRuntime5074MinSec)
                     });
                     g.attempt(|frame: &[u8; 6]| {
-                        rt::no_broadcast(
-                            frame[1],
-                            0x1F,
-                            &request::ResetLoadRuntime5074::DESC,
-                        )?;
-                        rt::equal(
-                            &request::ResetLoadRuntime5074::ARG1_DESC,
-                            2,
-                            frame[2],
-                            0xAA,
-                        )?;
-                        rt::equal(
-                            &request::ResetLoadRuntime5074::ARG2_DESC,
-                            3,
-                            frame[3],
-                            0x55,
-                        )?;
-                        rt::Ok(Self::ResetLoadRuntime5074(request::ResetLoadRuntime5074))
+                        request::ResetLoadRuntime5074::from_frame(frame)
+                            .map(Self::ResetLoadRuntime5074)
                     });
                     g.end(&request::ReadLoadRuntime5074Hours::DESC)
                 }
                 0xA6 => {
                     let mut g = rt::Group::new(frame, 0xA6, rt::None);
                     g.attempt(|frame: &[u8; 6]| {
-                        rt::no_broadcast(
-                            frame[1],
-                            0x1F,
-                            &request::ReadLoadRuntime7599Hours::DESC,
-                        )?;
-                        rt::equal(
-                            &request::ReadLoadRuntime7599Hours::ARG1_DESC,
-                            2,
-                            frame[2],
-                            0x0,
-                        )?;
-                        rt::equal(
-                            &request::ReadLoadRuntime7599Hours::ARG2_DESC,
-                            3,
-                            frame[3],
-                            0x0,
-                        )?;
-                        rt::Ok(
-                            Self::ReadLoadRuntime7599Hours(
-                                request::ReadLoadRuntime7599Hours,
-                            ),
-                        )
+                        request::ReadLoadRuntime7599Hours::from_frame(frame)
+                            .map(Self::ReadLoadRuntime7599Hours)
                     });
                     g.attempt(|frame: &[u8; 6]| {
-                        rt::no_broadcast(
-                            frame[1],
-                            0x1F,
-                            &request::ReadLoadRuntime7599MinSec::DESC,
-                        )?;
-                        rt::equal(
-                            &request::ReadLoadRuntime7599MinSec::ARG1_DESC,
-                            2,
-                            frame[2],
-                            0x0,
-                        )?;
-                        rt::equal(
-                            &request::ReadLoadRuntime7599MinSec::ARG2_DESC,
-                            3,
-                            frame[3],
-                            0x1,
-                        )?;
-                        rt::Ok(
-                            Self::ReadLoadRuntime7599MinSec(
-                                request::ReadLoadRuntime7599MinSec,
-                            ),
-                        )
+                        request::ReadLoadRuntime7599MinSec::from_frame(frame)
+                            .map(Self::ReadLoadRuntime7599MinSec)
                     });
                     g.attempt(|frame: &[u8; 6]| {
-                        rt::no_broadcast(
-                            frame[1],
-                            0x1F,
-                            &request::ResetLoadRuntime7599::DESC,
-                        )?;
-                        rt::equal(
-                            &request::ResetLoadRuntime7599::ARG1_DESC,
-                            2,
-                            frame[2],
-                            0xAA,
-                        )?;
-                        rt::equal(
-                            &request::ResetLoadRuntime7599::ARG2_DESC,
-                            3,
-                            frame[3],
-                            0x55,
-                        )?;
-                        rt::Ok(Self::ResetLoadRuntime7599(request::ResetLoadRuntime7599))
+                        request::ResetLoadRuntime7599::from_frame(frame)
+                            .map(Self::ResetLoadRuntime7599)
                     });
                     g.end(&request::ReadLoadRuntime7599Hours::DESC)
                 }
                 0xA7 => {
                     let mut g = rt::Group::new(frame, 0xA7, rt::None);
                     g.attempt(|frame: &[u8; 6]| {
-                        rt::no_broadcast(
-                            frame[1],
-                            0x1F,
-                            &request::ReadLoadRuntime100Hours::DESC,
-                        )?;
-                        rt::equal(
-                            &request::ReadLoadRuntime100Hours::ARG1_DESC,
-                            2,
-                            frame[2],
-                            0x0,
-                        )?;
-                        rt::equal(
-                            &request::ReadLoadRuntime100Hours::ARG2_DESC,
-                            3,
-                            frame[3],
-                            0x0,
-                        )?;
-                        rt::Ok(
-                            Self::ReadLoadRuntime100Hours(
-                                request::ReadLoadRuntime100Hours,
-                            ),
-                        )
+                        request::ReadLoadRuntime100Hours::from_frame(frame)
+                            .map(Self::ReadLoadRuntime100Hours)
                     });
                     g.attempt(|frame: &[u8; 6]| {
-                        rt::no_broadcast(
-                            frame[1],
-                            0x1F,
-                            &request::ReadLoadRuntime100MinSec::DESC,
-                        )?;
-                        rt::equal(
-                            &request::ReadLoadRuntime100MinSec::ARG1_DESC,
-                            2,
-                            frame[2],
-                            0x0,
-                        )?;
-                        rt::equal(
-                            &request::ReadLoadRuntime100MinSec::ARG2_DESC,
-                            3,
-                            frame[3],
-                            0x1,
-                        )?;
-                        rt::Ok(
-                            Self::ReadLoadRuntime100MinSec(
-                                request::ReadLoadRuntime100MinSec,
-                            ),
-                        )
+                        request::ReadLoadRuntime100MinSec::from_frame(frame)
+                            .map(Self::ReadLoadRuntime100MinSec)
                     });
                     g.attempt(|frame: &[u8; 6]| {
-                        rt::no_broadcast(
-                            frame[1],
-                            0x1F,
-                            &request::ResetLoadRuntime100::DESC,
-                        )?;
-                        rt::equal(
-                            &request::ResetLoadRuntime100::ARG1_DESC,
-                            2,
-                            frame[2],
-                            0xAA,
-                        )?;
-                        rt::equal(
-                            &request::ResetLoadRuntime100::ARG2_DESC,
-                            3,
-                            frame[3],
-                            0x55,
-                        )?;
-                        rt::Ok(Self::ResetLoadRuntime100(request::ResetLoadRuntime100))
+                        request::ResetLoadRuntime100::from_frame(frame)
+                            .map(Self::ResetLoadRuntime100)
                     });
                     g.end(&request::ReadLoadRuntime100Hours::DESC)
                 }
                 0xA8 => {
                     let mut g = rt::Group::new(frame, 0xA8, rt::None);
                     g.attempt(|frame: &[u8; 6]| {
-                        rt::no_broadcast(
-                            frame[1],
-                            0x1F,
-                            &request::ReadStallEventCounter::DESC,
-                        )?;
-                        rt::equal(
-                            &request::ReadStallEventCounter::ARG1_DESC,
-                            2,
-                            frame[2],
-                            0x0,
-                        )?;
-                        rt::equal(
-                            &request::ReadStallEventCounter::ARG2_DESC,
-                            3,
-                            frame[3],
-                            0x0,
-                        )?;
-                        rt::Ok(
-                            Self::ReadStallEventCounter(request::ReadStallEventCounter),
-                        )
+                        request::ReadStallEventCounter::from_frame(frame)
+                            .map(Self::ReadStallEventCounter)
                     });
                     g.attempt(|frame: &[u8; 6]| {
-                        rt::no_broadcast(
-                            frame[1],
-                            0x1F,
-                            &request::ResetStallEventCounter::DESC,
-                        )?;
-                        rt::equal(
-                            &request::ResetStallEventCounter::ARG1_DESC,
-                            2,
-                            frame[2],
-                            0xAA,
-                        )?;
-                        rt::equal(
-                            &request::ResetStallEventCounter::ARG2_DESC,
-                            3,
-                            frame[3],
-                            0x55,
-                        )?;
-                        rt::Ok(
-                            Self::ResetStallEventCounter(request::ResetStallEventCounter),
-                        )
+                        request::ResetStallEventCounter::from_frame(frame)
+                            .map(Self::ResetStallEventCounter)
                     });
                     g.end(&request::ReadStallEventCounter::DESC)
                 }
                 0xA9 => {
-                    let frame = rt::fixed::<
-                        6,
-                    >(frame, &request::ReadPowerUpCycles::DESC)?;
-                    rt::no_broadcast(frame[1], 0x1F, &request::ReadPowerUpCycles::DESC)?;
-                    rt::equal(&request::ReadPowerUpCycles::ARG1_DESC, 2, frame[2], 0x0)?;
-                    rt::equal(&request::ReadPowerUpCycles::ARG2_DESC, 3, frame[3], 0x0)?;
-                    rt::Ok(Self::ReadPowerUpCycles(request::ReadPowerUpCycles))
+                    request::ReadPowerUpCycles::from_frame(frame)
+                        .map(Self::ReadPowerUpCycles)
                 }
                 _ => rt::Err(REQUEST_CODE.unknown(frame)),
             }
@@ -2754,353 +2035,89 @@ pub mod sd {
             let asked: u64 = request.map_or(!0, Request::replies);
             match frame[0] {
                 0x56 => {
-                    let frame = rt::fixed::<6>(frame, &response::SetPointReply::DESC)?;
-                    let field_0: u16 = u16::from_be_bytes([frame[2], frame[3]]);
-                    rt::Ok(
-                        Self::SetPointReply(response::SetPointReply {
-                            freshness: (field_0 >> 12) as u8,
-                            position: Angle::from_raw(
-                                (((field_0 & 0xFFF) as u16) << 4) as i16 >> 4,
-                            ),
-                        }),
-                    )
+                    response::SetPointReply::from_frame(frame).map(Self::SetPointReply)
                 }
                 0x49 => {
-                    let frame = rt::fixed::<6>(frame, &response::ActualPosition::DESC)?;
-                    let field_0: u16 = u16::from_be_bytes([frame[2], frame[3]]);
-                    rt::equal(
-                        &response::ActualPosition::ZERO_DESC,
-                        2,
-                        field_0 >> 12,
-                        0x0,
-                    )?;
-                    rt::Ok(
-                        Self::ActualPosition(response::ActualPosition {
-                            position: Angle::from_raw(
-                                (((field_0 & 0xFFF) as u16) << 4) as i16 >> 4,
-                            ),
-                        }),
-                    )
+                    response::ActualPosition::from_frame(frame).map(Self::ActualPosition)
                 }
                 0x57 => {
-                    let frame = rt::fixed::<
-                        6,
-                    >(frame, &response::SetVelocityReply::DESC)?;
-                    rt::Ok(
-                        Self::SetVelocityReply(response::SetVelocityReply {
-                            actual_velocity: Velocity::from_raw(
-                                i16::from_be_bytes([frame[2], frame[3]]),
-                            ),
-                        }),
-                    )
+                    response::SetVelocityReply::from_frame(frame)
+                        .map(Self::SetVelocityReply)
                 }
                 0x48 => {
-                    let frame = rt::fixed::<6>(frame, &response::ActualVelocity::DESC)?;
-                    rt::Ok(
-                        Self::ActualVelocity(response::ActualVelocity {
-                            actual_velocity: Velocity::from_raw(
-                                i16::from_be_bytes([frame[2], frame[3]]),
-                            ),
-                        }),
-                    )
+                    response::ActualVelocity::from_frame(frame).map(Self::ActualVelocity)
                 }
                 0x55 => {
-                    let frame = rt::fixed::<6>(frame, &response::SetServoIdReply::DESC)?;
-                    rt::in_range(
-                        &response::SetServoIdReply::NEW_ID_DESC,
-                        2,
-                        frame[2],
-                        1,
-                        30,
-                    )?;
-                    rt::same(
-                        &response::SetServoIdReply::NEW_ID_REPEAT_DESC,
-                        3,
-                        frame[3],
-                        "new_id",
-                        frame[2],
-                    )?;
-                    rt::Ok(
-                        Self::SetServoIdReply(response::SetServoIdReply {
-                            new_id: frame[2],
-                        }),
-                    )
+                    response::SetServoIdReply::from_frame(frame)
+                        .map(Self::SetServoIdReply)
                 }
-                0x6D => {
-                    let frame = rt::fixed::<6>(frame, &response::ServoId::DESC)?;
-                    rt::in_range(&response::ServoId::ID_DESC, 2, frame[2], 1, 30)?;
-                    rt::same(
-                        &response::ServoId::ID_REPEAT_DESC,
-                        3,
-                        frame[3],
-                        "id",
-                        frame[2],
-                    )?;
-                    rt::Ok(Self::ServoId(response::ServoId { id: frame[2] }))
-                }
+                0x6D => response::ServoId::from_frame(frame).map(Self::ServoId),
                 0x30 => {
-                    let frame = rt::fixed::<
-                        6,
-                    >(frame, &response::CurrentConsumption::DESC)?;
-                    rt::same(
-                        &response::CurrentConsumption::CURRENT_REPEAT_DESC,
-                        3,
-                        frame[3],
-                        "current",
-                        frame[2],
-                    )?;
-                    rt::Ok(
-                        Self::CurrentConsumption(response::CurrentConsumption {
-                            current: Current::from_raw(frame[2] as u16),
-                        }),
-                    )
+                    response::CurrentConsumption::from_frame(frame)
+                        .map(Self::CurrentConsumption)
                 }
-                0x31 => {
-                    let frame = rt::fixed::<6>(frame, &response::BusVoltages::DESC)?;
-                    rt::Ok(
-                        Self::BusVoltages(response::BusVoltages {
-                            power_bus_1_voltage: Voltage::from_raw(frame[2]),
-                            power_bus_2_voltage: Voltage::from_raw(frame[3]),
-                        }),
-                    )
-                }
+                0x31 => response::BusVoltages::from_frame(frame).map(Self::BusVoltages),
                 0x32 => {
-                    let frame = rt::fixed::<
-                        6,
-                    >(frame, &response::ExtendedCurrentConsumption::DESC)?;
-                    rt::Ok(
-                        Self::ExtendedCurrentConsumption(response::ExtendedCurrentConsumption {
-                            current: Current::from_raw(
-                                u16::from_be_bytes([frame[2], frame[3]]),
-                            ),
-                        }),
-                    )
+                    response::ExtendedCurrentConsumption::from_frame(frame)
+                        .map(Self::ExtendedCurrentConsumption)
                 }
-                0x20 => {
-                    let frame = rt::fixed::<6>(frame, &response::Temperatures::DESC)?;
-                    rt::Ok(
-                        Self::Temperatures(response::Temperatures {
-                            motor_temperature: Temperature::from_raw(frame[2]),
-                            pcb_temperature: Temperature::from_raw(frame[3]),
-                        }),
-                    )
-                }
-                0x21 => {
-                    let frame = rt::fixed::<6>(frame, &response::Humidity::DESC)?;
-                    rt::in_range_or(
-                        &response::Humidity::HUMIDITY_DESC,
-                        2,
-                        frame[2],
-                        1,
-                        100,
-                        &[0],
-                    )?;
-                    rt::same(
-                        &response::Humidity::HUMIDITY_REPEAT_DESC,
-                        3,
-                        frame[3],
-                        "humidity",
-                        frame[2],
-                    )?;
-                    rt::Ok(
-                        Self::Humidity(response::Humidity {
-                            humidity: frame[2],
-                        }),
-                    )
-                }
+                0x20 => response::Temperatures::from_frame(frame).map(Self::Temperatures),
+                0x21 => response::Humidity::from_frame(frame).map(Self::Humidity),
                 0x38 => {
                     let mut g = rt::Group::new(frame, 0x38, request.map(Request::name));
                     g.ambiguous(
                         asked >> 11 & 1 != 0,
                         &response::SkippedFramesCounter::DESC,
                         |frame: &[u8; 6]| {
-                            rt::Ok(
-                                Self::SkippedFramesCounter(response::SkippedFramesCounter {
-                                    host_freshness_counter: frame[2],
-                                    dropped_frames: frame[3],
-                                }),
-                            )
+                            response::SkippedFramesCounter::from_frame(frame)
+                                .map(Self::SkippedFramesCounter)
                         },
                     );
                     g.ambiguous(
                         asked >> 12 & 1 != 0,
                         &response::DroppedFramesCounterReset::DESC,
                         |frame: &[u8; 6]| {
-                            rt::equal(
-                                &response::DroppedFramesCounterReset::ARG2_DESC,
-                                3,
-                                frame[3],
-                                0x0,
-                            )?;
-                            rt::Ok(
-                                Self::DroppedFramesCounterReset(response::DroppedFramesCounterReset {
-                                    host_freshness_counter: frame[2],
-                                }),
-                            )
+                            response::DroppedFramesCounterReset::from_frame(frame)
+                                .map(Self::DroppedFramesCounterReset)
                         },
                     );
                     g.end(&response::SkippedFramesCounter::DESC)
                 }
                 0x41 => {
-                    let frame = rt::fixed::<
-                        6,
-                    >(frame, &response::ActuatorStatusWord::DESC)?;
-                    rt::Ok(
-                        Self::ActuatorStatusWord(response::ActuatorStatusWord {
-                            status_bits: ActuatorStatusBits::from_raw(frame[2]),
-                            status_arg2: frame[3],
-                        }),
-                    )
+                    response::ActuatorStatusWord::from_frame(frame)
+                        .map(Self::ActuatorStatusWord)
                 }
                 0x5A => {
-                    let frame = rt::fixed::<
-                        6,
-                    >(frame, &response::ResetDefaultRoleAndErrorFlagsReply::DESC)?;
-                    rt::equal(
-                        &response::ResetDefaultRoleAndErrorFlagsReply::ARG1_DESC,
-                        2,
-                        frame[2],
-                        0x41,
-                    )?;
-                    rt::equal(
-                        &response::ResetDefaultRoleAndErrorFlagsReply::ARG2_DESC,
-                        3,
-                        frame[3],
-                        0x53,
-                    )?;
-                    rt::Ok(
-                        Self::ResetDefaultRoleAndErrorFlagsReply(
-                            response::ResetDefaultRoleAndErrorFlagsReply,
-                        ),
-                    )
+                    response::ResetDefaultRoleAndErrorFlagsReply::from_frame(frame)
+                        .map(Self::ResetDefaultRoleAndErrorFlagsReply)
                 }
                 0x4C => {
-                    let frame = rt::fixed::<
-                        6,
-                    >(frame, &response::SetCurrentPositionAsZeroReply::DESC)?;
-                    let field_0: u16 = u16::from_be_bytes([frame[2], frame[3]]);
-                    rt::equal(
-                        &response::SetCurrentPositionAsZeroReply::ZERO_DESC,
-                        2,
-                        field_0 >> 12,
-                        0x0,
-                    )?;
-                    rt::Ok(
-                        Self::SetCurrentPositionAsZeroReply(response::SetCurrentPositionAsZeroReply {
-                            zero_offset: Angle::from_raw(
-                                (((field_0 & 0xFFF) as u16) << 4) as i16 >> 4,
-                            ),
-                        }),
-                    )
+                    response::SetCurrentPositionAsZeroReply::from_frame(frame)
+                        .map(Self::SetCurrentPositionAsZeroReply)
                 }
                 0x65 => {
-                    let frame = rt::fixed::<
-                        6,
-                    >(frame, &response::CurrentZeroOffset::DESC)?;
-                    let field_0: u16 = u16::from_be_bytes([frame[2], frame[3]]);
-                    rt::equal(
-                        &response::CurrentZeroOffset::ZERO_DESC,
-                        2,
-                        field_0 >> 12,
-                        0x0,
-                    )?;
-                    rt::Ok(
-                        Self::CurrentZeroOffset(response::CurrentZeroOffset {
-                            zero_offset: Angle::from_raw(
-                                (((field_0 & 0xFFF) as u16) << 4) as i16 >> 4,
-                            ),
-                        }),
-                    )
+                    response::CurrentZeroOffset::from_frame(frame)
+                        .map(Self::CurrentZeroOffset)
                 }
                 0x64 => {
-                    let frame = rt::fixed::<
-                        6,
-                    >(frame, &response::ResetZeroOffsetReply::DESC)?;
-                    rt::equal(
-                        &response::ResetZeroOffsetReply::ARG1_DESC,
-                        2,
-                        frame[2],
-                        0x0,
-                    )?;
-                    rt::equal(
-                        &response::ResetZeroOffsetReply::ARG2_DESC,
-                        3,
-                        frame[3],
-                        0x0,
-                    )?;
-                    rt::Ok(Self::ResetZeroOffsetReply(response::ResetZeroOffsetReply))
+                    response::ResetZeroOffsetReply::from_frame(frame)
+                        .map(Self::ResetZeroOffsetReply)
                 }
                 0x10 => {
-                    let frame = rt::fixed::<
-                        6,
-                    >(frame, &response::ElectronicSerialNumberCharacter::DESC)?;
-                    rt::in_range(
-                        &response::ElectronicSerialNumberCharacter::STRING_LENGTH_DESC,
-                        3,
-                        frame[3],
-                        0,
-                        32,
-                    )?;
-                    rt::Ok(
-                        Self::ElectronicSerialNumberCharacter(response::ElectronicSerialNumberCharacter {
-                            character: frame[2],
-                            string_length: frame[3],
-                        }),
-                    )
+                    response::ElectronicSerialNumberCharacter::from_frame(frame)
+                        .map(Self::ElectronicSerialNumberCharacter)
                 }
                 0x11 => {
-                    let frame = rt::fixed::<
-                        6,
-                    >(frame, &response::ProductDescriptionCharacter::DESC)?;
-                    rt::in_range(
-                        &response::ProductDescriptionCharacter::STRING_LENGTH_DESC,
-                        3,
-                        frame[3],
-                        0,
-                        32,
-                    )?;
-                    rt::Ok(
-                        Self::ProductDescriptionCharacter(response::ProductDescriptionCharacter {
-                            character: frame[2],
-                            string_length: frame[3],
-                        }),
-                    )
+                    response::ProductDescriptionCharacter::from_frame(frame)
+                        .map(Self::ProductDescriptionCharacter)
                 }
                 0x12 => {
-                    let frame = rt::fixed::<
-                        6,
-                    >(frame, &response::SoftwareRevisionCharacter::DESC)?;
-                    rt::in_range(
-                        &response::SoftwareRevisionCharacter::STRING_LENGTH_DESC,
-                        3,
-                        frame[3],
-                        0,
-                        32,
-                    )?;
-                    rt::Ok(
-                        Self::SoftwareRevisionCharacter(response::SoftwareRevisionCharacter {
-                            character: frame[2],
-                            string_length: frame[3],
-                        }),
-                    )
+                    response::SoftwareRevisionCharacter::from_frame(frame)
+                        .map(Self::SoftwareRevisionCharacter)
                 }
                 0x13 => {
-                    let frame = rt::fixed::<
-                        6,
-                    >(frame, &response::HardwareRevisionCharacter::DESC)?;
-                    rt::in_range(
-                        &response::HardwareRevisionCharacter::STRING_LENGTH_DESC,
-                        3,
-                        frame[3],
-                        0,
-                        32,
-                    )?;
-                    rt::Ok(
-                        Self::HardwareRevisionCharacter(response::HardwareRevisionCharacter {
-                            character: frame[2],
-                            string_length: frame[3],
-                        }),
-                    )
+                    response::HardwareRevisionCharacter::from_frame(frame)
+                        .map(Self::HardwareRevisionCharacter)
                 }
                 0x22 => {
                     let mut g = rt::Group::new(frame, 0x22, request.map(Request::name));
@@ -3108,37 +2125,16 @@ pub mod sd {
                         asked >> 22 & 1 != 0,
                         &response::TotalRuntimeHours::DESC,
                         |frame: &[u8; 6]| {
-                            rt::Ok(
-                                Self::TotalRuntimeHours(response::TotalRuntimeHours {
-                                    runtime_hours: u16::from_be_bytes([frame[2], frame[3]]),
-                                }),
-                            )
+                            response::TotalRuntimeHours::from_frame(frame)
+                                .map(Self::TotalRuntimeHours)
                         },
                     );
                     g.ambiguous(
                         asked >> 23 & 1 != 0,
                         &response::TotalRuntimeMinSec::DESC,
                         |frame: &[u8; 6]| {
-                            rt::in_range(
-                                &response::TotalRuntimeMinSec::RUNTIME_MINUTES_DESC,
-                                2,
-                                frame[2],
-                                0,
-                                59,
-                            )?;
-                            rt::in_range(
-                                &response::TotalRuntimeMinSec::RUNTIME_SECONDS_DESC,
-                                3,
-                                frame[3],
-                                0,
-                                59,
-                            )?;
-                            rt::Ok(
-                                Self::TotalRuntimeMinSec(response::TotalRuntimeMinSec {
-                                    runtime_minutes: frame[2],
-                                    runtime_seconds: frame[3],
-                                }),
-                            )
+                            response::TotalRuntimeMinSec::from_frame(frame)
+                                .map(Self::TotalRuntimeMinSec)
                         },
                     );
                     g.end(&response::TotalRuntimeHours::DESC)
@@ -3149,51 +2145,24 @@ pub mod sd {
                         asked >> 24 & 1 != 0,
                         &response::LoadRuntime024Hours::DESC,
                         |frame: &[u8; 6]| {
-                            rt::Ok(
-                                Self::LoadRuntime024Hours(response::LoadRuntime024Hours {
-                                    runtime_hours: u16::from_be_bytes([frame[2], frame[3]]),
-                                }),
-                            )
+                            response::LoadRuntime024Hours::from_frame(frame)
+                                .map(Self::LoadRuntime024Hours)
                         },
                     );
                     g.ambiguous(
                         asked >> 25 & 1 != 0,
                         &response::LoadRuntime024MinSec::DESC,
                         |frame: &[u8; 6]| {
-                            rt::in_range(
-                                &response::LoadRuntime024MinSec::RUNTIME_MINUTES_DESC,
-                                2,
-                                frame[2],
-                                0,
-                                59,
-                            )?;
-                            rt::in_range(
-                                &response::LoadRuntime024MinSec::RUNTIME_SECONDS_DESC,
-                                3,
-                                frame[3],
-                                0,
-                                59,
-                            )?;
-                            rt::Ok(
-                                Self::LoadRuntime024MinSec(response::LoadRuntime024MinSec {
-                                    runtime_minutes: frame[2],
-                                    runtime_seconds: frame[3],
-                                }),
-                            )
+                            response::LoadRuntime024MinSec::from_frame(frame)
+                                .map(Self::LoadRuntime024MinSec)
                         },
                     );
                     g.ambiguous(
                         asked >> 26 & 1 != 0,
                         &response::LoadRuntime024HoursBeforeReset::DESC,
                         |frame: &[u8; 6]| {
-                            rt::Ok(
-                                Self::LoadRuntime024HoursBeforeReset(response::LoadRuntime024HoursBeforeReset {
-                                    runtime_hours_before_reset: u16::from_be_bytes([
-                                        frame[2],
-                                        frame[3],
-                                    ]),
-                                }),
-                            )
+                            response::LoadRuntime024HoursBeforeReset::from_frame(frame)
+                                .map(Self::LoadRuntime024HoursBeforeReset)
                         },
                     );
                     g.end(&response::LoadRuntime024Hours::DESC)
@@ -3204,51 +2173,24 @@ pub mod sd {
                         asked >> 27 & 1 != 0,
                         &response::LoadRuntime2549Hours::DESC,
                         |frame: &[u8; 6]| {
-                            rt::Ok(
-                                Self::LoadRuntime2549Hours(response::LoadRuntime2549Hours {
-                                    runtime_hours: u16::from_be_bytes([frame[2], frame[3]]),
-                                }),
-                            )
+                            response::LoadRuntime2549Hours::from_frame(frame)
+                                .map(Self::LoadRuntime2549Hours)
                         },
                     );
                     g.ambiguous(
                         asked >> 28 & 1 != 0,
                         &response::LoadRuntime2549MinSec::DESC,
                         |frame: &[u8; 6]| {
-                            rt::in_range(
-                                &response::LoadRuntime2549MinSec::RUNTIME_MINUTES_DESC,
-                                2,
-                                frame[2],
-                                0,
-                                59,
-                            )?;
-                            rt::in_range(
-                                &response::LoadRuntime2549MinSec::RUNTIME_SECONDS_DESC,
-                                3,
-                                frame[3],
-                                0,
-                                59,
-                            )?;
-                            rt::Ok(
-                                Self::LoadRuntime2549MinSec(response::LoadRuntime2549MinSec {
-                                    runtime_minutes: frame[2],
-                                    runtime_seconds: frame[3],
-                                }),
-                            )
+                            response::LoadRuntime2549MinSec::from_frame(frame)
+                                .map(Self::LoadRuntime2549MinSec)
                         },
                     );
                     g.ambiguous(
                         asked >> 29 & 1 != 0,
                         &response::LoadRuntime2549HoursBeforeReset::DESC,
                         |frame: &[u8; 6]| {
-                            rt::Ok(
-                                Self::LoadRuntime2549HoursBeforeReset(response::LoadRuntime2549HoursBeforeReset {
-                                    runtime_hours_before_reset: u16::from_be_bytes([
-                                        frame[2],
-                                        frame[3],
-                                    ]),
-                                }),
-                            )
+                            response::LoadRuntime2549HoursBeforeReset::from_frame(frame)
+                                .map(Self::LoadRuntime2549HoursBeforeReset)
                         },
                     );
                     g.end(&response::LoadRuntime2549Hours::DESC)
@@ -3259,51 +2201,24 @@ pub mod sd {
                         asked >> 30 & 1 != 0,
                         &response::LoadRuntime5074Hours::DESC,
                         |frame: &[u8; 6]| {
-                            rt::Ok(
-                                Self::LoadRuntime5074Hours(response::LoadRuntime5074Hours {
-                                    runtime_hours: u16::from_be_bytes([frame[2], frame[3]]),
-                                }),
-                            )
+                            response::LoadRuntime5074Hours::from_frame(frame)
+                                .map(Self::LoadRuntime5074Hours)
                         },
                     );
                     g.ambiguous(
                         asked >> 31 & 1 != 0,
                         &response::LoadRuntime5074MinSec::DESC,
                         |frame: &[u8; 6]| {
-                            rt::in_range(
-                                &response::LoadRuntime5074MinSec::RUNTIME_MINUTES_DESC,
-                                2,
-                                frame[2],
-                                0,
-                                59,
-                            )?;
-                            rt::in_range(
-                                &response::LoadRuntime5074MinSec::RUNTIME_SECONDS_DESC,
-                                3,
-                                frame[3],
-                                0,
-                                59,
-                            )?;
-                            rt::Ok(
-                                Self::LoadRuntime5074MinSec(response::LoadRuntime5074MinSec {
-                                    runtime_minutes: frame[2],
-                                    runtime_seconds: frame[3],
-                                }),
-                            )
+                            response::LoadRuntime5074MinSec::from_frame(frame)
+                                .map(Self::LoadRuntime5074MinSec)
                         },
                     );
                     g.ambiguous(
                         asked >> 32 & 1 != 0,
                         &response::LoadRuntime5074HoursBeforeReset::DESC,
                         |frame: &[u8; 6]| {
-                            rt::Ok(
-                                Self::LoadRuntime5074HoursBeforeReset(response::LoadRuntime5074HoursBeforeReset {
-                                    runtime_hours_before_reset: u16::from_be_bytes([
-                                        frame[2],
-                                        frame[3],
-                                    ]),
-                                }),
-                            )
+                            response::LoadRuntime5074HoursBeforeReset::from_frame(frame)
+                                .map(Self::LoadRuntime5074HoursBeforeReset)
                         },
                     );
                     g.end(&response::LoadRuntime5074Hours::DESC)
@@ -3314,51 +2229,24 @@ pub mod sd {
                         asked >> 33 & 1 != 0,
                         &response::LoadRuntime7599Hours::DESC,
                         |frame: &[u8; 6]| {
-                            rt::Ok(
-                                Self::LoadRuntime7599Hours(response::LoadRuntime7599Hours {
-                                    runtime_hours: u16::from_be_bytes([frame[2], frame[3]]),
-                                }),
-                            )
+                            response::LoadRuntime7599Hours::from_frame(frame)
+                                .map(Self::LoadRuntime7599Hours)
                         },
                     );
                     g.ambiguous(
                         asked >> 34 & 1 != 0,
                         &response::LoadRuntime7599MinSec::DESC,
                         |frame: &[u8; 6]| {
-                            rt::in_range(
-                                &response::LoadRuntime7599MinSec::RUNTIME_MINUTES_DESC,
-                                2,
-                                frame[2],
-                                0,
-                                59,
-                            )?;
-                            rt::in_range(
-                                &response::LoadRuntime7599MinSec::RUNTIME_SECONDS_DESC,
-                                3,
-                                frame[3],
-                                0,
-                                59,
-                            )?;
-                            rt::Ok(
-                                Self::LoadRuntime7599MinSec(response::LoadRuntime7599MinSec {
-                                    runtime_minutes: frame[2],
-                                    runtime_seconds: frame[3],
-                                }),
-                            )
+                            response::LoadRuntime7599MinSec::from_frame(frame)
+                                .map(Self::LoadRuntime7599MinSec)
                         },
                     );
                     g.ambiguous(
                         asked >> 35 & 1 != 0,
                         &response::LoadRuntime7599HoursBeforeReset::DESC,
                         |frame: &[u8; 6]| {
-                            rt::Ok(
-                                Self::LoadRuntime7599HoursBeforeReset(response::LoadRuntime7599HoursBeforeReset {
-                                    runtime_hours_before_reset: u16::from_be_bytes([
-                                        frame[2],
-                                        frame[3],
-                                    ]),
-                                }),
-                            )
+                            response::LoadRuntime7599HoursBeforeReset::from_frame(frame)
+                                .map(Self::LoadRuntime7599HoursBeforeReset)
                         },
                     );
                     g.end(&response::LoadRuntime7599Hours::DESC)
@@ -3369,51 +2257,24 @@ pub mod sd {
                         asked >> 36 & 1 != 0,
                         &response::LoadRuntime100Hours::DESC,
                         |frame: &[u8; 6]| {
-                            rt::Ok(
-                                Self::LoadRuntime100Hours(response::LoadRuntime100Hours {
-                                    runtime_hours: u16::from_be_bytes([frame[2], frame[3]]),
-                                }),
-                            )
+                            response::LoadRuntime100Hours::from_frame(frame)
+                                .map(Self::LoadRuntime100Hours)
                         },
                     );
                     g.ambiguous(
                         asked >> 37 & 1 != 0,
                         &response::LoadRuntime100MinSec::DESC,
                         |frame: &[u8; 6]| {
-                            rt::in_range(
-                                &response::LoadRuntime100MinSec::RUNTIME_MINUTES_DESC,
-                                2,
-                                frame[2],
-                                0,
-                                59,
-                            )?;
-                            rt::in_range(
-                                &response::LoadRuntime100MinSec::RUNTIME_SECONDS_DESC,
-                                3,
-                                frame[3],
-                                0,
-                                59,
-                            )?;
-                            rt::Ok(
-                                Self::LoadRuntime100MinSec(response::LoadRuntime100MinSec {
-                                    runtime_minutes: frame[2],
-                                    runtime_seconds: frame[3],
-                                }),
-                            )
+                            response::LoadRuntime100MinSec::from_frame(frame)
+                                .map(Self::LoadRuntime100MinSec)
                         },
                     );
                     g.ambiguous(
                         asked >> 38 & 1 != 0,
                         &response::LoadRuntime100HoursBeforeReset::DESC,
                         |frame: &[u8; 6]| {
-                            rt::Ok(
-                                Self::LoadRuntime100HoursBeforeReset(response::LoadRuntime100HoursBeforeReset {
-                                    runtime_hours_before_reset: u16::from_be_bytes([
-                                        frame[2],
-                                        frame[3],
-                                    ]),
-                                }),
-                            )
+                            response::LoadRuntime100HoursBeforeReset::from_frame(frame)
+                                .map(Self::LoadRuntime100HoursBeforeReset)
                         },
                     );
                     g.end(&response::LoadRuntime100Hours::DESC)
@@ -3424,36 +2285,22 @@ pub mod sd {
                         asked >> 39 & 1 != 0,
                         &response::StallEventCounter::DESC,
                         |frame: &[u8; 6]| {
-                            rt::Ok(
-                                Self::StallEventCounter(response::StallEventCounter {
-                                    stall_events: u16::from_be_bytes([frame[2], frame[3]]),
-                                }),
-                            )
+                            response::StallEventCounter::from_frame(frame)
+                                .map(Self::StallEventCounter)
                         },
                     );
                     g.ambiguous(
                         asked >> 40 & 1 != 0,
                         &response::StallEventCounterBeforeReset::DESC,
                         |frame: &[u8; 6]| {
-                            rt::Ok(
-                                Self::StallEventCounterBeforeReset(response::StallEventCounterBeforeReset {
-                                    stall_events_before_reset: u16::from_be_bytes([
-                                        frame[2],
-                                        frame[3],
-                                    ]),
-                                }),
-                            )
+                            response::StallEventCounterBeforeReset::from_frame(frame)
+                                .map(Self::StallEventCounterBeforeReset)
                         },
                     );
                     g.end(&response::StallEventCounter::DESC)
                 }
                 0x29 => {
-                    let frame = rt::fixed::<6>(frame, &response::PowerUpCycles::DESC)?;
-                    rt::Ok(
-                        Self::PowerUpCycles(response::PowerUpCycles {
-                            power_up_cycles: u16::from_be_bytes([frame[2], frame[3]]),
-                        }),
-                    )
+                    response::PowerUpCycles::from_frame(frame).map(Self::PowerUpCycles)
                 }
                 _ => rt::Err(RESPONSE_CODE.unknown(frame)),
             }
@@ -3896,6 +2743,16 @@ pub mod sd {
         pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             Request::SetPoint(*self).encode(address, buf)
         }
+        /// Reads this message from a frame whose framing and code are checked.
+        #[inline(always)]
+        fn from_frame(frame: &[u8]) -> rt::DecodeResult<Self> {
+            let frame = rt::fixed::<6>(frame, &Self::DESC)?;
+            let field_0: u16 = u16::from_be_bytes([frame[2], frame[3]]);
+            rt::Ok(Self {
+                freshness: (field_0 >> 12) as u8,
+                position: Angle::from_raw((((field_0 & 0xFFF) as u16) << 4) as i16 >> 4),
+            })
+        }
     }
     impl request::ReadActualPosition {
         pub const NAME: &'static str = "read_actual_position";
@@ -3906,6 +2763,14 @@ pub mod sd {
         pub const ARG2_DESC: rt::FieldDesc = rt::field(Self::NAME, "arg2");
         pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             Request::ReadActualPosition(*self).encode(address, buf)
+        }
+        /// Reads this message from a frame whose framing and code are checked.
+        #[inline(always)]
+        fn from_frame(frame: &[u8]) -> rt::DecodeResult<Self> {
+            let frame = rt::fixed::<6>(frame, &Self::DESC)?;
+            rt::equal(&Self::ARG1_DESC, 2, frame[2], 0x0)?;
+            rt::equal(&Self::ARG2_DESC, 3, frame[3], 0x0)?;
+            rt::Ok(Self)
         }
     }
     impl request::SetVelocity {
@@ -3920,6 +2785,16 @@ pub mod sd {
         pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             Request::SetVelocity(*self).encode(address, buf)
         }
+        /// Reads this message from a frame whose framing and code are checked.
+        #[inline(always)]
+        fn from_frame(frame: &[u8]) -> rt::DecodeResult<Self> {
+            let frame = rt::fixed::<6>(frame, &Self::DESC)?;
+            rt::Ok(Self {
+                set_velocity: Velocity::from_raw(
+                    i16::from_be_bytes([frame[2], frame[3]]),
+                ),
+            })
+        }
     }
     impl request::ReadActualVelocity {
         pub const NAME: &'static str = "read_actual_velocity";
@@ -3930,6 +2805,14 @@ pub mod sd {
         pub const ARG2_DESC: rt::FieldDesc = rt::field(Self::NAME, "arg2");
         pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             Request::ReadActualVelocity(*self).encode(address, buf)
+        }
+        /// Reads this message from a frame whose framing and code are checked.
+        #[inline(always)]
+        fn from_frame(frame: &[u8]) -> rt::DecodeResult<Self> {
+            let frame = rt::fixed::<6>(frame, &Self::DESC)?;
+            rt::equal(&Self::ARG1_DESC, 2, frame[2], 0x0)?;
+            rt::equal(&Self::ARG2_DESC, 3, frame[3], 0x0)?;
+            rt::Ok(Self)
         }
     }
     impl request::SetServoId {
@@ -3949,6 +2832,14 @@ pub mod sd {
         pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             Request::SetServoId(*self).encode(address, buf)
         }
+        /// Reads this message from a frame whose framing and code are checked.
+        #[inline(always)]
+        fn from_frame(frame: &[u8]) -> rt::DecodeResult<Self> {
+            let frame = rt::fixed::<6>(frame, &Self::DESC)?;
+            rt::in_range(&Self::NEW_ID_DESC, 2, frame[2], 1, 30)?;
+            rt::same(&Self::NEW_ID_REPEAT_DESC, 3, frame[3], "new_id", frame[2])?;
+            rt::Ok(Self { new_id: frame[2] })
+        }
     }
     impl request::ReadServoId {
         pub const NAME: &'static str = "read_servo_id";
@@ -3959,6 +2850,14 @@ pub mod sd {
         pub const ARG2_DESC: rt::FieldDesc = rt::field(Self::NAME, "arg2");
         pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             Request::ReadServoId(*self).encode(address, buf)
+        }
+        /// Reads this message from a frame whose framing and code are checked.
+        #[inline(always)]
+        fn from_frame(frame: &[u8]) -> rt::DecodeResult<Self> {
+            let frame = rt::fixed::<6>(frame, &Self::DESC)?;
+            rt::equal(&Self::ARG1_DESC, 2, frame[2], 0x0)?;
+            rt::equal(&Self::ARG2_DESC, 3, frame[3], 0x0)?;
+            rt::Ok(Self)
         }
     }
     impl request::ReadCurrentConsumption {
@@ -3971,6 +2870,15 @@ pub mod sd {
         pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             Request::ReadCurrentConsumption(*self).encode(address, buf)
         }
+        /// Reads this message from a frame whose framing and code are checked.
+        #[inline(always)]
+        fn from_frame(frame: &[u8]) -> rt::DecodeResult<Self> {
+            let frame = rt::fixed::<6>(frame, &Self::DESC)?;
+            rt::no_broadcast(frame[1], 0x1F, &Self::DESC)?;
+            rt::equal(&Self::ARG1_DESC, 2, frame[2], 0x0)?;
+            rt::equal(&Self::ARG2_DESC, 3, frame[3], 0x0)?;
+            rt::Ok(Self)
+        }
     }
     impl request::ReadBusVoltages {
         pub const NAME: &'static str = "read_bus_voltages";
@@ -3981,6 +2889,15 @@ pub mod sd {
         pub const ARG2_DESC: rt::FieldDesc = rt::field(Self::NAME, "arg2");
         pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             Request::ReadBusVoltages(*self).encode(address, buf)
+        }
+        /// Reads this message from a frame whose framing and code are checked.
+        #[inline(always)]
+        fn from_frame(frame: &[u8]) -> rt::DecodeResult<Self> {
+            let frame = rt::fixed::<6>(frame, &Self::DESC)?;
+            rt::no_broadcast(frame[1], 0x1F, &Self::DESC)?;
+            rt::equal(&Self::ARG1_DESC, 2, frame[2], 0x0)?;
+            rt::equal(&Self::ARG2_DESC, 3, frame[3], 0x0)?;
+            rt::Ok(Self)
         }
     }
     impl request::ReadExtendedCurrentConsumption {
@@ -3993,6 +2910,15 @@ pub mod sd {
         pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             Request::ReadExtendedCurrentConsumption(*self).encode(address, buf)
         }
+        /// Reads this message from a frame whose framing and code are checked.
+        #[inline(always)]
+        fn from_frame(frame: &[u8]) -> rt::DecodeResult<Self> {
+            let frame = rt::fixed::<6>(frame, &Self::DESC)?;
+            rt::no_broadcast(frame[1], 0x1F, &Self::DESC)?;
+            rt::equal(&Self::ARG1_DESC, 2, frame[2], 0x0)?;
+            rt::equal(&Self::ARG2_DESC, 3, frame[3], 0x0)?;
+            rt::Ok(Self)
+        }
     }
     impl request::ReadTemperatures {
         pub const NAME: &'static str = "read_temperatures";
@@ -4003,6 +2929,15 @@ pub mod sd {
         pub const ARG2_DESC: rt::FieldDesc = rt::field(Self::NAME, "arg2");
         pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             Request::ReadTemperatures(*self).encode(address, buf)
+        }
+        /// Reads this message from a frame whose framing and code are checked.
+        #[inline(always)]
+        fn from_frame(frame: &[u8]) -> rt::DecodeResult<Self> {
+            let frame = rt::fixed::<6>(frame, &Self::DESC)?;
+            rt::no_broadcast(frame[1], 0x1F, &Self::DESC)?;
+            rt::equal(&Self::ARG1_DESC, 2, frame[2], 0x0)?;
+            rt::equal(&Self::ARG2_DESC, 3, frame[3], 0x0)?;
+            rt::Ok(Self)
         }
     }
     impl request::ReadHumidity {
@@ -4015,6 +2950,15 @@ pub mod sd {
         pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             Request::ReadHumidity(*self).encode(address, buf)
         }
+        /// Reads this message from a frame whose framing and code are checked.
+        #[inline(always)]
+        fn from_frame(frame: &[u8]) -> rt::DecodeResult<Self> {
+            let frame = rt::fixed::<6>(frame, &Self::DESC)?;
+            rt::no_broadcast(frame[1], 0x1F, &Self::DESC)?;
+            rt::equal(&Self::ARG1_DESC, 2, frame[2], 0x0)?;
+            rt::equal(&Self::ARG2_DESC, 3, frame[3], 0x0)?;
+            rt::Ok(Self)
+        }
     }
     impl request::ReadSkippedFramesCounter {
         pub const NAME: &'static str = "read_skipped_frames_counter";
@@ -4025,6 +2969,15 @@ pub mod sd {
         pub const ARG2_DESC: rt::FieldDesc = rt::field(Self::NAME, "arg2");
         pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             Request::ReadSkippedFramesCounter(*self).encode(address, buf)
+        }
+        /// Reads this message from a frame whose framing and code are checked.
+        #[inline(always)]
+        fn from_frame(frame: &[u8]) -> rt::DecodeResult<Self> {
+            let frame = rt::fixed::<6>(frame, &Self::DESC)?;
+            rt::no_broadcast(frame[1], 0x1F, &Self::DESC)?;
+            rt::equal(&Self::ARG1_DESC, 2, frame[2], 0x0)?;
+            rt::equal(&Self::ARG2_DESC, 3, frame[3], 0x1)?;
+            rt::Ok(Self)
         }
     }
     impl request::ResetDroppedFramesCounter {
@@ -4037,6 +2990,15 @@ pub mod sd {
         pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             Request::ResetDroppedFramesCounter(*self).encode(address, buf)
         }
+        /// Reads this message from a frame whose framing and code are checked.
+        #[inline(always)]
+        fn from_frame(frame: &[u8]) -> rt::DecodeResult<Self> {
+            let frame = rt::fixed::<6>(frame, &Self::DESC)?;
+            rt::no_broadcast(frame[1], 0x1F, &Self::DESC)?;
+            rt::equal(&Self::ARG1_DESC, 2, frame[2], 0x0)?;
+            rt::equal(&Self::ARG2_DESC, 3, frame[3], 0x2)?;
+            rt::Ok(Self)
+        }
     }
     impl request::ReadActuatorStatusWord {
         pub const NAME: &'static str = "read_actuator_status_word";
@@ -4047,6 +3009,15 @@ pub mod sd {
         pub const ARG2_DESC: rt::FieldDesc = rt::field(Self::NAME, "arg2");
         pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             Request::ReadActuatorStatusWord(*self).encode(address, buf)
+        }
+        /// Reads this message from a frame whose framing and code are checked.
+        #[inline(always)]
+        fn from_frame(frame: &[u8]) -> rt::DecodeResult<Self> {
+            let frame = rt::fixed::<6>(frame, &Self::DESC)?;
+            rt::no_broadcast(frame[1], 0x1F, &Self::DESC)?;
+            rt::equal(&Self::ARG1_DESC, 2, frame[2], 0xAA)?;
+            rt::equal(&Self::ARG2_DESC, 3, frame[3], 0x2)?;
+            rt::Ok(Self)
         }
     }
     impl request::ResetActuatorStatusWord {
@@ -4059,6 +3030,15 @@ pub mod sd {
         pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             Request::ResetActuatorStatusWord(*self).encode(address, buf)
         }
+        /// Reads this message from a frame whose framing and code are checked.
+        #[inline(always)]
+        fn from_frame(frame: &[u8]) -> rt::DecodeResult<Self> {
+            let frame = rt::fixed::<6>(frame, &Self::DESC)?;
+            rt::no_broadcast(frame[1], 0x1F, &Self::DESC)?;
+            rt::equal(&Self::ARG1_DESC, 2, frame[2], 0xAA)?;
+            rt::equal(&Self::ARG2_DESC, 3, frame[3], 0x52)?;
+            rt::Ok(Self)
+        }
     }
     impl request::ResetDefaultRoleAndErrorFlags {
         pub const NAME: &'static str = "reset_default_role_and_error_flags";
@@ -4069,6 +3049,15 @@ pub mod sd {
         pub const ARG2_DESC: rt::FieldDesc = rt::field(Self::NAME, "arg2");
         pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             Request::ResetDefaultRoleAndErrorFlags(*self).encode(address, buf)
+        }
+        /// Reads this message from a frame whose framing and code are checked.
+        #[inline(always)]
+        fn from_frame(frame: &[u8]) -> rt::DecodeResult<Self> {
+            let frame = rt::fixed::<6>(frame, &Self::DESC)?;
+            rt::no_broadcast(frame[1], 0x1F, &Self::DESC)?;
+            rt::equal(&Self::ARG1_DESC, 2, frame[2], 0x41)?;
+            rt::equal(&Self::ARG2_DESC, 3, frame[3], 0x53)?;
+            rt::Ok(Self)
         }
     }
     impl request::SetCurrentPositionAsZero {
@@ -4081,6 +3070,15 @@ pub mod sd {
         pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             Request::SetCurrentPositionAsZero(*self).encode(address, buf)
         }
+        /// Reads this message from a frame whose framing and code are checked.
+        #[inline(always)]
+        fn from_frame(frame: &[u8]) -> rt::DecodeResult<Self> {
+            let frame = rt::fixed::<6>(frame, &Self::DESC)?;
+            rt::no_broadcast(frame[1], 0x1F, &Self::DESC)?;
+            rt::equal(&Self::ARG1_DESC, 2, frame[2], 0x0)?;
+            rt::equal(&Self::ARG2_DESC, 3, frame[3], 0x0)?;
+            rt::Ok(Self)
+        }
     }
     impl request::ReadCurrentZeroOffset {
         pub const NAME: &'static str = "read_current_zero_offset";
@@ -4092,6 +3090,15 @@ pub mod sd {
         pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             Request::ReadCurrentZeroOffset(*self).encode(address, buf)
         }
+        /// Reads this message from a frame whose framing and code are checked.
+        #[inline(always)]
+        fn from_frame(frame: &[u8]) -> rt::DecodeResult<Self> {
+            let frame = rt::fixed::<6>(frame, &Self::DESC)?;
+            rt::no_broadcast(frame[1], 0x1F, &Self::DESC)?;
+            rt::equal(&Self::ARG1_DESC, 2, frame[2], 0x0)?;
+            rt::equal(&Self::ARG2_DESC, 3, frame[3], 0x0)?;
+            rt::Ok(Self)
+        }
     }
     impl request::ResetZeroOffset {
         pub const NAME: &'static str = "reset_zero_offset";
@@ -4102,6 +3109,15 @@ pub mod sd {
         pub const ARG2_DESC: rt::FieldDesc = rt::field(Self::NAME, "arg2");
         pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             Request::ResetZeroOffset(*self).encode(address, buf)
+        }
+        /// Reads this message from a frame whose framing and code are checked.
+        #[inline(always)]
+        fn from_frame(frame: &[u8]) -> rt::DecodeResult<Self> {
+            let frame = rt::fixed::<6>(frame, &Self::DESC)?;
+            rt::no_broadcast(frame[1], 0x1F, &Self::DESC)?;
+            rt::equal(&Self::ARG1_DESC, 2, frame[2], 0x0)?;
+            rt::equal(&Self::ARG2_DESC, 3, frame[3], 0x0)?;
+            rt::Ok(Self)
         }
     }
     impl request::ReadElectronicSerialNumber {
@@ -4118,6 +3134,15 @@ pub mod sd {
         pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             Request::ReadElectronicSerialNumber(*self).encode(address, buf)
         }
+        /// Reads this message from a frame whose framing and code are checked.
+        #[inline(always)]
+        fn from_frame(frame: &[u8]) -> rt::DecodeResult<Self> {
+            let frame = rt::fixed::<6>(frame, &Self::DESC)?;
+            rt::no_broadcast(frame[1], 0x1F, &Self::DESC)?;
+            rt::equal(&Self::ARG1_DESC, 2, frame[2], 0x0)?;
+            rt::in_range(&Self::BYTE_NUMBER_DESC, 3, frame[3], 0, 31)?;
+            rt::Ok(Self { byte_number: frame[3] })
+        }
     }
     impl request::ReadProductDescription {
         pub const NAME: &'static str = "read_product_description";
@@ -4132,6 +3157,15 @@ pub mod sd {
         }
         pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             Request::ReadProductDescription(*self).encode(address, buf)
+        }
+        /// Reads this message from a frame whose framing and code are checked.
+        #[inline(always)]
+        fn from_frame(frame: &[u8]) -> rt::DecodeResult<Self> {
+            let frame = rt::fixed::<6>(frame, &Self::DESC)?;
+            rt::no_broadcast(frame[1], 0x1F, &Self::DESC)?;
+            rt::equal(&Self::ARG1_DESC, 2, frame[2], 0x0)?;
+            rt::in_range(&Self::BYTE_NUMBER_DESC, 3, frame[3], 0, 31)?;
+            rt::Ok(Self { byte_number: frame[3] })
         }
     }
     impl request::ReadSoftwareRevision {
@@ -4148,6 +3182,15 @@ pub mod sd {
         pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             Request::ReadSoftwareRevision(*self).encode(address, buf)
         }
+        /// Reads this message from a frame whose framing and code are checked.
+        #[inline(always)]
+        fn from_frame(frame: &[u8]) -> rt::DecodeResult<Self> {
+            let frame = rt::fixed::<6>(frame, &Self::DESC)?;
+            rt::no_broadcast(frame[1], 0x1F, &Self::DESC)?;
+            rt::equal(&Self::ARG1_DESC, 2, frame[2], 0x0)?;
+            rt::in_range(&Self::BYTE_NUMBER_DESC, 3, frame[3], 0, 31)?;
+            rt::Ok(Self { byte_number: frame[3] })
+        }
     }
     impl request::ReadHardwareRevision {
         pub const NAME: &'static str = "read_hardware_revision";
@@ -4163,6 +3206,15 @@ pub mod sd {
         pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             Request::ReadHardwareRevision(*self).encode(address, buf)
         }
+        /// Reads this message from a frame whose framing and code are checked.
+        #[inline(always)]
+        fn from_frame(frame: &[u8]) -> rt::DecodeResult<Self> {
+            let frame = rt::fixed::<6>(frame, &Self::DESC)?;
+            rt::no_broadcast(frame[1], 0x1F, &Self::DESC)?;
+            rt::equal(&Self::ARG1_DESC, 2, frame[2], 0x0)?;
+            rt::in_range(&Self::BYTE_NUMBER_DESC, 3, frame[3], 0, 31)?;
+            rt::Ok(Self { byte_number: frame[3] })
+        }
     }
     impl request::ReadTotalRuntimeHours {
         pub const NAME: &'static str = "read_total_runtime_hours";
@@ -4173,6 +3225,15 @@ pub mod sd {
         pub const ARG2_DESC: rt::FieldDesc = rt::field(Self::NAME, "arg2");
         pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             Request::ReadTotalRuntimeHours(*self).encode(address, buf)
+        }
+        /// Reads this message from a frame whose framing and code are checked.
+        #[inline(always)]
+        fn from_frame(frame: &[u8]) -> rt::DecodeResult<Self> {
+            let frame = rt::fixed::<6>(frame, &Self::DESC)?;
+            rt::no_broadcast(frame[1], 0x1F, &Self::DESC)?;
+            rt::equal(&Self::ARG1_DESC, 2, frame[2], 0x0)?;
+            rt::equal(&Self::ARG2_DESC, 3, frame[3], 0x0)?;
+            rt::Ok(Self)
         }
     }
     impl request::ReadTotalRuntimeMinSec {
@@ -4185,6 +3246,15 @@ pub mod sd {
         pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             Request::ReadTotalRuntimeMinSec(*self).encode(address, buf)
         }
+        /// Reads this message from a frame whose framing and code are checked.
+        #[inline(always)]
+        fn from_frame(frame: &[u8]) -> rt::DecodeResult<Self> {
+            let frame = rt::fixed::<6>(frame, &Self::DESC)?;
+            rt::no_broadcast(frame[1], 0x1F, &Self::DESC)?;
+            rt::equal(&Self::ARG1_DESC, 2, frame[2], 0x0)?;
+            rt::equal(&Self::ARG2_DESC, 3, frame[3], 0x1)?;
+            rt::Ok(Self)
+        }
     }
     impl request::ReadLoadRuntime024Hours {
         pub const NAME: &'static str = "read_load_runtime_0_24_hours";
@@ -4195,6 +3265,15 @@ pub mod sd {
         pub const ARG2_DESC: rt::FieldDesc = rt::field(Self::NAME, "arg2");
         pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             Request::ReadLoadRuntime024Hours(*self).encode(address, buf)
+        }
+        /// Reads this message from a frame whose framing and code are checked.
+        #[inline(always)]
+        fn from_frame(frame: &[u8]) -> rt::DecodeResult<Self> {
+            let frame = rt::fixed::<6>(frame, &Self::DESC)?;
+            rt::no_broadcast(frame[1], 0x1F, &Self::DESC)?;
+            rt::equal(&Self::ARG1_DESC, 2, frame[2], 0x0)?;
+            rt::equal(&Self::ARG2_DESC, 3, frame[3], 0x0)?;
+            rt::Ok(Self)
         }
     }
     impl request::ReadLoadRuntime024MinSec {
@@ -4207,6 +3286,15 @@ pub mod sd {
         pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             Request::ReadLoadRuntime024MinSec(*self).encode(address, buf)
         }
+        /// Reads this message from a frame whose framing and code are checked.
+        #[inline(always)]
+        fn from_frame(frame: &[u8]) -> rt::DecodeResult<Self> {
+            let frame = rt::fixed::<6>(frame, &Self::DESC)?;
+            rt::no_broadcast(frame[1], 0x1F, &Self::DESC)?;
+            rt::equal(&Self::ARG1_DESC, 2, frame[2], 0x0)?;
+            rt::equal(&Self::ARG2_DESC, 3, frame[3], 0x1)?;
+            rt::Ok(Self)
+        }
     }
     impl request::ResetLoadRuntime024 {
         pub const NAME: &'static str = "reset_load_runtime_0_24";
@@ -4217,6 +3305,15 @@ pub mod sd {
         pub const ARG2_DESC: rt::FieldDesc = rt::field(Self::NAME, "arg2");
         pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             Request::ResetLoadRuntime024(*self).encode(address, buf)
+        }
+        /// Reads this message from a frame whose framing and code are checked.
+        #[inline(always)]
+        fn from_frame(frame: &[u8]) -> rt::DecodeResult<Self> {
+            let frame = rt::fixed::<6>(frame, &Self::DESC)?;
+            rt::no_broadcast(frame[1], 0x1F, &Self::DESC)?;
+            rt::equal(&Self::ARG1_DESC, 2, frame[2], 0xAA)?;
+            rt::equal(&Self::ARG2_DESC, 3, frame[3], 0x55)?;
+            rt::Ok(Self)
         }
     }
     impl request::ReadLoadRuntime2549Hours {
@@ -4229,6 +3326,15 @@ pub mod sd {
         pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             Request::ReadLoadRuntime2549Hours(*self).encode(address, buf)
         }
+        /// Reads this message from a frame whose framing and code are checked.
+        #[inline(always)]
+        fn from_frame(frame: &[u8]) -> rt::DecodeResult<Self> {
+            let frame = rt::fixed::<6>(frame, &Self::DESC)?;
+            rt::no_broadcast(frame[1], 0x1F, &Self::DESC)?;
+            rt::equal(&Self::ARG1_DESC, 2, frame[2], 0x0)?;
+            rt::equal(&Self::ARG2_DESC, 3, frame[3], 0x0)?;
+            rt::Ok(Self)
+        }
     }
     impl request::ReadLoadRuntime2549MinSec {
         pub const NAME: &'static str = "read_load_runtime_25_49_min_sec";
@@ -4239,6 +3345,15 @@ pub mod sd {
         pub const ARG2_DESC: rt::FieldDesc = rt::field(Self::NAME, "arg2");
         pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             Request::ReadLoadRuntime2549MinSec(*self).encode(address, buf)
+        }
+        /// Reads this message from a frame whose framing and code are checked.
+        #[inline(always)]
+        fn from_frame(frame: &[u8]) -> rt::DecodeResult<Self> {
+            let frame = rt::fixed::<6>(frame, &Self::DESC)?;
+            rt::no_broadcast(frame[1], 0x1F, &Self::DESC)?;
+            rt::equal(&Self::ARG1_DESC, 2, frame[2], 0x0)?;
+            rt::equal(&Self::ARG2_DESC, 3, frame[3], 0x1)?;
+            rt::Ok(Self)
         }
     }
     impl request::ResetLoadRuntime2549 {
@@ -4251,6 +3366,15 @@ pub mod sd {
         pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             Request::ResetLoadRuntime2549(*self).encode(address, buf)
         }
+        /// Reads this message from a frame whose framing and code are checked.
+        #[inline(always)]
+        fn from_frame(frame: &[u8]) -> rt::DecodeResult<Self> {
+            let frame = rt::fixed::<6>(frame, &Self::DESC)?;
+            rt::no_broadcast(frame[1], 0x1F, &Self::DESC)?;
+            rt::equal(&Self::ARG1_DESC, 2, frame[2], 0xAA)?;
+            rt::equal(&Self::ARG2_DESC, 3, frame[3], 0x55)?;
+            rt::Ok(Self)
+        }
     }
     impl request::ReadLoadRuntime5074Hours {
         pub const NAME: &'static str = "read_load_runtime_50_74_hours";
@@ -4261,6 +3385,15 @@ pub mod sd {
         pub const ARG2_DESC: rt::FieldDesc = rt::field(Self::NAME, "arg2");
         pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             Request::ReadLoadRuntime5074Hours(*self).encode(address, buf)
+        }
+        /// Reads this message from a frame whose framing and code are checked.
+        #[inline(always)]
+        fn from_frame(frame: &[u8]) -> rt::DecodeResult<Self> {
+            let frame = rt::fixed::<6>(frame, &Self::DESC)?;
+            rt::no_broadcast(frame[1], 0x1F, &Self::DESC)?;
+            rt::equal(&Self::ARG1_DESC, 2, frame[2], 0x0)?;
+            rt::equal(&Self::ARG2_DESC, 3, frame[3], 0x0)?;
+            rt::Ok(Self)
         }
     }
     impl request::ReadLoadRuntime5074MinSec {
@@ -4273,6 +3406,15 @@ pub mod sd {
         pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             Request::ReadLoadRuntime5074MinSec(*self).encode(address, buf)
         }
+        /// Reads this message from a frame whose framing and code are checked.
+        #[inline(always)]
+        fn from_frame(frame: &[u8]) -> rt::DecodeResult<Self> {
+            let frame = rt::fixed::<6>(frame, &Self::DESC)?;
+            rt::no_broadcast(frame[1], 0x1F, &Self::DESC)?;
+            rt::equal(&Self::ARG1_DESC, 2, frame[2], 0x0)?;
+            rt::equal(&Self::ARG2_DESC, 3, frame[3], 0x1)?;
+            rt::Ok(Self)
+        }
     }
     impl request::ResetLoadRuntime5074 {
         pub const NAME: &'static str = "reset_load_runtime_50_74";
@@ -4283,6 +3425,15 @@ pub mod sd {
         pub const ARG2_DESC: rt::FieldDesc = rt::field(Self::NAME, "arg2");
         pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             Request::ResetLoadRuntime5074(*self).encode(address, buf)
+        }
+        /// Reads this message from a frame whose framing and code are checked.
+        #[inline(always)]
+        fn from_frame(frame: &[u8]) -> rt::DecodeResult<Self> {
+            let frame = rt::fixed::<6>(frame, &Self::DESC)?;
+            rt::no_broadcast(frame[1], 0x1F, &Self::DESC)?;
+            rt::equal(&Self::ARG1_DESC, 2, frame[2], 0xAA)?;
+            rt::equal(&Self::ARG2_DESC, 3, frame[3], 0x55)?;
+            rt::Ok(Self)
         }
     }
     impl request::ReadLoadRuntime7599Hours {
@@ -4295,6 +3446,15 @@ pub mod sd {
         pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             Request::ReadLoadRuntime7599Hours(*self).encode(address, buf)
         }
+        /// Reads this message from a frame whose framing and code are checked.
+        #[inline(always)]
+        fn from_frame(frame: &[u8]) -> rt::DecodeResult<Self> {
+            let frame = rt::fixed::<6>(frame, &Self::DESC)?;
+            rt::no_broadcast(frame[1], 0x1F, &Self::DESC)?;
+            rt::equal(&Self::ARG1_DESC, 2, frame[2], 0x0)?;
+            rt::equal(&Self::ARG2_DESC, 3, frame[3], 0x0)?;
+            rt::Ok(Self)
+        }
     }
     impl request::ReadLoadRuntime7599MinSec {
         pub const NAME: &'static str = "read_load_runtime_75_99_min_sec";
@@ -4305,6 +3465,15 @@ pub mod sd {
         pub const ARG2_DESC: rt::FieldDesc = rt::field(Self::NAME, "arg2");
         pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             Request::ReadLoadRuntime7599MinSec(*self).encode(address, buf)
+        }
+        /// Reads this message from a frame whose framing and code are checked.
+        #[inline(always)]
+        fn from_frame(frame: &[u8]) -> rt::DecodeResult<Self> {
+            let frame = rt::fixed::<6>(frame, &Self::DESC)?;
+            rt::no_broadcast(frame[1], 0x1F, &Self::DESC)?;
+            rt::equal(&Self::ARG1_DESC, 2, frame[2], 0x0)?;
+            rt::equal(&Self::ARG2_DESC, 3, frame[3], 0x1)?;
+            rt::Ok(Self)
         }
     }
     impl request::ResetLoadRuntime7599 {
@@ -4317,6 +3486,15 @@ pub mod sd {
         pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             Request::ResetLoadRuntime7599(*self).encode(address, buf)
         }
+        /// Reads this message from a frame whose framing and code are checked.
+        #[inline(always)]
+        fn from_frame(frame: &[u8]) -> rt::DecodeResult<Self> {
+            let frame = rt::fixed::<6>(frame, &Self::DESC)?;
+            rt::no_broadcast(frame[1], 0x1F, &Self::DESC)?;
+            rt::equal(&Self::ARG1_DESC, 2, frame[2], 0xAA)?;
+            rt::equal(&Self::ARG2_DESC, 3, frame[3], 0x55)?;
+            rt::Ok(Self)
+        }
     }
     impl request::ReadLoadRuntime100Hours {
         pub const NAME: &'static str = "read_load_runtime_100_hours";
@@ -4327,6 +3505,15 @@ pub mod sd {
         pub const ARG2_DESC: rt::FieldDesc = rt::field(Self::NAME, "arg2");
         pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             Request::ReadLoadRuntime100Hours(*self).encode(address, buf)
+        }
+        /// Reads this message from a frame whose framing and code are checked.
+        #[inline(always)]
+        fn from_frame(frame: &[u8]) -> rt::DecodeResult<Self> {
+            let frame = rt::fixed::<6>(frame, &Self::DESC)?;
+            rt::no_broadcast(frame[1], 0x1F, &Self::DESC)?;
+            rt::equal(&Self::ARG1_DESC, 2, frame[2], 0x0)?;
+            rt::equal(&Self::ARG2_DESC, 3, frame[3], 0x0)?;
+            rt::Ok(Self)
         }
     }
     impl request::ReadLoadRuntime100MinSec {
@@ -4339,6 +3526,15 @@ pub mod sd {
         pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             Request::ReadLoadRuntime100MinSec(*self).encode(address, buf)
         }
+        /// Reads this message from a frame whose framing and code are checked.
+        #[inline(always)]
+        fn from_frame(frame: &[u8]) -> rt::DecodeResult<Self> {
+            let frame = rt::fixed::<6>(frame, &Self::DESC)?;
+            rt::no_broadcast(frame[1], 0x1F, &Self::DESC)?;
+            rt::equal(&Self::ARG1_DESC, 2, frame[2], 0x0)?;
+            rt::equal(&Self::ARG2_DESC, 3, frame[3], 0x1)?;
+            rt::Ok(Self)
+        }
     }
     impl request::ResetLoadRuntime100 {
         pub const NAME: &'static str = "reset_load_runtime_100";
@@ -4349,6 +3545,15 @@ pub mod sd {
         pub const ARG2_DESC: rt::FieldDesc = rt::field(Self::NAME, "arg2");
         pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             Request::ResetLoadRuntime100(*self).encode(address, buf)
+        }
+        /// Reads this message from a frame whose framing and code are checked.
+        #[inline(always)]
+        fn from_frame(frame: &[u8]) -> rt::DecodeResult<Self> {
+            let frame = rt::fixed::<6>(frame, &Self::DESC)?;
+            rt::no_broadcast(frame[1], 0x1F, &Self::DESC)?;
+            rt::equal(&Self::ARG1_DESC, 2, frame[2], 0xAA)?;
+            rt::equal(&Self::ARG2_DESC, 3, frame[3], 0x55)?;
+            rt::Ok(Self)
         }
     }
     impl request::ReadStallEventCounter {
@@ -4361,6 +3566,15 @@ pub mod sd {
         pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             Request::ReadStallEventCounter(*self).encode(address, buf)
         }
+        /// Reads this message from a frame whose framing and code are checked.
+        #[inline(always)]
+        fn from_frame(frame: &[u8]) -> rt::DecodeResult<Self> {
+            let frame = rt::fixed::<6>(frame, &Self::DESC)?;
+            rt::no_broadcast(frame[1], 0x1F, &Self::DESC)?;
+            rt::equal(&Self::ARG1_DESC, 2, frame[2], 0x0)?;
+            rt::equal(&Self::ARG2_DESC, 3, frame[3], 0x0)?;
+            rt::Ok(Self)
+        }
     }
     impl request::ResetStallEventCounter {
         pub const NAME: &'static str = "reset_stall_event_counter";
@@ -4372,6 +3586,15 @@ pub mod sd {
         pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             Request::ResetStallEventCounter(*self).encode(address, buf)
         }
+        /// Reads this message from a frame whose framing and code are checked.
+        #[inline(always)]
+        fn from_frame(frame: &[u8]) -> rt::DecodeResult<Self> {
+            let frame = rt::fixed::<6>(frame, &Self::DESC)?;
+            rt::no_broadcast(frame[1], 0x1F, &Self::DESC)?;
+            rt::equal(&Self::ARG1_DESC, 2, frame[2], 0xAA)?;
+            rt::equal(&Self::ARG2_DESC, 3, frame[3], 0x55)?;
+            rt::Ok(Self)
+        }
     }
     impl request::ReadPowerUpCycles {
         pub const NAME: &'static str = "read_power_up_cycles";
@@ -4382,6 +3605,15 @@ pub mod sd {
         pub const ARG2_DESC: rt::FieldDesc = rt::field(Self::NAME, "arg2");
         pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             Request::ReadPowerUpCycles(*self).encode(address, buf)
+        }
+        /// Reads this message from a frame whose framing and code are checked.
+        #[inline(always)]
+        fn from_frame(frame: &[u8]) -> rt::DecodeResult<Self> {
+            let frame = rt::fixed::<6>(frame, &Self::DESC)?;
+            rt::no_broadcast(frame[1], 0x1F, &Self::DESC)?;
+            rt::equal(&Self::ARG1_DESC, 2, frame[2], 0x0)?;
+            rt::equal(&Self::ARG2_DESC, 3, frame[3], 0x0)?;
+            rt::Ok(Self)
         }
     }
     impl response::SetPointReply {
@@ -4396,6 +3628,16 @@ pub mod sd {
         pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             Response::SetPointReply(*self).encode(address, buf)
         }
+        /// Reads this message from a frame whose framing and code are checked.
+        #[inline(always)]
+        fn from_frame(frame: &[u8]) -> rt::DecodeResult<Self> {
+            let frame = rt::fixed::<6>(frame, &Self::DESC)?;
+            let field_0: u16 = u16::from_be_bytes([frame[2], frame[3]]);
+            rt::Ok(Self {
+                freshness: (field_0 >> 12) as u8,
+                position: Angle::from_raw((((field_0 & 0xFFF) as u16) << 4) as i16 >> 4),
+            })
+        }
     }
     impl response::ActualPosition {
         pub const NAME: &'static str = "actual_position";
@@ -4408,6 +3650,16 @@ pub mod sd {
         }
         pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             Response::ActualPosition(*self).encode(address, buf)
+        }
+        /// Reads this message from a frame whose framing and code are checked.
+        #[inline(always)]
+        fn from_frame(frame: &[u8]) -> rt::DecodeResult<Self> {
+            let frame = rt::fixed::<6>(frame, &Self::DESC)?;
+            let field_0: u16 = u16::from_be_bytes([frame[2], frame[3]]);
+            rt::equal(&Self::ZERO_DESC, 2, field_0 >> 12, 0x0)?;
+            rt::Ok(Self {
+                position: Angle::from_raw((((field_0 & 0xFFF) as u16) << 4) as i16 >> 4),
+            })
         }
     }
     impl response::SetVelocityReply {
@@ -4422,6 +3674,16 @@ pub mod sd {
         pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             Response::SetVelocityReply(*self).encode(address, buf)
         }
+        /// Reads this message from a frame whose framing and code are checked.
+        #[inline(always)]
+        fn from_frame(frame: &[u8]) -> rt::DecodeResult<Self> {
+            let frame = rt::fixed::<6>(frame, &Self::DESC)?;
+            rt::Ok(Self {
+                actual_velocity: Velocity::from_raw(
+                    i16::from_be_bytes([frame[2], frame[3]]),
+                ),
+            })
+        }
     }
     impl response::ActualVelocity {
         pub const NAME: &'static str = "actual_velocity";
@@ -4434,6 +3696,16 @@ pub mod sd {
         }
         pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             Response::ActualVelocity(*self).encode(address, buf)
+        }
+        /// Reads this message from a frame whose framing and code are checked.
+        #[inline(always)]
+        fn from_frame(frame: &[u8]) -> rt::DecodeResult<Self> {
+            let frame = rt::fixed::<6>(frame, &Self::DESC)?;
+            rt::Ok(Self {
+                actual_velocity: Velocity::from_raw(
+                    i16::from_be_bytes([frame[2], frame[3]]),
+                ),
+            })
         }
     }
     impl response::SetServoIdReply {
@@ -4453,6 +3725,14 @@ pub mod sd {
         pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             Response::SetServoIdReply(*self).encode(address, buf)
         }
+        /// Reads this message from a frame whose framing and code are checked.
+        #[inline(always)]
+        fn from_frame(frame: &[u8]) -> rt::DecodeResult<Self> {
+            let frame = rt::fixed::<6>(frame, &Self::DESC)?;
+            rt::in_range(&Self::NEW_ID_DESC, 2, frame[2], 1, 30)?;
+            rt::same(&Self::NEW_ID_REPEAT_DESC, 3, frame[3], "new_id", frame[2])?;
+            rt::Ok(Self { new_id: frame[2] })
+        }
     }
     impl response::ServoId {
         pub const NAME: &'static str = "servo_id";
@@ -4467,6 +3747,14 @@ pub mod sd {
         }
         pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             Response::ServoId(*self).encode(address, buf)
+        }
+        /// Reads this message from a frame whose framing and code are checked.
+        #[inline(always)]
+        fn from_frame(frame: &[u8]) -> rt::DecodeResult<Self> {
+            let frame = rt::fixed::<6>(frame, &Self::DESC)?;
+            rt::in_range(&Self::ID_DESC, 2, frame[2], 1, 30)?;
+            rt::same(&Self::ID_REPEAT_DESC, 3, frame[3], "id", frame[2])?;
+            rt::Ok(Self { id: frame[2] })
         }
     }
     impl response::CurrentConsumption {
@@ -4485,6 +3773,15 @@ pub mod sd {
         pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             Response::CurrentConsumption(*self).encode(address, buf)
         }
+        /// Reads this message from a frame whose framing and code are checked.
+        #[inline(always)]
+        fn from_frame(frame: &[u8]) -> rt::DecodeResult<Self> {
+            let frame = rt::fixed::<6>(frame, &Self::DESC)?;
+            rt::same(&Self::CURRENT_REPEAT_DESC, 3, frame[3], "current", frame[2])?;
+            rt::Ok(Self {
+                current: Current::from_raw(frame[2] as u16),
+            })
+        }
     }
     impl response::BusVoltages {
         pub const NAME: &'static str = "bus_voltages";
@@ -4500,6 +3797,15 @@ pub mod sd {
         pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             Response::BusVoltages(*self).encode(address, buf)
         }
+        /// Reads this message from a frame whose framing and code are checked.
+        #[inline(always)]
+        fn from_frame(frame: &[u8]) -> rt::DecodeResult<Self> {
+            let frame = rt::fixed::<6>(frame, &Self::DESC)?;
+            rt::Ok(Self {
+                power_bus_1_voltage: Voltage::from_raw(frame[2]),
+                power_bus_2_voltage: Voltage::from_raw(frame[3]),
+            })
+        }
     }
     impl response::ExtendedCurrentConsumption {
         pub const NAME: &'static str = "extended_current_consumption";
@@ -4512,6 +3818,14 @@ pub mod sd {
         }
         pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             Response::ExtendedCurrentConsumption(*self).encode(address, buf)
+        }
+        /// Reads this message from a frame whose framing and code are checked.
+        #[inline(always)]
+        fn from_frame(frame: &[u8]) -> rt::DecodeResult<Self> {
+            let frame = rt::fixed::<6>(frame, &Self::DESC)?;
+            rt::Ok(Self {
+                current: Current::from_raw(u16::from_be_bytes([frame[2], frame[3]])),
+            })
         }
     }
     impl response::Temperatures {
@@ -4536,6 +3850,15 @@ pub mod sd {
         pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             Response::Temperatures(*self).encode(address, buf)
         }
+        /// Reads this message from a frame whose framing and code are checked.
+        #[inline(always)]
+        fn from_frame(frame: &[u8]) -> rt::DecodeResult<Self> {
+            let frame = rt::fixed::<6>(frame, &Self::DESC)?;
+            rt::Ok(Self {
+                motor_temperature: Temperature::from_raw(frame[2]),
+                pcb_temperature: Temperature::from_raw(frame[3]),
+            })
+        }
     }
     impl response::Humidity {
         pub const NAME: &'static str = "humidity";
@@ -4556,6 +3879,14 @@ pub mod sd {
         pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             Response::Humidity(*self).encode(address, buf)
         }
+        /// Reads this message from a frame whose framing and code are checked.
+        #[inline(always)]
+        fn from_frame(frame: &[u8]) -> rt::DecodeResult<Self> {
+            let frame = rt::fixed::<6>(frame, &Self::DESC)?;
+            rt::in_range_or(&Self::HUMIDITY_DESC, 2, frame[2], 1, 100, &[0])?;
+            rt::same(&Self::HUMIDITY_REPEAT_DESC, 3, frame[3], "humidity", frame[2])?;
+            rt::Ok(Self { humidity: frame[2] })
+        }
     }
     impl response::SkippedFramesCounter {
         pub const NAME: &'static str = "skipped_frames_counter";
@@ -4571,6 +3902,15 @@ pub mod sd {
         pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             Response::SkippedFramesCounter(*self).encode(address, buf)
         }
+        /// Reads this message from a frame whose framing and code are checked.
+        #[inline(always)]
+        fn from_frame(frame: &[u8]) -> rt::DecodeResult<Self> {
+            let frame = rt::fixed::<6>(frame, &Self::DESC)?;
+            rt::Ok(Self {
+                host_freshness_counter: frame[2],
+                dropped_frames: frame[3],
+            })
+        }
     }
     impl response::DroppedFramesCounterReset {
         pub const NAME: &'static str = "dropped_frames_counter_reset";
@@ -4584,6 +3924,15 @@ pub mod sd {
         }
         pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             Response::DroppedFramesCounterReset(*self).encode(address, buf)
+        }
+        /// Reads this message from a frame whose framing and code are checked.
+        #[inline(always)]
+        fn from_frame(frame: &[u8]) -> rt::DecodeResult<Self> {
+            let frame = rt::fixed::<6>(frame, &Self::DESC)?;
+            rt::equal(&Self::ARG2_DESC, 3, frame[3], 0x0)?;
+            rt::Ok(Self {
+                host_freshness_counter: frame[2],
+            })
         }
     }
     impl response::ActuatorStatusWord {
@@ -4600,6 +3949,15 @@ pub mod sd {
         pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             Response::ActuatorStatusWord(*self).encode(address, buf)
         }
+        /// Reads this message from a frame whose framing and code are checked.
+        #[inline(always)]
+        fn from_frame(frame: &[u8]) -> rt::DecodeResult<Self> {
+            let frame = rt::fixed::<6>(frame, &Self::DESC)?;
+            rt::Ok(Self {
+                status_bits: ActuatorStatusBits::from_raw(frame[2]),
+                status_arg2: frame[3],
+            })
+        }
     }
     impl response::ResetDefaultRoleAndErrorFlagsReply {
         pub const NAME: &'static str = "reset_default_role_and_error_flags_reply";
@@ -4610,6 +3968,14 @@ pub mod sd {
         pub const ARG2_DESC: rt::FieldDesc = rt::field(Self::NAME, "arg2");
         pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             Response::ResetDefaultRoleAndErrorFlagsReply(*self).encode(address, buf)
+        }
+        /// Reads this message from a frame whose framing and code are checked.
+        #[inline(always)]
+        fn from_frame(frame: &[u8]) -> rt::DecodeResult<Self> {
+            let frame = rt::fixed::<6>(frame, &Self::DESC)?;
+            rt::equal(&Self::ARG1_DESC, 2, frame[2], 0x41)?;
+            rt::equal(&Self::ARG2_DESC, 3, frame[3], 0x53)?;
+            rt::Ok(Self)
         }
     }
     impl response::SetCurrentPositionAsZeroReply {
@@ -4624,6 +3990,18 @@ pub mod sd {
         pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             Response::SetCurrentPositionAsZeroReply(*self).encode(address, buf)
         }
+        /// Reads this message from a frame whose framing and code are checked.
+        #[inline(always)]
+        fn from_frame(frame: &[u8]) -> rt::DecodeResult<Self> {
+            let frame = rt::fixed::<6>(frame, &Self::DESC)?;
+            let field_0: u16 = u16::from_be_bytes([frame[2], frame[3]]);
+            rt::equal(&Self::ZERO_DESC, 2, field_0 >> 12, 0x0)?;
+            rt::Ok(Self {
+                zero_offset: Angle::from_raw(
+                    (((field_0 & 0xFFF) as u16) << 4) as i16 >> 4,
+                ),
+            })
+        }
     }
     impl response::CurrentZeroOffset {
         pub const NAME: &'static str = "current_zero_offset";
@@ -4637,6 +4015,18 @@ pub mod sd {
         pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             Response::CurrentZeroOffset(*self).encode(address, buf)
         }
+        /// Reads this message from a frame whose framing and code are checked.
+        #[inline(always)]
+        fn from_frame(frame: &[u8]) -> rt::DecodeResult<Self> {
+            let frame = rt::fixed::<6>(frame, &Self::DESC)?;
+            let field_0: u16 = u16::from_be_bytes([frame[2], frame[3]]);
+            rt::equal(&Self::ZERO_DESC, 2, field_0 >> 12, 0x0)?;
+            rt::Ok(Self {
+                zero_offset: Angle::from_raw(
+                    (((field_0 & 0xFFF) as u16) << 4) as i16 >> 4,
+                ),
+            })
+        }
     }
     impl response::ResetZeroOffsetReply {
         pub const NAME: &'static str = "reset_zero_offset_reply";
@@ -4647,6 +4037,14 @@ pub mod sd {
         pub const ARG2_DESC: rt::FieldDesc = rt::field(Self::NAME, "arg2");
         pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             Response::ResetZeroOffsetReply(*self).encode(address, buf)
+        }
+        /// Reads this message from a frame whose framing and code are checked.
+        #[inline(always)]
+        fn from_frame(frame: &[u8]) -> rt::DecodeResult<Self> {
+            let frame = rt::fixed::<6>(frame, &Self::DESC)?;
+            rt::equal(&Self::ARG1_DESC, 2, frame[2], 0x0)?;
+            rt::equal(&Self::ARG2_DESC, 3, frame[3], 0x0)?;
+            rt::Ok(Self)
         }
     }
     impl response::ElectronicSerialNumberCharacter {
@@ -4667,6 +4065,16 @@ pub mod sd {
         pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             Response::ElectronicSerialNumberCharacter(*self).encode(address, buf)
         }
+        /// Reads this message from a frame whose framing and code are checked.
+        #[inline(always)]
+        fn from_frame(frame: &[u8]) -> rt::DecodeResult<Self> {
+            let frame = rt::fixed::<6>(frame, &Self::DESC)?;
+            rt::in_range(&Self::STRING_LENGTH_DESC, 3, frame[3], 0, 32)?;
+            rt::Ok(Self {
+                character: frame[2],
+                string_length: frame[3],
+            })
+        }
     }
     impl response::ProductDescriptionCharacter {
         pub const NAME: &'static str = "product_description_character";
@@ -4685,6 +4093,16 @@ pub mod sd {
         }
         pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             Response::ProductDescriptionCharacter(*self).encode(address, buf)
+        }
+        /// Reads this message from a frame whose framing and code are checked.
+        #[inline(always)]
+        fn from_frame(frame: &[u8]) -> rt::DecodeResult<Self> {
+            let frame = rt::fixed::<6>(frame, &Self::DESC)?;
+            rt::in_range(&Self::STRING_LENGTH_DESC, 3, frame[3], 0, 32)?;
+            rt::Ok(Self {
+                character: frame[2],
+                string_length: frame[3],
+            })
         }
     }
     impl response::SoftwareRevisionCharacter {
@@ -4705,6 +4123,16 @@ pub mod sd {
         pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             Response::SoftwareRevisionCharacter(*self).encode(address, buf)
         }
+        /// Reads this message from a frame whose framing and code are checked.
+        #[inline(always)]
+        fn from_frame(frame: &[u8]) -> rt::DecodeResult<Self> {
+            let frame = rt::fixed::<6>(frame, &Self::DESC)?;
+            rt::in_range(&Self::STRING_LENGTH_DESC, 3, frame[3], 0, 32)?;
+            rt::Ok(Self {
+                character: frame[2],
+                string_length: frame[3],
+            })
+        }
     }
     impl response::HardwareRevisionCharacter {
         pub const NAME: &'static str = "hardware_revision_character";
@@ -4724,6 +4152,16 @@ pub mod sd {
         pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             Response::HardwareRevisionCharacter(*self).encode(address, buf)
         }
+        /// Reads this message from a frame whose framing and code are checked.
+        #[inline(always)]
+        fn from_frame(frame: &[u8]) -> rt::DecodeResult<Self> {
+            let frame = rt::fixed::<6>(frame, &Self::DESC)?;
+            rt::in_range(&Self::STRING_LENGTH_DESC, 3, frame[3], 0, 32)?;
+            rt::Ok(Self {
+                character: frame[2],
+                string_length: frame[3],
+            })
+        }
     }
     impl response::TotalRuntimeHours {
         pub const NAME: &'static str = "total_runtime_hours";
@@ -4736,6 +4174,14 @@ pub mod sd {
         }
         pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             Response::TotalRuntimeHours(*self).encode(address, buf)
+        }
+        /// Reads this message from a frame whose framing and code are checked.
+        #[inline(always)]
+        fn from_frame(frame: &[u8]) -> rt::DecodeResult<Self> {
+            let frame = rt::fixed::<6>(frame, &Self::DESC)?;
+            rt::Ok(Self {
+                runtime_hours: u16::from_be_bytes([frame[2], frame[3]]),
+            })
         }
     }
     impl response::TotalRuntimeMinSec {
@@ -4760,6 +4206,17 @@ pub mod sd {
         pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             Response::TotalRuntimeMinSec(*self).encode(address, buf)
         }
+        /// Reads this message from a frame whose framing and code are checked.
+        #[inline(always)]
+        fn from_frame(frame: &[u8]) -> rt::DecodeResult<Self> {
+            let frame = rt::fixed::<6>(frame, &Self::DESC)?;
+            rt::in_range(&Self::RUNTIME_MINUTES_DESC, 2, frame[2], 0, 59)?;
+            rt::in_range(&Self::RUNTIME_SECONDS_DESC, 3, frame[3], 0, 59)?;
+            rt::Ok(Self {
+                runtime_minutes: frame[2],
+                runtime_seconds: frame[3],
+            })
+        }
     }
     impl response::LoadRuntime024Hours {
         pub const NAME: &'static str = "load_runtime_0_24_hours";
@@ -4772,6 +4229,14 @@ pub mod sd {
         }
         pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             Response::LoadRuntime024Hours(*self).encode(address, buf)
+        }
+        /// Reads this message from a frame whose framing and code are checked.
+        #[inline(always)]
+        fn from_frame(frame: &[u8]) -> rt::DecodeResult<Self> {
+            let frame = rt::fixed::<6>(frame, &Self::DESC)?;
+            rt::Ok(Self {
+                runtime_hours: u16::from_be_bytes([frame[2], frame[3]]),
+            })
         }
     }
     impl response::LoadRuntime024MinSec {
@@ -4796,6 +4261,17 @@ pub mod sd {
         pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             Response::LoadRuntime024MinSec(*self).encode(address, buf)
         }
+        /// Reads this message from a frame whose framing and code are checked.
+        #[inline(always)]
+        fn from_frame(frame: &[u8]) -> rt::DecodeResult<Self> {
+            let frame = rt::fixed::<6>(frame, &Self::DESC)?;
+            rt::in_range(&Self::RUNTIME_MINUTES_DESC, 2, frame[2], 0, 59)?;
+            rt::in_range(&Self::RUNTIME_SECONDS_DESC, 3, frame[3], 0, 59)?;
+            rt::Ok(Self {
+                runtime_minutes: frame[2],
+                runtime_seconds: frame[3],
+            })
+        }
     }
     impl response::LoadRuntime024HoursBeforeReset {
         pub const NAME: &'static str = "load_runtime_0_24_hours_before_reset";
@@ -4812,6 +4288,14 @@ pub mod sd {
         pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             Response::LoadRuntime024HoursBeforeReset(*self).encode(address, buf)
         }
+        /// Reads this message from a frame whose framing and code are checked.
+        #[inline(always)]
+        fn from_frame(frame: &[u8]) -> rt::DecodeResult<Self> {
+            let frame = rt::fixed::<6>(frame, &Self::DESC)?;
+            rt::Ok(Self {
+                runtime_hours_before_reset: u16::from_be_bytes([frame[2], frame[3]]),
+            })
+        }
     }
     impl response::LoadRuntime2549Hours {
         pub const NAME: &'static str = "load_runtime_25_49_hours";
@@ -4824,6 +4308,14 @@ pub mod sd {
         }
         pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             Response::LoadRuntime2549Hours(*self).encode(address, buf)
+        }
+        /// Reads this message from a frame whose framing and code are checked.
+        #[inline(always)]
+        fn from_frame(frame: &[u8]) -> rt::DecodeResult<Self> {
+            let frame = rt::fixed::<6>(frame, &Self::DESC)?;
+            rt::Ok(Self {
+                runtime_hours: u16::from_be_bytes([frame[2], frame[3]]),
+            })
         }
     }
     impl response::LoadRuntime2549MinSec {
@@ -4848,6 +4340,17 @@ pub mod sd {
         pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             Response::LoadRuntime2549MinSec(*self).encode(address, buf)
         }
+        /// Reads this message from a frame whose framing and code are checked.
+        #[inline(always)]
+        fn from_frame(frame: &[u8]) -> rt::DecodeResult<Self> {
+            let frame = rt::fixed::<6>(frame, &Self::DESC)?;
+            rt::in_range(&Self::RUNTIME_MINUTES_DESC, 2, frame[2], 0, 59)?;
+            rt::in_range(&Self::RUNTIME_SECONDS_DESC, 3, frame[3], 0, 59)?;
+            rt::Ok(Self {
+                runtime_minutes: frame[2],
+                runtime_seconds: frame[3],
+            })
+        }
     }
     impl response::LoadRuntime2549HoursBeforeReset {
         pub const NAME: &'static str = "load_runtime_25_49_hours_before_reset";
@@ -4864,6 +4367,14 @@ pub mod sd {
         pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             Response::LoadRuntime2549HoursBeforeReset(*self).encode(address, buf)
         }
+        /// Reads this message from a frame whose framing and code are checked.
+        #[inline(always)]
+        fn from_frame(frame: &[u8]) -> rt::DecodeResult<Self> {
+            let frame = rt::fixed::<6>(frame, &Self::DESC)?;
+            rt::Ok(Self {
+                runtime_hours_before_reset: u16::from_be_bytes([frame[2], frame[3]]),
+            })
+        }
     }
     impl response::LoadRuntime5074Hours {
         pub const NAME: &'static str = "load_runtime_50_74_hours";
@@ -4876,6 +4387,14 @@ pub mod sd {
         }
         pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             Response::LoadRuntime5074Hours(*self).encode(address, buf)
+        }
+        /// Reads this message from a frame whose framing and code are checked.
+        #[inline(always)]
+        fn from_frame(frame: &[u8]) -> rt::DecodeResult<Self> {
+            let frame = rt::fixed::<6>(frame, &Self::DESC)?;
+            rt::Ok(Self {
+                runtime_hours: u16::from_be_bytes([frame[2], frame[3]]),
+            })
         }
     }
     impl response::LoadRuntime5074MinSec {
@@ -4900,6 +4419,17 @@ pub mod sd {
         pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             Response::LoadRuntime5074MinSec(*self).encode(address, buf)
         }
+        /// Reads this message from a frame whose framing and code are checked.
+        #[inline(always)]
+        fn from_frame(frame: &[u8]) -> rt::DecodeResult<Self> {
+            let frame = rt::fixed::<6>(frame, &Self::DESC)?;
+            rt::in_range(&Self::RUNTIME_MINUTES_DESC, 2, frame[2], 0, 59)?;
+            rt::in_range(&Self::RUNTIME_SECONDS_DESC, 3, frame[3], 0, 59)?;
+            rt::Ok(Self {
+                runtime_minutes: frame[2],
+                runtime_seconds: frame[3],
+            })
+        }
     }
     impl response::LoadRuntime5074HoursBeforeReset {
         pub const NAME: &'static str = "load_runtime_50_74_hours_before_reset";
@@ -4916,6 +4446,14 @@ pub mod sd {
         pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             Response::LoadRuntime5074HoursBeforeReset(*self).encode(address, buf)
         }
+        /// Reads this message from a frame whose framing and code are checked.
+        #[inline(always)]
+        fn from_frame(frame: &[u8]) -> rt::DecodeResult<Self> {
+            let frame = rt::fixed::<6>(frame, &Self::DESC)?;
+            rt::Ok(Self {
+                runtime_hours_before_reset: u16::from_be_bytes([frame[2], frame[3]]),
+            })
+        }
     }
     impl response::LoadRuntime7599Hours {
         pub const NAME: &'static str = "load_runtime_75_99_hours";
@@ -4928,6 +4466,14 @@ pub mod sd {
         }
         pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             Response::LoadRuntime7599Hours(*self).encode(address, buf)
+        }
+        /// Reads this message from a frame whose framing and code are checked.
+        #[inline(always)]
+        fn from_frame(frame: &[u8]) -> rt::DecodeResult<Self> {
+            let frame = rt::fixed::<6>(frame, &Self::DESC)?;
+            rt::Ok(Self {
+                runtime_hours: u16::from_be_bytes([frame[2], frame[3]]),
+            })
         }
     }
     impl response::LoadRuntime7599MinSec {
@@ -4952,6 +4498,17 @@ pub mod sd {
         pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             Response::LoadRuntime7599MinSec(*self).encode(address, buf)
         }
+        /// Reads this message from a frame whose framing and code are checked.
+        #[inline(always)]
+        fn from_frame(frame: &[u8]) -> rt::DecodeResult<Self> {
+            let frame = rt::fixed::<6>(frame, &Self::DESC)?;
+            rt::in_range(&Self::RUNTIME_MINUTES_DESC, 2, frame[2], 0, 59)?;
+            rt::in_range(&Self::RUNTIME_SECONDS_DESC, 3, frame[3], 0, 59)?;
+            rt::Ok(Self {
+                runtime_minutes: frame[2],
+                runtime_seconds: frame[3],
+            })
+        }
     }
     impl response::LoadRuntime7599HoursBeforeReset {
         pub const NAME: &'static str = "load_runtime_75_99_hours_before_reset";
@@ -4968,6 +4525,14 @@ pub mod sd {
         pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             Response::LoadRuntime7599HoursBeforeReset(*self).encode(address, buf)
         }
+        /// Reads this message from a frame whose framing and code are checked.
+        #[inline(always)]
+        fn from_frame(frame: &[u8]) -> rt::DecodeResult<Self> {
+            let frame = rt::fixed::<6>(frame, &Self::DESC)?;
+            rt::Ok(Self {
+                runtime_hours_before_reset: u16::from_be_bytes([frame[2], frame[3]]),
+            })
+        }
     }
     impl response::LoadRuntime100Hours {
         pub const NAME: &'static str = "load_runtime_100_hours";
@@ -4980,6 +4545,14 @@ pub mod sd {
         }
         pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             Response::LoadRuntime100Hours(*self).encode(address, buf)
+        }
+        /// Reads this message from a frame whose framing and code are checked.
+        #[inline(always)]
+        fn from_frame(frame: &[u8]) -> rt::DecodeResult<Self> {
+            let frame = rt::fixed::<6>(frame, &Self::DESC)?;
+            rt::Ok(Self {
+                runtime_hours: u16::from_be_bytes([frame[2], frame[3]]),
+            })
         }
     }
     impl response::LoadRuntime100MinSec {
@@ -5004,6 +4577,17 @@ pub mod sd {
         pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             Response::LoadRuntime100MinSec(*self).encode(address, buf)
         }
+        /// Reads this message from a frame whose framing and code are checked.
+        #[inline(always)]
+        fn from_frame(frame: &[u8]) -> rt::DecodeResult<Self> {
+            let frame = rt::fixed::<6>(frame, &Self::DESC)?;
+            rt::in_range(&Self::RUNTIME_MINUTES_DESC, 2, frame[2], 0, 59)?;
+            rt::in_range(&Self::RUNTIME_SECONDS_DESC, 3, frame[3], 0, 59)?;
+            rt::Ok(Self {
+                runtime_minutes: frame[2],
+                runtime_seconds: frame[3],
+            })
+        }
     }
     impl response::LoadRuntime100HoursBeforeReset {
         pub const NAME: &'static str = "load_runtime_100_hours_before_reset";
@@ -5020,6 +4604,14 @@ pub mod sd {
         pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             Response::LoadRuntime100HoursBeforeReset(*self).encode(address, buf)
         }
+        /// Reads this message from a frame whose framing and code are checked.
+        #[inline(always)]
+        fn from_frame(frame: &[u8]) -> rt::DecodeResult<Self> {
+            let frame = rt::fixed::<6>(frame, &Self::DESC)?;
+            rt::Ok(Self {
+                runtime_hours_before_reset: u16::from_be_bytes([frame[2], frame[3]]),
+            })
+        }
     }
     impl response::StallEventCounter {
         pub const NAME: &'static str = "stall_event_counter";
@@ -5032,6 +4624,14 @@ pub mod sd {
         }
         pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             Response::StallEventCounter(*self).encode(address, buf)
+        }
+        /// Reads this message from a frame whose framing and code are checked.
+        #[inline(always)]
+        fn from_frame(frame: &[u8]) -> rt::DecodeResult<Self> {
+            let frame = rt::fixed::<6>(frame, &Self::DESC)?;
+            rt::Ok(Self {
+                stall_events: u16::from_be_bytes([frame[2], frame[3]]),
+            })
         }
     }
     impl response::StallEventCounterBeforeReset {
@@ -5049,6 +4649,14 @@ pub mod sd {
         pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             Response::StallEventCounterBeforeReset(*self).encode(address, buf)
         }
+        /// Reads this message from a frame whose framing and code are checked.
+        #[inline(always)]
+        fn from_frame(frame: &[u8]) -> rt::DecodeResult<Self> {
+            let frame = rt::fixed::<6>(frame, &Self::DESC)?;
+            rt::Ok(Self {
+                stall_events_before_reset: u16::from_be_bytes([frame[2], frame[3]]),
+            })
+        }
     }
     impl response::PowerUpCycles {
         pub const NAME: &'static str = "power_up_cycles";
@@ -5061,6 +4669,14 @@ pub mod sd {
         }
         pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             Response::PowerUpCycles(*self).encode(address, buf)
+        }
+        /// Reads this message from a frame whose framing and code are checked.
+        #[inline(always)]
+        fn from_frame(frame: &[u8]) -> rt::DecodeResult<Self> {
+            let frame = rt::fixed::<6>(frame, &Self::DESC)?;
+            rt::Ok(Self {
+                power_up_cycles: u16::from_be_bytes([frame[2], frame[3]]),
+            })
         }
     }
     /// Each request as a struct of its own; its constants (`DESC`, which names it as

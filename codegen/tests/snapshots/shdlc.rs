@@ -458,18 +458,8 @@ pub mod shdlc {
         fn dispatch(frame: &[u8]) -> rt::DecodeResult<Self> {
             match frame[2] {
                 0x00 => {
-                    let frame = rt::fixed::<8>(frame, &request::StartMeasurement::DESC)?;
-                    rt::equal(
-                        &request::StartMeasurement::SUBCOMMAND_DESC,
-                        4,
-                        frame[4],
-                        0x1,
-                    )?;
-                    rt::Ok(
-                        Self::StartMeasurement(request::StartMeasurement {
-                            output_format: OutputFormat::from_raw(frame[5]),
-                        }),
-                    )
+                    request::StartMeasurement::from_frame(frame)
+                        .map(Self::StartMeasurement)
                 }
                 0x01 => {
                     rt::fixed::<6>(frame, &request::StopMeasurement::DESC)
@@ -488,14 +478,8 @@ pub mod shdlc {
                         .map(|_| Self::WakeUp(request::WakeUp))
                 }
                 0xD0 => {
-                    let frame = rt::fixed::<
-                        7,
-                    >(frame, &request::DeviceInformation::DESC)?;
-                    rt::Ok(
-                        Self::DeviceInformation(request::DeviceInformation {
-                            information: Information::from_raw(frame[4]),
-                        }),
-                    )
+                    request::DeviceInformation::from_frame(frame)
+                        .map(Self::DeviceInformation)
                 }
                 0xD3 => {
                     rt::fixed::<6>(frame, &request::Reset::DESC)
@@ -901,136 +885,30 @@ pub mod shdlc {
         ) -> rt::DecodeResult<Self> {
             match frame[2] {
                 0x00 => {
-                    let frame = rt::fixed::<
-                        7,
-                    >(frame, &response::MeasurementStarted::DESC)?;
-                    rt::Ok(
-                        Self::MeasurementStarted(response::MeasurementStarted {
-                            state: State::from_raw(frame[3]),
-                        }),
-                    )
+                    response::MeasurementStarted::from_frame(frame)
+                        .map(Self::MeasurementStarted)
                 }
                 0x01 => {
-                    let frame = rt::fixed::<
-                        7,
-                    >(frame, &response::MeasurementStopped::DESC)?;
-                    rt::Ok(
-                        Self::MeasurementStopped(response::MeasurementStopped {
-                            state: State::from_raw(frame[3]),
-                        }),
-                    )
+                    response::MeasurementStopped::from_frame(frame)
+                        .map(Self::MeasurementStopped)
                 }
                 0x03 => {
                     let mut g = rt::Group::new(frame, 0x03, request.map(Request::name));
                     g.attempt(|frame: &[u8; 47]| {
-                        rt::Ok(
-                            Self::MeasuredFloats(response::MeasuredFloats {
-                                state: State::from_raw(frame[3]),
-                                mass_pm1_0: f32::from_be_bytes([
-                                    frame[5],
-                                    frame[6],
-                                    frame[7],
-                                    frame[8],
-                                ]),
-                                mass_pm2_5: f32::from_be_bytes([
-                                    frame[9],
-                                    frame[10],
-                                    frame[11],
-                                    frame[12],
-                                ]),
-                                mass_pm4_0: f32::from_be_bytes([
-                                    frame[13],
-                                    frame[14],
-                                    frame[15],
-                                    frame[16],
-                                ]),
-                                mass_pm10: f32::from_be_bytes([
-                                    frame[17],
-                                    frame[18],
-                                    frame[19],
-                                    frame[20],
-                                ]),
-                                number_pm0_5: f32::from_be_bytes([
-                                    frame[21],
-                                    frame[22],
-                                    frame[23],
-                                    frame[24],
-                                ]),
-                                number_pm1_0: f32::from_be_bytes([
-                                    frame[25],
-                                    frame[26],
-                                    frame[27],
-                                    frame[28],
-                                ]),
-                                number_pm2_5: f32::from_be_bytes([
-                                    frame[29],
-                                    frame[30],
-                                    frame[31],
-                                    frame[32],
-                                ]),
-                                number_pm4_0: f32::from_be_bytes([
-                                    frame[33],
-                                    frame[34],
-                                    frame[35],
-                                    frame[36],
-                                ]),
-                                number_pm10: f32::from_be_bytes([
-                                    frame[37],
-                                    frame[38],
-                                    frame[39],
-                                    frame[40],
-                                ]),
-                                typical_size: f32::from_be_bytes([
-                                    frame[41],
-                                    frame[42],
-                                    frame[43],
-                                    frame[44],
-                                ]),
-                            }),
-                        )
+                        response::MeasuredFloats::from_frame(frame)
+                            .map(Self::MeasuredFloats)
                     });
                     g.attempt(|frame: &[u8; 27]| {
-                        rt::Ok(
-                            Self::MeasuredIntegers(response::MeasuredIntegers {
-                                state: State::from_raw(frame[3]),
-                                mass_pm1_0: u16::from_be_bytes([frame[5], frame[6]]),
-                                mass_pm2_5: u16::from_be_bytes([frame[7], frame[8]]),
-                                mass_pm4_0: u16::from_be_bytes([frame[9], frame[10]]),
-                                mass_pm10: u16::from_be_bytes([frame[11], frame[12]]),
-                                number_pm0_5: u16::from_be_bytes([frame[13], frame[14]]),
-                                number_pm1_0: u16::from_be_bytes([frame[15], frame[16]]),
-                                number_pm2_5: u16::from_be_bytes([frame[17], frame[18]]),
-                                number_pm4_0: u16::from_be_bytes([frame[19], frame[20]]),
-                                number_pm10: u16::from_be_bytes([frame[21], frame[22]]),
-                                typical_size: u16::from_be_bytes([frame[23], frame[24]]),
-                            }),
-                        )
+                        response::MeasuredIntegers::from_frame(frame)
+                            .map(Self::MeasuredIntegers)
                     });
                     g.attempt(|frame: &[u8; 7]| {
-                        rt::Ok(
-                            Self::NoNewValues(response::NoNewValues {
-                                state: State::from_raw(frame[3]),
-                            }),
-                        )
+                        response::NoNewValues::from_frame(frame).map(Self::NoNewValues)
                     });
                     g.end(&response::MeasuredFloats::DESC)
                 }
-                0x10 => {
-                    let frame = rt::fixed::<7>(frame, &response::Asleep::DESC)?;
-                    rt::Ok(
-                        Self::Asleep(response::Asleep {
-                            state: State::from_raw(frame[3]),
-                        }),
-                    )
-                }
-                0x11 => {
-                    let frame = rt::fixed::<7>(frame, &response::Awake::DESC)?;
-                    rt::Ok(
-                        Self::Awake(response::Awake {
-                            state: State::from_raw(frame[3]),
-                        }),
-                    )
-                }
+                0x10 => response::Asleep::from_frame(frame).map(Self::Asleep),
+                0x11 => response::Awake::from_frame(frame).map(Self::Awake),
                 0xD0 => {
                     let s = LISTS_INFORMATION_TEXT.split::<7, 1>(frame)?;
                     let frame = &s.frame;
@@ -1043,14 +921,7 @@ pub mod shdlc {
                         }),
                     )
                 }
-                0xD3 => {
-                    let frame = rt::fixed::<7>(frame, &response::ResetDone::DESC)?;
-                    rt::Ok(
-                        Self::ResetDone(response::ResetDone {
-                            state: State::from_raw(frame[3]),
-                        }),
-                    )
-                }
+                0xD3 => response::ResetDone::from_frame(frame).map(Self::ResetDone),
                 _ => rt::Err(RESPONSE_CODE.unknown(frame)),
             }
         }
@@ -1273,6 +1144,15 @@ pub mod shdlc {
         pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             Request::StartMeasurement(*self).encode(address, buf)
         }
+        /// Reads this message from a frame whose framing and code are checked.
+        #[inline(always)]
+        fn from_frame(frame: &[u8]) -> rt::DecodeResult<Self> {
+            let frame = rt::fixed::<8>(frame, &Self::DESC)?;
+            rt::equal(&Self::SUBCOMMAND_DESC, 4, frame[4], 0x1)?;
+            rt::Ok(Self {
+                output_format: OutputFormat::from_raw(frame[5]),
+            })
+        }
     }
     impl request::StopMeasurement {
         pub const NAME: &'static str = "stop_measurement";
@@ -1322,6 +1202,14 @@ pub mod shdlc {
         pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             Request::DeviceInformation(*self).encode(address, buf)
         }
+        /// Reads this message from a frame whose framing and code are checked.
+        #[inline(always)]
+        fn from_frame(frame: &[u8]) -> rt::DecodeResult<Self> {
+            let frame = rt::fixed::<7>(frame, &Self::DESC)?;
+            rt::Ok(Self {
+                information: Information::from_raw(frame[4]),
+            })
+        }
     }
     impl request::Reset {
         pub const NAME: &'static str = "reset";
@@ -1344,6 +1232,14 @@ pub mod shdlc {
         pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             Response::MeasurementStarted(*self).encode(address, buf)
         }
+        /// Reads this message from a frame whose framing and code are checked.
+        #[inline(always)]
+        fn from_frame(frame: &[u8]) -> rt::DecodeResult<Self> {
+            let frame = rt::fixed::<7>(frame, &Self::DESC)?;
+            rt::Ok(Self {
+                state: State::from_raw(frame[3]),
+            })
+        }
     }
     impl response::MeasurementStopped {
         pub const NAME: &'static str = "measurement_stopped";
@@ -1356,6 +1252,14 @@ pub mod shdlc {
         }
         pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             Response::MeasurementStopped(*self).encode(address, buf)
+        }
+        /// Reads this message from a frame whose framing and code are checked.
+        #[inline(always)]
+        fn from_frame(frame: &[u8]) -> rt::DecodeResult<Self> {
+            let frame = rt::fixed::<7>(frame, &Self::DESC)?;
+            rt::Ok(Self {
+                state: State::from_raw(frame[3]),
+            })
         }
     }
     impl response::MeasuredFloats {
@@ -1390,6 +1294,69 @@ pub mod shdlc {
         pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             Response::MeasuredFloats(*self).encode(address, buf)
         }
+        /// Reads this message from a frame whose framing and code are checked.
+        #[inline(always)]
+        fn from_frame(frame: &[u8]) -> rt::DecodeResult<Self> {
+            let frame = rt::fixed::<47>(frame, &Self::DESC)?;
+            rt::Ok(Self {
+                state: State::from_raw(frame[3]),
+                mass_pm1_0: f32::from_be_bytes([frame[5], frame[6], frame[7], frame[8]]),
+                mass_pm2_5: f32::from_be_bytes([
+                    frame[9],
+                    frame[10],
+                    frame[11],
+                    frame[12],
+                ]),
+                mass_pm4_0: f32::from_be_bytes([
+                    frame[13],
+                    frame[14],
+                    frame[15],
+                    frame[16],
+                ]),
+                mass_pm10: f32::from_be_bytes([
+                    frame[17],
+                    frame[18],
+                    frame[19],
+                    frame[20],
+                ]),
+                number_pm0_5: f32::from_be_bytes([
+                    frame[21],
+                    frame[22],
+                    frame[23],
+                    frame[24],
+                ]),
+                number_pm1_0: f32::from_be_bytes([
+                    frame[25],
+                    frame[26],
+                    frame[27],
+                    frame[28],
+                ]),
+                number_pm2_5: f32::from_be_bytes([
+                    frame[29],
+                    frame[30],
+                    frame[31],
+                    frame[32],
+                ]),
+                number_pm4_0: f32::from_be_bytes([
+                    frame[33],
+                    frame[34],
+                    frame[35],
+                    frame[36],
+                ]),
+                number_pm10: f32::from_be_bytes([
+                    frame[37],
+                    frame[38],
+                    frame[39],
+                    frame[40],
+                ]),
+                typical_size: f32::from_be_bytes([
+                    frame[41],
+                    frame[42],
+                    frame[43],
+                    frame[44],
+                ]),
+            })
+        }
     }
     impl response::MeasuredIntegers {
         pub const NAME: &'static str = "measured_integers";
@@ -1423,6 +1390,24 @@ pub mod shdlc {
         pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             Response::MeasuredIntegers(*self).encode(address, buf)
         }
+        /// Reads this message from a frame whose framing and code are checked.
+        #[inline(always)]
+        fn from_frame(frame: &[u8]) -> rt::DecodeResult<Self> {
+            let frame = rt::fixed::<27>(frame, &Self::DESC)?;
+            rt::Ok(Self {
+                state: State::from_raw(frame[3]),
+                mass_pm1_0: u16::from_be_bytes([frame[5], frame[6]]),
+                mass_pm2_5: u16::from_be_bytes([frame[7], frame[8]]),
+                mass_pm4_0: u16::from_be_bytes([frame[9], frame[10]]),
+                mass_pm10: u16::from_be_bytes([frame[11], frame[12]]),
+                number_pm0_5: u16::from_be_bytes([frame[13], frame[14]]),
+                number_pm1_0: u16::from_be_bytes([frame[15], frame[16]]),
+                number_pm2_5: u16::from_be_bytes([frame[17], frame[18]]),
+                number_pm4_0: u16::from_be_bytes([frame[19], frame[20]]),
+                number_pm10: u16::from_be_bytes([frame[21], frame[22]]),
+                typical_size: u16::from_be_bytes([frame[23], frame[24]]),
+            })
+        }
     }
     impl response::NoNewValues {
         pub const NAME: &'static str = "no_new_values";
@@ -1435,6 +1420,14 @@ pub mod shdlc {
         }
         pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             Response::NoNewValues(*self).encode(address, buf)
+        }
+        /// Reads this message from a frame whose framing and code are checked.
+        #[inline(always)]
+        fn from_frame(frame: &[u8]) -> rt::DecodeResult<Self> {
+            let frame = rt::fixed::<7>(frame, &Self::DESC)?;
+            rt::Ok(Self {
+                state: State::from_raw(frame[3]),
+            })
         }
     }
     impl response::Asleep {
@@ -1449,6 +1442,14 @@ pub mod shdlc {
         pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             Response::Asleep(*self).encode(address, buf)
         }
+        /// Reads this message from a frame whose framing and code are checked.
+        #[inline(always)]
+        fn from_frame(frame: &[u8]) -> rt::DecodeResult<Self> {
+            let frame = rt::fixed::<7>(frame, &Self::DESC)?;
+            rt::Ok(Self {
+                state: State::from_raw(frame[3]),
+            })
+        }
     }
     impl response::Awake {
         pub const NAME: &'static str = "awake";
@@ -1461,6 +1462,14 @@ pub mod shdlc {
         }
         pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             Response::Awake(*self).encode(address, buf)
+        }
+        /// Reads this message from a frame whose framing and code are checked.
+        #[inline(always)]
+        fn from_frame(frame: &[u8]) -> rt::DecodeResult<Self> {
+            let frame = rt::fixed::<7>(frame, &Self::DESC)?;
+            rt::Ok(Self {
+                state: State::from_raw(frame[3]),
+            })
         }
     }
     impl response::InformationText {
@@ -1490,6 +1499,14 @@ pub mod shdlc {
         }
         pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             Response::ResetDone(*self).encode(address, buf)
+        }
+        /// Reads this message from a frame whose framing and code are checked.
+        #[inline(always)]
+        fn from_frame(frame: &[u8]) -> rt::DecodeResult<Self> {
+            let frame = rt::fixed::<7>(frame, &Self::DESC)?;
+            rt::Ok(Self {
+                state: State::from_raw(frame[3]),
+            })
         }
     }
     /// Each request as a struct of its own; its constants (`DESC`, which names it as

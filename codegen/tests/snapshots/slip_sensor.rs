@@ -278,14 +278,7 @@ pub mod slip_sensor {
                     rt::fixed::<4>(frame, &request::ReadTemperature::DESC)
                         .map(|_| Self::ReadTemperature(request::ReadTemperature))
                 }
-                0x02 => {
-                    let frame = rt::fixed::<6>(frame, &request::SetThreshold::DESC)?;
-                    rt::Ok(
-                        Self::SetThreshold(request::SetThreshold {
-                            threshold: u16::from_be_bytes([frame[1], frame[2]]),
-                        }),
-                    )
-                }
+                0x02 => request::SetThreshold::from_frame(frame).map(Self::SetThreshold),
                 0x03 => {
                     rt::fixed::<4>(frame, &request::ReadSamples::DESC)
                         .map(|_| Self::ReadSamples(request::ReadSamples))
@@ -517,16 +510,7 @@ pub mod slip_sensor {
         #[inline]
         fn dispatch(frame: &[u8]) -> rt::DecodeResult<Self> {
             match frame[0] {
-                0x81 => {
-                    let frame = rt::fixed::<6>(frame, &response::Temperature::DESC)?;
-                    rt::Ok(
-                        Self::Temperature(response::Temperature {
-                            temperature: Centidegrees::from_raw(
-                                i16::from_be_bytes([frame[1], frame[2]]),
-                            ),
-                        }),
-                    )
-                }
+                0x81 => response::Temperature::from_frame(frame).map(Self::Temperature),
                 0x82 => {
                     rt::fixed::<4>(frame, &response::Ack::DESC)
                         .map(|_| Self::Ack(response::Ack))
@@ -716,6 +700,14 @@ pub mod slip_sensor {
         pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             Request::SetThreshold(*self).encode(address, buf)
         }
+        /// Reads this message from a frame whose framing and code are checked.
+        #[inline(always)]
+        fn from_frame(frame: &[u8]) -> rt::DecodeResult<Self> {
+            let frame = rt::fixed::<6>(frame, &Self::DESC)?;
+            rt::Ok(Self {
+                threshold: u16::from_be_bytes([frame[1], frame[2]]),
+            })
+        }
     }
     impl request::ReadSamples {
         pub const NAME: &'static str = "read_samples";
@@ -737,6 +729,16 @@ pub mod slip_sensor {
         }
         pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             Response::Temperature(*self).encode(address, buf)
+        }
+        /// Reads this message from a frame whose framing and code are checked.
+        #[inline(always)]
+        fn from_frame(frame: &[u8]) -> rt::DecodeResult<Self> {
+            let frame = rt::fixed::<6>(frame, &Self::DESC)?;
+            rt::Ok(Self {
+                temperature: Centidegrees::from_raw(
+                    i16::from_be_bytes([frame[1], frame[2]]),
+                ),
+            })
         }
     }
     impl response::Ack {

@@ -169,14 +169,7 @@ pub mod sync_after_code {
         #[inline]
         fn dispatch(frame: &[u8]) -> rt::DecodeResult<Self> {
             match u16::from_be_bytes([frame[1], frame[2]]) {
-                0x0102 => {
-                    let frame = rt::fixed::<6>(frame, &request::Read::DESC)?;
-                    rt::Ok(
-                        Self::Read(request::Read {
-                            register: frame[4],
-                        }),
-                    )
-                }
+                0x0102 => request::Read::from_frame(frame).map(Self::Read),
                 _ => rt::Err(REQUEST_CODE.unknown(frame)),
             }
         }
@@ -345,14 +338,7 @@ pub mod sync_after_code {
         #[inline]
         fn dispatch(frame: &[u8]) -> rt::DecodeResult<Self> {
             match u16::from_be_bytes([frame[1], frame[2]]) {
-                0x8102 => {
-                    let frame = rt::fixed::<7>(frame, &response::Value::DESC)?;
-                    rt::Ok(
-                        Self::Value(response::Value {
-                            value: u16::from_be_bytes([frame[4], frame[5]]),
-                        }),
-                    )
-                }
+                0x8102 => response::Value::from_frame(frame).map(Self::Value),
                 _ => rt::Err(RESPONSE_CODE.unknown(frame)),
             }
         }
@@ -531,6 +517,12 @@ pub mod sync_after_code {
         pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             Request::Read(*self).encode(address, buf)
         }
+        /// Reads this message from a frame whose framing and code are checked.
+        #[inline(always)]
+        fn from_frame(frame: &[u8]) -> rt::DecodeResult<Self> {
+            let frame = rt::fixed::<6>(frame, &Self::DESC)?;
+            rt::Ok(Self { register: frame[4] })
+        }
     }
     impl response::Value {
         pub const NAME: &'static str = "value";
@@ -543,6 +535,14 @@ pub mod sync_after_code {
         }
         pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             Response::Value(*self).encode(address, buf)
+        }
+        /// Reads this message from a frame whose framing and code are checked.
+        #[inline(always)]
+        fn from_frame(frame: &[u8]) -> rt::DecodeResult<Self> {
+            let frame = rt::fixed::<7>(frame, &Self::DESC)?;
+            rt::Ok(Self {
+                value: u16::from_be_bytes([frame[4], frame[5]]),
+            })
         }
     }
     /// Each request as a struct of its own; its constants (`DESC`, which names it as

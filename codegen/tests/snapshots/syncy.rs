@@ -259,47 +259,9 @@ pub mod syncy {
         #[inline]
         fn dispatch(frame: &[u8]) -> rt::DecodeResult<Self> {
             match frame[4] {
-                0x03 => {
-                    let frame = rt::fixed::<9>(frame, &request::MoveTo::DESC)?;
-                    rt::no_broadcast(frame[2], 0xFE, &request::MoveTo::DESC)?;
-                    let field_0: i32 = rt::i24([frame[5], frame[6], frame[7]], false);
-                    rt::in_range(
-                        &request::MoveTo::TARGET_DESC,
-                        5,
-                        field_0,
-                        -1000000,
-                        1000000,
-                    )?;
-                    rt::Ok(
-                        Self::MoveTo(request::MoveTo {
-                            target: Millimetre::from_raw(field_0 as i32),
-                        }),
-                    )
-                }
-                0x04 => {
-                    let frame = rt::fixed::<6>(frame, &request::GetCounter::DESC)?;
-                    rt::no_broadcast(frame[2], 0xFE, &request::GetCounter::DESC)?;
-                    rt::Ok(Self::GetCounter(request::GetCounter))
-                }
-                0x05 => {
-                    let frame = rt::fixed::<10>(frame, &request::SetPair::DESC)?;
-                    rt::no_broadcast(frame[2], 0xFE, &request::SetPair::DESC)?;
-                    rt::in_range(&request::SetPair::QUANTITY_DESC, 5, frame[5], 1, 100)?;
-                    rt::following(
-                        &request::SetPair::DOUBLED_DESC,
-                        6,
-                        frame[6],
-                        frame[5] as i64,
-                        (2, 1),
-                        "2 × quantity",
-                    )?;
-                    rt::Ok(
-                        Self::SetPair(request::SetPair {
-                            quantity: frame[5],
-                            level: u16::from_be_bytes([frame[7], frame[8]]),
-                        }),
-                    )
-                }
+                0x03 => request::MoveTo::from_frame(frame).map(Self::MoveTo),
+                0x04 => request::GetCounter::from_frame(frame).map(Self::GetCounter),
+                0x05 => request::SetPair::from_frame(frame).map(Self::SetPair),
                 _ => rt::Err(REQUEST_CODE.unknown(frame)),
             }
         }
@@ -532,34 +494,9 @@ pub mod syncy {
                     rt::fixed::<6>(frame, &response::Moving::DESC)
                         .map(|_| Self::Moving(response::Moving))
                 }
-                0x01 => {
-                    let frame = rt::fixed::<12>(frame, &response::Counter::DESC)?;
-                    let field_1: u32 = rt::u24([frame[8], frame[9], frame[10]], false);
-                    rt::Ok(
-                        Self::Counter(response::Counter {
-                            total: rt::u24([frame[5], frame[6], frame[7]], false),
-                            tag: ((field_1 >> 20) & 0xF) as u8,
-                            offset: (((field_1 & 0xFFFFF) as u32) << 12) as i32 >> 12,
-                        }),
-                    )
-                }
-                0x05 => {
-                    let frame = rt::fixed::<8>(frame, &response::SetPairReply::DESC)?;
-                    rt::Ok(
-                        Self::SetPairReply(response::SetPairReply {
-                            quantity: frame[5],
-                            groups: frame[6],
-                        }),
-                    )
-                }
-                0x85 => {
-                    let frame = rt::fixed::<7>(frame, &response::SetPairError::DESC)?;
-                    rt::Ok(
-                        Self::SetPairError(response::SetPairError {
-                            reason: frame[5],
-                        }),
-                    )
-                }
+                0x01 => response::Counter::from_frame(frame).map(Self::Counter),
+                0x05 => response::SetPairReply::from_frame(frame).map(Self::SetPairReply),
+                0x85 => response::SetPairError::from_frame(frame).map(Self::SetPairError),
                 _ => rt::Err(RESPONSE_CODE.unknown(frame)),
             }
         }
@@ -795,6 +732,17 @@ pub mod syncy {
         pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             Request::MoveTo(*self).encode(address, buf)
         }
+        /// Reads this message from a frame whose framing and code are checked.
+        #[inline(always)]
+        fn from_frame(frame: &[u8]) -> rt::DecodeResult<Self> {
+            let frame = rt::fixed::<9>(frame, &Self::DESC)?;
+            rt::no_broadcast(frame[2], 0xFE, &Self::DESC)?;
+            let field_0: i32 = rt::i24([frame[5], frame[6], frame[7]], false);
+            rt::in_range(&Self::TARGET_DESC, 5, field_0, -1000000, 1000000)?;
+            rt::Ok(Self {
+                target: Millimetre::from_raw(field_0 as i32),
+            })
+        }
     }
     impl request::GetCounter {
         pub const NAME: &'static str = "get_counter";
@@ -803,6 +751,13 @@ pub mod syncy {
         pub const DESC: rt::MessageDesc = rt::desc(Self::NAME, 0x04, 1, &[6]);
         pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             Request::GetCounter(*self).encode(address, buf)
+        }
+        /// Reads this message from a frame whose framing and code are checked.
+        #[inline(always)]
+        fn from_frame(frame: &[u8]) -> rt::DecodeResult<Self> {
+            let frame = rt::fixed::<6>(frame, &Self::DESC)?;
+            rt::no_broadcast(frame[2], 0xFE, &Self::DESC)?;
+            rt::Ok(Self)
         }
     }
     impl request::SetPair {
@@ -820,6 +775,25 @@ pub mod syncy {
         }
         pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             Request::SetPair(*self).encode(address, buf)
+        }
+        /// Reads this message from a frame whose framing and code are checked.
+        #[inline(always)]
+        fn from_frame(frame: &[u8]) -> rt::DecodeResult<Self> {
+            let frame = rt::fixed::<10>(frame, &Self::DESC)?;
+            rt::no_broadcast(frame[2], 0xFE, &Self::DESC)?;
+            rt::in_range(&Self::QUANTITY_DESC, 5, frame[5], 1, 100)?;
+            rt::following(
+                &Self::DOUBLED_DESC,
+                6,
+                frame[6],
+                frame[5] as i64,
+                (2, 1),
+                "2 × quantity",
+            )?;
+            rt::Ok(Self {
+                quantity: frame[5],
+                level: u16::from_be_bytes([frame[7], frame[8]]),
+            })
         }
     }
     impl response::Moving {
@@ -845,6 +819,17 @@ pub mod syncy {
         pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             Response::Counter(*self).encode(address, buf)
         }
+        /// Reads this message from a frame whose framing and code are checked.
+        #[inline(always)]
+        fn from_frame(frame: &[u8]) -> rt::DecodeResult<Self> {
+            let frame = rt::fixed::<12>(frame, &Self::DESC)?;
+            let field_1: u32 = rt::u24([frame[8], frame[9], frame[10]], false);
+            rt::Ok(Self {
+                total: rt::u24([frame[5], frame[6], frame[7]], false),
+                tag: ((field_1 >> 20) & 0xF) as u8,
+                offset: (((field_1 & 0xFFFFF) as u32) << 12) as i32 >> 12,
+            })
+        }
     }
     impl response::SetPairReply {
         pub const NAME: &'static str = "set_pair_reply";
@@ -862,6 +847,15 @@ pub mod syncy {
         pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             Response::SetPairReply(*self).encode(address, buf)
         }
+        /// Reads this message from a frame whose framing and code are checked.
+        #[inline(always)]
+        fn from_frame(frame: &[u8]) -> rt::DecodeResult<Self> {
+            let frame = rt::fixed::<8>(frame, &Self::DESC)?;
+            rt::Ok(Self {
+                quantity: frame[5],
+                groups: frame[6],
+            })
+        }
     }
     impl response::SetPairError {
         pub const NAME: &'static str = "set_pair_error";
@@ -874,6 +868,12 @@ pub mod syncy {
         }
         pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             Response::SetPairError(*self).encode(address, buf)
+        }
+        /// Reads this message from a frame whose framing and code are checked.
+        #[inline(always)]
+        fn from_frame(frame: &[u8]) -> rt::DecodeResult<Self> {
+            let frame = rt::fixed::<7>(frame, &Self::DESC)?;
+            rt::Ok(Self { reason: frame[5] })
         }
     }
     /// Each request as a struct of its own; its constants (`DESC`, which names it as

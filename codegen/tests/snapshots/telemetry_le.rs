@@ -201,49 +201,7 @@ pub mod telemetry_le {
                     rt::fixed::<5>(frame, &request::GetState::DESC)
                         .map(|_| Self::GetState(request::GetState))
                 }
-                0x02 => {
-                    let frame = rt::fixed::<21>(frame, &request::SetHome::DESC)?;
-                    let field_0: f64 = f64::from_le_bytes([
-                        frame[4],
-                        frame[5],
-                        frame[6],
-                        frame[7],
-                        frame[8],
-                        frame[9],
-                        frame[10],
-                        frame[11],
-                    ]);
-                    rt::in_range(
-                        &request::SetHome::LAT_DESC,
-                        4,
-                        field_0,
-                        rt::f64_raw(-90f64),
-                        rt::f64_raw(90f64),
-                    )?;
-                    let field_1: f64 = f64::from_le_bytes([
-                        frame[12],
-                        frame[13],
-                        frame[14],
-                        frame[15],
-                        frame[16],
-                        frame[17],
-                        frame[18],
-                        frame[19],
-                    ]);
-                    rt::in_range(
-                        &request::SetHome::LON_DESC,
-                        12,
-                        field_1,
-                        rt::f64_raw(-180f64),
-                        rt::f64_raw(180f64),
-                    )?;
-                    rt::Ok(
-                        Self::SetHome(request::SetHome {
-                            lat: field_0,
-                            lon: field_1,
-                        }),
-                    )
-                }
+                0x02 => request::SetHome::from_frame(frame).map(Self::SetHome),
                 _ => rt::Err(REQUEST_CODE.unknown(frame)),
             }
         }
@@ -446,69 +404,7 @@ pub mod telemetry_le {
         #[inline]
         fn dispatch(frame: &[u8]) -> rt::DecodeResult<Self> {
             match frame[3] {
-                0x81 => {
-                    let frame = rt::fixed::<41>(frame, &response::State::DESC)?;
-                    let field_4: f32 = f32::from_le_bytes([
-                        frame[34],
-                        frame[35],
-                        frame[32],
-                        frame[33],
-                    ]);
-                    rt::in_range(
-                        &response::State::PRESSURE_DESC,
-                        32,
-                        field_4,
-                        rt::f32_raw(300f32),
-                        rt::f32_raw(1100.5f32),
-                    )?;
-                    rt::Ok(
-                        Self::State(response::State {
-                            time_us: u64::from_le_bytes([
-                                frame[4],
-                                frame[5],
-                                frame[6],
-                                frame[7],
-                                frame[8],
-                                frame[9],
-                                frame[10],
-                                frame[11],
-                            ]),
-                            altitude: f32::from_le_bytes([
-                                frame[12],
-                                frame[13],
-                                frame[14],
-                                frame[15],
-                            ]),
-                            lat: f64::from_le_bytes([
-                                frame[16],
-                                frame[17],
-                                frame[18],
-                                frame[19],
-                                frame[20],
-                                frame[21],
-                                frame[22],
-                                frame[23],
-                            ]),
-                            offset: i64::from_le_bytes([
-                                frame[24],
-                                frame[25],
-                                frame[26],
-                                frame[27],
-                                frame[28],
-                                frame[29],
-                                frame[30],
-                                frame[31],
-                            ]),
-                            pressure: field_4,
-                            total: u32::from_le_bytes([
-                                frame[38],
-                                frame[39],
-                                frame[36],
-                                frame[37],
-                            ]),
-                        }),
-                    )
-                }
+                0x81 => response::State::from_frame(frame).map(Self::State),
                 0x82 => {
                     rt::fixed::<5>(frame, &response::Ack::DESC)
                         .map(|_| Self::Ack(response::Ack))
@@ -718,6 +614,46 @@ pub mod telemetry_le {
         pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             Request::SetHome(*self).encode(address, buf)
         }
+        /// Reads this message from a frame whose framing and code are checked.
+        #[inline(always)]
+        fn from_frame(frame: &[u8]) -> rt::DecodeResult<Self> {
+            let frame = rt::fixed::<21>(frame, &Self::DESC)?;
+            let field_0: f64 = f64::from_le_bytes([
+                frame[4],
+                frame[5],
+                frame[6],
+                frame[7],
+                frame[8],
+                frame[9],
+                frame[10],
+                frame[11],
+            ]);
+            rt::in_range(
+                &Self::LAT_DESC,
+                4,
+                field_0,
+                rt::f64_raw(-90f64),
+                rt::f64_raw(90f64),
+            )?;
+            let field_1: f64 = f64::from_le_bytes([
+                frame[12],
+                frame[13],
+                frame[14],
+                frame[15],
+                frame[16],
+                frame[17],
+                frame[18],
+                frame[19],
+            ]);
+            rt::in_range(
+                &Self::LON_DESC,
+                12,
+                field_1,
+                rt::f64_raw(-180f64),
+                rt::f64_raw(180f64),
+            )?;
+            rt::Ok(Self { lat: field_0, lon: field_1 })
+        }
     }
     impl response::State {
         pub const NAME: &'static str = "state";
@@ -741,6 +677,64 @@ pub mod telemetry_le {
         }
         pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             Response::State(*self).encode(address, buf)
+        }
+        /// Reads this message from a frame whose framing and code are checked.
+        #[inline(always)]
+        fn from_frame(frame: &[u8]) -> rt::DecodeResult<Self> {
+            let frame = rt::fixed::<41>(frame, &Self::DESC)?;
+            let field_4: f32 = f32::from_le_bytes([
+                frame[34],
+                frame[35],
+                frame[32],
+                frame[33],
+            ]);
+            rt::in_range(
+                &Self::PRESSURE_DESC,
+                32,
+                field_4,
+                rt::f32_raw(300f32),
+                rt::f32_raw(1100.5f32),
+            )?;
+            rt::Ok(Self {
+                time_us: u64::from_le_bytes([
+                    frame[4],
+                    frame[5],
+                    frame[6],
+                    frame[7],
+                    frame[8],
+                    frame[9],
+                    frame[10],
+                    frame[11],
+                ]),
+                altitude: f32::from_le_bytes([
+                    frame[12],
+                    frame[13],
+                    frame[14],
+                    frame[15],
+                ]),
+                lat: f64::from_le_bytes([
+                    frame[16],
+                    frame[17],
+                    frame[18],
+                    frame[19],
+                    frame[20],
+                    frame[21],
+                    frame[22],
+                    frame[23],
+                ]),
+                offset: i64::from_le_bytes([
+                    frame[24],
+                    frame[25],
+                    frame[26],
+                    frame[27],
+                    frame[28],
+                    frame[29],
+                    frame[30],
+                    frame[31],
+                ]),
+                pressure: field_4,
+                total: u32::from_le_bytes([frame[38], frame[39], frame[36], frame[37]]),
+            })
         }
     }
     impl response::Ack {

@@ -496,10 +496,7 @@ pub mod text_counted {
         #[inline]
         fn dispatch(frame: &[u8]) -> rt::DecodeResult<Self> {
             match frame[2] {
-                0x20 => {
-                    let frame = rt::fixed::<5>(frame, &response::Ack::DESC)?;
-                    rt::Ok(Self::Ack(response::Ack { status: frame[3] }))
-                }
+                0x20 => response::Ack::from_frame(frame).map(Self::Ack),
                 0x21 => {
                     let s = LISTS_DEVICE_INFO.split::<10, 1>(frame)?;
                     let frame = &s.frame;
@@ -925,6 +922,12 @@ pub mod text_counted {
         }
         pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             Response::Ack(*self).encode(address, buf)
+        }
+        /// Reads this message from a frame whose framing and code are checked.
+        #[inline(always)]
+        fn from_frame(frame: &[u8]) -> rt::DecodeResult<Self> {
+            let frame = rt::fixed::<5>(frame, &Self::DESC)?;
+            rt::Ok(Self { status: frame[3] })
         }
     }
     impl response::DeviceInfo {

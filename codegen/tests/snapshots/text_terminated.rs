@@ -264,12 +264,7 @@ pub mod text_terminated {
                     )
                 }
                 0x2C => {
-                    let frame = rt::fixed::<5>(frame, &request::ReadParameter::DESC)?;
-                    rt::Ok(
-                        Self::ReadParameter(request::ReadParameter {
-                            index: frame[3],
-                        }),
-                    )
+                    request::ReadParameter::from_frame(frame).map(Self::ReadParameter)
                 }
                 _ => rt::Err(REQUEST_CODE.unknown(frame)),
             }
@@ -636,10 +631,7 @@ pub mod text_terminated {
                         }),
                     )
                 }
-                0x2A => {
-                    let frame = rt::fixed::<5>(frame, &response::Ack::DESC)?;
-                    rt::Ok(Self::Ack(response::Ack { status: frame[3] }))
-                }
+                0x2A => response::Ack::from_frame(frame).map(Self::Ack),
                 0x2B => {
                     let s = LISTS_PARAMETER.split::<7, 2>(frame)?;
                     let frame = &s.frame;
@@ -1167,6 +1159,12 @@ pub mod text_terminated {
         pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             Request::ReadParameter(*self).encode(address, buf)
         }
+        /// Reads this message from a frame whose framing and code are checked.
+        #[inline(always)]
+        fn from_frame(frame: &[u8]) -> rt::DecodeResult<Self> {
+            let frame = rt::fixed::<5>(frame, &Self::DESC)?;
+            rt::Ok(Self { index: frame[3] })
+        }
     }
     impl response::DeviceInfo {
         pub const NAME: &'static str = "device_info";
@@ -1198,6 +1196,12 @@ pub mod text_terminated {
         }
         pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             Response::Ack(*self).encode(address, buf)
+        }
+        /// Reads this message from a frame whose framing and code are checked.
+        #[inline(always)]
+        fn from_frame(frame: &[u8]) -> rt::DecodeResult<Self> {
+            let frame = rt::fixed::<5>(frame, &Self::DESC)?;
+            rt::Ok(Self { status: frame[3] })
         }
     }
     impl response::Parameter {

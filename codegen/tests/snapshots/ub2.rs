@@ -812,14 +812,8 @@ pub mod ub2 {
                         .map(|_| Self::ReferenceRunStatus(request::ReferenceRunStatus))
                 }
                 0x2000 => {
-                    let frame = rt::fixed::<9>(frame, &request::GoToCapacitance::DESC)?;
-                    rt::Ok(
-                        Self::GoToCapacitance(request::GoToCapacitance {
-                            target: Capacitance::from_raw(
-                                u32::from_le_bytes([frame[4], frame[5], frame[6], frame[7]]),
-                            ),
-                        }),
-                    )
+                    request::GoToCapacitance::from_frame(frame)
+                        .map(Self::GoToCapacitance)
                 }
                 0x2001 => {
                     rt::fixed::<5>(frame, &request::GoToCapacitanceStatus::DESC)
@@ -828,14 +822,8 @@ pub mod ub2 {
                         ))
                 }
                 0x2100 => {
-                    let frame = rt::fixed::<
-                        7,
-                    >(frame, &request::GoToFullStepPosition::DESC)?;
-                    rt::Ok(
-                        Self::GoToFullStepPosition(request::GoToFullStepPosition {
-                            target: u16::from_le_bytes([frame[4], frame[5]]),
-                        }),
-                    )
+                    request::GoToFullStepPosition::from_frame(frame)
+                        .map(Self::GoToFullStepPosition)
                 }
                 0x2101 => {
                     rt::fixed::<5>(frame, &request::GoToFullStepPositionStatus::DESC)
@@ -844,12 +832,7 @@ pub mod ub2 {
                         ))
                 }
                 0x2200 => {
-                    let frame = rt::fixed::<7>(frame, &request::MoveFullSteps::DESC)?;
-                    rt::Ok(
-                        Self::MoveFullSteps(request::MoveFullSteps {
-                            steps: i16::from_le_bytes([frame[4], frame[5]]),
-                        }),
-                    )
+                    request::MoveFullSteps::from_frame(frame).map(Self::MoveFullSteps)
                 }
                 0x2201 => {
                     rt::fixed::<5>(frame, &request::MoveFullStepsStatus::DESC)
@@ -872,19 +855,8 @@ pub mod ub2 {
                         .map(|_| Self::GoToCmaxStatus(request::GoToCmaxStatus))
                 }
                 0x2500 => {
-                    let frame = rt::fixed::<
-                        9,
-                    >(frame, &request::GoToMicroStepPosition::DESC)?;
-                    rt::Ok(
-                        Self::GoToMicroStepPosition(request::GoToMicroStepPosition {
-                            target: u32::from_le_bytes([
-                                frame[4],
-                                frame[5],
-                                frame[6],
-                                frame[7],
-                            ]),
-                        }),
-                    )
+                    request::GoToMicroStepPosition::from_frame(frame)
+                        .map(Self::GoToMicroStepPosition)
                 }
                 0x2501 => {
                     rt::fixed::<5>(frame, &request::GoToMicroStepPositionStatus::DESC)
@@ -893,17 +865,7 @@ pub mod ub2 {
                         ))
                 }
                 0x2600 => {
-                    let frame = rt::fixed::<9>(frame, &request::MoveMicroSteps::DESC)?;
-                    rt::Ok(
-                        Self::MoveMicroSteps(request::MoveMicroSteps {
-                            steps: i32::from_le_bytes([
-                                frame[4],
-                                frame[5],
-                                frame[6],
-                                frame[7],
-                            ]),
-                        }),
-                    )
+                    request::MoveMicroSteps::from_frame(frame).map(Self::MoveMicroSteps)
                 }
                 0x2601 => {
                     rt::fixed::<5>(frame, &request::MoveMicroStepsStatus::DESC)
@@ -912,21 +874,8 @@ pub mod ub2 {
                         ))
                 }
                 0x2700 => {
-                    let frame = rt::fixed::<
-                        6,
-                    >(frame, &request::GoToStoredPosition::DESC)?;
-                    rt::in_range(
-                        &request::GoToStoredPosition::INDEX_DESC,
-                        4,
-                        frame[4],
-                        0,
-                        9,
-                    )?;
-                    rt::Ok(
-                        Self::GoToStoredPosition(request::GoToStoredPosition {
-                            index: frame[4],
-                        }),
-                    )
+                    request::GoToStoredPosition::from_frame(frame)
+                        .map(Self::GoToStoredPosition)
                 }
                 0x2701 => {
                     rt::fixed::<5>(frame, &request::GoToStoredPositionStatus::DESC)
@@ -935,113 +884,30 @@ pub mod ub2 {
                         ))
                 }
                 0x4300 => {
-                    let frame = rt::fixed::<
-                        7,
-                    >(frame, &request::SetAccelerationSpeedIndex::DESC)?;
-                    rt::in_range(
-                        &request::SetAccelerationSpeedIndex::ACCELERATION_INDEX_DESC,
-                        4,
-                        frame[4],
-                        0,
-                        18,
-                    )?;
-                    rt::in_range(
-                        &request::SetAccelerationSpeedIndex::SPEED_INDEX_DESC,
-                        5,
-                        frame[5],
-                        0,
-                        18,
-                    )?;
-                    rt::Ok(
-                        Self::SetAccelerationSpeedIndex(request::SetAccelerationSpeedIndex {
-                            acceleration_index: frame[4],
-                            speed_index: frame[5],
-                        }),
-                    )
+                    request::SetAccelerationSpeedIndex::from_frame(frame)
+                        .map(Self::SetAccelerationSpeedIndex)
                 }
-                0x4500 => {
-                    let frame = rt::fixed::<7>(frame, &request::SetCurrent::DESC)?;
-                    rt::Ok(
-                        Self::SetCurrent(request::SetCurrent {
-                            idle_current: frame[4],
-                            drive_current: frame[5],
-                        }),
-                    )
-                }
+                0x4500 => request::SetCurrent::from_frame(frame).map(Self::SetCurrent),
                 0x6000 => {
-                    let frame = rt::fixed::<6>(frame, &request::SetSlaveAddress::DESC)?;
-                    rt::in_range(
-                        &request::SetSlaveAddress::ADDRESS_DESC,
-                        4,
-                        frame[4],
-                        33,
-                        64,
-                    )?;
-                    rt::Ok(
-                        Self::SetSlaveAddress(request::SetSlaveAddress {
-                            address: frame[4],
-                        }),
-                    )
+                    request::SetSlaveAddress::from_frame(frame)
+                        .map(Self::SetSlaveAddress)
                 }
-                0x6100 => {
-                    let frame = rt::fixed::<6>(frame, &request::SetBaudRate::DESC)?;
-                    rt::Ok(
-                        Self::SetBaudRate(request::SetBaudRate {
-                            baud_rate: BaudRateIndex::from_raw(frame[4]),
-                        }),
-                    )
-                }
+                0x6100 => request::SetBaudRate::from_frame(frame).map(Self::SetBaudRate),
                 0x7201 => {
-                    let frame = rt::fixed::<
-                        9,
-                    >(frame, &request::SetLowerCustomerLimit::DESC)?;
-                    rt::Ok(
-                        Self::SetLowerCustomerLimit(request::SetLowerCustomerLimit {
-                            limit: Capacitance::from_raw(
-                                u32::from_le_bytes([frame[4], frame[5], frame[6], frame[7]]),
-                            ),
-                        }),
-                    )
+                    request::SetLowerCustomerLimit::from_frame(frame)
+                        .map(Self::SetLowerCustomerLimit)
                 }
                 0x7202 => {
-                    let frame = rt::fixed::<
-                        9,
-                    >(frame, &request::SetUpperCustomerLimit::DESC)?;
-                    rt::Ok(
-                        Self::SetUpperCustomerLimit(request::SetUpperCustomerLimit {
-                            limit: Capacitance::from_raw(
-                                u32::from_le_bytes([frame[4], frame[5], frame[6], frame[7]]),
-                            ),
-                        }),
-                    )
+                    request::SetUpperCustomerLimit::from_frame(frame)
+                        .map(Self::SetUpperCustomerLimit)
                 }
                 0x7500 => {
-                    let frame = rt::fixed::<
-                        8,
-                    >(frame, &request::StoreIndexedPosition::DESC)?;
-                    rt::in_range(
-                        &request::StoreIndexedPosition::INDEX_DESC,
-                        4,
-                        frame[4],
-                        0,
-                        9,
-                    )?;
-                    rt::Ok(
-                        Self::StoreIndexedPosition(request::StoreIndexedPosition {
-                            index: frame[4],
-                            position: u16::from_le_bytes([frame[5], frame[6]]),
-                        }),
-                    )
+                    request::StoreIndexedPosition::from_frame(frame)
+                        .map(Self::StoreIndexedPosition)
                 }
                 0x8000 => {
-                    let frame = rt::fixed::<
-                        6,
-                    >(frame, &request::SetModeOfOperation::DESC)?;
-                    rt::Ok(
-                        Self::SetModeOfOperation(request::SetModeOfOperation {
-                            mode: ModeOfOperation::from_raw(frame[4]),
-                        }),
-                    )
+                    request::SetModeOfOperation::from_frame(frame)
+                        .map(Self::SetModeOfOperation)
                 }
                 0x4001 => {
                     rt::fixed::<5>(frame, &request::GetActualCapacitance::DESC)
@@ -1078,22 +944,8 @@ pub mod ub2 {
                         .map(|_| Self::GetStatus(request::GetStatus))
                 }
                 0x4030 => {
-                    let frame = rt::fixed::<
-                        7,
-                    >(frame, &request::GetCCurveIndexedFullStepCapacitance::DESC)?;
-                    let field_0: u16 = u16::from_le_bytes([frame[4], frame[5]]);
-                    rt::in_range(
-                        &request::GetCCurveIndexedFullStepCapacitance::INDEX_DESC,
-                        4,
-                        field_0,
-                        0,
-                        499,
-                    )?;
-                    rt::Ok(
-                        Self::GetCCurveIndexedFullStepCapacitance(request::GetCCurveIndexedFullStepCapacitance {
-                            index: field_0,
-                        }),
-                    )
+                    request::GetCCurveIndexedFullStepCapacitance::from_frame(frame)
+                        .map(Self::GetCCurveIndexedFullStepCapacitance)
                 }
                 0x4032 => {
                     rt::fixed::<5>(frame, &request::GetControllerTemperature::DESC)
@@ -1126,89 +978,38 @@ pub mod ub2 {
                 0x4072 => {
                     let mut g = rt::Group::new(frame, 0x4072, rt::None);
                     g.attempt(|frame: &[u8; 6]| {
-                        rt::equal(
-                            &request::GetLowerCustomerLimit::INDEX_DESC,
-                            4,
-                            frame[4],
-                            0x1,
-                        )?;
-                        rt::Ok(
-                            Self::GetLowerCustomerLimit(request::GetLowerCustomerLimit),
-                        )
+                        request::GetLowerCustomerLimit::from_frame(frame)
+                            .map(Self::GetLowerCustomerLimit)
                     });
                     g.attempt(|frame: &[u8; 6]| {
-                        rt::equal(
-                            &request::GetUpperCustomerLimit::INDEX_DESC,
-                            4,
-                            frame[4],
-                            0x2,
-                        )?;
-                        rt::Ok(
-                            Self::GetUpperCustomerLimit(request::GetUpperCustomerLimit),
-                        )
+                        request::GetUpperCustomerLimit::from_frame(frame)
+                            .map(Self::GetUpperCustomerLimit)
                     });
                     g.attempt(|frame: &[u8; 6]| {
-                        rt::equal(
-                            &request::GetLowerFactoryLimit::INDEX_DESC,
-                            4,
-                            frame[4],
-                            0x3,
-                        )?;
-                        rt::Ok(Self::GetLowerFactoryLimit(request::GetLowerFactoryLimit))
+                        request::GetLowerFactoryLimit::from_frame(frame)
+                            .map(Self::GetLowerFactoryLimit)
                     });
                     g.attempt(|frame: &[u8; 6]| {
-                        rt::equal(
-                            &request::GetUpperFactoryLimit::INDEX_DESC,
-                            4,
-                            frame[4],
-                            0x4,
-                        )?;
-                        rt::Ok(Self::GetUpperFactoryLimit(request::GetUpperFactoryLimit))
+                        request::GetUpperFactoryLimit::from_frame(frame)
+                            .map(Self::GetUpperFactoryLimit)
                     });
                     g.end(&request::GetLowerCustomerLimit::DESC)
                 }
                 0x4073 => {
                     let mut g = rt::Group::new(frame, 0x4073, rt::None);
                     g.attempt(|frame: &[u8; 6]| {
-                        rt::equal(
-                            &request::GetPresetCapacitance::INDEX_DESC,
-                            4,
-                            frame[4],
-                            0x0,
-                        )?;
-                        rt::Ok(Self::GetPresetCapacitance(request::GetPresetCapacitance))
+                        request::GetPresetCapacitance::from_frame(frame)
+                            .map(Self::GetPresetCapacitance)
                     });
                     g.attempt(|frame: &[u8; 6]| {
-                        rt::equal(
-                            &request::GetPresetFullStepPosition::INDEX_DESC,
-                            4,
-                            frame[4],
-                            0x1,
-                        )?;
-                        rt::Ok(
-                            Self::GetPresetFullStepPosition(
-                                request::GetPresetFullStepPosition,
-                            ),
-                        )
+                        request::GetPresetFullStepPosition::from_frame(frame)
+                            .map(Self::GetPresetFullStepPosition)
                     });
                     g.end(&request::GetPresetCapacitance::DESC)
                 }
                 0x4075 => {
-                    let frame = rt::fixed::<
-                        6,
-                    >(frame, &request::GetStoredFullStepPosition::DESC)?;
-                    rt::in_range(
-                        &request::GetStoredFullStepPosition::INDEX_DESC,
-                        4,
-                        frame[4],
-                        0,
-                        9,
-                    )?;
-                    rt::Ok(
-                        Self::GetStoredFullStepPosition(request::GetStoredFullStepPosition {
-                            index: frame[4],
-                        }),
-                    )
+                    request::GetStoredFullStepPosition::from_frame(frame)
+                        .map(Self::GetStoredFullStepPosition)
                 }
                 0x4080 => {
                     rt::fixed::<5>(frame, &request::GetModeOfOperation::DESC)
@@ -2061,19 +1862,8 @@ pub mod ub2 {
             }
             match u16::from_be_bytes([frame[2], frame[3]]) {
                 0x5400 => {
-                    let frame = rt::fixed::<
-                        9,
-                    >(frame, &response::MovementCompletedWithStepLoss::DESC)?;
-                    rt::Ok(
-                        Self::MovementCompletedWithStepLoss(response::MovementCompletedWithStepLoss {
-                            lost_micro_steps: u32::from_le_bytes([
-                                frame[4],
-                                frame[5],
-                                frame[6],
-                                frame[7],
-                            ]),
-                        }),
-                    )
+                    response::MovementCompletedWithStepLoss::from_frame(frame)
+                        .map(Self::MovementCompletedWithStepLoss)
                 }
                 0x4300 => {
                     rt::fixed::<5>(frame, &response::SetAccelerationSpeedIndexAck::DESC)
@@ -2118,177 +1908,44 @@ pub mod ub2 {
                         ))
                 }
                 0x4101 => {
-                    let frame = rt::fixed::<
-                        9,
-                    >(frame, &response::ActualCapacitance::DESC)?;
-                    rt::Ok(
-                        Self::ActualCapacitance(response::ActualCapacitance {
-                            capacitance: Capacitance::from_raw(
-                                u32::from_le_bytes([frame[4], frame[5], frame[6], frame[7]]),
-                            ),
-                        }),
-                    )
+                    response::ActualCapacitance::from_frame(frame)
+                        .map(Self::ActualCapacitance)
                 }
                 0x4102 => {
-                    let frame = rt::fixed::<
-                        7,
-                    >(frame, &response::ActualFullStepPosition::DESC)?;
-                    rt::Ok(
-                        Self::ActualFullStepPosition(response::ActualFullStepPosition {
-                            full_steps: u16::from_le_bytes([frame[4], frame[5]]),
-                        }),
-                    )
+                    response::ActualFullStepPosition::from_frame(frame)
+                        .map(Self::ActualFullStepPosition)
                 }
                 0x4110 => {
-                    let frame = rt::fixed::<
-                        9,
-                    >(frame, &response::MinimumCapacitance::DESC)?;
-                    rt::Ok(
-                        Self::MinimumCapacitance(response::MinimumCapacitance {
-                            capacitance: Capacitance::from_raw(
-                                u32::from_le_bytes([frame[4], frame[5], frame[6], frame[7]]),
-                            ),
-                        }),
-                    )
+                    response::MinimumCapacitance::from_frame(frame)
+                        .map(Self::MinimumCapacitance)
                 }
                 0x4111 => {
-                    let frame = rt::fixed::<
-                        9,
-                    >(frame, &response::MaximumCapacitance::DESC)?;
-                    rt::Ok(
-                        Self::MaximumCapacitance(response::MaximumCapacitance {
-                            capacitance: Capacitance::from_raw(
-                                u32::from_le_bytes([frame[4], frame[5], frame[6], frame[7]]),
-                            ),
-                        }),
-                    )
+                    response::MaximumCapacitance::from_frame(frame)
+                        .map(Self::MaximumCapacitance)
                 }
                 0x4121 => {
-                    let frame = rt::fixed::<
-                        7,
-                    >(frame, &response::AccelerationSpeed::DESC)?;
-                    rt::in_range(
-                        &response::AccelerationSpeed::ACCELERATION_INDEX_DESC,
-                        4,
-                        frame[4],
-                        0,
-                        18,
-                    )?;
-                    rt::in_range(
-                        &response::AccelerationSpeed::SPEED_INDEX_DESC,
-                        5,
-                        frame[5],
-                        0,
-                        18,
-                    )?;
-                    rt::Ok(
-                        Self::AccelerationSpeed(response::AccelerationSpeed {
-                            acceleration_index: frame[4],
-                            speed_index: frame[5],
-                        }),
-                    )
+                    response::AccelerationSpeed::from_frame(frame)
+                        .map(Self::AccelerationSpeed)
                 }
-                0x4122 => {
-                    let frame = rt::fixed::<7>(frame, &response::Status::DESC)?;
-                    rt::Ok(
-                        Self::Status(response::Status {
-                            error_bits: StatusErrorBits::from_raw(frame[4]),
-                            reserved: frame[5],
-                        }),
-                    )
-                }
-                0x4130 => {
-                    let frame = rt::fixed::<13>(frame, &response::CCurveEntry::DESC)?;
-                    let field_0: u16 = u16::from_le_bytes([frame[4], frame[5]]);
-                    rt::in_range(
-                        &response::CCurveEntry::INDEX_DESC,
-                        4,
-                        field_0,
-                        0,
-                        499,
-                    )?;
-                    rt::Ok(
-                        Self::CCurveEntry(response::CCurveEntry {
-                            index: field_0,
-                            full_steps: u16::from_le_bytes([frame[6], frame[7]]),
-                            capacitance: Capacitance::from_raw(
-                                u32::from_le_bytes([
-                                    frame[8],
-                                    frame[9],
-                                    frame[10],
-                                    frame[11],
-                                ]),
-                            ),
-                        }),
-                    )
-                }
+                0x4122 => response::Status::from_frame(frame).map(Self::Status),
+                0x4130 => response::CCurveEntry::from_frame(frame).map(Self::CCurveEntry),
                 0x4132 => {
-                    let frame = rt::fixed::<
-                        6,
-                    >(frame, &response::ControllerTemperature::DESC)?;
-                    rt::Ok(
-                        Self::ControllerTemperature(response::ControllerTemperature {
-                            temperature: frame[4],
-                        }),
-                    )
+                    response::ControllerTemperature::from_frame(frame)
+                        .map(Self::ControllerTemperature)
                 }
                 0x4136 => {
-                    let frame = rt::fixed::<
-                        9,
-                    >(frame, &response::MicroStepPosition::DESC)?;
-                    rt::Ok(
-                        Self::MicroStepPosition(response::MicroStepPosition {
-                            micro_steps: u32::from_le_bytes([
-                                frame[4],
-                                frame[5],
-                                frame[6],
-                                frame[7],
-                            ]),
-                        }),
-                    )
+                    response::MicroStepPosition::from_frame(frame)
+                        .map(Self::MicroStepPosition)
                 }
                 0x4161 => {
-                    let frame = rt::fixed::<
-                        16,
-                    >(frame, &response::FirmwareVersion::DESC)?;
-                    rt::Ok(
-                        Self::FirmwareVersion(response::FirmwareVersion {
-                            firmware_version: rt::Ascii(
-                                frame[4..15].try_into().unwrap_or([0; 11]),
-                            ),
-                        }),
-                    )
+                    response::FirmwareVersion::from_frame(frame)
+                        .map(Self::FirmwareVersion)
                 }
                 0x4162 => {
-                    let frame = rt::fixed::<13>(frame, &response::SerialNumber::DESC)?;
-                    rt::Ok(
-                        Self::SerialNumber(response::SerialNumber {
-                            serial_number: rt::Ascii(
-                                frame[4..12].try_into().unwrap_or([0; 8]),
-                            ),
-                        }),
-                    )
+                    response::SerialNumber::from_frame(frame).map(Self::SerialNumber)
                 }
-                0x4170 => {
-                    let frame = rt::fixed::<9>(frame, &response::CminNom::DESC)?;
-                    rt::Ok(
-                        Self::CminNom(response::CminNom {
-                            capacitance: Capacitance::from_raw(
-                                u32::from_le_bytes([frame[4], frame[5], frame[6], frame[7]]),
-                            ),
-                        }),
-                    )
-                }
-                0x4171 => {
-                    let frame = rt::fixed::<9>(frame, &response::CmaxNom::DESC)?;
-                    rt::Ok(
-                        Self::CmaxNom(response::CmaxNom {
-                            capacitance: Capacitance::from_raw(
-                                u32::from_le_bytes([frame[4], frame[5], frame[6], frame[7]]),
-                            ),
-                        }),
-                    )
-                }
+                0x4170 => response::CminNom::from_frame(frame).map(Self::CminNom),
+                0x4171 => response::CmaxNom::from_frame(frame).map(Self::CmaxNom),
                 0x4172 => {
                     let mut g = rt::Group::new(
                         frame,
@@ -2296,64 +1953,20 @@ pub mod ub2 {
                         request.map(Request::name),
                     );
                     g.attempt(|frame: &[u8; 10]| {
-                        rt::equal(
-                            &response::LowerCustomerLimit::INDEX_DESC,
-                            4,
-                            frame[4],
-                            0x1,
-                        )?;
-                        rt::Ok(
-                            Self::LowerCustomerLimit(response::LowerCustomerLimit {
-                                capacitance: Capacitance::from_raw(
-                                    u32::from_le_bytes([frame[5], frame[6], frame[7], frame[8]]),
-                                ),
-                            }),
-                        )
+                        response::LowerCustomerLimit::from_frame(frame)
+                            .map(Self::LowerCustomerLimit)
                     });
                     g.attempt(|frame: &[u8; 10]| {
-                        rt::equal(
-                            &response::UpperCustomerLimit::INDEX_DESC,
-                            4,
-                            frame[4],
-                            0x2,
-                        )?;
-                        rt::Ok(
-                            Self::UpperCustomerLimit(response::UpperCustomerLimit {
-                                capacitance: Capacitance::from_raw(
-                                    u32::from_le_bytes([frame[5], frame[6], frame[7], frame[8]]),
-                                ),
-                            }),
-                        )
+                        response::UpperCustomerLimit::from_frame(frame)
+                            .map(Self::UpperCustomerLimit)
                     });
                     g.attempt(|frame: &[u8; 10]| {
-                        rt::equal(
-                            &response::LowerFactoryLimit::INDEX_DESC,
-                            4,
-                            frame[4],
-                            0x3,
-                        )?;
-                        rt::Ok(
-                            Self::LowerFactoryLimit(response::LowerFactoryLimit {
-                                capacitance: Capacitance::from_raw(
-                                    u32::from_le_bytes([frame[5], frame[6], frame[7], frame[8]]),
-                                ),
-                            }),
-                        )
+                        response::LowerFactoryLimit::from_frame(frame)
+                            .map(Self::LowerFactoryLimit)
                     });
                     g.attempt(|frame: &[u8; 10]| {
-                        rt::equal(
-                            &response::UpperFactoryLimit::INDEX_DESC,
-                            4,
-                            frame[4],
-                            0x4,
-                        )?;
-                        rt::Ok(
-                            Self::UpperFactoryLimit(response::UpperFactoryLimit {
-                                capacitance: Capacitance::from_raw(
-                                    u32::from_le_bytes([frame[5], frame[6], frame[7], frame[8]]),
-                                ),
-                            }),
-                        )
+                        response::UpperFactoryLimit::from_frame(frame)
+                            .map(Self::UpperFactoryLimit)
                     });
                     g.end(&response::LowerCustomerLimit::DESC)
                 }
@@ -2364,67 +1977,22 @@ pub mod ub2 {
                         request.map(Request::name),
                     );
                     g.attempt(|frame: &[u8; 10]| {
-                        rt::equal(
-                            &response::PresetCapacitance::INDEX_DESC,
-                            4,
-                            frame[4],
-                            0x0,
-                        )?;
-                        rt::Ok(
-                            Self::PresetCapacitance(response::PresetCapacitance {
-                                capacitance: Capacitance::from_raw(
-                                    u32::from_le_bytes([frame[5], frame[6], frame[7], frame[8]]),
-                                ),
-                            }),
-                        )
+                        response::PresetCapacitance::from_frame(frame)
+                            .map(Self::PresetCapacitance)
                     });
                     g.attempt(|frame: &[u8; 10]| {
-                        rt::equal(
-                            &response::PresetFullStepPosition::INDEX_DESC,
-                            4,
-                            frame[4],
-                            0x1,
-                        )?;
-                        rt::Ok(
-                            Self::PresetFullStepPosition(response::PresetFullStepPosition {
-                                full_steps: u32::from_le_bytes([
-                                    frame[5],
-                                    frame[6],
-                                    frame[7],
-                                    frame[8],
-                                ]),
-                            }),
-                        )
+                        response::PresetFullStepPosition::from_frame(frame)
+                            .map(Self::PresetFullStepPosition)
                     });
                     g.end(&response::PresetCapacitance::DESC)
                 }
                 0x4175 => {
-                    let frame = rt::fixed::<
-                        8,
-                    >(frame, &response::StoredFullStepPosition::DESC)?;
-                    rt::in_range(
-                        &response::StoredFullStepPosition::INDEX_DESC,
-                        4,
-                        frame[4],
-                        0,
-                        9,
-                    )?;
-                    rt::Ok(
-                        Self::StoredFullStepPosition(response::StoredFullStepPosition {
-                            index: frame[4],
-                            full_steps: u16::from_le_bytes([frame[5], frame[6]]),
-                        }),
-                    )
+                    response::StoredFullStepPosition::from_frame(frame)
+                        .map(Self::StoredFullStepPosition)
                 }
                 0x4180 => {
-                    let frame = rt::fixed::<
-                        6,
-                    >(frame, &response::ActualModeOfOperation::DESC)?;
-                    rt::Ok(
-                        Self::ActualModeOfOperation(response::ActualModeOfOperation {
-                            mode: ModeOfOperation::from_raw(frame[4]),
-                        }),
-                    )
+                    response::ActualModeOfOperation::from_frame(frame)
+                        .map(Self::ActualModeOfOperation)
                 }
                 _ => rt::Err(RESPONSE_CODE.unknown(frame)),
             }
@@ -2896,6 +2464,16 @@ pub mod ub2 {
         pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             Request::GoToCapacitance(*self).encode(address, buf)
         }
+        /// Reads this message from a frame whose framing and code are checked.
+        #[inline(always)]
+        fn from_frame(frame: &[u8]) -> rt::DecodeResult<Self> {
+            let frame = rt::fixed::<9>(frame, &Self::DESC)?;
+            rt::Ok(Self {
+                target: Capacitance::from_raw(
+                    u32::from_le_bytes([frame[4], frame[5], frame[6], frame[7]]),
+                ),
+            })
+        }
     }
     impl request::GoToCapacitanceStatus {
         pub const NAME: &'static str = "go_to_capacitance_status";
@@ -2918,6 +2496,14 @@ pub mod ub2 {
         pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             Request::GoToFullStepPosition(*self).encode(address, buf)
         }
+        /// Reads this message from a frame whose framing and code are checked.
+        #[inline(always)]
+        fn from_frame(frame: &[u8]) -> rt::DecodeResult<Self> {
+            let frame = rt::fixed::<7>(frame, &Self::DESC)?;
+            rt::Ok(Self {
+                target: u16::from_le_bytes([frame[4], frame[5]]),
+            })
+        }
     }
     impl request::GoToFullStepPositionStatus {
         pub const NAME: &'static str = "go_to_full_step_position_status";
@@ -2939,6 +2525,14 @@ pub mod ub2 {
         }
         pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             Request::MoveFullSteps(*self).encode(address, buf)
+        }
+        /// Reads this message from a frame whose framing and code are checked.
+        #[inline(always)]
+        fn from_frame(frame: &[u8]) -> rt::DecodeResult<Self> {
+            let frame = rt::fixed::<7>(frame, &Self::DESC)?;
+            rt::Ok(Self {
+                steps: i16::from_le_bytes([frame[4], frame[5]]),
+            })
         }
     }
     impl request::MoveFullStepsStatus {
@@ -2998,6 +2592,14 @@ pub mod ub2 {
         pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             Request::GoToMicroStepPosition(*self).encode(address, buf)
         }
+        /// Reads this message from a frame whose framing and code are checked.
+        #[inline(always)]
+        fn from_frame(frame: &[u8]) -> rt::DecodeResult<Self> {
+            let frame = rt::fixed::<9>(frame, &Self::DESC)?;
+            rt::Ok(Self {
+                target: u32::from_le_bytes([frame[4], frame[5], frame[6], frame[7]]),
+            })
+        }
     }
     impl request::GoToMicroStepPositionStatus {
         pub const NAME: &'static str = "go_to_micro_step_position_status";
@@ -3019,6 +2621,14 @@ pub mod ub2 {
         }
         pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             Request::MoveMicroSteps(*self).encode(address, buf)
+        }
+        /// Reads this message from a frame whose framing and code are checked.
+        #[inline(always)]
+        fn from_frame(frame: &[u8]) -> rt::DecodeResult<Self> {
+            let frame = rt::fixed::<9>(frame, &Self::DESC)?;
+            rt::Ok(Self {
+                steps: i32::from_le_bytes([frame[4], frame[5], frame[6], frame[7]]),
+            })
         }
     }
     impl request::MoveMicroStepsStatus {
@@ -3042,6 +2652,13 @@ pub mod ub2 {
         }
         pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             Request::GoToStoredPosition(*self).encode(address, buf)
+        }
+        /// Reads this message from a frame whose framing and code are checked.
+        #[inline(always)]
+        fn from_frame(frame: &[u8]) -> rt::DecodeResult<Self> {
+            let frame = rt::fixed::<6>(frame, &Self::DESC)?;
+            rt::in_range(&Self::INDEX_DESC, 4, frame[4], 0, 9)?;
+            rt::Ok(Self { index: frame[4] })
         }
     }
     impl request::GoToStoredPositionStatus {
@@ -3072,6 +2689,17 @@ pub mod ub2 {
         pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             Request::SetAccelerationSpeedIndex(*self).encode(address, buf)
         }
+        /// Reads this message from a frame whose framing and code are checked.
+        #[inline(always)]
+        fn from_frame(frame: &[u8]) -> rt::DecodeResult<Self> {
+            let frame = rt::fixed::<7>(frame, &Self::DESC)?;
+            rt::in_range(&Self::ACCELERATION_INDEX_DESC, 4, frame[4], 0, 18)?;
+            rt::in_range(&Self::SPEED_INDEX_DESC, 5, frame[5], 0, 18)?;
+            rt::Ok(Self {
+                acceleration_index: frame[4],
+                speed_index: frame[5],
+            })
+        }
     }
     impl request::SetCurrent {
         pub const NAME: &'static str = "set_current";
@@ -3087,6 +2715,15 @@ pub mod ub2 {
         pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             Request::SetCurrent(*self).encode(address, buf)
         }
+        /// Reads this message from a frame whose framing and code are checked.
+        #[inline(always)]
+        fn from_frame(frame: &[u8]) -> rt::DecodeResult<Self> {
+            let frame = rt::fixed::<7>(frame, &Self::DESC)?;
+            rt::Ok(Self {
+                idle_current: frame[4],
+                drive_current: frame[5],
+            })
+        }
     }
     impl request::SetSlaveAddress {
         pub const NAME: &'static str = "set_slave_address";
@@ -3101,6 +2738,13 @@ pub mod ub2 {
         pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             Request::SetSlaveAddress(*self).encode(address, buf)
         }
+        /// Reads this message from a frame whose framing and code are checked.
+        #[inline(always)]
+        fn from_frame(frame: &[u8]) -> rt::DecodeResult<Self> {
+            let frame = rt::fixed::<6>(frame, &Self::DESC)?;
+            rt::in_range(&Self::ADDRESS_DESC, 4, frame[4], 33, 64)?;
+            rt::Ok(Self { address: frame[4] })
+        }
     }
     impl request::SetBaudRate {
         pub const NAME: &'static str = "set_baud_rate";
@@ -3113,6 +2757,14 @@ pub mod ub2 {
         }
         pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             Request::SetBaudRate(*self).encode(address, buf)
+        }
+        /// Reads this message from a frame whose framing and code are checked.
+        #[inline(always)]
+        fn from_frame(frame: &[u8]) -> rt::DecodeResult<Self> {
+            let frame = rt::fixed::<6>(frame, &Self::DESC)?;
+            rt::Ok(Self {
+                baud_rate: BaudRateIndex::from_raw(frame[4]),
+            })
         }
     }
     impl request::SetLowerCustomerLimit {
@@ -3127,6 +2779,16 @@ pub mod ub2 {
         pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             Request::SetLowerCustomerLimit(*self).encode(address, buf)
         }
+        /// Reads this message from a frame whose framing and code are checked.
+        #[inline(always)]
+        fn from_frame(frame: &[u8]) -> rt::DecodeResult<Self> {
+            let frame = rt::fixed::<9>(frame, &Self::DESC)?;
+            rt::Ok(Self {
+                limit: Capacitance::from_raw(
+                    u32::from_le_bytes([frame[4], frame[5], frame[6], frame[7]]),
+                ),
+            })
+        }
     }
     impl request::SetUpperCustomerLimit {
         pub const NAME: &'static str = "set_upper_customer_limit";
@@ -3139,6 +2801,16 @@ pub mod ub2 {
         }
         pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             Request::SetUpperCustomerLimit(*self).encode(address, buf)
+        }
+        /// Reads this message from a frame whose framing and code are checked.
+        #[inline(always)]
+        fn from_frame(frame: &[u8]) -> rt::DecodeResult<Self> {
+            let frame = rt::fixed::<9>(frame, &Self::DESC)?;
+            rt::Ok(Self {
+                limit: Capacitance::from_raw(
+                    u32::from_le_bytes([frame[4], frame[5], frame[6], frame[7]]),
+                ),
+            })
         }
     }
     impl request::StoreIndexedPosition {
@@ -3156,6 +2828,16 @@ pub mod ub2 {
         pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             Request::StoreIndexedPosition(*self).encode(address, buf)
         }
+        /// Reads this message from a frame whose framing and code are checked.
+        #[inline(always)]
+        fn from_frame(frame: &[u8]) -> rt::DecodeResult<Self> {
+            let frame = rt::fixed::<8>(frame, &Self::DESC)?;
+            rt::in_range(&Self::INDEX_DESC, 4, frame[4], 0, 9)?;
+            rt::Ok(Self {
+                index: frame[4],
+                position: u16::from_le_bytes([frame[5], frame[6]]),
+            })
+        }
     }
     impl request::SetModeOfOperation {
         pub const NAME: &'static str = "set_mode_of_operation";
@@ -3168,6 +2850,14 @@ pub mod ub2 {
         }
         pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             Request::SetModeOfOperation(*self).encode(address, buf)
+        }
+        /// Reads this message from a frame whose framing and code are checked.
+        #[inline(always)]
+        fn from_frame(frame: &[u8]) -> rt::DecodeResult<Self> {
+            let frame = rt::fixed::<6>(frame, &Self::DESC)?;
+            rt::Ok(Self {
+                mode: ModeOfOperation::from_raw(frame[4]),
+            })
         }
     }
     impl request::GetActualCapacitance {
@@ -3237,6 +2927,14 @@ pub mod ub2 {
         pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             Request::GetCCurveIndexedFullStepCapacitance(*self).encode(address, buf)
         }
+        /// Reads this message from a frame whose framing and code are checked.
+        #[inline(always)]
+        fn from_frame(frame: &[u8]) -> rt::DecodeResult<Self> {
+            let frame = rt::fixed::<7>(frame, &Self::DESC)?;
+            let field_0: u16 = u16::from_le_bytes([frame[4], frame[5]]);
+            rt::in_range(&Self::INDEX_DESC, 4, field_0, 0, 499)?;
+            rt::Ok(Self { index: field_0 })
+        }
     }
     impl request::GetControllerTemperature {
         pub const NAME: &'static str = "get_controller_temperature";
@@ -3301,6 +2999,13 @@ pub mod ub2 {
         pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             Request::GetLowerCustomerLimit(*self).encode(address, buf)
         }
+        /// Reads this message from a frame whose framing and code are checked.
+        #[inline(always)]
+        fn from_frame(frame: &[u8]) -> rt::DecodeResult<Self> {
+            let frame = rt::fixed::<6>(frame, &Self::DESC)?;
+            rt::equal(&Self::INDEX_DESC, 4, frame[4], 0x1)?;
+            rt::Ok(Self)
+        }
     }
     impl request::GetUpperCustomerLimit {
         pub const NAME: &'static str = "get_upper_customer_limit";
@@ -3310,6 +3015,13 @@ pub mod ub2 {
         pub const INDEX_DESC: rt::FieldDesc = rt::field(Self::NAME, "index");
         pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             Request::GetUpperCustomerLimit(*self).encode(address, buf)
+        }
+        /// Reads this message from a frame whose framing and code are checked.
+        #[inline(always)]
+        fn from_frame(frame: &[u8]) -> rt::DecodeResult<Self> {
+            let frame = rt::fixed::<6>(frame, &Self::DESC)?;
+            rt::equal(&Self::INDEX_DESC, 4, frame[4], 0x2)?;
+            rt::Ok(Self)
         }
     }
     impl request::GetLowerFactoryLimit {
@@ -3321,6 +3033,13 @@ pub mod ub2 {
         pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             Request::GetLowerFactoryLimit(*self).encode(address, buf)
         }
+        /// Reads this message from a frame whose framing and code are checked.
+        #[inline(always)]
+        fn from_frame(frame: &[u8]) -> rt::DecodeResult<Self> {
+            let frame = rt::fixed::<6>(frame, &Self::DESC)?;
+            rt::equal(&Self::INDEX_DESC, 4, frame[4], 0x3)?;
+            rt::Ok(Self)
+        }
     }
     impl request::GetUpperFactoryLimit {
         pub const NAME: &'static str = "get_upper_factory_limit";
@@ -3330,6 +3049,13 @@ pub mod ub2 {
         pub const INDEX_DESC: rt::FieldDesc = rt::field(Self::NAME, "index");
         pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             Request::GetUpperFactoryLimit(*self).encode(address, buf)
+        }
+        /// Reads this message from a frame whose framing and code are checked.
+        #[inline(always)]
+        fn from_frame(frame: &[u8]) -> rt::DecodeResult<Self> {
+            let frame = rt::fixed::<6>(frame, &Self::DESC)?;
+            rt::equal(&Self::INDEX_DESC, 4, frame[4], 0x4)?;
+            rt::Ok(Self)
         }
     }
     impl request::GetPresetCapacitance {
@@ -3341,6 +3067,13 @@ pub mod ub2 {
         pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             Request::GetPresetCapacitance(*self).encode(address, buf)
         }
+        /// Reads this message from a frame whose framing and code are checked.
+        #[inline(always)]
+        fn from_frame(frame: &[u8]) -> rt::DecodeResult<Self> {
+            let frame = rt::fixed::<6>(frame, &Self::DESC)?;
+            rt::equal(&Self::INDEX_DESC, 4, frame[4], 0x0)?;
+            rt::Ok(Self)
+        }
     }
     impl request::GetPresetFullStepPosition {
         pub const NAME: &'static str = "get_preset_full_step_position";
@@ -3350,6 +3083,13 @@ pub mod ub2 {
         pub const INDEX_DESC: rt::FieldDesc = rt::field(Self::NAME, "index");
         pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             Request::GetPresetFullStepPosition(*self).encode(address, buf)
+        }
+        /// Reads this message from a frame whose framing and code are checked.
+        #[inline(always)]
+        fn from_frame(frame: &[u8]) -> rt::DecodeResult<Self> {
+            let frame = rt::fixed::<6>(frame, &Self::DESC)?;
+            rt::equal(&Self::INDEX_DESC, 4, frame[4], 0x1)?;
+            rt::Ok(Self)
         }
     }
     impl request::GetStoredFullStepPosition {
@@ -3364,6 +3104,13 @@ pub mod ub2 {
         }
         pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             Request::GetStoredFullStepPosition(*self).encode(address, buf)
+        }
+        /// Reads this message from a frame whose framing and code are checked.
+        #[inline(always)]
+        fn from_frame(frame: &[u8]) -> rt::DecodeResult<Self> {
+            let frame = rt::fixed::<6>(frame, &Self::DESC)?;
+            rt::in_range(&Self::INDEX_DESC, 4, frame[4], 0, 9)?;
+            rt::Ok(Self { index: frame[4] })
         }
     }
     impl request::GetModeOfOperation {
@@ -3422,6 +3169,19 @@ pub mod ub2 {
         }
         pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             Response::MovementCompletedWithStepLoss(*self).encode(address, buf)
+        }
+        /// Reads this message from a frame whose framing and code are checked.
+        #[inline(always)]
+        fn from_frame(frame: &[u8]) -> rt::DecodeResult<Self> {
+            let frame = rt::fixed::<9>(frame, &Self::DESC)?;
+            rt::Ok(Self {
+                lost_micro_steps: u32::from_le_bytes([
+                    frame[4],
+                    frame[5],
+                    frame[6],
+                    frame[7],
+                ]),
+            })
         }
     }
     impl response::NakUnknownCommand {
@@ -3553,6 +3313,16 @@ pub mod ub2 {
         pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             Response::ActualCapacitance(*self).encode(address, buf)
         }
+        /// Reads this message from a frame whose framing and code are checked.
+        #[inline(always)]
+        fn from_frame(frame: &[u8]) -> rt::DecodeResult<Self> {
+            let frame = rt::fixed::<9>(frame, &Self::DESC)?;
+            rt::Ok(Self {
+                capacitance: Capacitance::from_raw(
+                    u32::from_le_bytes([frame[4], frame[5], frame[6], frame[7]]),
+                ),
+            })
+        }
     }
     impl response::ActualFullStepPosition {
         pub const NAME: &'static str = "actual_full_step_position";
@@ -3565,6 +3335,14 @@ pub mod ub2 {
         }
         pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             Response::ActualFullStepPosition(*self).encode(address, buf)
+        }
+        /// Reads this message from a frame whose framing and code are checked.
+        #[inline(always)]
+        fn from_frame(frame: &[u8]) -> rt::DecodeResult<Self> {
+            let frame = rt::fixed::<7>(frame, &Self::DESC)?;
+            rt::Ok(Self {
+                full_steps: u16::from_le_bytes([frame[4], frame[5]]),
+            })
         }
     }
     impl response::MinimumCapacitance {
@@ -3579,6 +3357,16 @@ pub mod ub2 {
         pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             Response::MinimumCapacitance(*self).encode(address, buf)
         }
+        /// Reads this message from a frame whose framing and code are checked.
+        #[inline(always)]
+        fn from_frame(frame: &[u8]) -> rt::DecodeResult<Self> {
+            let frame = rt::fixed::<9>(frame, &Self::DESC)?;
+            rt::Ok(Self {
+                capacitance: Capacitance::from_raw(
+                    u32::from_le_bytes([frame[4], frame[5], frame[6], frame[7]]),
+                ),
+            })
+        }
     }
     impl response::MaximumCapacitance {
         pub const NAME: &'static str = "maximum_capacitance";
@@ -3591,6 +3379,16 @@ pub mod ub2 {
         }
         pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             Response::MaximumCapacitance(*self).encode(address, buf)
+        }
+        /// Reads this message from a frame whose framing and code are checked.
+        #[inline(always)]
+        fn from_frame(frame: &[u8]) -> rt::DecodeResult<Self> {
+            let frame = rt::fixed::<9>(frame, &Self::DESC)?;
+            rt::Ok(Self {
+                capacitance: Capacitance::from_raw(
+                    u32::from_le_bytes([frame[4], frame[5], frame[6], frame[7]]),
+                ),
+            })
         }
     }
     impl response::AccelerationSpeed {
@@ -3612,6 +3410,17 @@ pub mod ub2 {
         pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             Response::AccelerationSpeed(*self).encode(address, buf)
         }
+        /// Reads this message from a frame whose framing and code are checked.
+        #[inline(always)]
+        fn from_frame(frame: &[u8]) -> rt::DecodeResult<Self> {
+            let frame = rt::fixed::<7>(frame, &Self::DESC)?;
+            rt::in_range(&Self::ACCELERATION_INDEX_DESC, 4, frame[4], 0, 18)?;
+            rt::in_range(&Self::SPEED_INDEX_DESC, 5, frame[5], 0, 18)?;
+            rt::Ok(Self {
+                acceleration_index: frame[4],
+                speed_index: frame[5],
+            })
+        }
     }
     impl response::Status {
         pub const NAME: &'static str = "status";
@@ -3626,6 +3435,15 @@ pub mod ub2 {
         }
         pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             Response::Status(*self).encode(address, buf)
+        }
+        /// Reads this message from a frame whose framing and code are checked.
+        #[inline(always)]
+        fn from_frame(frame: &[u8]) -> rt::DecodeResult<Self> {
+            let frame = rt::fixed::<7>(frame, &Self::DESC)?;
+            rt::Ok(Self {
+                error_bits: StatusErrorBits::from_raw(frame[4]),
+                reserved: frame[5],
+            })
         }
     }
     impl response::CCurveEntry {
@@ -3645,6 +3463,20 @@ pub mod ub2 {
         pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             Response::CCurveEntry(*self).encode(address, buf)
         }
+        /// Reads this message from a frame whose framing and code are checked.
+        #[inline(always)]
+        fn from_frame(frame: &[u8]) -> rt::DecodeResult<Self> {
+            let frame = rt::fixed::<13>(frame, &Self::DESC)?;
+            let field_0: u16 = u16::from_le_bytes([frame[4], frame[5]]);
+            rt::in_range(&Self::INDEX_DESC, 4, field_0, 0, 499)?;
+            rt::Ok(Self {
+                index: field_0,
+                full_steps: u16::from_le_bytes([frame[6], frame[7]]),
+                capacitance: Capacitance::from_raw(
+                    u32::from_le_bytes([frame[8], frame[9], frame[10], frame[11]]),
+                ),
+            })
+        }
     }
     impl response::ControllerTemperature {
         pub const NAME: &'static str = "controller_temperature";
@@ -3657,6 +3489,12 @@ pub mod ub2 {
         }
         pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             Response::ControllerTemperature(*self).encode(address, buf)
+        }
+        /// Reads this message from a frame whose framing and code are checked.
+        #[inline(always)]
+        fn from_frame(frame: &[u8]) -> rt::DecodeResult<Self> {
+            let frame = rt::fixed::<6>(frame, &Self::DESC)?;
+            rt::Ok(Self { temperature: frame[4] })
         }
     }
     impl response::MicroStepPosition {
@@ -3671,6 +3509,14 @@ pub mod ub2 {
         pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             Response::MicroStepPosition(*self).encode(address, buf)
         }
+        /// Reads this message from a frame whose framing and code are checked.
+        #[inline(always)]
+        fn from_frame(frame: &[u8]) -> rt::DecodeResult<Self> {
+            let frame = rt::fixed::<9>(frame, &Self::DESC)?;
+            rt::Ok(Self {
+                micro_steps: u32::from_le_bytes([frame[4], frame[5], frame[6], frame[7]]),
+            })
+        }
     }
     impl response::FirmwareVersion {
         pub const NAME: &'static str = "firmware_version";
@@ -3683,6 +3529,14 @@ pub mod ub2 {
         }
         pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             Response::FirmwareVersion(*self).encode(address, buf)
+        }
+        /// Reads this message from a frame whose framing and code are checked.
+        #[inline(always)]
+        fn from_frame(frame: &[u8]) -> rt::DecodeResult<Self> {
+            let frame = rt::fixed::<16>(frame, &Self::DESC)?;
+            rt::Ok(Self {
+                firmware_version: rt::Ascii(frame[4..15].try_into().unwrap_or([0; 11])),
+            })
         }
     }
     impl response::SerialNumber {
@@ -3697,6 +3551,14 @@ pub mod ub2 {
         pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             Response::SerialNumber(*self).encode(address, buf)
         }
+        /// Reads this message from a frame whose framing and code are checked.
+        #[inline(always)]
+        fn from_frame(frame: &[u8]) -> rt::DecodeResult<Self> {
+            let frame = rt::fixed::<13>(frame, &Self::DESC)?;
+            rt::Ok(Self {
+                serial_number: rt::Ascii(frame[4..12].try_into().unwrap_or([0; 8])),
+            })
+        }
     }
     impl response::CminNom {
         pub const NAME: &'static str = "cmin_nom";
@@ -3710,6 +3572,16 @@ pub mod ub2 {
         pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             Response::CminNom(*self).encode(address, buf)
         }
+        /// Reads this message from a frame whose framing and code are checked.
+        #[inline(always)]
+        fn from_frame(frame: &[u8]) -> rt::DecodeResult<Self> {
+            let frame = rt::fixed::<9>(frame, &Self::DESC)?;
+            rt::Ok(Self {
+                capacitance: Capacitance::from_raw(
+                    u32::from_le_bytes([frame[4], frame[5], frame[6], frame[7]]),
+                ),
+            })
+        }
     }
     impl response::CmaxNom {
         pub const NAME: &'static str = "cmax_nom";
@@ -3722,6 +3594,16 @@ pub mod ub2 {
         }
         pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             Response::CmaxNom(*self).encode(address, buf)
+        }
+        /// Reads this message from a frame whose framing and code are checked.
+        #[inline(always)]
+        fn from_frame(frame: &[u8]) -> rt::DecodeResult<Self> {
+            let frame = rt::fixed::<9>(frame, &Self::DESC)?;
+            rt::Ok(Self {
+                capacitance: Capacitance::from_raw(
+                    u32::from_le_bytes([frame[4], frame[5], frame[6], frame[7]]),
+                ),
+            })
         }
     }
     impl response::LowerCustomerLimit {
@@ -3737,6 +3619,17 @@ pub mod ub2 {
         pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             Response::LowerCustomerLimit(*self).encode(address, buf)
         }
+        /// Reads this message from a frame whose framing and code are checked.
+        #[inline(always)]
+        fn from_frame(frame: &[u8]) -> rt::DecodeResult<Self> {
+            let frame = rt::fixed::<10>(frame, &Self::DESC)?;
+            rt::equal(&Self::INDEX_DESC, 4, frame[4], 0x1)?;
+            rt::Ok(Self {
+                capacitance: Capacitance::from_raw(
+                    u32::from_le_bytes([frame[5], frame[6], frame[7], frame[8]]),
+                ),
+            })
+        }
     }
     impl response::UpperCustomerLimit {
         pub const NAME: &'static str = "upper_customer_limit";
@@ -3750,6 +3643,17 @@ pub mod ub2 {
         }
         pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             Response::UpperCustomerLimit(*self).encode(address, buf)
+        }
+        /// Reads this message from a frame whose framing and code are checked.
+        #[inline(always)]
+        fn from_frame(frame: &[u8]) -> rt::DecodeResult<Self> {
+            let frame = rt::fixed::<10>(frame, &Self::DESC)?;
+            rt::equal(&Self::INDEX_DESC, 4, frame[4], 0x2)?;
+            rt::Ok(Self {
+                capacitance: Capacitance::from_raw(
+                    u32::from_le_bytes([frame[5], frame[6], frame[7], frame[8]]),
+                ),
+            })
         }
     }
     impl response::LowerFactoryLimit {
@@ -3765,6 +3669,17 @@ pub mod ub2 {
         pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             Response::LowerFactoryLimit(*self).encode(address, buf)
         }
+        /// Reads this message from a frame whose framing and code are checked.
+        #[inline(always)]
+        fn from_frame(frame: &[u8]) -> rt::DecodeResult<Self> {
+            let frame = rt::fixed::<10>(frame, &Self::DESC)?;
+            rt::equal(&Self::INDEX_DESC, 4, frame[4], 0x3)?;
+            rt::Ok(Self {
+                capacitance: Capacitance::from_raw(
+                    u32::from_le_bytes([frame[5], frame[6], frame[7], frame[8]]),
+                ),
+            })
+        }
     }
     impl response::UpperFactoryLimit {
         pub const NAME: &'static str = "upper_factory_limit";
@@ -3778,6 +3693,17 @@ pub mod ub2 {
         }
         pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             Response::UpperFactoryLimit(*self).encode(address, buf)
+        }
+        /// Reads this message from a frame whose framing and code are checked.
+        #[inline(always)]
+        fn from_frame(frame: &[u8]) -> rt::DecodeResult<Self> {
+            let frame = rt::fixed::<10>(frame, &Self::DESC)?;
+            rt::equal(&Self::INDEX_DESC, 4, frame[4], 0x4)?;
+            rt::Ok(Self {
+                capacitance: Capacitance::from_raw(
+                    u32::from_le_bytes([frame[5], frame[6], frame[7], frame[8]]),
+                ),
+            })
         }
     }
     impl response::PresetCapacitance {
@@ -3793,6 +3719,17 @@ pub mod ub2 {
         pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             Response::PresetCapacitance(*self).encode(address, buf)
         }
+        /// Reads this message from a frame whose framing and code are checked.
+        #[inline(always)]
+        fn from_frame(frame: &[u8]) -> rt::DecodeResult<Self> {
+            let frame = rt::fixed::<10>(frame, &Self::DESC)?;
+            rt::equal(&Self::INDEX_DESC, 4, frame[4], 0x0)?;
+            rt::Ok(Self {
+                capacitance: Capacitance::from_raw(
+                    u32::from_le_bytes([frame[5], frame[6], frame[7], frame[8]]),
+                ),
+            })
+        }
     }
     impl response::PresetFullStepPosition {
         pub const NAME: &'static str = "preset_full_step_position";
@@ -3806,6 +3743,15 @@ pub mod ub2 {
         }
         pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             Response::PresetFullStepPosition(*self).encode(address, buf)
+        }
+        /// Reads this message from a frame whose framing and code are checked.
+        #[inline(always)]
+        fn from_frame(frame: &[u8]) -> rt::DecodeResult<Self> {
+            let frame = rt::fixed::<10>(frame, &Self::DESC)?;
+            rt::equal(&Self::INDEX_DESC, 4, frame[4], 0x1)?;
+            rt::Ok(Self {
+                full_steps: u32::from_le_bytes([frame[5], frame[6], frame[7], frame[8]]),
+            })
         }
     }
     impl response::StoredFullStepPosition {
@@ -3823,6 +3769,16 @@ pub mod ub2 {
         pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             Response::StoredFullStepPosition(*self).encode(address, buf)
         }
+        /// Reads this message from a frame whose framing and code are checked.
+        #[inline(always)]
+        fn from_frame(frame: &[u8]) -> rt::DecodeResult<Self> {
+            let frame = rt::fixed::<8>(frame, &Self::DESC)?;
+            rt::in_range(&Self::INDEX_DESC, 4, frame[4], 0, 9)?;
+            rt::Ok(Self {
+                index: frame[4],
+                full_steps: u16::from_le_bytes([frame[5], frame[6]]),
+            })
+        }
     }
     impl response::ActualModeOfOperation {
         pub const NAME: &'static str = "actual_mode_of_operation";
@@ -3835,6 +3791,14 @@ pub mod ub2 {
         }
         pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             Response::ActualModeOfOperation(*self).encode(address, buf)
+        }
+        /// Reads this message from a frame whose framing and code are checked.
+        #[inline(always)]
+        fn from_frame(frame: &[u8]) -> rt::DecodeResult<Self> {
+            let frame = rt::fixed::<6>(frame, &Self::DESC)?;
+            rt::Ok(Self {
+                mode: ModeOfOperation::from_raw(frame[4]),
+            })
         }
     }
     /// Each request as a struct of its own; its constants (`DESC`, which names it as

@@ -848,15 +848,7 @@ pub mod ubx_fixed_blocks {
                         }),
                     )
                 }
-                0x0501 => {
-                    let frame = rt::fixed::<10>(frame, &response::Ack::DESC)?;
-                    rt::Ok(
-                        Self::Ack(response::Ack {
-                            class_id: frame[6],
-                            msg_id: frame[7],
-                        }),
-                    )
-                }
+                0x0501 => response::Ack::from_frame(frame).map(Self::Ack),
                 _ => rt::Err(RESPONSE_CODE.unknown(frame)),
             }
         }
@@ -1210,6 +1202,15 @@ pub mod ubx_fixed_blocks {
         }
         pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             Response::Ack(*self).encode(address, buf)
+        }
+        /// Reads this message from a frame whose framing and code are checked.
+        #[inline(always)]
+        fn from_frame(frame: &[u8]) -> rt::DecodeResult<Self> {
+            let frame = rt::fixed::<10>(frame, &Self::DESC)?;
+            rt::Ok(Self {
+                class_id: frame[6],
+                msg_id: frame[7],
+            })
         }
     }
     /// Each request as a struct of its own; its constants (`DESC`, which names it as

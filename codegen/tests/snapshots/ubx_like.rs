@@ -298,31 +298,7 @@ pub mod ubx_like {
                     let mut g = rt::Group::new(frame, 0x0608, rt::None);
                     g.attempt(|_: &[u8; 8]| rt::Ok(Self::PollRate(request::PollRate)));
                     g.attempt(|frame: &[u8; 14]| {
-                        let field_0: u16 = u16::from_le_bytes([frame[6], frame[7]]);
-                        rt::in_range(
-                            &request::SetRate::MEAS_RATE_DESC,
-                            6,
-                            field_0,
-                            25,
-                            65535,
-                        )?;
-                        let field_1: u16 = u16::from_le_bytes([frame[8], frame[9]]);
-                        rt::in_range(
-                            &request::SetRate::NAV_RATE_DESC,
-                            8,
-                            field_1,
-                            1,
-                            127,
-                        )?;
-                        rt::Ok(
-                            Self::SetRate(request::SetRate {
-                                meas_rate: field_0,
-                                nav_rate: field_1,
-                                time_ref: TimeRef::from_raw(
-                                    u16::from_le_bytes([frame[10], frame[11]]),
-                                ),
-                            }),
-                        )
+                        request::SetRate::from_frame(frame).map(Self::SetRate)
                     });
                     g.end(&request::PollRate::DESC)
                 }
@@ -740,36 +716,9 @@ pub mod ubx_like {
         #[inline]
         fn dispatch(frame: &[u8]) -> rt::DecodeResult<Self> {
             match u16::from_be_bytes([frame[2], frame[3]]) {
-                0x0608 => {
-                    let frame = rt::fixed::<14>(frame, &response::Rate::DESC)?;
-                    rt::Ok(
-                        Self::Rate(response::Rate {
-                            meas_rate: u16::from_le_bytes([frame[6], frame[7]]),
-                            nav_rate: u16::from_le_bytes([frame[8], frame[9]]),
-                            time_ref: TimeRef::from_raw(
-                                u16::from_le_bytes([frame[10], frame[11]]),
-                            ),
-                        }),
-                    )
-                }
-                0x0501 => {
-                    let frame = rt::fixed::<10>(frame, &response::Ack::DESC)?;
-                    rt::Ok(
-                        Self::Ack(response::Ack {
-                            class_id: frame[6],
-                            msg_id: frame[7],
-                        }),
-                    )
-                }
-                0x0500 => {
-                    let frame = rt::fixed::<10>(frame, &response::Nak::DESC)?;
-                    rt::Ok(
-                        Self::Nak(response::Nak {
-                            class_id: frame[6],
-                            msg_id: frame[7],
-                        }),
-                    )
-                }
+                0x0608 => response::Rate::from_frame(frame).map(Self::Rate),
+                0x0501 => response::Ack::from_frame(frame).map(Self::Ack),
+                0x0500 => response::Nak::from_frame(frame).map(Self::Nak),
                 0x0135 => {
                     let (frame, elements, _) = REPEAT_SATELLITES.split::<14>(frame)?;
                     rt::equal(&response::Satellites::VERSION_DESC, 10, frame[10], 0x1)?;
@@ -1032,6 +981,20 @@ pub mod ubx_like {
         pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             Request::SetRate(*self).encode(address, buf)
         }
+        /// Reads this message from a frame whose framing and code are checked.
+        #[inline(always)]
+        fn from_frame(frame: &[u8]) -> rt::DecodeResult<Self> {
+            let frame = rt::fixed::<14>(frame, &Self::DESC)?;
+            let field_0: u16 = u16::from_le_bytes([frame[6], frame[7]]);
+            rt::in_range(&Self::MEAS_RATE_DESC, 6, field_0, 25, 65535)?;
+            let field_1: u16 = u16::from_le_bytes([frame[8], frame[9]]);
+            rt::in_range(&Self::NAV_RATE_DESC, 8, field_1, 1, 127)?;
+            rt::Ok(Self {
+                meas_rate: field_0,
+                nav_rate: field_1,
+                time_ref: TimeRef::from_raw(u16::from_le_bytes([frame[10], frame[11]])),
+            })
+        }
     }
     impl request::PollSatellites {
         pub const NAME: &'static str = "poll_satellites";
@@ -1058,6 +1021,16 @@ pub mod ubx_like {
         pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             Response::Rate(*self).encode(address, buf)
         }
+        /// Reads this message from a frame whose framing and code are checked.
+        #[inline(always)]
+        fn from_frame(frame: &[u8]) -> rt::DecodeResult<Self> {
+            let frame = rt::fixed::<14>(frame, &Self::DESC)?;
+            rt::Ok(Self {
+                meas_rate: u16::from_le_bytes([frame[6], frame[7]]),
+                nav_rate: u16::from_le_bytes([frame[8], frame[9]]),
+                time_ref: TimeRef::from_raw(u16::from_le_bytes([frame[10], frame[11]])),
+            })
+        }
     }
     impl response::Ack {
         pub const NAME: &'static str = "ack";
@@ -1073,6 +1046,15 @@ pub mod ubx_like {
         pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             Response::Ack(*self).encode(address, buf)
         }
+        /// Reads this message from a frame whose framing and code are checked.
+        #[inline(always)]
+        fn from_frame(frame: &[u8]) -> rt::DecodeResult<Self> {
+            let frame = rt::fixed::<10>(frame, &Self::DESC)?;
+            rt::Ok(Self {
+                class_id: frame[6],
+                msg_id: frame[7],
+            })
+        }
     }
     impl response::Nak {
         pub const NAME: &'static str = "nak";
@@ -1087,6 +1069,15 @@ pub mod ubx_like {
         }
         pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             Response::Nak(*self).encode(address, buf)
+        }
+        /// Reads this message from a frame whose framing and code are checked.
+        #[inline(always)]
+        fn from_frame(frame: &[u8]) -> rt::DecodeResult<Self> {
+            let frame = rt::fixed::<10>(frame, &Self::DESC)?;
+            rt::Ok(Self {
+                class_id: frame[6],
+                msg_id: frame[7],
+            })
         }
     }
     impl response::Satellites {

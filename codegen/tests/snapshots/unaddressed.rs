@@ -235,12 +235,7 @@ pub mod unaddressed {
                     rt::fixed::<5>(frame, &request::ReadTemperature::DESC)
                         .map(|_| Self::ReadTemperature(request::ReadTemperature))
                 }
-                0x20 => {
-                    let frame = rt::fixed::<7>(frame, &request::SetRate::DESC)?;
-                    let field_0: u16 = u16::from_le_bytes([frame[4], frame[5]]);
-                    rt::in_range(&request::SetRate::RATE_DESC, 4, field_0, 1, 1000)?;
-                    rt::Ok(Self::SetRate(request::SetRate { rate: field_0 }))
-                }
+                0x20 => request::SetRate::from_frame(frame).map(Self::SetRate),
                 0x30 => {
                     rt::fixed::<5>(frame, &request::ReadVersion::DESC)
                         .map(|_| Self::ReadVersion(request::ReadVersion))
@@ -439,34 +434,12 @@ pub mod unaddressed {
         #[inline]
         fn dispatch(frame: &[u8]) -> rt::DecodeResult<Self> {
             match frame[3] {
-                0x90 => {
-                    let frame = rt::fixed::<7>(frame, &response::Temperature::DESC)?;
-                    let field_0: i16 = i16::from_le_bytes([frame[4], frame[5]]);
-                    rt::in_range(
-                        &response::Temperature::TEMPERATURE_DESC,
-                        4,
-                        field_0,
-                        -4000,
-                        12500,
-                    )?;
-                    rt::Ok(
-                        Self::Temperature(response::Temperature {
-                            temperature: Centidegrees::from_raw(field_0),
-                        }),
-                    )
-                }
+                0x90 => response::Temperature::from_frame(frame).map(Self::Temperature),
                 0xA0 => {
                     rt::fixed::<5>(frame, &response::Ack::DESC)
                         .map(|_| Self::Ack(response::Ack))
                 }
-                0xB0 => {
-                    let frame = rt::fixed::<9>(frame, &response::Version::DESC)?;
-                    rt::Ok(
-                        Self::Version(response::Version {
-                            version: rt::Ascii(frame[4..8].try_into().unwrap_or([0; 4])),
-                        }),
-                    )
-                }
+                0xB0 => response::Version::from_frame(frame).map(Self::Version),
                 _ => rt::Err(RESPONSE_CODE.unknown(frame)),
             }
         }
@@ -671,6 +644,14 @@ pub mod unaddressed {
         pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             Request::SetRate(*self).encode(address, buf)
         }
+        /// Reads this message from a frame whose framing and code are checked.
+        #[inline(always)]
+        fn from_frame(frame: &[u8]) -> rt::DecodeResult<Self> {
+            let frame = rt::fixed::<7>(frame, &Self::DESC)?;
+            let field_0: u16 = u16::from_le_bytes([frame[4], frame[5]]);
+            rt::in_range(&Self::RATE_DESC, 4, field_0, 1, 1000)?;
+            rt::Ok(Self { rate: field_0 })
+        }
     }
     impl request::ReadVersion {
         pub const NAME: &'static str = "read_version";
@@ -694,6 +675,16 @@ pub mod unaddressed {
         pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             Response::Temperature(*self).encode(address, buf)
         }
+        /// Reads this message from a frame whose framing and code are checked.
+        #[inline(always)]
+        fn from_frame(frame: &[u8]) -> rt::DecodeResult<Self> {
+            let frame = rt::fixed::<7>(frame, &Self::DESC)?;
+            let field_0: i16 = i16::from_le_bytes([frame[4], frame[5]]);
+            rt::in_range(&Self::TEMPERATURE_DESC, 4, field_0, -4000, 12500)?;
+            rt::Ok(Self {
+                temperature: Centidegrees::from_raw(field_0),
+            })
+        }
     }
     impl response::Ack {
         pub const NAME: &'static str = "ack";
@@ -715,6 +706,14 @@ pub mod unaddressed {
         }
         pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             Response::Version(*self).encode(address, buf)
+        }
+        /// Reads this message from a frame whose framing and code are checked.
+        #[inline(always)]
+        fn from_frame(frame: &[u8]) -> rt::DecodeResult<Self> {
+            let frame = rt::fixed::<9>(frame, &Self::DESC)?;
+            rt::Ok(Self {
+                version: rt::Ascii(frame[4..8].try_into().unwrap_or([0; 4])),
+            })
         }
     }
     /// Each request as a struct of its own; its constants (`DESC`, which names it as

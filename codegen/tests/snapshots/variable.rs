@@ -243,16 +243,7 @@ pub mod vario {
         #[inline]
         fn dispatch(frame: &[u8]) -> rt::DecodeResult<Self> {
             match frame[4] {
-                0x01 => {
-                    let frame = rt::fixed::<9>(frame, &request::Read::DESC)?;
-                    rt::in_range(&request::Read::QUANTITY_DESC, 7, frame[7], 1, 16)?;
-                    rt::Ok(
-                        Self::Read(request::Read {
-                            first: u16::from_be_bytes([frame[5], frame[6]]),
-                            quantity: frame[7],
-                        }),
-                    )
-                }
+                0x01 => request::Read::from_frame(frame).map(Self::Read),
                 0x02 => {
                     let (frame, elements, _) = REPEAT_WRITE.split::<7>(frame)?;
                     rt::in_range(&request::Write::QUANTITY_DESC, 5, frame[5], 1, 16)?;
@@ -272,14 +263,7 @@ pub mod vario {
                         }),
                     )
                 }
-                0x03 => {
-                    let frame = rt::fixed::<9>(frame, &request::Stamp::DESC)?;
-                    rt::Ok(
-                        Self::Stamp(request::Stamp {
-                            ticks: rt::u24([frame[5], frame[6], frame[7]], false),
-                        }),
-                    )
-                }
+                0x03 => request::Stamp::from_frame(frame).map(Self::Stamp),
                 _ => rt::Err(REQUEST_CODE.unknown(frame)),
             }
         }
@@ -513,22 +497,8 @@ pub mod vario {
                         }),
                     )
                 }
-                0x81 => {
-                    let frame = rt::fixed::<7>(frame, &response::ReadError::DESC)?;
-                    rt::Ok(
-                        Self::ReadError(response::ReadError {
-                            reason: frame[5],
-                        }),
-                    )
-                }
-                0x02 => {
-                    let frame = rt::fixed::<7>(frame, &response::WriteReply::DESC)?;
-                    rt::Ok(
-                        Self::WriteReply(response::WriteReply {
-                            status: frame[5],
-                        }),
-                    )
-                }
+                0x81 => response::ReadError::from_frame(frame).map(Self::ReadError),
+                0x02 => response::WriteReply::from_frame(frame).map(Self::WriteReply),
                 _ => rt::Err(RESPONSE_CODE.unknown(frame)),
             }
         }
@@ -1005,6 +975,16 @@ pub mod vario {
         pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             Request::Read(*self).encode(address, buf)
         }
+        /// Reads this message from a frame whose framing and code are checked.
+        #[inline(always)]
+        fn from_frame(frame: &[u8]) -> rt::DecodeResult<Self> {
+            let frame = rt::fixed::<9>(frame, &Self::DESC)?;
+            rt::in_range(&Self::QUANTITY_DESC, 7, frame[7], 1, 16)?;
+            rt::Ok(Self {
+                first: u16::from_be_bytes([frame[5], frame[6]]),
+                quantity: frame[7],
+            })
+        }
     }
     impl request::Write {
         pub const NAME: &'static str = "write";
@@ -1036,6 +1016,14 @@ pub mod vario {
         pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             Request::Stamp(*self).encode(address, buf)
         }
+        /// Reads this message from a frame whose framing and code are checked.
+        #[inline(always)]
+        fn from_frame(frame: &[u8]) -> rt::DecodeResult<Self> {
+            let frame = rt::fixed::<9>(frame, &Self::DESC)?;
+            rt::Ok(Self {
+                ticks: rt::u24([frame[5], frame[6], frame[7]], false),
+            })
+        }
     }
     impl response::ReadReply {
         pub const NAME: &'static str = "read_reply";
@@ -1063,6 +1051,12 @@ pub mod vario {
         pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             Response::ReadError(*self).encode(address, buf)
         }
+        /// Reads this message from a frame whose framing and code are checked.
+        #[inline(always)]
+        fn from_frame(frame: &[u8]) -> rt::DecodeResult<Self> {
+            let frame = rt::fixed::<7>(frame, &Self::DESC)?;
+            rt::Ok(Self { reason: frame[5] })
+        }
     }
     impl response::WriteReply {
         pub const NAME: &'static str = "write_reply";
@@ -1075,6 +1069,12 @@ pub mod vario {
         }
         pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             Response::WriteReply(*self).encode(address, buf)
+        }
+        /// Reads this message from a frame whose framing and code are checked.
+        #[inline(always)]
+        fn from_frame(frame: &[u8]) -> rt::DecodeResult<Self> {
+            let frame = rt::fixed::<7>(frame, &Self::DESC)?;
+            rt::Ok(Self { status: frame[5] })
         }
     }
     /// Each request as a struct of its own; its constants (`DESC`, which names it as

@@ -691,59 +691,14 @@ pub mod vesc {
                     rt::fixed::<7>(frame, &request::GetValues::DESC)
                         .map(|_| Self::GetValues(request::GetValues))
                 }
-                0x05 => {
-                    let frame = rt::fixed::<11>(frame, &request::SetDuty::DESC)?;
-                    rt::Ok(
-                        Self::SetDuty(request::SetDuty {
-                            duty: Duty::from_raw(
-                                i32::from_be_bytes([frame[4], frame[5], frame[6], frame[7]]),
-                            ),
-                        }),
-                    )
-                }
-                0x06 => {
-                    let frame = rt::fixed::<11>(frame, &request::SetCurrent::DESC)?;
-                    rt::Ok(
-                        Self::SetCurrent(request::SetCurrent {
-                            current: Milliamps::from_raw(
-                                i32::from_be_bytes([frame[4], frame[5], frame[6], frame[7]]),
-                            ),
-                        }),
-                    )
-                }
+                0x05 => request::SetDuty::from_frame(frame).map(Self::SetDuty),
+                0x06 => request::SetCurrent::from_frame(frame).map(Self::SetCurrent),
                 0x07 => {
-                    let frame = rt::fixed::<11>(frame, &request::SetCurrentBrake::DESC)?;
-                    rt::Ok(
-                        Self::SetCurrentBrake(request::SetCurrentBrake {
-                            current: Milliamps::from_raw(
-                                i32::from_be_bytes([frame[4], frame[5], frame[6], frame[7]]),
-                            ),
-                        }),
-                    )
+                    request::SetCurrentBrake::from_frame(frame)
+                        .map(Self::SetCurrentBrake)
                 }
-                0x08 => {
-                    let frame = rt::fixed::<11>(frame, &request::SetRpm::DESC)?;
-                    rt::Ok(
-                        Self::SetRpm(request::SetRpm {
-                            rpm: i32::from_be_bytes([
-                                frame[4],
-                                frame[5],
-                                frame[6],
-                                frame[7],
-                            ]),
-                        }),
-                    )
-                }
-                0x09 => {
-                    let frame = rt::fixed::<11>(frame, &request::SetPos::DESC)?;
-                    rt::Ok(
-                        Self::SetPos(request::SetPos {
-                            pos: MicroDegrees::from_raw(
-                                i32::from_be_bytes([frame[4], frame[5], frame[6], frame[7]]),
-                            ),
-                        }),
-                    )
-                }
+                0x08 => request::SetRpm::from_frame(frame).map(Self::SetRpm),
+                0x09 => request::SetPos::from_frame(frame).map(Self::SetPos),
                 0x1E => {
                     rt::fixed::<7>(frame, &request::Alive::DESC)
                         .map(|_| Self::Alive(request::Alive))
@@ -1082,128 +1037,11 @@ pub mod vesc {
                     )
                 }
                 0x03 => {
-                    let frame = rt::fixed::<
-                        12,
-                    >(frame, &response::WriteNewAppDataReply::DESC)?;
-                    rt::in_range(
-                        &response::WriteNewAppDataReply::OK_DESC,
-                        4,
-                        frame[4],
-                        0,
-                        1,
-                    )?;
-                    rt::Ok(
-                        Self::WriteNewAppDataReply(response::WriteNewAppDataReply {
-                            ok: frame[4],
-                            offset: u32::from_be_bytes([
-                                frame[5],
-                                frame[6],
-                                frame[7],
-                                frame[8],
-                            ]),
-                        }),
-                    )
+                    response::WriteNewAppDataReply::from_frame(frame)
+                        .map(Self::WriteNewAppDataReply)
                 }
                 0x04 => {
-                    let frame = rt::fixed::<62>(frame, &response::GetValuesReply::DESC)?;
-                    rt::Ok(
-                        Self::GetValuesReply(response::GetValuesReply {
-                            temp_mos1: DeciCelsius::from_raw(
-                                i16::from_be_bytes([frame[4], frame[5]]),
-                            ),
-                            temp_mos2: DeciCelsius::from_raw(
-                                i16::from_be_bytes([frame[6], frame[7]]),
-                            ),
-                            temp_mos3: DeciCelsius::from_raw(
-                                i16::from_be_bytes([frame[8], frame[9]]),
-                            ),
-                            temp_mos4: DeciCelsius::from_raw(
-                                i16::from_be_bytes([frame[10], frame[11]]),
-                            ),
-                            temp_mos5: DeciCelsius::from_raw(
-                                i16::from_be_bytes([frame[12], frame[13]]),
-                            ),
-                            temp_mos6: DeciCelsius::from_raw(
-                                i16::from_be_bytes([frame[14], frame[15]]),
-                            ),
-                            temp_pcb: DeciCelsius::from_raw(
-                                i16::from_be_bytes([frame[16], frame[17]]),
-                            ),
-                            current_motor: CentiAmps::from_raw(
-                                i32::from_be_bytes([
-                                    frame[18],
-                                    frame[19],
-                                    frame[20],
-                                    frame[21],
-                                ]),
-                            ),
-                            current_in: CentiAmps::from_raw(
-                                i32::from_be_bytes([
-                                    frame[22],
-                                    frame[23],
-                                    frame[24],
-                                    frame[25],
-                                ]),
-                            ),
-                            duty_now: PerMille::from_raw(
-                                i16::from_be_bytes([frame[26], frame[27]]),
-                            ),
-                            rpm: i32::from_be_bytes([
-                                frame[28],
-                                frame[29],
-                                frame[30],
-                                frame[31],
-                            ]),
-                            v_in: DeciVolts::from_raw(
-                                i16::from_be_bytes([frame[32], frame[33]]),
-                            ),
-                            amp_hours: AmpHours::from_raw(
-                                i32::from_be_bytes([
-                                    frame[34],
-                                    frame[35],
-                                    frame[36],
-                                    frame[37],
-                                ]),
-                            ),
-                            amp_hours_charged: AmpHours::from_raw(
-                                i32::from_be_bytes([
-                                    frame[38],
-                                    frame[39],
-                                    frame[40],
-                                    frame[41],
-                                ]),
-                            ),
-                            watt_hours: WattHours::from_raw(
-                                i32::from_be_bytes([
-                                    frame[42],
-                                    frame[43],
-                                    frame[44],
-                                    frame[45],
-                                ]),
-                            ),
-                            watt_hours_charged: WattHours::from_raw(
-                                i32::from_be_bytes([
-                                    frame[46],
-                                    frame[47],
-                                    frame[48],
-                                    frame[49],
-                                ]),
-                            ),
-                            tachometer: i32::from_be_bytes([
-                                frame[50],
-                                frame[51],
-                                frame[52],
-                                frame[53],
-                            ]),
-                            tachometer_abs: i32::from_be_bytes([
-                                frame[54],
-                                frame[55],
-                                frame[56],
-                                frame[57],
-                            ]),
-                            mc_fault_code: frame[58],
-                        }),
-                    )
+                    response::GetValuesReply::from_frame(frame).map(Self::GetValuesReply)
                 }
                 _ => rt::Err(RESPONSE_CODE.unknown(frame)),
             }
@@ -1450,6 +1288,16 @@ pub mod vesc {
         pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             Request::SetDuty(*self).encode(address, buf)
         }
+        /// Reads this message from a frame whose framing and code are checked.
+        #[inline(always)]
+        fn from_frame(frame: &[u8]) -> rt::DecodeResult<Self> {
+            let frame = rt::fixed::<11>(frame, &Self::DESC)?;
+            rt::Ok(Self {
+                duty: Duty::from_raw(
+                    i32::from_be_bytes([frame[4], frame[5], frame[6], frame[7]]),
+                ),
+            })
+        }
     }
     impl request::SetCurrent {
         pub const NAME: &'static str = "set_current";
@@ -1462,6 +1310,16 @@ pub mod vesc {
         }
         pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             Request::SetCurrent(*self).encode(address, buf)
+        }
+        /// Reads this message from a frame whose framing and code are checked.
+        #[inline(always)]
+        fn from_frame(frame: &[u8]) -> rt::DecodeResult<Self> {
+            let frame = rt::fixed::<11>(frame, &Self::DESC)?;
+            rt::Ok(Self {
+                current: Milliamps::from_raw(
+                    i32::from_be_bytes([frame[4], frame[5], frame[6], frame[7]]),
+                ),
+            })
         }
     }
     impl request::SetCurrentBrake {
@@ -1476,6 +1334,16 @@ pub mod vesc {
         pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             Request::SetCurrentBrake(*self).encode(address, buf)
         }
+        /// Reads this message from a frame whose framing and code are checked.
+        #[inline(always)]
+        fn from_frame(frame: &[u8]) -> rt::DecodeResult<Self> {
+            let frame = rt::fixed::<11>(frame, &Self::DESC)?;
+            rt::Ok(Self {
+                current: Milliamps::from_raw(
+                    i32::from_be_bytes([frame[4], frame[5], frame[6], frame[7]]),
+                ),
+            })
+        }
     }
     impl request::SetRpm {
         pub const NAME: &'static str = "set_rpm";
@@ -1489,6 +1357,14 @@ pub mod vesc {
         pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             Request::SetRpm(*self).encode(address, buf)
         }
+        /// Reads this message from a frame whose framing and code are checked.
+        #[inline(always)]
+        fn from_frame(frame: &[u8]) -> rt::DecodeResult<Self> {
+            let frame = rt::fixed::<11>(frame, &Self::DESC)?;
+            rt::Ok(Self {
+                rpm: i32::from_be_bytes([frame[4], frame[5], frame[6], frame[7]]),
+            })
+        }
     }
     impl request::SetPos {
         pub const NAME: &'static str = "set_pos";
@@ -1501,6 +1377,16 @@ pub mod vesc {
         }
         pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             Request::SetPos(*self).encode(address, buf)
+        }
+        /// Reads this message from a frame whose framing and code are checked.
+        #[inline(always)]
+        fn from_frame(frame: &[u8]) -> rt::DecodeResult<Self> {
+            let frame = rt::fixed::<11>(frame, &Self::DESC)?;
+            rt::Ok(Self {
+                pos: MicroDegrees::from_raw(
+                    i32::from_be_bytes([frame[4], frame[5], frame[6], frame[7]]),
+                ),
+            })
         }
     }
     impl request::Alive {
@@ -1544,6 +1430,16 @@ pub mod vesc {
         }
         pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             Response::WriteNewAppDataReply(*self).encode(address, buf)
+        }
+        /// Reads this message from a frame whose framing and code are checked.
+        #[inline(always)]
+        fn from_frame(frame: &[u8]) -> rt::DecodeResult<Self> {
+            let frame = rt::fixed::<12>(frame, &Self::DESC)?;
+            rt::in_range(&Self::OK_DESC, 4, frame[4], 0, 1)?;
+            rt::Ok(Self {
+                ok: frame[4],
+                offset: u32::from_be_bytes([frame[5], frame[6], frame[7], frame[8]]),
+            })
         }
     }
     impl response::GetValuesReply {
@@ -1593,6 +1489,68 @@ pub mod vesc {
         }
         pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             Response::GetValuesReply(*self).encode(address, buf)
+        }
+        /// Reads this message from a frame whose framing and code are checked.
+        #[inline(always)]
+        fn from_frame(frame: &[u8]) -> rt::DecodeResult<Self> {
+            let frame = rt::fixed::<62>(frame, &Self::DESC)?;
+            rt::Ok(Self {
+                temp_mos1: DeciCelsius::from_raw(
+                    i16::from_be_bytes([frame[4], frame[5]]),
+                ),
+                temp_mos2: DeciCelsius::from_raw(
+                    i16::from_be_bytes([frame[6], frame[7]]),
+                ),
+                temp_mos3: DeciCelsius::from_raw(
+                    i16::from_be_bytes([frame[8], frame[9]]),
+                ),
+                temp_mos4: DeciCelsius::from_raw(
+                    i16::from_be_bytes([frame[10], frame[11]]),
+                ),
+                temp_mos5: DeciCelsius::from_raw(
+                    i16::from_be_bytes([frame[12], frame[13]]),
+                ),
+                temp_mos6: DeciCelsius::from_raw(
+                    i16::from_be_bytes([frame[14], frame[15]]),
+                ),
+                temp_pcb: DeciCelsius::from_raw(
+                    i16::from_be_bytes([frame[16], frame[17]]),
+                ),
+                current_motor: CentiAmps::from_raw(
+                    i32::from_be_bytes([frame[18], frame[19], frame[20], frame[21]]),
+                ),
+                current_in: CentiAmps::from_raw(
+                    i32::from_be_bytes([frame[22], frame[23], frame[24], frame[25]]),
+                ),
+                duty_now: PerMille::from_raw(i16::from_be_bytes([frame[26], frame[27]])),
+                rpm: i32::from_be_bytes([frame[28], frame[29], frame[30], frame[31]]),
+                v_in: DeciVolts::from_raw(i16::from_be_bytes([frame[32], frame[33]])),
+                amp_hours: AmpHours::from_raw(
+                    i32::from_be_bytes([frame[34], frame[35], frame[36], frame[37]]),
+                ),
+                amp_hours_charged: AmpHours::from_raw(
+                    i32::from_be_bytes([frame[38], frame[39], frame[40], frame[41]]),
+                ),
+                watt_hours: WattHours::from_raw(
+                    i32::from_be_bytes([frame[42], frame[43], frame[44], frame[45]]),
+                ),
+                watt_hours_charged: WattHours::from_raw(
+                    i32::from_be_bytes([frame[46], frame[47], frame[48], frame[49]]),
+                ),
+                tachometer: i32::from_be_bytes([
+                    frame[50],
+                    frame[51],
+                    frame[52],
+                    frame[53],
+                ]),
+                tachometer_abs: i32::from_be_bytes([
+                    frame[54],
+                    frame[55],
+                    frame[56],
+                    frame[57],
+                ]),
+                mc_fault_code: frame[58],
+            })
         }
     }
     /// Each request as a struct of its own; its constants (`DESC`, which names it as

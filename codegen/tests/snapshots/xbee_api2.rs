@@ -831,25 +831,9 @@ pub mod xbee_api2 {
                     )
                 }
                 0x8B => {
-                    let frame = rt::fixed::<11>(frame, &response::TransmitStatus::DESC)?;
-                    rt::Ok(
-                        Self::TransmitStatus(response::TransmitStatus {
-                            frame_id: frame[4],
-                            destination16: u16::from_be_bytes([frame[5], frame[6]]),
-                            retries: frame[7],
-                            delivery: DeliveryStatus::from_raw(frame[8]),
-                            discovery: frame[9],
-                        }),
-                    )
+                    response::TransmitStatus::from_frame(frame).map(Self::TransmitStatus)
                 }
-                0x8A => {
-                    let frame = rt::fixed::<6>(frame, &response::ModemStatus::DESC)?;
-                    rt::Ok(
-                        Self::ModemStatus(response::ModemStatus {
-                            status: ModemStatus::from_raw(frame[4]),
-                        }),
-                    )
-                }
+                0x8A => response::ModemStatus::from_frame(frame).map(Self::ModemStatus),
                 0x90 => {
                     let (frame, elements, _) = REPEAT_RECEIVE_PACKET.split::<15>(frame)?;
                     rt::Ok(
@@ -1127,6 +1111,18 @@ pub mod xbee_api2 {
         pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             Response::TransmitStatus(*self).encode(address, buf)
         }
+        /// Reads this message from a frame whose framing and code are checked.
+        #[inline(always)]
+        fn from_frame(frame: &[u8]) -> rt::DecodeResult<Self> {
+            let frame = rt::fixed::<11>(frame, &Self::DESC)?;
+            rt::Ok(Self {
+                frame_id: frame[4],
+                destination16: u16::from_be_bytes([frame[5], frame[6]]),
+                retries: frame[7],
+                delivery: DeliveryStatus::from_raw(frame[8]),
+                discovery: frame[9],
+            })
+        }
     }
     impl response::ModemStatus {
         pub const NAME: &'static str = "modem_status";
@@ -1139,6 +1135,14 @@ pub mod xbee_api2 {
         }
         pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             Response::ModemStatus(*self).encode(address, buf)
+        }
+        /// Reads this message from a frame whose framing and code are checked.
+        #[inline(always)]
+        fn from_frame(frame: &[u8]) -> rt::DecodeResult<Self> {
+            let frame = rt::fixed::<6>(frame, &Self::DESC)?;
+            rt::Ok(Self {
+                status: ModemStatus::from_raw(frame[4]),
+            })
         }
     }
     impl response::ReceivePacket {
