@@ -32,8 +32,8 @@
 //!   (`rt::FrameChecks`, `rt::in_range`, `rt::frame_mut`, `rt::Group`, ...);
 //! - per-message constants are tables (`MESSAGES`: name, code, length; `COMMANDS`: kind,
 //!   broadcast rule, replies), indexed by one `match` (`index`);
-//! - `dispatch` has one arm per code; a message of a fixed length with fields to read is
-//!   decoded by its struct's own `from_frame` (`request::ReadCoils::from_frame(frame)
+//! - `dispatch` has one arm per code; a message of a fixed length with anything to check or
+//!   read is decoded by its struct's own `from_frame` (`request::ReadCoils::from_frame(frame)
 //!   .map(Self::ReadCoils)`: its length, then each field's rule, naming its descriptors
 //!   through `Self`), one without by the arm itself; codes, start bytes and addresses are
 //!   written in hex as the documents print them;
