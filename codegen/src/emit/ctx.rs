@@ -142,6 +142,9 @@ pub(super) struct Ctx<'a> {
     /// Each message's `from_frame` (its direction and name, the function), emitted in its
     /// `impl` by `emit_descs`.
     pub(super) readers: std::cell::RefCell<Vec<(Direction, String, TokenStream)>>,
+    /// Each message's `write` (its direction and name, the function: the encoder's arm of a
+    /// message with fields, `encode::emit_encode_arm`), emitted in its `impl` likewise.
+    pub(super) writers: std::cell::RefCell<Vec<(Direction, String, TokenStream)>>,
 }
 
 impl<'a> Ctx<'a> {
@@ -227,6 +230,7 @@ impl<'a> Ctx<'a> {
             codes_used: std::cell::Cell::new([false; 2]),
             own: std::cell::Cell::new(false),
             readers: std::cell::RefCell::new(Vec::new()),
+            writers: std::cell::RefCell::new(Vec::new()),
         }
     }
 

@@ -10,10 +10,11 @@ use super::*;
 pub(super) fn emit_descs(ctx: &Ctx) -> TokenStream {
     let fields = ctx.field_descs.borrow();
     let impls = ctx.impls.borrow();
-    let readers = ctx.readers.borrow();
+    let (readers, writers) = (ctx.readers.borrow(), ctx.writers.borrow());
     let impls = impls.iter().map(|(d, name, path, consts, fns)| {
-        let read = readers
+        let read = writers
             .iter()
+            .chain(readers.iter())
             .filter(|(rd, rn, _)| rd == d && rn == name)
             .map(|(.., f)| f);
         let descs = fields

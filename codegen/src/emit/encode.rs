@@ -136,10 +136,18 @@ pub(super) fn emit_encode_arm(
         if checksum_in_arms(p) {
             // The frame taken, then sealed: two short lines rather than one nested call.
             let end = encode_end(p, quote!(out), false, head);
-            return sealed(m, pattern, quote!(#(#stmts)* let out = #take;), end);
+            return write_arm(
+                ctx,
+                m,
+                ls,
+                taken,
+                pattern,
+                quote!(#(#stmts)* let out = #take;),
+                end,
+            );
         }
         let (check, end) = (stmts, encode_end(p, take, false, head));
-        return sealed(m, pattern, quote!(#(#check)*), end);
+        return write_arm(ctx, m, ls, taken, pattern, quote!(#(#check)*), end);
     }
     stmts.push(quote!(let out = #take;));
     if repeat.is_some() {
@@ -264,7 +272,59 @@ pub(super) fn emit_encode_arm(
     }
     let variable = repeat.is_some() || !lists.is_empty() || m.has_optional();
     let end = encode_end(p, quote!(out), variable, head);
-    sealed(m, pattern, quote!(#(#stmts)*), end)
+    write_arm(ctx, m, ls, taken, pattern, quote!(#(#stmts)*), end)
+}
+
+/// The encoder's arm of message `m`: a message with fields is written by its struct's own
+/// `write` (emitted in its `impl` by `emit_descs`: its fields bound to their locals, `stmts`,
+/// then `end`, the frame's length), into `out` where the direction took the frame before its
+/// match (`taken`), else into `buf`; the arm calls it (`Self::ReadCoils(ref m) =>
+/// m.write(address, buf)?`). A message without fields, or without a checksum (whose arm
+/// returns past the seal), keeps `stmts` in its arm.
+#[allow(clippy::too_many_arguments)]
+fn write_arm(
+    ctx: &Ctx,
+    m: &Message,
+    ls: &[Leaf],
+    taken: bool,
+    pattern: &TokenStream,
+    stmts: TokenStream,
+    end: TokenStream,
+) -> TokenStream {
+    if ls.is_empty() || m.unchecked {
+        return sealed(m, pattern, stmts, end);
+    }
+    let v = variant(m);
+    let fields = ls.iter().map(|l| {
+        let (n, v) = (ident(l.name), local(l.name));
+        quote!(#n: #v)
+    });
+    let (param, arg) = if taken {
+        let len = usize_lit(ctx.p.frame_len(m));
+        (quote!(out: &mut [u8; #len]), quote!(out))
+    } else {
+        (quote!(buf: &mut [u8]), quote!(buf))
+    };
+    let mut writers = ctx.writers.borrow_mut();
+    if !writers
+        .iter()
+        .any(|(d, n, _)| *d == m.direction && *n == m.name)
+    {
+        writers.push((
+            m.direction,
+            m.name.clone(),
+            quote! {
+                /// Writes this message's frame for `address`, as the direction's `encode` does.
+                #[inline(always)]
+                fn write(&self, address: u8, #param) -> rt::EncodeResult {
+                    let Self { #(#fields),* } = *self;
+                    #stmts
+                    rt::Ok(#end)
+                }
+            },
+        ));
+    }
+    quote!(Self::#v(ref m) => m.write(address, #arg)?,)
 }
 
 /// Writes the packed elements (`packed`) of field `f` at offset `at`: each in its bits, or

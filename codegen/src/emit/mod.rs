@@ -38,7 +38,9 @@
 //!   through `Self`), one without by the arm itself; codes, start bytes and addresses are
 //!   written in hex as the documents print them;
 //! - encode writes the bytes known before any field in one `copy_from_slice`, and keeps a sum-8
-//!   in each arm, where it folds the constant header bytes.
+//!   in each arm, where it folds the constant header bytes; a message with fields is written
+//!   by its struct's own `write` (`Self::ReadCoils(ref m) => m.write(address, buf)?`), one
+//!   without (or without a checksum) in the arm.
 //! - sized for `opt-level = "s"` as well as for speed (BENCHMARKS.md, "What the benches taught
 //!   the generator"; the rounds in its history): no range check that cannot fail, one buffer
 //!   check per `encode` where a direction has one frame length (it then precedes the message's

@@ -194,21 +194,7 @@ pub mod bcd_meter {
                 Self::ReadEnergy(_) => {
                     rt::frame_mut::<5>(buf, &[0x68, address, 0x11])?.len()
                 }
-                Self::SetClock(
-                    request::SetClock { hour: v_hour, minute: v_minute, year: v_year },
-                ) => {
-                    rt::encode_in_range("hour", v_hour, 0, 23)?;
-                    rt::encode_in_range("minute", v_minute, 0, 59)?;
-                    rt::encode_in_range("year", v_year, 0, 9999)?;
-                    let out = rt::frame_mut::<9>(buf, &[0x68, address, 0x08])?;
-                    out[3] = rt::to_bcd(v_hour as u64) as u8;
-                    out[4] = rt::to_bcd(v_minute as u64) as u8;
-                    out[5..7]
-                        .copy_from_slice(
-                            &(rt::to_bcd(v_year as u64) as u16).to_le_bytes(),
-                        );
-                    out.len()
-                }
+                Self::SetClock(ref m) => m.write(address, buf)?,
             };
             FRAME.seal(buf, len, frame_sum);
             rt::Ok(len)
@@ -357,19 +343,7 @@ pub mod bcd_meter {
         pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             rt::encode_address(address, &FRAME)?;
             let len = match *self {
-                Self::Energy(
-                    response::Energy { energy: v_energy, tariff: v_tariff },
-                ) => {
-                    rt::encode_in_range("energy", v_energy.raw(), 0, 99999999)?;
-                    rt::encode_in_range("tariff", v_tariff, 1, 4)?;
-                    let out = rt::frame_mut::<10>(buf, &[0x68, address, 0x91])?;
-                    out[3..7]
-                        .copy_from_slice(
-                            &(rt::to_bcd(v_energy.raw() as u64) as u32).to_le_bytes(),
-                        );
-                    out[7] = rt::to_bcd(v_tariff as u64) as u8;
-                    out.len()
-                }
+                Self::Energy(ref m) => m.write(address, buf)?,
                 Self::Ack(_) => rt::frame_mut::<5>(buf, &[0x68, address, 0x88])?.len(),
             };
             FRAME.seal(buf, len, frame_sum);
@@ -614,6 +588,19 @@ pub mod bcd_meter {
         pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             Request::SetClock(*self).encode(address, buf)
         }
+        /// Writes this message's frame for `address`, as the direction's `encode` does.
+        #[inline(always)]
+        fn write(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            let Self { hour: v_hour, minute: v_minute, year: v_year } = *self;
+            rt::encode_in_range("hour", v_hour, 0, 23)?;
+            rt::encode_in_range("minute", v_minute, 0, 59)?;
+            rt::encode_in_range("year", v_year, 0, 9999)?;
+            let out = rt::frame_mut::<9>(buf, &[0x68, address, 0x08])?;
+            out[3] = rt::to_bcd(v_hour as u64) as u8;
+            out[4] = rt::to_bcd(v_minute as u64) as u8;
+            out[5..7].copy_from_slice(&(rt::to_bcd(v_year as u64) as u16).to_le_bytes());
+            rt::Ok(out.len())
+        }
         /// Reads this message from a frame whose framing and code are checked.
         #[inline(always)]
         fn from_frame(frame: &[u8]) -> rt::DecodeResult<Self> {
@@ -650,6 +637,20 @@ pub mod bcd_meter {
         }
         pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             Response::Energy(*self).encode(address, buf)
+        }
+        /// Writes this message's frame for `address`, as the direction's `encode` does.
+        #[inline(always)]
+        fn write(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            let Self { energy: v_energy, tariff: v_tariff } = *self;
+            rt::encode_in_range("energy", v_energy.raw(), 0, 99999999)?;
+            rt::encode_in_range("tariff", v_tariff, 1, 4)?;
+            let out = rt::frame_mut::<10>(buf, &[0x68, address, 0x91])?;
+            out[3..7]
+                .copy_from_slice(
+                    &(rt::to_bcd(v_energy.raw() as u64) as u32).to_le_bytes(),
+                );
+            out[7] = rt::to_bcd(v_tariff as u64) as u8;
+            rt::Ok(out.len())
         }
         /// Reads this message from a frame whose framing and code are checked.
         #[inline(always)]

@@ -203,11 +203,7 @@ pub mod cobs_link {
             rt::encode_address(address, &FRAME)?;
             let len = match *self {
                 Self::ReadPosition(_) => rt::frame_mut::<4>(buf, &[0x00, 0x10])?.len(),
-                Self::SetSpeed(request::SetSpeed { speed: v_speed }) => {
-                    let out = rt::frame_mut::<6>(buf, &[0x02, 0x20])?;
-                    out[2..4].copy_from_slice(&v_speed.to_le_bytes());
-                    out.len()
-                }
+                Self::SetSpeed(ref m) => m.write(address, buf)?,
                 Self::ReadLog(_) => rt::frame_mut::<4>(buf, &[0x00, 0x30])?.len(),
             };
             FRAME.seal(buf, len, frame_sum);
@@ -402,20 +398,9 @@ pub mod cobs_link {
         fn encode_unescaped(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             rt::encode_address(address, &FRAME)?;
             let len = match *self {
-                Self::Position(response::Position { position: v_position }) => {
-                    let out = rt::frame_mut::<8>(buf, &[0x04, 0x90])?;
-                    out[2..6].copy_from_slice(&v_position.to_le_bytes());
-                    out.len()
-                }
+                Self::Position(ref m) => m.write(address, buf)?,
                 Self::Ack(_) => rt::frame_mut::<4>(buf, &[0x00, 0xA0])?.len(),
-                Self::Log(response::Log { entries: v_entries }) => {
-                    let frame_len = REPEAT_LOG.encode_len(v_entries.len())?;
-                    let out = rt::frame_mut_len(buf, frame_len, &[])?;
-                    LENGTH.put(out)?;
-                    out[1] = 0xB0;
-                    rt::write_elements(v_entries.as_slice(), 1, true, &mut out[2..]);
-                    out.len()
-                }
+                Self::Log(ref m) => m.write(address, buf)?,
             };
             FRAME.seal(buf, len, frame_sum);
             rt::Ok(len)
@@ -663,6 +648,14 @@ pub mod cobs_link {
         pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             Request::SetSpeed(*self).encode(address, buf)
         }
+        /// Writes this message's frame for `address`, as the direction's `encode` does.
+        #[inline(always)]
+        fn write(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            let Self { speed: v_speed } = *self;
+            let out = rt::frame_mut::<6>(buf, &[0x02, 0x20])?;
+            out[2..4].copy_from_slice(&v_speed.to_le_bytes());
+            rt::Ok(out.len())
+        }
         /// Reads this message from a frame whose framing and code are checked.
         #[inline(always)]
         fn from_frame(frame: &[u8]) -> rt::DecodeResult<Self> {
@@ -692,6 +685,14 @@ pub mod cobs_link {
         }
         pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             Response::Position(*self).encode(address, buf)
+        }
+        /// Writes this message's frame for `address`, as the direction's `encode` does.
+        #[inline(always)]
+        fn write(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            let Self { position: v_position } = *self;
+            let out = rt::frame_mut::<8>(buf, &[0x04, 0x90])?;
+            out[2..6].copy_from_slice(&v_position.to_le_bytes());
+            rt::Ok(out.len())
         }
         /// Reads this message from a frame whose framing and code are checked.
         #[inline(always)]
@@ -723,6 +724,17 @@ pub mod cobs_link {
         }
         pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             Response::Log(*self).encode(address, buf)
+        }
+        /// Writes this message's frame for `address`, as the direction's `encode` does.
+        #[inline(always)]
+        fn write(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            let Self { entries: v_entries } = *self;
+            let frame_len = REPEAT_LOG.encode_len(v_entries.len())?;
+            let out = rt::frame_mut_len(buf, frame_len, &[])?;
+            LENGTH.put(out)?;
+            out[1] = 0xB0;
+            rt::write_elements(v_entries.as_slice(), 1, true, &mut out[2..]);
+            rt::Ok(out.len())
         }
     }
     /// Each request as a struct of its own; its constants (`DESC`, which names it as

@@ -187,13 +187,7 @@ pub mod codeless {
                 Self::Ping(_) => {
                     rt::frame_mut::<6>(buf, &[0xFF, 0xFF, address, 0x02, 0x01])?.len()
                 }
-                Self::Read(request::Read { register: v_register }) => {
-                    let out = rt::frame_mut::<
-                        7,
-                    >(buf, &[0xFF, 0xFF, address, 0x03, 0x02])?;
-                    out[5] = v_register;
-                    out.len()
-                }
+                Self::Read(ref m) => m.write(address, buf)?,
             };
             FRAME.seal(buf, len, frame_sum);
             rt::Ok(len)
@@ -341,19 +335,8 @@ pub mod codeless {
         pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             rt::encode_address(address, &FRAME)?;
             let len = match *self {
-                Self::Status(response::Status { error: v_error }) => {
-                    let out = rt::frame_mut::<6>(buf, &[0xFF, 0xFF, address, 0x02])?;
-                    out[4] = v_error.raw();
-                    out.len()
-                }
-                Self::ReadStatus(
-                    response::ReadStatus { error: v_error, value: v_value },
-                ) => {
-                    let out = rt::frame_mut::<8>(buf, &[0xFF, 0xFF, address, 0x04])?;
-                    out[4] = v_error.raw();
-                    out[5..7].copy_from_slice(&v_value.to_le_bytes());
-                    out.len()
-                }
+                Self::Status(ref m) => m.write(address, buf)?,
+                Self::ReadStatus(ref m) => m.write(address, buf)?,
             };
             FRAME.seal(buf, len, frame_sum);
             rt::Ok(len)
@@ -609,6 +592,14 @@ pub mod codeless {
         pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             Request::Read(*self).encode(address, buf)
         }
+        /// Writes this message's frame for `address`, as the direction's `encode` does.
+        #[inline(always)]
+        fn write(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            let Self { register: v_register } = *self;
+            let out = rt::frame_mut::<7>(buf, &[0xFF, 0xFF, address, 0x03, 0x02])?;
+            out[5] = v_register;
+            rt::Ok(out.len())
+        }
         /// Reads this message from a frame whose framing and code are checked.
         #[inline(always)]
         fn from_frame(frame: &[u8]) -> rt::DecodeResult<Self> {
@@ -627,6 +618,14 @@ pub mod codeless {
         }
         pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             Response::Status(*self).encode(address, buf)
+        }
+        /// Writes this message's frame for `address`, as the direction's `encode` does.
+        #[inline(always)]
+        fn write(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            let Self { error: v_error } = *self;
+            let out = rt::frame_mut::<6>(buf, &[0xFF, 0xFF, address, 0x02])?;
+            out[4] = v_error.raw();
+            rt::Ok(out.len())
         }
         /// Reads this message from a frame whose framing and code are checked.
         #[inline(always)]
@@ -650,6 +649,15 @@ pub mod codeless {
         }
         pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             Response::ReadStatus(*self).encode(address, buf)
+        }
+        /// Writes this message's frame for `address`, as the direction's `encode` does.
+        #[inline(always)]
+        fn write(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            let Self { error: v_error, value: v_value } = *self;
+            let out = rt::frame_mut::<8>(buf, &[0xFF, 0xFF, address, 0x04])?;
+            out[4] = v_error.raw();
+            out[5..7].copy_from_slice(&v_value.to_le_bytes());
+            rt::Ok(out.len())
         }
         /// Reads this message from a frame whose framing and code are checked.
         #[inline(always)]

@@ -327,35 +327,10 @@ pub mod clash {
         pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             rt::encode_address(address, &FRAME)?;
             let len = match *self {
-                Self::Option(request::Option { some: v_some, core: v_core }) => {
-                    rt::encode_broadcast(address, 0x00, &request::Option::DESC)?;
-                    rt::encode_in_range("core", v_core.raw(), 0, 1000)?;
-                    let out = rt::frame_mut::<7>(buf, &[0xAA, address, 0x10])?;
-                    out[3] = v_some.raw();
-                    out[4..6].copy_from_slice(&v_core.raw().to_le_bytes());
-                    rt::seal_sum8_head(out, 3, address.wrapping_add(0xBA))
-                }
-                Self::U8(request::U8 { frame: v_frame }) => {
-                    rt::encode_broadcast(address, 0x00, &request::U8::DESC)?;
-                    let out = rt::frame_mut::<5>(buf, &[0xAA, address, 0x11])?;
-                    out[3] = rt::fits("frame", v_frame.raw(), 0, 255)? as u8;
-                    rt::seal_sum8_head(out, 3, address.wrapping_add(0xBB))
-                }
-                Self::Core(request::Core { address: v_address, out: v_out }) => {
-                    let out = rt::frame_mut::<7>(buf, &[0xAA, address, 0x12])?;
-                    out[4] = 0x00;
-                    out[3] = v_address;
-                    out[5..6].copy_from_slice(&v_out.to_le_bytes());
-                    rt::seal_sum8_head(out, 3, address.wrapping_add(0xBC))
-                }
-                Self::Rt(request::Rt { f: v_f }) => {
-                    rt::encode_broadcast(address, 0x00, &request::Rt::DESC)?;
-                    let out = rt::frame_mut::<6>(buf, &[0xAA, address, 0x13])?;
-                    let field_0: u8 = v_f;
-                    out[3] = field_0;
-                    out[4] = field_0;
-                    rt::seal_sum8_head(out, 3, address.wrapping_add(0xBD))
-                }
+                Self::Option(ref m) => m.write(address, buf)?,
+                Self::U8(ref m) => m.write(address, buf)?,
+                Self::Core(ref m) => m.write(address, buf)?,
+                Self::Rt(ref m) => m.write(address, buf)?,
             };
             rt::Ok(len)
         }
@@ -535,22 +510,8 @@ pub mod clash {
                     let out = rt::frame_mut::<4>(buf, &[0xAA, address, 0x90])?;
                     rt::seal_sum8_head(out, 3, address.wrapping_add(0x3A))
                 }
-                Self::Result(response::Result { g: v_g, usize: v_usize }) => {
-                    let out = rt::frame_mut::<7>(buf, &[0xAA, address, 0x51])?;
-                    out[3] = v_g.raw();
-                    out[4..6].copy_from_slice(&v_usize.raw().to_le_bytes());
-                    rt::seal_sum8_head(out, 3, address.wrapping_add(0xFB))
-                }
-                Self::Usize(
-                    response::Usize { asked: v_asked, none: v_none, some: v_some },
-                ) => {
-                    let out = rt::frame_mut::<7>(buf, &[0xAA, address, 0x52])?;
-                    out[3..5].copy_from_slice(&v_asked.0);
-                    let field_1: u8 = ((rt::fits("none", v_none, 0, 15)? as u8) << 4)
-                        | ((rt::fits("some", v_some.raw(), -8, 7)? as u8) & 0xF);
-                    out[5] = field_1;
-                    rt::seal_sum8_head(out, 3, address.wrapping_add(0xFC))
-                }
+                Self::Result(ref m) => m.write(address, buf)?,
+                Self::Usize(ref m) => m.write(address, buf)?,
             };
             rt::Ok(len)
         }
@@ -795,6 +756,17 @@ pub mod clash {
         pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             Request::Option(*self).encode(address, buf)
         }
+        /// Writes this message's frame for `address`, as the direction's `encode` does.
+        #[inline(always)]
+        fn write(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            let Self { some: v_some, core: v_core } = *self;
+            rt::encode_broadcast(address, 0x00, &request::Option::DESC)?;
+            rt::encode_in_range("core", v_core.raw(), 0, 1000)?;
+            let out = rt::frame_mut::<7>(buf, &[0xAA, address, 0x10])?;
+            out[3] = v_some.raw();
+            out[4..6].copy_from_slice(&v_core.raw().to_le_bytes());
+            rt::Ok(rt::seal_sum8_head(out, 3, address.wrapping_add(0xBA)))
+        }
         /// Reads this message from a frame whose framing and code are checked.
         #[inline(always)]
         fn from_frame(frame: &[u8]) -> rt::DecodeResult<Self> {
@@ -819,6 +791,15 @@ pub mod clash {
         }
         pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             Request::U8(*self).encode(address, buf)
+        }
+        /// Writes this message's frame for `address`, as the direction's `encode` does.
+        #[inline(always)]
+        fn write(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            let Self { frame: v_frame } = *self;
+            rt::encode_broadcast(address, 0x00, &request::U8::DESC)?;
+            let out = rt::frame_mut::<5>(buf, &[0xAA, address, 0x11])?;
+            out[3] = rt::fits("frame", v_frame.raw(), 0, 255)? as u8;
+            rt::Ok(rt::seal_sum8_head(out, 3, address.wrapping_add(0xBB)))
         }
         /// Reads this message from a frame whose framing and code are checked.
         #[inline(always)]
@@ -845,6 +826,16 @@ pub mod clash {
         pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             Request::Core(*self).encode(address, buf)
         }
+        /// Writes this message's frame for `address`, as the direction's `encode` does.
+        #[inline(always)]
+        fn write(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            let Self { address: v_address, out: v_out } = *self;
+            let out = rt::frame_mut::<7>(buf, &[0xAA, address, 0x12])?;
+            out[4] = 0x00;
+            out[3] = v_address;
+            out[5..6].copy_from_slice(&v_out.to_le_bytes());
+            rt::Ok(rt::seal_sum8_head(out, 3, address.wrapping_add(0xBC)))
+        }
         /// Reads this message from a frame whose framing and code are checked.
         #[inline(always)]
         fn from_frame(frame: &[u8]) -> rt::DecodeResult<Self> {
@@ -868,6 +859,17 @@ pub mod clash {
         }
         pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             Request::Rt(*self).encode(address, buf)
+        }
+        /// Writes this message's frame for `address`, as the direction's `encode` does.
+        #[inline(always)]
+        fn write(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            let Self { f: v_f } = *self;
+            rt::encode_broadcast(address, 0x00, &request::Rt::DESC)?;
+            let out = rt::frame_mut::<6>(buf, &[0xAA, address, 0x13])?;
+            let field_0: u8 = v_f;
+            out[3] = field_0;
+            out[4] = field_0;
+            rt::Ok(rt::seal_sum8_head(out, 3, address.wrapping_add(0xBD)))
         }
         /// Reads this message from a frame whose framing and code are checked.
         #[inline(always)]
@@ -910,6 +912,15 @@ pub mod clash {
         pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             Response::Result(*self).encode(address, buf)
         }
+        /// Writes this message's frame for `address`, as the direction's `encode` does.
+        #[inline(always)]
+        fn write(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            let Self { g: v_g, usize: v_usize } = *self;
+            let out = rt::frame_mut::<7>(buf, &[0xAA, address, 0x51])?;
+            out[3] = v_g.raw();
+            out[4..6].copy_from_slice(&v_usize.raw().to_le_bytes());
+            rt::Ok(rt::seal_sum8_head(out, 3, address.wrapping_add(0xFB)))
+        }
         /// Reads this message from a frame whose framing and code are checked.
         #[inline(always)]
         fn from_frame(frame: &[u8]) -> rt::DecodeResult<Self> {
@@ -933,6 +944,17 @@ pub mod clash {
         }
         pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             Response::Usize(*self).encode(address, buf)
+        }
+        /// Writes this message's frame for `address`, as the direction's `encode` does.
+        #[inline(always)]
+        fn write(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            let Self { asked: v_asked, none: v_none, some: v_some } = *self;
+            let out = rt::frame_mut::<7>(buf, &[0xAA, address, 0x52])?;
+            out[3..5].copy_from_slice(&v_asked.0);
+            let field_1: u8 = ((rt::fits("none", v_none, 0, 15)? as u8) << 4)
+                | ((rt::fits("some", v_some.raw(), -8, 7)? as u8) & 0xF);
+            out[5] = field_1;
+            rt::Ok(rt::seal_sum8_head(out, 3, address.wrapping_add(0xFC)))
         }
         /// Reads this message from a frame whose framing and code are checked.
         #[inline(always)]

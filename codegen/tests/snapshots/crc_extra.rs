@@ -190,39 +190,8 @@ pub mod crc_extra {
         pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             rt::encode_address(address, &FRAME)?;
             let len = match *self {
-                Self::Ping(
-                    request::Ping {
-                        time_usec: v_time_usec,
-                        seq: v_seq,
-                        target_system: v_target_system,
-                        target_component: v_target_component,
-                    },
-                ) => {
-                    let out = rt::frame_mut::<19>(buf, &[0xFE, 0x0E, 0x04])?;
-                    out[3..11].copy_from_slice(&v_time_usec.to_le_bytes());
-                    out[11..15].copy_from_slice(&v_seq.to_le_bytes());
-                    out[15] = v_target_system;
-                    out[16] = v_target_component;
-                    out.len()
-                }
-                Self::RequestDataStream(
-                    request::RequestDataStream {
-                        req_message_rate: v_req_message_rate,
-                        target_system: v_target_system,
-                        target_component: v_target_component,
-                        req_stream_id: v_req_stream_id,
-                        start_stop: v_start_stop,
-                    },
-                ) => {
-                    rt::encode_in_range("start_stop", v_start_stop, 0, 1)?;
-                    let out = rt::frame_mut::<11>(buf, &[0xFE, 0x06, 0x42])?;
-                    out[3..5].copy_from_slice(&v_req_message_rate.to_le_bytes());
-                    out[5] = v_target_system;
-                    out[6] = v_target_component;
-                    out[7] = v_req_stream_id;
-                    out[8] = v_start_stop;
-                    out.len()
-                }
+                Self::Ping(ref m) => m.write(address, buf)?,
+                Self::RequestDataStream(ref m) => m.write(address, buf)?,
             };
             FRAME.seal(buf, len, frame_sum);
             rt::Ok(len)
@@ -384,40 +353,8 @@ pub mod crc_extra {
         pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             rt::encode_address(address, &FRAME)?;
             let len = match *self {
-                Self::PingReply(
-                    response::PingReply {
-                        time_usec: v_time_usec,
-                        seq: v_seq,
-                        target_system: v_target_system,
-                        target_component: v_target_component,
-                    },
-                ) => {
-                    let out = rt::frame_mut::<19>(buf, &[0xFE, 0x0E, 0x04])?;
-                    out[3..11].copy_from_slice(&v_time_usec.to_le_bytes());
-                    out[11..15].copy_from_slice(&v_seq.to_le_bytes());
-                    out[15] = v_target_system;
-                    out[16] = v_target_component;
-                    out.len()
-                }
-                Self::Heartbeat(
-                    response::Heartbeat {
-                        custom_mode: v_custom_mode,
-                        vehicle_type: v_vehicle_type,
-                        autopilot: v_autopilot,
-                        base_mode: v_base_mode,
-                        system_status: v_system_status,
-                        mavlink_version: v_mavlink_version,
-                    },
-                ) => {
-                    let out = rt::frame_mut::<14>(buf, &[0xFE, 0x09, 0x00])?;
-                    out[3..7].copy_from_slice(&v_custom_mode.to_le_bytes());
-                    out[7] = v_vehicle_type;
-                    out[8] = v_autopilot;
-                    out[9] = v_base_mode;
-                    out[10] = v_system_status;
-                    out[11] = v_mavlink_version;
-                    out.len()
-                }
+                Self::PingReply(ref m) => m.write(address, buf)?,
+                Self::Heartbeat(ref m) => m.write(address, buf)?,
             };
             FRAME.seal(buf, len, frame_sum);
             rt::Ok(len)
@@ -660,6 +597,22 @@ pub mod crc_extra {
         pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             Request::Ping(*self).encode(address, buf)
         }
+        /// Writes this message's frame for `address`, as the direction's `encode` does.
+        #[inline(always)]
+        fn write(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            let Self {
+                time_usec: v_time_usec,
+                seq: v_seq,
+                target_system: v_target_system,
+                target_component: v_target_component,
+            } = *self;
+            let out = rt::frame_mut::<19>(buf, &[0xFE, 0x0E, 0x04])?;
+            out[3..11].copy_from_slice(&v_time_usec.to_le_bytes());
+            out[11..15].copy_from_slice(&v_seq.to_le_bytes());
+            out[15] = v_target_system;
+            out[16] = v_target_component;
+            rt::Ok(out.len())
+        }
         /// Reads this message from a frame whose framing and code are checked.
         #[inline(always)]
         fn from_frame(frame: &[u8]) -> rt::DecodeResult<Self> {
@@ -702,6 +655,25 @@ pub mod crc_extra {
         pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             Request::RequestDataStream(*self).encode(address, buf)
         }
+        /// Writes this message's frame for `address`, as the direction's `encode` does.
+        #[inline(always)]
+        fn write(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            let Self {
+                req_message_rate: v_req_message_rate,
+                target_system: v_target_system,
+                target_component: v_target_component,
+                req_stream_id: v_req_stream_id,
+                start_stop: v_start_stop,
+            } = *self;
+            rt::encode_in_range("start_stop", v_start_stop, 0, 1)?;
+            let out = rt::frame_mut::<11>(buf, &[0xFE, 0x06, 0x42])?;
+            out[3..5].copy_from_slice(&v_req_message_rate.to_le_bytes());
+            out[5] = v_target_system;
+            out[6] = v_target_component;
+            out[7] = v_req_stream_id;
+            out[8] = v_start_stop;
+            rt::Ok(out.len())
+        }
         /// Reads this message from a frame whose framing and code are checked.
         #[inline(always)]
         fn from_frame(frame: &[u8]) -> rt::DecodeResult<Self> {
@@ -733,6 +705,22 @@ pub mod crc_extra {
         }
         pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             Response::PingReply(*self).encode(address, buf)
+        }
+        /// Writes this message's frame for `address`, as the direction's `encode` does.
+        #[inline(always)]
+        fn write(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            let Self {
+                time_usec: v_time_usec,
+                seq: v_seq,
+                target_system: v_target_system,
+                target_component: v_target_component,
+            } = *self;
+            let out = rt::frame_mut::<19>(buf, &[0xFE, 0x0E, 0x04])?;
+            out[3..11].copy_from_slice(&v_time_usec.to_le_bytes());
+            out[11..15].copy_from_slice(&v_seq.to_le_bytes());
+            out[15] = v_target_system;
+            out[16] = v_target_component;
+            rt::Ok(out.len())
         }
         /// Reads this message from a frame whose framing and code are checked.
         #[inline(always)]
@@ -776,6 +764,26 @@ pub mod crc_extra {
         }
         pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             Response::Heartbeat(*self).encode(address, buf)
+        }
+        /// Writes this message's frame for `address`, as the direction's `encode` does.
+        #[inline(always)]
+        fn write(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            let Self {
+                custom_mode: v_custom_mode,
+                vehicle_type: v_vehicle_type,
+                autopilot: v_autopilot,
+                base_mode: v_base_mode,
+                system_status: v_system_status,
+                mavlink_version: v_mavlink_version,
+            } = *self;
+            let out = rt::frame_mut::<14>(buf, &[0xFE, 0x09, 0x00])?;
+            out[3..7].copy_from_slice(&v_custom_mode.to_le_bytes());
+            out[7] = v_vehicle_type;
+            out[8] = v_autopilot;
+            out[9] = v_base_mode;
+            out[10] = v_system_status;
+            out[11] = v_mavlink_version;
+            rt::Ok(out.len())
         }
         /// Reads this message from a frame whose framing and code are checked.
         #[inline(always)]

@@ -179,60 +179,8 @@ pub mod dlt645 {
         fn encode_frame(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             rt::encode_address(address, &FRAME)?;
             let len = match *self {
-                Self::ReadAddress(
-                    request::ReadAddress {
-                        address_low: v_address_low,
-                        address_high: v_address_high,
-                    },
-                ) => {
-                    let out = rt::frame_mut::<12>(buf, &[0x68])?;
-                    out[7..10].copy_from_slice(&[0x68, 0x13, 0x00]);
-                    out[1..4]
-                        .copy_from_slice(
-                            &rt::bytes24(
-                                (rt::fits("address_low", v_address_low, 0, 16777215)?
-                                    as u32) as u32,
-                                true,
-                            ),
-                        );
-                    out[4..7]
-                        .copy_from_slice(
-                            &rt::bytes24(
-                                (rt::fits("address_high", v_address_high, 0, 16777215)?
-                                    as u32) as u32,
-                                true,
-                            ),
-                        );
-                    out.len()
-                }
-                Self::ReadData(
-                    request::ReadData {
-                        address_low: v_address_low,
-                        address_high: v_address_high,
-                        data_id: v_data_id,
-                    },
-                ) => {
-                    let out = rt::frame_mut::<16>(buf, &[0x68])?;
-                    out[7..10].copy_from_slice(&[0x68, 0x11, 0x04]);
-                    out[1..4]
-                        .copy_from_slice(
-                            &rt::bytes24(
-                                (rt::fits("address_low", v_address_low, 0, 16777215)?
-                                    as u32) as u32,
-                                true,
-                            ),
-                        );
-                    out[4..7]
-                        .copy_from_slice(
-                            &rt::bytes24(
-                                (rt::fits("address_high", v_address_high, 0, 16777215)?
-                                    as u32) as u32,
-                                true,
-                            ),
-                        );
-                    out[10..14].copy_from_slice(&v_data_id.to_le_bytes());
-                    out.len()
-                }
+                Self::ReadAddress(ref m) => m.write(address, buf)?,
+                Self::ReadData(ref m) => m.write(address, buf)?,
             };
             TRANSFORM.put(buf, len, 10, 2);
             FRAME.seal(buf, len, frame_sum);
@@ -421,129 +369,9 @@ pub mod dlt645 {
         fn encode_frame(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             rt::encode_address(address, &FRAME)?;
             let len = match *self {
-                Self::AddressReply(
-                    response::AddressReply {
-                        address_low: v_address_low,
-                        address_high: v_address_high,
-                        meter_low: v_meter_low,
-                        meter_high: v_meter_high,
-                    },
-                ) => {
-                    let out = rt::frame_mut::<18>(buf, &[0x68])?;
-                    out[7..10].copy_from_slice(&[0x68, 0x93, 0x06]);
-                    out[1..4]
-                        .copy_from_slice(
-                            &rt::bytes24(
-                                (rt::fits("address_low", v_address_low, 0, 16777215)?
-                                    as u32) as u32,
-                                true,
-                            ),
-                        );
-                    out[4..7]
-                        .copy_from_slice(
-                            &rt::bytes24(
-                                (rt::fits("address_high", v_address_high, 0, 16777215)?
-                                    as u32) as u32,
-                                true,
-                            ),
-                        );
-                    out[10..13]
-                        .copy_from_slice(
-                            &rt::bytes24(
-                                (rt::fits("meter_low", v_meter_low, 0, 16777215)? as u32)
-                                    as u32,
-                                true,
-                            ),
-                        );
-                    out[13..16]
-                        .copy_from_slice(
-                            &rt::bytes24(
-                                (rt::fits("meter_high", v_meter_high, 0, 16777215)? as u32)
-                                    as u32,
-                                true,
-                            ),
-                        );
-                    out.len()
-                }
-                Self::DataReply(
-                    response::DataReply {
-                        address_low: v_address_low,
-                        address_high: v_address_high,
-                        data_id: v_data_id,
-                        value: v_value,
-                    },
-                ) => {
-                    rt::encode_in_range("value", v_value, 0, 99999999)?;
-                    let out = rt::frame_mut::<20>(buf, &[0x68])?;
-                    out[7..10].copy_from_slice(&[0x68, 0x91, 0x08]);
-                    out[1..4]
-                        .copy_from_slice(
-                            &rt::bytes24(
-                                (rt::fits("address_low", v_address_low, 0, 16777215)?
-                                    as u32) as u32,
-                                true,
-                            ),
-                        );
-                    out[4..7]
-                        .copy_from_slice(
-                            &rt::bytes24(
-                                (rt::fits("address_high", v_address_high, 0, 16777215)?
-                                    as u32) as u32,
-                                true,
-                            ),
-                        );
-                    out[10..14].copy_from_slice(&v_data_id.to_le_bytes());
-                    out[14..18]
-                        .copy_from_slice(
-                            &(rt::to_bcd(v_value as u64) as u32).to_le_bytes(),
-                        );
-                    out.len()
-                }
-                Self::MeterNumberReply(
-                    response::MeterNumberReply {
-                        address_low: v_address_low,
-                        address_high: v_address_high,
-                        number_low: v_number_low,
-                        number_high: v_number_high,
-                    },
-                ) => {
-                    let out = rt::frame_mut::<22>(buf, &[0x68])?;
-                    out[7..14]
-                        .copy_from_slice(&[0x68, 0x91, 0x0A, 0x02, 0x04, 0x00, 0x04]);
-                    out[1..4]
-                        .copy_from_slice(
-                            &rt::bytes24(
-                                (rt::fits("address_low", v_address_low, 0, 16777215)?
-                                    as u32) as u32,
-                                true,
-                            ),
-                        );
-                    out[4..7]
-                        .copy_from_slice(
-                            &rt::bytes24(
-                                (rt::fits("address_high", v_address_high, 0, 16777215)?
-                                    as u32) as u32,
-                                true,
-                            ),
-                        );
-                    out[14..17]
-                        .copy_from_slice(
-                            &rt::bytes24(
-                                (rt::fits("number_low", v_number_low, 0, 16777215)? as u32)
-                                    as u32,
-                                true,
-                            ),
-                        );
-                    out[17..20]
-                        .copy_from_slice(
-                            &rt::bytes24(
-                                (rt::fits("number_high", v_number_high, 0, 16777215)?
-                                    as u32) as u32,
-                                true,
-                            ),
-                        );
-                    out.len()
-                }
+                Self::AddressReply(ref m) => m.write(address, buf)?,
+                Self::DataReply(ref m) => m.write(address, buf)?,
+                Self::MeterNumberReply(ref m) => m.write(address, buf)?,
             };
             TRANSFORM.put(buf, len, 10, 2);
             FRAME.seal(buf, len, frame_sum);
@@ -858,6 +686,30 @@ pub mod dlt645 {
         pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             Request::ReadAddress(*self).encode(address, buf)
         }
+        /// Writes this message's frame for `address`, as the direction's `encode` does.
+        #[inline(always)]
+        fn write(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            let Self { address_low: v_address_low, address_high: v_address_high } = *self;
+            let out = rt::frame_mut::<12>(buf, &[0x68])?;
+            out[7..10].copy_from_slice(&[0x68, 0x13, 0x00]);
+            out[1..4]
+                .copy_from_slice(
+                    &rt::bytes24(
+                        (rt::fits("address_low", v_address_low, 0, 16777215)? as u32)
+                            as u32,
+                        true,
+                    ),
+                );
+            out[4..7]
+                .copy_from_slice(
+                    &rt::bytes24(
+                        (rt::fits("address_high", v_address_high, 0, 16777215)? as u32)
+                            as u32,
+                        true,
+                    ),
+                );
+            rt::Ok(out.len())
+        }
         /// Reads this message from a frame whose framing and code are checked.
         #[inline(always)]
         fn from_frame(frame: &[u8]) -> rt::DecodeResult<Self> {
@@ -883,6 +735,35 @@ pub mod dlt645 {
         }
         pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             Request::ReadData(*self).encode(address, buf)
+        }
+        /// Writes this message's frame for `address`, as the direction's `encode` does.
+        #[inline(always)]
+        fn write(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            let Self {
+                address_low: v_address_low,
+                address_high: v_address_high,
+                data_id: v_data_id,
+            } = *self;
+            let out = rt::frame_mut::<16>(buf, &[0x68])?;
+            out[7..10].copy_from_slice(&[0x68, 0x11, 0x04]);
+            out[1..4]
+                .copy_from_slice(
+                    &rt::bytes24(
+                        (rt::fits("address_low", v_address_low, 0, 16777215)? as u32)
+                            as u32,
+                        true,
+                    ),
+                );
+            out[4..7]
+                .copy_from_slice(
+                    &rt::bytes24(
+                        (rt::fits("address_high", v_address_high, 0, 16777215)? as u32)
+                            as u32,
+                        true,
+                    ),
+                );
+            out[10..14].copy_from_slice(&v_data_id.to_le_bytes());
+            rt::Ok(out.len())
         }
         /// Reads this message from a frame whose framing and code are checked.
         #[inline(always)]
@@ -912,6 +793,50 @@ pub mod dlt645 {
         }
         pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             Response::AddressReply(*self).encode(address, buf)
+        }
+        /// Writes this message's frame for `address`, as the direction's `encode` does.
+        #[inline(always)]
+        fn write(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            let Self {
+                address_low: v_address_low,
+                address_high: v_address_high,
+                meter_low: v_meter_low,
+                meter_high: v_meter_high,
+            } = *self;
+            let out = rt::frame_mut::<18>(buf, &[0x68])?;
+            out[7..10].copy_from_slice(&[0x68, 0x93, 0x06]);
+            out[1..4]
+                .copy_from_slice(
+                    &rt::bytes24(
+                        (rt::fits("address_low", v_address_low, 0, 16777215)? as u32)
+                            as u32,
+                        true,
+                    ),
+                );
+            out[4..7]
+                .copy_from_slice(
+                    &rt::bytes24(
+                        (rt::fits("address_high", v_address_high, 0, 16777215)? as u32)
+                            as u32,
+                        true,
+                    ),
+                );
+            out[10..13]
+                .copy_from_slice(
+                    &rt::bytes24(
+                        (rt::fits("meter_low", v_meter_low, 0, 16777215)? as u32) as u32,
+                        true,
+                    ),
+                );
+            out[13..16]
+                .copy_from_slice(
+                    &rt::bytes24(
+                        (rt::fits("meter_high", v_meter_high, 0, 16777215)? as u32)
+                            as u32,
+                        true,
+                    ),
+                );
+            rt::Ok(out.len())
         }
         /// Reads this message from a frame whose framing and code are checked.
         #[inline(always)]
@@ -943,6 +868,39 @@ pub mod dlt645 {
         }
         pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             Response::DataReply(*self).encode(address, buf)
+        }
+        /// Writes this message's frame for `address`, as the direction's `encode` does.
+        #[inline(always)]
+        fn write(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            let Self {
+                address_low: v_address_low,
+                address_high: v_address_high,
+                data_id: v_data_id,
+                value: v_value,
+            } = *self;
+            rt::encode_in_range("value", v_value, 0, 99999999)?;
+            let out = rt::frame_mut::<20>(buf, &[0x68])?;
+            out[7..10].copy_from_slice(&[0x68, 0x91, 0x08]);
+            out[1..4]
+                .copy_from_slice(
+                    &rt::bytes24(
+                        (rt::fits("address_low", v_address_low, 0, 16777215)? as u32)
+                            as u32,
+                        true,
+                    ),
+                );
+            out[4..7]
+                .copy_from_slice(
+                    &rt::bytes24(
+                        (rt::fits("address_high", v_address_high, 0, 16777215)? as u32)
+                            as u32,
+                        true,
+                    ),
+                );
+            out[10..14].copy_from_slice(&v_data_id.to_le_bytes());
+            out[14..18]
+                .copy_from_slice(&(rt::to_bcd(v_value as u64) as u32).to_le_bytes());
+            rt::Ok(out.len())
         }
         /// Reads this message from a frame whose framing and code are checked.
         #[inline(always)]
@@ -985,6 +943,51 @@ pub mod dlt645 {
         }
         pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             Response::MeterNumberReply(*self).encode(address, buf)
+        }
+        /// Writes this message's frame for `address`, as the direction's `encode` does.
+        #[inline(always)]
+        fn write(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            let Self {
+                address_low: v_address_low,
+                address_high: v_address_high,
+                number_low: v_number_low,
+                number_high: v_number_high,
+            } = *self;
+            let out = rt::frame_mut::<22>(buf, &[0x68])?;
+            out[7..14].copy_from_slice(&[0x68, 0x91, 0x0A, 0x02, 0x04, 0x00, 0x04]);
+            out[1..4]
+                .copy_from_slice(
+                    &rt::bytes24(
+                        (rt::fits("address_low", v_address_low, 0, 16777215)? as u32)
+                            as u32,
+                        true,
+                    ),
+                );
+            out[4..7]
+                .copy_from_slice(
+                    &rt::bytes24(
+                        (rt::fits("address_high", v_address_high, 0, 16777215)? as u32)
+                            as u32,
+                        true,
+                    ),
+                );
+            out[14..17]
+                .copy_from_slice(
+                    &rt::bytes24(
+                        (rt::fits("number_low", v_number_low, 0, 16777215)? as u32)
+                            as u32,
+                        true,
+                    ),
+                );
+            out[17..20]
+                .copy_from_slice(
+                    &rt::bytes24(
+                        (rt::fits("number_high", v_number_high, 0, 16777215)? as u32)
+                            as u32,
+                        true,
+                    ),
+                );
+            rt::Ok(out.len())
         }
         /// Reads this message from a frame whose framing and code are checked.
         #[inline(always)]

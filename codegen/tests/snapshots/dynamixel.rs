@@ -250,58 +250,16 @@ pub mod dynamixel {
                     rt::encode_broadcast(address, 0xFE, &request::Ping::DESC)?;
                     rt::frame_mut::<6>(buf, &[0xFF, 0xFF, address, 0x02, 0x01])?.len()
                 }
-                Self::Read(request::Read { address: v_address, length: v_length }) => {
-                    rt::encode_broadcast(address, 0xFE, &request::Read::DESC)?;
-                    rt::encode_in_range("length", v_length, 1, 253)?;
-                    let out = rt::frame_mut::<
-                        8,
-                    >(buf, &[0xFF, 0xFF, address, 0x04, 0x02])?;
-                    out[5] = v_address;
-                    out[6] = v_length;
-                    out.len()
-                }
-                Self::Write(request::Write { address: v_address, data: v_data }) => {
-                    let frame_len = REPEAT_WRITE.encode_len(v_data.len())?;
-                    let out = rt::frame_mut_len(buf, frame_len, &[0xFF, 0xFF, address])?;
-                    LENGTH.put(out)?;
-                    out[4] = 0x03;
-                    out[5] = v_address;
-                    rt::write_elements(v_data.as_slice(), 1, true, &mut out[6..]);
-                    out.len()
-                }
-                Self::RegWrite(
-                    request::RegWrite { address: v_address, data: v_data },
-                ) => {
-                    let frame_len = REPEAT_REG_WRITE.encode_len(v_data.len())?;
-                    let out = rt::frame_mut_len(buf, frame_len, &[0xFF, 0xFF, address])?;
-                    LENGTH.put(out)?;
-                    out[4] = 0x04;
-                    out[5] = v_address;
-                    rt::write_elements(v_data.as_slice(), 1, true, &mut out[6..]);
-                    out.len()
-                }
+                Self::Read(ref m) => m.write(address, buf)?,
+                Self::Write(ref m) => m.write(address, buf)?,
+                Self::RegWrite(ref m) => m.write(address, buf)?,
                 Self::Action(_) => {
                     rt::frame_mut::<6>(buf, &[0xFF, 0xFF, address, 0x02, 0x05])?.len()
                 }
                 Self::Reset(_) => {
                     rt::frame_mut::<6>(buf, &[0xFF, 0xFF, address, 0x02, 0x06])?.len()
                 }
-                Self::SyncWrite(
-                    request::SyncWrite {
-                        address: v_address,
-                        data_length: v_data_length,
-                        blocks: v_blocks,
-                    },
-                ) => {
-                    let frame_len = REPEAT_SYNC_WRITE.encode_len(v_blocks.len())?;
-                    let out = rt::frame_mut_len(buf, frame_len, &[0xFF, 0xFF, address])?;
-                    LENGTH.put(out)?;
-                    out[4] = 0x83;
-                    out[5] = v_address;
-                    out[6] = v_data_length;
-                    rt::write_elements(v_blocks.as_slice(), 1, true, &mut out[7..]);
-                    out.len()
-                }
+                Self::SyncWrite(ref m) => m.write(address, buf)?,
             };
             FRAME.seal(buf, len, frame_sum);
             rt::Ok(len)
@@ -527,21 +485,8 @@ pub mod dynamixel {
         pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             rt::encode_address(address, &FRAME)?;
             let len = match *self {
-                Self::Status(response::Status { error: v_error }) => {
-                    let out = rt::frame_mut::<6>(buf, &[0xFF, 0xFF, address, 0x02])?;
-                    out[4] = v_error.raw();
-                    out.len()
-                }
-                Self::ReadStatus(
-                    response::ReadStatus { error: v_error, data: v_data },
-                ) => {
-                    let frame_len = REPEAT_READ_STATUS.encode_len(v_data.len())?;
-                    let out = rt::frame_mut_len(buf, frame_len, &[0xFF, 0xFF, address])?;
-                    LENGTH.put(out)?;
-                    out[4] = v_error.raw();
-                    rt::write_elements(v_data.as_slice(), 1, true, &mut out[5..]);
-                    out.len()
-                }
+                Self::Status(ref m) => m.write(address, buf)?,
+                Self::ReadStatus(ref m) => m.write(address, buf)?,
             };
             FRAME.seal(buf, len, frame_sum);
             rt::Ok(len)
@@ -1162,6 +1107,17 @@ pub mod dynamixel {
         pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             Request::Read(*self).encode(address, buf)
         }
+        /// Writes this message's frame for `address`, as the direction's `encode` does.
+        #[inline(always)]
+        fn write(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            let Self { address: v_address, length: v_length } = *self;
+            rt::encode_broadcast(address, 0xFE, &request::Read::DESC)?;
+            rt::encode_in_range("length", v_length, 1, 253)?;
+            let out = rt::frame_mut::<8>(buf, &[0xFF, 0xFF, address, 0x04, 0x02])?;
+            out[5] = v_address;
+            out[6] = v_length;
+            rt::Ok(out.len())
+        }
         /// Reads this message from a frame whose framing and code are checked.
         #[inline(always)]
         fn from_frame(frame: &[u8]) -> rt::DecodeResult<Self> {
@@ -1189,6 +1145,18 @@ pub mod dynamixel {
         pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             Request::Write(*self).encode(address, buf)
         }
+        /// Writes this message's frame for `address`, as the direction's `encode` does.
+        #[inline(always)]
+        fn write(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            let Self { address: v_address, data: v_data } = *self;
+            let frame_len = REPEAT_WRITE.encode_len(v_data.len())?;
+            let out = rt::frame_mut_len(buf, frame_len, &[0xFF, 0xFF, address])?;
+            LENGTH.put(out)?;
+            out[4] = 0x03;
+            out[5] = v_address;
+            rt::write_elements(v_data.as_slice(), 1, true, &mut out[6..]);
+            rt::Ok(out.len())
+        }
     }
     impl request::RegWrite {
         pub const NAME: &'static str = "reg_write";
@@ -1204,6 +1172,18 @@ pub mod dynamixel {
         }
         pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             Request::RegWrite(*self).encode(address, buf)
+        }
+        /// Writes this message's frame for `address`, as the direction's `encode` does.
+        #[inline(always)]
+        fn write(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            let Self { address: v_address, data: v_data } = *self;
+            let frame_len = REPEAT_REG_WRITE.encode_len(v_data.len())?;
+            let out = rt::frame_mut_len(buf, frame_len, &[0xFF, 0xFF, address])?;
+            LENGTH.put(out)?;
+            out[4] = 0x04;
+            out[5] = v_address;
+            rt::write_elements(v_data.as_slice(), 1, true, &mut out[6..]);
+            rt::Ok(out.len())
         }
     }
     impl request::Action {
@@ -1241,6 +1221,23 @@ pub mod dynamixel {
         pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             Request::SyncWrite(*self).encode(address, buf)
         }
+        /// Writes this message's frame for `address`, as the direction's `encode` does.
+        #[inline(always)]
+        fn write(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            let Self {
+                address: v_address,
+                data_length: v_data_length,
+                blocks: v_blocks,
+            } = *self;
+            let frame_len = REPEAT_SYNC_WRITE.encode_len(v_blocks.len())?;
+            let out = rt::frame_mut_len(buf, frame_len, &[0xFF, 0xFF, address])?;
+            LENGTH.put(out)?;
+            out[4] = 0x83;
+            out[5] = v_address;
+            out[6] = v_data_length;
+            rt::write_elements(v_blocks.as_slice(), 1, true, &mut out[7..]);
+            rt::Ok(out.len())
+        }
     }
     impl response::Status {
         pub const NAME: &'static str = "status";
@@ -1253,6 +1250,14 @@ pub mod dynamixel {
         }
         pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             Response::Status(*self).encode(address, buf)
+        }
+        /// Writes this message's frame for `address`, as the direction's `encode` does.
+        #[inline(always)]
+        fn write(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            let Self { error: v_error } = *self;
+            let out = rt::frame_mut::<6>(buf, &[0xFF, 0xFF, address, 0x02])?;
+            out[4] = v_error.raw();
+            rt::Ok(out.len())
         }
         /// Reads this message from a frame whose framing and code are checked.
         #[inline(always)]
@@ -1277,6 +1282,17 @@ pub mod dynamixel {
         }
         pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             Response::ReadStatus(*self).encode(address, buf)
+        }
+        /// Writes this message's frame for `address`, as the direction's `encode` does.
+        #[inline(always)]
+        fn write(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            let Self { error: v_error, data: v_data } = *self;
+            let frame_len = REPEAT_READ_STATUS.encode_len(v_data.len())?;
+            let out = rt::frame_mut_len(buf, frame_len, &[0xFF, 0xFF, address])?;
+            LENGTH.put(out)?;
+            out[4] = v_error.raw();
+            rt::write_elements(v_data.as_slice(), 1, true, &mut out[5..]);
+            rt::Ok(out.len())
         }
     }
     /// Each request as a struct of its own; its constants (`DESC`, which names it as

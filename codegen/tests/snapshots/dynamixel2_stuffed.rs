@@ -258,14 +258,7 @@ pub mod dynamixel2_stuffed {
                     >(buf, &[0xFF, 0xFF, 0xFD, 0x00, address, 0x03, 0x00, 0x01])?
                         .len()
                 }
-                Self::Write4(request::Write4 { address: v_address, value: v_value }) => {
-                    let out = rt::frame_mut::<
-                        16,
-                    >(buf, &[0xFF, 0xFF, 0xFD, 0x00, address, 0x09, 0x00, 0x03])?;
-                    out[8..10].copy_from_slice(&v_address.to_le_bytes());
-                    out[10..14].copy_from_slice(&v_value.to_le_bytes());
-                    out.len()
-                }
+                Self::Write4(ref m) => m.write(address, buf)?,
             };
             FRAME.seal(buf, len, frame_sum);
             rt::Ok(len)
@@ -437,28 +430,8 @@ pub mod dynamixel2_stuffed {
         fn encode_unescaped(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             rt::encode_address(address, &FRAME)?;
             let len = match *self {
-                Self::PingStatus(
-                    response::PingStatus {
-                        error: v_error,
-                        model_number: v_model_number,
-                        firmware_version: v_firmware_version,
-                    },
-                ) => {
-                    let out = rt::frame_mut::<
-                        14,
-                    >(buf, &[0xFF, 0xFF, 0xFD, 0x00, address, 0x07, 0x00, 0x55])?;
-                    out[8] = v_error.raw();
-                    out[9..11].copy_from_slice(&v_model_number.to_le_bytes());
-                    out[11] = v_firmware_version;
-                    out.len()
-                }
-                Self::Status(response::Status { error: v_error }) => {
-                    let out = rt::frame_mut::<
-                        11,
-                    >(buf, &[0xFF, 0xFF, 0xFD, 0x00, address, 0x04, 0x00, 0x55])?;
-                    out[8] = v_error.raw();
-                    out.len()
-                }
+                Self::PingStatus(ref m) => m.write(address, buf)?,
+                Self::Status(ref m) => m.write(address, buf)?,
             };
             FRAME.seal(buf, len, frame_sum);
             rt::Ok(len)
@@ -708,6 +681,17 @@ pub mod dynamixel2_stuffed {
         pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             Request::Write4(*self).encode(address, buf)
         }
+        /// Writes this message's frame for `address`, as the direction's `encode` does.
+        #[inline(always)]
+        fn write(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            let Self { address: v_address, value: v_value } = *self;
+            let out = rt::frame_mut::<
+                16,
+            >(buf, &[0xFF, 0xFF, 0xFD, 0x00, address, 0x09, 0x00, 0x03])?;
+            out[8..10].copy_from_slice(&v_address.to_le_bytes());
+            out[10..14].copy_from_slice(&v_value.to_le_bytes());
+            rt::Ok(out.len())
+        }
         /// Reads this message from a frame whose framing and code are checked.
         #[inline(always)]
         fn from_frame(frame: &[u8]) -> rt::DecodeResult<Self> {
@@ -734,6 +718,22 @@ pub mod dynamixel2_stuffed {
         pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             Response::PingStatus(*self).encode(address, buf)
         }
+        /// Writes this message's frame for `address`, as the direction's `encode` does.
+        #[inline(always)]
+        fn write(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            let Self {
+                error: v_error,
+                model_number: v_model_number,
+                firmware_version: v_firmware_version,
+            } = *self;
+            let out = rt::frame_mut::<
+                14,
+            >(buf, &[0xFF, 0xFF, 0xFD, 0x00, address, 0x07, 0x00, 0x55])?;
+            out[8] = v_error.raw();
+            out[9..11].copy_from_slice(&v_model_number.to_le_bytes());
+            out[11] = v_firmware_version;
+            rt::Ok(out.len())
+        }
         /// Reads this message from a frame whose framing and code are checked.
         #[inline(always)]
         fn from_frame(frame: &[u8]) -> rt::DecodeResult<Self> {
@@ -756,6 +756,16 @@ pub mod dynamixel2_stuffed {
         }
         pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             Response::Status(*self).encode(address, buf)
+        }
+        /// Writes this message's frame for `address`, as the direction's `encode` does.
+        #[inline(always)]
+        fn write(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            let Self { error: v_error } = *self;
+            let out = rt::frame_mut::<
+                11,
+            >(buf, &[0xFF, 0xFF, 0xFD, 0x00, address, 0x04, 0x00, 0x55])?;
+            out[8] = v_error.raw();
+            rt::Ok(out.len())
         }
         /// Reads this message from a frame whose framing and code are checked.
         #[inline(always)]

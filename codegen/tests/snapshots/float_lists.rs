@@ -166,16 +166,7 @@ pub mod float_lists {
         pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             rt::encode_address(address, &FRAME)?;
             let len = match *self {
-                Self::ReadFloats(
-                    request::ReadFloats { start: v_start, quantity: v_quantity },
-                ) => {
-                    rt::encode_broadcast(address, 0x00, &request::ReadFloats::DESC)?;
-                    rt::encode_in_range("quantity", v_quantity, 2, 16)?;
-                    let out = rt::frame_mut::<8>(buf, &[address, 0x03])?;
-                    out[2..4].copy_from_slice(&v_start.to_be_bytes());
-                    out[4..6].copy_from_slice(&v_quantity.to_be_bytes());
-                    out.len()
-                }
+                Self::ReadFloats(ref m) => m.write(address, buf)?,
                 Self::ReadCounters(_) => {
                     rt::encode_broadcast(address, 0x00, &request::ReadCounters::DESC)?;
                     rt::frame_mut::<4>(buf, &[address, 0x41])?.len()
@@ -427,75 +418,9 @@ pub mod float_lists {
         pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             rt::encode_address(address, &FRAME)?;
             let len = match *self {
-                Self::Floats(response::Floats { values: v_values }) => {
-                    REPEAT_FLOATS
-                        .encode_in_range(v_values.as_slice(), 3296329728, 1148846080)?;
-                    let frame_len = REPEAT_FLOATS.encode_len(v_values.len())?;
-                    let out = rt::frame_mut_len(buf, frame_len, &[address, 0x03])?;
-                    out[2] = rt::fits(
-                        "byte_count",
-                        REPEAT_FLOATS.count_value(v_values.len()) as u64,
-                        0,
-                        255,
-                    )? as u8;
-                    rt::write_words(v_values.as_slice(), 4, false, &mut out[3..]);
-                    out.len()
-                }
-                Self::Counters(
-                    response::Counters { totals: v_totals, drifts: v_drifts },
-                ) => {
-                    let bytes_0: usize = LISTS_COUNTERS
-                        .lists[0]
-                        .encode_len(v_totals.len())? - LISTS_COUNTERS.base;
-                    LISTS_COUNTERS
-                        .lists[1]
-                        .encode_in_range(
-                            v_drifts.as_slice(),
-                            -9000000000000,
-                            9000000000000,
-                        )?;
-                    let bytes_1: usize = LISTS_COUNTERS
-                        .lists[1]
-                        .encode_len(v_drifts.len())? - LISTS_COUNTERS.base;
-                    let mut compact = [0u8; 6];
-                    let out = {
-                        compact[..2].copy_from_slice(&[address, 0x41]);
-                        &mut compact
-                    };
-                    out[2] = rt::fits(
-                        "num_totals",
-                        LISTS_COUNTERS.lists[0].count_value(v_totals.len()) as u64,
-                        0,
-                        255,
-                    )? as u8;
-                    out[3] = rt::fits(
-                        "num_drifts",
-                        LISTS_COUNTERS.lists[1].count_value(v_drifts.len()) as u64,
-                        0,
-                        255,
-                    )? as u8;
-                    let out = LISTS_COUNTERS.expand(&compact, &[bytes_0, bytes_1], buf)?;
-                    rt::write_elements(v_totals.as_slice(), 8, false, &mut out[3..]);
-                    rt::write_elements(
-                        v_drifts.as_slice(),
-                        8,
-                        false,
-                        &mut out[4 + bytes_0..],
-                    );
-                    out.len()
-                }
-                Self::Samples(response::Samples { samples: v_samples }) => {
-                    let frame_len = REPEAT_SAMPLES.encode_len(v_samples.len())?;
-                    let out = rt::frame_mut_len(buf, frame_len, &[address, 0x42])?;
-                    out[2] = rt::fits(
-                        "num_samples",
-                        REPEAT_SAMPLES.count_value(v_samples.len()) as u64,
-                        0,
-                        255,
-                    )? as u8;
-                    rt::write_words(v_samples.as_slice(), 8, false, &mut out[3..]);
-                    out.len()
-                }
+                Self::Floats(ref m) => m.write(address, buf)?,
+                Self::Counters(ref m) => m.write(address, buf)?,
+                Self::Samples(ref m) => m.write(address, buf)?,
             };
             FRAME.seal(buf, len, frame_sum);
             rt::Ok(len)
@@ -931,6 +856,17 @@ pub mod float_lists {
         pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             Request::ReadFloats(*self).encode(address, buf)
         }
+        /// Writes this message's frame for `address`, as the direction's `encode` does.
+        #[inline(always)]
+        fn write(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            let Self { start: v_start, quantity: v_quantity } = *self;
+            rt::encode_broadcast(address, 0x00, &request::ReadFloats::DESC)?;
+            rt::encode_in_range("quantity", v_quantity, 2, 16)?;
+            let out = rt::frame_mut::<8>(buf, &[address, 0x03])?;
+            out[2..4].copy_from_slice(&v_start.to_be_bytes());
+            out[4..6].copy_from_slice(&v_quantity.to_be_bytes());
+            rt::Ok(out.len())
+        }
         /// Reads this message from a frame whose framing and code are checked.
         #[inline(always)]
         fn from_frame(frame: &[u8]) -> rt::DecodeResult<Self> {
@@ -989,6 +925,22 @@ pub mod float_lists {
         pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             Response::Floats(*self).encode(address, buf)
         }
+        /// Writes this message's frame for `address`, as the direction's `encode` does.
+        #[inline(always)]
+        fn write(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            let Self { values: v_values } = *self;
+            REPEAT_FLOATS.encode_in_range(v_values.as_slice(), 3296329728, 1148846080)?;
+            let frame_len = REPEAT_FLOATS.encode_len(v_values.len())?;
+            let out = rt::frame_mut_len(buf, frame_len, &[address, 0x03])?;
+            out[2] = rt::fits(
+                "byte_count",
+                REPEAT_FLOATS.count_value(v_values.len()) as u64,
+                0,
+                255,
+            )? as u8;
+            rt::write_words(v_values.as_slice(), 4, false, &mut out[3..]);
+            rt::Ok(out.len())
+        }
     }
     impl response::Counters {
         pub const NAME: &'static str = "counters";
@@ -1005,6 +957,39 @@ pub mod float_lists {
         pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             Response::Counters(*self).encode(address, buf)
         }
+        /// Writes this message's frame for `address`, as the direction's `encode` does.
+        #[inline(always)]
+        fn write(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            let Self { totals: v_totals, drifts: v_drifts } = *self;
+            let bytes_0: usize = LISTS_COUNTERS.lists[0].encode_len(v_totals.len())?
+                - LISTS_COUNTERS.base;
+            LISTS_COUNTERS
+                .lists[1]
+                .encode_in_range(v_drifts.as_slice(), -9000000000000, 9000000000000)?;
+            let bytes_1: usize = LISTS_COUNTERS.lists[1].encode_len(v_drifts.len())?
+                - LISTS_COUNTERS.base;
+            let mut compact = [0u8; 6];
+            let out = {
+                compact[..2].copy_from_slice(&[address, 0x41]);
+                &mut compact
+            };
+            out[2] = rt::fits(
+                "num_totals",
+                LISTS_COUNTERS.lists[0].count_value(v_totals.len()) as u64,
+                0,
+                255,
+            )? as u8;
+            out[3] = rt::fits(
+                "num_drifts",
+                LISTS_COUNTERS.lists[1].count_value(v_drifts.len()) as u64,
+                0,
+                255,
+            )? as u8;
+            let out = LISTS_COUNTERS.expand(&compact, &[bytes_0, bytes_1], buf)?;
+            rt::write_elements(v_totals.as_slice(), 8, false, &mut out[3..]);
+            rt::write_elements(v_drifts.as_slice(), 8, false, &mut out[4 + bytes_0..]);
+            rt::Ok(out.len())
+        }
     }
     impl response::Samples {
         pub const NAME: &'static str = "samples";
@@ -1018,6 +1003,21 @@ pub mod float_lists {
         }
         pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             Response::Samples(*self).encode(address, buf)
+        }
+        /// Writes this message's frame for `address`, as the direction's `encode` does.
+        #[inline(always)]
+        fn write(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            let Self { samples: v_samples } = *self;
+            let frame_len = REPEAT_SAMPLES.encode_len(v_samples.len())?;
+            let out = rt::frame_mut_len(buf, frame_len, &[address, 0x42])?;
+            out[2] = rt::fits(
+                "num_samples",
+                REPEAT_SAMPLES.count_value(v_samples.len()) as u64,
+                0,
+                255,
+            )? as u8;
+            rt::write_words(v_samples.as_slice(), 8, false, &mut out[3..]);
+            rt::Ok(out.len())
         }
     }
     /// Each request as a struct of its own; its constants (`DESC`, which names it as

@@ -311,42 +311,7 @@ pub mod ft12_variable {
             rt::encode_address(address, &FRAME)?;
             let out = rt::frame_mut::<27>(buf, &[])?;
             let len = match *self {
-                Self::RspUd(
-                    response::RspUd {
-                        identification: v_identification,
-                        manufacturer: v_manufacturer,
-                        version: v_version,
-                        medium: v_medium,
-                        access: v_access,
-                        status: v_status,
-                        signature: v_signature,
-                        volume: v_volume,
-                    },
-                ) => {
-                    rt::encode_in_range(
-                        "identification",
-                        v_identification,
-                        0,
-                        99999999,
-                    )?;
-                    let out = rt::head(
-                        out,
-                        &[0x68, 0x15, 0x15, 0x68, 0x08, address, 0x72],
-                    );
-                    out[19..21].copy_from_slice(&[0x04, 0x13]);
-                    out[7..11]
-                        .copy_from_slice(
-                            &(rt::to_bcd(v_identification as u64) as u32).to_le_bytes(),
-                        );
-                    out[11..13].copy_from_slice(&v_manufacturer.to_le_bytes());
-                    out[13] = v_version;
-                    out[14] = v_medium;
-                    out[15] = v_access;
-                    out[16] = v_status;
-                    out[17..19].copy_from_slice(&v_signature.to_le_bytes());
-                    out[21..25].copy_from_slice(&v_volume.to_le_bytes());
-                    out.len()
-                }
+                Self::RspUd(ref m) => m.write(address, out)?,
             };
             FRAME.seal(buf, len, frame_sum);
             rt::Ok(len)
@@ -632,6 +597,35 @@ pub mod ft12_variable {
         }
         pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             Response::RspUd(*self).encode(address, buf)
+        }
+        /// Writes this message's frame for `address`, as the direction's `encode` does.
+        #[inline(always)]
+        fn write(&self, address: u8, out: &mut [u8; 27]) -> rt::EncodeResult {
+            let Self {
+                identification: v_identification,
+                manufacturer: v_manufacturer,
+                version: v_version,
+                medium: v_medium,
+                access: v_access,
+                status: v_status,
+                signature: v_signature,
+                volume: v_volume,
+            } = *self;
+            rt::encode_in_range("identification", v_identification, 0, 99999999)?;
+            let out = rt::head(out, &[0x68, 0x15, 0x15, 0x68, 0x08, address, 0x72]);
+            out[19..21].copy_from_slice(&[0x04, 0x13]);
+            out[7..11]
+                .copy_from_slice(
+                    &(rt::to_bcd(v_identification as u64) as u32).to_le_bytes(),
+                );
+            out[11..13].copy_from_slice(&v_manufacturer.to_le_bytes());
+            out[13] = v_version;
+            out[14] = v_medium;
+            out[15] = v_access;
+            out[16] = v_status;
+            out[17..19].copy_from_slice(&v_signature.to_le_bytes());
+            out[21..25].copy_from_slice(&v_volume.to_le_bytes());
+            rt::Ok(out.len())
         }
         /// Reads this message from a frame whose framing and code are checked.
         #[inline(always)]

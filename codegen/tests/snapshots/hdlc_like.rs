@@ -198,14 +198,7 @@ pub mod hdlc_like {
                     rt::encode_broadcast(address, 0xFF, &request::ReadStatus::DESC)?;
                     rt::frame_mut::<6>(buf, &[0x7E, address, 0x10])?.len()
                 }
-                Self::WriteRegister(
-                    request::WriteRegister { register: v_register, value: v_value },
-                ) => {
-                    let out = rt::frame_mut::<10>(buf, &[0x7E, address, 0x20])?;
-                    out[3..5].copy_from_slice(&v_register.to_le_bytes());
-                    out[5..7].copy_from_slice(&v_value.to_le_bytes());
-                    out.len()
-                }
+                Self::WriteRegister(ref m) => m.write(address, buf)?,
             };
             FRAME.seal(buf, len, frame_sum);
             rt::Ok(len)
@@ -375,11 +368,7 @@ pub mod hdlc_like {
         fn encode_unescaped(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             rt::encode_address(address, &FRAME)?;
             let len = match *self {
-                Self::Status(response::Status { state: v_state }) => {
-                    let out = rt::frame_mut::<8>(buf, &[0x7E, address, 0x90])?;
-                    out[3..5].copy_from_slice(&v_state.to_le_bytes());
-                    out.len()
-                }
+                Self::Status(ref m) => m.write(address, buf)?,
                 Self::Ack(_) => rt::frame_mut::<6>(buf, &[0x7E, address, 0xA0])?.len(),
             };
             FRAME.seal(buf, len, frame_sum);
@@ -623,6 +612,15 @@ pub mod hdlc_like {
         pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             Request::WriteRegister(*self).encode(address, buf)
         }
+        /// Writes this message's frame for `address`, as the direction's `encode` does.
+        #[inline(always)]
+        fn write(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            let Self { register: v_register, value: v_value } = *self;
+            let out = rt::frame_mut::<10>(buf, &[0x7E, address, 0x20])?;
+            out[3..5].copy_from_slice(&v_register.to_le_bytes());
+            out[5..7].copy_from_slice(&v_value.to_le_bytes());
+            rt::Ok(out.len())
+        }
         /// Reads this message from a frame whose framing and code are checked.
         #[inline(always)]
         fn from_frame(frame: &[u8]) -> rt::DecodeResult<Self> {
@@ -644,6 +642,14 @@ pub mod hdlc_like {
         }
         pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             Response::Status(*self).encode(address, buf)
+        }
+        /// Writes this message's frame for `address`, as the direction's `encode` does.
+        #[inline(always)]
+        fn write(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            let Self { state: v_state } = *self;
+            let out = rt::frame_mut::<8>(buf, &[0x7E, address, 0x90])?;
+            out[3..5].copy_from_slice(&v_state.to_le_bytes());
+            rt::Ok(out.len())
         }
         /// Reads this message from a frame whose framing and code are checked.
         #[inline(always)]

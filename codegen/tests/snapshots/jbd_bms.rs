@@ -445,24 +445,9 @@ pub mod jbd_bms {
             rt::encode_address(address, &FRAME)?;
             let out = rt::frame_mut::<7>(buf, &[])?;
             let len = match *self {
-                Self::ReadBasicInfo(request::ReadBasicInfo { state: v_state }) => {
-                    let out = rt::head(out, &[0xDD]);
-                    out[2..4].copy_from_slice(&[0x03, 0x00]);
-                    out[1] = v_state.raw();
-                    out.len()
-                }
-                Self::ReadCellVoltages(request::ReadCellVoltages { state: v_state }) => {
-                    let out = rt::head(out, &[0xDD]);
-                    out[2..4].copy_from_slice(&[0x04, 0x00]);
-                    out[1] = v_state.raw();
-                    out.len()
-                }
-                Self::ReadVersion(request::ReadVersion { state: v_state }) => {
-                    let out = rt::head(out, &[0xDD]);
-                    out[2..4].copy_from_slice(&[0x05, 0x00]);
-                    out[1] = v_state.raw();
-                    out.len()
-                }
+                Self::ReadBasicInfo(ref m) => m.write(address, out)?,
+                Self::ReadCellVoltages(ref m) => m.write(address, out)?,
+                Self::ReadVersion(ref m) => m.write(address, out)?,
             };
             FRAME.seal(buf, len, frame_sum);
             rt::Ok(len)
@@ -687,109 +672,12 @@ pub mod jbd_bms {
         pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             rt::encode_address(address, &FRAME)?;
             let len = match *self {
-                Self::BasicInfo(
-                    response::BasicInfo {
-                        status: v_status,
-                        total_voltage: v_total_voltage,
-                        current: v_current,
-                        remaining_capacity: v_remaining_capacity,
-                        nominal_capacity: v_nominal_capacity,
-                        cycles: v_cycles,
-                        production_date: v_production_date,
-                        balance_low: v_balance_low,
-                        balance_high: v_balance_high,
-                        protection: v_protection,
-                        software_version: v_software_version,
-                        soc: v_soc,
-                        fet_control: v_fet_control,
-                        cells: v_cells,
-                        temperatures: v_temperatures,
-                    },
-                ) => {
-                    rt::encode_in_range("soc", v_soc, 0, 100)?;
-                    REPEAT_BASIC_INFO
-                        .encode_in_range(v_temperatures.as_slice(), 0, 65535)?;
-                    let frame_len = REPEAT_BASIC_INFO.encode_len(v_temperatures.len())?;
-                    let out = rt::frame_mut_len(buf, frame_len, &[0xDD, 0x03])?;
-                    LENGTH.put(out)?;
-                    out[2] = v_status.raw();
-                    out[4..6].copy_from_slice(&v_total_voltage.raw().to_be_bytes());
-                    out[6..8].copy_from_slice(&v_current.raw().to_be_bytes());
-                    out[8..10]
-                        .copy_from_slice(&v_remaining_capacity.raw().to_be_bytes());
-                    out[10..12].copy_from_slice(&v_nominal_capacity.raw().to_be_bytes());
-                    out[12..14].copy_from_slice(&v_cycles.to_be_bytes());
-                    out[14..16].copy_from_slice(&v_production_date.to_be_bytes());
-                    out[16..18].copy_from_slice(&v_balance_low.to_be_bytes());
-                    out[18..20].copy_from_slice(&v_balance_high.to_be_bytes());
-                    out[20..22].copy_from_slice(&v_protection.to_be_bytes());
-                    out[22] = v_software_version;
-                    out[23] = v_soc;
-                    out[24] = v_fet_control;
-                    out[25] = v_cells;
-                    out[26] = rt::fits(
-                        "ntc_count",
-                        REPEAT_BASIC_INFO.count_value(v_temperatures.len()) as u64,
-                        0,
-                        255,
-                    )? as u8;
-                    rt::write_elements(
-                        v_temperatures.as_slice(),
-                        2,
-                        false,
-                        &mut out[27..],
-                    );
-                    out.len()
-                }
-                Self::CellVoltages(
-                    response::CellVoltages {
-                        status: v_status,
-                        cell_voltages: v_cell_voltages,
-                    },
-                ) => {
-                    let frame_len = REPEAT_CELL_VOLTAGES
-                        .encode_len(v_cell_voltages.len())?;
-                    let out = rt::frame_mut_len(buf, frame_len, &[0xDD, 0x04])?;
-                    LENGTH.put(out)?;
-                    out[2] = v_status.raw();
-                    rt::write_elements(
-                        v_cell_voltages.as_slice(),
-                        2,
-                        false,
-                        &mut out[4..],
-                    );
-                    out.len()
-                }
-                Self::Version(
-                    response::Version { status: v_status, version: v_version },
-                ) => {
-                    let frame_len = REPEAT_VERSION.encode_len(v_version.len())?;
-                    let out = rt::frame_mut_len(buf, frame_len, &[0xDD, 0x05])?;
-                    LENGTH.put(out)?;
-                    out[2] = v_status.raw();
-                    rt::write_elements(v_version.as_slice(), 1, false, &mut out[4..]);
-                    out.len()
-                }
-                Self::BasicInfoError(response::BasicInfoError { status: v_status }) => {
-                    let out = rt::frame_mut::<7>(buf, &[0xDD, 0x03])?;
-                    out[3] = 0x00;
-                    out[2] = v_status.raw();
-                    out.len()
-                }
-                Self::CellVoltagesError(
-                    response::CellVoltagesError { status: v_status },
-                ) => {
-                    let out = rt::frame_mut::<7>(buf, &[0xDD, 0x04])?;
-                    out[3] = 0x00;
-                    out[2] = v_status.raw();
-                    out.len()
-                }
-                Self::VersionError(response::VersionError { status: v_status }) => {
-                    let out = rt::frame_mut::<7>(buf, &[0xDD, 0x05])?;
-                    out[3] = 0x00;
-                    out[2] = v_status.raw();
-                    out.len()
-                }
+                Self::BasicInfo(ref m) => m.write(address, buf)?,
+                Self::CellVoltages(ref m) => m.write(address, buf)?,
+                Self::Version(ref m) => m.write(address, buf)?,
+                Self::BasicInfoError(ref m) => m.write(address, buf)?,
+                Self::CellVoltagesError(ref m) => m.write(address, buf)?,
+                Self::VersionError(ref m) => m.write(address, buf)?,
             };
             FRAME.seal(buf, len, frame_sum);
             rt::Ok(len)
@@ -1463,6 +1351,15 @@ pub mod jbd_bms {
         pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             Request::ReadBasicInfo(*self).encode(address, buf)
         }
+        /// Writes this message's frame for `address`, as the direction's `encode` does.
+        #[inline(always)]
+        fn write(&self, address: u8, out: &mut [u8; 7]) -> rt::EncodeResult {
+            let Self { state: v_state } = *self;
+            let out = rt::head(out, &[0xDD]);
+            out[2..4].copy_from_slice(&[0x03, 0x00]);
+            out[1] = v_state.raw();
+            rt::Ok(out.len())
+        }
         /// Reads this message from a frame whose framing and code are checked.
         #[inline(always)]
         fn from_frame(frame: &[u8]) -> rt::DecodeResult<Self> {
@@ -1484,6 +1381,15 @@ pub mod jbd_bms {
         pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             Request::ReadCellVoltages(*self).encode(address, buf)
         }
+        /// Writes this message's frame for `address`, as the direction's `encode` does.
+        #[inline(always)]
+        fn write(&self, address: u8, out: &mut [u8; 7]) -> rt::EncodeResult {
+            let Self { state: v_state } = *self;
+            let out = rt::head(out, &[0xDD]);
+            out[2..4].copy_from_slice(&[0x04, 0x00]);
+            out[1] = v_state.raw();
+            rt::Ok(out.len())
+        }
         /// Reads this message from a frame whose framing and code are checked.
         #[inline(always)]
         fn from_frame(frame: &[u8]) -> rt::DecodeResult<Self> {
@@ -1504,6 +1410,15 @@ pub mod jbd_bms {
         }
         pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             Request::ReadVersion(*self).encode(address, buf)
+        }
+        /// Writes this message's frame for `address`, as the direction's `encode` does.
+        #[inline(always)]
+        fn write(&self, address: u8, out: &mut [u8; 7]) -> rt::EncodeResult {
+            let Self { state: v_state } = *self;
+            let out = rt::head(out, &[0xDD]);
+            out[2..4].copy_from_slice(&[0x05, 0x00]);
+            out[1] = v_state.raw();
+            rt::Ok(out.len())
         }
         /// Reads this message from a frame whose framing and code are checked.
         #[inline(always)]
@@ -1559,6 +1474,54 @@ pub mod jbd_bms {
         pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             Response::BasicInfo(*self).encode(address, buf)
         }
+        /// Writes this message's frame for `address`, as the direction's `encode` does.
+        #[inline(always)]
+        fn write(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            let Self {
+                status: v_status,
+                total_voltage: v_total_voltage,
+                current: v_current,
+                remaining_capacity: v_remaining_capacity,
+                nominal_capacity: v_nominal_capacity,
+                cycles: v_cycles,
+                production_date: v_production_date,
+                balance_low: v_balance_low,
+                balance_high: v_balance_high,
+                protection: v_protection,
+                software_version: v_software_version,
+                soc: v_soc,
+                fet_control: v_fet_control,
+                cells: v_cells,
+                temperatures: v_temperatures,
+            } = *self;
+            rt::encode_in_range("soc", v_soc, 0, 100)?;
+            REPEAT_BASIC_INFO.encode_in_range(v_temperatures.as_slice(), 0, 65535)?;
+            let frame_len = REPEAT_BASIC_INFO.encode_len(v_temperatures.len())?;
+            let out = rt::frame_mut_len(buf, frame_len, &[0xDD, 0x03])?;
+            LENGTH.put(out)?;
+            out[2] = v_status.raw();
+            out[4..6].copy_from_slice(&v_total_voltage.raw().to_be_bytes());
+            out[6..8].copy_from_slice(&v_current.raw().to_be_bytes());
+            out[8..10].copy_from_slice(&v_remaining_capacity.raw().to_be_bytes());
+            out[10..12].copy_from_slice(&v_nominal_capacity.raw().to_be_bytes());
+            out[12..14].copy_from_slice(&v_cycles.to_be_bytes());
+            out[14..16].copy_from_slice(&v_production_date.to_be_bytes());
+            out[16..18].copy_from_slice(&v_balance_low.to_be_bytes());
+            out[18..20].copy_from_slice(&v_balance_high.to_be_bytes());
+            out[20..22].copy_from_slice(&v_protection.to_be_bytes());
+            out[22] = v_software_version;
+            out[23] = v_soc;
+            out[24] = v_fet_control;
+            out[25] = v_cells;
+            out[26] = rt::fits(
+                "ntc_count",
+                REPEAT_BASIC_INFO.count_value(v_temperatures.len()) as u64,
+                0,
+                255,
+            )? as u8;
+            rt::write_elements(v_temperatures.as_slice(), 2, false, &mut out[27..]);
+            rt::Ok(out.len())
+        }
     }
     impl response::CellVoltages {
         pub const NAME: &'static str = "cell_voltages";
@@ -1578,6 +1541,17 @@ pub mod jbd_bms {
         pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             Response::CellVoltages(*self).encode(address, buf)
         }
+        /// Writes this message's frame for `address`, as the direction's `encode` does.
+        #[inline(always)]
+        fn write(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            let Self { status: v_status, cell_voltages: v_cell_voltages } = *self;
+            let frame_len = REPEAT_CELL_VOLTAGES.encode_len(v_cell_voltages.len())?;
+            let out = rt::frame_mut_len(buf, frame_len, &[0xDD, 0x04])?;
+            LENGTH.put(out)?;
+            out[2] = v_status.raw();
+            rt::write_elements(v_cell_voltages.as_slice(), 2, false, &mut out[4..]);
+            rt::Ok(out.len())
+        }
     }
     impl response::Version {
         pub const NAME: &'static str = "version";
@@ -1594,6 +1568,17 @@ pub mod jbd_bms {
         pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             Response::Version(*self).encode(address, buf)
         }
+        /// Writes this message's frame for `address`, as the direction's `encode` does.
+        #[inline(always)]
+        fn write(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            let Self { status: v_status, version: v_version } = *self;
+            let frame_len = REPEAT_VERSION.encode_len(v_version.len())?;
+            let out = rt::frame_mut_len(buf, frame_len, &[0xDD, 0x05])?;
+            LENGTH.put(out)?;
+            out[2] = v_status.raw();
+            rt::write_elements(v_version.as_slice(), 1, false, &mut out[4..]);
+            rt::Ok(out.len())
+        }
     }
     impl response::BasicInfoError {
         pub const NAME: &'static str = "basic_info_error";
@@ -1606,6 +1591,15 @@ pub mod jbd_bms {
         }
         pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             Response::BasicInfoError(*self).encode(address, buf)
+        }
+        /// Writes this message's frame for `address`, as the direction's `encode` does.
+        #[inline(always)]
+        fn write(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            let Self { status: v_status } = *self;
+            let out = rt::frame_mut::<7>(buf, &[0xDD, 0x03])?;
+            out[3] = 0x00;
+            out[2] = v_status.raw();
+            rt::Ok(out.len())
         }
         /// Reads this message from a frame whose framing and code are checked.
         #[inline(always)]
@@ -1628,6 +1622,15 @@ pub mod jbd_bms {
         pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             Response::CellVoltagesError(*self).encode(address, buf)
         }
+        /// Writes this message's frame for `address`, as the direction's `encode` does.
+        #[inline(always)]
+        fn write(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            let Self { status: v_status } = *self;
+            let out = rt::frame_mut::<7>(buf, &[0xDD, 0x04])?;
+            out[3] = 0x00;
+            out[2] = v_status.raw();
+            rt::Ok(out.len())
+        }
         /// Reads this message from a frame whose framing and code are checked.
         #[inline(always)]
         fn from_frame(frame: &[u8]) -> rt::DecodeResult<Self> {
@@ -1648,6 +1651,15 @@ pub mod jbd_bms {
         }
         pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             Response::VersionError(*self).encode(address, buf)
+        }
+        /// Writes this message's frame for `address`, as the direction's `encode` does.
+        #[inline(always)]
+        fn write(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            let Self { status: v_status } = *self;
+            let out = rt::frame_mut::<7>(buf, &[0xDD, 0x05])?;
+            out[3] = 0x00;
+            out[2] = v_status.raw();
+            rt::Ok(out.len())
         }
         /// Reads this message from a frame whose framing and code are checked.
         #[inline(always)]

@@ -226,43 +226,13 @@ pub mod kiss {
         fn encode_unescaped(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             rt::encode_address(address, &FRAME)?;
             let len = match *self {
-                Self::DataFrame(request::DataFrame { frame: v_frame }) => {
-                    let frame_len = REPEAT_DATA_FRAME.encode_len(v_frame.len())?;
-                    let out = rt::frame_mut_len(buf, frame_len, &[0xC0, 0x00])?;
-                    rt::write_elements(v_frame.as_slice(), 1, false, &mut out[2..]);
-                    out.len()
-                }
-                Self::TxDelay(request::TxDelay { txdelay: v_txdelay }) => {
-                    let out = rt::frame_mut::<4>(buf, &[0xC0, 0x01])?;
-                    out[2] = v_txdelay;
-                    out.len()
-                }
-                Self::Persistence(request::Persistence { p: v_p }) => {
-                    let out = rt::frame_mut::<4>(buf, &[0xC0, 0x02])?;
-                    out[2] = v_p;
-                    out.len()
-                }
-                Self::SlotTime(request::SlotTime { slot: v_slot }) => {
-                    let out = rt::frame_mut::<4>(buf, &[0xC0, 0x03])?;
-                    out[2] = v_slot;
-                    out.len()
-                }
-                Self::TxTail(request::TxTail { tail: v_tail }) => {
-                    let out = rt::frame_mut::<4>(buf, &[0xC0, 0x04])?;
-                    out[2] = v_tail;
-                    out.len()
-                }
-                Self::FullDuplex(request::FullDuplex { duplex: v_duplex }) => {
-                    let out = rt::frame_mut::<4>(buf, &[0xC0, 0x05])?;
-                    out[2] = v_duplex;
-                    out.len()
-                }
-                Self::SetHardware(request::SetHardware { data: v_data }) => {
-                    let frame_len = REPEAT_SET_HARDWARE.encode_len(v_data.len())?;
-                    let out = rt::frame_mut_len(buf, frame_len, &[0xC0, 0x06])?;
-                    rt::write_elements(v_data.as_slice(), 1, false, &mut out[2..]);
-                    out.len()
-                }
+                Self::DataFrame(ref m) => m.write(address, buf)?,
+                Self::TxDelay(ref m) => m.write(address, buf)?,
+                Self::Persistence(ref m) => m.write(address, buf)?,
+                Self::SlotTime(ref m) => m.write(address, buf)?,
+                Self::TxTail(ref m) => m.write(address, buf)?,
+                Self::FullDuplex(ref m) => m.write(address, buf)?,
+                Self::SetHardware(ref m) => m.write(address, buf)?,
                 Self::ReturnFromKiss(_) => rt::frame_mut::<3>(buf, &[0xC0, 0xFF])?.len(),
             };
             FRAME.seal(buf, len, frame_sum);
@@ -513,12 +483,7 @@ pub mod kiss {
         fn encode_unescaped(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             rt::encode_address(address, &FRAME)?;
             let len = match *self {
-                Self::ReceivedFrame(response::ReceivedFrame { frame: v_frame }) => {
-                    let frame_len = REPEAT_RECEIVED_FRAME.encode_len(v_frame.len())?;
-                    let out = rt::frame_mut_len(buf, frame_len, &[0xC0, 0x00])?;
-                    rt::write_elements(v_frame.as_slice(), 1, false, &mut out[2..]);
-                    out.len()
-                }
+                Self::ReceivedFrame(ref m) => m.write(address, buf)?,
             };
             FRAME.seal(buf, len, frame_sum);
             rt::Ok(len)
@@ -747,6 +712,15 @@ pub mod kiss {
         pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             Request::DataFrame(*self).encode(address, buf)
         }
+        /// Writes this message's frame for `address`, as the direction's `encode` does.
+        #[inline(always)]
+        fn write(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            let Self { frame: v_frame } = *self;
+            let frame_len = REPEAT_DATA_FRAME.encode_len(v_frame.len())?;
+            let out = rt::frame_mut_len(buf, frame_len, &[0xC0, 0x00])?;
+            rt::write_elements(v_frame.as_slice(), 1, false, &mut out[2..]);
+            rt::Ok(out.len())
+        }
     }
     impl request::TxDelay {
         pub const NAME: &'static str = "tx_delay";
@@ -759,6 +733,14 @@ pub mod kiss {
         }
         pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             Request::TxDelay(*self).encode(address, buf)
+        }
+        /// Writes this message's frame for `address`, as the direction's `encode` does.
+        #[inline(always)]
+        fn write(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            let Self { txdelay: v_txdelay } = *self;
+            let out = rt::frame_mut::<4>(buf, &[0xC0, 0x01])?;
+            out[2] = v_txdelay;
+            rt::Ok(out.len())
         }
         /// Reads this message from a frame whose framing and code are checked.
         #[inline(always)]
@@ -779,6 +761,14 @@ pub mod kiss {
         pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             Request::Persistence(*self).encode(address, buf)
         }
+        /// Writes this message's frame for `address`, as the direction's `encode` does.
+        #[inline(always)]
+        fn write(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            let Self { p: v_p } = *self;
+            let out = rt::frame_mut::<4>(buf, &[0xC0, 0x02])?;
+            out[2] = v_p;
+            rt::Ok(out.len())
+        }
         /// Reads this message from a frame whose framing and code are checked.
         #[inline(always)]
         fn from_frame(frame: &[u8]) -> rt::DecodeResult<Self> {
@@ -797,6 +787,14 @@ pub mod kiss {
         }
         pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             Request::SlotTime(*self).encode(address, buf)
+        }
+        /// Writes this message's frame for `address`, as the direction's `encode` does.
+        #[inline(always)]
+        fn write(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            let Self { slot: v_slot } = *self;
+            let out = rt::frame_mut::<4>(buf, &[0xC0, 0x03])?;
+            out[2] = v_slot;
+            rt::Ok(out.len())
         }
         /// Reads this message from a frame whose framing and code are checked.
         #[inline(always)]
@@ -817,6 +815,14 @@ pub mod kiss {
         pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             Request::TxTail(*self).encode(address, buf)
         }
+        /// Writes this message's frame for `address`, as the direction's `encode` does.
+        #[inline(always)]
+        fn write(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            let Self { tail: v_tail } = *self;
+            let out = rt::frame_mut::<4>(buf, &[0xC0, 0x04])?;
+            out[2] = v_tail;
+            rt::Ok(out.len())
+        }
         /// Reads this message from a frame whose framing and code are checked.
         #[inline(always)]
         fn from_frame(frame: &[u8]) -> rt::DecodeResult<Self> {
@@ -835,6 +841,14 @@ pub mod kiss {
         }
         pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             Request::FullDuplex(*self).encode(address, buf)
+        }
+        /// Writes this message's frame for `address`, as the direction's `encode` does.
+        #[inline(always)]
+        fn write(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            let Self { duplex: v_duplex } = *self;
+            let out = rt::frame_mut::<4>(buf, &[0xC0, 0x05])?;
+            out[2] = v_duplex;
+            rt::Ok(out.len())
         }
         /// Reads this message from a frame whose framing and code are checked.
         #[inline(always)]
@@ -855,6 +869,15 @@ pub mod kiss {
         }
         pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             Request::SetHardware(*self).encode(address, buf)
+        }
+        /// Writes this message's frame for `address`, as the direction's `encode` does.
+        #[inline(always)]
+        fn write(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            let Self { data: v_data } = *self;
+            let frame_len = REPEAT_SET_HARDWARE.encode_len(v_data.len())?;
+            let out = rt::frame_mut_len(buf, frame_len, &[0xC0, 0x06])?;
+            rt::write_elements(v_data.as_slice(), 1, false, &mut out[2..]);
+            rt::Ok(out.len())
         }
     }
     impl request::ReturnFromKiss {
@@ -878,6 +901,15 @@ pub mod kiss {
         }
         pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             Response::ReceivedFrame(*self).encode(address, buf)
+        }
+        /// Writes this message's frame for `address`, as the direction's `encode` does.
+        #[inline(always)]
+        fn write(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            let Self { frame: v_frame } = *self;
+            let frame_len = REPEAT_RECEIVED_FRAME.encode_len(v_frame.len())?;
+            let out = rt::frame_mut_len(buf, frame_len, &[0xC0, 0x00])?;
+            rt::write_elements(v_frame.as_slice(), 1, false, &mut out[2..]);
+            rt::Ok(out.len())
         }
     }
     /// Each request as a struct of its own; its constants (`DESC`, which names it as

@@ -249,72 +249,9 @@ pub mod lists_after {
         pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             rt::encode_address(address, &FRAME)?;
             let len = match *self {
-                Self::ReadBlock(
-                    request::ReadBlock { first: v_first, quantity: v_quantity },
-                ) => {
-                    rt::encode_in_range("quantity", v_quantity, 1, 8)?;
-                    let out = rt::frame_mut::<7>(buf, &[0x7E, address, 0x10])?;
-                    out[3..5].copy_from_slice(&v_first.to_be_bytes());
-                    out[5] = v_quantity;
-                    out.len()
-                }
-                Self::WriteBlock(
-                    request::WriteBlock { values: v_values, flags: v_flags },
-                ) => {
-                    rt::encode_in_range("flags", v_flags, 0, 255)?;
-                    let bytes_0: usize = LISTS_WRITE_BLOCK
-                        .lists[0]
-                        .encode_len(v_values.len())? - LISTS_WRITE_BLOCK.base;
-                    let mut compact = [0u8; 7];
-                    let out = {
-                        compact[..3].copy_from_slice(&[0x7E, address, 0x11]);
-                        &mut compact
-                    };
-                    out[3] = rt::fits(
-                        "n",
-                        LISTS_WRITE_BLOCK.lists[0].count_value(v_values.len()) as u64,
-                        0,
-                        255,
-                    )? as u8;
-                    out[4..6].copy_from_slice(&v_flags.to_be_bytes());
-                    let out = LISTS_WRITE_BLOCK.expand(&compact, &[bytes_0], buf)?;
-                    rt::write_elements(v_values.as_slice(), 2, false, &mut out[4..]);
-                    out.len()
-                }
-                Self::Copy(request::Copy { sources: v_sources, targets: v_targets }) => {
-                    let bytes_0: usize = LISTS_COPY.lists[0].encode_len(v_sources.len())?
-                        - LISTS_COPY.base;
-                    LISTS_COPY.lists[1].encode_in_range(v_targets.as_slice(), 1, 1000)?;
-                    let bytes_1: usize = LISTS_COPY.lists[1].encode_len(v_targets.len())?
-                        - LISTS_COPY.base;
-                    let mut compact = [0u8; 7];
-                    let out = {
-                        compact[..3].copy_from_slice(&[0x7E, address, 0x12]);
-                        &mut compact
-                    };
-                    out[5] = 0x01;
-                    out[3] = rt::fits(
-                        "na",
-                        LISTS_COPY.lists[0].count_value(v_sources.len()) as u64,
-                        0,
-                        255,
-                    )? as u8;
-                    out[4] = rt::fits(
-                        "nb",
-                        LISTS_COPY.lists[1].count_value(v_targets.len()) as u64,
-                        0,
-                        255,
-                    )? as u8;
-                    let out = LISTS_COPY.expand(&compact, &[bytes_0, bytes_1], buf)?;
-                    rt::write_elements(v_sources.as_slice(), 1, false, &mut out[4..]);
-                    rt::write_elements(
-                        v_targets.as_slice(),
-                        2,
-                        false,
-                        &mut out[5 + bytes_0..],
-                    );
-                    out.len()
-                }
+                Self::ReadBlock(ref m) => m.write(address, buf)?,
+                Self::WriteBlock(ref m) => m.write(address, buf)?,
+                Self::Copy(ref m) => m.write(address, buf)?,
             };
             FRAME.seal(buf, len, frame_sum);
             rt::Ok(len)
@@ -538,27 +475,8 @@ pub mod lists_after {
         pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             rt::encode_address(address, &FRAME)?;
             let len = match *self {
-                Self::BlockReply(
-                    response::BlockReply { values: v_values, status: v_status },
-                ) => {
-                    let bytes_0: usize = LISTS_BLOCK_REPLY
-                        .lists[0]
-                        .encode_len(v_values.len())? - LISTS_BLOCK_REPLY.base;
-                    let mut compact = [0u8; 6];
-                    let out = {
-                        compact[..3].copy_from_slice(&[0x7E, address, 0x10]);
-                        &mut compact
-                    };
-                    out[3..5].copy_from_slice(&v_status.to_be_bytes());
-                    let out = LISTS_BLOCK_REPLY.expand(&compact, &[bytes_0], buf)?;
-                    rt::write_elements(v_values.as_slice(), 2, false, &mut out[3..]);
-                    out.len()
-                }
-                Self::Ack(response::Ack { status: v_status }) => {
-                    let out = rt::frame_mut::<5>(buf, &[0x7E, address, 0x11])?;
-                    out[3] = v_status;
-                    out.len()
-                }
+                Self::BlockReply(ref m) => m.write(address, buf)?,
+                Self::Ack(ref m) => m.write(address, buf)?,
             };
             FRAME.seal(buf, len, frame_sum);
             rt::Ok(len)
@@ -1062,6 +980,16 @@ pub mod lists_after {
         pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             Request::ReadBlock(*self).encode(address, buf)
         }
+        /// Writes this message's frame for `address`, as the direction's `encode` does.
+        #[inline(always)]
+        fn write(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            let Self { first: v_first, quantity: v_quantity } = *self;
+            rt::encode_in_range("quantity", v_quantity, 1, 8)?;
+            let out = rt::frame_mut::<7>(buf, &[0x7E, address, 0x10])?;
+            out[3..5].copy_from_slice(&v_first.to_be_bytes());
+            out[5] = v_quantity;
+            rt::Ok(out.len())
+        }
         /// Reads this message from a frame whose framing and code are checked.
         #[inline(always)]
         fn from_frame(frame: &[u8]) -> rt::DecodeResult<Self> {
@@ -1088,6 +1016,29 @@ pub mod lists_after {
         pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             Request::WriteBlock(*self).encode(address, buf)
         }
+        /// Writes this message's frame for `address`, as the direction's `encode` does.
+        #[inline(always)]
+        fn write(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            let Self { values: v_values, flags: v_flags } = *self;
+            rt::encode_in_range("flags", v_flags, 0, 255)?;
+            let bytes_0: usize = LISTS_WRITE_BLOCK.lists[0].encode_len(v_values.len())?
+                - LISTS_WRITE_BLOCK.base;
+            let mut compact = [0u8; 7];
+            let out = {
+                compact[..3].copy_from_slice(&[0x7E, address, 0x11]);
+                &mut compact
+            };
+            out[3] = rt::fits(
+                "n",
+                LISTS_WRITE_BLOCK.lists[0].count_value(v_values.len()) as u64,
+                0,
+                255,
+            )? as u8;
+            out[4..6].copy_from_slice(&v_flags.to_be_bytes());
+            let out = LISTS_WRITE_BLOCK.expand(&compact, &[bytes_0], buf)?;
+            rt::write_elements(v_values.as_slice(), 2, false, &mut out[4..]);
+            rt::Ok(out.len())
+        }
     }
     impl request::Copy {
         pub const NAME: &'static str = "copy";
@@ -1105,6 +1056,38 @@ pub mod lists_after {
         pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             Request::Copy(*self).encode(address, buf)
         }
+        /// Writes this message's frame for `address`, as the direction's `encode` does.
+        #[inline(always)]
+        fn write(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            let Self { sources: v_sources, targets: v_targets } = *self;
+            let bytes_0: usize = LISTS_COPY.lists[0].encode_len(v_sources.len())?
+                - LISTS_COPY.base;
+            LISTS_COPY.lists[1].encode_in_range(v_targets.as_slice(), 1, 1000)?;
+            let bytes_1: usize = LISTS_COPY.lists[1].encode_len(v_targets.len())?
+                - LISTS_COPY.base;
+            let mut compact = [0u8; 7];
+            let out = {
+                compact[..3].copy_from_slice(&[0x7E, address, 0x12]);
+                &mut compact
+            };
+            out[5] = 0x01;
+            out[3] = rt::fits(
+                "na",
+                LISTS_COPY.lists[0].count_value(v_sources.len()) as u64,
+                0,
+                255,
+            )? as u8;
+            out[4] = rt::fits(
+                "nb",
+                LISTS_COPY.lists[1].count_value(v_targets.len()) as u64,
+                0,
+                255,
+            )? as u8;
+            let out = LISTS_COPY.expand(&compact, &[bytes_0, bytes_1], buf)?;
+            rt::write_elements(v_sources.as_slice(), 1, false, &mut out[4..]);
+            rt::write_elements(v_targets.as_slice(), 2, false, &mut out[5 + bytes_0..]);
+            rt::Ok(out.len())
+        }
     }
     impl response::BlockReply {
         pub const NAME: &'static str = "block_reply";
@@ -1120,6 +1103,22 @@ pub mod lists_after {
         pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             Response::BlockReply(*self).encode(address, buf)
         }
+        /// Writes this message's frame for `address`, as the direction's `encode` does.
+        #[inline(always)]
+        fn write(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            let Self { values: v_values, status: v_status } = *self;
+            let bytes_0: usize = LISTS_BLOCK_REPLY.lists[0].encode_len(v_values.len())?
+                - LISTS_BLOCK_REPLY.base;
+            let mut compact = [0u8; 6];
+            let out = {
+                compact[..3].copy_from_slice(&[0x7E, address, 0x10]);
+                &mut compact
+            };
+            out[3..5].copy_from_slice(&v_status.to_be_bytes());
+            let out = LISTS_BLOCK_REPLY.expand(&compact, &[bytes_0], buf)?;
+            rt::write_elements(v_values.as_slice(), 2, false, &mut out[3..]);
+            rt::Ok(out.len())
+        }
     }
     impl response::Ack {
         pub const NAME: &'static str = "ack";
@@ -1132,6 +1131,14 @@ pub mod lists_after {
         }
         pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             Response::Ack(*self).encode(address, buf)
+        }
+        /// Writes this message's frame for `address`, as the direction's `encode` does.
+        #[inline(always)]
+        fn write(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            let Self { status: v_status } = *self;
+            let out = rt::frame_mut::<5>(buf, &[0x7E, address, 0x11])?;
+            out[3] = v_status;
+            rt::Ok(out.len())
         }
         /// Reads this message from a frame whose framing and code are checked.
         #[inline(always)]

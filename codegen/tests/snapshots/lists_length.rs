@@ -305,65 +305,8 @@ pub mod lists_length {
         pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             rt::encode_address(address, &FRAME)?;
             let len = match *self {
-                Self::Log(
-                    request::Log { channels: v_channels, samples: v_samples, seq: v_seq },
-                ) => {
-                    LISTS_LOG.lists[0].encode_in_range(v_channels.as_slice(), 0, 15)?;
-                    let bytes_0: usize = LISTS_LOG.lists[0].encode_len(v_channels.len())?
-                        - LISTS_LOG.base;
-                    LISTS_LOG
-                        .lists[1]
-                        .encode_in_range(v_samples.as_slice(), -32768, 32767)?;
-                    let bytes_1: usize = LISTS_LOG.lists[1].encode_len(v_samples.len())?
-                        - LISTS_LOG.base;
-                    let mut compact = [0u8; 7];
-                    let out = {
-                        compact[..1].copy_from_slice(&[0xC5]);
-                        &mut compact
-                    };
-                    out[2] = 0x20;
-                    out[3] = rt::fits(
-                        "n",
-                        LISTS_LOG.lists[0].count_value(v_channels.len()) as u64,
-                        0,
-                        255,
-                    )? as u8;
-                    out[4..6].copy_from_slice(&v_seq.to_le_bytes());
-                    let out = LISTS_LOG.expand(&compact, &[bytes_0, bytes_1], buf)?;
-                    rt::write_elements(v_channels.as_slice(), 1, true, &mut out[4..]);
-                    rt::write_elements(
-                        v_samples.as_slice(),
-                        2,
-                        true,
-                        &mut out[4 + bytes_0..],
-                    );
-                    LENGTH.put(out)?;
-                    out.len()
-                }
-                Self::SetOutputs(
-                    request::SetOutputs { outputs: v_outputs, mask: v_mask },
-                ) => {
-                    let bytes_0: usize = LISTS_SET_OUTPUTS
-                        .lists[0]
-                        .encode_len(v_outputs.len())? - LISTS_SET_OUTPUTS.base;
-                    let mut compact = [0u8; 7];
-                    let out = {
-                        compact[..1].copy_from_slice(&[0xC5]);
-                        &mut compact
-                    };
-                    out[2] = 0x21;
-                    out[3] = rt::fits(
-                        "bytes",
-                        LISTS_SET_OUTPUTS.lists[0].count_value(v_outputs.len()) as u64,
-                        0,
-                        255,
-                    )? as u8;
-                    out[4..6].copy_from_slice(&v_mask.to_le_bytes());
-                    let out = LISTS_SET_OUTPUTS.expand(&compact, &[bytes_0], buf)?;
-                    rt::write_bits(&v_outputs, &mut out[4..]);
-                    LENGTH.put(out)?;
-                    out.len()
-                }
+                Self::Log(ref m) => m.write(address, buf)?,
+                Self::SetOutputs(ref m) => m.write(address, buf)?,
             };
             FRAME.seal(buf, len, frame_sum);
             rt::Ok(len)
@@ -540,11 +483,7 @@ pub mod lists_length {
             rt::encode_address(address, &FRAME)?;
             let out = rt::frame_mut::<6>(buf, &[])?;
             let len = match *self {
-                Self::LogAck(response::LogAck { seq: v_seq }) => {
-                    let out = rt::head(out, &[0xC5, 0x03, 0x20]);
-                    out[3..5].copy_from_slice(&v_seq.to_le_bytes());
-                    out.len()
-                }
+                Self::LogAck(ref m) => m.write(address, out)?,
             };
             FRAME.seal(buf, len, frame_sum);
             rt::Ok(len)
@@ -886,6 +825,35 @@ pub mod lists_length {
         pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             Request::Log(*self).encode(address, buf)
         }
+        /// Writes this message's frame for `address`, as the direction's `encode` does.
+        #[inline(always)]
+        fn write(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            let Self { channels: v_channels, samples: v_samples, seq: v_seq } = *self;
+            LISTS_LOG.lists[0].encode_in_range(v_channels.as_slice(), 0, 15)?;
+            let bytes_0: usize = LISTS_LOG.lists[0].encode_len(v_channels.len())?
+                - LISTS_LOG.base;
+            LISTS_LOG.lists[1].encode_in_range(v_samples.as_slice(), -32768, 32767)?;
+            let bytes_1: usize = LISTS_LOG.lists[1].encode_len(v_samples.len())?
+                - LISTS_LOG.base;
+            let mut compact = [0u8; 7];
+            let out = {
+                compact[..1].copy_from_slice(&[0xC5]);
+                &mut compact
+            };
+            out[2] = 0x20;
+            out[3] = rt::fits(
+                "n",
+                LISTS_LOG.lists[0].count_value(v_channels.len()) as u64,
+                0,
+                255,
+            )? as u8;
+            out[4..6].copy_from_slice(&v_seq.to_le_bytes());
+            let out = LISTS_LOG.expand(&compact, &[bytes_0, bytes_1], buf)?;
+            rt::write_elements(v_channels.as_slice(), 1, true, &mut out[4..]);
+            rt::write_elements(v_samples.as_slice(), 2, true, &mut out[4 + bytes_0..]);
+            LENGTH.put(out)?;
+            rt::Ok(out.len())
+        }
     }
     impl request::SetOutputs {
         pub const NAME: &'static str = "set_outputs";
@@ -901,6 +869,30 @@ pub mod lists_length {
         pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             Request::SetOutputs(*self).encode(address, buf)
         }
+        /// Writes this message's frame for `address`, as the direction's `encode` does.
+        #[inline(always)]
+        fn write(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            let Self { outputs: v_outputs, mask: v_mask } = *self;
+            let bytes_0: usize = LISTS_SET_OUTPUTS.lists[0].encode_len(v_outputs.len())?
+                - LISTS_SET_OUTPUTS.base;
+            let mut compact = [0u8; 7];
+            let out = {
+                compact[..1].copy_from_slice(&[0xC5]);
+                &mut compact
+            };
+            out[2] = 0x21;
+            out[3] = rt::fits(
+                "bytes",
+                LISTS_SET_OUTPUTS.lists[0].count_value(v_outputs.len()) as u64,
+                0,
+                255,
+            )? as u8;
+            out[4..6].copy_from_slice(&v_mask.to_le_bytes());
+            let out = LISTS_SET_OUTPUTS.expand(&compact, &[bytes_0], buf)?;
+            rt::write_bits(&v_outputs, &mut out[4..]);
+            LENGTH.put(out)?;
+            rt::Ok(out.len())
+        }
     }
     impl response::LogAck {
         pub const NAME: &'static str = "log_ack";
@@ -913,6 +905,14 @@ pub mod lists_length {
         }
         pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             Response::LogAck(*self).encode(address, buf)
+        }
+        /// Writes this message's frame for `address`, as the direction's `encode` does.
+        #[inline(always)]
+        fn write(&self, address: u8, out: &mut [u8; 6]) -> rt::EncodeResult {
+            let Self { seq: v_seq } = *self;
+            let out = rt::head(out, &[0xC5, 0x03, 0x20]);
+            out[3..5].copy_from_slice(&v_seq.to_le_bytes());
+            rt::Ok(out.len())
         }
         /// Reads this message from a frame whose framing and code are checked.
         #[inline(always)]

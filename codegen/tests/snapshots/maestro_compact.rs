@@ -184,33 +184,8 @@ pub mod maestro_compact {
         pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             rt::encode_address(address, &FRAME)?;
             let len = match *self {
-                Self::SetTarget(
-                    request::SetTarget {
-                        channel: v_channel,
-                        target_high: v_target_high,
-                        target_low: v_target_low,
-                    },
-                ) => {
-                    rt::encode_in_range("channel", v_channel, 0, 23)?;
-                    let out = rt::frame_mut::<4>(buf, &[0x84])?;
-                    out[1] = v_channel;
-                    let field_1: u16 = (((rt::fits(
-                        "target_high",
-                        v_target_high.raw(),
-                        0,
-                        127,
-                    )? as u16) & 0x7F) << 8)
-                        | ((rt::fits("target_low", v_target_low.raw(), 0, 127)? as u16)
-                            & 0x7F);
-                    out[2..4].copy_from_slice(&field_1.to_le_bytes());
-                    out.len()
-                }
-                Self::GetPosition(request::GetPosition { channel: v_channel }) => {
-                    rt::encode_in_range("channel", v_channel, 0, 23)?;
-                    let out = rt::frame_mut::<2>(buf, &[0x90])?;
-                    out[1] = v_channel;
-                    out.len()
-                }
+                Self::SetTarget(ref m) => m.write(address, buf)?,
+                Self::GetPosition(ref m) => m.write(address, buf)?,
             };
             FRAME.seal(buf, len, frame_sum);
             rt::Ok(len)
@@ -366,11 +341,7 @@ pub mod maestro_compact {
             rt::encode_address(address, &FRAME)?;
             let out = rt::frame_mut::<2>(buf, &[])?;
             let len = match *self {
-                Self::Position(response::Position { position: v_position }) => {
-                    let out = rt::head(out, &[]);
-                    out[0..2].copy_from_slice(&v_position.raw().to_le_bytes());
-                    out.len()
-                }
+                Self::Position(ref m) => m.write(address, out)?,
             };
             FRAME.seal(buf, len, frame_sum);
             rt::Ok(len)
@@ -587,6 +558,23 @@ pub mod maestro_compact {
         pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             Request::SetTarget(*self).encode(address, buf)
         }
+        /// Writes this message's frame for `address`, as the direction's `encode` does.
+        #[inline(always)]
+        fn write(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            let Self {
+                channel: v_channel,
+                target_high: v_target_high,
+                target_low: v_target_low,
+            } = *self;
+            rt::encode_in_range("channel", v_channel, 0, 23)?;
+            let out = rt::frame_mut::<4>(buf, &[0x84])?;
+            out[1] = v_channel;
+            let field_1: u16 = (((rt::fits("target_high", v_target_high.raw(), 0, 127)?
+                as u16) & 0x7F) << 8)
+                | ((rt::fits("target_low", v_target_low.raw(), 0, 127)? as u16) & 0x7F);
+            out[2..4].copy_from_slice(&field_1.to_le_bytes());
+            rt::Ok(out.len())
+        }
         /// Reads this message from a frame whose framing and code are checked.
         #[inline(always)]
         fn from_frame(frame: &[u8]) -> rt::DecodeResult<Self> {
@@ -619,6 +607,15 @@ pub mod maestro_compact {
         pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             Request::GetPosition(*self).encode(address, buf)
         }
+        /// Writes this message's frame for `address`, as the direction's `encode` does.
+        #[inline(always)]
+        fn write(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            let Self { channel: v_channel } = *self;
+            rt::encode_in_range("channel", v_channel, 0, 23)?;
+            let out = rt::frame_mut::<2>(buf, &[0x90])?;
+            out[1] = v_channel;
+            rt::Ok(out.len())
+        }
         /// Reads this message from a frame whose framing and code are checked.
         #[inline(always)]
         fn from_frame(frame: &[u8]) -> rt::DecodeResult<Self> {
@@ -638,6 +635,14 @@ pub mod maestro_compact {
         }
         pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             Response::Position(*self).encode(address, buf)
+        }
+        /// Writes this message's frame for `address`, as the direction's `encode` does.
+        #[inline(always)]
+        fn write(&self, address: u8, out: &mut [u8; 2]) -> rt::EncodeResult {
+            let Self { position: v_position } = *self;
+            let out = rt::head(out, &[]);
+            out[0..2].copy_from_slice(&v_position.raw().to_le_bytes());
+            rt::Ok(out.len())
         }
         /// Reads this message from a frame whose framing and code are checked.
         #[inline(always)]

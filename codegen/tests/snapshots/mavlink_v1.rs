@@ -192,53 +192,8 @@ pub mod mavlink_v1 {
         pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             rt::encode_address(address, &FRAME)?;
             let len = match *self {
-                Self::Ping(
-                    request::Ping {
-                        sequence: v_sequence,
-                        sysid: v_sysid,
-                        compid: v_compid,
-                        time_usec: v_time_usec,
-                        seq: v_seq,
-                        target_system: v_target_system,
-                        target_component: v_target_component,
-                    },
-                ) => {
-                    let out = rt::frame_mut::<22>(buf, &[0xFE, 0x0E])?;
-                    out[5] = 0x04;
-                    out[2] = v_sequence;
-                    out[3] = v_sysid;
-                    out[4] = v_compid;
-                    out[6..14].copy_from_slice(&v_time_usec.to_le_bytes());
-                    out[14..18].copy_from_slice(&v_seq.to_le_bytes());
-                    out[18] = v_target_system;
-                    out[19] = v_target_component;
-                    out.len()
-                }
-                Self::RequestDataStream(
-                    request::RequestDataStream {
-                        sequence: v_sequence,
-                        sysid: v_sysid,
-                        compid: v_compid,
-                        req_message_rate: v_req_message_rate,
-                        target_system: v_target_system,
-                        target_component: v_target_component,
-                        req_stream_id: v_req_stream_id,
-                        start_stop: v_start_stop,
-                    },
-                ) => {
-                    rt::encode_in_range("start_stop", v_start_stop, 0, 1)?;
-                    let out = rt::frame_mut::<14>(buf, &[0xFE, 0x06])?;
-                    out[5] = 0x42;
-                    out[2] = v_sequence;
-                    out[3] = v_sysid;
-                    out[4] = v_compid;
-                    out[6..8].copy_from_slice(&v_req_message_rate.to_le_bytes());
-                    out[8] = v_target_system;
-                    out[9] = v_target_component;
-                    out[10] = v_req_stream_id;
-                    out[11] = v_start_stop;
-                    out.len()
-                }
+                Self::Ping(ref m) => m.write(address, buf)?,
+                Self::RequestDataStream(ref m) => m.write(address, buf)?,
             };
             FRAME.seal(buf, len, frame_sum);
             rt::Ok(len)
@@ -414,131 +369,10 @@ pub mod mavlink_v1 {
         pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             rt::encode_address(address, &FRAME)?;
             let len = match *self {
-                Self::PingReply(
-                    response::PingReply {
-                        sequence: v_sequence,
-                        sysid: v_sysid,
-                        compid: v_compid,
-                        time_usec: v_time_usec,
-                        seq: v_seq,
-                        target_system: v_target_system,
-                        target_component: v_target_component,
-                    },
-                ) => {
-                    let out = rt::frame_mut::<22>(buf, &[0xFE, 0x0E])?;
-                    out[5] = 0x04;
-                    out[2] = v_sequence;
-                    out[3] = v_sysid;
-                    out[4] = v_compid;
-                    out[6..14].copy_from_slice(&v_time_usec.to_le_bytes());
-                    out[14..18].copy_from_slice(&v_seq.to_le_bytes());
-                    out[18] = v_target_system;
-                    out[19] = v_target_component;
-                    out.len()
-                }
-                Self::Heartbeat(
-                    response::Heartbeat {
-                        sequence: v_sequence,
-                        sysid: v_sysid,
-                        compid: v_compid,
-                        custom_mode: v_custom_mode,
-                        vehicle_type: v_vehicle_type,
-                        autopilot: v_autopilot,
-                        base_mode: v_base_mode,
-                        system_status: v_system_status,
-                        mavlink_version: v_mavlink_version,
-                    },
-                ) => {
-                    let out = rt::frame_mut::<17>(buf, &[0xFE, 0x09])?;
-                    out[5] = 0x00;
-                    out[2] = v_sequence;
-                    out[3] = v_sysid;
-                    out[4] = v_compid;
-                    out[6..10].copy_from_slice(&v_custom_mode.to_le_bytes());
-                    out[10] = v_vehicle_type;
-                    out[11] = v_autopilot;
-                    out[12] = v_base_mode;
-                    out[13] = v_system_status;
-                    out[14] = v_mavlink_version;
-                    out.len()
-                }
-                Self::SysStatus(
-                    response::SysStatus {
-                        sequence: v_sequence,
-                        sysid: v_sysid,
-                        compid: v_compid,
-                        onboard_control_sensors_present: v_onboard_control_sensors_present,
-                        onboard_control_sensors_enabled: v_onboard_control_sensors_enabled,
-                        onboard_control_sensors_health: v_onboard_control_sensors_health,
-                        load: v_load,
-                        voltage_battery: v_voltage_battery,
-                        current_battery: v_current_battery,
-                        drop_rate_comm: v_drop_rate_comm,
-                        errors_comm: v_errors_comm,
-                        errors_count1: v_errors_count1,
-                        errors_count2: v_errors_count2,
-                        errors_count3: v_errors_count3,
-                        errors_count4: v_errors_count4,
-                        battery_remaining: v_battery_remaining,
-                    },
-                ) => {
-                    let out = rt::frame_mut::<39>(buf, &[0xFE, 0x1F])?;
-                    out[5] = 0x01;
-                    out[2] = v_sequence;
-                    out[3] = v_sysid;
-                    out[4] = v_compid;
-                    out[6..10]
-                        .copy_from_slice(
-                            &v_onboard_control_sensors_present.to_le_bytes(),
-                        );
-                    out[10..14]
-                        .copy_from_slice(
-                            &v_onboard_control_sensors_enabled.to_le_bytes(),
-                        );
-                    out[14..18]
-                        .copy_from_slice(
-                            &v_onboard_control_sensors_health.to_le_bytes(),
-                        );
-                    out[18..20].copy_from_slice(&v_load.to_le_bytes());
-                    out[20..22].copy_from_slice(&v_voltage_battery.to_le_bytes());
-                    out[22..24].copy_from_slice(&v_current_battery.to_le_bytes());
-                    out[24..26].copy_from_slice(&v_drop_rate_comm.to_le_bytes());
-                    out[26..28].copy_from_slice(&v_errors_comm.to_le_bytes());
-                    out[28..30].copy_from_slice(&v_errors_count1.to_le_bytes());
-                    out[30..32].copy_from_slice(&v_errors_count2.to_le_bytes());
-                    out[32..34].copy_from_slice(&v_errors_count3.to_le_bytes());
-                    out[34..36].copy_from_slice(&v_errors_count4.to_le_bytes());
-                    out[36..37].copy_from_slice(&v_battery_remaining.to_le_bytes());
-                    out.len()
-                }
-                Self::Attitude(
-                    response::Attitude {
-                        sequence: v_sequence,
-                        sysid: v_sysid,
-                        compid: v_compid,
-                        time_boot_ms: v_time_boot_ms,
-                        roll: v_roll,
-                        pitch: v_pitch,
-                        yaw: v_yaw,
-                        rollspeed: v_rollspeed,
-                        pitchspeed: v_pitchspeed,
-                        yawspeed: v_yawspeed,
-                    },
-                ) => {
-                    let out = rt::frame_mut::<36>(buf, &[0xFE, 0x1C])?;
-                    out[5] = 0x1E;
-                    out[2] = v_sequence;
-                    out[3] = v_sysid;
-                    out[4] = v_compid;
-                    out[6..10].copy_from_slice(&v_time_boot_ms.to_le_bytes());
-                    out[10..14].copy_from_slice(&v_roll.to_le_bytes());
-                    out[14..18].copy_from_slice(&v_pitch.to_le_bytes());
-                    out[18..22].copy_from_slice(&v_yaw.to_le_bytes());
-                    out[22..26].copy_from_slice(&v_rollspeed.to_le_bytes());
-                    out[26..30].copy_from_slice(&v_pitchspeed.to_le_bytes());
-                    out[30..34].copy_from_slice(&v_yawspeed.to_le_bytes());
-                    out.len()
-                }
+                Self::PingReply(ref m) => m.write(address, buf)?,
+                Self::Heartbeat(ref m) => m.write(address, buf)?,
+                Self::SysStatus(ref m) => m.write(address, buf)?,
+                Self::Attitude(ref m) => m.write(address, buf)?,
             };
             FRAME.seal(buf, len, frame_sum);
             rt::Ok(len)
@@ -838,6 +672,29 @@ pub mod mavlink_v1 {
         pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             Request::Ping(*self).encode(address, buf)
         }
+        /// Writes this message's frame for `address`, as the direction's `encode` does.
+        #[inline(always)]
+        fn write(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            let Self {
+                sequence: v_sequence,
+                sysid: v_sysid,
+                compid: v_compid,
+                time_usec: v_time_usec,
+                seq: v_seq,
+                target_system: v_target_system,
+                target_component: v_target_component,
+            } = *self;
+            let out = rt::frame_mut::<22>(buf, &[0xFE, 0x0E])?;
+            out[5] = 0x04;
+            out[2] = v_sequence;
+            out[3] = v_sysid;
+            out[4] = v_compid;
+            out[6..14].copy_from_slice(&v_time_usec.to_le_bytes());
+            out[14..18].copy_from_slice(&v_seq.to_le_bytes());
+            out[18] = v_target_system;
+            out[19] = v_target_component;
+            rt::Ok(out.len())
+        }
         /// Reads this message from a frame whose framing and code are checked.
         #[inline(always)]
         fn from_frame(frame: &[u8]) -> rt::DecodeResult<Self> {
@@ -889,6 +746,32 @@ pub mod mavlink_v1 {
         pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             Request::RequestDataStream(*self).encode(address, buf)
         }
+        /// Writes this message's frame for `address`, as the direction's `encode` does.
+        #[inline(always)]
+        fn write(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            let Self {
+                sequence: v_sequence,
+                sysid: v_sysid,
+                compid: v_compid,
+                req_message_rate: v_req_message_rate,
+                target_system: v_target_system,
+                target_component: v_target_component,
+                req_stream_id: v_req_stream_id,
+                start_stop: v_start_stop,
+            } = *self;
+            rt::encode_in_range("start_stop", v_start_stop, 0, 1)?;
+            let out = rt::frame_mut::<14>(buf, &[0xFE, 0x06])?;
+            out[5] = 0x42;
+            out[2] = v_sequence;
+            out[3] = v_sysid;
+            out[4] = v_compid;
+            out[6..8].copy_from_slice(&v_req_message_rate.to_le_bytes());
+            out[8] = v_target_system;
+            out[9] = v_target_component;
+            out[10] = v_req_stream_id;
+            out[11] = v_start_stop;
+            rt::Ok(out.len())
+        }
         /// Reads this message from a frame whose framing and code are checked.
         #[inline(always)]
         fn from_frame(frame: &[u8]) -> rt::DecodeResult<Self> {
@@ -929,6 +812,29 @@ pub mod mavlink_v1 {
         }
         pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             Response::PingReply(*self).encode(address, buf)
+        }
+        /// Writes this message's frame for `address`, as the direction's `encode` does.
+        #[inline(always)]
+        fn write(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            let Self {
+                sequence: v_sequence,
+                sysid: v_sysid,
+                compid: v_compid,
+                time_usec: v_time_usec,
+                seq: v_seq,
+                target_system: v_target_system,
+                target_component: v_target_component,
+            } = *self;
+            let out = rt::frame_mut::<22>(buf, &[0xFE, 0x0E])?;
+            out[5] = 0x04;
+            out[2] = v_sequence;
+            out[3] = v_sysid;
+            out[4] = v_compid;
+            out[6..14].copy_from_slice(&v_time_usec.to_le_bytes());
+            out[14..18].copy_from_slice(&v_seq.to_le_bytes());
+            out[18] = v_target_system;
+            out[19] = v_target_component;
+            rt::Ok(out.len())
         }
         /// Reads this message from a frame whose framing and code are checked.
         #[inline(always)]
@@ -981,6 +887,33 @@ pub mod mavlink_v1 {
         }
         pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             Response::Heartbeat(*self).encode(address, buf)
+        }
+        /// Writes this message's frame for `address`, as the direction's `encode` does.
+        #[inline(always)]
+        fn write(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            let Self {
+                sequence: v_sequence,
+                sysid: v_sysid,
+                compid: v_compid,
+                custom_mode: v_custom_mode,
+                vehicle_type: v_vehicle_type,
+                autopilot: v_autopilot,
+                base_mode: v_base_mode,
+                system_status: v_system_status,
+                mavlink_version: v_mavlink_version,
+            } = *self;
+            let out = rt::frame_mut::<17>(buf, &[0xFE, 0x09])?;
+            out[5] = 0x00;
+            out[2] = v_sequence;
+            out[3] = v_sysid;
+            out[4] = v_compid;
+            out[6..10].copy_from_slice(&v_custom_mode.to_le_bytes());
+            out[10] = v_vehicle_type;
+            out[11] = v_autopilot;
+            out[12] = v_base_mode;
+            out[13] = v_system_status;
+            out[14] = v_mavlink_version;
+            rt::Ok(out.len())
         }
         /// Reads this message from a frame whose framing and code are checked.
         #[inline(always)]
@@ -1055,6 +988,48 @@ pub mod mavlink_v1 {
         pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             Response::SysStatus(*self).encode(address, buf)
         }
+        /// Writes this message's frame for `address`, as the direction's `encode` does.
+        #[inline(always)]
+        fn write(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            let Self {
+                sequence: v_sequence,
+                sysid: v_sysid,
+                compid: v_compid,
+                onboard_control_sensors_present: v_onboard_control_sensors_present,
+                onboard_control_sensors_enabled: v_onboard_control_sensors_enabled,
+                onboard_control_sensors_health: v_onboard_control_sensors_health,
+                load: v_load,
+                voltage_battery: v_voltage_battery,
+                current_battery: v_current_battery,
+                drop_rate_comm: v_drop_rate_comm,
+                errors_comm: v_errors_comm,
+                errors_count1: v_errors_count1,
+                errors_count2: v_errors_count2,
+                errors_count3: v_errors_count3,
+                errors_count4: v_errors_count4,
+                battery_remaining: v_battery_remaining,
+            } = *self;
+            let out = rt::frame_mut::<39>(buf, &[0xFE, 0x1F])?;
+            out[5] = 0x01;
+            out[2] = v_sequence;
+            out[3] = v_sysid;
+            out[4] = v_compid;
+            out[6..10].copy_from_slice(&v_onboard_control_sensors_present.to_le_bytes());
+            out[10..14]
+                .copy_from_slice(&v_onboard_control_sensors_enabled.to_le_bytes());
+            out[14..18].copy_from_slice(&v_onboard_control_sensors_health.to_le_bytes());
+            out[18..20].copy_from_slice(&v_load.to_le_bytes());
+            out[20..22].copy_from_slice(&v_voltage_battery.to_le_bytes());
+            out[22..24].copy_from_slice(&v_current_battery.to_le_bytes());
+            out[24..26].copy_from_slice(&v_drop_rate_comm.to_le_bytes());
+            out[26..28].copy_from_slice(&v_errors_comm.to_le_bytes());
+            out[28..30].copy_from_slice(&v_errors_count1.to_le_bytes());
+            out[30..32].copy_from_slice(&v_errors_count2.to_le_bytes());
+            out[32..34].copy_from_slice(&v_errors_count3.to_le_bytes());
+            out[34..36].copy_from_slice(&v_errors_count4.to_le_bytes());
+            out[36..37].copy_from_slice(&v_battery_remaining.to_le_bytes());
+            rt::Ok(out.len())
+        }
         /// Reads this message from a frame whose framing and code are checked.
         #[inline(always)]
         fn from_frame(frame: &[u8]) -> rt::DecodeResult<Self> {
@@ -1123,6 +1098,35 @@ pub mod mavlink_v1 {
         }
         pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             Response::Attitude(*self).encode(address, buf)
+        }
+        /// Writes this message's frame for `address`, as the direction's `encode` does.
+        #[inline(always)]
+        fn write(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            let Self {
+                sequence: v_sequence,
+                sysid: v_sysid,
+                compid: v_compid,
+                time_boot_ms: v_time_boot_ms,
+                roll: v_roll,
+                pitch: v_pitch,
+                yaw: v_yaw,
+                rollspeed: v_rollspeed,
+                pitchspeed: v_pitchspeed,
+                yawspeed: v_yawspeed,
+            } = *self;
+            let out = rt::frame_mut::<36>(buf, &[0xFE, 0x1C])?;
+            out[5] = 0x1E;
+            out[2] = v_sequence;
+            out[3] = v_sysid;
+            out[4] = v_compid;
+            out[6..10].copy_from_slice(&v_time_boot_ms.to_le_bytes());
+            out[10..14].copy_from_slice(&v_roll.to_le_bytes());
+            out[14..18].copy_from_slice(&v_pitch.to_le_bytes());
+            out[18..22].copy_from_slice(&v_yaw.to_le_bytes());
+            out[22..26].copy_from_slice(&v_rollspeed.to_le_bytes());
+            out[26..30].copy_from_slice(&v_pitchspeed.to_le_bytes());
+            out[30..34].copy_from_slice(&v_yawspeed.to_le_bytes());
+            rt::Ok(out.len())
         }
         /// Reads this message from a frame whose framing and code are checked.
         #[inline(always)]

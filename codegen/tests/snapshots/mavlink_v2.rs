@@ -226,63 +226,8 @@ pub mod mavlink_v2 {
         fn encode_laid_out(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             rt::encode_address(address, &FRAME)?;
             let len = match *self {
-                Self::Ping(
-                    request::Ping {
-                        incompat_flags: v_incompat_flags,
-                        compat_flags: v_compat_flags,
-                        sequence: v_sequence,
-                        sysid: v_sysid,
-                        compid: v_compid,
-                        time_usec: v_time_usec,
-                        seq: v_seq,
-                        target_system: v_target_system,
-                        target_component: v_target_component,
-                    },
-                ) => {
-                    rt::encode_in_range("incompat_flags", v_incompat_flags, 0, 0)?;
-                    let out = rt::frame_mut::<26>(buf, &[0xFD, 0x0E])?;
-                    out[7..10].copy_from_slice(&[0x04, 0x00, 0x00]);
-                    out[2] = v_incompat_flags;
-                    out[3] = v_compat_flags;
-                    out[4] = v_sequence;
-                    out[5] = v_sysid;
-                    out[6] = v_compid;
-                    out[10..18].copy_from_slice(&v_time_usec.to_le_bytes());
-                    out[18..22].copy_from_slice(&v_seq.to_le_bytes());
-                    out[22] = v_target_system;
-                    out[23] = v_target_component;
-                    out.len()
-                }
-                Self::RequestDataStream(
-                    request::RequestDataStream {
-                        incompat_flags: v_incompat_flags,
-                        compat_flags: v_compat_flags,
-                        sequence: v_sequence,
-                        sysid: v_sysid,
-                        compid: v_compid,
-                        req_message_rate: v_req_message_rate,
-                        target_system: v_target_system,
-                        target_component: v_target_component,
-                        req_stream_id: v_req_stream_id,
-                        start_stop: v_start_stop,
-                    },
-                ) => {
-                    rt::encode_in_range("incompat_flags", v_incompat_flags, 0, 0)?;
-                    rt::encode_in_range("start_stop", v_start_stop, 0, 1)?;
-                    let out = rt::frame_mut::<18>(buf, &[0xFD, 0x06])?;
-                    out[7..10].copy_from_slice(&[0x42, 0x00, 0x00]);
-                    out[2] = v_incompat_flags;
-                    out[3] = v_compat_flags;
-                    out[4] = v_sequence;
-                    out[5] = v_sysid;
-                    out[6] = v_compid;
-                    out[10..12].copy_from_slice(&v_req_message_rate.to_le_bytes());
-                    out[12] = v_target_system;
-                    out[13] = v_target_component;
-                    out[14] = v_req_stream_id;
-                    out[15] = v_start_stop;
-                    out.len()
-                }
+                Self::Ping(ref m) => m.write(address, buf)?,
+                Self::RequestDataStream(ref m) => m.write(address, buf)?,
             };
             FRAME.seal(buf, len, frame_sum);
             rt::Ok(len)
@@ -486,234 +431,12 @@ pub mod mavlink_v2 {
         fn encode_laid_out(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             rt::encode_address(address, &FRAME)?;
             let len = match *self {
-                Self::PingReply(
-                    response::PingReply {
-                        incompat_flags: v_incompat_flags,
-                        compat_flags: v_compat_flags,
-                        sequence: v_sequence,
-                        sysid: v_sysid,
-                        compid: v_compid,
-                        time_usec: v_time_usec,
-                        seq: v_seq,
-                        target_system: v_target_system,
-                        target_component: v_target_component,
-                    },
-                ) => {
-                    rt::encode_in_range("incompat_flags", v_incompat_flags, 0, 0)?;
-                    let out = rt::frame_mut::<26>(buf, &[0xFD, 0x0E])?;
-                    out[7..10].copy_from_slice(&[0x04, 0x00, 0x00]);
-                    out[2] = v_incompat_flags;
-                    out[3] = v_compat_flags;
-                    out[4] = v_sequence;
-                    out[5] = v_sysid;
-                    out[6] = v_compid;
-                    out[10..18].copy_from_slice(&v_time_usec.to_le_bytes());
-                    out[18..22].copy_from_slice(&v_seq.to_le_bytes());
-                    out[22] = v_target_system;
-                    out[23] = v_target_component;
-                    out.len()
-                }
-                Self::Heartbeat(
-                    response::Heartbeat {
-                        incompat_flags: v_incompat_flags,
-                        compat_flags: v_compat_flags,
-                        sequence: v_sequence,
-                        sysid: v_sysid,
-                        compid: v_compid,
-                        custom_mode: v_custom_mode,
-                        vehicle_type: v_vehicle_type,
-                        autopilot: v_autopilot,
-                        base_mode: v_base_mode,
-                        system_status: v_system_status,
-                        mavlink_version: v_mavlink_version,
-                    },
-                ) => {
-                    rt::encode_in_range("incompat_flags", v_incompat_flags, 0, 0)?;
-                    let out = rt::frame_mut::<21>(buf, &[0xFD, 0x09])?;
-                    out[7..10].copy_from_slice(&[0x00, 0x00, 0x00]);
-                    out[2] = v_incompat_flags;
-                    out[3] = v_compat_flags;
-                    out[4] = v_sequence;
-                    out[5] = v_sysid;
-                    out[6] = v_compid;
-                    out[10..14].copy_from_slice(&v_custom_mode.to_le_bytes());
-                    out[14] = v_vehicle_type;
-                    out[15] = v_autopilot;
-                    out[16] = v_base_mode;
-                    out[17] = v_system_status;
-                    out[18] = v_mavlink_version;
-                    out.len()
-                }
-                Self::SysStatus(
-                    response::SysStatus {
-                        incompat_flags: v_incompat_flags,
-                        compat_flags: v_compat_flags,
-                        sequence: v_sequence,
-                        sysid: v_sysid,
-                        compid: v_compid,
-                        onboard_control_sensors_present: v_onboard_control_sensors_present,
-                        onboard_control_sensors_enabled: v_onboard_control_sensors_enabled,
-                        onboard_control_sensors_health: v_onboard_control_sensors_health,
-                        load: v_load,
-                        voltage_battery: v_voltage_battery,
-                        current_battery: v_current_battery,
-                        drop_rate_comm: v_drop_rate_comm,
-                        errors_comm: v_errors_comm,
-                        errors_count1: v_errors_count1,
-                        errors_count2: v_errors_count2,
-                        errors_count3: v_errors_count3,
-                        errors_count4: v_errors_count4,
-                        battery_remaining: v_battery_remaining,
-                        onboard_control_sensors_present_extended: v_onboard_control_sensors_present_extended,
-                        onboard_control_sensors_enabled_extended: v_onboard_control_sensors_enabled_extended,
-                        onboard_control_sensors_health_extended: v_onboard_control_sensors_health_extended,
-                    },
-                ) => {
-                    rt::encode_in_range("incompat_flags", v_incompat_flags, 0, 0)?;
-                    let out = rt::frame_mut::<55>(buf, &[0xFD, 0x2B])?;
-                    out[7..10].copy_from_slice(&[0x01, 0x00, 0x00]);
-                    out[2] = v_incompat_flags;
-                    out[3] = v_compat_flags;
-                    out[4] = v_sequence;
-                    out[5] = v_sysid;
-                    out[6] = v_compid;
-                    out[10..14]
-                        .copy_from_slice(
-                            &v_onboard_control_sensors_present.to_le_bytes(),
-                        );
-                    out[14..18]
-                        .copy_from_slice(
-                            &v_onboard_control_sensors_enabled.to_le_bytes(),
-                        );
-                    out[18..22]
-                        .copy_from_slice(
-                            &v_onboard_control_sensors_health.to_le_bytes(),
-                        );
-                    out[22..24].copy_from_slice(&v_load.to_le_bytes());
-                    out[24..26].copy_from_slice(&v_voltage_battery.to_le_bytes());
-                    out[26..28].copy_from_slice(&v_current_battery.to_le_bytes());
-                    out[28..30].copy_from_slice(&v_drop_rate_comm.to_le_bytes());
-                    out[30..32].copy_from_slice(&v_errors_comm.to_le_bytes());
-                    out[32..34].copy_from_slice(&v_errors_count1.to_le_bytes());
-                    out[34..36].copy_from_slice(&v_errors_count2.to_le_bytes());
-                    out[36..38].copy_from_slice(&v_errors_count3.to_le_bytes());
-                    out[38..40].copy_from_slice(&v_errors_count4.to_le_bytes());
-                    out[40..41].copy_from_slice(&v_battery_remaining.to_le_bytes());
-                    out[41..45]
-                        .copy_from_slice(
-                            &v_onboard_control_sensors_present_extended.to_le_bytes(),
-                        );
-                    out[45..49]
-                        .copy_from_slice(
-                            &v_onboard_control_sensors_enabled_extended.to_le_bytes(),
-                        );
-                    out[49..53]
-                        .copy_from_slice(
-                            &v_onboard_control_sensors_health_extended.to_le_bytes(),
-                        );
-                    out.len()
-                }
-                Self::Attitude(
-                    response::Attitude {
-                        incompat_flags: v_incompat_flags,
-                        compat_flags: v_compat_flags,
-                        sequence: v_sequence,
-                        sysid: v_sysid,
-                        compid: v_compid,
-                        time_boot_ms: v_time_boot_ms,
-                        roll: v_roll,
-                        pitch: v_pitch,
-                        yaw: v_yaw,
-                        rollspeed: v_rollspeed,
-                        pitchspeed: v_pitchspeed,
-                        yawspeed: v_yawspeed,
-                    },
-                ) => {
-                    rt::encode_in_range("incompat_flags", v_incompat_flags, 0, 0)?;
-                    let out = rt::frame_mut::<40>(buf, &[0xFD, 0x1C])?;
-                    out[7..10].copy_from_slice(&[0x1E, 0x00, 0x00]);
-                    out[2] = v_incompat_flags;
-                    out[3] = v_compat_flags;
-                    out[4] = v_sequence;
-                    out[5] = v_sysid;
-                    out[6] = v_compid;
-                    out[10..14].copy_from_slice(&v_time_boot_ms.to_le_bytes());
-                    out[14..18].copy_from_slice(&v_roll.to_le_bytes());
-                    out[18..22].copy_from_slice(&v_pitch.to_le_bytes());
-                    out[22..26].copy_from_slice(&v_yaw.to_le_bytes());
-                    out[26..30].copy_from_slice(&v_rollspeed.to_le_bytes());
-                    out[30..34].copy_from_slice(&v_pitchspeed.to_le_bytes());
-                    out[34..38].copy_from_slice(&v_yawspeed.to_le_bytes());
-                    out.len()
-                }
-                Self::AttitudeQuaternion(
-                    response::AttitudeQuaternion {
-                        incompat_flags: v_incompat_flags,
-                        compat_flags: v_compat_flags,
-                        sequence: v_sequence,
-                        sysid: v_sysid,
-                        compid: v_compid,
-                        time_boot_ms: v_time_boot_ms,
-                        q1: v_q1,
-                        q2: v_q2,
-                        q3: v_q3,
-                        q4: v_q4,
-                        rollspeed: v_rollspeed,
-                        pitchspeed: v_pitchspeed,
-                        yawspeed: v_yawspeed,
-                        repr_offset_q: v_repr_offset_q,
-                    },
-                ) => {
-                    rt::encode_in_range("incompat_flags", v_incompat_flags, 0, 0)?;
-                    let out = rt::frame_mut::<60>(buf, &[0xFD, 0x30])?;
-                    out[7..10].copy_from_slice(&[0x1F, 0x00, 0x00]);
-                    out[2] = v_incompat_flags;
-                    out[3] = v_compat_flags;
-                    out[4] = v_sequence;
-                    out[5] = v_sysid;
-                    out[6] = v_compid;
-                    out[10..14].copy_from_slice(&v_time_boot_ms.to_le_bytes());
-                    out[14..18].copy_from_slice(&v_q1.to_le_bytes());
-                    out[18..22].copy_from_slice(&v_q2.to_le_bytes());
-                    out[22..26].copy_from_slice(&v_q3.to_le_bytes());
-                    out[26..30].copy_from_slice(&v_q4.to_le_bytes());
-                    out[30..34].copy_from_slice(&v_rollspeed.to_le_bytes());
-                    out[34..38].copy_from_slice(&v_pitchspeed.to_le_bytes());
-                    out[38..42].copy_from_slice(&v_yawspeed.to_le_bytes());
-                    rt::write_fixed(
-                        "repr_offset_q",
-                        v_repr_offset_q.as_slice(),
-                        4,
-                        4,
-                        true,
-                        false,
-                        &mut out[42..58],
-                    )?;
-                    out.len()
-                }
-                Self::RawRpm(
-                    response::RawRpm {
-                        incompat_flags: v_incompat_flags,
-                        compat_flags: v_compat_flags,
-                        sequence: v_sequence,
-                        sysid: v_sysid,
-                        compid: v_compid,
-                        frequency: v_frequency,
-                        index: v_index,
-                    },
-                ) => {
-                    rt::encode_in_range("incompat_flags", v_incompat_flags, 0, 0)?;
-                    let out = rt::frame_mut::<17>(buf, &[0xFD, 0x05])?;
-                    out[7..10].copy_from_slice(&[0x53, 0x01, 0x00]);
-                    out[2] = v_incompat_flags;
-                    out[3] = v_compat_flags;
-                    out[4] = v_sequence;
-                    out[5] = v_sysid;
-                    out[6] = v_compid;
-                    out[10..14].copy_from_slice(&v_frequency.to_le_bytes());
-                    out[14] = v_index;
-                    out.len()
-                }
+                Self::PingReply(ref m) => m.write(address, buf)?,
+                Self::Heartbeat(ref m) => m.write(address, buf)?,
+                Self::SysStatus(ref m) => m.write(address, buf)?,
+                Self::Attitude(ref m) => m.write(address, buf)?,
+                Self::AttitudeQuaternion(ref m) => m.write(address, buf)?,
+                Self::RawRpm(ref m) => m.write(address, buf)?,
             };
             FRAME.seal(buf, len, frame_sum);
             rt::Ok(len)
@@ -1061,6 +784,34 @@ pub mod mavlink_v2 {
         pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             Request::Ping(*self).encode(address, buf)
         }
+        /// Writes this message's frame for `address`, as the direction's `encode` does.
+        #[inline(always)]
+        fn write(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            let Self {
+                incompat_flags: v_incompat_flags,
+                compat_flags: v_compat_flags,
+                sequence: v_sequence,
+                sysid: v_sysid,
+                compid: v_compid,
+                time_usec: v_time_usec,
+                seq: v_seq,
+                target_system: v_target_system,
+                target_component: v_target_component,
+            } = *self;
+            rt::encode_in_range("incompat_flags", v_incompat_flags, 0, 0)?;
+            let out = rt::frame_mut::<26>(buf, &[0xFD, 0x0E])?;
+            out[7..10].copy_from_slice(&[0x04, 0x00, 0x00]);
+            out[2] = v_incompat_flags;
+            out[3] = v_compat_flags;
+            out[4] = v_sequence;
+            out[5] = v_sysid;
+            out[6] = v_compid;
+            out[10..18].copy_from_slice(&v_time_usec.to_le_bytes());
+            out[18..22].copy_from_slice(&v_seq.to_le_bytes());
+            out[22] = v_target_system;
+            out[23] = v_target_component;
+            rt::Ok(out.len())
+        }
         /// Reads this message from a frame whose framing and code are checked.
         #[inline(always)]
         fn from_frame(frame: &[u8]) -> rt::DecodeResult<Self> {
@@ -1123,6 +874,37 @@ pub mod mavlink_v2 {
         pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             Request::RequestDataStream(*self).encode(address, buf)
         }
+        /// Writes this message's frame for `address`, as the direction's `encode` does.
+        #[inline(always)]
+        fn write(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            let Self {
+                incompat_flags: v_incompat_flags,
+                compat_flags: v_compat_flags,
+                sequence: v_sequence,
+                sysid: v_sysid,
+                compid: v_compid,
+                req_message_rate: v_req_message_rate,
+                target_system: v_target_system,
+                target_component: v_target_component,
+                req_stream_id: v_req_stream_id,
+                start_stop: v_start_stop,
+            } = *self;
+            rt::encode_in_range("incompat_flags", v_incompat_flags, 0, 0)?;
+            rt::encode_in_range("start_stop", v_start_stop, 0, 1)?;
+            let out = rt::frame_mut::<18>(buf, &[0xFD, 0x06])?;
+            out[7..10].copy_from_slice(&[0x42, 0x00, 0x00]);
+            out[2] = v_incompat_flags;
+            out[3] = v_compat_flags;
+            out[4] = v_sequence;
+            out[5] = v_sysid;
+            out[6] = v_compid;
+            out[10..12].copy_from_slice(&v_req_message_rate.to_le_bytes());
+            out[12] = v_target_system;
+            out[13] = v_target_component;
+            out[14] = v_req_stream_id;
+            out[15] = v_start_stop;
+            rt::Ok(out.len())
+        }
         /// Reads this message from a frame whose framing and code are checked.
         #[inline(always)]
         fn from_frame(frame: &[u8]) -> rt::DecodeResult<Self> {
@@ -1174,6 +956,34 @@ pub mod mavlink_v2 {
         }
         pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             Response::PingReply(*self).encode(address, buf)
+        }
+        /// Writes this message's frame for `address`, as the direction's `encode` does.
+        #[inline(always)]
+        fn write(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            let Self {
+                incompat_flags: v_incompat_flags,
+                compat_flags: v_compat_flags,
+                sequence: v_sequence,
+                sysid: v_sysid,
+                compid: v_compid,
+                time_usec: v_time_usec,
+                seq: v_seq,
+                target_system: v_target_system,
+                target_component: v_target_component,
+            } = *self;
+            rt::encode_in_range("incompat_flags", v_incompat_flags, 0, 0)?;
+            let out = rt::frame_mut::<26>(buf, &[0xFD, 0x0E])?;
+            out[7..10].copy_from_slice(&[0x04, 0x00, 0x00]);
+            out[2] = v_incompat_flags;
+            out[3] = v_compat_flags;
+            out[4] = v_sequence;
+            out[5] = v_sysid;
+            out[6] = v_compid;
+            out[10..18].copy_from_slice(&v_time_usec.to_le_bytes());
+            out[18..22].copy_from_slice(&v_seq.to_le_bytes());
+            out[22] = v_target_system;
+            out[23] = v_target_component;
+            rt::Ok(out.len())
         }
         /// Reads this message from a frame whose framing and code are checked.
         #[inline(always)]
@@ -1237,6 +1047,38 @@ pub mod mavlink_v2 {
         }
         pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             Response::Heartbeat(*self).encode(address, buf)
+        }
+        /// Writes this message's frame for `address`, as the direction's `encode` does.
+        #[inline(always)]
+        fn write(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            let Self {
+                incompat_flags: v_incompat_flags,
+                compat_flags: v_compat_flags,
+                sequence: v_sequence,
+                sysid: v_sysid,
+                compid: v_compid,
+                custom_mode: v_custom_mode,
+                vehicle_type: v_vehicle_type,
+                autopilot: v_autopilot,
+                base_mode: v_base_mode,
+                system_status: v_system_status,
+                mavlink_version: v_mavlink_version,
+            } = *self;
+            rt::encode_in_range("incompat_flags", v_incompat_flags, 0, 0)?;
+            let out = rt::frame_mut::<21>(buf, &[0xFD, 0x09])?;
+            out[7..10].copy_from_slice(&[0x00, 0x00, 0x00]);
+            out[2] = v_incompat_flags;
+            out[3] = v_compat_flags;
+            out[4] = v_sequence;
+            out[5] = v_sysid;
+            out[6] = v_compid;
+            out[10..14].copy_from_slice(&v_custom_mode.to_le_bytes());
+            out[14] = v_vehicle_type;
+            out[15] = v_autopilot;
+            out[16] = v_base_mode;
+            out[17] = v_system_status;
+            out[18] = v_mavlink_version;
+            rt::Ok(out.len())
         }
         /// Reads this message from a frame whose framing and code are checked.
         #[inline(always)]
@@ -1337,6 +1179,69 @@ pub mod mavlink_v2 {
         pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             Response::SysStatus(*self).encode(address, buf)
         }
+        /// Writes this message's frame for `address`, as the direction's `encode` does.
+        #[inline(always)]
+        fn write(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            let Self {
+                incompat_flags: v_incompat_flags,
+                compat_flags: v_compat_flags,
+                sequence: v_sequence,
+                sysid: v_sysid,
+                compid: v_compid,
+                onboard_control_sensors_present: v_onboard_control_sensors_present,
+                onboard_control_sensors_enabled: v_onboard_control_sensors_enabled,
+                onboard_control_sensors_health: v_onboard_control_sensors_health,
+                load: v_load,
+                voltage_battery: v_voltage_battery,
+                current_battery: v_current_battery,
+                drop_rate_comm: v_drop_rate_comm,
+                errors_comm: v_errors_comm,
+                errors_count1: v_errors_count1,
+                errors_count2: v_errors_count2,
+                errors_count3: v_errors_count3,
+                errors_count4: v_errors_count4,
+                battery_remaining: v_battery_remaining,
+                onboard_control_sensors_present_extended: v_onboard_control_sensors_present_extended,
+                onboard_control_sensors_enabled_extended: v_onboard_control_sensors_enabled_extended,
+                onboard_control_sensors_health_extended: v_onboard_control_sensors_health_extended,
+            } = *self;
+            rt::encode_in_range("incompat_flags", v_incompat_flags, 0, 0)?;
+            let out = rt::frame_mut::<55>(buf, &[0xFD, 0x2B])?;
+            out[7..10].copy_from_slice(&[0x01, 0x00, 0x00]);
+            out[2] = v_incompat_flags;
+            out[3] = v_compat_flags;
+            out[4] = v_sequence;
+            out[5] = v_sysid;
+            out[6] = v_compid;
+            out[10..14]
+                .copy_from_slice(&v_onboard_control_sensors_present.to_le_bytes());
+            out[14..18]
+                .copy_from_slice(&v_onboard_control_sensors_enabled.to_le_bytes());
+            out[18..22].copy_from_slice(&v_onboard_control_sensors_health.to_le_bytes());
+            out[22..24].copy_from_slice(&v_load.to_le_bytes());
+            out[24..26].copy_from_slice(&v_voltage_battery.to_le_bytes());
+            out[26..28].copy_from_slice(&v_current_battery.to_le_bytes());
+            out[28..30].copy_from_slice(&v_drop_rate_comm.to_le_bytes());
+            out[30..32].copy_from_slice(&v_errors_comm.to_le_bytes());
+            out[32..34].copy_from_slice(&v_errors_count1.to_le_bytes());
+            out[34..36].copy_from_slice(&v_errors_count2.to_le_bytes());
+            out[36..38].copy_from_slice(&v_errors_count3.to_le_bytes());
+            out[38..40].copy_from_slice(&v_errors_count4.to_le_bytes());
+            out[40..41].copy_from_slice(&v_battery_remaining.to_le_bytes());
+            out[41..45]
+                .copy_from_slice(
+                    &v_onboard_control_sensors_present_extended.to_le_bytes(),
+                );
+            out[45..49]
+                .copy_from_slice(
+                    &v_onboard_control_sensors_enabled_extended.to_le_bytes(),
+                );
+            out[49..53]
+                .copy_from_slice(
+                    &v_onboard_control_sensors_health_extended.to_le_bytes(),
+                );
+            rt::Ok(out.len())
+        }
         /// Reads this message from a frame whose framing and code are checked.
         #[inline(always)]
         fn from_frame(frame: &[u8]) -> rt::DecodeResult<Self> {
@@ -1435,6 +1340,40 @@ pub mod mavlink_v2 {
         pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             Response::Attitude(*self).encode(address, buf)
         }
+        /// Writes this message's frame for `address`, as the direction's `encode` does.
+        #[inline(always)]
+        fn write(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            let Self {
+                incompat_flags: v_incompat_flags,
+                compat_flags: v_compat_flags,
+                sequence: v_sequence,
+                sysid: v_sysid,
+                compid: v_compid,
+                time_boot_ms: v_time_boot_ms,
+                roll: v_roll,
+                pitch: v_pitch,
+                yaw: v_yaw,
+                rollspeed: v_rollspeed,
+                pitchspeed: v_pitchspeed,
+                yawspeed: v_yawspeed,
+            } = *self;
+            rt::encode_in_range("incompat_flags", v_incompat_flags, 0, 0)?;
+            let out = rt::frame_mut::<40>(buf, &[0xFD, 0x1C])?;
+            out[7..10].copy_from_slice(&[0x1E, 0x00, 0x00]);
+            out[2] = v_incompat_flags;
+            out[3] = v_compat_flags;
+            out[4] = v_sequence;
+            out[5] = v_sysid;
+            out[6] = v_compid;
+            out[10..14].copy_from_slice(&v_time_boot_ms.to_le_bytes());
+            out[14..18].copy_from_slice(&v_roll.to_le_bytes());
+            out[18..22].copy_from_slice(&v_pitch.to_le_bytes());
+            out[22..26].copy_from_slice(&v_yaw.to_le_bytes());
+            out[26..30].copy_from_slice(&v_rollspeed.to_le_bytes());
+            out[30..34].copy_from_slice(&v_pitchspeed.to_le_bytes());
+            out[34..38].copy_from_slice(&v_yawspeed.to_le_bytes());
+            rt::Ok(out.len())
+        }
         /// Reads this message from a frame whose framing and code are checked.
         #[inline(always)]
         fn from_frame(frame: &[u8]) -> rt::DecodeResult<Self> {
@@ -1522,6 +1461,52 @@ pub mod mavlink_v2 {
         pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             Response::AttitudeQuaternion(*self).encode(address, buf)
         }
+        /// Writes this message's frame for `address`, as the direction's `encode` does.
+        #[inline(always)]
+        fn write(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            let Self {
+                incompat_flags: v_incompat_flags,
+                compat_flags: v_compat_flags,
+                sequence: v_sequence,
+                sysid: v_sysid,
+                compid: v_compid,
+                time_boot_ms: v_time_boot_ms,
+                q1: v_q1,
+                q2: v_q2,
+                q3: v_q3,
+                q4: v_q4,
+                rollspeed: v_rollspeed,
+                pitchspeed: v_pitchspeed,
+                yawspeed: v_yawspeed,
+                repr_offset_q: v_repr_offset_q,
+            } = *self;
+            rt::encode_in_range("incompat_flags", v_incompat_flags, 0, 0)?;
+            let out = rt::frame_mut::<60>(buf, &[0xFD, 0x30])?;
+            out[7..10].copy_from_slice(&[0x1F, 0x00, 0x00]);
+            out[2] = v_incompat_flags;
+            out[3] = v_compat_flags;
+            out[4] = v_sequence;
+            out[5] = v_sysid;
+            out[6] = v_compid;
+            out[10..14].copy_from_slice(&v_time_boot_ms.to_le_bytes());
+            out[14..18].copy_from_slice(&v_q1.to_le_bytes());
+            out[18..22].copy_from_slice(&v_q2.to_le_bytes());
+            out[22..26].copy_from_slice(&v_q3.to_le_bytes());
+            out[26..30].copy_from_slice(&v_q4.to_le_bytes());
+            out[30..34].copy_from_slice(&v_rollspeed.to_le_bytes());
+            out[34..38].copy_from_slice(&v_pitchspeed.to_le_bytes());
+            out[38..42].copy_from_slice(&v_yawspeed.to_le_bytes());
+            rt::write_fixed(
+                "repr_offset_q",
+                v_repr_offset_q.as_slice(),
+                4,
+                4,
+                true,
+                false,
+                &mut out[42..58],
+            )?;
+            rt::Ok(out.len())
+        }
         /// Reads this message from a frame whose framing and code are checked.
         #[inline(always)]
         fn from_frame(frame: &[u8]) -> rt::DecodeResult<Self> {
@@ -1602,6 +1587,30 @@ pub mod mavlink_v2 {
         }
         pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             Response::RawRpm(*self).encode(address, buf)
+        }
+        /// Writes this message's frame for `address`, as the direction's `encode` does.
+        #[inline(always)]
+        fn write(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            let Self {
+                incompat_flags: v_incompat_flags,
+                compat_flags: v_compat_flags,
+                sequence: v_sequence,
+                sysid: v_sysid,
+                compid: v_compid,
+                frequency: v_frequency,
+                index: v_index,
+            } = *self;
+            rt::encode_in_range("incompat_flags", v_incompat_flags, 0, 0)?;
+            let out = rt::frame_mut::<17>(buf, &[0xFD, 0x05])?;
+            out[7..10].copy_from_slice(&[0x53, 0x01, 0x00]);
+            out[2] = v_incompat_flags;
+            out[3] = v_compat_flags;
+            out[4] = v_sequence;
+            out[5] = v_sysid;
+            out[6] = v_compid;
+            out[10..14].copy_from_slice(&v_frequency.to_le_bytes());
+            out[14] = v_index;
+            rt::Ok(out.len())
         }
         /// Reads this message from a frame whose framing and code are checked.
         #[inline(always)]

@@ -167,24 +167,7 @@ pub mod meter_floats {
                     rt::encode_broadcast(address, 0x00, &request::ReadReadings::DESC)?;
                     rt::frame_mut::<4>(buf, &[address, 0x04])?.len()
                 }
-                Self::SetLimits(
-                    request::SetLimits {
-                        voltage_limit: v_voltage_limit,
-                        serial: v_serial,
-                    },
-                ) => {
-                    rt::encode_broadcast(address, 0x00, &request::SetLimits::DESC)?;
-                    rt::encode_in_range(
-                        "voltage_limit",
-                        v_voltage_limit,
-                        rt::f32_raw(0f32),
-                        rt::f32_raw(300.5f32),
-                    )?;
-                    let out = rt::frame_mut::<16>(buf, &[address, 0x10])?;
-                    out[2..6].copy_from_slice(&v_voltage_limit.to_be_bytes());
-                    out[6..14].copy_from_slice(&v_serial.to_be_bytes());
-                    out.len()
-                }
+                Self::SetLimits(ref m) => m.write(address, buf)?,
             };
             FRAME.seal(buf, len, frame_sum);
             rt::Ok(len)
@@ -329,67 +312,8 @@ pub mod meter_floats {
         pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             rt::encode_address(address, &FRAME)?;
             let len = match *self {
-                Self::Readings(
-                    response::Readings {
-                        voltage: v_voltage,
-                        frequency: v_frequency,
-                        energy: v_energy,
-                        energy_swapped: v_energy_swapped,
-                        pulses: v_pulses,
-                        drift: v_drift,
-                        counter: v_counter,
-                        temperature: v_temperature,
-                    },
-                ) => {
-                    rt::encode_in_range(
-                        "frequency",
-                        v_frequency,
-                        rt::f32_raw(45f32),
-                        rt::f32_raw(65f32),
-                    )?;
-                    rt::encode_in_range(
-                        "drift",
-                        v_drift,
-                        -9000000000000,
-                        9000000000000,
-                    )?;
-                    let out = rt::frame_mut::<52>(buf, &[address, 0x04])?;
-                    {
-                        let b = v_voltage.to_be_bytes();
-                        out[2..6].copy_from_slice(&[b[2], b[3], b[0], b[1]]);
-                    }
-                    out[6..10].copy_from_slice(&v_frequency.to_be_bytes());
-                    out[10..18].copy_from_slice(&v_energy.to_be_bytes());
-                    {
-                        let b = v_energy_swapped.to_be_bytes();
-                        out[18..26]
-                            .copy_from_slice(
-                                &[b[6], b[7], b[4], b[5], b[2], b[3], b[0], b[1]],
-                            );
-                    }
-                    out[26..34].copy_from_slice(&v_pulses.to_be_bytes());
-                    out[34..42].copy_from_slice(&v_drift.to_be_bytes());
-                    {
-                        let b = v_counter.to_be_bytes();
-                        out[42..46].copy_from_slice(&[b[2], b[3], b[0], b[1]]);
-                    }
-                    {
-                        let b = v_temperature.to_be_bytes();
-                        out[46..50].copy_from_slice(&[b[2], b[3], b[0], b[1]]);
-                    }
-                    out.len()
-                }
-                Self::LimitsSet(response::LimitsSet { serial: v_serial }) => {
-                    rt::encode_in_range(
-                        "serial",
-                        v_serial,
-                        rt::u64_raw(1u64),
-                        rt::u64_raw(18446744073709551615u64),
-                    )?;
-                    let out = rt::frame_mut::<12>(buf, &[address, 0x10])?;
-                    out[2..10].copy_from_slice(&v_serial.to_be_bytes());
-                    out.len()
-                }
+                Self::Readings(ref m) => m.write(address, buf)?,
+                Self::LimitsSet(ref m) => m.write(address, buf)?,
             };
             FRAME.seal(buf, len, frame_sum);
             rt::Ok(len)
@@ -637,6 +561,22 @@ pub mod meter_floats {
         pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             Request::SetLimits(*self).encode(address, buf)
         }
+        /// Writes this message's frame for `address`, as the direction's `encode` does.
+        #[inline(always)]
+        fn write(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            let Self { voltage_limit: v_voltage_limit, serial: v_serial } = *self;
+            rt::encode_broadcast(address, 0x00, &request::SetLimits::DESC)?;
+            rt::encode_in_range(
+                "voltage_limit",
+                v_voltage_limit,
+                rt::f32_raw(0f32),
+                rt::f32_raw(300.5f32),
+            )?;
+            let out = rt::frame_mut::<16>(buf, &[address, 0x10])?;
+            out[2..6].copy_from_slice(&v_voltage_limit.to_be_bytes());
+            out[6..14].copy_from_slice(&v_serial.to_be_bytes());
+            rt::Ok(out.len())
+        }
         /// Reads this message from a frame whose framing and code are checked.
         #[inline(always)]
         fn from_frame(frame: &[u8]) -> rt::DecodeResult<Self> {
@@ -697,6 +637,50 @@ pub mod meter_floats {
         }
         pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             Response::Readings(*self).encode(address, buf)
+        }
+        /// Writes this message's frame for `address`, as the direction's `encode` does.
+        #[inline(always)]
+        fn write(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            let Self {
+                voltage: v_voltage,
+                frequency: v_frequency,
+                energy: v_energy,
+                energy_swapped: v_energy_swapped,
+                pulses: v_pulses,
+                drift: v_drift,
+                counter: v_counter,
+                temperature: v_temperature,
+            } = *self;
+            rt::encode_in_range(
+                "frequency",
+                v_frequency,
+                rt::f32_raw(45f32),
+                rt::f32_raw(65f32),
+            )?;
+            rt::encode_in_range("drift", v_drift, -9000000000000, 9000000000000)?;
+            let out = rt::frame_mut::<52>(buf, &[address, 0x04])?;
+            {
+                let b = v_voltage.to_be_bytes();
+                out[2..6].copy_from_slice(&[b[2], b[3], b[0], b[1]]);
+            }
+            out[6..10].copy_from_slice(&v_frequency.to_be_bytes());
+            out[10..18].copy_from_slice(&v_energy.to_be_bytes());
+            {
+                let b = v_energy_swapped.to_be_bytes();
+                out[18..26]
+                    .copy_from_slice(&[b[6], b[7], b[4], b[5], b[2], b[3], b[0], b[1]]);
+            }
+            out[26..34].copy_from_slice(&v_pulses.to_be_bytes());
+            out[34..42].copy_from_slice(&v_drift.to_be_bytes());
+            {
+                let b = v_counter.to_be_bytes();
+                out[42..46].copy_from_slice(&[b[2], b[3], b[0], b[1]]);
+            }
+            {
+                let b = v_temperature.to_be_bytes();
+                out[46..50].copy_from_slice(&[b[2], b[3], b[0], b[1]]);
+            }
+            rt::Ok(out.len())
         }
         /// Reads this message from a frame whose framing and code are checked.
         #[inline(always)]
@@ -787,6 +771,20 @@ pub mod meter_floats {
         }
         pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             Response::LimitsSet(*self).encode(address, buf)
+        }
+        /// Writes this message's frame for `address`, as the direction's `encode` does.
+        #[inline(always)]
+        fn write(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            let Self { serial: v_serial } = *self;
+            rt::encode_in_range(
+                "serial",
+                v_serial,
+                rt::u64_raw(1u64),
+                rt::u64_raw(18446744073709551615u64),
+            )?;
+            let out = rt::frame_mut::<12>(buf, &[address, 0x10])?;
+            out[2..10].copy_from_slice(&v_serial.to_be_bytes());
+            rt::Ok(out.len())
         }
         /// Reads this message from a frame whose framing and code are checked.
         #[inline(always)]

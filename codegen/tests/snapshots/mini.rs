@@ -367,23 +367,9 @@ pub mod mini {
         pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             rt::encode_address(address, &FRAME)?;
             let len = match *self {
-                Self::GoTo(request::GoTo { target: v_target }) => {
-                    rt::encode_in_range("target", v_target.raw(), 0, 100000)?;
-                    let out = rt::frame_mut::<9>(buf, &[0xAA, address, 0x20, 0x00])?;
-                    out[4..8].copy_from_slice(&v_target.raw().to_le_bytes());
-                    rt::seal_sum8_head(out, 4, address.wrapping_add(0xCA))
-                }
-                Self::SetMode(request::SetMode { mode: v_mode }) => {
-                    let out = rt::frame_mut::<6>(buf, &[0xAA, address, 0x30, 0x00])?;
-                    out[4] = v_mode.raw();
-                    rt::seal_sum8_head(out, 4, address.wrapping_add(0xDA))
-                }
-                Self::GetStatus(request::GetStatus { channel: v_channel }) => {
-                    rt::encode_in_range("channel", v_channel, 0, 3)?;
-                    let out = rt::frame_mut::<6>(buf, &[0xAA, address, 0x40, 0x00])?;
-                    out[4] = v_channel;
-                    rt::seal_sum8_head(out, 4, address.wrapping_add(0xEA))
-                }
+                Self::GoTo(ref m) => m.write(address, buf)?,
+                Self::SetMode(ref m) => m.write(address, buf)?,
+                Self::GetStatus(ref m) => m.write(address, buf)?,
             };
             rt::Ok(len)
         }
@@ -555,27 +541,7 @@ pub mod mini {
                     let out = rt::frame_mut::<5>(buf, &[0xAA, address, 0x30, 0x00])?;
                     rt::seal_sum8_head(out, 4, address.wrapping_add(0xDA))
                 }
-                Self::Status(
-                    response::Status {
-                        error_bits: v_error_bits,
-                        freshness: v_freshness,
-                        position: v_position,
-                        firmware: v_firmware,
-                        temperature: v_temperature,
-                    },
-                ) => {
-                    let out = rt::frame_mut::<13>(buf, &[0xAA, address, 0x40, 0x00])?;
-                    out[11] = 0x00;
-                    out[4] = v_error_bits.raw();
-                    let field_1: u16 = ((rt::fits("freshness", v_freshness, 0, 15)?
-                        as u16) << 12)
-                        | ((rt::fits("position", v_position.raw(), -2048, 2047)? as u16)
-                            & 0xFFF);
-                    out[5..7].copy_from_slice(&field_1.to_le_bytes());
-                    out[7..10].copy_from_slice(&v_firmware.0);
-                    out[10] = v_temperature.raw();
-                    rt::seal_sum8_head(out, 4, address.wrapping_add(0xEA))
-                }
+                Self::Status(ref m) => m.write(address, buf)?,
             };
             rt::Ok(len)
         }
@@ -837,6 +803,15 @@ pub mod mini {
         pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             Request::GoTo(*self).encode(address, buf)
         }
+        /// Writes this message's frame for `address`, as the direction's `encode` does.
+        #[inline(always)]
+        fn write(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            let Self { target: v_target } = *self;
+            rt::encode_in_range("target", v_target.raw(), 0, 100000)?;
+            let out = rt::frame_mut::<9>(buf, &[0xAA, address, 0x20, 0x00])?;
+            out[4..8].copy_from_slice(&v_target.raw().to_le_bytes());
+            rt::Ok(rt::seal_sum8_head(out, 4, address.wrapping_add(0xCA)))
+        }
         /// Reads this message from a frame whose framing and code are checked.
         #[inline(always)]
         fn from_frame(frame: &[u8]) -> rt::DecodeResult<Self> {
@@ -865,6 +840,14 @@ pub mod mini {
         pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             Request::SetMode(*self).encode(address, buf)
         }
+        /// Writes this message's frame for `address`, as the direction's `encode` does.
+        #[inline(always)]
+        fn write(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            let Self { mode: v_mode } = *self;
+            let out = rt::frame_mut::<6>(buf, &[0xAA, address, 0x30, 0x00])?;
+            out[4] = v_mode.raw();
+            rt::Ok(rt::seal_sum8_head(out, 4, address.wrapping_add(0xDA)))
+        }
         /// Reads this message from a frame whose framing and code are checked.
         #[inline(always)]
         fn from_frame(frame: &[u8]) -> rt::DecodeResult<Self> {
@@ -886,6 +869,15 @@ pub mod mini {
         }
         pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             Request::GetStatus(*self).encode(address, buf)
+        }
+        /// Writes this message's frame for `address`, as the direction's `encode` does.
+        #[inline(always)]
+        fn write(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            let Self { channel: v_channel } = *self;
+            rt::encode_in_range("channel", v_channel, 0, 3)?;
+            let out = rt::frame_mut::<6>(buf, &[0xAA, address, 0x40, 0x00])?;
+            out[4] = v_channel;
+            rt::Ok(rt::seal_sum8_head(out, 4, address.wrapping_add(0xEA)))
         }
         /// Reads this message from a frame whose framing and code are checked.
         #[inline(always)]
@@ -940,6 +932,28 @@ pub mod mini {
         }
         pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             Response::Status(*self).encode(address, buf)
+        }
+        /// Writes this message's frame for `address`, as the direction's `encode` does.
+        #[inline(always)]
+        fn write(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            let Self {
+                error_bits: v_error_bits,
+                freshness: v_freshness,
+                position: v_position,
+                firmware: v_firmware,
+                temperature: v_temperature,
+            } = *self;
+            let out = rt::frame_mut::<13>(buf, &[0xAA, address, 0x40, 0x00])?;
+            out[11] = 0x00;
+            out[4] = v_error_bits.raw();
+            let field_1: u16 = ((rt::fits("freshness", v_freshness, 0, 15)? as u16)
+                << 12)
+                | ((rt::fits("position", v_position.raw(), -2048, 2047)? as u16)
+                    & 0xFFF);
+            out[5..7].copy_from_slice(&field_1.to_le_bytes());
+            out[7..10].copy_from_slice(&v_firmware.0);
+            out[10] = v_temperature.raw();
+            rt::Ok(rt::seal_sum8_head(out, 4, address.wrapping_add(0xEA)))
         }
         /// Reads this message from a frame whose framing and code are checked.
         #[inline(always)]

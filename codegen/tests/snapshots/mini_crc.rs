@@ -175,11 +175,7 @@ pub mod mini_crc {
                     )?;
                     rt::head(out, &[0x69, address, 0x02, 0x00]).len()
                 }
-                Self::SetCounter(request::SetCounter { counter: v_counter }) => {
-                    let out = rt::head(out, &[0x70, address]);
-                    out[2..4].copy_from_slice(&v_counter.to_be_bytes());
-                    out.len()
-                }
+                Self::SetCounter(ref m) => m.write(address, out)?,
             };
             FRAME.seal(buf, len, frame_sum);
             rt::Ok(len)
@@ -343,26 +339,9 @@ pub mod mini_crc {
             rt::encode_address(address, &FRAME)?;
             let out = rt::frame_mut::<6>(buf, &[])?;
             let len = match *self {
-                Self::RuntimeHours(response::RuntimeHours { hours: v_hours }) => {
-                    let out = rt::head(out, &[0x22, address]);
-                    out[2..4].copy_from_slice(&v_hours.to_be_bytes());
-                    out.len()
-                }
-                Self::RuntimeMinSec(
-                    response::RuntimeMinSec { minutes: v_minutes, seconds: v_seconds },
-                ) => {
-                    rt::encode_in_range("minutes", v_minutes, 0, 59)?;
-                    rt::encode_in_range("seconds", v_seconds, 0, 59)?;
-                    let out = rt::head(out, &[0x22, address]);
-                    out[2] = v_minutes;
-                    out[3] = v_seconds;
-                    out.len()
-                }
-                Self::CounterEcho(response::CounterEcho { counter: v_counter }) => {
-                    let out = rt::head(out, &[0x70, address]);
-                    out[2..4].copy_from_slice(&v_counter.to_be_bytes());
-                    out.len()
-                }
+                Self::RuntimeHours(ref m) => m.write(address, out)?,
+                Self::RuntimeMinSec(ref m) => m.write(address, out)?,
+                Self::CounterEcho(ref m) => m.write(address, out)?,
             };
             FRAME.seal(buf, len, frame_sum);
             rt::Ok(len)
@@ -638,6 +617,14 @@ pub mod mini_crc {
         pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             Request::SetCounter(*self).encode(address, buf)
         }
+        /// Writes this message's frame for `address`, as the direction's `encode` does.
+        #[inline(always)]
+        fn write(&self, address: u8, out: &mut [u8; 6]) -> rt::EncodeResult {
+            let Self { counter: v_counter } = *self;
+            let out = rt::head(out, &[0x70, address]);
+            out[2..4].copy_from_slice(&v_counter.to_be_bytes());
+            rt::Ok(out.len())
+        }
         /// Reads this message from a frame whose framing and code are checked.
         #[inline(always)]
         fn from_frame(frame: &[u8]) -> rt::DecodeResult<Self> {
@@ -658,6 +645,14 @@ pub mod mini_crc {
         }
         pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             Response::RuntimeHours(*self).encode(address, buf)
+        }
+        /// Writes this message's frame for `address`, as the direction's `encode` does.
+        #[inline(always)]
+        fn write(&self, address: u8, out: &mut [u8; 6]) -> rt::EncodeResult {
+            let Self { hours: v_hours } = *self;
+            let out = rt::head(out, &[0x22, address]);
+            out[2..4].copy_from_slice(&v_hours.to_be_bytes());
+            rt::Ok(out.len())
         }
         /// Reads this message from a frame whose framing and code are checked.
         #[inline(always)]
@@ -684,6 +679,17 @@ pub mod mini_crc {
         pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             Response::RuntimeMinSec(*self).encode(address, buf)
         }
+        /// Writes this message's frame for `address`, as the direction's `encode` does.
+        #[inline(always)]
+        fn write(&self, address: u8, out: &mut [u8; 6]) -> rt::EncodeResult {
+            let Self { minutes: v_minutes, seconds: v_seconds } = *self;
+            rt::encode_in_range("minutes", v_minutes, 0, 59)?;
+            rt::encode_in_range("seconds", v_seconds, 0, 59)?;
+            let out = rt::head(out, &[0x22, address]);
+            out[2] = v_minutes;
+            out[3] = v_seconds;
+            rt::Ok(out.len())
+        }
         /// Reads this message from a frame whose framing and code are checked.
         #[inline(always)]
         fn from_frame(frame: &[u8]) -> rt::DecodeResult<Self> {
@@ -707,6 +713,14 @@ pub mod mini_crc {
         }
         pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             Response::CounterEcho(*self).encode(address, buf)
+        }
+        /// Writes this message's frame for `address`, as the direction's `encode` does.
+        #[inline(always)]
+        fn write(&self, address: u8, out: &mut [u8; 6]) -> rt::EncodeResult {
+            let Self { counter: v_counter } = *self;
+            let out = rt::head(out, &[0x70, address]);
+            out[2..4].copy_from_slice(&v_counter.to_be_bytes());
+            rt::Ok(out.len())
         }
         /// Reads this message from a frame whose framing and code are checked.
         #[inline(always)]

@@ -366,144 +366,14 @@ pub mod modbus {
         pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             rt::encode_address(address, &FRAME)?;
             let len = match *self {
-                Self::ReadCoils(
-                    request::ReadCoils {
-                        starting_address: v_starting_address,
-                        quantity: v_quantity,
-                    },
-                ) => {
-                    rt::encode_broadcast(address, 0x00, &request::ReadCoils::DESC)?;
-                    rt::encode_in_range("quantity", v_quantity, 1, 2000)?;
-                    let out = rt::frame_mut::<8>(buf, &[address, 0x01])?;
-                    out[2..4].copy_from_slice(&v_starting_address.to_be_bytes());
-                    out[4..6].copy_from_slice(&v_quantity.to_be_bytes());
-                    out.len()
-                }
-                Self::ReadDiscreteInputs(
-                    request::ReadDiscreteInputs {
-                        starting_address: v_starting_address,
-                        quantity: v_quantity,
-                    },
-                ) => {
-                    rt::encode_broadcast(
-                        address,
-                        0x00,
-                        &request::ReadDiscreteInputs::DESC,
-                    )?;
-                    rt::encode_in_range("quantity", v_quantity, 1, 2000)?;
-                    let out = rt::frame_mut::<8>(buf, &[address, 0x02])?;
-                    out[2..4].copy_from_slice(&v_starting_address.to_be_bytes());
-                    out[4..6].copy_from_slice(&v_quantity.to_be_bytes());
-                    out.len()
-                }
-                Self::ReadHoldingRegisters(
-                    request::ReadHoldingRegisters {
-                        starting_address: v_starting_address,
-                        quantity: v_quantity,
-                    },
-                ) => {
-                    rt::encode_broadcast(
-                        address,
-                        0x00,
-                        &request::ReadHoldingRegisters::DESC,
-                    )?;
-                    rt::encode_in_range("quantity", v_quantity, 1, 125)?;
-                    let out = rt::frame_mut::<8>(buf, &[address, 0x03])?;
-                    out[2..4].copy_from_slice(&v_starting_address.to_be_bytes());
-                    out[4..6].copy_from_slice(&v_quantity.to_be_bytes());
-                    out.len()
-                }
-                Self::ReadInputRegisters(
-                    request::ReadInputRegisters {
-                        starting_address: v_starting_address,
-                        quantity: v_quantity,
-                    },
-                ) => {
-                    rt::encode_broadcast(
-                        address,
-                        0x00,
-                        &request::ReadInputRegisters::DESC,
-                    )?;
-                    rt::encode_in_range("quantity", v_quantity, 1, 125)?;
-                    let out = rt::frame_mut::<8>(buf, &[address, 0x04])?;
-                    out[2..4].copy_from_slice(&v_starting_address.to_be_bytes());
-                    out[4..6].copy_from_slice(&v_quantity.to_be_bytes());
-                    out.len()
-                }
-                Self::WriteSingleCoil(
-                    request::WriteSingleCoil {
-                        output_address: v_output_address,
-                        output_value: v_output_value,
-                    },
-                ) => {
-                    let out = rt::frame_mut::<8>(buf, &[address, 0x05])?;
-                    out[2..4].copy_from_slice(&v_output_address.to_be_bytes());
-                    out[4..6].copy_from_slice(&v_output_value.raw().to_be_bytes());
-                    out.len()
-                }
-                Self::WriteSingleRegister(
-                    request::WriteSingleRegister {
-                        register_address: v_register_address,
-                        register_value: v_register_value,
-                    },
-                ) => {
-                    let out = rt::frame_mut::<8>(buf, &[address, 0x06])?;
-                    out[2..4].copy_from_slice(&v_register_address.to_be_bytes());
-                    out[4..6].copy_from_slice(&v_register_value.to_be_bytes());
-                    out.len()
-                }
-                Self::WriteMultipleCoils(
-                    request::WriteMultipleCoils {
-                        starting_address: v_starting_address,
-                        quantity: v_quantity,
-                        outputs: v_outputs,
-                    },
-                ) => {
-                    rt::encode_in_range("quantity", v_quantity, 1, 1968)?;
-                    let frame_len = REPEAT_WRITE_MULTIPLE_COILS
-                        .encode_len(v_outputs.len())?;
-                    let out = rt::frame_mut_len(buf, frame_len, &[address, 0x0F])?;
-                    out[2..4].copy_from_slice(&v_starting_address.to_be_bytes());
-                    let field_1: u16 = v_quantity;
-                    out[4..6].copy_from_slice(&field_1.to_be_bytes());
-                    let field_2: u8 = rt::fits(
-                        "byte_count",
-                        rt::follows(field_1 as i64, 1, 8),
-                        0,
-                        255,
-                    )? as u8;
-                    REPEAT_WRITE_MULTIPLE_COILS
-                        .encode_agrees(v_outputs.len(), field_2 as u64)?;
-                    out[6] = field_2;
-                    rt::write_bits(&v_outputs, &mut out[7..]);
-                    out.len()
-                }
-                Self::WriteMultipleRegisters(
-                    request::WriteMultipleRegisters {
-                        starting_address: v_starting_address,
-                        quantity: v_quantity,
-                        values: v_values,
-                    },
-                ) => {
-                    rt::encode_in_range("quantity", v_quantity, 1, 123)?;
-                    let frame_len = REPEAT_WRITE_MULTIPLE_REGISTERS
-                        .encode_len(v_values.len())?;
-                    let out = rt::frame_mut_len(buf, frame_len, &[address, 0x10])?;
-                    out[2..4].copy_from_slice(&v_starting_address.to_be_bytes());
-                    let field_1: u16 = v_quantity;
-                    out[4..6].copy_from_slice(&field_1.to_be_bytes());
-                    let field_2: u8 = rt::fits(
-                        "byte_count",
-                        rt::follows(field_1 as i64, 2, 1),
-                        0,
-                        255,
-                    )? as u8;
-                    REPEAT_WRITE_MULTIPLE_REGISTERS
-                        .encode_agrees(v_values.len(), field_2 as u64)?;
-                    out[6] = field_2;
-                    rt::write_elements(v_values.as_slice(), 2, false, &mut out[7..]);
-                    out.len()
-                }
+                Self::ReadCoils(ref m) => m.write(address, buf)?,
+                Self::ReadDiscreteInputs(ref m) => m.write(address, buf)?,
+                Self::ReadHoldingRegisters(ref m) => m.write(address, buf)?,
+                Self::ReadInputRegisters(ref m) => m.write(address, buf)?,
+                Self::WriteSingleCoil(ref m) => m.write(address, buf)?,
+                Self::WriteSingleRegister(ref m) => m.write(address, buf)?,
+                Self::WriteMultipleCoils(ref m) => m.write(address, buf)?,
+                Self::WriteMultipleRegisters(ref m) => m.write(address, buf)?,
             };
             FRAME.seal(buf, len, frame_sum);
             rt::Ok(len)
@@ -911,180 +781,22 @@ pub mod modbus {
         pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             rt::encode_address(address, &FRAME)?;
             let len = match *self {
-                Self::ReadCoilsReply(response::ReadCoilsReply { coils: v_coils }) => {
-                    let frame_len = REPEAT_READ_COILS_REPLY.encode_len(v_coils.len())?;
-                    let out = rt::frame_mut_len(buf, frame_len, &[address, 0x01])?;
-                    out[2] = rt::fits(
-                        "byte_count",
-                        REPEAT_READ_COILS_REPLY.count_value(v_coils.len()) as u64,
-                        0,
-                        255,
-                    )? as u8;
-                    rt::write_bits(&v_coils, &mut out[3..]);
-                    out.len()
-                }
-                Self::ReadCoilsException(
-                    response::ReadCoilsException { exception_code: v_exception_code },
-                ) => {
-                    let out = rt::frame_mut::<5>(buf, &[address, 0x81])?;
-                    out[2] = v_exception_code.raw();
-                    out.len()
-                }
-                Self::ReadDiscreteInputsReply(
-                    response::ReadDiscreteInputsReply { inputs: v_inputs },
-                ) => {
-                    let frame_len = REPEAT_READ_DISCRETE_INPUTS_REPLY
-                        .encode_len(v_inputs.len())?;
-                    let out = rt::frame_mut_len(buf, frame_len, &[address, 0x02])?;
-                    out[2] = rt::fits(
-                        "byte_count",
-                        REPEAT_READ_DISCRETE_INPUTS_REPLY.count_value(v_inputs.len())
-                            as u64,
-                        0,
-                        255,
-                    )? as u8;
-                    rt::write_bits(&v_inputs, &mut out[3..]);
-                    out.len()
-                }
-                Self::ReadDiscreteInputsException(
-                    response::ReadDiscreteInputsException {
-                        exception_code: v_exception_code,
-                    },
-                ) => {
-                    let out = rt::frame_mut::<5>(buf, &[address, 0x82])?;
-                    out[2] = v_exception_code.raw();
-                    out.len()
-                }
-                Self::ReadHoldingRegistersReply(
-                    response::ReadHoldingRegistersReply { registers: v_registers },
-                ) => {
-                    let frame_len = REPEAT_READ_HOLDING_REGISTERS_REPLY
-                        .encode_len(v_registers.len())?;
-                    let out = rt::frame_mut_len(buf, frame_len, &[address, 0x03])?;
-                    out[2] = rt::fits(
-                        "byte_count",
-                        REPEAT_READ_HOLDING_REGISTERS_REPLY
-                            .count_value(v_registers.len()) as u64,
-                        0,
-                        255,
-                    )? as u8;
-                    rt::write_elements(v_registers.as_slice(), 2, false, &mut out[3..]);
-                    out.len()
-                }
-                Self::ReadHoldingRegistersException(
-                    response::ReadHoldingRegistersException {
-                        exception_code: v_exception_code,
-                    },
-                ) => {
-                    let out = rt::frame_mut::<5>(buf, &[address, 0x83])?;
-                    out[2] = v_exception_code.raw();
-                    out.len()
-                }
-                Self::ReadInputRegistersReply(
-                    response::ReadInputRegistersReply { registers: v_registers },
-                ) => {
-                    let frame_len = REPEAT_READ_INPUT_REGISTERS_REPLY
-                        .encode_len(v_registers.len())?;
-                    let out = rt::frame_mut_len(buf, frame_len, &[address, 0x04])?;
-                    out[2] = rt::fits(
-                        "byte_count",
-                        REPEAT_READ_INPUT_REGISTERS_REPLY.count_value(v_registers.len())
-                            as u64,
-                        0,
-                        255,
-                    )? as u8;
-                    rt::write_elements(v_registers.as_slice(), 2, false, &mut out[3..]);
-                    out.len()
-                }
-                Self::ReadInputRegistersException(
-                    response::ReadInputRegistersException {
-                        exception_code: v_exception_code,
-                    },
-                ) => {
-                    let out = rt::frame_mut::<5>(buf, &[address, 0x84])?;
-                    out[2] = v_exception_code.raw();
-                    out.len()
-                }
-                Self::WriteSingleCoilReply(
-                    response::WriteSingleCoilReply {
-                        output_address: v_output_address,
-                        output_value: v_output_value,
-                    },
-                ) => {
-                    let out = rt::frame_mut::<8>(buf, &[address, 0x05])?;
-                    out[2..4].copy_from_slice(&v_output_address.to_be_bytes());
-                    out[4..6].copy_from_slice(&v_output_value.raw().to_be_bytes());
-                    out.len()
-                }
-                Self::WriteSingleCoilException(
-                    response::WriteSingleCoilException {
-                        exception_code: v_exception_code,
-                    },
-                ) => {
-                    let out = rt::frame_mut::<5>(buf, &[address, 0x85])?;
-                    out[2] = v_exception_code.raw();
-                    out.len()
-                }
-                Self::WriteSingleRegisterReply(
-                    response::WriteSingleRegisterReply {
-                        register_address: v_register_address,
-                        register_value: v_register_value,
-                    },
-                ) => {
-                    let out = rt::frame_mut::<8>(buf, &[address, 0x06])?;
-                    out[2..4].copy_from_slice(&v_register_address.to_be_bytes());
-                    out[4..6].copy_from_slice(&v_register_value.to_be_bytes());
-                    out.len()
-                }
-                Self::WriteSingleRegisterException(
-                    response::WriteSingleRegisterException {
-                        exception_code: v_exception_code,
-                    },
-                ) => {
-                    let out = rt::frame_mut::<5>(buf, &[address, 0x86])?;
-                    out[2] = v_exception_code.raw();
-                    out.len()
-                }
-                Self::WriteMultipleCoilsReply(
-                    response::WriteMultipleCoilsReply {
-                        starting_address: v_starting_address,
-                        quantity: v_quantity,
-                    },
-                ) => {
-                    let out = rt::frame_mut::<8>(buf, &[address, 0x0F])?;
-                    out[2..4].copy_from_slice(&v_starting_address.to_be_bytes());
-                    out[4..6].copy_from_slice(&v_quantity.to_be_bytes());
-                    out.len()
-                }
-                Self::WriteMultipleCoilsException(
-                    response::WriteMultipleCoilsException {
-                        exception_code: v_exception_code,
-                    },
-                ) => {
-                    let out = rt::frame_mut::<5>(buf, &[address, 0x8F])?;
-                    out[2] = v_exception_code.raw();
-                    out.len()
-                }
-                Self::WriteMultipleRegistersReply(
-                    response::WriteMultipleRegistersReply {
-                        starting_address: v_starting_address,
-                        quantity: v_quantity,
-                    },
-                ) => {
-                    let out = rt::frame_mut::<8>(buf, &[address, 0x10])?;
-                    out[2..4].copy_from_slice(&v_starting_address.to_be_bytes());
-                    out[4..6].copy_from_slice(&v_quantity.to_be_bytes());
-                    out.len()
-                }
-                Self::WriteMultipleRegistersException(
-                    response::WriteMultipleRegistersException {
-                        exception_code: v_exception_code,
-                    },
-                ) => {
-                    let out = rt::frame_mut::<5>(buf, &[address, 0x90])?;
-                    out[2] = v_exception_code.raw();
-                    out.len()
-                }
+                Self::ReadCoilsReply(ref m) => m.write(address, buf)?,
+                Self::ReadCoilsException(ref m) => m.write(address, buf)?,
+                Self::ReadDiscreteInputsReply(ref m) => m.write(address, buf)?,
+                Self::ReadDiscreteInputsException(ref m) => m.write(address, buf)?,
+                Self::ReadHoldingRegistersReply(ref m) => m.write(address, buf)?,
+                Self::ReadHoldingRegistersException(ref m) => m.write(address, buf)?,
+                Self::ReadInputRegistersReply(ref m) => m.write(address, buf)?,
+                Self::ReadInputRegistersException(ref m) => m.write(address, buf)?,
+                Self::WriteSingleCoilReply(ref m) => m.write(address, buf)?,
+                Self::WriteSingleCoilException(ref m) => m.write(address, buf)?,
+                Self::WriteSingleRegisterReply(ref m) => m.write(address, buf)?,
+                Self::WriteSingleRegisterException(ref m) => m.write(address, buf)?,
+                Self::WriteMultipleCoilsReply(ref m) => m.write(address, buf)?,
+                Self::WriteMultipleCoilsException(ref m) => m.write(address, buf)?,
+                Self::WriteMultipleRegistersReply(ref m) => m.write(address, buf)?,
+                Self::WriteMultipleRegistersException(ref m) => m.write(address, buf)?,
             };
             FRAME.seal(buf, len, frame_sum);
             rt::Ok(len)
@@ -2560,6 +2272,17 @@ pub mod modbus {
         pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             Request::ReadCoils(*self).encode(address, buf)
         }
+        /// Writes this message's frame for `address`, as the direction's `encode` does.
+        #[inline(always)]
+        fn write(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            let Self { starting_address: v_starting_address, quantity: v_quantity } = *self;
+            rt::encode_broadcast(address, 0x00, &request::ReadCoils::DESC)?;
+            rt::encode_in_range("quantity", v_quantity, 1, 2000)?;
+            let out = rt::frame_mut::<8>(buf, &[address, 0x01])?;
+            out[2..4].copy_from_slice(&v_starting_address.to_be_bytes());
+            out[4..6].copy_from_slice(&v_quantity.to_be_bytes());
+            rt::Ok(out.len())
+        }
         /// Reads this message from a frame whose framing and code are checked.
         #[inline(always)]
         fn from_frame(frame: &[u8]) -> rt::DecodeResult<Self> {
@@ -2587,6 +2310,17 @@ pub mod modbus {
         }
         pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             Request::ReadDiscreteInputs(*self).encode(address, buf)
+        }
+        /// Writes this message's frame for `address`, as the direction's `encode` does.
+        #[inline(always)]
+        fn write(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            let Self { starting_address: v_starting_address, quantity: v_quantity } = *self;
+            rt::encode_broadcast(address, 0x00, &request::ReadDiscreteInputs::DESC)?;
+            rt::encode_in_range("quantity", v_quantity, 1, 2000)?;
+            let out = rt::frame_mut::<8>(buf, &[address, 0x02])?;
+            out[2..4].copy_from_slice(&v_starting_address.to_be_bytes());
+            out[4..6].copy_from_slice(&v_quantity.to_be_bytes());
+            rt::Ok(out.len())
         }
         /// Reads this message from a frame whose framing and code are checked.
         #[inline(always)]
@@ -2616,6 +2350,17 @@ pub mod modbus {
         pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             Request::ReadHoldingRegisters(*self).encode(address, buf)
         }
+        /// Writes this message's frame for `address`, as the direction's `encode` does.
+        #[inline(always)]
+        fn write(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            let Self { starting_address: v_starting_address, quantity: v_quantity } = *self;
+            rt::encode_broadcast(address, 0x00, &request::ReadHoldingRegisters::DESC)?;
+            rt::encode_in_range("quantity", v_quantity, 1, 125)?;
+            let out = rt::frame_mut::<8>(buf, &[address, 0x03])?;
+            out[2..4].copy_from_slice(&v_starting_address.to_be_bytes());
+            out[4..6].copy_from_slice(&v_quantity.to_be_bytes());
+            rt::Ok(out.len())
+        }
         /// Reads this message from a frame whose framing and code are checked.
         #[inline(always)]
         fn from_frame(frame: &[u8]) -> rt::DecodeResult<Self> {
@@ -2644,6 +2389,17 @@ pub mod modbus {
         pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             Request::ReadInputRegisters(*self).encode(address, buf)
         }
+        /// Writes this message's frame for `address`, as the direction's `encode` does.
+        #[inline(always)]
+        fn write(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            let Self { starting_address: v_starting_address, quantity: v_quantity } = *self;
+            rt::encode_broadcast(address, 0x00, &request::ReadInputRegisters::DESC)?;
+            rt::encode_in_range("quantity", v_quantity, 1, 125)?;
+            let out = rt::frame_mut::<8>(buf, &[address, 0x04])?;
+            out[2..4].copy_from_slice(&v_starting_address.to_be_bytes());
+            out[4..6].copy_from_slice(&v_quantity.to_be_bytes());
+            rt::Ok(out.len())
+        }
         /// Reads this message from a frame whose framing and code are checked.
         #[inline(always)]
         fn from_frame(frame: &[u8]) -> rt::DecodeResult<Self> {
@@ -2671,6 +2427,18 @@ pub mod modbus {
         pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             Request::WriteSingleCoil(*self).encode(address, buf)
         }
+        /// Writes this message's frame for `address`, as the direction's `encode` does.
+        #[inline(always)]
+        fn write(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            let Self {
+                output_address: v_output_address,
+                output_value: v_output_value,
+            } = *self;
+            let out = rt::frame_mut::<8>(buf, &[address, 0x05])?;
+            out[2..4].copy_from_slice(&v_output_address.to_be_bytes());
+            out[4..6].copy_from_slice(&v_output_value.raw().to_be_bytes());
+            rt::Ok(out.len())
+        }
         /// Reads this message from a frame whose framing and code are checked.
         #[inline(always)]
         fn from_frame(frame: &[u8]) -> rt::DecodeResult<Self> {
@@ -2696,6 +2464,18 @@ pub mod modbus {
         }
         pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             Request::WriteSingleRegister(*self).encode(address, buf)
+        }
+        /// Writes this message's frame for `address`, as the direction's `encode` does.
+        #[inline(always)]
+        fn write(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            let Self {
+                register_address: v_register_address,
+                register_value: v_register_value,
+            } = *self;
+            let out = rt::frame_mut::<8>(buf, &[address, 0x06])?;
+            out[2..4].copy_from_slice(&v_register_address.to_be_bytes());
+            out[4..6].copy_from_slice(&v_register_value.to_be_bytes());
+            rt::Ok(out.len())
         }
         /// Reads this message from a frame whose framing and code are checked.
         #[inline(always)]
@@ -2726,6 +2506,31 @@ pub mod modbus {
         pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             Request::WriteMultipleCoils(*self).encode(address, buf)
         }
+        /// Writes this message's frame for `address`, as the direction's `encode` does.
+        #[inline(always)]
+        fn write(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            let Self {
+                starting_address: v_starting_address,
+                quantity: v_quantity,
+                outputs: v_outputs,
+            } = *self;
+            rt::encode_in_range("quantity", v_quantity, 1, 1968)?;
+            let frame_len = REPEAT_WRITE_MULTIPLE_COILS.encode_len(v_outputs.len())?;
+            let out = rt::frame_mut_len(buf, frame_len, &[address, 0x0F])?;
+            out[2..4].copy_from_slice(&v_starting_address.to_be_bytes());
+            let field_1: u16 = v_quantity;
+            out[4..6].copy_from_slice(&field_1.to_be_bytes());
+            let field_2: u8 = rt::fits(
+                "byte_count",
+                rt::follows(field_1 as i64, 1, 8),
+                0,
+                255,
+            )? as u8;
+            REPEAT_WRITE_MULTIPLE_COILS.encode_agrees(v_outputs.len(), field_2 as u64)?;
+            out[6] = field_2;
+            rt::write_bits(&v_outputs, &mut out[7..]);
+            rt::Ok(out.len())
+        }
     }
     impl request::WriteMultipleRegisters {
         pub const NAME: &'static str = "write_multiple_registers";
@@ -2746,6 +2551,32 @@ pub mod modbus {
         pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             Request::WriteMultipleRegisters(*self).encode(address, buf)
         }
+        /// Writes this message's frame for `address`, as the direction's `encode` does.
+        #[inline(always)]
+        fn write(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            let Self {
+                starting_address: v_starting_address,
+                quantity: v_quantity,
+                values: v_values,
+            } = *self;
+            rt::encode_in_range("quantity", v_quantity, 1, 123)?;
+            let frame_len = REPEAT_WRITE_MULTIPLE_REGISTERS.encode_len(v_values.len())?;
+            let out = rt::frame_mut_len(buf, frame_len, &[address, 0x10])?;
+            out[2..4].copy_from_slice(&v_starting_address.to_be_bytes());
+            let field_1: u16 = v_quantity;
+            out[4..6].copy_from_slice(&field_1.to_be_bytes());
+            let field_2: u8 = rt::fits(
+                "byte_count",
+                rt::follows(field_1 as i64, 2, 1),
+                0,
+                255,
+            )? as u8;
+            REPEAT_WRITE_MULTIPLE_REGISTERS
+                .encode_agrees(v_values.len(), field_2 as u64)?;
+            out[6] = field_2;
+            rt::write_elements(v_values.as_slice(), 2, false, &mut out[7..]);
+            rt::Ok(out.len())
+        }
     }
     impl response::ReadCoilsReply {
         pub const NAME: &'static str = "read_coils_reply";
@@ -2761,6 +2592,21 @@ pub mod modbus {
         pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             Response::ReadCoilsReply(*self).encode(address, buf)
         }
+        /// Writes this message's frame for `address`, as the direction's `encode` does.
+        #[inline(always)]
+        fn write(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            let Self { coils: v_coils } = *self;
+            let frame_len = REPEAT_READ_COILS_REPLY.encode_len(v_coils.len())?;
+            let out = rt::frame_mut_len(buf, frame_len, &[address, 0x01])?;
+            out[2] = rt::fits(
+                "byte_count",
+                REPEAT_READ_COILS_REPLY.count_value(v_coils.len()) as u64,
+                0,
+                255,
+            )? as u8;
+            rt::write_bits(&v_coils, &mut out[3..]);
+            rt::Ok(out.len())
+        }
     }
     impl response::ReadCoilsException {
         pub const NAME: &'static str = "read_coils_exception";
@@ -2773,6 +2619,14 @@ pub mod modbus {
         }
         pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             Response::ReadCoilsException(*self).encode(address, buf)
+        }
+        /// Writes this message's frame for `address`, as the direction's `encode` does.
+        #[inline(always)]
+        fn write(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            let Self { exception_code: v_exception_code } = *self;
+            let out = rt::frame_mut::<5>(buf, &[address, 0x81])?;
+            out[2] = v_exception_code.raw();
+            rt::Ok(out.len())
         }
         /// Reads this message from a frame whose framing and code are checked.
         #[inline(always)]
@@ -2797,6 +2651,22 @@ pub mod modbus {
         pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             Response::ReadDiscreteInputsReply(*self).encode(address, buf)
         }
+        /// Writes this message's frame for `address`, as the direction's `encode` does.
+        #[inline(always)]
+        fn write(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            let Self { inputs: v_inputs } = *self;
+            let frame_len = REPEAT_READ_DISCRETE_INPUTS_REPLY
+                .encode_len(v_inputs.len())?;
+            let out = rt::frame_mut_len(buf, frame_len, &[address, 0x02])?;
+            out[2] = rt::fits(
+                "byte_count",
+                REPEAT_READ_DISCRETE_INPUTS_REPLY.count_value(v_inputs.len()) as u64,
+                0,
+                255,
+            )? as u8;
+            rt::write_bits(&v_inputs, &mut out[3..]);
+            rt::Ok(out.len())
+        }
     }
     impl response::ReadDiscreteInputsException {
         pub const NAME: &'static str = "read_discrete_inputs_exception";
@@ -2809,6 +2679,14 @@ pub mod modbus {
         }
         pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             Response::ReadDiscreteInputsException(*self).encode(address, buf)
+        }
+        /// Writes this message's frame for `address`, as the direction's `encode` does.
+        #[inline(always)]
+        fn write(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            let Self { exception_code: v_exception_code } = *self;
+            let out = rt::frame_mut::<5>(buf, &[address, 0x82])?;
+            out[2] = v_exception_code.raw();
+            rt::Ok(out.len())
         }
         /// Reads this message from a frame whose framing and code are checked.
         #[inline(always)]
@@ -2833,6 +2711,23 @@ pub mod modbus {
         pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             Response::ReadHoldingRegistersReply(*self).encode(address, buf)
         }
+        /// Writes this message's frame for `address`, as the direction's `encode` does.
+        #[inline(always)]
+        fn write(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            let Self { registers: v_registers } = *self;
+            let frame_len = REPEAT_READ_HOLDING_REGISTERS_REPLY
+                .encode_len(v_registers.len())?;
+            let out = rt::frame_mut_len(buf, frame_len, &[address, 0x03])?;
+            out[2] = rt::fits(
+                "byte_count",
+                REPEAT_READ_HOLDING_REGISTERS_REPLY.count_value(v_registers.len())
+                    as u64,
+                0,
+                255,
+            )? as u8;
+            rt::write_elements(v_registers.as_slice(), 2, false, &mut out[3..]);
+            rt::Ok(out.len())
+        }
     }
     impl response::ReadHoldingRegistersException {
         pub const NAME: &'static str = "read_holding_registers_exception";
@@ -2845,6 +2740,14 @@ pub mod modbus {
         }
         pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             Response::ReadHoldingRegistersException(*self).encode(address, buf)
+        }
+        /// Writes this message's frame for `address`, as the direction's `encode` does.
+        #[inline(always)]
+        fn write(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            let Self { exception_code: v_exception_code } = *self;
+            let out = rt::frame_mut::<5>(buf, &[address, 0x83])?;
+            out[2] = v_exception_code.raw();
+            rt::Ok(out.len())
         }
         /// Reads this message from a frame whose framing and code are checked.
         #[inline(always)]
@@ -2869,6 +2772,22 @@ pub mod modbus {
         pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             Response::ReadInputRegistersReply(*self).encode(address, buf)
         }
+        /// Writes this message's frame for `address`, as the direction's `encode` does.
+        #[inline(always)]
+        fn write(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            let Self { registers: v_registers } = *self;
+            let frame_len = REPEAT_READ_INPUT_REGISTERS_REPLY
+                .encode_len(v_registers.len())?;
+            let out = rt::frame_mut_len(buf, frame_len, &[address, 0x04])?;
+            out[2] = rt::fits(
+                "byte_count",
+                REPEAT_READ_INPUT_REGISTERS_REPLY.count_value(v_registers.len()) as u64,
+                0,
+                255,
+            )? as u8;
+            rt::write_elements(v_registers.as_slice(), 2, false, &mut out[3..]);
+            rt::Ok(out.len())
+        }
     }
     impl response::ReadInputRegistersException {
         pub const NAME: &'static str = "read_input_registers_exception";
@@ -2881,6 +2800,14 @@ pub mod modbus {
         }
         pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             Response::ReadInputRegistersException(*self).encode(address, buf)
+        }
+        /// Writes this message's frame for `address`, as the direction's `encode` does.
+        #[inline(always)]
+        fn write(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            let Self { exception_code: v_exception_code } = *self;
+            let out = rt::frame_mut::<5>(buf, &[address, 0x84])?;
+            out[2] = v_exception_code.raw();
+            rt::Ok(out.len())
         }
         /// Reads this message from a frame whose framing and code are checked.
         #[inline(always)]
@@ -2913,6 +2840,18 @@ pub mod modbus {
         pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             Response::WriteSingleCoilReply(*self).encode(address, buf)
         }
+        /// Writes this message's frame for `address`, as the direction's `encode` does.
+        #[inline(always)]
+        fn write(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            let Self {
+                output_address: v_output_address,
+                output_value: v_output_value,
+            } = *self;
+            let out = rt::frame_mut::<8>(buf, &[address, 0x05])?;
+            out[2..4].copy_from_slice(&v_output_address.to_be_bytes());
+            out[4..6].copy_from_slice(&v_output_value.raw().to_be_bytes());
+            rt::Ok(out.len())
+        }
         /// Reads this message from a frame whose framing and code are checked.
         #[inline(always)]
         fn from_frame(frame: &[u8]) -> rt::DecodeResult<Self> {
@@ -2936,6 +2875,14 @@ pub mod modbus {
         }
         pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             Response::WriteSingleCoilException(*self).encode(address, buf)
+        }
+        /// Writes this message's frame for `address`, as the direction's `encode` does.
+        #[inline(always)]
+        fn write(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            let Self { exception_code: v_exception_code } = *self;
+            let out = rt::frame_mut::<5>(buf, &[address, 0x85])?;
+            out[2] = v_exception_code.raw();
+            rt::Ok(out.len())
         }
         /// Reads this message from a frame whose framing and code are checked.
         #[inline(always)]
@@ -2968,6 +2915,18 @@ pub mod modbus {
         pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             Response::WriteSingleRegisterReply(*self).encode(address, buf)
         }
+        /// Writes this message's frame for `address`, as the direction's `encode` does.
+        #[inline(always)]
+        fn write(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            let Self {
+                register_address: v_register_address,
+                register_value: v_register_value,
+            } = *self;
+            let out = rt::frame_mut::<8>(buf, &[address, 0x06])?;
+            out[2..4].copy_from_slice(&v_register_address.to_be_bytes());
+            out[4..6].copy_from_slice(&v_register_value.to_be_bytes());
+            rt::Ok(out.len())
+        }
         /// Reads this message from a frame whose framing and code are checked.
         #[inline(always)]
         fn from_frame(frame: &[u8]) -> rt::DecodeResult<Self> {
@@ -2991,6 +2950,14 @@ pub mod modbus {
         }
         pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             Response::WriteSingleRegisterException(*self).encode(address, buf)
+        }
+        /// Writes this message's frame for `address`, as the direction's `encode` does.
+        #[inline(always)]
+        fn write(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            let Self { exception_code: v_exception_code } = *self;
+            let out = rt::frame_mut::<5>(buf, &[address, 0x86])?;
+            out[2] = v_exception_code.raw();
+            rt::Ok(out.len())
         }
         /// Reads this message from a frame whose framing and code are checked.
         #[inline(always)]
@@ -3020,6 +2987,15 @@ pub mod modbus {
         pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             Response::WriteMultipleCoilsReply(*self).encode(address, buf)
         }
+        /// Writes this message's frame for `address`, as the direction's `encode` does.
+        #[inline(always)]
+        fn write(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            let Self { starting_address: v_starting_address, quantity: v_quantity } = *self;
+            let out = rt::frame_mut::<8>(buf, &[address, 0x0F])?;
+            out[2..4].copy_from_slice(&v_starting_address.to_be_bytes());
+            out[4..6].copy_from_slice(&v_quantity.to_be_bytes());
+            rt::Ok(out.len())
+        }
         /// Reads this message from a frame whose framing and code are checked.
         #[inline(always)]
         fn from_frame(frame: &[u8]) -> rt::DecodeResult<Self> {
@@ -3043,6 +3019,14 @@ pub mod modbus {
         }
         pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             Response::WriteMultipleCoilsException(*self).encode(address, buf)
+        }
+        /// Writes this message's frame for `address`, as the direction's `encode` does.
+        #[inline(always)]
+        fn write(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            let Self { exception_code: v_exception_code } = *self;
+            let out = rt::frame_mut::<5>(buf, &[address, 0x8F])?;
+            out[2] = v_exception_code.raw();
+            rt::Ok(out.len())
         }
         /// Reads this message from a frame whose framing and code are checked.
         #[inline(always)]
@@ -3072,6 +3056,15 @@ pub mod modbus {
         pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             Response::WriteMultipleRegistersReply(*self).encode(address, buf)
         }
+        /// Writes this message's frame for `address`, as the direction's `encode` does.
+        #[inline(always)]
+        fn write(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            let Self { starting_address: v_starting_address, quantity: v_quantity } = *self;
+            let out = rt::frame_mut::<8>(buf, &[address, 0x10])?;
+            out[2..4].copy_from_slice(&v_starting_address.to_be_bytes());
+            out[4..6].copy_from_slice(&v_quantity.to_be_bytes());
+            rt::Ok(out.len())
+        }
         /// Reads this message from a frame whose framing and code are checked.
         #[inline(always)]
         fn from_frame(frame: &[u8]) -> rt::DecodeResult<Self> {
@@ -3095,6 +3088,14 @@ pub mod modbus {
         }
         pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             Response::WriteMultipleRegistersException(*self).encode(address, buf)
+        }
+        /// Writes this message's frame for `address`, as the direction's `encode` does.
+        #[inline(always)]
+        fn write(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            let Self { exception_code: v_exception_code } = *self;
+            let out = rt::frame_mut::<5>(buf, &[address, 0x90])?;
+            out[2] = v_exception_code.raw();
+            rt::Ok(out.len())
         }
         /// Reads this message from a frame whose framing and code are checked.
         #[inline(always)]

@@ -374,36 +374,9 @@ pub mod msp_by_direction {
         pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             rt::encode_address(address, &FRAME)?;
             let len = match *self {
-                Self::ApiVersionReply(
-                    response::ApiVersionReply {
-                        protocol_version: v_protocol_version,
-                        api_major: v_api_major,
-                        api_minor: v_api_minor,
-                    },
-                ) => {
-                    let out = rt::frame_mut::<9>(buf, &[0x24, 0x4D, 0x3E, 0x03, 0x01])?;
-                    out[5] = v_protocol_version;
-                    out[6] = v_api_major;
-                    out[7] = v_api_minor;
-                    out.len()
-                }
-                Self::RcReply(response::RcReply { channels: v_channels }) => {
-                    let frame_len = REPEAT_RC_REPLY.encode_len(v_channels.len())?;
-                    let out = rt::frame_mut_len(buf, frame_len, &[0x24, 0x4D, 0x3E])?;
-                    LENGTH.put(out)?;
-                    out[4] = 0x69;
-                    rt::write_elements(v_channels.as_slice(), 2, true, &mut out[5..]);
-                    out.len()
-                }
-                Self::AttitudeReply(
-                    response::AttitudeReply { roll: v_roll, pitch: v_pitch, yaw: v_yaw },
-                ) => {
-                    let out = rt::frame_mut::<12>(buf, &[0x24, 0x4D, 0x3E, 0x06, 0x6C])?;
-                    out[5..7].copy_from_slice(&v_roll.raw().to_le_bytes());
-                    out[7..9].copy_from_slice(&v_pitch.raw().to_le_bytes());
-                    out[9..11].copy_from_slice(&v_yaw.to_le_bytes());
-                    out.len()
-                }
+                Self::ApiVersionReply(ref m) => m.write(address, buf)?,
+                Self::RcReply(ref m) => m.write(address, buf)?,
+                Self::AttitudeReply(ref m) => m.write(address, buf)?,
             };
             FRAME.seal(buf, len, frame_sum);
             rt::Ok(len)
@@ -849,6 +822,20 @@ pub mod msp_by_direction {
         pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             Response::ApiVersionReply(*self).encode(address, buf)
         }
+        /// Writes this message's frame for `address`, as the direction's `encode` does.
+        #[inline(always)]
+        fn write(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            let Self {
+                protocol_version: v_protocol_version,
+                api_major: v_api_major,
+                api_minor: v_api_minor,
+            } = *self;
+            let out = rt::frame_mut::<9>(buf, &[0x24, 0x4D, 0x3E, 0x03, 0x01])?;
+            out[5] = v_protocol_version;
+            out[6] = v_api_major;
+            out[7] = v_api_minor;
+            rt::Ok(out.len())
+        }
         /// Reads this message from a frame whose framing and code are checked.
         #[inline(always)]
         fn from_frame(frame: &[u8]) -> rt::DecodeResult<Self> {
@@ -873,6 +860,17 @@ pub mod msp_by_direction {
         pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             Response::RcReply(*self).encode(address, buf)
         }
+        /// Writes this message's frame for `address`, as the direction's `encode` does.
+        #[inline(always)]
+        fn write(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            let Self { channels: v_channels } = *self;
+            let frame_len = REPEAT_RC_REPLY.encode_len(v_channels.len())?;
+            let out = rt::frame_mut_len(buf, frame_len, &[0x24, 0x4D, 0x3E])?;
+            LENGTH.put(out)?;
+            out[4] = 0x69;
+            rt::write_elements(v_channels.as_slice(), 2, true, &mut out[5..]);
+            rt::Ok(out.len())
+        }
     }
     impl response::AttitudeReply {
         pub const NAME: &'static str = "attitude_reply";
@@ -889,6 +887,16 @@ pub mod msp_by_direction {
         }
         pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             Response::AttitudeReply(*self).encode(address, buf)
+        }
+        /// Writes this message's frame for `address`, as the direction's `encode` does.
+        #[inline(always)]
+        fn write(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            let Self { roll: v_roll, pitch: v_pitch, yaw: v_yaw } = *self;
+            let out = rt::frame_mut::<12>(buf, &[0x24, 0x4D, 0x3E, 0x06, 0x6C])?;
+            out[5..7].copy_from_slice(&v_roll.raw().to_le_bytes());
+            out[7..9].copy_from_slice(&v_pitch.raw().to_le_bytes());
+            out[9..11].copy_from_slice(&v_yaw.to_le_bytes());
+            rt::Ok(out.len())
         }
         /// Reads this message from a frame whose framing and code are checked.
         #[inline(always)]

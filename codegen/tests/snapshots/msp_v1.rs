@@ -351,33 +351,9 @@ pub mod msp_v1 {
         pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             rt::encode_address(address, &FRAME)?;
             let len = match *self {
-                Self::ApiVersionReply(
-                    response::ApiVersionReply {
-                        protocol_version: v_protocol_version,
-                        api_major: v_api_major,
-                        api_minor: v_api_minor,
-                    },
-                ) => {
-                    let out = rt::frame_mut::<9>(buf, &[0x24, 0x4D, 0x3E, 0x03, 0x01])?;
-                    out[5] = v_protocol_version;
-                    out[6] = v_api_major;
-                    out[7] = v_api_minor;
-                    out.len()
-                }
-                Self::AttitudeReply(
-                    response::AttitudeReply { roll: v_roll, pitch: v_pitch, yaw: v_yaw },
-                ) => {
-                    let out = rt::frame_mut::<12>(buf, &[0x24, 0x4D, 0x3E, 0x06, 0x6C])?;
-                    out[5..7].copy_from_slice(&v_roll.raw().to_le_bytes());
-                    out[7..9].copy_from_slice(&v_pitch.raw().to_le_bytes());
-                    out[9..11].copy_from_slice(&v_yaw.to_le_bytes());
-                    out.len()
-                }
-                Self::Error(response::Error { cmd: v_cmd }) => {
-                    let out = rt::frame_mut::<6>(buf, &[0x24, 0x4D, 0x21, 0x00])?;
-                    out[4] = v_cmd;
-                    out.len()
-                }
+                Self::ApiVersionReply(ref m) => m.write(address, buf)?,
+                Self::AttitudeReply(ref m) => m.write(address, buf)?,
+                Self::Error(ref m) => m.write(address, buf)?,
             };
             FRAME.seal(buf, len, frame_sum);
             rt::Ok(len)
@@ -708,6 +684,20 @@ pub mod msp_v1 {
         pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             Response::ApiVersionReply(*self).encode(address, buf)
         }
+        /// Writes this message's frame for `address`, as the direction's `encode` does.
+        #[inline(always)]
+        fn write(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            let Self {
+                protocol_version: v_protocol_version,
+                api_major: v_api_major,
+                api_minor: v_api_minor,
+            } = *self;
+            let out = rt::frame_mut::<9>(buf, &[0x24, 0x4D, 0x3E, 0x03, 0x01])?;
+            out[5] = v_protocol_version;
+            out[6] = v_api_major;
+            out[7] = v_api_minor;
+            rt::Ok(out.len())
+        }
         /// Reads this message from a frame whose framing and code are checked.
         #[inline(always)]
         fn from_frame(frame: &[u8]) -> rt::DecodeResult<Self> {
@@ -737,6 +727,16 @@ pub mod msp_v1 {
         pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             Response::AttitudeReply(*self).encode(address, buf)
         }
+        /// Writes this message's frame for `address`, as the direction's `encode` does.
+        #[inline(always)]
+        fn write(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            let Self { roll: v_roll, pitch: v_pitch, yaw: v_yaw } = *self;
+            let out = rt::frame_mut::<12>(buf, &[0x24, 0x4D, 0x3E, 0x06, 0x6C])?;
+            out[5..7].copy_from_slice(&v_roll.raw().to_le_bytes());
+            out[7..9].copy_from_slice(&v_pitch.raw().to_le_bytes());
+            out[9..11].copy_from_slice(&v_yaw.to_le_bytes());
+            rt::Ok(out.len())
+        }
         /// Reads this message from a frame whose framing and code are checked.
         #[inline(always)]
         fn from_frame(frame: &[u8]) -> rt::DecodeResult<Self> {
@@ -761,6 +761,14 @@ pub mod msp_v1 {
         }
         pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             Response::Error(*self).encode(address, buf)
+        }
+        /// Writes this message's frame for `address`, as the direction's `encode` does.
+        #[inline(always)]
+        fn write(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            let Self { cmd: v_cmd } = *self;
+            let out = rt::frame_mut::<6>(buf, &[0x24, 0x4D, 0x21, 0x00])?;
+            out[4] = v_cmd;
+            rt::Ok(out.len())
         }
         /// Reads this message from a frame whose framing and code are checked.
         #[inline(always)]

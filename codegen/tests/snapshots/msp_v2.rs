@@ -172,20 +172,8 @@ pub mod msp_v2 {
             rt::encode_address(address, &FRAME)?;
             let out = rt::frame_mut::<9>(buf, &[])?;
             let len = match *self {
-                Self::ApiVersion(request::ApiVersion { dont_reply: v_dont_reply }) => {
-                    let out = rt::head(out, &[0x24, 0x58, 0x3C]);
-                    out[4..8].copy_from_slice(&[0x01, 0x00, 0x00, 0x00]);
-                    let field_0: u8 = v_dont_reply as u8;
-                    out[3] = field_0;
-                    out.len()
-                }
-                Self::FcVariant(request::FcVariant { dont_reply: v_dont_reply }) => {
-                    let out = rt::head(out, &[0x24, 0x58, 0x3C]);
-                    out[4..8].copy_from_slice(&[0x02, 0x00, 0x00, 0x00]);
-                    let field_0: u8 = v_dont_reply as u8;
-                    out[3] = field_0;
-                    out.len()
-                }
+                Self::ApiVersion(ref m) => m.write(address, out)?,
+                Self::FcVariant(ref m) => m.write(address, out)?,
             };
             FRAME.seal(buf, len, frame_sum);
             rt::Ok(len)
@@ -344,36 +332,8 @@ pub mod msp_v2 {
         pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             rt::encode_address(address, &FRAME)?;
             let len = match *self {
-                Self::ApiVersionReply(
-                    response::ApiVersionReply {
-                        dont_reply: v_dont_reply,
-                        protocol_version: v_protocol_version,
-                        api_major: v_api_major,
-                        api_minor: v_api_minor,
-                    },
-                ) => {
-                    let out = rt::frame_mut::<12>(buf, &[0x24, 0x58, 0x3E])?;
-                    out[4..8].copy_from_slice(&[0x01, 0x00, 0x03, 0x00]);
-                    let field_0: u8 = v_dont_reply as u8;
-                    out[3] = field_0;
-                    out[8] = v_protocol_version;
-                    out[9] = v_api_major;
-                    out[10] = v_api_minor;
-                    out.len()
-                }
-                Self::FcVariantReply(
-                    response::FcVariantReply {
-                        dont_reply: v_dont_reply,
-                        variant: v_variant,
-                    },
-                ) => {
-                    let out = rt::frame_mut::<13>(buf, &[0x24, 0x58, 0x3E])?;
-                    out[4..8].copy_from_slice(&[0x02, 0x00, 0x04, 0x00]);
-                    let field_0: u8 = v_dont_reply as u8;
-                    out[3] = field_0;
-                    out[8..12].copy_from_slice(&v_variant.0);
-                    out.len()
-                }
+                Self::ApiVersionReply(ref m) => m.write(address, buf)?,
+                Self::FcVariantReply(ref m) => m.write(address, buf)?,
             };
             FRAME.seal(buf, len, frame_sum);
             rt::Ok(len)
@@ -617,6 +577,16 @@ pub mod msp_v2 {
         pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             Request::ApiVersion(*self).encode(address, buf)
         }
+        /// Writes this message's frame for `address`, as the direction's `encode` does.
+        #[inline(always)]
+        fn write(&self, address: u8, out: &mut [u8; 9]) -> rt::EncodeResult {
+            let Self { dont_reply: v_dont_reply } = *self;
+            let out = rt::head(out, &[0x24, 0x58, 0x3C]);
+            out[4..8].copy_from_slice(&[0x01, 0x00, 0x00, 0x00]);
+            let field_0: u8 = v_dont_reply as u8;
+            out[3] = field_0;
+            rt::Ok(out.len())
+        }
         /// Reads this message from a frame whose framing and code are checked.
         #[inline(always)]
         fn from_frame(frame: &[u8]) -> rt::DecodeResult<Self> {
@@ -641,6 +611,16 @@ pub mod msp_v2 {
         }
         pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             Request::FcVariant(*self).encode(address, buf)
+        }
+        /// Writes this message's frame for `address`, as the direction's `encode` does.
+        #[inline(always)]
+        fn write(&self, address: u8, out: &mut [u8; 9]) -> rt::EncodeResult {
+            let Self { dont_reply: v_dont_reply } = *self;
+            let out = rt::head(out, &[0x24, 0x58, 0x3C]);
+            out[4..8].copy_from_slice(&[0x02, 0x00, 0x00, 0x00]);
+            let field_0: u8 = v_dont_reply as u8;
+            out[3] = field_0;
+            rt::Ok(out.len())
         }
         /// Reads this message from a frame whose framing and code are checked.
         #[inline(always)]
@@ -673,6 +653,24 @@ pub mod msp_v2 {
         pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             Response::ApiVersionReply(*self).encode(address, buf)
         }
+        /// Writes this message's frame for `address`, as the direction's `encode` does.
+        #[inline(always)]
+        fn write(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            let Self {
+                dont_reply: v_dont_reply,
+                protocol_version: v_protocol_version,
+                api_major: v_api_major,
+                api_minor: v_api_minor,
+            } = *self;
+            let out = rt::frame_mut::<12>(buf, &[0x24, 0x58, 0x3E])?;
+            out[4..8].copy_from_slice(&[0x01, 0x00, 0x03, 0x00]);
+            let field_0: u8 = v_dont_reply as u8;
+            out[3] = field_0;
+            out[8] = v_protocol_version;
+            out[9] = v_api_major;
+            out[10] = v_api_minor;
+            rt::Ok(out.len())
+        }
         /// Reads this message from a frame whose framing and code are checked.
         #[inline(always)]
         fn from_frame(frame: &[u8]) -> rt::DecodeResult<Self> {
@@ -702,6 +700,17 @@ pub mod msp_v2 {
         }
         pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             Response::FcVariantReply(*self).encode(address, buf)
+        }
+        /// Writes this message's frame for `address`, as the direction's `encode` does.
+        #[inline(always)]
+        fn write(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            let Self { dont_reply: v_dont_reply, variant: v_variant } = *self;
+            let out = rt::frame_mut::<13>(buf, &[0x24, 0x58, 0x3E])?;
+            out[4..8].copy_from_slice(&[0x02, 0x00, 0x04, 0x00]);
+            let field_0: u8 = v_dont_reply as u8;
+            out[3] = field_0;
+            out[8..12].copy_from_slice(&v_variant.0);
+            rt::Ok(out.len())
         }
         /// Reads this message from a frame whose framing and code are checked.
         #[inline(always)]

@@ -207,13 +207,7 @@ pub mod nextion {
         pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             rt::encode_address(address, &FRAME)?;
             let len = match *self {
-                Self::Instruction(request::Instruction { text: v_text }) => {
-                    let frame_len = REPEAT_INSTRUCTION.encode_len(v_text.len())?;
-                    let out = rt::frame_mut_len(buf, frame_len, &[])?;
-                    rt::write_elements(v_text.as_slice(), 1, true, &mut out[0..]);
-                    REPEAT_INSTRUCTION.encode_delimited(out)?;
-                    out.len()
-                }
+                Self::Instruction(ref m) => m.write(address, buf)?,
             };
             FRAME.seal(buf, len, frame_sum);
             rt::Ok(len)
@@ -406,36 +400,10 @@ pub mod nextion {
                 Self::InvalidComponent(_) => rt::frame_mut::<4>(buf, &[0x02])?.len(),
                 Self::InvalidPage(_) => rt::frame_mut::<4>(buf, &[0x03])?.len(),
                 Self::InvalidVariable(_) => rt::frame_mut::<4>(buf, &[0x1A])?.len(),
-                Self::TouchEvent(
-                    response::TouchEvent {
-                        page: v_page,
-                        component: v_component,
-                        event: v_event,
-                    },
-                ) => {
-                    let out = rt::frame_mut::<7>(buf, &[0x65])?;
-                    out[1] = v_page;
-                    out[2] = v_component;
-                    out[3] = v_event.raw();
-                    out.len()
-                }
-                Self::CurrentPage(response::CurrentPage { page: v_page }) => {
-                    let out = rt::frame_mut::<5>(buf, &[0x66])?;
-                    out[1] = v_page;
-                    out.len()
-                }
-                Self::String(response::String { text: v_text }) => {
-                    let frame_len = REPEAT_STRING.encode_len(v_text.len())?;
-                    let out = rt::frame_mut_len(buf, frame_len, &[0x70])?;
-                    rt::write_elements(v_text.as_slice(), 1, true, &mut out[1..]);
-                    REPEAT_STRING.encode_delimited(out)?;
-                    out.len()
-                }
-                Self::Number(response::Number { value: v_value }) => {
-                    let out = rt::frame_mut::<8>(buf, &[0x71])?;
-                    out[1..5].copy_from_slice(&v_value.to_le_bytes());
-                    out.len()
-                }
+                Self::TouchEvent(ref m) => m.write(address, buf)?,
+                Self::CurrentPage(ref m) => m.write(address, buf)?,
+                Self::String(ref m) => m.write(address, buf)?,
+                Self::Number(ref m) => m.write(address, buf)?,
             };
             FRAME.seal(buf, len, frame_sum);
             rt::Ok(len)
@@ -959,6 +927,16 @@ pub mod nextion {
         pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             Request::Instruction(*self).encode(address, buf)
         }
+        /// Writes this message's frame for `address`, as the direction's `encode` does.
+        #[inline(always)]
+        fn write(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            let Self { text: v_text } = *self;
+            let frame_len = REPEAT_INSTRUCTION.encode_len(v_text.len())?;
+            let out = rt::frame_mut_len(buf, frame_len, &[])?;
+            rt::write_elements(v_text.as_slice(), 1, true, &mut out[0..]);
+            REPEAT_INSTRUCTION.encode_delimited(out)?;
+            rt::Ok(out.len())
+        }
     }
     impl response::InvalidInstruction {
         pub const NAME: &'static str = "invalid_instruction";
@@ -1021,6 +999,16 @@ pub mod nextion {
         pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             Response::TouchEvent(*self).encode(address, buf)
         }
+        /// Writes this message's frame for `address`, as the direction's `encode` does.
+        #[inline(always)]
+        fn write(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            let Self { page: v_page, component: v_component, event: v_event } = *self;
+            let out = rt::frame_mut::<7>(buf, &[0x65])?;
+            out[1] = v_page;
+            out[2] = v_component;
+            out[3] = v_event.raw();
+            rt::Ok(out.len())
+        }
         /// Reads this message from a frame whose framing and code are checked.
         #[inline(always)]
         fn from_frame(frame: &[u8]) -> rt::DecodeResult<Self> {
@@ -1044,6 +1032,14 @@ pub mod nextion {
         pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             Response::CurrentPage(*self).encode(address, buf)
         }
+        /// Writes this message's frame for `address`, as the direction's `encode` does.
+        #[inline(always)]
+        fn write(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            let Self { page: v_page } = *self;
+            let out = rt::frame_mut::<5>(buf, &[0x66])?;
+            out[1] = v_page;
+            rt::Ok(out.len())
+        }
         /// Reads this message from a frame whose framing and code are checked.
         #[inline(always)]
         fn from_frame(frame: &[u8]) -> rt::DecodeResult<Self> {
@@ -1064,6 +1060,16 @@ pub mod nextion {
         pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             Response::String(*self).encode(address, buf)
         }
+        /// Writes this message's frame for `address`, as the direction's `encode` does.
+        #[inline(always)]
+        fn write(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            let Self { text: v_text } = *self;
+            let frame_len = REPEAT_STRING.encode_len(v_text.len())?;
+            let out = rt::frame_mut_len(buf, frame_len, &[0x70])?;
+            rt::write_elements(v_text.as_slice(), 1, true, &mut out[1..]);
+            REPEAT_STRING.encode_delimited(out)?;
+            rt::Ok(out.len())
+        }
     }
     impl response::Number {
         pub const NAME: &'static str = "number";
@@ -1076,6 +1082,14 @@ pub mod nextion {
         }
         pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             Response::Number(*self).encode(address, buf)
+        }
+        /// Writes this message's frame for `address`, as the direction's `encode` does.
+        #[inline(always)]
+        fn write(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            let Self { value: v_value } = *self;
+            let out = rt::frame_mut::<8>(buf, &[0x71])?;
+            out[1..5].copy_from_slice(&v_value.to_le_bytes());
+            rt::Ok(out.len())
         }
         /// Reads this message from a frame whose framing and code are checked.
         #[inline(always)]

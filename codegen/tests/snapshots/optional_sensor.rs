@@ -538,75 +538,8 @@ pub mod optional_sensor {
         pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             rt::encode_address(address, &FRAME)?;
             let len = match *self {
-                Self::Reading(
-                    response::Reading {
-                        status: v_status,
-                        temperature: v_temperature,
-                        humidity: v_humidity,
-                        pressure: v_pressure,
-                    },
-                ) => {
-                    if let rt::Some(v_humidity) = v_humidity {
-                        rt::encode_in_range("humidity", v_humidity.raw(), 0, 1000)?;
-                    }
-                    let mut compact = [0u8; 14];
-                    let out = {
-                        compact[..2].copy_from_slice(&[0xA5, address]);
-                        &mut compact
-                    };
-                    out[3] = 0x81;
-                    let field_0: u8 = v_status.raw();
-                    out[4] = field_0;
-                    out[5..7].copy_from_slice(&v_temperature.raw().to_be_bytes());
-                    rt::presence(
-                        "humidity",
-                        field_0 & 0x1 != 0,
-                        v_humidity.is_some(),
-                        "bit 0 of `status` is set",
-                    )?;
-                    if let rt::Some(v_humidity) = v_humidity {
-                        out[7..9].copy_from_slice(&v_humidity.raw().to_be_bytes());
-                    }
-                    rt::presence(
-                        "pressure",
-                        field_0 & 0x2 != 0,
-                        v_pressure.is_some(),
-                        "bit 1 of `status` is set",
-                    )?;
-                    if let rt::Some(v_pressure) = v_pressure {
-                        out[9..13].copy_from_slice(&v_pressure.to_be_bytes());
-                    }
-                    let out = OPTIONAL_READING
-                        .pack(
-                            &compact,
-                            &[v_humidity.is_some(), v_pressure.is_some()],
-                            buf,
-                        )?;
-                    LENGTH.put(out)?;
-                    out.len()
-                }
-                Self::Event(response::Event { kind: v_kind, detail: v_detail }) => {
-                    let mut compact = [0u8; 8];
-                    let out = {
-                        compact[..2].copy_from_slice(&[0xA5, address]);
-                        &mut compact
-                    };
-                    out[3] = 0x82;
-                    let field_0: u8 = v_kind.raw();
-                    out[4] = field_0;
-                    rt::presence(
-                        "detail",
-                        field_0 == 2,
-                        v_detail.is_some(),
-                        "`kind` = 2",
-                    )?;
-                    if let rt::Some(v_detail) = v_detail {
-                        out[5..7].copy_from_slice(&v_detail.to_be_bytes());
-                    }
-                    let out = OPTIONAL_EVENT.pack(&compact, &[v_detail.is_some()], buf)?;
-                    LENGTH.put(out)?;
-                    out.len()
-                }
+                Self::Reading(ref m) => m.write(address, buf)?,
+                Self::Event(ref m) => m.write(address, buf)?,
             };
             FRAME.seal(buf, len, frame_sum);
             rt::Ok(len)
@@ -950,6 +883,50 @@ pub mod optional_sensor {
         pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             Response::Reading(*self).encode(address, buf)
         }
+        /// Writes this message's frame for `address`, as the direction's `encode` does.
+        #[inline(always)]
+        fn write(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            let Self {
+                status: v_status,
+                temperature: v_temperature,
+                humidity: v_humidity,
+                pressure: v_pressure,
+            } = *self;
+            if let rt::Some(v_humidity) = v_humidity {
+                rt::encode_in_range("humidity", v_humidity.raw(), 0, 1000)?;
+            }
+            let mut compact = [0u8; 14];
+            let out = {
+                compact[..2].copy_from_slice(&[0xA5, address]);
+                &mut compact
+            };
+            out[3] = 0x81;
+            let field_0: u8 = v_status.raw();
+            out[4] = field_0;
+            out[5..7].copy_from_slice(&v_temperature.raw().to_be_bytes());
+            rt::presence(
+                "humidity",
+                field_0 & 0x1 != 0,
+                v_humidity.is_some(),
+                "bit 0 of `status` is set",
+            )?;
+            if let rt::Some(v_humidity) = v_humidity {
+                out[7..9].copy_from_slice(&v_humidity.raw().to_be_bytes());
+            }
+            rt::presence(
+                "pressure",
+                field_0 & 0x2 != 0,
+                v_pressure.is_some(),
+                "bit 1 of `status` is set",
+            )?;
+            if let rt::Some(v_pressure) = v_pressure {
+                out[9..13].copy_from_slice(&v_pressure.to_be_bytes());
+            }
+            let out = OPTIONAL_READING
+                .pack(&compact, &[v_humidity.is_some(), v_pressure.is_some()], buf)?;
+            LENGTH.put(out)?;
+            rt::Ok(out.len())
+        }
     }
     impl response::Event {
         pub const NAME: &'static str = "event";
@@ -966,6 +943,26 @@ pub mod optional_sensor {
         }
         pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             Response::Event(*self).encode(address, buf)
+        }
+        /// Writes this message's frame for `address`, as the direction's `encode` does.
+        #[inline(always)]
+        fn write(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            let Self { kind: v_kind, detail: v_detail } = *self;
+            let mut compact = [0u8; 8];
+            let out = {
+                compact[..2].copy_from_slice(&[0xA5, address]);
+                &mut compact
+            };
+            out[3] = 0x82;
+            let field_0: u8 = v_kind.raw();
+            out[4] = field_0;
+            rt::presence("detail", field_0 == 2, v_detail.is_some(), "`kind` = 2")?;
+            if let rt::Some(v_detail) = v_detail {
+                out[5..7].copy_from_slice(&v_detail.to_be_bytes());
+            }
+            let out = OPTIONAL_EVENT.pack(&compact, &[v_detail.is_some()], buf)?;
+            LENGTH.put(out)?;
+            rt::Ok(out.len())
         }
     }
     /// Each request as a struct of its own; its constants (`DESC`, which names it as

@@ -316,135 +316,10 @@ pub mod packed_channels {
         pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             rt::encode_address(address, &FRAME)?;
             let len = match *self {
-                Self::Channels(
-                    request::Channels { channels: v_channels, flags: v_flags },
-                ) => {
-                    rt::encode_packed_in_range(
-                        "channels",
-                        v_channels.as_slice(),
-                        0,
-                        1999,
-                    )?;
-                    let out = rt::frame_mut::<11>(buf, &[0xC8, 0x09, 0x16])?;
-                    rt::pack(
-                        "channels",
-                        v_channels.as_slice(),
-                        4,
-                        11,
-                        true,
-                        &mut out[3..9],
-                    )?;
-                    out[9] = v_flags;
-                    out.len()
-                }
-                Self::Levels(request::Levels { bank: v_bank, levels: v_levels }) => {
-                    rt::encode_packed_in_range("levels", v_levels.as_slice(), 0, 6)?;
-                    let out = rt::frame_mut::<7>(buf, &[0xC8, 0x05, 0x17])?;
-                    out[3] = v_bank;
-                    rt::pack(
-                        "levels",
-                        v_levels.as_slice(),
-                        5,
-                        3,
-                        false,
-                        &mut out[4..6],
-                    )?;
-                    out.len()
-                }
-                Self::Calibrate(
-                    request::Calibrate { offsets: v_offsets, gains: v_gains },
-                ) => {
-                    rt::encode_packed_in_range("gains", v_gains.as_slice(), 1, 9)?;
-                    let out = rt::frame_mut::<12>(buf, &[0xC8, 0x0A, 0x19])?;
-                    rt::pack(
-                        "offsets",
-                        v_offsets.as_slice(),
-                        3,
-                        16,
-                        false,
-                        &mut out[3..9],
-                    )?;
-                    rt::pack("gains", v_gains.as_slice(), 2, 8, false, &mut out[9..11])?;
-                    out.len()
-                }
-                Self::Trim(
-                    request::Trim {
-                        deltas: v_deltas,
-                        factors: v_factors,
-                        modes: v_modes,
-                        trims: v_trims,
-                        stamp: v_stamp,
-                        scale: v_scale,
-                    },
-                ) => {
-                    rt::encode_packed_in_range(
-                        "deltas",
-                        v_deltas.as_slice(),
-                        -900,
-                        900,
-                    )?;
-                    rt::encode_packed_in_range(
-                        "factors",
-                        v_factors.as_slice(),
-                        3221225472,
-                        1073741824,
-                    )?;
-                    let out = rt::frame_mut::<40>(buf, &[0xC8, 0x26, 0x1A])?;
-                    rt::write_fixed(
-                        "deltas",
-                        v_deltas.as_slice(),
-                        2,
-                        2,
-                        false,
-                        false,
-                        &mut out[3..7],
-                    )?;
-                    rt::write_fixed(
-                        "factors",
-                        v_factors.as_slice(),
-                        2,
-                        4,
-                        false,
-                        false,
-                        &mut out[7..15],
-                    )?;
-                    rt::pack(
-                        "modes",
-                        v_modes.as_slice(),
-                        2,
-                        8,
-                        false,
-                        &mut out[15..17],
-                    )?;
-                    rt::write_fixed(
-                        "trims",
-                        v_trims.as_slice(),
-                        2,
-                        3,
-                        false,
-                        false,
-                        &mut out[17..23],
-                    )?;
-                    rt::write_fixed(
-                        "stamp",
-                        v_stamp.as_slice(),
-                        1,
-                        8,
-                        false,
-                        false,
-                        &mut out[23..31],
-                    )?;
-                    rt::write_fixed(
-                        "scale",
-                        v_scale.as_slice(),
-                        1,
-                        8,
-                        false,
-                        true,
-                        &mut out[31..39],
-                    )?;
-                    out.len()
-                }
+                Self::Channels(ref m) => m.write(address, buf)?,
+                Self::Levels(ref m) => m.write(address, buf)?,
+                Self::Calibrate(ref m) => m.write(address, buf)?,
+                Self::Trim(ref m) => m.write(address, buf)?,
             };
             FRAME.seal(buf, len, frame_sum);
             rt::Ok(len)
@@ -643,18 +518,7 @@ pub mod packed_channels {
             rt::encode_address(address, &FRAME)?;
             let out = rt::frame_mut::<12>(buf, &[])?;
             let len = match *self {
-                Self::Readings(response::Readings { readings: v_readings }) => {
-                    let out = rt::head(out, &[0xC8, 0x0A, 0x18]);
-                    rt::pack(
-                        "readings",
-                        v_readings.as_slice(),
-                        3,
-                        20,
-                        false,
-                        &mut out[3..11],
-                    )?;
-                    out.len()
-                }
+                Self::Readings(ref m) => m.write(address, out)?,
             };
             FRAME.seal(buf, len, frame_sum);
             rt::Ok(len)
@@ -883,6 +747,16 @@ pub mod packed_channels {
         pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             Request::Channels(*self).encode(address, buf)
         }
+        /// Writes this message's frame for `address`, as the direction's `encode` does.
+        #[inline(always)]
+        fn write(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            let Self { channels: v_channels, flags: v_flags } = *self;
+            rt::encode_packed_in_range("channels", v_channels.as_slice(), 0, 1999)?;
+            let out = rt::frame_mut::<11>(buf, &[0xC8, 0x09, 0x16])?;
+            rt::pack("channels", v_channels.as_slice(), 4, 11, true, &mut out[3..9])?;
+            out[9] = v_flags;
+            rt::Ok(out.len())
+        }
         /// Reads this message from a frame whose framing and code are checked.
         #[inline(always)]
         fn from_frame(frame: &[u8]) -> rt::DecodeResult<Self> {
@@ -923,6 +797,16 @@ pub mod packed_channels {
         pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             Request::Levels(*self).encode(address, buf)
         }
+        /// Writes this message's frame for `address`, as the direction's `encode` does.
+        #[inline(always)]
+        fn write(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            let Self { bank: v_bank, levels: v_levels } = *self;
+            rt::encode_packed_in_range("levels", v_levels.as_slice(), 0, 6)?;
+            let out = rt::frame_mut::<7>(buf, &[0xC8, 0x05, 0x17])?;
+            out[3] = v_bank;
+            rt::pack("levels", v_levels.as_slice(), 5, 3, false, &mut out[4..6])?;
+            rt::Ok(out.len())
+        }
         /// Reads this message from a frame whose framing and code are checked.
         #[inline(always)]
         fn from_frame(frame: &[u8]) -> rt::DecodeResult<Self> {
@@ -956,6 +840,16 @@ pub mod packed_channels {
         }
         pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             Request::Calibrate(*self).encode(address, buf)
+        }
+        /// Writes this message's frame for `address`, as the direction's `encode` does.
+        #[inline(always)]
+        fn write(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            let Self { offsets: v_offsets, gains: v_gains } = *self;
+            rt::encode_packed_in_range("gains", v_gains.as_slice(), 1, 9)?;
+            let out = rt::frame_mut::<12>(buf, &[0xC8, 0x0A, 0x19])?;
+            rt::pack("offsets", v_offsets.as_slice(), 3, 16, false, &mut out[3..9])?;
+            rt::pack("gains", v_gains.as_slice(), 2, 8, false, &mut out[9..11])?;
+            rt::Ok(out.len())
         }
         /// Reads this message from a frame whose framing and code are checked.
         #[inline(always)]
@@ -1009,6 +903,73 @@ pub mod packed_channels {
         }
         pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             Request::Trim(*self).encode(address, buf)
+        }
+        /// Writes this message's frame for `address`, as the direction's `encode` does.
+        #[inline(always)]
+        fn write(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            let Self {
+                deltas: v_deltas,
+                factors: v_factors,
+                modes: v_modes,
+                trims: v_trims,
+                stamp: v_stamp,
+                scale: v_scale,
+            } = *self;
+            rt::encode_packed_in_range("deltas", v_deltas.as_slice(), -900, 900)?;
+            rt::encode_packed_in_range(
+                "factors",
+                v_factors.as_slice(),
+                3221225472,
+                1073741824,
+            )?;
+            let out = rt::frame_mut::<40>(buf, &[0xC8, 0x26, 0x1A])?;
+            rt::write_fixed(
+                "deltas",
+                v_deltas.as_slice(),
+                2,
+                2,
+                false,
+                false,
+                &mut out[3..7],
+            )?;
+            rt::write_fixed(
+                "factors",
+                v_factors.as_slice(),
+                2,
+                4,
+                false,
+                false,
+                &mut out[7..15],
+            )?;
+            rt::pack("modes", v_modes.as_slice(), 2, 8, false, &mut out[15..17])?;
+            rt::write_fixed(
+                "trims",
+                v_trims.as_slice(),
+                2,
+                3,
+                false,
+                false,
+                &mut out[17..23],
+            )?;
+            rt::write_fixed(
+                "stamp",
+                v_stamp.as_slice(),
+                1,
+                8,
+                false,
+                false,
+                &mut out[23..31],
+            )?;
+            rt::write_fixed(
+                "scale",
+                v_scale.as_slice(),
+                1,
+                8,
+                false,
+                true,
+                &mut out[31..39],
+            )?;
+            rt::Ok(out.len())
         }
         /// Reads this message from a frame whose framing and code are checked.
         #[inline(always)]
@@ -1109,6 +1070,14 @@ pub mod packed_channels {
         }
         pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             Response::Readings(*self).encode(address, buf)
+        }
+        /// Writes this message's frame for `address`, as the direction's `encode` does.
+        #[inline(always)]
+        fn write(&self, address: u8, out: &mut [u8; 12]) -> rt::EncodeResult {
+            let Self { readings: v_readings } = *self;
+            let out = rt::head(out, &[0xC8, 0x0A, 0x18]);
+            rt::pack("readings", v_readings.as_slice(), 3, 20, false, &mut out[3..11])?;
+            rt::Ok(out.len())
         }
         /// Reads this message from a frame whose framing and code are checked.
         #[inline(always)]

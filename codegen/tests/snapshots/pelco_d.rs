@@ -189,52 +189,9 @@ pub mod pelco_d2 {
             rt::encode_address(address, &FRAME)?;
             let out = rt::frame_mut::<7>(buf, &[])?;
             let len = match *self {
-                Self::Ptz(
-                    request::Ptz {
-                        sense: v_sense,
-                        auto_scan: v_auto_scan,
-                        camera_on: v_camera_on,
-                        iris_close: v_iris_close,
-                        iris_open: v_iris_open,
-                        focus_near: v_focus_near,
-                        focus_far: v_focus_far,
-                        zoom_wide: v_zoom_wide,
-                        zoom_tele: v_zoom_tele,
-                        tilt_down: v_tilt_down,
-                        tilt_up: v_tilt_up,
-                        pan_left: v_pan_left,
-                        pan_right: v_pan_right,
-                        pan_speed: v_pan_speed,
-                        tilt_speed: v_tilt_speed,
-                    },
-                ) => {
-                    rt::encode_in_range_or("pan_speed", v_pan_speed, 0, 63, &[255])?;
-                    rt::encode_in_range("tilt_speed", v_tilt_speed, 0, 63)?;
-                    let out = rt::head(out, &[0xFF, address]);
-                    let field_0: u16 = ((v_sense as u16) << 15)
-                        | ((v_auto_scan as u16) << 12) | ((v_camera_on as u16) << 11)
-                        | ((v_iris_close as u16) << 10) | ((v_iris_open as u16) << 9)
-                        | ((v_focus_near as u16) << 8) | ((v_focus_far as u16) << 7)
-                        | ((v_zoom_wide as u16) << 6) | ((v_zoom_tele as u16) << 5)
-                        | ((v_tilt_down as u16) << 4) | ((v_tilt_up as u16) << 3)
-                        | ((v_pan_left as u16) << 2) | ((v_pan_right as u16) << 1);
-                    out[2..4].copy_from_slice(&field_0.to_be_bytes());
-                    out[4] = v_pan_speed;
-                    out[5] = v_tilt_speed;
-                    out.len()
-                }
-                Self::SetPreset(request::SetPreset { preset: v_preset }) => {
-                    rt::encode_in_range("preset", v_preset, 1, 255)?;
-                    let out = rt::head(out, &[0xFF, address, 0x00, 0x03, 0x00]);
-                    out[5] = v_preset;
-                    out.len()
-                }
-                Self::GoToPreset(request::GoToPreset { preset: v_preset }) => {
-                    rt::encode_in_range("preset", v_preset, 1, 255)?;
-                    let out = rt::head(out, &[0xFF, address, 0x00, 0x07, 0x00]);
-                    out[5] = v_preset;
-                    out.len()
-                }
+                Self::Ptz(ref m) => m.write(address, out)?,
+                Self::SetPreset(ref m) => m.write(address, out)?,
+                Self::GoToPreset(ref m) => m.write(address, out)?,
             };
             FRAME.seal(buf, len, frame_sum);
             rt::Ok(len)
@@ -467,13 +424,7 @@ pub mod pelco_d2 {
             rt::encode_address(address, &FRAME)?;
             let out = rt::frame_mut::<4>(buf, &[])?;
             let len = match *self {
-                Self::GeneralResponse(
-                    response::GeneralResponse { alarms: v_alarms },
-                ) => {
-                    let out = rt::head(out, &[0xFF, address]);
-                    out[2] = v_alarms.raw();
-                    out.len()
-                }
+                Self::GeneralResponse(ref m) => m.write(address, out)?,
             };
             FRAME.seal(buf, len, frame_sum);
             rt::Ok(len)
@@ -714,6 +665,41 @@ pub mod pelco_d2 {
         pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             Request::Ptz(*self).encode(address, buf)
         }
+        /// Writes this message's frame for `address`, as the direction's `encode` does.
+        #[inline(always)]
+        fn write(&self, address: u8, out: &mut [u8; 7]) -> rt::EncodeResult {
+            let Self {
+                sense: v_sense,
+                auto_scan: v_auto_scan,
+                camera_on: v_camera_on,
+                iris_close: v_iris_close,
+                iris_open: v_iris_open,
+                focus_near: v_focus_near,
+                focus_far: v_focus_far,
+                zoom_wide: v_zoom_wide,
+                zoom_tele: v_zoom_tele,
+                tilt_down: v_tilt_down,
+                tilt_up: v_tilt_up,
+                pan_left: v_pan_left,
+                pan_right: v_pan_right,
+                pan_speed: v_pan_speed,
+                tilt_speed: v_tilt_speed,
+            } = *self;
+            rt::encode_in_range_or("pan_speed", v_pan_speed, 0, 63, &[255])?;
+            rt::encode_in_range("tilt_speed", v_tilt_speed, 0, 63)?;
+            let out = rt::head(out, &[0xFF, address]);
+            let field_0: u16 = ((v_sense as u16) << 15) | ((v_auto_scan as u16) << 12)
+                | ((v_camera_on as u16) << 11) | ((v_iris_close as u16) << 10)
+                | ((v_iris_open as u16) << 9) | ((v_focus_near as u16) << 8)
+                | ((v_focus_far as u16) << 7) | ((v_zoom_wide as u16) << 6)
+                | ((v_zoom_tele as u16) << 5) | ((v_tilt_down as u16) << 4)
+                | ((v_tilt_up as u16) << 3) | ((v_pan_left as u16) << 2)
+                | ((v_pan_right as u16) << 1);
+            out[2..4].copy_from_slice(&field_0.to_be_bytes());
+            out[4] = v_pan_speed;
+            out[5] = v_tilt_speed;
+            rt::Ok(out.len())
+        }
     }
     impl request::SetPreset {
         pub const NAME: &'static str = "set_preset";
@@ -728,6 +714,15 @@ pub mod pelco_d2 {
         }
         pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             Request::SetPreset(*self).encode(address, buf)
+        }
+        /// Writes this message's frame for `address`, as the direction's `encode` does.
+        #[inline(always)]
+        fn write(&self, address: u8, out: &mut [u8; 7]) -> rt::EncodeResult {
+            let Self { preset: v_preset } = *self;
+            rt::encode_in_range("preset", v_preset, 1, 255)?;
+            let out = rt::head(out, &[0xFF, address, 0x00, 0x03, 0x00]);
+            out[5] = v_preset;
+            rt::Ok(out.len())
         }
         /// Reads this message from a frame whose framing and code are checked.
         #[inline(always)]
@@ -752,6 +747,15 @@ pub mod pelco_d2 {
         pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             Request::GoToPreset(*self).encode(address, buf)
         }
+        /// Writes this message's frame for `address`, as the direction's `encode` does.
+        #[inline(always)]
+        fn write(&self, address: u8, out: &mut [u8; 7]) -> rt::EncodeResult {
+            let Self { preset: v_preset } = *self;
+            rt::encode_in_range("preset", v_preset, 1, 255)?;
+            let out = rt::head(out, &[0xFF, address, 0x00, 0x07, 0x00]);
+            out[5] = v_preset;
+            rt::Ok(out.len())
+        }
         /// Reads this message from a frame whose framing and code are checked.
         #[inline(always)]
         fn from_frame(frame: &[u8]) -> rt::DecodeResult<Self> {
@@ -772,6 +776,14 @@ pub mod pelco_d2 {
         }
         pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             Response::GeneralResponse(*self).encode(address, buf)
+        }
+        /// Writes this message's frame for `address`, as the direction's `encode` does.
+        #[inline(always)]
+        fn write(&self, address: u8, out: &mut [u8; 4]) -> rt::EncodeResult {
+            let Self { alarms: v_alarms } = *self;
+            let out = rt::head(out, &[0xFF, address]);
+            out[2] = v_alarms.raw();
+            rt::Ok(out.len())
         }
         /// Reads this message from a frame whose framing and code are checked.
         #[inline(always)]

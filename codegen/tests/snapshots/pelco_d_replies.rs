@@ -279,55 +279,12 @@ pub mod pelco_d_replies {
             rt::encode_address(address, &FRAME)?;
             let out = rt::frame_mut::<7>(buf, &[])?;
             let len = match *self {
-                Self::Ptz(
-                    request::Ptz {
-                        sense: v_sense,
-                        auto_scan: v_auto_scan,
-                        camera_on: v_camera_on,
-                        iris_close: v_iris_close,
-                        iris_open: v_iris_open,
-                        focus_near: v_focus_near,
-                        focus_far: v_focus_far,
-                        zoom_wide: v_zoom_wide,
-                        zoom_tele: v_zoom_tele,
-                        tilt_down: v_tilt_down,
-                        tilt_up: v_tilt_up,
-                        pan_left: v_pan_left,
-                        pan_right: v_pan_right,
-                        pan_speed: v_pan_speed,
-                        tilt_speed: v_tilt_speed,
-                    },
-                ) => {
-                    rt::encode_in_range_or("pan_speed", v_pan_speed, 0, 63, &[255])?;
-                    rt::encode_in_range("tilt_speed", v_tilt_speed, 0, 63)?;
-                    let out = rt::head(out, &[0xFF, address]);
-                    let field_0: u16 = ((v_sense as u16) << 15)
-                        | ((v_auto_scan as u16) << 12) | ((v_camera_on as u16) << 11)
-                        | ((v_iris_close as u16) << 10) | ((v_iris_open as u16) << 9)
-                        | ((v_focus_near as u16) << 8) | ((v_focus_far as u16) << 7)
-                        | ((v_zoom_wide as u16) << 6) | ((v_zoom_tele as u16) << 5)
-                        | ((v_tilt_down as u16) << 4) | ((v_tilt_up as u16) << 3)
-                        | ((v_pan_left as u16) << 2) | ((v_pan_right as u16) << 1);
-                    out[2..4].copy_from_slice(&field_0.to_be_bytes());
-                    out[4] = v_pan_speed;
-                    out[5] = v_tilt_speed;
-                    out.len()
-                }
-                Self::SetAuxiliary(request::SetAuxiliary { auxiliary: v_auxiliary }) => {
-                    rt::encode_in_range("auxiliary", v_auxiliary, 1, 8)?;
-                    let out = rt::head(out, &[0xFF, address, 0x00, 0x09, 0x00]);
-                    out[5] = v_auxiliary;
-                    out.len()
-                }
+                Self::Ptz(ref m) => m.write(address, out)?,
+                Self::SetAuxiliary(ref m) => m.write(address, out)?,
                 Self::QueryPanPosition(_) => {
                     rt::head(out, &[0xFF, address, 0x00, 0x51, 0x00, 0x00]).len()
                 }
-                Self::GoToPreset(request::GoToPreset { preset: v_preset }) => {
-                    rt::encode_in_range("preset", v_preset, 1, 255)?;
-                    let out = rt::head(out, &[0xFF, address, 0x00, 0x07, 0x00]);
-                    out[5] = v_preset;
-                    out.len()
-                }
+                Self::GoToPreset(ref m) => m.write(address, out)?,
             };
             FRAME.seal(buf, len, frame_sum);
             rt::Ok(len)
@@ -621,20 +578,8 @@ pub mod pelco_d_replies {
         fn encode_own(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             rt::encode_address(address, &FRAME)?;
             let len = match *self {
-                Self::GeneralResponse(
-                    response::GeneralResponse { alarms: v_alarms },
-                ) => {
-                    let out = rt::frame_mut::<4>(buf, &[0xFF, address])?;
-                    out[2] = v_alarms.raw();
-                    out.len()
-                }
-                Self::PanPositionResponse(
-                    response::PanPositionResponse { position: v_position },
-                ) => {
-                    let out = rt::frame_mut::<7>(buf, &[0xFF, address, 0x00, 0x59])?;
-                    out[4..6].copy_from_slice(&v_position.raw().to_be_bytes());
-                    out.len()
-                }
+                Self::GeneralResponse(ref m) => m.write(address, buf)?,
+                Self::PanPositionResponse(ref m) => m.write(address, buf)?,
             };
             FRAME.seal(buf, len, frame_sum);
             rt::Ok(len)
@@ -960,6 +905,41 @@ pub mod pelco_d_replies {
         pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             Request::Ptz(*self).encode(address, buf)
         }
+        /// Writes this message's frame for `address`, as the direction's `encode` does.
+        #[inline(always)]
+        fn write(&self, address: u8, out: &mut [u8; 7]) -> rt::EncodeResult {
+            let Self {
+                sense: v_sense,
+                auto_scan: v_auto_scan,
+                camera_on: v_camera_on,
+                iris_close: v_iris_close,
+                iris_open: v_iris_open,
+                focus_near: v_focus_near,
+                focus_far: v_focus_far,
+                zoom_wide: v_zoom_wide,
+                zoom_tele: v_zoom_tele,
+                tilt_down: v_tilt_down,
+                tilt_up: v_tilt_up,
+                pan_left: v_pan_left,
+                pan_right: v_pan_right,
+                pan_speed: v_pan_speed,
+                tilt_speed: v_tilt_speed,
+            } = *self;
+            rt::encode_in_range_or("pan_speed", v_pan_speed, 0, 63, &[255])?;
+            rt::encode_in_range("tilt_speed", v_tilt_speed, 0, 63)?;
+            let out = rt::head(out, &[0xFF, address]);
+            let field_0: u16 = ((v_sense as u16) << 15) | ((v_auto_scan as u16) << 12)
+                | ((v_camera_on as u16) << 11) | ((v_iris_close as u16) << 10)
+                | ((v_iris_open as u16) << 9) | ((v_focus_near as u16) << 8)
+                | ((v_focus_far as u16) << 7) | ((v_zoom_wide as u16) << 6)
+                | ((v_zoom_tele as u16) << 5) | ((v_tilt_down as u16) << 4)
+                | ((v_tilt_up as u16) << 3) | ((v_pan_left as u16) << 2)
+                | ((v_pan_right as u16) << 1);
+            out[2..4].copy_from_slice(&field_0.to_be_bytes());
+            out[4] = v_pan_speed;
+            out[5] = v_tilt_speed;
+            rt::Ok(out.len())
+        }
     }
     impl request::SetAuxiliary {
         pub const NAME: &'static str = "set_auxiliary";
@@ -974,6 +954,15 @@ pub mod pelco_d_replies {
         }
         pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             Request::SetAuxiliary(*self).encode(address, buf)
+        }
+        /// Writes this message's frame for `address`, as the direction's `encode` does.
+        #[inline(always)]
+        fn write(&self, address: u8, out: &mut [u8; 7]) -> rt::EncodeResult {
+            let Self { auxiliary: v_auxiliary } = *self;
+            rt::encode_in_range("auxiliary", v_auxiliary, 1, 8)?;
+            let out = rt::head(out, &[0xFF, address, 0x00, 0x09, 0x00]);
+            out[5] = v_auxiliary;
+            rt::Ok(out.len())
         }
         /// Reads this message from a frame whose framing and code are checked.
         #[inline(always)]
@@ -1020,6 +1009,15 @@ pub mod pelco_d_replies {
         pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             Request::GoToPreset(*self).encode(address, buf)
         }
+        /// Writes this message's frame for `address`, as the direction's `encode` does.
+        #[inline(always)]
+        fn write(&self, address: u8, out: &mut [u8; 7]) -> rt::EncodeResult {
+            let Self { preset: v_preset } = *self;
+            rt::encode_in_range("preset", v_preset, 1, 255)?;
+            let out = rt::head(out, &[0xFF, address, 0x00, 0x07, 0x00]);
+            out[5] = v_preset;
+            rt::Ok(out.len())
+        }
         /// Reads this message from a frame whose framing and code are checked.
         #[inline(always)]
         fn from_frame(frame: &[u8]) -> rt::DecodeResult<Self> {
@@ -1041,6 +1039,14 @@ pub mod pelco_d_replies {
         pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             Response::GeneralResponse(*self).encode(address, buf)
         }
+        /// Writes this message's frame for `address`, as the direction's `encode` does.
+        #[inline(always)]
+        fn write(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            let Self { alarms: v_alarms } = *self;
+            let out = rt::frame_mut::<4>(buf, &[0xFF, address])?;
+            out[2] = v_alarms.raw();
+            rt::Ok(out.len())
+        }
     }
     impl response::PanPositionResponse {
         pub const NAME: &'static str = "pan_position_response";
@@ -1053,6 +1059,14 @@ pub mod pelco_d_replies {
         }
         pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             Response::PanPositionResponse(*self).encode(address, buf)
+        }
+        /// Writes this message's frame for `address`, as the direction's `encode` does.
+        #[inline(always)]
+        fn write(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            let Self { position: v_position } = *self;
+            let out = rt::frame_mut::<7>(buf, &[0xFF, address, 0x00, 0x59])?;
+            out[4..6].copy_from_slice(&v_position.raw().to_be_bytes());
+            rt::Ok(out.len())
         }
         /// Reads this message from a frame whose framing and code are checked.
         #[inline(always)]

@@ -514,60 +514,9 @@ pub mod records {
         pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             rt::encode_address(address, &FRAME)?;
             let len = match *self {
-                Self::SyncWrite(
-                    request::SyncWrite { blocks: v_blocks, flags: v_flags },
-                ) => {
-                    let bytes_0: usize = LISTS_SYNC_WRITE
-                        .lists[0]
-                        .encode_len(v_blocks.len())? - LISTS_SYNC_WRITE.base;
-                    let mut compact = [0u8; 6];
-                    let out = {
-                        compact[..3].copy_from_slice(&[0x7E, address, 0x83]);
-                        &mut compact
-                    };
-                    out[3] = rt::fits(
-                        "n",
-                        LISTS_SYNC_WRITE.lists[0].count_value(v_blocks.len()) as u64,
-                        0,
-                        255,
-                    )? as u8;
-                    out[4] = v_flags;
-                    let out = LISTS_SYNC_WRITE.expand(&compact, &[bytes_0], buf)?;
-                    for (k, r) in v_blocks.iter().enumerate() {
-                        let mut bytes = [0u8; 4];
-                        r.write(&mut bytes)?;
-                        let at = 4 + k * 4;
-                        if let rt::Some(to) = out.get_mut(at..at + 4) {
-                            to.copy_from_slice(&bytes);
-                        }
-                    }
-                    out.len()
-                }
-                Self::WritePairs(request::WritePairs { pairs: v_pairs }) => {
-                    let frame_len = REPEAT_WRITE_PAIRS.encode_len(v_pairs.len())?;
-                    let out = rt::frame_mut_len(buf, frame_len, &[0x7E, address, 0x84])?;
-                    out[3] = rt::fits(
-                        "byte_count",
-                        REPEAT_WRITE_PAIRS.count_value(v_pairs.len()) as u64,
-                        0,
-                        255,
-                    )? as u8;
-                    for (k, r) in v_pairs.iter().enumerate() {
-                        let mut bytes = [0u8; 5];
-                        r.write(&mut bytes)?;
-                        let at = 4 + k * 5;
-                        if let rt::Some(to) = out.get_mut(at..at + 5) {
-                            to.copy_from_slice(&bytes);
-                        }
-                    }
-                    out.len()
-                }
-                Self::ReadStatus(request::ReadStatus { quantity: v_quantity }) => {
-                    rt::encode_in_range("quantity", v_quantity, 1, 6)?;
-                    let out = rt::frame_mut::<5>(buf, &[0x7E, address, 0x85])?;
-                    out[3] = v_quantity;
-                    out.len()
-                }
+                Self::SyncWrite(ref m) => m.write(address, buf)?,
+                Self::WritePairs(ref m) => m.write(address, buf)?,
+                Self::ReadStatus(ref m) => m.write(address, buf)?,
             };
             FRAME.seal(buf, len, frame_sum);
             rt::Ok(len)
@@ -841,24 +790,8 @@ pub mod records {
         pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             rt::encode_address(address, &FRAME)?;
             let len = match *self {
-                Self::Ack(response::Ack { status: v_status }) => {
-                    let out = rt::frame_mut::<5>(buf, &[0x7E, address, 0x80])?;
-                    out[3] = v_status;
-                    out.len()
-                }
-                Self::StatusReply(response::StatusReply { readings: v_readings }) => {
-                    let frame_len = REPEAT_STATUS_REPLY.encode_len(v_readings.len())?;
-                    let out = rt::frame_mut_len(buf, frame_len, &[0x7E, address, 0x85])?;
-                    for (k, r) in v_readings.iter().enumerate() {
-                        let mut bytes = [0u8; 4];
-                        r.write(&mut bytes)?;
-                        let at = 3 + k * 4;
-                        if let rt::Some(to) = out.get_mut(at..at + 4) {
-                            to.copy_from_slice(&bytes);
-                        }
-                    }
-                    out.len()
-                }
+                Self::Ack(ref m) => m.write(address, buf)?,
+                Self::StatusReply(ref m) => m.write(address, buf)?,
             };
             FRAME.seal(buf, len, frame_sum);
             rt::Ok(len)
@@ -1147,6 +1080,35 @@ pub mod records {
         pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             Request::SyncWrite(*self).encode(address, buf)
         }
+        /// Writes this message's frame for `address`, as the direction's `encode` does.
+        #[inline(always)]
+        fn write(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            let Self { blocks: v_blocks, flags: v_flags } = *self;
+            let bytes_0: usize = LISTS_SYNC_WRITE.lists[0].encode_len(v_blocks.len())?
+                - LISTS_SYNC_WRITE.base;
+            let mut compact = [0u8; 6];
+            let out = {
+                compact[..3].copy_from_slice(&[0x7E, address, 0x83]);
+                &mut compact
+            };
+            out[3] = rt::fits(
+                "n",
+                LISTS_SYNC_WRITE.lists[0].count_value(v_blocks.len()) as u64,
+                0,
+                255,
+            )? as u8;
+            out[4] = v_flags;
+            let out = LISTS_SYNC_WRITE.expand(&compact, &[bytes_0], buf)?;
+            for (k, r) in v_blocks.iter().enumerate() {
+                let mut bytes = [0u8; 4];
+                r.write(&mut bytes)?;
+                let at = 4 + k * 4;
+                if let rt::Some(to) = out.get_mut(at..at + 4) {
+                    to.copy_from_slice(&bytes);
+                }
+            }
+            rt::Ok(out.len())
+        }
     }
     impl request::WritePairs {
         pub const NAME: &'static str = "write_pairs";
@@ -1162,6 +1124,28 @@ pub mod records {
         pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             Request::WritePairs(*self).encode(address, buf)
         }
+        /// Writes this message's frame for `address`, as the direction's `encode` does.
+        #[inline(always)]
+        fn write(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            let Self { pairs: v_pairs } = *self;
+            let frame_len = REPEAT_WRITE_PAIRS.encode_len(v_pairs.len())?;
+            let out = rt::frame_mut_len(buf, frame_len, &[0x7E, address, 0x84])?;
+            out[3] = rt::fits(
+                "byte_count",
+                REPEAT_WRITE_PAIRS.count_value(v_pairs.len()) as u64,
+                0,
+                255,
+            )? as u8;
+            for (k, r) in v_pairs.iter().enumerate() {
+                let mut bytes = [0u8; 5];
+                r.write(&mut bytes)?;
+                let at = 4 + k * 5;
+                if let rt::Some(to) = out.get_mut(at..at + 5) {
+                    to.copy_from_slice(&bytes);
+                }
+            }
+            rt::Ok(out.len())
+        }
     }
     impl request::ReadStatus {
         pub const NAME: &'static str = "read_status";
@@ -1175,6 +1159,15 @@ pub mod records {
         }
         pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             Request::ReadStatus(*self).encode(address, buf)
+        }
+        /// Writes this message's frame for `address`, as the direction's `encode` does.
+        #[inline(always)]
+        fn write(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            let Self { quantity: v_quantity } = *self;
+            rt::encode_in_range("quantity", v_quantity, 1, 6)?;
+            let out = rt::frame_mut::<5>(buf, &[0x7E, address, 0x85])?;
+            out[3] = v_quantity;
+            rt::Ok(out.len())
         }
         /// Reads this message from a frame whose framing and code are checked.
         #[inline(always)]
@@ -1196,6 +1189,14 @@ pub mod records {
         pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             Response::Ack(*self).encode(address, buf)
         }
+        /// Writes this message's frame for `address`, as the direction's `encode` does.
+        #[inline(always)]
+        fn write(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            let Self { status: v_status } = *self;
+            let out = rt::frame_mut::<5>(buf, &[0x7E, address, 0x80])?;
+            out[3] = v_status;
+            rt::Ok(out.len())
+        }
         /// Reads this message from a frame whose framing and code are checked.
         #[inline(always)]
         fn from_frame(frame: &[u8]) -> rt::DecodeResult<Self> {
@@ -1215,6 +1216,22 @@ pub mod records {
         }
         pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             Response::StatusReply(*self).encode(address, buf)
+        }
+        /// Writes this message's frame for `address`, as the direction's `encode` does.
+        #[inline(always)]
+        fn write(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            let Self { readings: v_readings } = *self;
+            let frame_len = REPEAT_STATUS_REPLY.encode_len(v_readings.len())?;
+            let out = rt::frame_mut_len(buf, frame_len, &[0x7E, address, 0x85])?;
+            for (k, r) in v_readings.iter().enumerate() {
+                let mut bytes = [0u8; 4];
+                r.write(&mut bytes)?;
+                let at = 3 + k * 4;
+                if let rt::Some(to) = out.get_mut(at..at + 4) {
+                    to.copy_from_slice(&bytes);
+                }
+            }
+            rt::Ok(out.len())
         }
     }
     /// Each request as a struct of its own; its constants (`DESC`, which names it as

@@ -413,58 +413,8 @@ pub mod records_sized {
         pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             rt::encode_address(address, &FRAME)?;
             let len = match *self {
-                Self::SyncWrite(
-                    request::SyncWrite {
-                        start_address: v_start_address,
-                        data_length: v_data_length,
-                        blocks: v_blocks,
-                    },
-                ) => {
-                    let frame_len = REPEAT_SYNC_WRITE
-                        .encode_len_sized(v_blocks.len(), (v_data_length) as u64)?;
-                    let last_width = (v_data_length) as usize;
-                    let out = rt::frame_mut_len(buf, frame_len, &[0xC5, address])?;
-                    LENGTH.put(out)?;
-                    out[3] = 0x83;
-                    out[4..6].copy_from_slice(&v_start_address.to_le_bytes());
-                    out[6..8].copy_from_slice(&v_data_length.to_le_bytes());
-                    let rec_width = 1 + last_width;
-                    for (k, r) in v_blocks.iter().enumerate() {
-                        let mut bytes = [0u8; 5];
-                        r.write(&mut bytes, last_width)?;
-                        let at = 8 + k * rec_width;
-                        if let (rt::Some(to), rt::Some(from)) = (
-                            out.get_mut(at..at + rec_width),
-                            bytes.get(..rec_width),
-                        ) {
-                            to.copy_from_slice(from);
-                        }
-                    }
-                    out.len()
-                }
-                Self::Trim(request::Trim { width: v_width, offsets: v_offsets }) => {
-                    rt::encode_broadcast(address, 0xFE, &request::Trim::DESC)?;
-                    let frame_len = REPEAT_TRIM
-                        .encode_len_sized(v_offsets.len(), (v_width) as u64)?;
-                    let last_width = (v_width) as usize;
-                    let out = rt::frame_mut_len(buf, frame_len, &[0xC5, address])?;
-                    LENGTH.put(out)?;
-                    out[3] = 0x84;
-                    out[4] = v_width;
-                    let rec_width = 1 + last_width;
-                    for (k, r) in v_offsets.iter().enumerate() {
-                        let mut bytes = [0u8; 3];
-                        r.write(&mut bytes, last_width)?;
-                        let at = 5 + k * rec_width;
-                        if let (rt::Some(to), rt::Some(from)) = (
-                            out.get_mut(at..at + rec_width),
-                            bytes.get(..rec_width),
-                        ) {
-                            to.copy_from_slice(from);
-                        }
-                    }
-                    out.len()
-                }
+                Self::SyncWrite(ref m) => m.write(address, buf)?,
+                Self::Trim(ref m) => m.write(address, buf)?,
             };
             FRAME.seal(buf, len, frame_sum);
             rt::Ok(len)
@@ -659,11 +609,7 @@ pub mod records_sized {
             rt::encode_address(address, &FRAME)?;
             let out = rt::frame_mut::<6>(buf, &[])?;
             let len = match *self {
-                Self::Ack(response::Ack { error: v_error }) => {
-                    let out = rt::head(out, &[0xC5, address, 0x02, 0x55]);
-                    out[4] = v_error;
-                    out.len()
-                }
+                Self::Ack(ref m) => m.write(address, out)?,
             };
             FRAME.seal(buf, len, frame_sum);
             rt::Ok(len)
@@ -920,6 +866,36 @@ pub mod records_sized {
         pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             Request::SyncWrite(*self).encode(address, buf)
         }
+        /// Writes this message's frame for `address`, as the direction's `encode` does.
+        #[inline(always)]
+        fn write(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            let Self {
+                start_address: v_start_address,
+                data_length: v_data_length,
+                blocks: v_blocks,
+            } = *self;
+            let frame_len = REPEAT_SYNC_WRITE
+                .encode_len_sized(v_blocks.len(), (v_data_length) as u64)?;
+            let last_width = (v_data_length) as usize;
+            let out = rt::frame_mut_len(buf, frame_len, &[0xC5, address])?;
+            LENGTH.put(out)?;
+            out[3] = 0x83;
+            out[4..6].copy_from_slice(&v_start_address.to_le_bytes());
+            out[6..8].copy_from_slice(&v_data_length.to_le_bytes());
+            let rec_width = 1 + last_width;
+            for (k, r) in v_blocks.iter().enumerate() {
+                let mut bytes = [0u8; 5];
+                r.write(&mut bytes, last_width)?;
+                let at = 8 + k * rec_width;
+                if let (rt::Some(to), rt::Some(from)) = (
+                    out.get_mut(at..at + rec_width),
+                    bytes.get(..rec_width),
+                ) {
+                    to.copy_from_slice(from);
+                }
+            }
+            rt::Ok(out.len())
+        }
     }
     impl request::Trim {
         pub const NAME: &'static str = "trim";
@@ -940,6 +916,32 @@ pub mod records_sized {
         pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             Request::Trim(*self).encode(address, buf)
         }
+        /// Writes this message's frame for `address`, as the direction's `encode` does.
+        #[inline(always)]
+        fn write(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            let Self { width: v_width, offsets: v_offsets } = *self;
+            rt::encode_broadcast(address, 0xFE, &request::Trim::DESC)?;
+            let frame_len = REPEAT_TRIM
+                .encode_len_sized(v_offsets.len(), (v_width) as u64)?;
+            let last_width = (v_width) as usize;
+            let out = rt::frame_mut_len(buf, frame_len, &[0xC5, address])?;
+            LENGTH.put(out)?;
+            out[3] = 0x84;
+            out[4] = v_width;
+            let rec_width = 1 + last_width;
+            for (k, r) in v_offsets.iter().enumerate() {
+                let mut bytes = [0u8; 3];
+                r.write(&mut bytes, last_width)?;
+                let at = 5 + k * rec_width;
+                if let (rt::Some(to), rt::Some(from)) = (
+                    out.get_mut(at..at + rec_width),
+                    bytes.get(..rec_width),
+                ) {
+                    to.copy_from_slice(from);
+                }
+            }
+            rt::Ok(out.len())
+        }
     }
     impl response::Ack {
         pub const NAME: &'static str = "ack";
@@ -952,6 +954,14 @@ pub mod records_sized {
         }
         pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             Response::Ack(*self).encode(address, buf)
+        }
+        /// Writes this message's frame for `address`, as the direction's `encode` does.
+        #[inline(always)]
+        fn write(&self, address: u8, out: &mut [u8; 6]) -> rt::EncodeResult {
+            let Self { error: v_error } = *self;
+            let out = rt::head(out, &[0xC5, address, 0x02, 0x55]);
+            out[4] = v_error;
+            rt::Ok(out.len())
         }
         /// Reads this message from a frame whose framing and code are checked.
         #[inline(always)]

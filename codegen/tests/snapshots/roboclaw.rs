@@ -589,18 +589,8 @@ pub mod roboclaw {
         pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             rt::encode_address(address, &FRAME)?;
             let len = match *self {
-                Self::DriveForwardM1(request::DriveForwardM1 { speed: v_speed }) => {
-                    rt::encode_in_range("speed", v_speed, 0, 127)?;
-                    let out = rt::frame_mut::<5>(buf, &[address, 0x00])?;
-                    out[2] = v_speed;
-                    out.len()
-                }
-                Self::DriveBackwardM1(request::DriveBackwardM1 { speed: v_speed }) => {
-                    rt::encode_in_range("speed", v_speed, 0, 127)?;
-                    let out = rt::frame_mut::<5>(buf, &[address, 0x01])?;
-                    out[2] = v_speed;
-                    out.len()
-                }
+                Self::DriveForwardM1(ref m) => m.write(address, buf)?,
+                Self::DriveBackwardM1(ref m) => m.write(address, buf)?,
                 Self::ReadEncoderM1(_) => {
                     return rt::Ok(rt::frame_mut::<2>(buf, &[address, 0x10])?.len());
                 }
@@ -619,17 +609,8 @@ pub mod roboclaw {
                 Self::ReadLogicBattery(_) => {
                     return rt::Ok(rt::frame_mut::<2>(buf, &[address, 0x19])?.len());
                 }
-                Self::DutyM1(request::DutyM1 { duty: v_duty }) => {
-                    rt::encode_in_range("duty", v_duty, -32767, 32767)?;
-                    let out = rt::frame_mut::<6>(buf, &[address, 0x20])?;
-                    out[2..4].copy_from_slice(&v_duty.to_be_bytes());
-                    out.len()
-                }
-                Self::SpeedM1(request::SpeedM1 { speed: v_speed }) => {
-                    let out = rt::frame_mut::<8>(buf, &[address, 0x23])?;
-                    out[2..6].copy_from_slice(&v_speed.to_be_bytes());
-                    out.len()
-                }
+                Self::DutyM1(ref m) => m.write(address, buf)?,
+                Self::SpeedM1(ref m) => m.write(address, buf)?,
                 Self::ReadCurrents(_) => {
                     return rt::Ok(rt::frame_mut::<2>(buf, &[address, 0x31])?.len());
                 }
@@ -978,77 +959,14 @@ pub mod roboclaw {
                 Self::Ack(_) => {
                     return rt::Ok(rt::frame_mut::<1>(buf, &[0xFF])?.len());
                 }
-                Self::EncoderM1(
-                    response::EncoderM1 { count: v_count, status: v_status },
-                ) => {
-                    let out = rt::frame_mut::<7>(buf, &[])?;
-                    out[0..4].copy_from_slice(&v_count.to_be_bytes());
-                    out[4] = v_status.raw();
-                    out.len()
-                }
-                Self::EncoderSpeedM1(
-                    response::EncoderSpeedM1 { speed: v_speed, direction: v_direction },
-                ) => {
-                    let out = rt::frame_mut::<7>(buf, &[])?;
-                    out[0..4].copy_from_slice(&v_speed.to_be_bytes());
-                    out[4] = v_direction.raw();
-                    out.len()
-                }
-                Self::FirmwareVersion(
-                    response::FirmwareVersion { version: v_version },
-                ) => {
-                    LISTS_FIRMWARE_VERSION.lists[0].encode_until(v_version.as_slice())?;
-                    let bytes_0: usize = LISTS_FIRMWARE_VERSION
-                        .lists[0]
-                        .encode_len(v_version.len())? - LISTS_FIRMWARE_VERSION.base;
-                    let mut compact = [0u8; 2];
-                    let out = {
-                        compact[..0].copy_from_slice(&[]);
-                        &mut compact
-                    };
-                    let out = LISTS_FIRMWARE_VERSION.expand(&compact, &[bytes_0], buf)?;
-                    {
-                        let at = 0;
-                        rt::write_elements(
-                            v_version.as_slice(),
-                            1,
-                            false,
-                            &mut out[at..],
-                        );
-                        if let rt::Some(b) = out.get_mut(at + v_version.len()) {
-                            *b = 0;
-                        }
-                    }
-                    out.len()
-                }
-                Self::MainBattery(response::MainBattery { voltage: v_voltage }) => {
-                    let out = rt::frame_mut::<4>(buf, &[])?;
-                    out[0..2].copy_from_slice(&v_voltage.raw().to_be_bytes());
-                    out.len()
-                }
-                Self::LogicBattery(response::LogicBattery { voltage: v_voltage }) => {
-                    let out = rt::frame_mut::<4>(buf, &[])?;
-                    out[0..2].copy_from_slice(&v_voltage.raw().to_be_bytes());
-                    out.len()
-                }
-                Self::Currents(response::Currents { m1: v_m1, m2: v_m2 }) => {
-                    let out = rt::frame_mut::<6>(buf, &[])?;
-                    out[0..2].copy_from_slice(&v_m1.raw().to_be_bytes());
-                    out[2..4].copy_from_slice(&v_m2.raw().to_be_bytes());
-                    out.len()
-                }
-                Self::Temperature(
-                    response::Temperature { temperature: v_temperature },
-                ) => {
-                    let out = rt::frame_mut::<4>(buf, &[])?;
-                    out[0..2].copy_from_slice(&v_temperature.raw().to_be_bytes());
-                    out.len()
-                }
-                Self::Status(response::Status { status: v_status }) => {
-                    let out = rt::frame_mut::<6>(buf, &[])?;
-                    out[0..4].copy_from_slice(&v_status.raw().to_be_bytes());
-                    out.len()
-                }
+                Self::EncoderM1(ref m) => m.write(address, buf)?,
+                Self::EncoderSpeedM1(ref m) => m.write(address, buf)?,
+                Self::FirmwareVersion(ref m) => m.write(address, buf)?,
+                Self::MainBattery(ref m) => m.write(address, buf)?,
+                Self::LogicBattery(ref m) => m.write(address, buf)?,
+                Self::Currents(ref m) => m.write(address, buf)?,
+                Self::Temperature(ref m) => m.write(address, buf)?,
+                Self::Status(ref m) => m.write(address, buf)?,
             };
             FRAME.seal(buf, len, frame_sum);
             rt::Ok(len)
@@ -1731,6 +1649,15 @@ pub mod roboclaw {
         pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             Request::DriveForwardM1(*self).encode(address, buf)
         }
+        /// Writes this message's frame for `address`, as the direction's `encode` does.
+        #[inline(always)]
+        fn write(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            let Self { speed: v_speed } = *self;
+            rt::encode_in_range("speed", v_speed, 0, 127)?;
+            let out = rt::frame_mut::<5>(buf, &[address, 0x00])?;
+            out[2] = v_speed;
+            rt::Ok(out.len())
+        }
         /// Reads this message from a frame whose framing and code are checked.
         #[inline(always)]
         fn from_frame(frame: &[u8]) -> rt::DecodeResult<Self> {
@@ -1751,6 +1678,15 @@ pub mod roboclaw {
         }
         pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             Request::DriveBackwardM1(*self).encode(address, buf)
+        }
+        /// Writes this message's frame for `address`, as the direction's `encode` does.
+        #[inline(always)]
+        fn write(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            let Self { speed: v_speed } = *self;
+            rt::encode_in_range("speed", v_speed, 0, 127)?;
+            let out = rt::frame_mut::<5>(buf, &[address, 0x01])?;
+            out[2] = v_speed;
+            rt::Ok(out.len())
         }
         /// Reads this message from a frame whose framing and code are checked.
         #[inline(always)]
@@ -1827,6 +1763,15 @@ pub mod roboclaw {
         pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             Request::DutyM1(*self).encode(address, buf)
         }
+        /// Writes this message's frame for `address`, as the direction's `encode` does.
+        #[inline(always)]
+        fn write(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            let Self { duty: v_duty } = *self;
+            rt::encode_in_range("duty", v_duty, -32767, 32767)?;
+            let out = rt::frame_mut::<6>(buf, &[address, 0x20])?;
+            out[2..4].copy_from_slice(&v_duty.to_be_bytes());
+            rt::Ok(out.len())
+        }
         /// Reads this message from a frame whose framing and code are checked.
         #[inline(always)]
         fn from_frame(frame: &[u8]) -> rt::DecodeResult<Self> {
@@ -1847,6 +1792,14 @@ pub mod roboclaw {
         }
         pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             Request::SpeedM1(*self).encode(address, buf)
+        }
+        /// Writes this message's frame for `address`, as the direction's `encode` does.
+        #[inline(always)]
+        fn write(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            let Self { speed: v_speed } = *self;
+            let out = rt::frame_mut::<8>(buf, &[address, 0x23])?;
+            out[2..6].copy_from_slice(&v_speed.to_be_bytes());
+            rt::Ok(out.len())
         }
         /// Reads this message from a frame whose framing and code are checked.
         #[inline(always)]
@@ -1915,6 +1868,15 @@ pub mod roboclaw {
         pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             Response::EncoderM1(*self).encode(address, buf)
         }
+        /// Writes this message's frame for `address`, as the direction's `encode` does.
+        #[inline(always)]
+        fn write(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            let Self { count: v_count, status: v_status } = *self;
+            let out = rt::frame_mut::<7>(buf, &[])?;
+            out[0..4].copy_from_slice(&v_count.to_be_bytes());
+            out[4] = v_status.raw();
+            rt::Ok(out.len())
+        }
         /// Reads this message from a frame whose framing and code are checked.
         #[inline(always)]
         fn from_frame(frame: &[u8]) -> rt::DecodeResult<Self> {
@@ -1939,6 +1901,15 @@ pub mod roboclaw {
         pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             Response::EncoderSpeedM1(*self).encode(address, buf)
         }
+        /// Writes this message's frame for `address`, as the direction's `encode` does.
+        #[inline(always)]
+        fn write(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            let Self { speed: v_speed, direction: v_direction } = *self;
+            let out = rt::frame_mut::<7>(buf, &[])?;
+            out[0..4].copy_from_slice(&v_speed.to_be_bytes());
+            out[4] = v_direction.raw();
+            rt::Ok(out.len())
+        }
         /// Reads this message from a frame whose framing and code are checked.
         #[inline(always)]
         fn from_frame(frame: &[u8]) -> rt::DecodeResult<Self> {
@@ -1962,6 +1933,29 @@ pub mod roboclaw {
         pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             Response::FirmwareVersion(*self).encode(address, buf)
         }
+        /// Writes this message's frame for `address`, as the direction's `encode` does.
+        #[inline(always)]
+        fn write(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            let Self { version: v_version } = *self;
+            LISTS_FIRMWARE_VERSION.lists[0].encode_until(v_version.as_slice())?;
+            let bytes_0: usize = LISTS_FIRMWARE_VERSION
+                .lists[0]
+                .encode_len(v_version.len())? - LISTS_FIRMWARE_VERSION.base;
+            let mut compact = [0u8; 2];
+            let out = {
+                compact[..0].copy_from_slice(&[]);
+                &mut compact
+            };
+            let out = LISTS_FIRMWARE_VERSION.expand(&compact, &[bytes_0], buf)?;
+            {
+                let at = 0;
+                rt::write_elements(v_version.as_slice(), 1, false, &mut out[at..]);
+                if let rt::Some(b) = out.get_mut(at + v_version.len()) {
+                    *b = 0;
+                }
+            }
+            rt::Ok(out.len())
+        }
     }
     impl response::MainBattery {
         pub const NAME: &'static str = "main_battery";
@@ -1974,6 +1968,14 @@ pub mod roboclaw {
         }
         pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             Response::MainBattery(*self).encode(address, buf)
+        }
+        /// Writes this message's frame for `address`, as the direction's `encode` does.
+        #[inline(always)]
+        fn write(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            let Self { voltage: v_voltage } = *self;
+            let out = rt::frame_mut::<4>(buf, &[])?;
+            out[0..2].copy_from_slice(&v_voltage.raw().to_be_bytes());
+            rt::Ok(out.len())
         }
         /// Reads this message from a frame whose framing and code are checked.
         #[inline(always)]
@@ -1995,6 +1997,14 @@ pub mod roboclaw {
         }
         pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             Response::LogicBattery(*self).encode(address, buf)
+        }
+        /// Writes this message's frame for `address`, as the direction's `encode` does.
+        #[inline(always)]
+        fn write(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            let Self { voltage: v_voltage } = *self;
+            let out = rt::frame_mut::<4>(buf, &[])?;
+            out[0..2].copy_from_slice(&v_voltage.raw().to_be_bytes());
+            rt::Ok(out.len())
         }
         /// Reads this message from a frame whose framing and code are checked.
         #[inline(always)]
@@ -2019,6 +2029,15 @@ pub mod roboclaw {
         pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             Response::Currents(*self).encode(address, buf)
         }
+        /// Writes this message's frame for `address`, as the direction's `encode` does.
+        #[inline(always)]
+        fn write(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            let Self { m1: v_m1, m2: v_m2 } = *self;
+            let out = rt::frame_mut::<6>(buf, &[])?;
+            out[0..2].copy_from_slice(&v_m1.raw().to_be_bytes());
+            out[2..4].copy_from_slice(&v_m2.raw().to_be_bytes());
+            rt::Ok(out.len())
+        }
         /// Reads this message from a frame whose framing and code are checked.
         #[inline(always)]
         fn from_frame(frame: &[u8]) -> rt::DecodeResult<Self> {
@@ -2040,6 +2059,14 @@ pub mod roboclaw {
         }
         pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             Response::Temperature(*self).encode(address, buf)
+        }
+        /// Writes this message's frame for `address`, as the direction's `encode` does.
+        #[inline(always)]
+        fn write(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            let Self { temperature: v_temperature } = *self;
+            let out = rt::frame_mut::<4>(buf, &[])?;
+            out[0..2].copy_from_slice(&v_temperature.raw().to_be_bytes());
+            rt::Ok(out.len())
         }
         /// Reads this message from a frame whose framing and code are checked.
         #[inline(always)]
@@ -2063,6 +2090,14 @@ pub mod roboclaw {
         }
         pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             Response::Status(*self).encode(address, buf)
+        }
+        /// Writes this message's frame for `address`, as the direction's `encode` does.
+        #[inline(always)]
+        fn write(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            let Self { status: v_status } = *self;
+            let out = rt::frame_mut::<6>(buf, &[])?;
+            out[0..4].copy_from_slice(&v_status.raw().to_be_bytes());
+            rt::Ok(out.len())
         }
         /// Reads this message from a frame whose framing and code are checked.
         #[inline(always)]

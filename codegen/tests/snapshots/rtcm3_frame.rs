@@ -192,32 +192,8 @@ pub mod rtcm3_frame {
         pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             rt::encode_address(address, &FRAME)?;
             let len = match *self {
-                Self::StationArp(
-                    request::StationArp { station_high: v_station_high, rest: v_rest },
-                ) => {
-                    let frame_len = REPEAT_STATION_ARP.encode_len(v_rest.len())?;
-                    let out = rt::frame_mut_len(buf, frame_len, &[0xD3])?;
-                    LENGTH.put(out)?;
-                    let field_0: u16 = (0x3ED << 4)
-                        | ((rt::fits("station_high", v_station_high, 0, 15)? as u16)
-                            & 0xF);
-                    out[3..5].copy_from_slice(&field_0.to_be_bytes());
-                    rt::write_elements(v_rest.as_slice(), 1, false, &mut out[5..]);
-                    out.len()
-                }
-                Self::Antenna(
-                    request::Antenna { station_high: v_station_high, rest: v_rest },
-                ) => {
-                    let frame_len = REPEAT_ANTENNA.encode_len(v_rest.len())?;
-                    let out = rt::frame_mut_len(buf, frame_len, &[0xD3])?;
-                    LENGTH.put(out)?;
-                    let field_0: u16 = (0x3EF << 4)
-                        | ((rt::fits("station_high", v_station_high, 0, 15)? as u16)
-                            & 0xF);
-                    out[3..5].copy_from_slice(&field_0.to_be_bytes());
-                    rt::write_elements(v_rest.as_slice(), 1, false, &mut out[5..]);
-                    out.len()
-                }
+                Self::StationArp(ref m) => m.write(address, buf)?,
+                Self::Antenna(ref m) => m.write(address, buf)?,
             };
             FRAME.seal(buf, len, frame_sum);
             rt::Ok(len)
@@ -748,6 +724,19 @@ pub mod rtcm3_frame {
         pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             Request::StationArp(*self).encode(address, buf)
         }
+        /// Writes this message's frame for `address`, as the direction's `encode` does.
+        #[inline(always)]
+        fn write(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            let Self { station_high: v_station_high, rest: v_rest } = *self;
+            let frame_len = REPEAT_STATION_ARP.encode_len(v_rest.len())?;
+            let out = rt::frame_mut_len(buf, frame_len, &[0xD3])?;
+            LENGTH.put(out)?;
+            let field_0: u16 = (0x3ED << 4)
+                | ((rt::fits("station_high", v_station_high, 0, 15)? as u16) & 0xF);
+            out[3..5].copy_from_slice(&field_0.to_be_bytes());
+            rt::write_elements(v_rest.as_slice(), 1, false, &mut out[5..]);
+            rt::Ok(out.len())
+        }
     }
     impl request::Antenna {
         pub const NAME: &'static str = "antenna";
@@ -763,6 +752,19 @@ pub mod rtcm3_frame {
         }
         pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             Request::Antenna(*self).encode(address, buf)
+        }
+        /// Writes this message's frame for `address`, as the direction's `encode` does.
+        #[inline(always)]
+        fn write(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            let Self { station_high: v_station_high, rest: v_rest } = *self;
+            let frame_len = REPEAT_ANTENNA.encode_len(v_rest.len())?;
+            let out = rt::frame_mut_len(buf, frame_len, &[0xD3])?;
+            LENGTH.put(out)?;
+            let field_0: u16 = (0x3EF << 4)
+                | ((rt::fits("station_high", v_station_high, 0, 15)? as u16) & 0xF);
+            out[3..5].copy_from_slice(&field_0.to_be_bytes());
+            rt::write_elements(v_rest.as_slice(), 1, false, &mut out[5..]);
+            rt::Ok(out.len())
         }
     }
     /// Each request as a struct of its own; its constants (`DESC`, which names it as

@@ -530,38 +530,15 @@ pub mod sd {
             rt::encode_address(address, &FRAME)?;
             let out = rt::frame_mut::<6>(buf, &[])?;
             let len = match *self {
-                Self::SetPoint(
-                    request::SetPoint { freshness: v_freshness, position: v_position },
-                ) => {
-                    let out = rt::head(out, &[0x76, address]);
-                    let field_0: u16 = ((rt::fits("freshness", v_freshness, 0, 15)?
-                        as u16) << 12)
-                        | ((rt::fits("position", v_position.raw(), -2048, 2047)? as u16)
-                            & 0xFFF);
-                    out[2..4].copy_from_slice(&field_0.to_be_bytes());
-                    out.len()
-                }
+                Self::SetPoint(ref m) => m.write(address, out)?,
                 Self::ReadActualPosition(_) => {
                     rt::head(out, &[0x69, address, 0x00, 0x00]).len()
                 }
-                Self::SetVelocity(
-                    request::SetVelocity { set_velocity: v_set_velocity },
-                ) => {
-                    let out = rt::head(out, &[0x77, address]);
-                    out[2..4].copy_from_slice(&v_set_velocity.raw().to_be_bytes());
-                    out.len()
-                }
+                Self::SetVelocity(ref m) => m.write(address, out)?,
                 Self::ReadActualVelocity(_) => {
                     rt::head(out, &[0x68, address, 0x00, 0x00]).len()
                 }
-                Self::SetServoId(request::SetServoId { new_id: v_new_id }) => {
-                    rt::encode_in_range("new_id", v_new_id, 1, 30)?;
-                    let out = rt::head(out, &[0xAA, address]);
-                    let field_0: u8 = v_new_id;
-                    out[2] = field_0;
-                    out[3] = field_0;
-                    out.len()
-                }
+                Self::SetServoId(ref m) => m.write(address, out)?,
                 Self::ReadServoId(_) => rt::head(out, &[0xDA, address, 0x00, 0x00]).len(),
                 Self::ReadCurrentConsumption(_) => {
                     rt::encode_broadcast(
@@ -663,58 +640,10 @@ pub mod sd {
                     )?;
                     rt::head(out, &[0x98, address, 0x00, 0x00]).len()
                 }
-                Self::ReadElectronicSerialNumber(
-                    request::ReadElectronicSerialNumber { byte_number: v_byte_number },
-                ) => {
-                    rt::encode_broadcast(
-                        address,
-                        0x1F,
-                        &request::ReadElectronicSerialNumber::DESC,
-                    )?;
-                    rt::encode_in_range("byte_number", v_byte_number, 0, 31)?;
-                    let out = rt::head(out, &[0xF0, address, 0x00]);
-                    out[3] = v_byte_number;
-                    out.len()
-                }
-                Self::ReadProductDescription(
-                    request::ReadProductDescription { byte_number: v_byte_number },
-                ) => {
-                    rt::encode_broadcast(
-                        address,
-                        0x1F,
-                        &request::ReadProductDescription::DESC,
-                    )?;
-                    rt::encode_in_range("byte_number", v_byte_number, 0, 31)?;
-                    let out = rt::head(out, &[0xF1, address, 0x00]);
-                    out[3] = v_byte_number;
-                    out.len()
-                }
-                Self::ReadSoftwareRevision(
-                    request::ReadSoftwareRevision { byte_number: v_byte_number },
-                ) => {
-                    rt::encode_broadcast(
-                        address,
-                        0x1F,
-                        &request::ReadSoftwareRevision::DESC,
-                    )?;
-                    rt::encode_in_range("byte_number", v_byte_number, 0, 31)?;
-                    let out = rt::head(out, &[0xF2, address, 0x00]);
-                    out[3] = v_byte_number;
-                    out.len()
-                }
-                Self::ReadHardwareRevision(
-                    request::ReadHardwareRevision { byte_number: v_byte_number },
-                ) => {
-                    rt::encode_broadcast(
-                        address,
-                        0x1F,
-                        &request::ReadHardwareRevision::DESC,
-                    )?;
-                    rt::encode_in_range("byte_number", v_byte_number, 0, 31)?;
-                    let out = rt::head(out, &[0xF3, address, 0x00]);
-                    out[3] = v_byte_number;
-                    out.len()
-                }
+                Self::ReadElectronicSerialNumber(ref m) => m.write(address, out)?,
+                Self::ReadProductDescription(ref m) => m.write(address, out)?,
+                Self::ReadSoftwareRevision(ref m) => m.write(address, out)?,
+                Self::ReadHardwareRevision(ref m) => m.write(address, out)?,
                 Self::ReadTotalRuntimeHours(_) => {
                     rt::encode_broadcast(
                         address,
@@ -1573,420 +1502,52 @@ pub mod sd {
             rt::encode_address(address, &FRAME)?;
             let out = rt::frame_mut::<6>(buf, &[])?;
             let len = match *self {
-                Self::SetPointReply(
-                    response::SetPointReply {
-                        freshness: v_freshness,
-                        position: v_position,
-                    },
-                ) => {
-                    let out = rt::head(out, &[0x56, address]);
-                    let field_0: u16 = ((rt::fits("freshness", v_freshness, 0, 15)?
-                        as u16) << 12)
-                        | ((rt::fits("position", v_position.raw(), -2048, 2047)? as u16)
-                            & 0xFFF);
-                    out[2..4].copy_from_slice(&field_0.to_be_bytes());
-                    out.len()
-                }
-                Self::ActualPosition(
-                    response::ActualPosition { position: v_position },
-                ) => {
-                    let out = rt::head(out, &[0x49, address]);
-                    let field_0: u16 = (rt::fits(
-                        "position",
-                        v_position.raw(),
-                        -2048,
-                        2047,
-                    )? as u16) & 0xFFF;
-                    out[2..4].copy_from_slice(&field_0.to_be_bytes());
-                    out.len()
-                }
-                Self::SetVelocityReply(
-                    response::SetVelocityReply { actual_velocity: v_actual_velocity },
-                ) => {
-                    let out = rt::head(out, &[0x57, address]);
-                    out[2..4].copy_from_slice(&v_actual_velocity.raw().to_be_bytes());
-                    out.len()
-                }
-                Self::ActualVelocity(
-                    response::ActualVelocity { actual_velocity: v_actual_velocity },
-                ) => {
-                    let out = rt::head(out, &[0x48, address]);
-                    out[2..4].copy_from_slice(&v_actual_velocity.raw().to_be_bytes());
-                    out.len()
-                }
-                Self::SetServoIdReply(
-                    response::SetServoIdReply { new_id: v_new_id },
-                ) => {
-                    rt::encode_in_range("new_id", v_new_id, 1, 30)?;
-                    let out = rt::head(out, &[0x55, address]);
-                    let field_0: u8 = v_new_id;
-                    out[2] = field_0;
-                    out[3] = field_0;
-                    out.len()
-                }
-                Self::ServoId(response::ServoId { id: v_id }) => {
-                    rt::encode_in_range("id", v_id, 1, 30)?;
-                    let out = rt::head(out, &[0x6D, address]);
-                    let field_0: u8 = v_id;
-                    out[2] = field_0;
-                    out[3] = field_0;
-                    out.len()
-                }
-                Self::CurrentConsumption(
-                    response::CurrentConsumption { current: v_current },
-                ) => {
-                    let out = rt::head(out, &[0x30, address]);
-                    let field_0: u8 = rt::fits("current", v_current.raw(), 0, 255)?
-                        as u8;
-                    out[2] = field_0;
-                    out[3] = field_0;
-                    out.len()
-                }
-                Self::BusVoltages(
-                    response::BusVoltages {
-                        power_bus_1_voltage: v_power_bus_1_voltage,
-                        power_bus_2_voltage: v_power_bus_2_voltage,
-                    },
-                ) => {
-                    let out = rt::head(out, &[0x31, address]);
-                    out[2] = v_power_bus_1_voltage.raw();
-                    out[3] = v_power_bus_2_voltage.raw();
-                    out.len()
-                }
-                Self::ExtendedCurrentConsumption(
-                    response::ExtendedCurrentConsumption { current: v_current },
-                ) => {
-                    let out = rt::head(out, &[0x32, address]);
-                    out[2..4].copy_from_slice(&v_current.raw().to_be_bytes());
-                    out.len()
-                }
-                Self::Temperatures(
-                    response::Temperatures {
-                        motor_temperature: v_motor_temperature,
-                        pcb_temperature: v_pcb_temperature,
-                    },
-                ) => {
-                    let out = rt::head(out, &[0x20, address]);
-                    out[2] = v_motor_temperature.raw();
-                    out[3] = v_pcb_temperature.raw();
-                    out.len()
-                }
-                Self::Humidity(response::Humidity { humidity: v_humidity }) => {
-                    rt::encode_in_range_or("humidity", v_humidity, 1, 100, &[0])?;
-                    let out = rt::head(out, &[0x21, address]);
-                    let field_0: u8 = v_humidity;
-                    out[2] = field_0;
-                    out[3] = field_0;
-                    out.len()
-                }
-                Self::SkippedFramesCounter(
-                    response::SkippedFramesCounter {
-                        host_freshness_counter: v_host_freshness_counter,
-                        dropped_frames: v_dropped_frames,
-                    },
-                ) => {
-                    let out = rt::head(out, &[0x38, address]);
-                    out[2] = v_host_freshness_counter;
-                    out[3] = v_dropped_frames;
-                    out.len()
-                }
-                Self::DroppedFramesCounterReset(
-                    response::DroppedFramesCounterReset {
-                        host_freshness_counter: v_host_freshness_counter,
-                    },
-                ) => {
-                    let out = rt::head(out, &[0x38, address]);
-                    out[3] = 0x00;
-                    out[2] = v_host_freshness_counter;
-                    out.len()
-                }
-                Self::ActuatorStatusWord(
-                    response::ActuatorStatusWord {
-                        status_bits: v_status_bits,
-                        status_arg2: v_status_arg2,
-                    },
-                ) => {
-                    let out = rt::head(out, &[0x41, address]);
-                    out[2] = v_status_bits.raw();
-                    out[3] = v_status_arg2;
-                    out.len()
-                }
+                Self::SetPointReply(ref m) => m.write(address, out)?,
+                Self::ActualPosition(ref m) => m.write(address, out)?,
+                Self::SetVelocityReply(ref m) => m.write(address, out)?,
+                Self::ActualVelocity(ref m) => m.write(address, out)?,
+                Self::SetServoIdReply(ref m) => m.write(address, out)?,
+                Self::ServoId(ref m) => m.write(address, out)?,
+                Self::CurrentConsumption(ref m) => m.write(address, out)?,
+                Self::BusVoltages(ref m) => m.write(address, out)?,
+                Self::ExtendedCurrentConsumption(ref m) => m.write(address, out)?,
+                Self::Temperatures(ref m) => m.write(address, out)?,
+                Self::Humidity(ref m) => m.write(address, out)?,
+                Self::SkippedFramesCounter(ref m) => m.write(address, out)?,
+                Self::DroppedFramesCounterReset(ref m) => m.write(address, out)?,
+                Self::ActuatorStatusWord(ref m) => m.write(address, out)?,
                 Self::ResetDefaultRoleAndErrorFlagsReply(_) => {
                     rt::head(out, &[0x5A, address, 0x41, 0x53]).len()
                 }
-                Self::SetCurrentPositionAsZeroReply(
-                    response::SetCurrentPositionAsZeroReply {
-                        zero_offset: v_zero_offset,
-                    },
-                ) => {
-                    let out = rt::head(out, &[0x4C, address]);
-                    let field_0: u16 = (rt::fits(
-                        "zero_offset",
-                        v_zero_offset.raw(),
-                        -2048,
-                        2047,
-                    )? as u16) & 0xFFF;
-                    out[2..4].copy_from_slice(&field_0.to_be_bytes());
-                    out.len()
-                }
-                Self::CurrentZeroOffset(
-                    response::CurrentZeroOffset { zero_offset: v_zero_offset },
-                ) => {
-                    let out = rt::head(out, &[0x65, address]);
-                    let field_0: u16 = (rt::fits(
-                        "zero_offset",
-                        v_zero_offset.raw(),
-                        -2048,
-                        2047,
-                    )? as u16) & 0xFFF;
-                    out[2..4].copy_from_slice(&field_0.to_be_bytes());
-                    out.len()
-                }
+                Self::SetCurrentPositionAsZeroReply(ref m) => m.write(address, out)?,
+                Self::CurrentZeroOffset(ref m) => m.write(address, out)?,
                 Self::ResetZeroOffsetReply(_) => {
                     rt::head(out, &[0x64, address, 0x00, 0x00]).len()
                 }
-                Self::ElectronicSerialNumberCharacter(
-                    response::ElectronicSerialNumberCharacter {
-                        character: v_character,
-                        string_length: v_string_length,
-                    },
-                ) => {
-                    rt::encode_in_range("string_length", v_string_length, 0, 32)?;
-                    let out = rt::head(out, &[0x10, address]);
-                    out[2] = v_character;
-                    out[3] = v_string_length;
-                    out.len()
-                }
-                Self::ProductDescriptionCharacter(
-                    response::ProductDescriptionCharacter {
-                        character: v_character,
-                        string_length: v_string_length,
-                    },
-                ) => {
-                    rt::encode_in_range("string_length", v_string_length, 0, 32)?;
-                    let out = rt::head(out, &[0x11, address]);
-                    out[2] = v_character;
-                    out[3] = v_string_length;
-                    out.len()
-                }
-                Self::SoftwareRevisionCharacter(
-                    response::SoftwareRevisionCharacter {
-                        character: v_character,
-                        string_length: v_string_length,
-                    },
-                ) => {
-                    rt::encode_in_range("string_length", v_string_length, 0, 32)?;
-                    let out = rt::head(out, &[0x12, address]);
-                    out[2] = v_character;
-                    out[3] = v_string_length;
-                    out.len()
-                }
-                Self::HardwareRevisionCharacter(
-                    response::HardwareRevisionCharacter {
-                        character: v_character,
-                        string_length: v_string_length,
-                    },
-                ) => {
-                    rt::encode_in_range("string_length", v_string_length, 0, 32)?;
-                    let out = rt::head(out, &[0x13, address]);
-                    out[2] = v_character;
-                    out[3] = v_string_length;
-                    out.len()
-                }
-                Self::TotalRuntimeHours(
-                    response::TotalRuntimeHours { runtime_hours: v_runtime_hours },
-                ) => {
-                    let out = rt::head(out, &[0x22, address]);
-                    out[2..4].copy_from_slice(&v_runtime_hours.to_be_bytes());
-                    out.len()
-                }
-                Self::TotalRuntimeMinSec(
-                    response::TotalRuntimeMinSec {
-                        runtime_minutes: v_runtime_minutes,
-                        runtime_seconds: v_runtime_seconds,
-                    },
-                ) => {
-                    rt::encode_in_range("runtime_minutes", v_runtime_minutes, 0, 59)?;
-                    rt::encode_in_range("runtime_seconds", v_runtime_seconds, 0, 59)?;
-                    let out = rt::head(out, &[0x22, address]);
-                    out[2] = v_runtime_minutes;
-                    out[3] = v_runtime_seconds;
-                    out.len()
-                }
-                Self::LoadRuntime024Hours(
-                    response::LoadRuntime024Hours { runtime_hours: v_runtime_hours },
-                ) => {
-                    let out = rt::head(out, &[0x23, address]);
-                    out[2..4].copy_from_slice(&v_runtime_hours.to_be_bytes());
-                    out.len()
-                }
-                Self::LoadRuntime024MinSec(
-                    response::LoadRuntime024MinSec {
-                        runtime_minutes: v_runtime_minutes,
-                        runtime_seconds: v_runtime_seconds,
-                    },
-                ) => {
-                    rt::encode_in_range("runtime_minutes", v_runtime_minutes, 0, 59)?;
-                    rt::encode_in_range("runtime_seconds", v_runtime_seconds, 0, 59)?;
-                    let out = rt::head(out, &[0x23, address]);
-                    out[2] = v_runtime_minutes;
-                    out[3] = v_runtime_seconds;
-                    out.len()
-                }
-                Self::LoadRuntime024HoursBeforeReset(
-                    response::LoadRuntime024HoursBeforeReset {
-                        runtime_hours_before_reset: v_runtime_hours_before_reset,
-                    },
-                ) => {
-                    let out = rt::head(out, &[0x23, address]);
-                    out[2..4]
-                        .copy_from_slice(&v_runtime_hours_before_reset.to_be_bytes());
-                    out.len()
-                }
-                Self::LoadRuntime2549Hours(
-                    response::LoadRuntime2549Hours { runtime_hours: v_runtime_hours },
-                ) => {
-                    let out = rt::head(out, &[0x24, address]);
-                    out[2..4].copy_from_slice(&v_runtime_hours.to_be_bytes());
-                    out.len()
-                }
-                Self::LoadRuntime2549MinSec(
-                    response::LoadRuntime2549MinSec {
-                        runtime_minutes: v_runtime_minutes,
-                        runtime_seconds: v_runtime_seconds,
-                    },
-                ) => {
-                    rt::encode_in_range("runtime_minutes", v_runtime_minutes, 0, 59)?;
-                    rt::encode_in_range("runtime_seconds", v_runtime_seconds, 0, 59)?;
-                    let out = rt::head(out, &[0x24, address]);
-                    out[2] = v_runtime_minutes;
-                    out[3] = v_runtime_seconds;
-                    out.len()
-                }
-                Self::LoadRuntime2549HoursBeforeReset(
-                    response::LoadRuntime2549HoursBeforeReset {
-                        runtime_hours_before_reset: v_runtime_hours_before_reset,
-                    },
-                ) => {
-                    let out = rt::head(out, &[0x24, address]);
-                    out[2..4]
-                        .copy_from_slice(&v_runtime_hours_before_reset.to_be_bytes());
-                    out.len()
-                }
-                Self::LoadRuntime5074Hours(
-                    response::LoadRuntime5074Hours { runtime_hours: v_runtime_hours },
-                ) => {
-                    let out = rt::head(out, &[0x25, address]);
-                    out[2..4].copy_from_slice(&v_runtime_hours.to_be_bytes());
-                    out.len()
-                }
-                Self::LoadRuntime5074MinSec(
-                    response::LoadRuntime5074MinSec {
-                        runtime_minutes: v_runtime_minutes,
-                        runtime_seconds: v_runtime_seconds,
-                    },
-                ) => {
-                    rt::encode_in_range("runtime_minutes", v_runtime_minutes, 0, 59)?;
-                    rt::encode_in_range("runtime_seconds", v_runtime_seconds, 0, 59)?;
-                    let out = rt::head(out, &[0x25, address]);
-                    out[2] = v_runtime_minutes;
-                    out[3] = v_runtime_seconds;
-                    out.len()
-                }
-                Self::LoadRuntime5074HoursBeforeReset(
-                    response::LoadRuntime5074HoursBeforeReset {
-                        runtime_hours_before_reset: v_runtime_hours_before_reset,
-                    },
-                ) => {
-                    let out = rt::head(out, &[0x25, address]);
-                    out[2..4]
-                        .copy_from_slice(&v_runtime_hours_before_reset.to_be_bytes());
-                    out.len()
-                }
-                Self::LoadRuntime7599Hours(
-                    response::LoadRuntime7599Hours { runtime_hours: v_runtime_hours },
-                ) => {
-                    let out = rt::head(out, &[0x26, address]);
-                    out[2..4].copy_from_slice(&v_runtime_hours.to_be_bytes());
-                    out.len()
-                }
-                Self::LoadRuntime7599MinSec(
-                    response::LoadRuntime7599MinSec {
-                        runtime_minutes: v_runtime_minutes,
-                        runtime_seconds: v_runtime_seconds,
-                    },
-                ) => {
-                    rt::encode_in_range("runtime_minutes", v_runtime_minutes, 0, 59)?;
-                    rt::encode_in_range("runtime_seconds", v_runtime_seconds, 0, 59)?;
-                    let out = rt::head(out, &[0x26, address]);
-                    out[2] = v_runtime_minutes;
-                    out[3] = v_runtime_seconds;
-                    out.len()
-                }
-                Self::LoadRuntime7599HoursBeforeReset(
-                    response::LoadRuntime7599HoursBeforeReset {
-                        runtime_hours_before_reset: v_runtime_hours_before_reset,
-                    },
-                ) => {
-                    let out = rt::head(out, &[0x26, address]);
-                    out[2..4]
-                        .copy_from_slice(&v_runtime_hours_before_reset.to_be_bytes());
-                    out.len()
-                }
-                Self::LoadRuntime100Hours(
-                    response::LoadRuntime100Hours { runtime_hours: v_runtime_hours },
-                ) => {
-                    let out = rt::head(out, &[0x27, address]);
-                    out[2..4].copy_from_slice(&v_runtime_hours.to_be_bytes());
-                    out.len()
-                }
-                Self::LoadRuntime100MinSec(
-                    response::LoadRuntime100MinSec {
-                        runtime_minutes: v_runtime_minutes,
-                        runtime_seconds: v_runtime_seconds,
-                    },
-                ) => {
-                    rt::encode_in_range("runtime_minutes", v_runtime_minutes, 0, 59)?;
-                    rt::encode_in_range("runtime_seconds", v_runtime_seconds, 0, 59)?;
-                    let out = rt::head(out, &[0x27, address]);
-                    out[2] = v_runtime_minutes;
-                    out[3] = v_runtime_seconds;
-                    out.len()
-                }
-                Self::LoadRuntime100HoursBeforeReset(
-                    response::LoadRuntime100HoursBeforeReset {
-                        runtime_hours_before_reset: v_runtime_hours_before_reset,
-                    },
-                ) => {
-                    let out = rt::head(out, &[0x27, address]);
-                    out[2..4]
-                        .copy_from_slice(&v_runtime_hours_before_reset.to_be_bytes());
-                    out.len()
-                }
-                Self::StallEventCounter(
-                    response::StallEventCounter { stall_events: v_stall_events },
-                ) => {
-                    let out = rt::head(out, &[0x28, address]);
-                    out[2..4].copy_from_slice(&v_stall_events.to_be_bytes());
-                    out.len()
-                }
-                Self::StallEventCounterBeforeReset(
-                    response::StallEventCounterBeforeReset {
-                        stall_events_before_reset: v_stall_events_before_reset,
-                    },
-                ) => {
-                    let out = rt::head(out, &[0x28, address]);
-                    out[2..4]
-                        .copy_from_slice(&v_stall_events_before_reset.to_be_bytes());
-                    out.len()
-                }
-                Self::PowerUpCycles(
-                    response::PowerUpCycles { power_up_cycles: v_power_up_cycles },
-                ) => {
-                    let out = rt::head(out, &[0x29, address]);
-                    out[2..4].copy_from_slice(&v_power_up_cycles.to_be_bytes());
-                    out.len()
-                }
+                Self::ElectronicSerialNumberCharacter(ref m) => m.write(address, out)?,
+                Self::ProductDescriptionCharacter(ref m) => m.write(address, out)?,
+                Self::SoftwareRevisionCharacter(ref m) => m.write(address, out)?,
+                Self::HardwareRevisionCharacter(ref m) => m.write(address, out)?,
+                Self::TotalRuntimeHours(ref m) => m.write(address, out)?,
+                Self::TotalRuntimeMinSec(ref m) => m.write(address, out)?,
+                Self::LoadRuntime024Hours(ref m) => m.write(address, out)?,
+                Self::LoadRuntime024MinSec(ref m) => m.write(address, out)?,
+                Self::LoadRuntime024HoursBeforeReset(ref m) => m.write(address, out)?,
+                Self::LoadRuntime2549Hours(ref m) => m.write(address, out)?,
+                Self::LoadRuntime2549MinSec(ref m) => m.write(address, out)?,
+                Self::LoadRuntime2549HoursBeforeReset(ref m) => m.write(address, out)?,
+                Self::LoadRuntime5074Hours(ref m) => m.write(address, out)?,
+                Self::LoadRuntime5074MinSec(ref m) => m.write(address, out)?,
+                Self::LoadRuntime5074HoursBeforeReset(ref m) => m.write(address, out)?,
+                Self::LoadRuntime7599Hours(ref m) => m.write(address, out)?,
+                Self::LoadRuntime7599MinSec(ref m) => m.write(address, out)?,
+                Self::LoadRuntime7599HoursBeforeReset(ref m) => m.write(address, out)?,
+                Self::LoadRuntime100Hours(ref m) => m.write(address, out)?,
+                Self::LoadRuntime100MinSec(ref m) => m.write(address, out)?,
+                Self::LoadRuntime100HoursBeforeReset(ref m) => m.write(address, out)?,
+                Self::StallEventCounter(ref m) => m.write(address, out)?,
+                Self::StallEventCounterBeforeReset(ref m) => m.write(address, out)?,
+                Self::PowerUpCycles(ref m) => m.write(address, out)?,
             };
             FRAME.seal(buf, len, frame_sum);
             rt::Ok(len)
@@ -2743,6 +2304,18 @@ pub mod sd {
         pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             Request::SetPoint(*self).encode(address, buf)
         }
+        /// Writes this message's frame for `address`, as the direction's `encode` does.
+        #[inline(always)]
+        fn write(&self, address: u8, out: &mut [u8; 6]) -> rt::EncodeResult {
+            let Self { freshness: v_freshness, position: v_position } = *self;
+            let out = rt::head(out, &[0x76, address]);
+            let field_0: u16 = ((rt::fits("freshness", v_freshness, 0, 15)? as u16)
+                << 12)
+                | ((rt::fits("position", v_position.raw(), -2048, 2047)? as u16)
+                    & 0xFFF);
+            out[2..4].copy_from_slice(&field_0.to_be_bytes());
+            rt::Ok(out.len())
+        }
         /// Reads this message from a frame whose framing and code are checked.
         #[inline(always)]
         fn from_frame(frame: &[u8]) -> rt::DecodeResult<Self> {
@@ -2784,6 +2357,14 @@ pub mod sd {
         }
         pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             Request::SetVelocity(*self).encode(address, buf)
+        }
+        /// Writes this message's frame for `address`, as the direction's `encode` does.
+        #[inline(always)]
+        fn write(&self, address: u8, out: &mut [u8; 6]) -> rt::EncodeResult {
+            let Self { set_velocity: v_set_velocity } = *self;
+            let out = rt::head(out, &[0x77, address]);
+            out[2..4].copy_from_slice(&v_set_velocity.raw().to_be_bytes());
+            rt::Ok(out.len())
         }
         /// Reads this message from a frame whose framing and code are checked.
         #[inline(always)]
@@ -2831,6 +2412,17 @@ pub mod sd {
         }
         pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             Request::SetServoId(*self).encode(address, buf)
+        }
+        /// Writes this message's frame for `address`, as the direction's `encode` does.
+        #[inline(always)]
+        fn write(&self, address: u8, out: &mut [u8; 6]) -> rt::EncodeResult {
+            let Self { new_id: v_new_id } = *self;
+            rt::encode_in_range("new_id", v_new_id, 1, 30)?;
+            let out = rt::head(out, &[0xAA, address]);
+            let field_0: u8 = v_new_id;
+            out[2] = field_0;
+            out[3] = field_0;
+            rt::Ok(out.len())
         }
         /// Reads this message from a frame whose framing and code are checked.
         #[inline(always)]
@@ -3134,6 +2726,20 @@ pub mod sd {
         pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             Request::ReadElectronicSerialNumber(*self).encode(address, buf)
         }
+        /// Writes this message's frame for `address`, as the direction's `encode` does.
+        #[inline(always)]
+        fn write(&self, address: u8, out: &mut [u8; 6]) -> rt::EncodeResult {
+            let Self { byte_number: v_byte_number } = *self;
+            rt::encode_broadcast(
+                address,
+                0x1F,
+                &request::ReadElectronicSerialNumber::DESC,
+            )?;
+            rt::encode_in_range("byte_number", v_byte_number, 0, 31)?;
+            let out = rt::head(out, &[0xF0, address, 0x00]);
+            out[3] = v_byte_number;
+            rt::Ok(out.len())
+        }
         /// Reads this message from a frame whose framing and code are checked.
         #[inline(always)]
         fn from_frame(frame: &[u8]) -> rt::DecodeResult<Self> {
@@ -3157,6 +2763,16 @@ pub mod sd {
         }
         pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             Request::ReadProductDescription(*self).encode(address, buf)
+        }
+        /// Writes this message's frame for `address`, as the direction's `encode` does.
+        #[inline(always)]
+        fn write(&self, address: u8, out: &mut [u8; 6]) -> rt::EncodeResult {
+            let Self { byte_number: v_byte_number } = *self;
+            rt::encode_broadcast(address, 0x1F, &request::ReadProductDescription::DESC)?;
+            rt::encode_in_range("byte_number", v_byte_number, 0, 31)?;
+            let out = rt::head(out, &[0xF1, address, 0x00]);
+            out[3] = v_byte_number;
+            rt::Ok(out.len())
         }
         /// Reads this message from a frame whose framing and code are checked.
         #[inline(always)]
@@ -3182,6 +2798,16 @@ pub mod sd {
         pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             Request::ReadSoftwareRevision(*self).encode(address, buf)
         }
+        /// Writes this message's frame for `address`, as the direction's `encode` does.
+        #[inline(always)]
+        fn write(&self, address: u8, out: &mut [u8; 6]) -> rt::EncodeResult {
+            let Self { byte_number: v_byte_number } = *self;
+            rt::encode_broadcast(address, 0x1F, &request::ReadSoftwareRevision::DESC)?;
+            rt::encode_in_range("byte_number", v_byte_number, 0, 31)?;
+            let out = rt::head(out, &[0xF2, address, 0x00]);
+            out[3] = v_byte_number;
+            rt::Ok(out.len())
+        }
         /// Reads this message from a frame whose framing and code are checked.
         #[inline(always)]
         fn from_frame(frame: &[u8]) -> rt::DecodeResult<Self> {
@@ -3205,6 +2831,16 @@ pub mod sd {
         }
         pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             Request::ReadHardwareRevision(*self).encode(address, buf)
+        }
+        /// Writes this message's frame for `address`, as the direction's `encode` does.
+        #[inline(always)]
+        fn write(&self, address: u8, out: &mut [u8; 6]) -> rt::EncodeResult {
+            let Self { byte_number: v_byte_number } = *self;
+            rt::encode_broadcast(address, 0x1F, &request::ReadHardwareRevision::DESC)?;
+            rt::encode_in_range("byte_number", v_byte_number, 0, 31)?;
+            let out = rt::head(out, &[0xF3, address, 0x00]);
+            out[3] = v_byte_number;
+            rt::Ok(out.len())
         }
         /// Reads this message from a frame whose framing and code are checked.
         #[inline(always)]
@@ -3628,6 +3264,18 @@ pub mod sd {
         pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             Response::SetPointReply(*self).encode(address, buf)
         }
+        /// Writes this message's frame for `address`, as the direction's `encode` does.
+        #[inline(always)]
+        fn write(&self, address: u8, out: &mut [u8; 6]) -> rt::EncodeResult {
+            let Self { freshness: v_freshness, position: v_position } = *self;
+            let out = rt::head(out, &[0x56, address]);
+            let field_0: u16 = ((rt::fits("freshness", v_freshness, 0, 15)? as u16)
+                << 12)
+                | ((rt::fits("position", v_position.raw(), -2048, 2047)? as u16)
+                    & 0xFFF);
+            out[2..4].copy_from_slice(&field_0.to_be_bytes());
+            rt::Ok(out.len())
+        }
         /// Reads this message from a frame whose framing and code are checked.
         #[inline(always)]
         fn from_frame(frame: &[u8]) -> rt::DecodeResult<Self> {
@@ -3650,6 +3298,16 @@ pub mod sd {
         }
         pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             Response::ActualPosition(*self).encode(address, buf)
+        }
+        /// Writes this message's frame for `address`, as the direction's `encode` does.
+        #[inline(always)]
+        fn write(&self, address: u8, out: &mut [u8; 6]) -> rt::EncodeResult {
+            let Self { position: v_position } = *self;
+            let out = rt::head(out, &[0x49, address]);
+            let field_0: u16 = (rt::fits("position", v_position.raw(), -2048, 2047)?
+                as u16) & 0xFFF;
+            out[2..4].copy_from_slice(&field_0.to_be_bytes());
+            rt::Ok(out.len())
         }
         /// Reads this message from a frame whose framing and code are checked.
         #[inline(always)]
@@ -3674,6 +3332,14 @@ pub mod sd {
         pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             Response::SetVelocityReply(*self).encode(address, buf)
         }
+        /// Writes this message's frame for `address`, as the direction's `encode` does.
+        #[inline(always)]
+        fn write(&self, address: u8, out: &mut [u8; 6]) -> rt::EncodeResult {
+            let Self { actual_velocity: v_actual_velocity } = *self;
+            let out = rt::head(out, &[0x57, address]);
+            out[2..4].copy_from_slice(&v_actual_velocity.raw().to_be_bytes());
+            rt::Ok(out.len())
+        }
         /// Reads this message from a frame whose framing and code are checked.
         #[inline(always)]
         fn from_frame(frame: &[u8]) -> rt::DecodeResult<Self> {
@@ -3696,6 +3362,14 @@ pub mod sd {
         }
         pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             Response::ActualVelocity(*self).encode(address, buf)
+        }
+        /// Writes this message's frame for `address`, as the direction's `encode` does.
+        #[inline(always)]
+        fn write(&self, address: u8, out: &mut [u8; 6]) -> rt::EncodeResult {
+            let Self { actual_velocity: v_actual_velocity } = *self;
+            let out = rt::head(out, &[0x48, address]);
+            out[2..4].copy_from_slice(&v_actual_velocity.raw().to_be_bytes());
+            rt::Ok(out.len())
         }
         /// Reads this message from a frame whose framing and code are checked.
         #[inline(always)]
@@ -3725,6 +3399,17 @@ pub mod sd {
         pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             Response::SetServoIdReply(*self).encode(address, buf)
         }
+        /// Writes this message's frame for `address`, as the direction's `encode` does.
+        #[inline(always)]
+        fn write(&self, address: u8, out: &mut [u8; 6]) -> rt::EncodeResult {
+            let Self { new_id: v_new_id } = *self;
+            rt::encode_in_range("new_id", v_new_id, 1, 30)?;
+            let out = rt::head(out, &[0x55, address]);
+            let field_0: u8 = v_new_id;
+            out[2] = field_0;
+            out[3] = field_0;
+            rt::Ok(out.len())
+        }
         /// Reads this message from a frame whose framing and code are checked.
         #[inline(always)]
         fn from_frame(frame: &[u8]) -> rt::DecodeResult<Self> {
@@ -3747,6 +3432,17 @@ pub mod sd {
         }
         pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             Response::ServoId(*self).encode(address, buf)
+        }
+        /// Writes this message's frame for `address`, as the direction's `encode` does.
+        #[inline(always)]
+        fn write(&self, address: u8, out: &mut [u8; 6]) -> rt::EncodeResult {
+            let Self { id: v_id } = *self;
+            rt::encode_in_range("id", v_id, 1, 30)?;
+            let out = rt::head(out, &[0x6D, address]);
+            let field_0: u8 = v_id;
+            out[2] = field_0;
+            out[3] = field_0;
+            rt::Ok(out.len())
         }
         /// Reads this message from a frame whose framing and code are checked.
         #[inline(always)]
@@ -3773,6 +3469,16 @@ pub mod sd {
         pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             Response::CurrentConsumption(*self).encode(address, buf)
         }
+        /// Writes this message's frame for `address`, as the direction's `encode` does.
+        #[inline(always)]
+        fn write(&self, address: u8, out: &mut [u8; 6]) -> rt::EncodeResult {
+            let Self { current: v_current } = *self;
+            let out = rt::head(out, &[0x30, address]);
+            let field_0: u8 = rt::fits("current", v_current.raw(), 0, 255)? as u8;
+            out[2] = field_0;
+            out[3] = field_0;
+            rt::Ok(out.len())
+        }
         /// Reads this message from a frame whose framing and code are checked.
         #[inline(always)]
         fn from_frame(frame: &[u8]) -> rt::DecodeResult<Self> {
@@ -3797,6 +3503,18 @@ pub mod sd {
         pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             Response::BusVoltages(*self).encode(address, buf)
         }
+        /// Writes this message's frame for `address`, as the direction's `encode` does.
+        #[inline(always)]
+        fn write(&self, address: u8, out: &mut [u8; 6]) -> rt::EncodeResult {
+            let Self {
+                power_bus_1_voltage: v_power_bus_1_voltage,
+                power_bus_2_voltage: v_power_bus_2_voltage,
+            } = *self;
+            let out = rt::head(out, &[0x31, address]);
+            out[2] = v_power_bus_1_voltage.raw();
+            out[3] = v_power_bus_2_voltage.raw();
+            rt::Ok(out.len())
+        }
         /// Reads this message from a frame whose framing and code are checked.
         #[inline(always)]
         fn from_frame(frame: &[u8]) -> rt::DecodeResult<Self> {
@@ -3818,6 +3536,14 @@ pub mod sd {
         }
         pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             Response::ExtendedCurrentConsumption(*self).encode(address, buf)
+        }
+        /// Writes this message's frame for `address`, as the direction's `encode` does.
+        #[inline(always)]
+        fn write(&self, address: u8, out: &mut [u8; 6]) -> rt::EncodeResult {
+            let Self { current: v_current } = *self;
+            let out = rt::head(out, &[0x32, address]);
+            out[2..4].copy_from_slice(&v_current.raw().to_be_bytes());
+            rt::Ok(out.len())
         }
         /// Reads this message from a frame whose framing and code are checked.
         #[inline(always)]
@@ -3850,6 +3576,18 @@ pub mod sd {
         pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             Response::Temperatures(*self).encode(address, buf)
         }
+        /// Writes this message's frame for `address`, as the direction's `encode` does.
+        #[inline(always)]
+        fn write(&self, address: u8, out: &mut [u8; 6]) -> rt::EncodeResult {
+            let Self {
+                motor_temperature: v_motor_temperature,
+                pcb_temperature: v_pcb_temperature,
+            } = *self;
+            let out = rt::head(out, &[0x20, address]);
+            out[2] = v_motor_temperature.raw();
+            out[3] = v_pcb_temperature.raw();
+            rt::Ok(out.len())
+        }
         /// Reads this message from a frame whose framing and code are checked.
         #[inline(always)]
         fn from_frame(frame: &[u8]) -> rt::DecodeResult<Self> {
@@ -3879,6 +3617,17 @@ pub mod sd {
         pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             Response::Humidity(*self).encode(address, buf)
         }
+        /// Writes this message's frame for `address`, as the direction's `encode` does.
+        #[inline(always)]
+        fn write(&self, address: u8, out: &mut [u8; 6]) -> rt::EncodeResult {
+            let Self { humidity: v_humidity } = *self;
+            rt::encode_in_range_or("humidity", v_humidity, 1, 100, &[0])?;
+            let out = rt::head(out, &[0x21, address]);
+            let field_0: u8 = v_humidity;
+            out[2] = field_0;
+            out[3] = field_0;
+            rt::Ok(out.len())
+        }
         /// Reads this message from a frame whose framing and code are checked.
         #[inline(always)]
         fn from_frame(frame: &[u8]) -> rt::DecodeResult<Self> {
@@ -3901,6 +3650,18 @@ pub mod sd {
         }
         pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             Response::SkippedFramesCounter(*self).encode(address, buf)
+        }
+        /// Writes this message's frame for `address`, as the direction's `encode` does.
+        #[inline(always)]
+        fn write(&self, address: u8, out: &mut [u8; 6]) -> rt::EncodeResult {
+            let Self {
+                host_freshness_counter: v_host_freshness_counter,
+                dropped_frames: v_dropped_frames,
+            } = *self;
+            let out = rt::head(out, &[0x38, address]);
+            out[2] = v_host_freshness_counter;
+            out[3] = v_dropped_frames;
+            rt::Ok(out.len())
         }
         /// Reads this message from a frame whose framing and code are checked.
         #[inline(always)]
@@ -3925,6 +3686,15 @@ pub mod sd {
         pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             Response::DroppedFramesCounterReset(*self).encode(address, buf)
         }
+        /// Writes this message's frame for `address`, as the direction's `encode` does.
+        #[inline(always)]
+        fn write(&self, address: u8, out: &mut [u8; 6]) -> rt::EncodeResult {
+            let Self { host_freshness_counter: v_host_freshness_counter } = *self;
+            let out = rt::head(out, &[0x38, address]);
+            out[3] = 0x00;
+            out[2] = v_host_freshness_counter;
+            rt::Ok(out.len())
+        }
         /// Reads this message from a frame whose framing and code are checked.
         #[inline(always)]
         fn from_frame(frame: &[u8]) -> rt::DecodeResult<Self> {
@@ -3948,6 +3718,15 @@ pub mod sd {
         }
         pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             Response::ActuatorStatusWord(*self).encode(address, buf)
+        }
+        /// Writes this message's frame for `address`, as the direction's `encode` does.
+        #[inline(always)]
+        fn write(&self, address: u8, out: &mut [u8; 6]) -> rt::EncodeResult {
+            let Self { status_bits: v_status_bits, status_arg2: v_status_arg2 } = *self;
+            let out = rt::head(out, &[0x41, address]);
+            out[2] = v_status_bits.raw();
+            out[3] = v_status_arg2;
+            rt::Ok(out.len())
         }
         /// Reads this message from a frame whose framing and code are checked.
         #[inline(always)]
@@ -3990,6 +3769,20 @@ pub mod sd {
         pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             Response::SetCurrentPositionAsZeroReply(*self).encode(address, buf)
         }
+        /// Writes this message's frame for `address`, as the direction's `encode` does.
+        #[inline(always)]
+        fn write(&self, address: u8, out: &mut [u8; 6]) -> rt::EncodeResult {
+            let Self { zero_offset: v_zero_offset } = *self;
+            let out = rt::head(out, &[0x4C, address]);
+            let field_0: u16 = (rt::fits(
+                "zero_offset",
+                v_zero_offset.raw(),
+                -2048,
+                2047,
+            )? as u16) & 0xFFF;
+            out[2..4].copy_from_slice(&field_0.to_be_bytes());
+            rt::Ok(out.len())
+        }
         /// Reads this message from a frame whose framing and code are checked.
         #[inline(always)]
         fn from_frame(frame: &[u8]) -> rt::DecodeResult<Self> {
@@ -4014,6 +3807,20 @@ pub mod sd {
         }
         pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             Response::CurrentZeroOffset(*self).encode(address, buf)
+        }
+        /// Writes this message's frame for `address`, as the direction's `encode` does.
+        #[inline(always)]
+        fn write(&self, address: u8, out: &mut [u8; 6]) -> rt::EncodeResult {
+            let Self { zero_offset: v_zero_offset } = *self;
+            let out = rt::head(out, &[0x65, address]);
+            let field_0: u16 = (rt::fits(
+                "zero_offset",
+                v_zero_offset.raw(),
+                -2048,
+                2047,
+            )? as u16) & 0xFFF;
+            out[2..4].copy_from_slice(&field_0.to_be_bytes());
+            rt::Ok(out.len())
         }
         /// Reads this message from a frame whose framing and code are checked.
         #[inline(always)]
@@ -4065,6 +3872,16 @@ pub mod sd {
         pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             Response::ElectronicSerialNumberCharacter(*self).encode(address, buf)
         }
+        /// Writes this message's frame for `address`, as the direction's `encode` does.
+        #[inline(always)]
+        fn write(&self, address: u8, out: &mut [u8; 6]) -> rt::EncodeResult {
+            let Self { character: v_character, string_length: v_string_length } = *self;
+            rt::encode_in_range("string_length", v_string_length, 0, 32)?;
+            let out = rt::head(out, &[0x10, address]);
+            out[2] = v_character;
+            out[3] = v_string_length;
+            rt::Ok(out.len())
+        }
         /// Reads this message from a frame whose framing and code are checked.
         #[inline(always)]
         fn from_frame(frame: &[u8]) -> rt::DecodeResult<Self> {
@@ -4093,6 +3910,16 @@ pub mod sd {
         }
         pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             Response::ProductDescriptionCharacter(*self).encode(address, buf)
+        }
+        /// Writes this message's frame for `address`, as the direction's `encode` does.
+        #[inline(always)]
+        fn write(&self, address: u8, out: &mut [u8; 6]) -> rt::EncodeResult {
+            let Self { character: v_character, string_length: v_string_length } = *self;
+            rt::encode_in_range("string_length", v_string_length, 0, 32)?;
+            let out = rt::head(out, &[0x11, address]);
+            out[2] = v_character;
+            out[3] = v_string_length;
+            rt::Ok(out.len())
         }
         /// Reads this message from a frame whose framing and code are checked.
         #[inline(always)]
@@ -4123,6 +3950,16 @@ pub mod sd {
         pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             Response::SoftwareRevisionCharacter(*self).encode(address, buf)
         }
+        /// Writes this message's frame for `address`, as the direction's `encode` does.
+        #[inline(always)]
+        fn write(&self, address: u8, out: &mut [u8; 6]) -> rt::EncodeResult {
+            let Self { character: v_character, string_length: v_string_length } = *self;
+            rt::encode_in_range("string_length", v_string_length, 0, 32)?;
+            let out = rt::head(out, &[0x12, address]);
+            out[2] = v_character;
+            out[3] = v_string_length;
+            rt::Ok(out.len())
+        }
         /// Reads this message from a frame whose framing and code are checked.
         #[inline(always)]
         fn from_frame(frame: &[u8]) -> rt::DecodeResult<Self> {
@@ -4152,6 +3989,16 @@ pub mod sd {
         pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             Response::HardwareRevisionCharacter(*self).encode(address, buf)
         }
+        /// Writes this message's frame for `address`, as the direction's `encode` does.
+        #[inline(always)]
+        fn write(&self, address: u8, out: &mut [u8; 6]) -> rt::EncodeResult {
+            let Self { character: v_character, string_length: v_string_length } = *self;
+            rt::encode_in_range("string_length", v_string_length, 0, 32)?;
+            let out = rt::head(out, &[0x13, address]);
+            out[2] = v_character;
+            out[3] = v_string_length;
+            rt::Ok(out.len())
+        }
         /// Reads this message from a frame whose framing and code are checked.
         #[inline(always)]
         fn from_frame(frame: &[u8]) -> rt::DecodeResult<Self> {
@@ -4174,6 +4021,14 @@ pub mod sd {
         }
         pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             Response::TotalRuntimeHours(*self).encode(address, buf)
+        }
+        /// Writes this message's frame for `address`, as the direction's `encode` does.
+        #[inline(always)]
+        fn write(&self, address: u8, out: &mut [u8; 6]) -> rt::EncodeResult {
+            let Self { runtime_hours: v_runtime_hours } = *self;
+            let out = rt::head(out, &[0x22, address]);
+            out[2..4].copy_from_slice(&v_runtime_hours.to_be_bytes());
+            rt::Ok(out.len())
         }
         /// Reads this message from a frame whose framing and code are checked.
         #[inline(always)]
@@ -4206,6 +4061,20 @@ pub mod sd {
         pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             Response::TotalRuntimeMinSec(*self).encode(address, buf)
         }
+        /// Writes this message's frame for `address`, as the direction's `encode` does.
+        #[inline(always)]
+        fn write(&self, address: u8, out: &mut [u8; 6]) -> rt::EncodeResult {
+            let Self {
+                runtime_minutes: v_runtime_minutes,
+                runtime_seconds: v_runtime_seconds,
+            } = *self;
+            rt::encode_in_range("runtime_minutes", v_runtime_minutes, 0, 59)?;
+            rt::encode_in_range("runtime_seconds", v_runtime_seconds, 0, 59)?;
+            let out = rt::head(out, &[0x22, address]);
+            out[2] = v_runtime_minutes;
+            out[3] = v_runtime_seconds;
+            rt::Ok(out.len())
+        }
         /// Reads this message from a frame whose framing and code are checked.
         #[inline(always)]
         fn from_frame(frame: &[u8]) -> rt::DecodeResult<Self> {
@@ -4229,6 +4098,14 @@ pub mod sd {
         }
         pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             Response::LoadRuntime024Hours(*self).encode(address, buf)
+        }
+        /// Writes this message's frame for `address`, as the direction's `encode` does.
+        #[inline(always)]
+        fn write(&self, address: u8, out: &mut [u8; 6]) -> rt::EncodeResult {
+            let Self { runtime_hours: v_runtime_hours } = *self;
+            let out = rt::head(out, &[0x23, address]);
+            out[2..4].copy_from_slice(&v_runtime_hours.to_be_bytes());
+            rt::Ok(out.len())
         }
         /// Reads this message from a frame whose framing and code are checked.
         #[inline(always)]
@@ -4261,6 +4138,20 @@ pub mod sd {
         pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             Response::LoadRuntime024MinSec(*self).encode(address, buf)
         }
+        /// Writes this message's frame for `address`, as the direction's `encode` does.
+        #[inline(always)]
+        fn write(&self, address: u8, out: &mut [u8; 6]) -> rt::EncodeResult {
+            let Self {
+                runtime_minutes: v_runtime_minutes,
+                runtime_seconds: v_runtime_seconds,
+            } = *self;
+            rt::encode_in_range("runtime_minutes", v_runtime_minutes, 0, 59)?;
+            rt::encode_in_range("runtime_seconds", v_runtime_seconds, 0, 59)?;
+            let out = rt::head(out, &[0x23, address]);
+            out[2] = v_runtime_minutes;
+            out[3] = v_runtime_seconds;
+            rt::Ok(out.len())
+        }
         /// Reads this message from a frame whose framing and code are checked.
         #[inline(always)]
         fn from_frame(frame: &[u8]) -> rt::DecodeResult<Self> {
@@ -4288,6 +4179,14 @@ pub mod sd {
         pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             Response::LoadRuntime024HoursBeforeReset(*self).encode(address, buf)
         }
+        /// Writes this message's frame for `address`, as the direction's `encode` does.
+        #[inline(always)]
+        fn write(&self, address: u8, out: &mut [u8; 6]) -> rt::EncodeResult {
+            let Self { runtime_hours_before_reset: v_runtime_hours_before_reset } = *self;
+            let out = rt::head(out, &[0x23, address]);
+            out[2..4].copy_from_slice(&v_runtime_hours_before_reset.to_be_bytes());
+            rt::Ok(out.len())
+        }
         /// Reads this message from a frame whose framing and code are checked.
         #[inline(always)]
         fn from_frame(frame: &[u8]) -> rt::DecodeResult<Self> {
@@ -4308,6 +4207,14 @@ pub mod sd {
         }
         pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             Response::LoadRuntime2549Hours(*self).encode(address, buf)
+        }
+        /// Writes this message's frame for `address`, as the direction's `encode` does.
+        #[inline(always)]
+        fn write(&self, address: u8, out: &mut [u8; 6]) -> rt::EncodeResult {
+            let Self { runtime_hours: v_runtime_hours } = *self;
+            let out = rt::head(out, &[0x24, address]);
+            out[2..4].copy_from_slice(&v_runtime_hours.to_be_bytes());
+            rt::Ok(out.len())
         }
         /// Reads this message from a frame whose framing and code are checked.
         #[inline(always)]
@@ -4340,6 +4247,20 @@ pub mod sd {
         pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             Response::LoadRuntime2549MinSec(*self).encode(address, buf)
         }
+        /// Writes this message's frame for `address`, as the direction's `encode` does.
+        #[inline(always)]
+        fn write(&self, address: u8, out: &mut [u8; 6]) -> rt::EncodeResult {
+            let Self {
+                runtime_minutes: v_runtime_minutes,
+                runtime_seconds: v_runtime_seconds,
+            } = *self;
+            rt::encode_in_range("runtime_minutes", v_runtime_minutes, 0, 59)?;
+            rt::encode_in_range("runtime_seconds", v_runtime_seconds, 0, 59)?;
+            let out = rt::head(out, &[0x24, address]);
+            out[2] = v_runtime_minutes;
+            out[3] = v_runtime_seconds;
+            rt::Ok(out.len())
+        }
         /// Reads this message from a frame whose framing and code are checked.
         #[inline(always)]
         fn from_frame(frame: &[u8]) -> rt::DecodeResult<Self> {
@@ -4367,6 +4288,14 @@ pub mod sd {
         pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             Response::LoadRuntime2549HoursBeforeReset(*self).encode(address, buf)
         }
+        /// Writes this message's frame for `address`, as the direction's `encode` does.
+        #[inline(always)]
+        fn write(&self, address: u8, out: &mut [u8; 6]) -> rt::EncodeResult {
+            let Self { runtime_hours_before_reset: v_runtime_hours_before_reset } = *self;
+            let out = rt::head(out, &[0x24, address]);
+            out[2..4].copy_from_slice(&v_runtime_hours_before_reset.to_be_bytes());
+            rt::Ok(out.len())
+        }
         /// Reads this message from a frame whose framing and code are checked.
         #[inline(always)]
         fn from_frame(frame: &[u8]) -> rt::DecodeResult<Self> {
@@ -4387,6 +4316,14 @@ pub mod sd {
         }
         pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             Response::LoadRuntime5074Hours(*self).encode(address, buf)
+        }
+        /// Writes this message's frame for `address`, as the direction's `encode` does.
+        #[inline(always)]
+        fn write(&self, address: u8, out: &mut [u8; 6]) -> rt::EncodeResult {
+            let Self { runtime_hours: v_runtime_hours } = *self;
+            let out = rt::head(out, &[0x25, address]);
+            out[2..4].copy_from_slice(&v_runtime_hours.to_be_bytes());
+            rt::Ok(out.len())
         }
         /// Reads this message from a frame whose framing and code are checked.
         #[inline(always)]
@@ -4419,6 +4356,20 @@ pub mod sd {
         pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             Response::LoadRuntime5074MinSec(*self).encode(address, buf)
         }
+        /// Writes this message's frame for `address`, as the direction's `encode` does.
+        #[inline(always)]
+        fn write(&self, address: u8, out: &mut [u8; 6]) -> rt::EncodeResult {
+            let Self {
+                runtime_minutes: v_runtime_minutes,
+                runtime_seconds: v_runtime_seconds,
+            } = *self;
+            rt::encode_in_range("runtime_minutes", v_runtime_minutes, 0, 59)?;
+            rt::encode_in_range("runtime_seconds", v_runtime_seconds, 0, 59)?;
+            let out = rt::head(out, &[0x25, address]);
+            out[2] = v_runtime_minutes;
+            out[3] = v_runtime_seconds;
+            rt::Ok(out.len())
+        }
         /// Reads this message from a frame whose framing and code are checked.
         #[inline(always)]
         fn from_frame(frame: &[u8]) -> rt::DecodeResult<Self> {
@@ -4446,6 +4397,14 @@ pub mod sd {
         pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             Response::LoadRuntime5074HoursBeforeReset(*self).encode(address, buf)
         }
+        /// Writes this message's frame for `address`, as the direction's `encode` does.
+        #[inline(always)]
+        fn write(&self, address: u8, out: &mut [u8; 6]) -> rt::EncodeResult {
+            let Self { runtime_hours_before_reset: v_runtime_hours_before_reset } = *self;
+            let out = rt::head(out, &[0x25, address]);
+            out[2..4].copy_from_slice(&v_runtime_hours_before_reset.to_be_bytes());
+            rt::Ok(out.len())
+        }
         /// Reads this message from a frame whose framing and code are checked.
         #[inline(always)]
         fn from_frame(frame: &[u8]) -> rt::DecodeResult<Self> {
@@ -4466,6 +4425,14 @@ pub mod sd {
         }
         pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             Response::LoadRuntime7599Hours(*self).encode(address, buf)
+        }
+        /// Writes this message's frame for `address`, as the direction's `encode` does.
+        #[inline(always)]
+        fn write(&self, address: u8, out: &mut [u8; 6]) -> rt::EncodeResult {
+            let Self { runtime_hours: v_runtime_hours } = *self;
+            let out = rt::head(out, &[0x26, address]);
+            out[2..4].copy_from_slice(&v_runtime_hours.to_be_bytes());
+            rt::Ok(out.len())
         }
         /// Reads this message from a frame whose framing and code are checked.
         #[inline(always)]
@@ -4498,6 +4465,20 @@ pub mod sd {
         pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             Response::LoadRuntime7599MinSec(*self).encode(address, buf)
         }
+        /// Writes this message's frame for `address`, as the direction's `encode` does.
+        #[inline(always)]
+        fn write(&self, address: u8, out: &mut [u8; 6]) -> rt::EncodeResult {
+            let Self {
+                runtime_minutes: v_runtime_minutes,
+                runtime_seconds: v_runtime_seconds,
+            } = *self;
+            rt::encode_in_range("runtime_minutes", v_runtime_minutes, 0, 59)?;
+            rt::encode_in_range("runtime_seconds", v_runtime_seconds, 0, 59)?;
+            let out = rt::head(out, &[0x26, address]);
+            out[2] = v_runtime_minutes;
+            out[3] = v_runtime_seconds;
+            rt::Ok(out.len())
+        }
         /// Reads this message from a frame whose framing and code are checked.
         #[inline(always)]
         fn from_frame(frame: &[u8]) -> rt::DecodeResult<Self> {
@@ -4525,6 +4506,14 @@ pub mod sd {
         pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             Response::LoadRuntime7599HoursBeforeReset(*self).encode(address, buf)
         }
+        /// Writes this message's frame for `address`, as the direction's `encode` does.
+        #[inline(always)]
+        fn write(&self, address: u8, out: &mut [u8; 6]) -> rt::EncodeResult {
+            let Self { runtime_hours_before_reset: v_runtime_hours_before_reset } = *self;
+            let out = rt::head(out, &[0x26, address]);
+            out[2..4].copy_from_slice(&v_runtime_hours_before_reset.to_be_bytes());
+            rt::Ok(out.len())
+        }
         /// Reads this message from a frame whose framing and code are checked.
         #[inline(always)]
         fn from_frame(frame: &[u8]) -> rt::DecodeResult<Self> {
@@ -4545,6 +4534,14 @@ pub mod sd {
         }
         pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             Response::LoadRuntime100Hours(*self).encode(address, buf)
+        }
+        /// Writes this message's frame for `address`, as the direction's `encode` does.
+        #[inline(always)]
+        fn write(&self, address: u8, out: &mut [u8; 6]) -> rt::EncodeResult {
+            let Self { runtime_hours: v_runtime_hours } = *self;
+            let out = rt::head(out, &[0x27, address]);
+            out[2..4].copy_from_slice(&v_runtime_hours.to_be_bytes());
+            rt::Ok(out.len())
         }
         /// Reads this message from a frame whose framing and code are checked.
         #[inline(always)]
@@ -4577,6 +4574,20 @@ pub mod sd {
         pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             Response::LoadRuntime100MinSec(*self).encode(address, buf)
         }
+        /// Writes this message's frame for `address`, as the direction's `encode` does.
+        #[inline(always)]
+        fn write(&self, address: u8, out: &mut [u8; 6]) -> rt::EncodeResult {
+            let Self {
+                runtime_minutes: v_runtime_minutes,
+                runtime_seconds: v_runtime_seconds,
+            } = *self;
+            rt::encode_in_range("runtime_minutes", v_runtime_minutes, 0, 59)?;
+            rt::encode_in_range("runtime_seconds", v_runtime_seconds, 0, 59)?;
+            let out = rt::head(out, &[0x27, address]);
+            out[2] = v_runtime_minutes;
+            out[3] = v_runtime_seconds;
+            rt::Ok(out.len())
+        }
         /// Reads this message from a frame whose framing and code are checked.
         #[inline(always)]
         fn from_frame(frame: &[u8]) -> rt::DecodeResult<Self> {
@@ -4604,6 +4615,14 @@ pub mod sd {
         pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             Response::LoadRuntime100HoursBeforeReset(*self).encode(address, buf)
         }
+        /// Writes this message's frame for `address`, as the direction's `encode` does.
+        #[inline(always)]
+        fn write(&self, address: u8, out: &mut [u8; 6]) -> rt::EncodeResult {
+            let Self { runtime_hours_before_reset: v_runtime_hours_before_reset } = *self;
+            let out = rt::head(out, &[0x27, address]);
+            out[2..4].copy_from_slice(&v_runtime_hours_before_reset.to_be_bytes());
+            rt::Ok(out.len())
+        }
         /// Reads this message from a frame whose framing and code are checked.
         #[inline(always)]
         fn from_frame(frame: &[u8]) -> rt::DecodeResult<Self> {
@@ -4624,6 +4643,14 @@ pub mod sd {
         }
         pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             Response::StallEventCounter(*self).encode(address, buf)
+        }
+        /// Writes this message's frame for `address`, as the direction's `encode` does.
+        #[inline(always)]
+        fn write(&self, address: u8, out: &mut [u8; 6]) -> rt::EncodeResult {
+            let Self { stall_events: v_stall_events } = *self;
+            let out = rt::head(out, &[0x28, address]);
+            out[2..4].copy_from_slice(&v_stall_events.to_be_bytes());
+            rt::Ok(out.len())
         }
         /// Reads this message from a frame whose framing and code are checked.
         #[inline(always)]
@@ -4649,6 +4676,14 @@ pub mod sd {
         pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             Response::StallEventCounterBeforeReset(*self).encode(address, buf)
         }
+        /// Writes this message's frame for `address`, as the direction's `encode` does.
+        #[inline(always)]
+        fn write(&self, address: u8, out: &mut [u8; 6]) -> rt::EncodeResult {
+            let Self { stall_events_before_reset: v_stall_events_before_reset } = *self;
+            let out = rt::head(out, &[0x28, address]);
+            out[2..4].copy_from_slice(&v_stall_events_before_reset.to_be_bytes());
+            rt::Ok(out.len())
+        }
         /// Reads this message from a frame whose framing and code are checked.
         #[inline(always)]
         fn from_frame(frame: &[u8]) -> rt::DecodeResult<Self> {
@@ -4669,6 +4704,14 @@ pub mod sd {
         }
         pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             Response::PowerUpCycles(*self).encode(address, buf)
+        }
+        /// Writes this message's frame for `address`, as the direction's `encode` does.
+        #[inline(always)]
+        fn write(&self, address: u8, out: &mut [u8; 6]) -> rt::EncodeResult {
+            let Self { power_up_cycles: v_power_up_cycles } = *self;
+            let out = rt::head(out, &[0x29, address]);
+            out[2..4].copy_from_slice(&v_power_up_cycles.to_be_bytes());
+            rt::Ok(out.len())
         }
         /// Reads this message from a frame whose framing and code are checked.
         #[inline(always)]

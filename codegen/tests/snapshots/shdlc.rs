@@ -395,15 +395,7 @@ pub mod shdlc {
         fn encode_unescaped(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             rt::encode_address(address, &FRAME)?;
             let len = match *self {
-                Self::StartMeasurement(
-                    request::StartMeasurement { output_format: v_output_format },
-                ) => {
-                    let out = rt::frame_mut::<
-                        8,
-                    >(buf, &[0x7E, address, 0x00, 0x02, 0x01])?;
-                    out[5] = v_output_format.raw();
-                    out.len()
-                }
+                Self::StartMeasurement(ref m) => m.write(address, buf)?,
                 Self::StopMeasurement(_) => {
                     rt::frame_mut::<6>(buf, &[0x7E, address, 0x01, 0x00])?.len()
                 }
@@ -416,13 +408,7 @@ pub mod shdlc {
                 Self::WakeUp(_) => {
                     rt::frame_mut::<6>(buf, &[0x7E, address, 0x11, 0x00])?.len()
                 }
-                Self::DeviceInformation(
-                    request::DeviceInformation { information: v_information },
-                ) => {
-                    let out = rt::frame_mut::<7>(buf, &[0x7E, address, 0xD0, 0x01])?;
-                    out[4] = v_information.raw();
-                    out.len()
-                }
+                Self::DeviceInformation(ref m) => m.write(address, buf)?,
                 Self::Reset(_) => {
                     rt::frame_mut::<6>(buf, &[0x7E, address, 0xD3, 0x00])?.len()
                 }
@@ -698,130 +684,15 @@ pub mod shdlc {
         fn encode_unescaped(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             rt::encode_address(address, &FRAME)?;
             let len = match *self {
-                Self::MeasurementStarted(
-                    response::MeasurementStarted { state: v_state },
-                ) => {
-                    let out = rt::frame_mut::<7>(buf, &[0x7E, address, 0x00])?;
-                    out[4] = 0x00;
-                    out[3] = v_state.raw();
-                    out.len()
-                }
-                Self::MeasurementStopped(
-                    response::MeasurementStopped { state: v_state },
-                ) => {
-                    let out = rt::frame_mut::<7>(buf, &[0x7E, address, 0x01])?;
-                    out[4] = 0x00;
-                    out[3] = v_state.raw();
-                    out.len()
-                }
-                Self::MeasuredFloats(
-                    response::MeasuredFloats {
-                        state: v_state,
-                        mass_pm1_0: v_mass_pm1_0,
-                        mass_pm2_5: v_mass_pm2_5,
-                        mass_pm4_0: v_mass_pm4_0,
-                        mass_pm10: v_mass_pm10,
-                        number_pm0_5: v_number_pm0_5,
-                        number_pm1_0: v_number_pm1_0,
-                        number_pm2_5: v_number_pm2_5,
-                        number_pm4_0: v_number_pm4_0,
-                        number_pm10: v_number_pm10,
-                        typical_size: v_typical_size,
-                    },
-                ) => {
-                    let out = rt::frame_mut::<47>(buf, &[0x7E, address, 0x03])?;
-                    out[4] = 0x28;
-                    out[3] = v_state.raw();
-                    out[5..9].copy_from_slice(&v_mass_pm1_0.to_be_bytes());
-                    out[9..13].copy_from_slice(&v_mass_pm2_5.to_be_bytes());
-                    out[13..17].copy_from_slice(&v_mass_pm4_0.to_be_bytes());
-                    out[17..21].copy_from_slice(&v_mass_pm10.to_be_bytes());
-                    out[21..25].copy_from_slice(&v_number_pm0_5.to_be_bytes());
-                    out[25..29].copy_from_slice(&v_number_pm1_0.to_be_bytes());
-                    out[29..33].copy_from_slice(&v_number_pm2_5.to_be_bytes());
-                    out[33..37].copy_from_slice(&v_number_pm4_0.to_be_bytes());
-                    out[37..41].copy_from_slice(&v_number_pm10.to_be_bytes());
-                    out[41..45].copy_from_slice(&v_typical_size.to_be_bytes());
-                    out.len()
-                }
-                Self::MeasuredIntegers(
-                    response::MeasuredIntegers {
-                        state: v_state,
-                        mass_pm1_0: v_mass_pm1_0,
-                        mass_pm2_5: v_mass_pm2_5,
-                        mass_pm4_0: v_mass_pm4_0,
-                        mass_pm10: v_mass_pm10,
-                        number_pm0_5: v_number_pm0_5,
-                        number_pm1_0: v_number_pm1_0,
-                        number_pm2_5: v_number_pm2_5,
-                        number_pm4_0: v_number_pm4_0,
-                        number_pm10: v_number_pm10,
-                        typical_size: v_typical_size,
-                    },
-                ) => {
-                    let out = rt::frame_mut::<27>(buf, &[0x7E, address, 0x03])?;
-                    out[4] = 0x14;
-                    out[3] = v_state.raw();
-                    out[5..7].copy_from_slice(&v_mass_pm1_0.to_be_bytes());
-                    out[7..9].copy_from_slice(&v_mass_pm2_5.to_be_bytes());
-                    out[9..11].copy_from_slice(&v_mass_pm4_0.to_be_bytes());
-                    out[11..13].copy_from_slice(&v_mass_pm10.to_be_bytes());
-                    out[13..15].copy_from_slice(&v_number_pm0_5.to_be_bytes());
-                    out[15..17].copy_from_slice(&v_number_pm1_0.to_be_bytes());
-                    out[17..19].copy_from_slice(&v_number_pm2_5.to_be_bytes());
-                    out[19..21].copy_from_slice(&v_number_pm4_0.to_be_bytes());
-                    out[21..23].copy_from_slice(&v_number_pm10.to_be_bytes());
-                    out[23..25].copy_from_slice(&v_typical_size.to_be_bytes());
-                    out.len()
-                }
-                Self::NoNewValues(response::NoNewValues { state: v_state }) => {
-                    let out = rt::frame_mut::<7>(buf, &[0x7E, address, 0x03])?;
-                    out[4] = 0x00;
-                    out[3] = v_state.raw();
-                    out.len()
-                }
-                Self::Asleep(response::Asleep { state: v_state }) => {
-                    let out = rt::frame_mut::<7>(buf, &[0x7E, address, 0x10])?;
-                    out[4] = 0x00;
-                    out[3] = v_state.raw();
-                    out.len()
-                }
-                Self::Awake(response::Awake { state: v_state }) => {
-                    let out = rt::frame_mut::<7>(buf, &[0x7E, address, 0x11])?;
-                    out[4] = 0x00;
-                    out[3] = v_state.raw();
-                    out.len()
-                }
-                Self::InformationText(
-                    response::InformationText { state: v_state, text: v_text },
-                ) => {
-                    LISTS_INFORMATION_TEXT.lists[0].encode_until(v_text.as_slice())?;
-                    let bytes_0: usize = LISTS_INFORMATION_TEXT
-                        .lists[0]
-                        .encode_len(v_text.len())? - LISTS_INFORMATION_TEXT.base;
-                    let mut compact = [0u8; 7];
-                    let out = {
-                        compact[..3].copy_from_slice(&[0x7E, address, 0xD0]);
-                        &mut compact
-                    };
-                    out[3] = v_state.raw();
-                    let out = LISTS_INFORMATION_TEXT.expand(&compact, &[bytes_0], buf)?;
-                    {
-                        let at = 5;
-                        rt::write_elements(v_text.as_slice(), 1, false, &mut out[at..]);
-                        if let rt::Some(b) = out.get_mut(at + v_text.len()) {
-                            *b = 0;
-                        }
-                    }
-                    RESPONSE_LENGTH.put(out)?;
-                    out.len()
-                }
-                Self::ResetDone(response::ResetDone { state: v_state }) => {
-                    let out = rt::frame_mut::<7>(buf, &[0x7E, address, 0xD3])?;
-                    out[4] = 0x00;
-                    out[3] = v_state.raw();
-                    out.len()
-                }
+                Self::MeasurementStarted(ref m) => m.write(address, buf)?,
+                Self::MeasurementStopped(ref m) => m.write(address, buf)?,
+                Self::MeasuredFloats(ref m) => m.write(address, buf)?,
+                Self::MeasuredIntegers(ref m) => m.write(address, buf)?,
+                Self::NoNewValues(ref m) => m.write(address, buf)?,
+                Self::Asleep(ref m) => m.write(address, buf)?,
+                Self::Awake(ref m) => m.write(address, buf)?,
+                Self::InformationText(ref m) => m.write(address, buf)?,
+                Self::ResetDone(ref m) => m.write(address, buf)?,
             };
             FRAME.seal(buf, len, frame_sum);
             rt::Ok(len)
@@ -1144,6 +1015,14 @@ pub mod shdlc {
         pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             Request::StartMeasurement(*self).encode(address, buf)
         }
+        /// Writes this message's frame for `address`, as the direction's `encode` does.
+        #[inline(always)]
+        fn write(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            let Self { output_format: v_output_format } = *self;
+            let out = rt::frame_mut::<8>(buf, &[0x7E, address, 0x00, 0x02, 0x01])?;
+            out[5] = v_output_format.raw();
+            rt::Ok(out.len())
+        }
         /// Reads this message from a frame whose framing and code are checked.
         #[inline(always)]
         fn from_frame(frame: &[u8]) -> rt::DecodeResult<Self> {
@@ -1202,6 +1081,14 @@ pub mod shdlc {
         pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             Request::DeviceInformation(*self).encode(address, buf)
         }
+        /// Writes this message's frame for `address`, as the direction's `encode` does.
+        #[inline(always)]
+        fn write(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            let Self { information: v_information } = *self;
+            let out = rt::frame_mut::<7>(buf, &[0x7E, address, 0xD0, 0x01])?;
+            out[4] = v_information.raw();
+            rt::Ok(out.len())
+        }
         /// Reads this message from a frame whose framing and code are checked.
         #[inline(always)]
         fn from_frame(frame: &[u8]) -> rt::DecodeResult<Self> {
@@ -1232,6 +1119,15 @@ pub mod shdlc {
         pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             Response::MeasurementStarted(*self).encode(address, buf)
         }
+        /// Writes this message's frame for `address`, as the direction's `encode` does.
+        #[inline(always)]
+        fn write(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            let Self { state: v_state } = *self;
+            let out = rt::frame_mut::<7>(buf, &[0x7E, address, 0x00])?;
+            out[4] = 0x00;
+            out[3] = v_state.raw();
+            rt::Ok(out.len())
+        }
         /// Reads this message from a frame whose framing and code are checked.
         #[inline(always)]
         fn from_frame(frame: &[u8]) -> rt::DecodeResult<Self> {
@@ -1252,6 +1148,15 @@ pub mod shdlc {
         }
         pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             Response::MeasurementStopped(*self).encode(address, buf)
+        }
+        /// Writes this message's frame for `address`, as the direction's `encode` does.
+        #[inline(always)]
+        fn write(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            let Self { state: v_state } = *self;
+            let out = rt::frame_mut::<7>(buf, &[0x7E, address, 0x01])?;
+            out[4] = 0x00;
+            out[3] = v_state.raw();
+            rt::Ok(out.len())
         }
         /// Reads this message from a frame whose framing and code are checked.
         #[inline(always)]
@@ -1293,6 +1198,37 @@ pub mod shdlc {
         }
         pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             Response::MeasuredFloats(*self).encode(address, buf)
+        }
+        /// Writes this message's frame for `address`, as the direction's `encode` does.
+        #[inline(always)]
+        fn write(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            let Self {
+                state: v_state,
+                mass_pm1_0: v_mass_pm1_0,
+                mass_pm2_5: v_mass_pm2_5,
+                mass_pm4_0: v_mass_pm4_0,
+                mass_pm10: v_mass_pm10,
+                number_pm0_5: v_number_pm0_5,
+                number_pm1_0: v_number_pm1_0,
+                number_pm2_5: v_number_pm2_5,
+                number_pm4_0: v_number_pm4_0,
+                number_pm10: v_number_pm10,
+                typical_size: v_typical_size,
+            } = *self;
+            let out = rt::frame_mut::<47>(buf, &[0x7E, address, 0x03])?;
+            out[4] = 0x28;
+            out[3] = v_state.raw();
+            out[5..9].copy_from_slice(&v_mass_pm1_0.to_be_bytes());
+            out[9..13].copy_from_slice(&v_mass_pm2_5.to_be_bytes());
+            out[13..17].copy_from_slice(&v_mass_pm4_0.to_be_bytes());
+            out[17..21].copy_from_slice(&v_mass_pm10.to_be_bytes());
+            out[21..25].copy_from_slice(&v_number_pm0_5.to_be_bytes());
+            out[25..29].copy_from_slice(&v_number_pm1_0.to_be_bytes());
+            out[29..33].copy_from_slice(&v_number_pm2_5.to_be_bytes());
+            out[33..37].copy_from_slice(&v_number_pm4_0.to_be_bytes());
+            out[37..41].copy_from_slice(&v_number_pm10.to_be_bytes());
+            out[41..45].copy_from_slice(&v_typical_size.to_be_bytes());
+            rt::Ok(out.len())
         }
         /// Reads this message from a frame whose framing and code are checked.
         #[inline(always)]
@@ -1390,6 +1326,37 @@ pub mod shdlc {
         pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             Response::MeasuredIntegers(*self).encode(address, buf)
         }
+        /// Writes this message's frame for `address`, as the direction's `encode` does.
+        #[inline(always)]
+        fn write(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            let Self {
+                state: v_state,
+                mass_pm1_0: v_mass_pm1_0,
+                mass_pm2_5: v_mass_pm2_5,
+                mass_pm4_0: v_mass_pm4_0,
+                mass_pm10: v_mass_pm10,
+                number_pm0_5: v_number_pm0_5,
+                number_pm1_0: v_number_pm1_0,
+                number_pm2_5: v_number_pm2_5,
+                number_pm4_0: v_number_pm4_0,
+                number_pm10: v_number_pm10,
+                typical_size: v_typical_size,
+            } = *self;
+            let out = rt::frame_mut::<27>(buf, &[0x7E, address, 0x03])?;
+            out[4] = 0x14;
+            out[3] = v_state.raw();
+            out[5..7].copy_from_slice(&v_mass_pm1_0.to_be_bytes());
+            out[7..9].copy_from_slice(&v_mass_pm2_5.to_be_bytes());
+            out[9..11].copy_from_slice(&v_mass_pm4_0.to_be_bytes());
+            out[11..13].copy_from_slice(&v_mass_pm10.to_be_bytes());
+            out[13..15].copy_from_slice(&v_number_pm0_5.to_be_bytes());
+            out[15..17].copy_from_slice(&v_number_pm1_0.to_be_bytes());
+            out[17..19].copy_from_slice(&v_number_pm2_5.to_be_bytes());
+            out[19..21].copy_from_slice(&v_number_pm4_0.to_be_bytes());
+            out[21..23].copy_from_slice(&v_number_pm10.to_be_bytes());
+            out[23..25].copy_from_slice(&v_typical_size.to_be_bytes());
+            rt::Ok(out.len())
+        }
         /// Reads this message from a frame whose framing and code are checked.
         #[inline(always)]
         fn from_frame(frame: &[u8]) -> rt::DecodeResult<Self> {
@@ -1421,6 +1388,15 @@ pub mod shdlc {
         pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             Response::NoNewValues(*self).encode(address, buf)
         }
+        /// Writes this message's frame for `address`, as the direction's `encode` does.
+        #[inline(always)]
+        fn write(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            let Self { state: v_state } = *self;
+            let out = rt::frame_mut::<7>(buf, &[0x7E, address, 0x03])?;
+            out[4] = 0x00;
+            out[3] = v_state.raw();
+            rt::Ok(out.len())
+        }
         /// Reads this message from a frame whose framing and code are checked.
         #[inline(always)]
         fn from_frame(frame: &[u8]) -> rt::DecodeResult<Self> {
@@ -1442,6 +1418,15 @@ pub mod shdlc {
         pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             Response::Asleep(*self).encode(address, buf)
         }
+        /// Writes this message's frame for `address`, as the direction's `encode` does.
+        #[inline(always)]
+        fn write(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            let Self { state: v_state } = *self;
+            let out = rt::frame_mut::<7>(buf, &[0x7E, address, 0x10])?;
+            out[4] = 0x00;
+            out[3] = v_state.raw();
+            rt::Ok(out.len())
+        }
         /// Reads this message from a frame whose framing and code are checked.
         #[inline(always)]
         fn from_frame(frame: &[u8]) -> rt::DecodeResult<Self> {
@@ -1462,6 +1447,15 @@ pub mod shdlc {
         }
         pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             Response::Awake(*self).encode(address, buf)
+        }
+        /// Writes this message's frame for `address`, as the direction's `encode` does.
+        #[inline(always)]
+        fn write(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            let Self { state: v_state } = *self;
+            let out = rt::frame_mut::<7>(buf, &[0x7E, address, 0x11])?;
+            out[4] = 0x00;
+            out[3] = v_state.raw();
+            rt::Ok(out.len())
         }
         /// Reads this message from a frame whose framing and code are checked.
         #[inline(always)]
@@ -1487,6 +1481,31 @@ pub mod shdlc {
         pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             Response::InformationText(*self).encode(address, buf)
         }
+        /// Writes this message's frame for `address`, as the direction's `encode` does.
+        #[inline(always)]
+        fn write(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            let Self { state: v_state, text: v_text } = *self;
+            LISTS_INFORMATION_TEXT.lists[0].encode_until(v_text.as_slice())?;
+            let bytes_0: usize = LISTS_INFORMATION_TEXT
+                .lists[0]
+                .encode_len(v_text.len())? - LISTS_INFORMATION_TEXT.base;
+            let mut compact = [0u8; 7];
+            let out = {
+                compact[..3].copy_from_slice(&[0x7E, address, 0xD0]);
+                &mut compact
+            };
+            out[3] = v_state.raw();
+            let out = LISTS_INFORMATION_TEXT.expand(&compact, &[bytes_0], buf)?;
+            {
+                let at = 5;
+                rt::write_elements(v_text.as_slice(), 1, false, &mut out[at..]);
+                if let rt::Some(b) = out.get_mut(at + v_text.len()) {
+                    *b = 0;
+                }
+            }
+            RESPONSE_LENGTH.put(out)?;
+            rt::Ok(out.len())
+        }
     }
     impl response::ResetDone {
         pub const NAME: &'static str = "reset_done";
@@ -1499,6 +1518,15 @@ pub mod shdlc {
         }
         pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             Response::ResetDone(*self).encode(address, buf)
+        }
+        /// Writes this message's frame for `address`, as the direction's `encode` does.
+        #[inline(always)]
+        fn write(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            let Self { state: v_state } = *self;
+            let out = rt::frame_mut::<7>(buf, &[0x7E, address, 0xD3])?;
+            out[4] = 0x00;
+            out[3] = v_state.raw();
+            rt::Ok(out.len())
         }
         /// Reads this message from a frame whose framing and code are checked.
         #[inline(always)]

@@ -238,11 +238,7 @@ pub mod slip_sensor {
             rt::encode_address(address, &FRAME)?;
             let len = match *self {
                 Self::ReadTemperature(_) => rt::frame_mut::<4>(buf, &[0x01])?.len(),
-                Self::SetThreshold(request::SetThreshold { threshold: v_threshold }) => {
-                    let out = rt::frame_mut::<6>(buf, &[0x02])?;
-                    out[1..3].copy_from_slice(&v_threshold.to_be_bytes());
-                    out.len()
-                }
+                Self::SetThreshold(ref m) => m.write(address, buf)?,
                 Self::ReadSamples(_) => rt::frame_mut::<4>(buf, &[0x03])?.len(),
             };
             FRAME.seal(buf, len, frame_sum);
@@ -438,20 +434,9 @@ pub mod slip_sensor {
         fn encode_unescaped(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             rt::encode_address(address, &FRAME)?;
             let len = match *self {
-                Self::Temperature(
-                    response::Temperature { temperature: v_temperature },
-                ) => {
-                    let out = rt::frame_mut::<6>(buf, &[0x81])?;
-                    out[1..3].copy_from_slice(&v_temperature.raw().to_be_bytes());
-                    out.len()
-                }
+                Self::Temperature(ref m) => m.write(address, buf)?,
                 Self::Ack(_) => rt::frame_mut::<4>(buf, &[0x82])?.len(),
-                Self::Samples(response::Samples { samples: v_samples }) => {
-                    let frame_len = REPEAT_SAMPLES.encode_len(v_samples.len())?;
-                    let out = rt::frame_mut_len(buf, frame_len, &[0x83])?;
-                    rt::write_elements(v_samples.as_slice(), 1, false, &mut out[1..]);
-                    out.len()
-                }
+                Self::Samples(ref m) => m.write(address, buf)?,
             };
             FRAME.seal(buf, len, frame_sum);
             rt::Ok(len)
@@ -700,6 +685,14 @@ pub mod slip_sensor {
         pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             Request::SetThreshold(*self).encode(address, buf)
         }
+        /// Writes this message's frame for `address`, as the direction's `encode` does.
+        #[inline(always)]
+        fn write(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            let Self { threshold: v_threshold } = *self;
+            let out = rt::frame_mut::<6>(buf, &[0x02])?;
+            out[1..3].copy_from_slice(&v_threshold.to_be_bytes());
+            rt::Ok(out.len())
+        }
         /// Reads this message from a frame whose framing and code are checked.
         #[inline(always)]
         fn from_frame(frame: &[u8]) -> rt::DecodeResult<Self> {
@@ -729,6 +722,14 @@ pub mod slip_sensor {
         }
         pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             Response::Temperature(*self).encode(address, buf)
+        }
+        /// Writes this message's frame for `address`, as the direction's `encode` does.
+        #[inline(always)]
+        fn write(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            let Self { temperature: v_temperature } = *self;
+            let out = rt::frame_mut::<6>(buf, &[0x81])?;
+            out[1..3].copy_from_slice(&v_temperature.raw().to_be_bytes());
+            rt::Ok(out.len())
         }
         /// Reads this message from a frame whose framing and code are checked.
         #[inline(always)]
@@ -762,6 +763,15 @@ pub mod slip_sensor {
         }
         pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             Response::Samples(*self).encode(address, buf)
+        }
+        /// Writes this message's frame for `address`, as the direction's `encode` does.
+        #[inline(always)]
+        fn write(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            let Self { samples: v_samples } = *self;
+            let frame_len = REPEAT_SAMPLES.encode_len(v_samples.len())?;
+            let out = rt::frame_mut_len(buf, frame_len, &[0x83])?;
+            rt::write_elements(v_samples.as_slice(), 1, false, &mut out[1..]);
+            rt::Ok(out.len())
         }
     }
     /// Each request as a struct of its own; its constants (`DESC`, which names it as

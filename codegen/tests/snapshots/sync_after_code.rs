@@ -148,11 +148,7 @@ pub mod sync_after_code {
             rt::encode_address(address, &FRAME)?;
             let out = rt::frame_mut::<6>(buf, &[])?;
             let len = match *self {
-                Self::Read(request::Read { register: v_register }) => {
-                    let out = rt::head(out, &[0x7E, 0x01, 0x02, 0x7E]);
-                    out[4] = v_register;
-                    out.len()
-                }
+                Self::Read(ref m) => m.write(address, out)?,
             };
             FRAME.seal(buf, len, frame_sum);
             rt::Ok(len)
@@ -290,11 +286,7 @@ pub mod sync_after_code {
             rt::encode_address(address, &FRAME)?;
             let out = rt::frame_mut::<7>(buf, &[])?;
             let len = match *self {
-                Self::Value(response::Value { value: v_value }) => {
-                    let out = rt::head(out, &[0x7E, 0x81, 0x02, 0x7E]);
-                    out[4..6].copy_from_slice(&v_value.to_be_bytes());
-                    out.len()
-                }
+                Self::Value(ref m) => m.write(address, out)?,
             };
             FRAME.seal(buf, len, frame_sum);
             rt::Ok(len)
@@ -517,6 +509,14 @@ pub mod sync_after_code {
         pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             Request::Read(*self).encode(address, buf)
         }
+        /// Writes this message's frame for `address`, as the direction's `encode` does.
+        #[inline(always)]
+        fn write(&self, address: u8, out: &mut [u8; 6]) -> rt::EncodeResult {
+            let Self { register: v_register } = *self;
+            let out = rt::head(out, &[0x7E, 0x01, 0x02, 0x7E]);
+            out[4] = v_register;
+            rt::Ok(out.len())
+        }
         /// Reads this message from a frame whose framing and code are checked.
         #[inline(always)]
         fn from_frame(frame: &[u8]) -> rt::DecodeResult<Self> {
@@ -535,6 +535,14 @@ pub mod sync_after_code {
         }
         pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             Response::Value(*self).encode(address, buf)
+        }
+        /// Writes this message's frame for `address`, as the direction's `encode` does.
+        #[inline(always)]
+        fn write(&self, address: u8, out: &mut [u8; 7]) -> rt::EncodeResult {
+            let Self { value: v_value } = *self;
+            let out = rt::head(out, &[0x7E, 0x81, 0x02, 0x7E]);
+            out[4..6].copy_from_slice(&v_value.to_be_bytes());
+            rt::Ok(out.len())
         }
         /// Reads this message from a frame whose framing and code are checked.
         #[inline(always)]

@@ -203,45 +203,12 @@ pub mod syncy {
         pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             rt::encode_address(address, &FRAME)?;
             let len = match *self {
-                Self::MoveTo(request::MoveTo { target: v_target }) => {
-                    rt::encode_broadcast(address, 0xFE, &request::MoveTo::DESC)?;
-                    rt::encode_in_range("target", v_target.raw(), -1000000, 1000000)?;
-                    let out = rt::frame_mut::<
-                        9,
-                    >(buf, &[0xFF, 0xFF, address, 0x05, 0x03])?;
-                    out[5..8]
-                        .copy_from_slice(
-                            &rt::bytes24(
-                                (rt::fits("target", v_target.raw(), -8388608, 8388607)?
-                                    as i32) as u32,
-                                false,
-                            ),
-                        );
-                    out.len()
-                }
+                Self::MoveTo(ref m) => m.write(address, buf)?,
                 Self::GetCounter(_) => {
                     rt::encode_broadcast(address, 0xFE, &request::GetCounter::DESC)?;
                     rt::frame_mut::<6>(buf, &[0xFF, 0xFF, address, 0x02, 0x04])?.len()
                 }
-                Self::SetPair(
-                    request::SetPair { quantity: v_quantity, level: v_level },
-                ) => {
-                    rt::encode_broadcast(address, 0xFE, &request::SetPair::DESC)?;
-                    rt::encode_in_range("quantity", v_quantity, 1, 100)?;
-                    let out = rt::frame_mut::<
-                        10,
-                    >(buf, &[0xFF, 0xFF, address, 0x06, 0x05])?;
-                    let field_0: u8 = v_quantity;
-                    out[5] = field_0;
-                    out[6] = rt::fits(
-                        "doubled",
-                        rt::follows(field_0 as i64, 2, 1),
-                        0,
-                        255,
-                    )? as u8;
-                    out[7..9].copy_from_slice(&v_level.to_be_bytes());
-                    out.len()
-                }
+                Self::SetPair(ref m) => m.write(address, buf)?,
             };
             FRAME.seal(buf, len, frame_sum);
             rt::Ok(len)
@@ -408,43 +375,9 @@ pub mod syncy {
                 Self::Moving(_) => {
                     rt::frame_mut::<6>(buf, &[0xFF, 0xFF, address, 0x02, 0x00])?.len()
                 }
-                Self::Counter(
-                    response::Counter { total: v_total, tag: v_tag, offset: v_offset },
-                ) => {
-                    let out = rt::frame_mut::<
-                        12,
-                    >(buf, &[0xFF, 0xFF, address, 0x08, 0x01])?;
-                    out[5..8]
-                        .copy_from_slice(
-                            &rt::bytes24(
-                                (rt::fits("total", v_total, 0, 16777215)? as u32) as u32,
-                                false,
-                            ),
-                        );
-                    let field_1: u32 = (((rt::fits("tag", v_tag, 0, 15)? as u32) & 0xF)
-                        << 20)
-                        | ((rt::fits("offset", v_offset, -524288, 524287)? as u32)
-                            & 0xFFFFF);
-                    out[8..11].copy_from_slice(&rt::bytes24(field_1 as u32, false));
-                    out.len()
-                }
-                Self::SetPairReply(
-                    response::SetPairReply { quantity: v_quantity, groups: v_groups },
-                ) => {
-                    let out = rt::frame_mut::<
-                        8,
-                    >(buf, &[0xFF, 0xFF, address, 0x04, 0x05])?;
-                    out[5] = v_quantity;
-                    out[6] = v_groups;
-                    out.len()
-                }
-                Self::SetPairError(response::SetPairError { reason: v_reason }) => {
-                    let out = rt::frame_mut::<
-                        7,
-                    >(buf, &[0xFF, 0xFF, address, 0x03, 0x85])?;
-                    out[5] = v_reason;
-                    out.len()
-                }
+                Self::Counter(ref m) => m.write(address, buf)?,
+                Self::SetPairReply(ref m) => m.write(address, buf)?,
+                Self::SetPairError(ref m) => m.write(address, buf)?,
             };
             FRAME.seal(buf, len, frame_sum);
             rt::Ok(len)
@@ -732,6 +665,23 @@ pub mod syncy {
         pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             Request::MoveTo(*self).encode(address, buf)
         }
+        /// Writes this message's frame for `address`, as the direction's `encode` does.
+        #[inline(always)]
+        fn write(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            let Self { target: v_target } = *self;
+            rt::encode_broadcast(address, 0xFE, &request::MoveTo::DESC)?;
+            rt::encode_in_range("target", v_target.raw(), -1000000, 1000000)?;
+            let out = rt::frame_mut::<9>(buf, &[0xFF, 0xFF, address, 0x05, 0x03])?;
+            out[5..8]
+                .copy_from_slice(
+                    &rt::bytes24(
+                        (rt::fits("target", v_target.raw(), -8388608, 8388607)? as i32)
+                            as u32,
+                        false,
+                    ),
+                );
+            rt::Ok(out.len())
+        }
         /// Reads this message from a frame whose framing and code are checked.
         #[inline(always)]
         fn from_frame(frame: &[u8]) -> rt::DecodeResult<Self> {
@@ -776,6 +726,20 @@ pub mod syncy {
         pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             Request::SetPair(*self).encode(address, buf)
         }
+        /// Writes this message's frame for `address`, as the direction's `encode` does.
+        #[inline(always)]
+        fn write(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            let Self { quantity: v_quantity, level: v_level } = *self;
+            rt::encode_broadcast(address, 0xFE, &request::SetPair::DESC)?;
+            rt::encode_in_range("quantity", v_quantity, 1, 100)?;
+            let out = rt::frame_mut::<10>(buf, &[0xFF, 0xFF, address, 0x06, 0x05])?;
+            let field_0: u8 = v_quantity;
+            out[5] = field_0;
+            out[6] = rt::fits("doubled", rt::follows(field_0 as i64, 2, 1), 0, 255)?
+                as u8;
+            out[7..9].copy_from_slice(&v_level.to_be_bytes());
+            rt::Ok(out.len())
+        }
         /// Reads this message from a frame whose framing and code are checked.
         #[inline(always)]
         fn from_frame(frame: &[u8]) -> rt::DecodeResult<Self> {
@@ -819,6 +783,23 @@ pub mod syncy {
         pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             Response::Counter(*self).encode(address, buf)
         }
+        /// Writes this message's frame for `address`, as the direction's `encode` does.
+        #[inline(always)]
+        fn write(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            let Self { total: v_total, tag: v_tag, offset: v_offset } = *self;
+            let out = rt::frame_mut::<12>(buf, &[0xFF, 0xFF, address, 0x08, 0x01])?;
+            out[5..8]
+                .copy_from_slice(
+                    &rt::bytes24(
+                        (rt::fits("total", v_total, 0, 16777215)? as u32) as u32,
+                        false,
+                    ),
+                );
+            let field_1: u32 = (((rt::fits("tag", v_tag, 0, 15)? as u32) & 0xF) << 20)
+                | ((rt::fits("offset", v_offset, -524288, 524287)? as u32) & 0xFFFFF);
+            out[8..11].copy_from_slice(&rt::bytes24(field_1 as u32, false));
+            rt::Ok(out.len())
+        }
         /// Reads this message from a frame whose framing and code are checked.
         #[inline(always)]
         fn from_frame(frame: &[u8]) -> rt::DecodeResult<Self> {
@@ -847,6 +828,15 @@ pub mod syncy {
         pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             Response::SetPairReply(*self).encode(address, buf)
         }
+        /// Writes this message's frame for `address`, as the direction's `encode` does.
+        #[inline(always)]
+        fn write(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            let Self { quantity: v_quantity, groups: v_groups } = *self;
+            let out = rt::frame_mut::<8>(buf, &[0xFF, 0xFF, address, 0x04, 0x05])?;
+            out[5] = v_quantity;
+            out[6] = v_groups;
+            rt::Ok(out.len())
+        }
         /// Reads this message from a frame whose framing and code are checked.
         #[inline(always)]
         fn from_frame(frame: &[u8]) -> rt::DecodeResult<Self> {
@@ -868,6 +858,14 @@ pub mod syncy {
         }
         pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             Response::SetPairError(*self).encode(address, buf)
+        }
+        /// Writes this message's frame for `address`, as the direction's `encode` does.
+        #[inline(always)]
+        fn write(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            let Self { reason: v_reason } = *self;
+            let out = rt::frame_mut::<7>(buf, &[0xFF, 0xFF, address, 0x03, 0x85])?;
+            out[5] = v_reason;
+            rt::Ok(out.len())
         }
         /// Reads this message from a frame whose framing and code are checked.
         #[inline(always)]

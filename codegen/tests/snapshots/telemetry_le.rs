@@ -162,24 +162,7 @@ pub mod telemetry_le {
                 Self::GetState(_) => {
                     rt::frame_mut::<5>(buf, &[0xA5, 0x5A, 0x01, 0x01])?.len()
                 }
-                Self::SetHome(request::SetHome { lat: v_lat, lon: v_lon }) => {
-                    rt::encode_in_range(
-                        "lat",
-                        v_lat,
-                        rt::f64_raw(-90f64),
-                        rt::f64_raw(90f64),
-                    )?;
-                    rt::encode_in_range(
-                        "lon",
-                        v_lon,
-                        rt::f64_raw(-180f64),
-                        rt::f64_raw(180f64),
-                    )?;
-                    let out = rt::frame_mut::<21>(buf, &[0xA5, 0x5A, 0x11, 0x02])?;
-                    out[4..12].copy_from_slice(&v_lat.to_le_bytes());
-                    out[12..20].copy_from_slice(&v_lon.to_le_bytes());
-                    out.len()
-                }
+                Self::SetHome(ref m) => m.write(address, buf)?,
             };
             FRAME.seal(buf, len, frame_sum);
             rt::Ok(len)
@@ -328,37 +311,7 @@ pub mod telemetry_le {
         pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             rt::encode_address(address, &FRAME)?;
             let len = match *self {
-                Self::State(
-                    response::State {
-                        time_us: v_time_us,
-                        altitude: v_altitude,
-                        lat: v_lat,
-                        offset: v_offset,
-                        pressure: v_pressure,
-                        total: v_total,
-                    },
-                ) => {
-                    rt::encode_in_range(
-                        "pressure",
-                        v_pressure,
-                        rt::f32_raw(300f32),
-                        rt::f32_raw(1100.5f32),
-                    )?;
-                    let out = rt::frame_mut::<41>(buf, &[0xA5, 0x5A, 0x25, 0x81])?;
-                    out[4..12].copy_from_slice(&v_time_us.to_le_bytes());
-                    out[12..16].copy_from_slice(&v_altitude.to_le_bytes());
-                    out[16..24].copy_from_slice(&v_lat.to_le_bytes());
-                    out[24..32].copy_from_slice(&v_offset.to_le_bytes());
-                    {
-                        let b = v_pressure.to_le_bytes();
-                        out[32..36].copy_from_slice(&[b[2], b[3], b[0], b[1]]);
-                    }
-                    {
-                        let b = v_total.to_le_bytes();
-                        out[36..40].copy_from_slice(&[b[2], b[3], b[0], b[1]]);
-                    }
-                    out.len()
-                }
+                Self::State(ref m) => m.write(address, buf)?,
                 Self::Ack(_) => rt::frame_mut::<5>(buf, &[0xA5, 0x5A, 0x01, 0x82])?.len(),
             };
             FRAME.seal(buf, len, frame_sum);
@@ -614,6 +567,22 @@ pub mod telemetry_le {
         pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             Request::SetHome(*self).encode(address, buf)
         }
+        /// Writes this message's frame for `address`, as the direction's `encode` does.
+        #[inline(always)]
+        fn write(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            let Self { lat: v_lat, lon: v_lon } = *self;
+            rt::encode_in_range("lat", v_lat, rt::f64_raw(-90f64), rt::f64_raw(90f64))?;
+            rt::encode_in_range(
+                "lon",
+                v_lon,
+                rt::f64_raw(-180f64),
+                rt::f64_raw(180f64),
+            )?;
+            let out = rt::frame_mut::<21>(buf, &[0xA5, 0x5A, 0x11, 0x02])?;
+            out[4..12].copy_from_slice(&v_lat.to_le_bytes());
+            out[12..20].copy_from_slice(&v_lon.to_le_bytes());
+            rt::Ok(out.len())
+        }
         /// Reads this message from a frame whose framing and code are checked.
         #[inline(always)]
         fn from_frame(frame: &[u8]) -> rt::DecodeResult<Self> {
@@ -677,6 +646,38 @@ pub mod telemetry_le {
         }
         pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             Response::State(*self).encode(address, buf)
+        }
+        /// Writes this message's frame for `address`, as the direction's `encode` does.
+        #[inline(always)]
+        fn write(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            let Self {
+                time_us: v_time_us,
+                altitude: v_altitude,
+                lat: v_lat,
+                offset: v_offset,
+                pressure: v_pressure,
+                total: v_total,
+            } = *self;
+            rt::encode_in_range(
+                "pressure",
+                v_pressure,
+                rt::f32_raw(300f32),
+                rt::f32_raw(1100.5f32),
+            )?;
+            let out = rt::frame_mut::<41>(buf, &[0xA5, 0x5A, 0x25, 0x81])?;
+            out[4..12].copy_from_slice(&v_time_us.to_le_bytes());
+            out[12..16].copy_from_slice(&v_altitude.to_le_bytes());
+            out[16..24].copy_from_slice(&v_lat.to_le_bytes());
+            out[24..32].copy_from_slice(&v_offset.to_le_bytes());
+            {
+                let b = v_pressure.to_le_bytes();
+                out[32..36].copy_from_slice(&[b[2], b[3], b[0], b[1]]);
+            }
+            {
+                let b = v_total.to_le_bytes();
+                out[36..40].copy_from_slice(&[b[2], b[3], b[0], b[1]]);
+            }
+            rt::Ok(out.len())
         }
         /// Reads this message from a frame whose framing and code are checked.
         #[inline(always)]

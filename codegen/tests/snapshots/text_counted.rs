@@ -191,27 +191,7 @@ pub mod text_counted {
         pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             rt::encode_address(address, &FRAME)?;
             let len = match *self {
-                Self::SetName(request::SetName { name: v_name, channel: v_channel }) => {
-                    rt::encode_in_range("channel", v_channel, 0, 7)?;
-                    let bytes_0: usize = LISTS_SET_NAME
-                        .lists[0]
-                        .encode_len(v_name.len())? - LISTS_SET_NAME.base;
-                    let mut compact = [0u8; 6];
-                    let out = {
-                        compact[..3].copy_from_slice(&[0x7E, address, 0x20]);
-                        &mut compact
-                    };
-                    out[3] = rt::fits(
-                        "name_len",
-                        LISTS_SET_NAME.lists[0].count_value(v_name.len()) as u64,
-                        0,
-                        255,
-                    )? as u8;
-                    out[4] = v_channel;
-                    let out = LISTS_SET_NAME.expand(&compact, &[bytes_0], buf)?;
-                    rt::write_elements(v_name.as_slice(), 1, false, &mut out[4..]);
-                    out.len()
-                }
+                Self::SetName(ref m) => m.write(address, buf)?,
                 Self::GetInfo(_) => {
                     rt::frame_mut::<4>(buf, &[0x7E, address, 0x21])?.len()
                 }
@@ -421,38 +401,8 @@ pub mod text_counted {
         pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             rt::encode_address(address, &FRAME)?;
             let len = match *self {
-                Self::Ack(response::Ack { status: v_status }) => {
-                    let out = rt::frame_mut::<5>(buf, &[0x7E, address, 0x20])?;
-                    out[3] = v_status;
-                    out.len()
-                }
-                Self::DeviceInfo(
-                    response::DeviceInfo {
-                        name: v_name,
-                        serial: v_serial,
-                        version: v_version,
-                    },
-                ) => {
-                    let bytes_0: usize = LISTS_DEVICE_INFO
-                        .lists[0]
-                        .encode_len(v_name.len())? - LISTS_DEVICE_INFO.base;
-                    let mut compact = [0u8; 10];
-                    let out = {
-                        compact[..3].copy_from_slice(&[0x7E, address, 0x21]);
-                        &mut compact
-                    };
-                    out[3] = rt::fits(
-                        "name_len",
-                        LISTS_DEVICE_INFO.lists[0].count_value(v_name.len()) as u64,
-                        0,
-                        255,
-                    )? as u8;
-                    out[4..8].copy_from_slice(&v_serial.to_be_bytes());
-                    out[8] = v_version;
-                    let out = LISTS_DEVICE_INFO.expand(&compact, &[bytes_0], buf)?;
-                    rt::write_elements(v_name.as_slice(), 1, false, &mut out[4..]);
-                    out.len()
-                }
+                Self::Ack(ref m) => m.write(address, buf)?,
+                Self::DeviceInfo(ref m) => m.write(address, buf)?,
             };
             FRAME.seal(buf, len, frame_sum);
             rt::Ok(len)
@@ -901,6 +851,29 @@ pub mod text_counted {
         pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             Request::SetName(*self).encode(address, buf)
         }
+        /// Writes this message's frame for `address`, as the direction's `encode` does.
+        #[inline(always)]
+        fn write(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            let Self { name: v_name, channel: v_channel } = *self;
+            rt::encode_in_range("channel", v_channel, 0, 7)?;
+            let bytes_0: usize = LISTS_SET_NAME.lists[0].encode_len(v_name.len())?
+                - LISTS_SET_NAME.base;
+            let mut compact = [0u8; 6];
+            let out = {
+                compact[..3].copy_from_slice(&[0x7E, address, 0x20]);
+                &mut compact
+            };
+            out[3] = rt::fits(
+                "name_len",
+                LISTS_SET_NAME.lists[0].count_value(v_name.len()) as u64,
+                0,
+                255,
+            )? as u8;
+            out[4] = v_channel;
+            let out = LISTS_SET_NAME.expand(&compact, &[bytes_0], buf)?;
+            rt::write_elements(v_name.as_slice(), 1, false, &mut out[4..]);
+            rt::Ok(out.len())
+        }
     }
     impl request::GetInfo {
         pub const NAME: &'static str = "get_info";
@@ -923,6 +896,14 @@ pub mod text_counted {
         pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             Response::Ack(*self).encode(address, buf)
         }
+        /// Writes this message's frame for `address`, as the direction's `encode` does.
+        #[inline(always)]
+        fn write(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            let Self { status: v_status } = *self;
+            let out = rt::frame_mut::<5>(buf, &[0x7E, address, 0x20])?;
+            out[3] = v_status;
+            rt::Ok(out.len())
+        }
         /// Reads this message from a frame whose framing and code are checked.
         #[inline(always)]
         fn from_frame(frame: &[u8]) -> rt::DecodeResult<Self> {
@@ -944,6 +925,29 @@ pub mod text_counted {
         }
         pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             Response::DeviceInfo(*self).encode(address, buf)
+        }
+        /// Writes this message's frame for `address`, as the direction's `encode` does.
+        #[inline(always)]
+        fn write(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            let Self { name: v_name, serial: v_serial, version: v_version } = *self;
+            let bytes_0: usize = LISTS_DEVICE_INFO.lists[0].encode_len(v_name.len())?
+                - LISTS_DEVICE_INFO.base;
+            let mut compact = [0u8; 10];
+            let out = {
+                compact[..3].copy_from_slice(&[0x7E, address, 0x21]);
+                &mut compact
+            };
+            out[3] = rt::fits(
+                "name_len",
+                LISTS_DEVICE_INFO.lists[0].count_value(v_name.len()) as u64,
+                0,
+                255,
+            )? as u8;
+            out[4..8].copy_from_slice(&v_serial.to_be_bytes());
+            out[8] = v_version;
+            let out = LISTS_DEVICE_INFO.expand(&compact, &[bytes_0], buf)?;
+            rt::write_elements(v_name.as_slice(), 1, false, &mut out[4..]);
+            rt::Ok(out.len())
         }
     }
     /// Each request as a struct of its own; its constants (`DESC`, which names it as

@@ -194,35 +194,8 @@ pub mod text_terminated {
             rt::encode_address(address, &FRAME)?;
             let len = match *self {
                 Self::Ping(_) => rt::frame_mut::<4>(buf, &[0xC8, 0x02, 0x28])?.len(),
-                Self::SetName(request::SetName { name: v_name, channel: v_channel }) => {
-                    rt::encode_in_range("channel", v_channel, 0, 7)?;
-                    LISTS_SET_NAME.lists[0].encode_until(v_name.as_slice())?;
-                    let bytes_0: usize = LISTS_SET_NAME
-                        .lists[0]
-                        .encode_len(v_name.len())? - LISTS_SET_NAME.base;
-                    let mut compact = [0u8; 5];
-                    let out = {
-                        compact[..1].copy_from_slice(&[0xC8]);
-                        &mut compact
-                    };
-                    out[2] = 0x2A;
-                    out[3] = v_channel;
-                    let out = LISTS_SET_NAME.expand(&compact, &[bytes_0], buf)?;
-                    {
-                        let at = 3;
-                        rt::write_elements(v_name.as_slice(), 1, false, &mut out[at..]);
-                        if let rt::Some(b) = out.get_mut(at + v_name.len()) {
-                            *b = 0;
-                        }
-                    }
-                    LENGTH.put(out)?;
-                    out.len()
-                }
-                Self::ReadParameter(request::ReadParameter { index: v_index }) => {
-                    let out = rt::frame_mut::<5>(buf, &[0xC8, 0x03, 0x2C])?;
-                    out[3] = v_index;
-                    out.len()
-                }
+                Self::SetName(ref m) => m.write(address, buf)?,
+                Self::ReadParameter(ref m) => m.write(address, buf)?,
             };
             FRAME.seal(buf, len, frame_sum);
             rt::Ok(len)
@@ -472,90 +445,9 @@ pub mod text_terminated {
         pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             rt::encode_address(address, &FRAME)?;
             let len = match *self {
-                Self::DeviceInfo(
-                    response::DeviceInfo {
-                        name: v_name,
-                        serial: v_serial,
-                        hardware: v_hardware,
-                        firmware: v_firmware,
-                        parameters: v_parameters,
-                        version: v_version,
-                    },
-                ) => {
-                    LISTS_DEVICE_INFO.lists[0].encode_until(v_name.as_slice())?;
-                    let bytes_0: usize = LISTS_DEVICE_INFO
-                        .lists[0]
-                        .encode_len(v_name.len())? - LISTS_DEVICE_INFO.base;
-                    let mut compact = [0u8; 18];
-                    let out = {
-                        compact[..1].copy_from_slice(&[0xC8]);
-                        &mut compact
-                    };
-                    out[2] = 0x29;
-                    out[3..7].copy_from_slice(&v_serial.to_be_bytes());
-                    out[7..11].copy_from_slice(&v_hardware.to_be_bytes());
-                    out[11..15].copy_from_slice(&v_firmware.to_be_bytes());
-                    out[15] = v_parameters;
-                    out[16] = v_version;
-                    let out = LISTS_DEVICE_INFO.expand(&compact, &[bytes_0], buf)?;
-                    {
-                        let at = 3;
-                        rt::write_elements(v_name.as_slice(), 1, false, &mut out[at..]);
-                        if let rt::Some(b) = out.get_mut(at + v_name.len()) {
-                            *b = 0;
-                        }
-                    }
-                    LENGTH.put(out)?;
-                    out.len()
-                }
-                Self::Ack(response::Ack { status: v_status }) => {
-                    let out = rt::frame_mut::<5>(buf, &[0xC8, 0x03, 0x2A])?;
-                    out[3] = v_status;
-                    out.len()
-                }
-                Self::Parameter(
-                    response::Parameter {
-                        index: v_index,
-                        label: v_label,
-                        unit: v_unit,
-                        value: v_value,
-                    },
-                ) => {
-                    LISTS_PARAMETER.lists[0].encode_until(v_label.as_slice())?;
-                    let bytes_0: usize = LISTS_PARAMETER
-                        .lists[0]
-                        .encode_len(v_label.len())? - LISTS_PARAMETER.base;
-                    LISTS_PARAMETER.lists[1].encode_until(v_unit.as_slice())?;
-                    let bytes_1: usize = LISTS_PARAMETER
-                        .lists[1]
-                        .encode_len(v_unit.len())? - LISTS_PARAMETER.base;
-                    let mut compact = [0u8; 7];
-                    let out = {
-                        compact[..1].copy_from_slice(&[0xC8]);
-                        &mut compact
-                    };
-                    out[2] = 0x2B;
-                    out[3] = v_index;
-                    out[4..6].copy_from_slice(&v_value.to_be_bytes());
-                    let out = LISTS_PARAMETER
-                        .expand(&compact, &[bytes_0, bytes_1], buf)?;
-                    {
-                        let at = 4;
-                        rt::write_elements(v_label.as_slice(), 1, false, &mut out[at..]);
-                        if let rt::Some(b) = out.get_mut(at + v_label.len()) {
-                            *b = 0;
-                        }
-                    }
-                    {
-                        let at = 4 + bytes_0;
-                        rt::write_elements(v_unit.as_slice(), 1, false, &mut out[at..]);
-                        if let rt::Some(b) = out.get_mut(at + v_unit.len()) {
-                            *b = 0;
-                        }
-                    }
-                    LENGTH.put(out)?;
-                    out.len()
-                }
+                Self::DeviceInfo(ref m) => m.write(address, buf)?,
+                Self::Ack(ref m) => m.write(address, buf)?,
+                Self::Parameter(ref m) => m.write(address, buf)?,
             };
             FRAME.seal(buf, len, frame_sum);
             rt::Ok(len)
@@ -1146,6 +1038,32 @@ pub mod text_terminated {
         pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             Request::SetName(*self).encode(address, buf)
         }
+        /// Writes this message's frame for `address`, as the direction's `encode` does.
+        #[inline(always)]
+        fn write(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            let Self { name: v_name, channel: v_channel } = *self;
+            rt::encode_in_range("channel", v_channel, 0, 7)?;
+            LISTS_SET_NAME.lists[0].encode_until(v_name.as_slice())?;
+            let bytes_0: usize = LISTS_SET_NAME.lists[0].encode_len(v_name.len())?
+                - LISTS_SET_NAME.base;
+            let mut compact = [0u8; 5];
+            let out = {
+                compact[..1].copy_from_slice(&[0xC8]);
+                &mut compact
+            };
+            out[2] = 0x2A;
+            out[3] = v_channel;
+            let out = LISTS_SET_NAME.expand(&compact, &[bytes_0], buf)?;
+            {
+                let at = 3;
+                rt::write_elements(v_name.as_slice(), 1, false, &mut out[at..]);
+                if let rt::Some(b) = out.get_mut(at + v_name.len()) {
+                    *b = 0;
+                }
+            }
+            LENGTH.put(out)?;
+            rt::Ok(out.len())
+        }
     }
     impl request::ReadParameter {
         pub const NAME: &'static str = "read_parameter";
@@ -1158,6 +1076,14 @@ pub mod text_terminated {
         }
         pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             Request::ReadParameter(*self).encode(address, buf)
+        }
+        /// Writes this message's frame for `address`, as the direction's `encode` does.
+        #[inline(always)]
+        fn write(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            let Self { index: v_index } = *self;
+            let out = rt::frame_mut::<5>(buf, &[0xC8, 0x03, 0x2C])?;
+            out[3] = v_index;
+            rt::Ok(out.len())
         }
         /// Reads this message from a frame whose framing and code are checked.
         #[inline(always)]
@@ -1184,6 +1110,42 @@ pub mod text_terminated {
         pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             Response::DeviceInfo(*self).encode(address, buf)
         }
+        /// Writes this message's frame for `address`, as the direction's `encode` does.
+        #[inline(always)]
+        fn write(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            let Self {
+                name: v_name,
+                serial: v_serial,
+                hardware: v_hardware,
+                firmware: v_firmware,
+                parameters: v_parameters,
+                version: v_version,
+            } = *self;
+            LISTS_DEVICE_INFO.lists[0].encode_until(v_name.as_slice())?;
+            let bytes_0: usize = LISTS_DEVICE_INFO.lists[0].encode_len(v_name.len())?
+                - LISTS_DEVICE_INFO.base;
+            let mut compact = [0u8; 18];
+            let out = {
+                compact[..1].copy_from_slice(&[0xC8]);
+                &mut compact
+            };
+            out[2] = 0x29;
+            out[3..7].copy_from_slice(&v_serial.to_be_bytes());
+            out[7..11].copy_from_slice(&v_hardware.to_be_bytes());
+            out[11..15].copy_from_slice(&v_firmware.to_be_bytes());
+            out[15] = v_parameters;
+            out[16] = v_version;
+            let out = LISTS_DEVICE_INFO.expand(&compact, &[bytes_0], buf)?;
+            {
+                let at = 3;
+                rt::write_elements(v_name.as_slice(), 1, false, &mut out[at..]);
+                if let rt::Some(b) = out.get_mut(at + v_name.len()) {
+                    *b = 0;
+                }
+            }
+            LENGTH.put(out)?;
+            rt::Ok(out.len())
+        }
     }
     impl response::Ack {
         pub const NAME: &'static str = "ack";
@@ -1196,6 +1158,14 @@ pub mod text_terminated {
         }
         pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             Response::Ack(*self).encode(address, buf)
+        }
+        /// Writes this message's frame for `address`, as the direction's `encode` does.
+        #[inline(always)]
+        fn write(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            let Self { status: v_status } = *self;
+            let out = rt::frame_mut::<5>(buf, &[0xC8, 0x03, 0x2A])?;
+            out[3] = v_status;
+            rt::Ok(out.len())
         }
         /// Reads this message from a frame whose framing and code are checked.
         #[inline(always)]
@@ -1221,6 +1191,42 @@ pub mod text_terminated {
         }
         pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             Response::Parameter(*self).encode(address, buf)
+        }
+        /// Writes this message's frame for `address`, as the direction's `encode` does.
+        #[inline(always)]
+        fn write(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            let Self { index: v_index, label: v_label, unit: v_unit, value: v_value } = *self;
+            LISTS_PARAMETER.lists[0].encode_until(v_label.as_slice())?;
+            let bytes_0: usize = LISTS_PARAMETER.lists[0].encode_len(v_label.len())?
+                - LISTS_PARAMETER.base;
+            LISTS_PARAMETER.lists[1].encode_until(v_unit.as_slice())?;
+            let bytes_1: usize = LISTS_PARAMETER.lists[1].encode_len(v_unit.len())?
+                - LISTS_PARAMETER.base;
+            let mut compact = [0u8; 7];
+            let out = {
+                compact[..1].copy_from_slice(&[0xC8]);
+                &mut compact
+            };
+            out[2] = 0x2B;
+            out[3] = v_index;
+            out[4..6].copy_from_slice(&v_value.to_be_bytes());
+            let out = LISTS_PARAMETER.expand(&compact, &[bytes_0, bytes_1], buf)?;
+            {
+                let at = 4;
+                rt::write_elements(v_label.as_slice(), 1, false, &mut out[at..]);
+                if let rt::Some(b) = out.get_mut(at + v_label.len()) {
+                    *b = 0;
+                }
+            }
+            {
+                let at = 4 + bytes_0;
+                rt::write_elements(v_unit.as_slice(), 1, false, &mut out[at..]);
+                if let rt::Some(b) = out.get_mut(at + v_unit.len()) {
+                    *b = 0;
+                }
+            }
+            LENGTH.put(out)?;
+            rt::Ok(out.len())
         }
     }
     /// Each request as a struct of its own; its constants (`DESC`, which names it as

@@ -532,31 +532,17 @@ pub mod ub2 {
                     let out = rt::frame_mut::<5>(buf, &[0xAA, address, 0x10, 0x01])?;
                     rt::seal_sum8_head(out, 4, address.wrapping_add(0xBB))
                 }
-                Self::GoToCapacitance(request::GoToCapacitance { target: v_target }) => {
-                    let out = rt::frame_mut::<9>(buf, &[0xAA, address, 0x20, 0x00])?;
-                    out[4..8].copy_from_slice(&v_target.raw().to_le_bytes());
-                    rt::seal_sum8_head(out, 4, address.wrapping_add(0xCA))
-                }
+                Self::GoToCapacitance(ref m) => m.write(address, buf)?,
                 Self::GoToCapacitanceStatus(_) => {
                     let out = rt::frame_mut::<5>(buf, &[0xAA, address, 0x20, 0x01])?;
                     rt::seal_sum8_head(out, 4, address.wrapping_add(0xCB))
                 }
-                Self::GoToFullStepPosition(
-                    request::GoToFullStepPosition { target: v_target },
-                ) => {
-                    let out = rt::frame_mut::<7>(buf, &[0xAA, address, 0x21, 0x00])?;
-                    out[4..6].copy_from_slice(&v_target.to_le_bytes());
-                    rt::seal_sum8_head(out, 4, address.wrapping_add(0xCB))
-                }
+                Self::GoToFullStepPosition(ref m) => m.write(address, buf)?,
                 Self::GoToFullStepPositionStatus(_) => {
                     let out = rt::frame_mut::<5>(buf, &[0xAA, address, 0x21, 0x01])?;
                     rt::seal_sum8_head(out, 4, address.wrapping_add(0xCC))
                 }
-                Self::MoveFullSteps(request::MoveFullSteps { steps: v_steps }) => {
-                    let out = rt::frame_mut::<7>(buf, &[0xAA, address, 0x22, 0x00])?;
-                    out[4..6].copy_from_slice(&v_steps.to_le_bytes());
-                    rt::seal_sum8_head(out, 4, address.wrapping_add(0xCC))
-                }
+                Self::MoveFullSteps(ref m) => m.write(address, buf)?,
                 Self::MoveFullStepsStatus(_) => {
                     let out = rt::frame_mut::<5>(buf, &[0xAA, address, 0x22, 0x01])?;
                     rt::seal_sum8_head(out, 4, address.wrapping_add(0xCD))
@@ -577,113 +563,29 @@ pub mod ub2 {
                     let out = rt::frame_mut::<5>(buf, &[0xAA, address, 0x24, 0x01])?;
                     rt::seal_sum8_head(out, 4, address.wrapping_add(0xCF))
                 }
-                Self::GoToMicroStepPosition(
-                    request::GoToMicroStepPosition { target: v_target },
-                ) => {
-                    let out = rt::frame_mut::<9>(buf, &[0xAA, address, 0x25, 0x00])?;
-                    out[4..8].copy_from_slice(&v_target.to_le_bytes());
-                    rt::seal_sum8_head(out, 4, address.wrapping_add(0xCF))
-                }
+                Self::GoToMicroStepPosition(ref m) => m.write(address, buf)?,
                 Self::GoToMicroStepPositionStatus(_) => {
                     let out = rt::frame_mut::<5>(buf, &[0xAA, address, 0x25, 0x01])?;
                     rt::seal_sum8_head(out, 4, address.wrapping_add(0xD0))
                 }
-                Self::MoveMicroSteps(request::MoveMicroSteps { steps: v_steps }) => {
-                    let out = rt::frame_mut::<9>(buf, &[0xAA, address, 0x26, 0x00])?;
-                    out[4..8].copy_from_slice(&v_steps.to_le_bytes());
-                    rt::seal_sum8_head(out, 4, address.wrapping_add(0xD0))
-                }
+                Self::MoveMicroSteps(ref m) => m.write(address, buf)?,
                 Self::MoveMicroStepsStatus(_) => {
                     let out = rt::frame_mut::<5>(buf, &[0xAA, address, 0x26, 0x01])?;
                     rt::seal_sum8_head(out, 4, address.wrapping_add(0xD1))
                 }
-                Self::GoToStoredPosition(
-                    request::GoToStoredPosition { index: v_index },
-                ) => {
-                    rt::encode_in_range("index", v_index, 0, 9)?;
-                    let out = rt::frame_mut::<6>(buf, &[0xAA, address, 0x27, 0x00])?;
-                    out[4] = v_index;
-                    rt::seal_sum8_head(out, 4, address.wrapping_add(0xD1))
-                }
+                Self::GoToStoredPosition(ref m) => m.write(address, buf)?,
                 Self::GoToStoredPositionStatus(_) => {
                     let out = rt::frame_mut::<5>(buf, &[0xAA, address, 0x27, 0x01])?;
                     rt::seal_sum8_head(out, 4, address.wrapping_add(0xD2))
                 }
-                Self::SetAccelerationSpeedIndex(
-                    request::SetAccelerationSpeedIndex {
-                        acceleration_index: v_acceleration_index,
-                        speed_index: v_speed_index,
-                    },
-                ) => {
-                    rt::encode_in_range(
-                        "acceleration_index",
-                        v_acceleration_index,
-                        0,
-                        18,
-                    )?;
-                    rt::encode_in_range("speed_index", v_speed_index, 0, 18)?;
-                    let out = rt::frame_mut::<7>(buf, &[0xAA, address, 0x43, 0x00])?;
-                    out[4] = v_acceleration_index;
-                    out[5] = v_speed_index;
-                    rt::seal_sum8_head(out, 4, address.wrapping_add(0xED))
-                }
-                Self::SetCurrent(
-                    request::SetCurrent {
-                        idle_current: v_idle_current,
-                        drive_current: v_drive_current,
-                    },
-                ) => {
-                    let out = rt::frame_mut::<7>(buf, &[0xAA, address, 0x45, 0x00])?;
-                    out[4] = v_idle_current;
-                    out[5] = v_drive_current;
-                    rt::seal_sum8_head(out, 4, address.wrapping_add(0xEF))
-                }
-                Self::SetSlaveAddress(
-                    request::SetSlaveAddress { address: v_address },
-                ) => {
-                    rt::encode_in_range("address", v_address, 33, 64)?;
-                    let out = rt::frame_mut::<6>(buf, &[0xAA, address, 0x60, 0x00])?;
-                    out[4] = v_address;
-                    rt::seal_sum8_head(out, 4, address.wrapping_add(0x0A))
-                }
-                Self::SetBaudRate(request::SetBaudRate { baud_rate: v_baud_rate }) => {
-                    let out = rt::frame_mut::<6>(buf, &[0xAA, address, 0x61, 0x00])?;
-                    out[4] = v_baud_rate.raw();
-                    rt::seal_sum8_head(out, 4, address.wrapping_add(0x0B))
-                }
-                Self::SetLowerCustomerLimit(
-                    request::SetLowerCustomerLimit { limit: v_limit },
-                ) => {
-                    let out = rt::frame_mut::<9>(buf, &[0xAA, address, 0x72, 0x01])?;
-                    out[4..8].copy_from_slice(&v_limit.raw().to_le_bytes());
-                    rt::seal_sum8_head(out, 4, address.wrapping_add(0x1D))
-                }
-                Self::SetUpperCustomerLimit(
-                    request::SetUpperCustomerLimit { limit: v_limit },
-                ) => {
-                    let out = rt::frame_mut::<9>(buf, &[0xAA, address, 0x72, 0x02])?;
-                    out[4..8].copy_from_slice(&v_limit.raw().to_le_bytes());
-                    rt::seal_sum8_head(out, 4, address.wrapping_add(0x1E))
-                }
-                Self::StoreIndexedPosition(
-                    request::StoreIndexedPosition {
-                        index: v_index,
-                        position: v_position,
-                    },
-                ) => {
-                    rt::encode_in_range("index", v_index, 0, 9)?;
-                    let out = rt::frame_mut::<8>(buf, &[0xAA, address, 0x75, 0x00])?;
-                    out[4] = v_index;
-                    out[5..7].copy_from_slice(&v_position.to_le_bytes());
-                    rt::seal_sum8_head(out, 4, address.wrapping_add(0x1F))
-                }
-                Self::SetModeOfOperation(
-                    request::SetModeOfOperation { mode: v_mode },
-                ) => {
-                    let out = rt::frame_mut::<6>(buf, &[0xAA, address, 0x80, 0x00])?;
-                    out[4] = v_mode.raw();
-                    rt::seal_sum8_head(out, 4, address.wrapping_add(0x2A))
-                }
+                Self::SetAccelerationSpeedIndex(ref m) => m.write(address, buf)?,
+                Self::SetCurrent(ref m) => m.write(address, buf)?,
+                Self::SetSlaveAddress(ref m) => m.write(address, buf)?,
+                Self::SetBaudRate(ref m) => m.write(address, buf)?,
+                Self::SetLowerCustomerLimit(ref m) => m.write(address, buf)?,
+                Self::SetUpperCustomerLimit(ref m) => m.write(address, buf)?,
+                Self::StoreIndexedPosition(ref m) => m.write(address, buf)?,
+                Self::SetModeOfOperation(ref m) => m.write(address, buf)?,
                 Self::GetActualCapacitance(_) => {
                     let out = rt::frame_mut::<5>(buf, &[0xAA, address, 0x40, 0x01])?;
                     rt::seal_sum8_head(out, 4, address.wrapping_add(0xEB))
@@ -708,13 +610,8 @@ pub mod ub2 {
                     let out = rt::frame_mut::<5>(buf, &[0xAA, address, 0x40, 0x22])?;
                     rt::seal_sum8_head(out, 4, address.wrapping_add(0x0C))
                 }
-                Self::GetCCurveIndexedFullStepCapacitance(
-                    request::GetCCurveIndexedFullStepCapacitance { index: v_index },
-                ) => {
-                    rt::encode_in_range("index", v_index, 0, 499)?;
-                    let out = rt::frame_mut::<7>(buf, &[0xAA, address, 0x40, 0x30])?;
-                    out[4..6].copy_from_slice(&v_index.to_le_bytes());
-                    rt::seal_sum8_head(out, 4, address.wrapping_add(0x1A))
+                Self::GetCCurveIndexedFullStepCapacitance(ref m) => {
+                    m.write(address, buf)?
                 }
                 Self::GetControllerTemperature(_) => {
                     let out = rt::frame_mut::<5>(buf, &[0xAA, address, 0x40, 0x32])?;
@@ -776,14 +673,7 @@ pub mod ub2 {
                     >(buf, &[0xAA, address, 0x40, 0x73, 0x01])?;
                     rt::seal_sum8_head(out, 5, address.wrapping_add(0x5E))
                 }
-                Self::GetStoredFullStepPosition(
-                    request::GetStoredFullStepPosition { index: v_index },
-                ) => {
-                    rt::encode_in_range("index", v_index, 0, 9)?;
-                    let out = rt::frame_mut::<6>(buf, &[0xAA, address, 0x40, 0x75])?;
-                    out[4] = v_index;
-                    rt::seal_sum8_head(out, 4, address.wrapping_add(0x5F))
-                }
+                Self::GetStoredFullStepPosition(ref m) => m.write(address, buf)?,
                 Self::GetModeOfOperation(_) => {
                     let out = rt::frame_mut::<5>(buf, &[0xAA, address, 0x40, 0x80])?;
                     rt::seal_sum8_head(out, 4, address.wrapping_add(0x6A))
@@ -1514,15 +1404,7 @@ pub mod ub2 {
                     let out = rt::frame_mut::<4>(buf, &[0xAA, address, 0x53])?;
                     rt::seal_sum8_head(out, 3, address.wrapping_add(0xFD))
                 }
-                Self::MovementCompletedWithStepLoss(
-                    response::MovementCompletedWithStepLoss {
-                        lost_micro_steps: v_lost_micro_steps,
-                    },
-                ) => {
-                    let out = rt::frame_mut::<9>(buf, &[0xAA, address, 0x54, 0x00])?;
-                    out[4..8].copy_from_slice(&v_lost_micro_steps.to_le_bytes());
-                    rt::seal_sum8_head(out, 4, address.wrapping_add(0xFE))
-                }
+                Self::MovementCompletedWithStepLoss(ref m) => m.write(address, buf)?,
                 Self::NakUnknownCommand(_) => {
                     let out = rt::frame_mut::<4>(buf, &[0xAA, address, 0x90])?;
                     rt::seal_sum8_head(out, 3, address.wrapping_add(0x3A))
@@ -1575,185 +1457,27 @@ pub mod ub2 {
                     let out = rt::frame_mut::<5>(buf, &[0xAA, address, 0x80, 0x00])?;
                     rt::seal_sum8_head(out, 4, address.wrapping_add(0x2A))
                 }
-                Self::ActualCapacitance(
-                    response::ActualCapacitance { capacitance: v_capacitance },
-                ) => {
-                    let out = rt::frame_mut::<9>(buf, &[0xAA, address, 0x41, 0x01])?;
-                    out[4..8].copy_from_slice(&v_capacitance.raw().to_le_bytes());
-                    rt::seal_sum8_head(out, 4, address.wrapping_add(0xEC))
-                }
-                Self::ActualFullStepPosition(
-                    response::ActualFullStepPosition { full_steps: v_full_steps },
-                ) => {
-                    let out = rt::frame_mut::<7>(buf, &[0xAA, address, 0x41, 0x02])?;
-                    out[4..6].copy_from_slice(&v_full_steps.to_le_bytes());
-                    rt::seal_sum8_head(out, 4, address.wrapping_add(0xED))
-                }
-                Self::MinimumCapacitance(
-                    response::MinimumCapacitance { capacitance: v_capacitance },
-                ) => {
-                    let out = rt::frame_mut::<9>(buf, &[0xAA, address, 0x41, 0x10])?;
-                    out[4..8].copy_from_slice(&v_capacitance.raw().to_le_bytes());
-                    rt::seal_sum8_head(out, 4, address.wrapping_add(0xFB))
-                }
-                Self::MaximumCapacitance(
-                    response::MaximumCapacitance { capacitance: v_capacitance },
-                ) => {
-                    let out = rt::frame_mut::<9>(buf, &[0xAA, address, 0x41, 0x11])?;
-                    out[4..8].copy_from_slice(&v_capacitance.raw().to_le_bytes());
-                    rt::seal_sum8_head(out, 4, address.wrapping_add(0xFC))
-                }
-                Self::AccelerationSpeed(
-                    response::AccelerationSpeed {
-                        acceleration_index: v_acceleration_index,
-                        speed_index: v_speed_index,
-                    },
-                ) => {
-                    rt::encode_in_range(
-                        "acceleration_index",
-                        v_acceleration_index,
-                        0,
-                        18,
-                    )?;
-                    rt::encode_in_range("speed_index", v_speed_index, 0, 18)?;
-                    let out = rt::frame_mut::<7>(buf, &[0xAA, address, 0x41, 0x21])?;
-                    out[4] = v_acceleration_index;
-                    out[5] = v_speed_index;
-                    rt::seal_sum8_head(out, 4, address.wrapping_add(0x0C))
-                }
-                Self::Status(
-                    response::Status { error_bits: v_error_bits, reserved: v_reserved },
-                ) => {
-                    let out = rt::frame_mut::<7>(buf, &[0xAA, address, 0x41, 0x22])?;
-                    out[4] = v_error_bits.raw();
-                    out[5] = v_reserved;
-                    rt::seal_sum8_head(out, 4, address.wrapping_add(0x0D))
-                }
-                Self::CCurveEntry(
-                    response::CCurveEntry {
-                        index: v_index,
-                        full_steps: v_full_steps,
-                        capacitance: v_capacitance,
-                    },
-                ) => {
-                    rt::encode_in_range("index", v_index, 0, 499)?;
-                    let out = rt::frame_mut::<13>(buf, &[0xAA, address, 0x41, 0x30])?;
-                    out[4..6].copy_from_slice(&v_index.to_le_bytes());
-                    out[6..8].copy_from_slice(&v_full_steps.to_le_bytes());
-                    out[8..12].copy_from_slice(&v_capacitance.raw().to_le_bytes());
-                    rt::seal_sum8_head(out, 4, address.wrapping_add(0x1B))
-                }
-                Self::ControllerTemperature(
-                    response::ControllerTemperature { temperature: v_temperature },
-                ) => {
-                    let out = rt::frame_mut::<6>(buf, &[0xAA, address, 0x41, 0x32])?;
-                    out[4] = v_temperature;
-                    rt::seal_sum8_head(out, 4, address.wrapping_add(0x1D))
-                }
-                Self::MicroStepPosition(
-                    response::MicroStepPosition { micro_steps: v_micro_steps },
-                ) => {
-                    let out = rt::frame_mut::<9>(buf, &[0xAA, address, 0x41, 0x36])?;
-                    out[4..8].copy_from_slice(&v_micro_steps.to_le_bytes());
-                    rt::seal_sum8_head(out, 4, address.wrapping_add(0x21))
-                }
-                Self::FirmwareVersion(
-                    response::FirmwareVersion { firmware_version: v_firmware_version },
-                ) => {
-                    let out = rt::frame_mut::<16>(buf, &[0xAA, address, 0x41, 0x61])?;
-                    out[4..15].copy_from_slice(&v_firmware_version.0);
-                    rt::seal_sum8_head(out, 4, address.wrapping_add(0x4C))
-                }
-                Self::SerialNumber(
-                    response::SerialNumber { serial_number: v_serial_number },
-                ) => {
-                    let out = rt::frame_mut::<13>(buf, &[0xAA, address, 0x41, 0x62])?;
-                    out[4..12].copy_from_slice(&v_serial_number.0);
-                    rt::seal_sum8_head(out, 4, address.wrapping_add(0x4D))
-                }
-                Self::CminNom(response::CminNom { capacitance: v_capacitance }) => {
-                    let out = rt::frame_mut::<9>(buf, &[0xAA, address, 0x41, 0x70])?;
-                    out[4..8].copy_from_slice(&v_capacitance.raw().to_le_bytes());
-                    rt::seal_sum8_head(out, 4, address.wrapping_add(0x5B))
-                }
-                Self::CmaxNom(response::CmaxNom { capacitance: v_capacitance }) => {
-                    let out = rt::frame_mut::<9>(buf, &[0xAA, address, 0x41, 0x71])?;
-                    out[4..8].copy_from_slice(&v_capacitance.raw().to_le_bytes());
-                    rt::seal_sum8_head(out, 4, address.wrapping_add(0x5C))
-                }
-                Self::LowerCustomerLimit(
-                    response::LowerCustomerLimit { capacitance: v_capacitance },
-                ) => {
-                    let out = rt::frame_mut::<
-                        10,
-                    >(buf, &[0xAA, address, 0x41, 0x72, 0x01])?;
-                    out[5..9].copy_from_slice(&v_capacitance.raw().to_le_bytes());
-                    rt::seal_sum8_head(out, 5, address.wrapping_add(0x5E))
-                }
-                Self::UpperCustomerLimit(
-                    response::UpperCustomerLimit { capacitance: v_capacitance },
-                ) => {
-                    let out = rt::frame_mut::<
-                        10,
-                    >(buf, &[0xAA, address, 0x41, 0x72, 0x02])?;
-                    out[5..9].copy_from_slice(&v_capacitance.raw().to_le_bytes());
-                    rt::seal_sum8_head(out, 5, address.wrapping_add(0x5F))
-                }
-                Self::LowerFactoryLimit(
-                    response::LowerFactoryLimit { capacitance: v_capacitance },
-                ) => {
-                    let out = rt::frame_mut::<
-                        10,
-                    >(buf, &[0xAA, address, 0x41, 0x72, 0x03])?;
-                    out[5..9].copy_from_slice(&v_capacitance.raw().to_le_bytes());
-                    rt::seal_sum8_head(out, 5, address.wrapping_add(0x60))
-                }
-                Self::UpperFactoryLimit(
-                    response::UpperFactoryLimit { capacitance: v_capacitance },
-                ) => {
-                    let out = rt::frame_mut::<
-                        10,
-                    >(buf, &[0xAA, address, 0x41, 0x72, 0x04])?;
-                    out[5..9].copy_from_slice(&v_capacitance.raw().to_le_bytes());
-                    rt::seal_sum8_head(out, 5, address.wrapping_add(0x61))
-                }
-                Self::PresetCapacitance(
-                    response::PresetCapacitance { capacitance: v_capacitance },
-                ) => {
-                    let out = rt::frame_mut::<
-                        10,
-                    >(buf, &[0xAA, address, 0x41, 0x73, 0x00])?;
-                    out[5..9].copy_from_slice(&v_capacitance.raw().to_le_bytes());
-                    rt::seal_sum8_head(out, 5, address.wrapping_add(0x5E))
-                }
-                Self::PresetFullStepPosition(
-                    response::PresetFullStepPosition { full_steps: v_full_steps },
-                ) => {
-                    let out = rt::frame_mut::<
-                        10,
-                    >(buf, &[0xAA, address, 0x41, 0x73, 0x01])?;
-                    out[5..9].copy_from_slice(&v_full_steps.to_le_bytes());
-                    rt::seal_sum8_head(out, 5, address.wrapping_add(0x5F))
-                }
-                Self::StoredFullStepPosition(
-                    response::StoredFullStepPosition {
-                        index: v_index,
-                        full_steps: v_full_steps,
-                    },
-                ) => {
-                    rt::encode_in_range("index", v_index, 0, 9)?;
-                    let out = rt::frame_mut::<8>(buf, &[0xAA, address, 0x41, 0x75])?;
-                    out[4] = v_index;
-                    out[5..7].copy_from_slice(&v_full_steps.to_le_bytes());
-                    rt::seal_sum8_head(out, 4, address.wrapping_add(0x60))
-                }
-                Self::ActualModeOfOperation(
-                    response::ActualModeOfOperation { mode: v_mode },
-                ) => {
-                    let out = rt::frame_mut::<6>(buf, &[0xAA, address, 0x41, 0x80])?;
-                    out[4] = v_mode.raw();
-                    rt::seal_sum8_head(out, 4, address.wrapping_add(0x6B))
-                }
+                Self::ActualCapacitance(ref m) => m.write(address, buf)?,
+                Self::ActualFullStepPosition(ref m) => m.write(address, buf)?,
+                Self::MinimumCapacitance(ref m) => m.write(address, buf)?,
+                Self::MaximumCapacitance(ref m) => m.write(address, buf)?,
+                Self::AccelerationSpeed(ref m) => m.write(address, buf)?,
+                Self::Status(ref m) => m.write(address, buf)?,
+                Self::CCurveEntry(ref m) => m.write(address, buf)?,
+                Self::ControllerTemperature(ref m) => m.write(address, buf)?,
+                Self::MicroStepPosition(ref m) => m.write(address, buf)?,
+                Self::FirmwareVersion(ref m) => m.write(address, buf)?,
+                Self::SerialNumber(ref m) => m.write(address, buf)?,
+                Self::CminNom(ref m) => m.write(address, buf)?,
+                Self::CmaxNom(ref m) => m.write(address, buf)?,
+                Self::LowerCustomerLimit(ref m) => m.write(address, buf)?,
+                Self::UpperCustomerLimit(ref m) => m.write(address, buf)?,
+                Self::LowerFactoryLimit(ref m) => m.write(address, buf)?,
+                Self::UpperFactoryLimit(ref m) => m.write(address, buf)?,
+                Self::PresetCapacitance(ref m) => m.write(address, buf)?,
+                Self::PresetFullStepPosition(ref m) => m.write(address, buf)?,
+                Self::StoredFullStepPosition(ref m) => m.write(address, buf)?,
+                Self::ActualModeOfOperation(ref m) => m.write(address, buf)?,
             };
             rt::Ok(len)
         }
@@ -2464,6 +2188,14 @@ pub mod ub2 {
         pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             Request::GoToCapacitance(*self).encode(address, buf)
         }
+        /// Writes this message's frame for `address`, as the direction's `encode` does.
+        #[inline(always)]
+        fn write(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            let Self { target: v_target } = *self;
+            let out = rt::frame_mut::<9>(buf, &[0xAA, address, 0x20, 0x00])?;
+            out[4..8].copy_from_slice(&v_target.raw().to_le_bytes());
+            rt::Ok(rt::seal_sum8_head(out, 4, address.wrapping_add(0xCA)))
+        }
         /// Reads this message from a frame whose framing and code are checked.
         #[inline(always)]
         fn from_frame(frame: &[u8]) -> rt::DecodeResult<Self> {
@@ -2496,6 +2228,14 @@ pub mod ub2 {
         pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             Request::GoToFullStepPosition(*self).encode(address, buf)
         }
+        /// Writes this message's frame for `address`, as the direction's `encode` does.
+        #[inline(always)]
+        fn write(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            let Self { target: v_target } = *self;
+            let out = rt::frame_mut::<7>(buf, &[0xAA, address, 0x21, 0x00])?;
+            out[4..6].copy_from_slice(&v_target.to_le_bytes());
+            rt::Ok(rt::seal_sum8_head(out, 4, address.wrapping_add(0xCB)))
+        }
         /// Reads this message from a frame whose framing and code are checked.
         #[inline(always)]
         fn from_frame(frame: &[u8]) -> rt::DecodeResult<Self> {
@@ -2525,6 +2265,14 @@ pub mod ub2 {
         }
         pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             Request::MoveFullSteps(*self).encode(address, buf)
+        }
+        /// Writes this message's frame for `address`, as the direction's `encode` does.
+        #[inline(always)]
+        fn write(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            let Self { steps: v_steps } = *self;
+            let out = rt::frame_mut::<7>(buf, &[0xAA, address, 0x22, 0x00])?;
+            out[4..6].copy_from_slice(&v_steps.to_le_bytes());
+            rt::Ok(rt::seal_sum8_head(out, 4, address.wrapping_add(0xCC)))
         }
         /// Reads this message from a frame whose framing and code are checked.
         #[inline(always)]
@@ -2592,6 +2340,14 @@ pub mod ub2 {
         pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             Request::GoToMicroStepPosition(*self).encode(address, buf)
         }
+        /// Writes this message's frame for `address`, as the direction's `encode` does.
+        #[inline(always)]
+        fn write(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            let Self { target: v_target } = *self;
+            let out = rt::frame_mut::<9>(buf, &[0xAA, address, 0x25, 0x00])?;
+            out[4..8].copy_from_slice(&v_target.to_le_bytes());
+            rt::Ok(rt::seal_sum8_head(out, 4, address.wrapping_add(0xCF)))
+        }
         /// Reads this message from a frame whose framing and code are checked.
         #[inline(always)]
         fn from_frame(frame: &[u8]) -> rt::DecodeResult<Self> {
@@ -2621,6 +2377,14 @@ pub mod ub2 {
         }
         pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             Request::MoveMicroSteps(*self).encode(address, buf)
+        }
+        /// Writes this message's frame for `address`, as the direction's `encode` does.
+        #[inline(always)]
+        fn write(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            let Self { steps: v_steps } = *self;
+            let out = rt::frame_mut::<9>(buf, &[0xAA, address, 0x26, 0x00])?;
+            out[4..8].copy_from_slice(&v_steps.to_le_bytes());
+            rt::Ok(rt::seal_sum8_head(out, 4, address.wrapping_add(0xD0)))
         }
         /// Reads this message from a frame whose framing and code are checked.
         #[inline(always)]
@@ -2652,6 +2416,15 @@ pub mod ub2 {
         }
         pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             Request::GoToStoredPosition(*self).encode(address, buf)
+        }
+        /// Writes this message's frame for `address`, as the direction's `encode` does.
+        #[inline(always)]
+        fn write(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            let Self { index: v_index } = *self;
+            rt::encode_in_range("index", v_index, 0, 9)?;
+            let out = rt::frame_mut::<6>(buf, &[0xAA, address, 0x27, 0x00])?;
+            out[4] = v_index;
+            rt::Ok(rt::seal_sum8_head(out, 4, address.wrapping_add(0xD1)))
         }
         /// Reads this message from a frame whose framing and code are checked.
         #[inline(always)]
@@ -2689,6 +2462,20 @@ pub mod ub2 {
         pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             Request::SetAccelerationSpeedIndex(*self).encode(address, buf)
         }
+        /// Writes this message's frame for `address`, as the direction's `encode` does.
+        #[inline(always)]
+        fn write(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            let Self {
+                acceleration_index: v_acceleration_index,
+                speed_index: v_speed_index,
+            } = *self;
+            rt::encode_in_range("acceleration_index", v_acceleration_index, 0, 18)?;
+            rt::encode_in_range("speed_index", v_speed_index, 0, 18)?;
+            let out = rt::frame_mut::<7>(buf, &[0xAA, address, 0x43, 0x00])?;
+            out[4] = v_acceleration_index;
+            out[5] = v_speed_index;
+            rt::Ok(rt::seal_sum8_head(out, 4, address.wrapping_add(0xED)))
+        }
         /// Reads this message from a frame whose framing and code are checked.
         #[inline(always)]
         fn from_frame(frame: &[u8]) -> rt::DecodeResult<Self> {
@@ -2715,6 +2502,15 @@ pub mod ub2 {
         pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             Request::SetCurrent(*self).encode(address, buf)
         }
+        /// Writes this message's frame for `address`, as the direction's `encode` does.
+        #[inline(always)]
+        fn write(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            let Self { idle_current: v_idle_current, drive_current: v_drive_current } = *self;
+            let out = rt::frame_mut::<7>(buf, &[0xAA, address, 0x45, 0x00])?;
+            out[4] = v_idle_current;
+            out[5] = v_drive_current;
+            rt::Ok(rt::seal_sum8_head(out, 4, address.wrapping_add(0xEF)))
+        }
         /// Reads this message from a frame whose framing and code are checked.
         #[inline(always)]
         fn from_frame(frame: &[u8]) -> rt::DecodeResult<Self> {
@@ -2738,6 +2534,15 @@ pub mod ub2 {
         pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             Request::SetSlaveAddress(*self).encode(address, buf)
         }
+        /// Writes this message's frame for `address`, as the direction's `encode` does.
+        #[inline(always)]
+        fn write(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            let Self { address: v_address } = *self;
+            rt::encode_in_range("address", v_address, 33, 64)?;
+            let out = rt::frame_mut::<6>(buf, &[0xAA, address, 0x60, 0x00])?;
+            out[4] = v_address;
+            rt::Ok(rt::seal_sum8_head(out, 4, address.wrapping_add(0x0A)))
+        }
         /// Reads this message from a frame whose framing and code are checked.
         #[inline(always)]
         fn from_frame(frame: &[u8]) -> rt::DecodeResult<Self> {
@@ -2757,6 +2562,14 @@ pub mod ub2 {
         }
         pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             Request::SetBaudRate(*self).encode(address, buf)
+        }
+        /// Writes this message's frame for `address`, as the direction's `encode` does.
+        #[inline(always)]
+        fn write(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            let Self { baud_rate: v_baud_rate } = *self;
+            let out = rt::frame_mut::<6>(buf, &[0xAA, address, 0x61, 0x00])?;
+            out[4] = v_baud_rate.raw();
+            rt::Ok(rt::seal_sum8_head(out, 4, address.wrapping_add(0x0B)))
         }
         /// Reads this message from a frame whose framing and code are checked.
         #[inline(always)]
@@ -2778,6 +2591,14 @@ pub mod ub2 {
         }
         pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             Request::SetLowerCustomerLimit(*self).encode(address, buf)
+        }
+        /// Writes this message's frame for `address`, as the direction's `encode` does.
+        #[inline(always)]
+        fn write(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            let Self { limit: v_limit } = *self;
+            let out = rt::frame_mut::<9>(buf, &[0xAA, address, 0x72, 0x01])?;
+            out[4..8].copy_from_slice(&v_limit.raw().to_le_bytes());
+            rt::Ok(rt::seal_sum8_head(out, 4, address.wrapping_add(0x1D)))
         }
         /// Reads this message from a frame whose framing and code are checked.
         #[inline(always)]
@@ -2801,6 +2622,14 @@ pub mod ub2 {
         }
         pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             Request::SetUpperCustomerLimit(*self).encode(address, buf)
+        }
+        /// Writes this message's frame for `address`, as the direction's `encode` does.
+        #[inline(always)]
+        fn write(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            let Self { limit: v_limit } = *self;
+            let out = rt::frame_mut::<9>(buf, &[0xAA, address, 0x72, 0x02])?;
+            out[4..8].copy_from_slice(&v_limit.raw().to_le_bytes());
+            rt::Ok(rt::seal_sum8_head(out, 4, address.wrapping_add(0x1E)))
         }
         /// Reads this message from a frame whose framing and code are checked.
         #[inline(always)]
@@ -2828,6 +2657,16 @@ pub mod ub2 {
         pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             Request::StoreIndexedPosition(*self).encode(address, buf)
         }
+        /// Writes this message's frame for `address`, as the direction's `encode` does.
+        #[inline(always)]
+        fn write(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            let Self { index: v_index, position: v_position } = *self;
+            rt::encode_in_range("index", v_index, 0, 9)?;
+            let out = rt::frame_mut::<8>(buf, &[0xAA, address, 0x75, 0x00])?;
+            out[4] = v_index;
+            out[5..7].copy_from_slice(&v_position.to_le_bytes());
+            rt::Ok(rt::seal_sum8_head(out, 4, address.wrapping_add(0x1F)))
+        }
         /// Reads this message from a frame whose framing and code are checked.
         #[inline(always)]
         fn from_frame(frame: &[u8]) -> rt::DecodeResult<Self> {
@@ -2850,6 +2689,14 @@ pub mod ub2 {
         }
         pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             Request::SetModeOfOperation(*self).encode(address, buf)
+        }
+        /// Writes this message's frame for `address`, as the direction's `encode` does.
+        #[inline(always)]
+        fn write(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            let Self { mode: v_mode } = *self;
+            let out = rt::frame_mut::<6>(buf, &[0xAA, address, 0x80, 0x00])?;
+            out[4] = v_mode.raw();
+            rt::Ok(rt::seal_sum8_head(out, 4, address.wrapping_add(0x2A)))
         }
         /// Reads this message from a frame whose framing and code are checked.
         #[inline(always)]
@@ -2926,6 +2773,15 @@ pub mod ub2 {
         }
         pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             Request::GetCCurveIndexedFullStepCapacitance(*self).encode(address, buf)
+        }
+        /// Writes this message's frame for `address`, as the direction's `encode` does.
+        #[inline(always)]
+        fn write(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            let Self { index: v_index } = *self;
+            rt::encode_in_range("index", v_index, 0, 499)?;
+            let out = rt::frame_mut::<7>(buf, &[0xAA, address, 0x40, 0x30])?;
+            out[4..6].copy_from_slice(&v_index.to_le_bytes());
+            rt::Ok(rt::seal_sum8_head(out, 4, address.wrapping_add(0x1A)))
         }
         /// Reads this message from a frame whose framing and code are checked.
         #[inline(always)]
@@ -3105,6 +2961,15 @@ pub mod ub2 {
         pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             Request::GetStoredFullStepPosition(*self).encode(address, buf)
         }
+        /// Writes this message's frame for `address`, as the direction's `encode` does.
+        #[inline(always)]
+        fn write(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            let Self { index: v_index } = *self;
+            rt::encode_in_range("index", v_index, 0, 9)?;
+            let out = rt::frame_mut::<6>(buf, &[0xAA, address, 0x40, 0x75])?;
+            out[4] = v_index;
+            rt::Ok(rt::seal_sum8_head(out, 4, address.wrapping_add(0x5F)))
+        }
         /// Reads this message from a frame whose framing and code are checked.
         #[inline(always)]
         fn from_frame(frame: &[u8]) -> rt::DecodeResult<Self> {
@@ -3169,6 +3034,14 @@ pub mod ub2 {
         }
         pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             Response::MovementCompletedWithStepLoss(*self).encode(address, buf)
+        }
+        /// Writes this message's frame for `address`, as the direction's `encode` does.
+        #[inline(always)]
+        fn write(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            let Self { lost_micro_steps: v_lost_micro_steps } = *self;
+            let out = rt::frame_mut::<9>(buf, &[0xAA, address, 0x54, 0x00])?;
+            out[4..8].copy_from_slice(&v_lost_micro_steps.to_le_bytes());
+            rt::Ok(rt::seal_sum8_head(out, 4, address.wrapping_add(0xFE)))
         }
         /// Reads this message from a frame whose framing and code are checked.
         #[inline(always)]
@@ -3313,6 +3186,14 @@ pub mod ub2 {
         pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             Response::ActualCapacitance(*self).encode(address, buf)
         }
+        /// Writes this message's frame for `address`, as the direction's `encode` does.
+        #[inline(always)]
+        fn write(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            let Self { capacitance: v_capacitance } = *self;
+            let out = rt::frame_mut::<9>(buf, &[0xAA, address, 0x41, 0x01])?;
+            out[4..8].copy_from_slice(&v_capacitance.raw().to_le_bytes());
+            rt::Ok(rt::seal_sum8_head(out, 4, address.wrapping_add(0xEC)))
+        }
         /// Reads this message from a frame whose framing and code are checked.
         #[inline(always)]
         fn from_frame(frame: &[u8]) -> rt::DecodeResult<Self> {
@@ -3336,6 +3217,14 @@ pub mod ub2 {
         pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             Response::ActualFullStepPosition(*self).encode(address, buf)
         }
+        /// Writes this message's frame for `address`, as the direction's `encode` does.
+        #[inline(always)]
+        fn write(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            let Self { full_steps: v_full_steps } = *self;
+            let out = rt::frame_mut::<7>(buf, &[0xAA, address, 0x41, 0x02])?;
+            out[4..6].copy_from_slice(&v_full_steps.to_le_bytes());
+            rt::Ok(rt::seal_sum8_head(out, 4, address.wrapping_add(0xED)))
+        }
         /// Reads this message from a frame whose framing and code are checked.
         #[inline(always)]
         fn from_frame(frame: &[u8]) -> rt::DecodeResult<Self> {
@@ -3356,6 +3245,14 @@ pub mod ub2 {
         }
         pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             Response::MinimumCapacitance(*self).encode(address, buf)
+        }
+        /// Writes this message's frame for `address`, as the direction's `encode` does.
+        #[inline(always)]
+        fn write(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            let Self { capacitance: v_capacitance } = *self;
+            let out = rt::frame_mut::<9>(buf, &[0xAA, address, 0x41, 0x10])?;
+            out[4..8].copy_from_slice(&v_capacitance.raw().to_le_bytes());
+            rt::Ok(rt::seal_sum8_head(out, 4, address.wrapping_add(0xFB)))
         }
         /// Reads this message from a frame whose framing and code are checked.
         #[inline(always)]
@@ -3379,6 +3276,14 @@ pub mod ub2 {
         }
         pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             Response::MaximumCapacitance(*self).encode(address, buf)
+        }
+        /// Writes this message's frame for `address`, as the direction's `encode` does.
+        #[inline(always)]
+        fn write(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            let Self { capacitance: v_capacitance } = *self;
+            let out = rt::frame_mut::<9>(buf, &[0xAA, address, 0x41, 0x11])?;
+            out[4..8].copy_from_slice(&v_capacitance.raw().to_le_bytes());
+            rt::Ok(rt::seal_sum8_head(out, 4, address.wrapping_add(0xFC)))
         }
         /// Reads this message from a frame whose framing and code are checked.
         #[inline(always)]
@@ -3410,6 +3315,20 @@ pub mod ub2 {
         pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             Response::AccelerationSpeed(*self).encode(address, buf)
         }
+        /// Writes this message's frame for `address`, as the direction's `encode` does.
+        #[inline(always)]
+        fn write(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            let Self {
+                acceleration_index: v_acceleration_index,
+                speed_index: v_speed_index,
+            } = *self;
+            rt::encode_in_range("acceleration_index", v_acceleration_index, 0, 18)?;
+            rt::encode_in_range("speed_index", v_speed_index, 0, 18)?;
+            let out = rt::frame_mut::<7>(buf, &[0xAA, address, 0x41, 0x21])?;
+            out[4] = v_acceleration_index;
+            out[5] = v_speed_index;
+            rt::Ok(rt::seal_sum8_head(out, 4, address.wrapping_add(0x0C)))
+        }
         /// Reads this message from a frame whose framing and code are checked.
         #[inline(always)]
         fn from_frame(frame: &[u8]) -> rt::DecodeResult<Self> {
@@ -3435,6 +3354,15 @@ pub mod ub2 {
         }
         pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             Response::Status(*self).encode(address, buf)
+        }
+        /// Writes this message's frame for `address`, as the direction's `encode` does.
+        #[inline(always)]
+        fn write(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            let Self { error_bits: v_error_bits, reserved: v_reserved } = *self;
+            let out = rt::frame_mut::<7>(buf, &[0xAA, address, 0x41, 0x22])?;
+            out[4] = v_error_bits.raw();
+            out[5] = v_reserved;
+            rt::Ok(rt::seal_sum8_head(out, 4, address.wrapping_add(0x0D)))
         }
         /// Reads this message from a frame whose framing and code are checked.
         #[inline(always)]
@@ -3463,6 +3391,21 @@ pub mod ub2 {
         pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             Response::CCurveEntry(*self).encode(address, buf)
         }
+        /// Writes this message's frame for `address`, as the direction's `encode` does.
+        #[inline(always)]
+        fn write(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            let Self {
+                index: v_index,
+                full_steps: v_full_steps,
+                capacitance: v_capacitance,
+            } = *self;
+            rt::encode_in_range("index", v_index, 0, 499)?;
+            let out = rt::frame_mut::<13>(buf, &[0xAA, address, 0x41, 0x30])?;
+            out[4..6].copy_from_slice(&v_index.to_le_bytes());
+            out[6..8].copy_from_slice(&v_full_steps.to_le_bytes());
+            out[8..12].copy_from_slice(&v_capacitance.raw().to_le_bytes());
+            rt::Ok(rt::seal_sum8_head(out, 4, address.wrapping_add(0x1B)))
+        }
         /// Reads this message from a frame whose framing and code are checked.
         #[inline(always)]
         fn from_frame(frame: &[u8]) -> rt::DecodeResult<Self> {
@@ -3490,6 +3433,14 @@ pub mod ub2 {
         pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             Response::ControllerTemperature(*self).encode(address, buf)
         }
+        /// Writes this message's frame for `address`, as the direction's `encode` does.
+        #[inline(always)]
+        fn write(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            let Self { temperature: v_temperature } = *self;
+            let out = rt::frame_mut::<6>(buf, &[0xAA, address, 0x41, 0x32])?;
+            out[4] = v_temperature;
+            rt::Ok(rt::seal_sum8_head(out, 4, address.wrapping_add(0x1D)))
+        }
         /// Reads this message from a frame whose framing and code are checked.
         #[inline(always)]
         fn from_frame(frame: &[u8]) -> rt::DecodeResult<Self> {
@@ -3508,6 +3459,14 @@ pub mod ub2 {
         }
         pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             Response::MicroStepPosition(*self).encode(address, buf)
+        }
+        /// Writes this message's frame for `address`, as the direction's `encode` does.
+        #[inline(always)]
+        fn write(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            let Self { micro_steps: v_micro_steps } = *self;
+            let out = rt::frame_mut::<9>(buf, &[0xAA, address, 0x41, 0x36])?;
+            out[4..8].copy_from_slice(&v_micro_steps.to_le_bytes());
+            rt::Ok(rt::seal_sum8_head(out, 4, address.wrapping_add(0x21)))
         }
         /// Reads this message from a frame whose framing and code are checked.
         #[inline(always)]
@@ -3530,6 +3489,14 @@ pub mod ub2 {
         pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             Response::FirmwareVersion(*self).encode(address, buf)
         }
+        /// Writes this message's frame for `address`, as the direction's `encode` does.
+        #[inline(always)]
+        fn write(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            let Self { firmware_version: v_firmware_version } = *self;
+            let out = rt::frame_mut::<16>(buf, &[0xAA, address, 0x41, 0x61])?;
+            out[4..15].copy_from_slice(&v_firmware_version.0);
+            rt::Ok(rt::seal_sum8_head(out, 4, address.wrapping_add(0x4C)))
+        }
         /// Reads this message from a frame whose framing and code are checked.
         #[inline(always)]
         fn from_frame(frame: &[u8]) -> rt::DecodeResult<Self> {
@@ -3551,6 +3518,14 @@ pub mod ub2 {
         pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             Response::SerialNumber(*self).encode(address, buf)
         }
+        /// Writes this message's frame for `address`, as the direction's `encode` does.
+        #[inline(always)]
+        fn write(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            let Self { serial_number: v_serial_number } = *self;
+            let out = rt::frame_mut::<13>(buf, &[0xAA, address, 0x41, 0x62])?;
+            out[4..12].copy_from_slice(&v_serial_number.0);
+            rt::Ok(rt::seal_sum8_head(out, 4, address.wrapping_add(0x4D)))
+        }
         /// Reads this message from a frame whose framing and code are checked.
         #[inline(always)]
         fn from_frame(frame: &[u8]) -> rt::DecodeResult<Self> {
@@ -3571,6 +3546,14 @@ pub mod ub2 {
         }
         pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             Response::CminNom(*self).encode(address, buf)
+        }
+        /// Writes this message's frame for `address`, as the direction's `encode` does.
+        #[inline(always)]
+        fn write(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            let Self { capacitance: v_capacitance } = *self;
+            let out = rt::frame_mut::<9>(buf, &[0xAA, address, 0x41, 0x70])?;
+            out[4..8].copy_from_slice(&v_capacitance.raw().to_le_bytes());
+            rt::Ok(rt::seal_sum8_head(out, 4, address.wrapping_add(0x5B)))
         }
         /// Reads this message from a frame whose framing and code are checked.
         #[inline(always)]
@@ -3595,6 +3578,14 @@ pub mod ub2 {
         pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             Response::CmaxNom(*self).encode(address, buf)
         }
+        /// Writes this message's frame for `address`, as the direction's `encode` does.
+        #[inline(always)]
+        fn write(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            let Self { capacitance: v_capacitance } = *self;
+            let out = rt::frame_mut::<9>(buf, &[0xAA, address, 0x41, 0x71])?;
+            out[4..8].copy_from_slice(&v_capacitance.raw().to_le_bytes());
+            rt::Ok(rt::seal_sum8_head(out, 4, address.wrapping_add(0x5C)))
+        }
         /// Reads this message from a frame whose framing and code are checked.
         #[inline(always)]
         fn from_frame(frame: &[u8]) -> rt::DecodeResult<Self> {
@@ -3618,6 +3609,14 @@ pub mod ub2 {
         }
         pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             Response::LowerCustomerLimit(*self).encode(address, buf)
+        }
+        /// Writes this message's frame for `address`, as the direction's `encode` does.
+        #[inline(always)]
+        fn write(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            let Self { capacitance: v_capacitance } = *self;
+            let out = rt::frame_mut::<10>(buf, &[0xAA, address, 0x41, 0x72, 0x01])?;
+            out[5..9].copy_from_slice(&v_capacitance.raw().to_le_bytes());
+            rt::Ok(rt::seal_sum8_head(out, 5, address.wrapping_add(0x5E)))
         }
         /// Reads this message from a frame whose framing and code are checked.
         #[inline(always)]
@@ -3644,6 +3643,14 @@ pub mod ub2 {
         pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             Response::UpperCustomerLimit(*self).encode(address, buf)
         }
+        /// Writes this message's frame for `address`, as the direction's `encode` does.
+        #[inline(always)]
+        fn write(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            let Self { capacitance: v_capacitance } = *self;
+            let out = rt::frame_mut::<10>(buf, &[0xAA, address, 0x41, 0x72, 0x02])?;
+            out[5..9].copy_from_slice(&v_capacitance.raw().to_le_bytes());
+            rt::Ok(rt::seal_sum8_head(out, 5, address.wrapping_add(0x5F)))
+        }
         /// Reads this message from a frame whose framing and code are checked.
         #[inline(always)]
         fn from_frame(frame: &[u8]) -> rt::DecodeResult<Self> {
@@ -3668,6 +3675,14 @@ pub mod ub2 {
         }
         pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             Response::LowerFactoryLimit(*self).encode(address, buf)
+        }
+        /// Writes this message's frame for `address`, as the direction's `encode` does.
+        #[inline(always)]
+        fn write(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            let Self { capacitance: v_capacitance } = *self;
+            let out = rt::frame_mut::<10>(buf, &[0xAA, address, 0x41, 0x72, 0x03])?;
+            out[5..9].copy_from_slice(&v_capacitance.raw().to_le_bytes());
+            rt::Ok(rt::seal_sum8_head(out, 5, address.wrapping_add(0x60)))
         }
         /// Reads this message from a frame whose framing and code are checked.
         #[inline(always)]
@@ -3694,6 +3709,14 @@ pub mod ub2 {
         pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             Response::UpperFactoryLimit(*self).encode(address, buf)
         }
+        /// Writes this message's frame for `address`, as the direction's `encode` does.
+        #[inline(always)]
+        fn write(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            let Self { capacitance: v_capacitance } = *self;
+            let out = rt::frame_mut::<10>(buf, &[0xAA, address, 0x41, 0x72, 0x04])?;
+            out[5..9].copy_from_slice(&v_capacitance.raw().to_le_bytes());
+            rt::Ok(rt::seal_sum8_head(out, 5, address.wrapping_add(0x61)))
+        }
         /// Reads this message from a frame whose framing and code are checked.
         #[inline(always)]
         fn from_frame(frame: &[u8]) -> rt::DecodeResult<Self> {
@@ -3718,6 +3741,14 @@ pub mod ub2 {
         }
         pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             Response::PresetCapacitance(*self).encode(address, buf)
+        }
+        /// Writes this message's frame for `address`, as the direction's `encode` does.
+        #[inline(always)]
+        fn write(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            let Self { capacitance: v_capacitance } = *self;
+            let out = rt::frame_mut::<10>(buf, &[0xAA, address, 0x41, 0x73, 0x00])?;
+            out[5..9].copy_from_slice(&v_capacitance.raw().to_le_bytes());
+            rt::Ok(rt::seal_sum8_head(out, 5, address.wrapping_add(0x5E)))
         }
         /// Reads this message from a frame whose framing and code are checked.
         #[inline(always)]
@@ -3744,6 +3775,14 @@ pub mod ub2 {
         pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             Response::PresetFullStepPosition(*self).encode(address, buf)
         }
+        /// Writes this message's frame for `address`, as the direction's `encode` does.
+        #[inline(always)]
+        fn write(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            let Self { full_steps: v_full_steps } = *self;
+            let out = rt::frame_mut::<10>(buf, &[0xAA, address, 0x41, 0x73, 0x01])?;
+            out[5..9].copy_from_slice(&v_full_steps.to_le_bytes());
+            rt::Ok(rt::seal_sum8_head(out, 5, address.wrapping_add(0x5F)))
+        }
         /// Reads this message from a frame whose framing and code are checked.
         #[inline(always)]
         fn from_frame(frame: &[u8]) -> rt::DecodeResult<Self> {
@@ -3769,6 +3808,16 @@ pub mod ub2 {
         pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             Response::StoredFullStepPosition(*self).encode(address, buf)
         }
+        /// Writes this message's frame for `address`, as the direction's `encode` does.
+        #[inline(always)]
+        fn write(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            let Self { index: v_index, full_steps: v_full_steps } = *self;
+            rt::encode_in_range("index", v_index, 0, 9)?;
+            let out = rt::frame_mut::<8>(buf, &[0xAA, address, 0x41, 0x75])?;
+            out[4] = v_index;
+            out[5..7].copy_from_slice(&v_full_steps.to_le_bytes());
+            rt::Ok(rt::seal_sum8_head(out, 4, address.wrapping_add(0x60)))
+        }
         /// Reads this message from a frame whose framing and code are checked.
         #[inline(always)]
         fn from_frame(frame: &[u8]) -> rt::DecodeResult<Self> {
@@ -3791,6 +3840,14 @@ pub mod ub2 {
         }
         pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             Response::ActualModeOfOperation(*self).encode(address, buf)
+        }
+        /// Writes this message's frame for `address`, as the direction's `encode` does.
+        #[inline(always)]
+        fn write(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            let Self { mode: v_mode } = *self;
+            let out = rt::frame_mut::<6>(buf, &[0xAA, address, 0x41, 0x80])?;
+            out[4] = v_mode.raw();
+            rt::Ok(rt::seal_sum8_head(out, 4, address.wrapping_add(0x6B)))
         }
         /// Reads this message from a frame whose framing and code are checked.
         #[inline(always)]

@@ -385,43 +385,7 @@ pub mod ubx_fixed_blocks {
                 Self::PollSatBlocks(_) => {
                     rt::frame_mut::<8>(buf, &[0xB5, 0x62, 0x01, 0x36, 0x00, 0x00])?.len()
                 }
-                Self::SetPorts(request::SetPorts { ports: v_ports, pins: v_pins }) => {
-                    let bytes_0: usize = LISTS_SET_PORTS
-                        .lists[0]
-                        .encode_len(v_ports.len())? - LISTS_SET_PORTS.base;
-                    let bytes_1: usize = LISTS_SET_PORTS
-                        .lists[1]
-                        .encode_len(v_pins.len())? - LISTS_SET_PORTS.base;
-                    let mut compact = [0u8; 9];
-                    let out = {
-                        compact[..4].copy_from_slice(&[0xB5, 0x62, 0x06, 0x13]);
-                        &mut compact
-                    };
-                    out[6] = rt::fits(
-                        "num_pins",
-                        LISTS_SET_PORTS.lists[1].count_value(v_pins.len()) as u64,
-                        0,
-                        255,
-                    )? as u8;
-                    let out = LISTS_SET_PORTS
-                        .expand(&compact, &[bytes_0, bytes_1], buf)?;
-                    for (k, r) in v_ports.iter().enumerate() {
-                        let mut bytes = [0u8; 3];
-                        r.write(&mut bytes)?;
-                        let at = 6 + k * 3;
-                        if let rt::Some(to) = out.get_mut(at..at + 3) {
-                            to.copy_from_slice(&bytes);
-                        }
-                    }
-                    rt::write_elements(
-                        v_pins.as_slice(),
-                        1,
-                        true,
-                        &mut out[7 + bytes_0..],
-                    );
-                    LENGTH.put(out)?;
-                    out.len()
-                }
+                Self::SetPorts(ref m) => m.write(address, buf)?,
             };
             FRAME.seal(buf, len, frame_sum);
             rt::Ok(len)
@@ -745,43 +709,8 @@ pub mod ubx_fixed_blocks {
         pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             rt::encode_address(address, &FRAME)?;
             let len = match *self {
-                Self::SatBlocks(
-                    response::SatBlocks {
-                        itow: v_itow,
-                        blocks: v_blocks,
-                        flags: v_flags,
-                    },
-                ) => {
-                    let bytes_0: usize = LISTS_SAT_BLOCKS
-                        .lists[0]
-                        .encode_len(v_blocks.len())? - LISTS_SAT_BLOCKS.base;
-                    let mut compact = [0u8; 13];
-                    let out = {
-                        compact[..4].copy_from_slice(&[0xB5, 0x62, 0x01, 0x36]);
-                        &mut compact
-                    };
-                    out[6..10].copy_from_slice(&v_itow.to_le_bytes());
-                    out[10] = v_flags;
-                    let out = LISTS_SAT_BLOCKS.expand(&compact, &[bytes_0], buf)?;
-                    for (k, r) in v_blocks.iter().enumerate() {
-                        let mut bytes = [0u8; 6];
-                        r.write(&mut bytes)?;
-                        let at = 10 + k * 6;
-                        if let rt::Some(to) = out.get_mut(at..at + 6) {
-                            to.copy_from_slice(&bytes);
-                        }
-                    }
-                    LENGTH.put(out)?;
-                    out.len()
-                }
-                Self::Ack(response::Ack { class_id: v_class_id, msg_id: v_msg_id }) => {
-                    let out = rt::frame_mut::<
-                        10,
-                    >(buf, &[0xB5, 0x62, 0x05, 0x01, 0x02, 0x00])?;
-                    out[6] = v_class_id;
-                    out[7] = v_msg_id;
-                    out.len()
-                }
+                Self::SatBlocks(ref m) => m.write(address, buf)?,
+                Self::Ack(ref m) => m.write(address, buf)?,
             };
             FRAME.seal(buf, len, frame_sum);
             rt::Ok(len)
@@ -1169,6 +1098,38 @@ pub mod ubx_fixed_blocks {
         pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             Request::SetPorts(*self).encode(address, buf)
         }
+        /// Writes this message's frame for `address`, as the direction's `encode` does.
+        #[inline(always)]
+        fn write(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            let Self { ports: v_ports, pins: v_pins } = *self;
+            let bytes_0: usize = LISTS_SET_PORTS.lists[0].encode_len(v_ports.len())?
+                - LISTS_SET_PORTS.base;
+            let bytes_1: usize = LISTS_SET_PORTS.lists[1].encode_len(v_pins.len())?
+                - LISTS_SET_PORTS.base;
+            let mut compact = [0u8; 9];
+            let out = {
+                compact[..4].copy_from_slice(&[0xB5, 0x62, 0x06, 0x13]);
+                &mut compact
+            };
+            out[6] = rt::fits(
+                "num_pins",
+                LISTS_SET_PORTS.lists[1].count_value(v_pins.len()) as u64,
+                0,
+                255,
+            )? as u8;
+            let out = LISTS_SET_PORTS.expand(&compact, &[bytes_0, bytes_1], buf)?;
+            for (k, r) in v_ports.iter().enumerate() {
+                let mut bytes = [0u8; 3];
+                r.write(&mut bytes)?;
+                let at = 6 + k * 3;
+                if let rt::Some(to) = out.get_mut(at..at + 3) {
+                    to.copy_from_slice(&bytes);
+                }
+            }
+            rt::write_elements(v_pins.as_slice(), 1, true, &mut out[7 + bytes_0..]);
+            LENGTH.put(out)?;
+            rt::Ok(out.len())
+        }
     }
     impl response::SatBlocks {
         pub const NAME: &'static str = "sat_blocks";
@@ -1188,6 +1149,31 @@ pub mod ubx_fixed_blocks {
         pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             Response::SatBlocks(*self).encode(address, buf)
         }
+        /// Writes this message's frame for `address`, as the direction's `encode` does.
+        #[inline(always)]
+        fn write(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            let Self { itow: v_itow, blocks: v_blocks, flags: v_flags } = *self;
+            let bytes_0: usize = LISTS_SAT_BLOCKS.lists[0].encode_len(v_blocks.len())?
+                - LISTS_SAT_BLOCKS.base;
+            let mut compact = [0u8; 13];
+            let out = {
+                compact[..4].copy_from_slice(&[0xB5, 0x62, 0x01, 0x36]);
+                &mut compact
+            };
+            out[6..10].copy_from_slice(&v_itow.to_le_bytes());
+            out[10] = v_flags;
+            let out = LISTS_SAT_BLOCKS.expand(&compact, &[bytes_0], buf)?;
+            for (k, r) in v_blocks.iter().enumerate() {
+                let mut bytes = [0u8; 6];
+                r.write(&mut bytes)?;
+                let at = 10 + k * 6;
+                if let rt::Some(to) = out.get_mut(at..at + 6) {
+                    to.copy_from_slice(&bytes);
+                }
+            }
+            LENGTH.put(out)?;
+            rt::Ok(out.len())
+        }
     }
     impl response::Ack {
         pub const NAME: &'static str = "ack";
@@ -1202,6 +1188,15 @@ pub mod ubx_fixed_blocks {
         }
         pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             Response::Ack(*self).encode(address, buf)
+        }
+        /// Writes this message's frame for `address`, as the direction's `encode` does.
+        #[inline(always)]
+        fn write(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            let Self { class_id: v_class_id, msg_id: v_msg_id } = *self;
+            let out = rt::frame_mut::<10>(buf, &[0xB5, 0x62, 0x05, 0x01, 0x02, 0x00])?;
+            out[6] = v_class_id;
+            out[7] = v_msg_id;
+            rt::Ok(out.len())
         }
         /// Reads this message from a frame whose framing and code are checked.
         #[inline(always)]

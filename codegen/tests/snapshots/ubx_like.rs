@@ -257,23 +257,7 @@ pub mod ubx_like {
                 Self::PollRate(_) => {
                     rt::frame_mut::<8>(buf, &[0xB5, 0x62, 0x06, 0x08, 0x00, 0x00])?.len()
                 }
-                Self::SetRate(
-                    request::SetRate {
-                        meas_rate: v_meas_rate,
-                        nav_rate: v_nav_rate,
-                        time_ref: v_time_ref,
-                    },
-                ) => {
-                    rt::encode_in_range("meas_rate", v_meas_rate, 25, 65535)?;
-                    rt::encode_in_range("nav_rate", v_nav_rate, 1, 127)?;
-                    let out = rt::frame_mut::<
-                        14,
-                    >(buf, &[0xB5, 0x62, 0x06, 0x08, 0x06, 0x00])?;
-                    out[6..8].copy_from_slice(&v_meas_rate.to_le_bytes());
-                    out[8..10].copy_from_slice(&v_nav_rate.to_le_bytes());
-                    out[10..12].copy_from_slice(&v_time_ref.raw().to_le_bytes());
-                    out.len()
-                }
+                Self::SetRate(ref m) => m.write(address, buf)?,
                 Self::PollSatellites(_) => {
                     rt::frame_mut::<8>(buf, &[0xB5, 0x62, 0x01, 0x35, 0x00, 0x00])?.len()
                 }
@@ -608,70 +592,10 @@ pub mod ubx_like {
         pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             rt::encode_address(address, &FRAME)?;
             let len = match *self {
-                Self::Rate(
-                    response::Rate {
-                        meas_rate: v_meas_rate,
-                        nav_rate: v_nav_rate,
-                        time_ref: v_time_ref,
-                    },
-                ) => {
-                    let out = rt::frame_mut::<
-                        14,
-                    >(buf, &[0xB5, 0x62, 0x06, 0x08, 0x06, 0x00])?;
-                    out[6..8].copy_from_slice(&v_meas_rate.to_le_bytes());
-                    out[8..10].copy_from_slice(&v_nav_rate.to_le_bytes());
-                    out[10..12].copy_from_slice(&v_time_ref.raw().to_le_bytes());
-                    out.len()
-                }
-                Self::Ack(response::Ack { class_id: v_class_id, msg_id: v_msg_id }) => {
-                    let out = rt::frame_mut::<
-                        10,
-                    >(buf, &[0xB5, 0x62, 0x05, 0x01, 0x02, 0x00])?;
-                    out[6] = v_class_id;
-                    out[7] = v_msg_id;
-                    out.len()
-                }
-                Self::Nak(response::Nak { class_id: v_class_id, msg_id: v_msg_id }) => {
-                    let out = rt::frame_mut::<
-                        10,
-                    >(buf, &[0xB5, 0x62, 0x05, 0x00, 0x02, 0x00])?;
-                    out[6] = v_class_id;
-                    out[7] = v_msg_id;
-                    out.len()
-                }
-                Self::Satellites(
-                    response::Satellites {
-                        itow: v_itow,
-                        reserved1: v_reserved1,
-                        svs: v_svs,
-                    },
-                ) => {
-                    let frame_len = REPEAT_SATELLITES.encode_len(v_svs.len())?;
-                    let out = rt::frame_mut_len(
-                        buf,
-                        frame_len,
-                        &[0xB5, 0x62, 0x01, 0x35],
-                    )?;
-                    LENGTH.put(out)?;
-                    out[10] = 0x01;
-                    out[6..10].copy_from_slice(&v_itow.to_le_bytes());
-                    out[11] = rt::fits(
-                        "num_svs",
-                        REPEAT_SATELLITES.count_value(v_svs.len()) as u64,
-                        0,
-                        255,
-                    )? as u8;
-                    out[12..14].copy_from_slice(&v_reserved1.to_le_bytes());
-                    for (k, r) in v_svs.iter().enumerate() {
-                        let mut bytes = [0u8; 12];
-                        r.write(&mut bytes)?;
-                        let at = 14 + k * 12;
-                        if let rt::Some(to) = out.get_mut(at..at + 12) {
-                            to.copy_from_slice(&bytes);
-                        }
-                    }
-                    out.len()
-                }
+                Self::Rate(ref m) => m.write(address, buf)?,
+                Self::Ack(ref m) => m.write(address, buf)?,
+                Self::Nak(ref m) => m.write(address, buf)?,
+                Self::Satellites(ref m) => m.write(address, buf)?,
             };
             FRAME.seal(buf, len, frame_sum);
             rt::Ok(len)
@@ -981,6 +905,22 @@ pub mod ubx_like {
         pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             Request::SetRate(*self).encode(address, buf)
         }
+        /// Writes this message's frame for `address`, as the direction's `encode` does.
+        #[inline(always)]
+        fn write(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            let Self {
+                meas_rate: v_meas_rate,
+                nav_rate: v_nav_rate,
+                time_ref: v_time_ref,
+            } = *self;
+            rt::encode_in_range("meas_rate", v_meas_rate, 25, 65535)?;
+            rt::encode_in_range("nav_rate", v_nav_rate, 1, 127)?;
+            let out = rt::frame_mut::<14>(buf, &[0xB5, 0x62, 0x06, 0x08, 0x06, 0x00])?;
+            out[6..8].copy_from_slice(&v_meas_rate.to_le_bytes());
+            out[8..10].copy_from_slice(&v_nav_rate.to_le_bytes());
+            out[10..12].copy_from_slice(&v_time_ref.raw().to_le_bytes());
+            rt::Ok(out.len())
+        }
         /// Reads this message from a frame whose framing and code are checked.
         #[inline(always)]
         fn from_frame(frame: &[u8]) -> rt::DecodeResult<Self> {
@@ -1021,6 +961,20 @@ pub mod ubx_like {
         pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             Response::Rate(*self).encode(address, buf)
         }
+        /// Writes this message's frame for `address`, as the direction's `encode` does.
+        #[inline(always)]
+        fn write(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            let Self {
+                meas_rate: v_meas_rate,
+                nav_rate: v_nav_rate,
+                time_ref: v_time_ref,
+            } = *self;
+            let out = rt::frame_mut::<14>(buf, &[0xB5, 0x62, 0x06, 0x08, 0x06, 0x00])?;
+            out[6..8].copy_from_slice(&v_meas_rate.to_le_bytes());
+            out[8..10].copy_from_slice(&v_nav_rate.to_le_bytes());
+            out[10..12].copy_from_slice(&v_time_ref.raw().to_le_bytes());
+            rt::Ok(out.len())
+        }
         /// Reads this message from a frame whose framing and code are checked.
         #[inline(always)]
         fn from_frame(frame: &[u8]) -> rt::DecodeResult<Self> {
@@ -1046,6 +1000,15 @@ pub mod ubx_like {
         pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             Response::Ack(*self).encode(address, buf)
         }
+        /// Writes this message's frame for `address`, as the direction's `encode` does.
+        #[inline(always)]
+        fn write(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            let Self { class_id: v_class_id, msg_id: v_msg_id } = *self;
+            let out = rt::frame_mut::<10>(buf, &[0xB5, 0x62, 0x05, 0x01, 0x02, 0x00])?;
+            out[6] = v_class_id;
+            out[7] = v_msg_id;
+            rt::Ok(out.len())
+        }
         /// Reads this message from a frame whose framing and code are checked.
         #[inline(always)]
         fn from_frame(frame: &[u8]) -> rt::DecodeResult<Self> {
@@ -1069,6 +1032,15 @@ pub mod ubx_like {
         }
         pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             Response::Nak(*self).encode(address, buf)
+        }
+        /// Writes this message's frame for `address`, as the direction's `encode` does.
+        #[inline(always)]
+        fn write(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            let Self { class_id: v_class_id, msg_id: v_msg_id } = *self;
+            let out = rt::frame_mut::<10>(buf, &[0xB5, 0x62, 0x05, 0x00, 0x02, 0x00])?;
+            out[6] = v_class_id;
+            out[7] = v_msg_id;
+            rt::Ok(out.len())
         }
         /// Reads this message from a frame whose framing and code are checked.
         #[inline(always)]
@@ -1097,6 +1069,32 @@ pub mod ubx_like {
         }
         pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             Response::Satellites(*self).encode(address, buf)
+        }
+        /// Writes this message's frame for `address`, as the direction's `encode` does.
+        #[inline(always)]
+        fn write(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            let Self { itow: v_itow, reserved1: v_reserved1, svs: v_svs } = *self;
+            let frame_len = REPEAT_SATELLITES.encode_len(v_svs.len())?;
+            let out = rt::frame_mut_len(buf, frame_len, &[0xB5, 0x62, 0x01, 0x35])?;
+            LENGTH.put(out)?;
+            out[10] = 0x01;
+            out[6..10].copy_from_slice(&v_itow.to_le_bytes());
+            out[11] = rt::fits(
+                "num_svs",
+                REPEAT_SATELLITES.count_value(v_svs.len()) as u64,
+                0,
+                255,
+            )? as u8;
+            out[12..14].copy_from_slice(&v_reserved1.to_le_bytes());
+            for (k, r) in v_svs.iter().enumerate() {
+                let mut bytes = [0u8; 12];
+                r.write(&mut bytes)?;
+                let at = 14 + k * 12;
+                if let rt::Some(to) = out.get_mut(at..at + 12) {
+                    to.copy_from_slice(&bytes);
+                }
+            }
+            rt::Ok(out.len())
         }
     }
     /// Each request as a struct of its own; its constants (`DESC`, which names it as

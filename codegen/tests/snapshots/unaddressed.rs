@@ -205,12 +205,7 @@ pub mod unaddressed {
                 Self::ReadTemperature(_) => {
                     rt::frame_mut::<5>(buf, &[0xA5, 0x5A, 0x01, 0x10])?.len()
                 }
-                Self::SetRate(request::SetRate { rate: v_rate }) => {
-                    rt::encode_in_range("rate", v_rate, 1, 1000)?;
-                    let out = rt::frame_mut::<7>(buf, &[0xA5, 0x5A, 0x03, 0x20])?;
-                    out[4..6].copy_from_slice(&v_rate.to_le_bytes());
-                    out.len()
-                }
+                Self::SetRate(ref m) => m.write(address, buf)?,
                 Self::ReadVersion(_) => {
                     rt::frame_mut::<5>(buf, &[0xA5, 0x5A, 0x01, 0x30])?.len()
                 }
@@ -371,25 +366,9 @@ pub mod unaddressed {
         pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             rt::encode_address(address, &FRAME)?;
             let len = match *self {
-                Self::Temperature(
-                    response::Temperature { temperature: v_temperature },
-                ) => {
-                    rt::encode_in_range(
-                        "temperature",
-                        v_temperature.raw(),
-                        -4000,
-                        12500,
-                    )?;
-                    let out = rt::frame_mut::<7>(buf, &[0xA5, 0x5A, 0x03, 0x90])?;
-                    out[4..6].copy_from_slice(&v_temperature.raw().to_le_bytes());
-                    out.len()
-                }
+                Self::Temperature(ref m) => m.write(address, buf)?,
                 Self::Ack(_) => rt::frame_mut::<5>(buf, &[0xA5, 0x5A, 0x01, 0xA0])?.len(),
-                Self::Version(response::Version { version: v_version }) => {
-                    let out = rt::frame_mut::<9>(buf, &[0xA5, 0x5A, 0x05, 0xB0])?;
-                    out[4..8].copy_from_slice(&v_version.0);
-                    out.len()
-                }
+                Self::Version(ref m) => m.write(address, buf)?,
             };
             FRAME.seal(buf, len, frame_sum);
             rt::Ok(len)
@@ -644,6 +623,15 @@ pub mod unaddressed {
         pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             Request::SetRate(*self).encode(address, buf)
         }
+        /// Writes this message's frame for `address`, as the direction's `encode` does.
+        #[inline(always)]
+        fn write(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            let Self { rate: v_rate } = *self;
+            rt::encode_in_range("rate", v_rate, 1, 1000)?;
+            let out = rt::frame_mut::<7>(buf, &[0xA5, 0x5A, 0x03, 0x20])?;
+            out[4..6].copy_from_slice(&v_rate.to_le_bytes());
+            rt::Ok(out.len())
+        }
         /// Reads this message from a frame whose framing and code are checked.
         #[inline(always)]
         fn from_frame(frame: &[u8]) -> rt::DecodeResult<Self> {
@@ -674,6 +662,15 @@ pub mod unaddressed {
         }
         pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             Response::Temperature(*self).encode(address, buf)
+        }
+        /// Writes this message's frame for `address`, as the direction's `encode` does.
+        #[inline(always)]
+        fn write(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            let Self { temperature: v_temperature } = *self;
+            rt::encode_in_range("temperature", v_temperature.raw(), -4000, 12500)?;
+            let out = rt::frame_mut::<7>(buf, &[0xA5, 0x5A, 0x03, 0x90])?;
+            out[4..6].copy_from_slice(&v_temperature.raw().to_le_bytes());
+            rt::Ok(out.len())
         }
         /// Reads this message from a frame whose framing and code are checked.
         #[inline(always)]
@@ -706,6 +703,14 @@ pub mod unaddressed {
         }
         pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             Response::Version(*self).encode(address, buf)
+        }
+        /// Writes this message's frame for `address`, as the direction's `encode` does.
+        #[inline(always)]
+        fn write(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            let Self { version: v_version } = *self;
+            let out = rt::frame_mut::<9>(buf, &[0xA5, 0x5A, 0x05, 0xB0])?;
+            out[4..8].copy_from_slice(&v_version.0);
+            rt::Ok(out.len())
         }
         /// Reads this message from a frame whose framing and code are checked.
         #[inline(always)]

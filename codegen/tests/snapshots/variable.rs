@@ -183,49 +183,9 @@ pub mod vario {
         pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             rt::encode_address(address, &FRAME)?;
             let len = match *self {
-                Self::Read(request::Read { first: v_first, quantity: v_quantity }) => {
-                    rt::encode_in_range("quantity", v_quantity, 1, 16)?;
-                    let out = rt::frame_mut::<
-                        9,
-                    >(buf, &[0xA5, 0x5A, address, 0x05, 0x01])?;
-                    out[5..7].copy_from_slice(&v_first.to_be_bytes());
-                    out[7] = v_quantity;
-                    out.len()
-                }
-                Self::Write(
-                    request::Write { quantity: v_quantity, values: v_values },
-                ) => {
-                    rt::encode_in_range("quantity", v_quantity, 1, 16)?;
-                    let frame_len = REPEAT_WRITE.encode_len(v_values.len())?;
-                    let out = rt::frame_mut_len(buf, frame_len, &[0xA5, 0x5A, address])?;
-                    LENGTH.put(out)?;
-                    out[4] = 0x02;
-                    let field_0: u8 = v_quantity;
-                    out[5] = field_0;
-                    let field_1: u8 = rt::fits(
-                        "byte_count",
-                        rt::follows(field_0 as i64, 2, 1),
-                        0,
-                        255,
-                    )? as u8;
-                    REPEAT_WRITE.encode_agrees(v_values.len(), field_1 as u64)?;
-                    out[6] = field_1;
-                    rt::write_elements(v_values.as_slice(), 2, false, &mut out[7..]);
-                    out.len()
-                }
-                Self::Stamp(request::Stamp { ticks: v_ticks }) => {
-                    let out = rt::frame_mut::<
-                        9,
-                    >(buf, &[0xA5, 0x5A, address, 0x05, 0x03])?;
-                    out[5..8]
-                        .copy_from_slice(
-                            &rt::bytes24(
-                                (rt::fits("ticks", v_ticks, 0, 16777215)? as u32) as u32,
-                                false,
-                            ),
-                        );
-                    out.len()
-                }
+                Self::Read(ref m) => m.write(address, buf)?,
+                Self::Write(ref m) => m.write(address, buf)?,
+                Self::Stamp(ref m) => m.write(address, buf)?,
             };
             FRAME.seal(buf, len, frame_sum);
             rt::Ok(len)
@@ -421,28 +381,9 @@ pub mod vario {
         pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             rt::encode_address(address, &FRAME)?;
             let len = match *self {
-                Self::ReadReply(response::ReadReply { values: v_values }) => {
-                    let frame_len = REPEAT_READ_REPLY.encode_len(v_values.len())?;
-                    let out = rt::frame_mut_len(buf, frame_len, &[0xA5, 0x5A, address])?;
-                    LENGTH.put(out)?;
-                    out[4] = 0x01;
-                    rt::write_elements(v_values.as_slice(), 2, false, &mut out[5..]);
-                    out.len()
-                }
-                Self::ReadError(response::ReadError { reason: v_reason }) => {
-                    let out = rt::frame_mut::<
-                        7,
-                    >(buf, &[0xA5, 0x5A, address, 0x03, 0x81])?;
-                    out[5] = v_reason;
-                    out.len()
-                }
-                Self::WriteReply(response::WriteReply { status: v_status }) => {
-                    let out = rt::frame_mut::<
-                        7,
-                    >(buf, &[0xA5, 0x5A, address, 0x03, 0x02])?;
-                    out[5] = v_status;
-                    out.len()
-                }
+                Self::ReadReply(ref m) => m.write(address, buf)?,
+                Self::ReadError(ref m) => m.write(address, buf)?,
+                Self::WriteReply(ref m) => m.write(address, buf)?,
             };
             FRAME.seal(buf, len, frame_sum);
             rt::Ok(len)
@@ -975,6 +916,16 @@ pub mod vario {
         pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             Request::Read(*self).encode(address, buf)
         }
+        /// Writes this message's frame for `address`, as the direction's `encode` does.
+        #[inline(always)]
+        fn write(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            let Self { first: v_first, quantity: v_quantity } = *self;
+            rt::encode_in_range("quantity", v_quantity, 1, 16)?;
+            let out = rt::frame_mut::<9>(buf, &[0xA5, 0x5A, address, 0x05, 0x01])?;
+            out[5..7].copy_from_slice(&v_first.to_be_bytes());
+            out[7] = v_quantity;
+            rt::Ok(out.len())
+        }
         /// Reads this message from a frame whose framing and code are checked.
         #[inline(always)]
         fn from_frame(frame: &[u8]) -> rt::DecodeResult<Self> {
@@ -1003,6 +954,28 @@ pub mod vario {
         pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             Request::Write(*self).encode(address, buf)
         }
+        /// Writes this message's frame for `address`, as the direction's `encode` does.
+        #[inline(always)]
+        fn write(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            let Self { quantity: v_quantity, values: v_values } = *self;
+            rt::encode_in_range("quantity", v_quantity, 1, 16)?;
+            let frame_len = REPEAT_WRITE.encode_len(v_values.len())?;
+            let out = rt::frame_mut_len(buf, frame_len, &[0xA5, 0x5A, address])?;
+            LENGTH.put(out)?;
+            out[4] = 0x02;
+            let field_0: u8 = v_quantity;
+            out[5] = field_0;
+            let field_1: u8 = rt::fits(
+                "byte_count",
+                rt::follows(field_0 as i64, 2, 1),
+                0,
+                255,
+            )? as u8;
+            REPEAT_WRITE.encode_agrees(v_values.len(), field_1 as u64)?;
+            out[6] = field_1;
+            rt::write_elements(v_values.as_slice(), 2, false, &mut out[7..]);
+            rt::Ok(out.len())
+        }
     }
     impl request::Stamp {
         pub const NAME: &'static str = "stamp";
@@ -1015,6 +988,20 @@ pub mod vario {
         }
         pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             Request::Stamp(*self).encode(address, buf)
+        }
+        /// Writes this message's frame for `address`, as the direction's `encode` does.
+        #[inline(always)]
+        fn write(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            let Self { ticks: v_ticks } = *self;
+            let out = rt::frame_mut::<9>(buf, &[0xA5, 0x5A, address, 0x05, 0x03])?;
+            out[5..8]
+                .copy_from_slice(
+                    &rt::bytes24(
+                        (rt::fits("ticks", v_ticks, 0, 16777215)? as u32) as u32,
+                        false,
+                    ),
+                );
+            rt::Ok(out.len())
         }
         /// Reads this message from a frame whose framing and code are checked.
         #[inline(always)]
@@ -1038,6 +1025,17 @@ pub mod vario {
         pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             Response::ReadReply(*self).encode(address, buf)
         }
+        /// Writes this message's frame for `address`, as the direction's `encode` does.
+        #[inline(always)]
+        fn write(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            let Self { values: v_values } = *self;
+            let frame_len = REPEAT_READ_REPLY.encode_len(v_values.len())?;
+            let out = rt::frame_mut_len(buf, frame_len, &[0xA5, 0x5A, address])?;
+            LENGTH.put(out)?;
+            out[4] = 0x01;
+            rt::write_elements(v_values.as_slice(), 2, false, &mut out[5..]);
+            rt::Ok(out.len())
+        }
     }
     impl response::ReadError {
         pub const NAME: &'static str = "read_error";
@@ -1050,6 +1048,14 @@ pub mod vario {
         }
         pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             Response::ReadError(*self).encode(address, buf)
+        }
+        /// Writes this message's frame for `address`, as the direction's `encode` does.
+        #[inline(always)]
+        fn write(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            let Self { reason: v_reason } = *self;
+            let out = rt::frame_mut::<7>(buf, &[0xA5, 0x5A, address, 0x03, 0x81])?;
+            out[5] = v_reason;
+            rt::Ok(out.len())
         }
         /// Reads this message from a frame whose framing and code are checked.
         #[inline(always)]
@@ -1069,6 +1075,14 @@ pub mod vario {
         }
         pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             Response::WriteReply(*self).encode(address, buf)
+        }
+        /// Writes this message's frame for `address`, as the direction's `encode` does.
+        #[inline(always)]
+        fn write(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            let Self { status: v_status } = *self;
+            let out = rt::frame_mut::<7>(buf, &[0xA5, 0x5A, address, 0x03, 0x02])?;
+            out[5] = v_status;
+            rt::Ok(out.len())
         }
         /// Reads this message from a frame whose framing and code are checked.
         #[inline(always)]

@@ -598,47 +598,15 @@ pub mod vesc {
                 Self::FwVersion(_) => {
                     rt::frame_mut::<7>(buf, &[0x02, 0x00, 0x01, 0x00])?.len()
                 }
-                Self::WriteNewAppData(
-                    request::WriteNewAppData { offset: v_offset, data: v_data },
-                ) => {
-                    let frame_len = REPEAT_WRITE_NEW_APP_DATA.encode_len(v_data.len())?;
-                    let out = rt::frame_mut_len(buf, frame_len, &[0x02])?;
-                    LENGTH.put(out)?;
-                    out[3] = 0x03;
-                    out[4..8].copy_from_slice(&v_offset.to_be_bytes());
-                    rt::write_elements(v_data.as_slice(), 1, false, &mut out[8..]);
-                    out.len()
-                }
+                Self::WriteNewAppData(ref m) => m.write(address, buf)?,
                 Self::GetValues(_) => {
                     rt::frame_mut::<7>(buf, &[0x02, 0x00, 0x01, 0x04])?.len()
                 }
-                Self::SetDuty(request::SetDuty { duty: v_duty }) => {
-                    let out = rt::frame_mut::<11>(buf, &[0x02, 0x00, 0x05, 0x05])?;
-                    out[4..8].copy_from_slice(&v_duty.raw().to_be_bytes());
-                    out.len()
-                }
-                Self::SetCurrent(request::SetCurrent { current: v_current }) => {
-                    let out = rt::frame_mut::<11>(buf, &[0x02, 0x00, 0x05, 0x06])?;
-                    out[4..8].copy_from_slice(&v_current.raw().to_be_bytes());
-                    out.len()
-                }
-                Self::SetCurrentBrake(
-                    request::SetCurrentBrake { current: v_current },
-                ) => {
-                    let out = rt::frame_mut::<11>(buf, &[0x02, 0x00, 0x05, 0x07])?;
-                    out[4..8].copy_from_slice(&v_current.raw().to_be_bytes());
-                    out.len()
-                }
-                Self::SetRpm(request::SetRpm { rpm: v_rpm }) => {
-                    let out = rt::frame_mut::<11>(buf, &[0x02, 0x00, 0x05, 0x08])?;
-                    out[4..8].copy_from_slice(&v_rpm.to_be_bytes());
-                    out.len()
-                }
-                Self::SetPos(request::SetPos { pos: v_pos }) => {
-                    let out = rt::frame_mut::<11>(buf, &[0x02, 0x00, 0x05, 0x09])?;
-                    out[4..8].copy_from_slice(&v_pos.raw().to_be_bytes());
-                    out.len()
-                }
+                Self::SetDuty(ref m) => m.write(address, buf)?,
+                Self::SetCurrent(ref m) => m.write(address, buf)?,
+                Self::SetCurrentBrake(ref m) => m.write(address, buf)?,
+                Self::SetRpm(ref m) => m.write(address, buf)?,
+                Self::SetPos(ref m) => m.write(address, buf)?,
                 Self::Alive(_) => {
                     rt::frame_mut::<7>(buf, &[0x02, 0x00, 0x01, 0x1E])?.len()
                 }
@@ -899,78 +867,9 @@ pub mod vesc {
         fn encode_laid_out(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             rt::encode_address(address, &FRAME)?;
             let len = match *self {
-                Self::FwVersionReply(
-                    response::FwVersionReply {
-                        fw_major: v_fw_major,
-                        fw_minor: v_fw_minor,
-                        rest: v_rest,
-                    },
-                ) => {
-                    let frame_len = REPEAT_FW_VERSION_REPLY.encode_len(v_rest.len())?;
-                    let out = rt::frame_mut_len(buf, frame_len, &[0x02])?;
-                    LENGTH.put(out)?;
-                    out[3] = 0x00;
-                    out[4] = v_fw_major;
-                    out[5] = v_fw_minor;
-                    rt::write_elements(v_rest.as_slice(), 1, false, &mut out[6..]);
-                    out.len()
-                }
-                Self::WriteNewAppDataReply(
-                    response::WriteNewAppDataReply { ok: v_ok, offset: v_offset },
-                ) => {
-                    rt::encode_in_range("ok", v_ok, 0, 1)?;
-                    let out = rt::frame_mut::<12>(buf, &[0x02, 0x00, 0x06, 0x03])?;
-                    out[4] = v_ok;
-                    out[5..9].copy_from_slice(&v_offset.to_be_bytes());
-                    out.len()
-                }
-                Self::GetValuesReply(
-                    response::GetValuesReply {
-                        temp_mos1: v_temp_mos1,
-                        temp_mos2: v_temp_mos2,
-                        temp_mos3: v_temp_mos3,
-                        temp_mos4: v_temp_mos4,
-                        temp_mos5: v_temp_mos5,
-                        temp_mos6: v_temp_mos6,
-                        temp_pcb: v_temp_pcb,
-                        current_motor: v_current_motor,
-                        current_in: v_current_in,
-                        duty_now: v_duty_now,
-                        rpm: v_rpm,
-                        v_in: v_v_in,
-                        amp_hours: v_amp_hours,
-                        amp_hours_charged: v_amp_hours_charged,
-                        watt_hours: v_watt_hours,
-                        watt_hours_charged: v_watt_hours_charged,
-                        tachometer: v_tachometer,
-                        tachometer_abs: v_tachometer_abs,
-                        mc_fault_code: v_mc_fault_code,
-                    },
-                ) => {
-                    let out = rt::frame_mut::<62>(buf, &[0x02, 0x00, 0x38, 0x04])?;
-                    out[4..6].copy_from_slice(&v_temp_mos1.raw().to_be_bytes());
-                    out[6..8].copy_from_slice(&v_temp_mos2.raw().to_be_bytes());
-                    out[8..10].copy_from_slice(&v_temp_mos3.raw().to_be_bytes());
-                    out[10..12].copy_from_slice(&v_temp_mos4.raw().to_be_bytes());
-                    out[12..14].copy_from_slice(&v_temp_mos5.raw().to_be_bytes());
-                    out[14..16].copy_from_slice(&v_temp_mos6.raw().to_be_bytes());
-                    out[16..18].copy_from_slice(&v_temp_pcb.raw().to_be_bytes());
-                    out[18..22].copy_from_slice(&v_current_motor.raw().to_be_bytes());
-                    out[22..26].copy_from_slice(&v_current_in.raw().to_be_bytes());
-                    out[26..28].copy_from_slice(&v_duty_now.raw().to_be_bytes());
-                    out[28..32].copy_from_slice(&v_rpm.to_be_bytes());
-                    out[32..34].copy_from_slice(&v_v_in.raw().to_be_bytes());
-                    out[34..38].copy_from_slice(&v_amp_hours.raw().to_be_bytes());
-                    out[38..42]
-                        .copy_from_slice(&v_amp_hours_charged.raw().to_be_bytes());
-                    out[42..46].copy_from_slice(&v_watt_hours.raw().to_be_bytes());
-                    out[46..50]
-                        .copy_from_slice(&v_watt_hours_charged.raw().to_be_bytes());
-                    out[50..54].copy_from_slice(&v_tachometer.to_be_bytes());
-                    out[54..58].copy_from_slice(&v_tachometer_abs.to_be_bytes());
-                    out[58] = v_mc_fault_code;
-                    out.len()
-                }
+                Self::FwVersionReply(ref m) => m.write(address, buf)?,
+                Self::WriteNewAppDataReply(ref m) => m.write(address, buf)?,
+                Self::GetValuesReply(ref m) => m.write(address, buf)?,
             };
             FRAME.seal(buf, len, frame_sum);
             rt::Ok(len)
@@ -1266,6 +1165,18 @@ pub mod vesc {
         pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             Request::WriteNewAppData(*self).encode(address, buf)
         }
+        /// Writes this message's frame for `address`, as the direction's `encode` does.
+        #[inline(always)]
+        fn write(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            let Self { offset: v_offset, data: v_data } = *self;
+            let frame_len = REPEAT_WRITE_NEW_APP_DATA.encode_len(v_data.len())?;
+            let out = rt::frame_mut_len(buf, frame_len, &[0x02])?;
+            LENGTH.put(out)?;
+            out[3] = 0x03;
+            out[4..8].copy_from_slice(&v_offset.to_be_bytes());
+            rt::write_elements(v_data.as_slice(), 1, false, &mut out[8..]);
+            rt::Ok(out.len())
+        }
     }
     impl request::GetValues {
         pub const NAME: &'static str = "get_values";
@@ -1287,6 +1198,14 @@ pub mod vesc {
         }
         pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             Request::SetDuty(*self).encode(address, buf)
+        }
+        /// Writes this message's frame for `address`, as the direction's `encode` does.
+        #[inline(always)]
+        fn write(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            let Self { duty: v_duty } = *self;
+            let out = rt::frame_mut::<11>(buf, &[0x02, 0x00, 0x05, 0x05])?;
+            out[4..8].copy_from_slice(&v_duty.raw().to_be_bytes());
+            rt::Ok(out.len())
         }
         /// Reads this message from a frame whose framing and code are checked.
         #[inline(always)]
@@ -1311,6 +1230,14 @@ pub mod vesc {
         pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             Request::SetCurrent(*self).encode(address, buf)
         }
+        /// Writes this message's frame for `address`, as the direction's `encode` does.
+        #[inline(always)]
+        fn write(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            let Self { current: v_current } = *self;
+            let out = rt::frame_mut::<11>(buf, &[0x02, 0x00, 0x05, 0x06])?;
+            out[4..8].copy_from_slice(&v_current.raw().to_be_bytes());
+            rt::Ok(out.len())
+        }
         /// Reads this message from a frame whose framing and code are checked.
         #[inline(always)]
         fn from_frame(frame: &[u8]) -> rt::DecodeResult<Self> {
@@ -1333,6 +1260,14 @@ pub mod vesc {
         }
         pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             Request::SetCurrentBrake(*self).encode(address, buf)
+        }
+        /// Writes this message's frame for `address`, as the direction's `encode` does.
+        #[inline(always)]
+        fn write(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            let Self { current: v_current } = *self;
+            let out = rt::frame_mut::<11>(buf, &[0x02, 0x00, 0x05, 0x07])?;
+            out[4..8].copy_from_slice(&v_current.raw().to_be_bytes());
+            rt::Ok(out.len())
         }
         /// Reads this message from a frame whose framing and code are checked.
         #[inline(always)]
@@ -1357,6 +1292,14 @@ pub mod vesc {
         pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             Request::SetRpm(*self).encode(address, buf)
         }
+        /// Writes this message's frame for `address`, as the direction's `encode` does.
+        #[inline(always)]
+        fn write(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            let Self { rpm: v_rpm } = *self;
+            let out = rt::frame_mut::<11>(buf, &[0x02, 0x00, 0x05, 0x08])?;
+            out[4..8].copy_from_slice(&v_rpm.to_be_bytes());
+            rt::Ok(out.len())
+        }
         /// Reads this message from a frame whose framing and code are checked.
         #[inline(always)]
         fn from_frame(frame: &[u8]) -> rt::DecodeResult<Self> {
@@ -1377,6 +1320,14 @@ pub mod vesc {
         }
         pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             Request::SetPos(*self).encode(address, buf)
+        }
+        /// Writes this message's frame for `address`, as the direction's `encode` does.
+        #[inline(always)]
+        fn write(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            let Self { pos: v_pos } = *self;
+            let out = rt::frame_mut::<11>(buf, &[0x02, 0x00, 0x05, 0x09])?;
+            out[4..8].copy_from_slice(&v_pos.raw().to_be_bytes());
+            rt::Ok(out.len())
         }
         /// Reads this message from a frame whose framing and code are checked.
         #[inline(always)]
@@ -1415,6 +1366,19 @@ pub mod vesc {
         pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             Response::FwVersionReply(*self).encode(address, buf)
         }
+        /// Writes this message's frame for `address`, as the direction's `encode` does.
+        #[inline(always)]
+        fn write(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            let Self { fw_major: v_fw_major, fw_minor: v_fw_minor, rest: v_rest } = *self;
+            let frame_len = REPEAT_FW_VERSION_REPLY.encode_len(v_rest.len())?;
+            let out = rt::frame_mut_len(buf, frame_len, &[0x02])?;
+            LENGTH.put(out)?;
+            out[3] = 0x00;
+            out[4] = v_fw_major;
+            out[5] = v_fw_minor;
+            rt::write_elements(v_rest.as_slice(), 1, false, &mut out[6..]);
+            rt::Ok(out.len())
+        }
     }
     impl response::WriteNewAppDataReply {
         pub const NAME: &'static str = "write_new_app_data_reply";
@@ -1430,6 +1394,16 @@ pub mod vesc {
         }
         pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             Response::WriteNewAppDataReply(*self).encode(address, buf)
+        }
+        /// Writes this message's frame for `address`, as the direction's `encode` does.
+        #[inline(always)]
+        fn write(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            let Self { ok: v_ok, offset: v_offset } = *self;
+            rt::encode_in_range("ok", v_ok, 0, 1)?;
+            let out = rt::frame_mut::<12>(buf, &[0x02, 0x00, 0x06, 0x03])?;
+            out[4] = v_ok;
+            out[5..9].copy_from_slice(&v_offset.to_be_bytes());
+            rt::Ok(out.len())
         }
         /// Reads this message from a frame whose framing and code are checked.
         #[inline(always)]
@@ -1489,6 +1463,52 @@ pub mod vesc {
         }
         pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             Response::GetValuesReply(*self).encode(address, buf)
+        }
+        /// Writes this message's frame for `address`, as the direction's `encode` does.
+        #[inline(always)]
+        fn write(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            let Self {
+                temp_mos1: v_temp_mos1,
+                temp_mos2: v_temp_mos2,
+                temp_mos3: v_temp_mos3,
+                temp_mos4: v_temp_mos4,
+                temp_mos5: v_temp_mos5,
+                temp_mos6: v_temp_mos6,
+                temp_pcb: v_temp_pcb,
+                current_motor: v_current_motor,
+                current_in: v_current_in,
+                duty_now: v_duty_now,
+                rpm: v_rpm,
+                v_in: v_v_in,
+                amp_hours: v_amp_hours,
+                amp_hours_charged: v_amp_hours_charged,
+                watt_hours: v_watt_hours,
+                watt_hours_charged: v_watt_hours_charged,
+                tachometer: v_tachometer,
+                tachometer_abs: v_tachometer_abs,
+                mc_fault_code: v_mc_fault_code,
+            } = *self;
+            let out = rt::frame_mut::<62>(buf, &[0x02, 0x00, 0x38, 0x04])?;
+            out[4..6].copy_from_slice(&v_temp_mos1.raw().to_be_bytes());
+            out[6..8].copy_from_slice(&v_temp_mos2.raw().to_be_bytes());
+            out[8..10].copy_from_slice(&v_temp_mos3.raw().to_be_bytes());
+            out[10..12].copy_from_slice(&v_temp_mos4.raw().to_be_bytes());
+            out[12..14].copy_from_slice(&v_temp_mos5.raw().to_be_bytes());
+            out[14..16].copy_from_slice(&v_temp_mos6.raw().to_be_bytes());
+            out[16..18].copy_from_slice(&v_temp_pcb.raw().to_be_bytes());
+            out[18..22].copy_from_slice(&v_current_motor.raw().to_be_bytes());
+            out[22..26].copy_from_slice(&v_current_in.raw().to_be_bytes());
+            out[26..28].copy_from_slice(&v_duty_now.raw().to_be_bytes());
+            out[28..32].copy_from_slice(&v_rpm.to_be_bytes());
+            out[32..34].copy_from_slice(&v_v_in.raw().to_be_bytes());
+            out[34..38].copy_from_slice(&v_amp_hours.raw().to_be_bytes());
+            out[38..42].copy_from_slice(&v_amp_hours_charged.raw().to_be_bytes());
+            out[42..46].copy_from_slice(&v_watt_hours.raw().to_be_bytes());
+            out[46..50].copy_from_slice(&v_watt_hours_charged.raw().to_be_bytes());
+            out[50..54].copy_from_slice(&v_tachometer.to_be_bytes());
+            out[54..58].copy_from_slice(&v_tachometer_abs.to_be_bytes());
+            out[58] = v_mc_fault_code;
+            rt::Ok(out.len())
         }
         /// Reads this message from a frame whose framing and code are checked.
         #[inline(always)]

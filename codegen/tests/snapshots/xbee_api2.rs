@@ -411,44 +411,8 @@ pub mod xbee_api2 {
         fn encode_unescaped(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             rt::encode_address(address, &FRAME)?;
             let len = match *self {
-                Self::AtCommand(
-                    request::AtCommand {
-                        frame_id: v_frame_id,
-                        command: v_command,
-                        parameter: v_parameter,
-                    },
-                ) => {
-                    let frame_len = REPEAT_AT_COMMAND.encode_len(v_parameter.len())?;
-                    let out = rt::frame_mut_len(buf, frame_len, &[0x7E])?;
-                    LENGTH.put(out)?;
-                    out[3] = 0x08;
-                    out[4] = v_frame_id;
-                    out[5..7].copy_from_slice(&v_command.0);
-                    rt::write_elements(v_parameter.as_slice(), 1, false, &mut out[7..]);
-                    out.len()
-                }
-                Self::TransmitRequest(
-                    request::TransmitRequest {
-                        frame_id: v_frame_id,
-                        destination64: v_destination64,
-                        destination16: v_destination16,
-                        radius: v_radius,
-                        options: v_options,
-                        data: v_data,
-                    },
-                ) => {
-                    let frame_len = REPEAT_TRANSMIT_REQUEST.encode_len(v_data.len())?;
-                    let out = rt::frame_mut_len(buf, frame_len, &[0x7E])?;
-                    LENGTH.put(out)?;
-                    out[3] = 0x10;
-                    out[4] = v_frame_id;
-                    out[5..13].copy_from_slice(&v_destination64.to_be_bytes());
-                    out[13..15].copy_from_slice(&v_destination16.to_be_bytes());
-                    out[15] = v_radius;
-                    out[16] = v_options;
-                    rt::write_elements(v_data.as_slice(), 1, false, &mut out[17..]);
-                    out.len()
-                }
+                Self::AtCommand(ref m) => m.write(address, buf)?,
+                Self::TransmitRequest(ref m) => m.write(address, buf)?,
             };
             FRAME.seal(buf, len, frame_sum);
             rt::Ok(len)
@@ -701,64 +665,10 @@ pub mod xbee_api2 {
         fn encode_unescaped(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             rt::encode_address(address, &FRAME)?;
             let len = match *self {
-                Self::AtResponse(
-                    response::AtResponse {
-                        frame_id: v_frame_id,
-                        command: v_command,
-                        status: v_status,
-                        data: v_data,
-                    },
-                ) => {
-                    let frame_len = REPEAT_AT_RESPONSE.encode_len(v_data.len())?;
-                    let out = rt::frame_mut_len(buf, frame_len, &[0x7E])?;
-                    LENGTH.put(out)?;
-                    out[3] = 0x88;
-                    out[4] = v_frame_id;
-                    out[5..7].copy_from_slice(&v_command.0);
-                    out[7] = v_status.raw();
-                    rt::write_elements(v_data.as_slice(), 1, false, &mut out[8..]);
-                    out.len()
-                }
-                Self::TransmitStatus(
-                    response::TransmitStatus {
-                        frame_id: v_frame_id,
-                        destination16: v_destination16,
-                        retries: v_retries,
-                        delivery: v_delivery,
-                        discovery: v_discovery,
-                    },
-                ) => {
-                    let out = rt::frame_mut::<11>(buf, &[0x7E, 0x00, 0x07, 0x8B])?;
-                    out[4] = v_frame_id;
-                    out[5..7].copy_from_slice(&v_destination16.to_be_bytes());
-                    out[7] = v_retries;
-                    out[8] = v_delivery.raw();
-                    out[9] = v_discovery;
-                    out.len()
-                }
-                Self::ModemStatus(response::ModemStatus { status: v_status }) => {
-                    let out = rt::frame_mut::<6>(buf, &[0x7E, 0x00, 0x02, 0x8A])?;
-                    out[4] = v_status.raw();
-                    out.len()
-                }
-                Self::ReceivePacket(
-                    response::ReceivePacket {
-                        source64: v_source64,
-                        source16: v_source16,
-                        options: v_options,
-                        data: v_data,
-                    },
-                ) => {
-                    let frame_len = REPEAT_RECEIVE_PACKET.encode_len(v_data.len())?;
-                    let out = rt::frame_mut_len(buf, frame_len, &[0x7E])?;
-                    LENGTH.put(out)?;
-                    out[3] = 0x90;
-                    out[4..12].copy_from_slice(&v_source64.to_be_bytes());
-                    out[12..14].copy_from_slice(&v_source16.to_be_bytes());
-                    out[14] = v_options;
-                    rt::write_elements(v_data.as_slice(), 1, false, &mut out[15..]);
-                    out.len()
-                }
+                Self::AtResponse(ref m) => m.write(address, buf)?,
+                Self::TransmitStatus(ref m) => m.write(address, buf)?,
+                Self::ModemStatus(ref m) => m.write(address, buf)?,
+                Self::ReceivePacket(ref m) => m.write(address, buf)?,
             };
             FRAME.seal(buf, len, frame_sum);
             rt::Ok(len)
@@ -1046,6 +956,23 @@ pub mod xbee_api2 {
         pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             Request::AtCommand(*self).encode(address, buf)
         }
+        /// Writes this message's frame for `address`, as the direction's `encode` does.
+        #[inline(always)]
+        fn write(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            let Self {
+                frame_id: v_frame_id,
+                command: v_command,
+                parameter: v_parameter,
+            } = *self;
+            let frame_len = REPEAT_AT_COMMAND.encode_len(v_parameter.len())?;
+            let out = rt::frame_mut_len(buf, frame_len, &[0x7E])?;
+            LENGTH.put(out)?;
+            out[3] = 0x08;
+            out[4] = v_frame_id;
+            out[5..7].copy_from_slice(&v_command.0);
+            rt::write_elements(v_parameter.as_slice(), 1, false, &mut out[7..]);
+            rt::Ok(out.len())
+        }
     }
     impl request::TransmitRequest {
         pub const NAME: &'static str = "transmit_request";
@@ -1070,6 +997,29 @@ pub mod xbee_api2 {
         pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             Request::TransmitRequest(*self).encode(address, buf)
         }
+        /// Writes this message's frame for `address`, as the direction's `encode` does.
+        #[inline(always)]
+        fn write(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            let Self {
+                frame_id: v_frame_id,
+                destination64: v_destination64,
+                destination16: v_destination16,
+                radius: v_radius,
+                options: v_options,
+                data: v_data,
+            } = *self;
+            let frame_len = REPEAT_TRANSMIT_REQUEST.encode_len(v_data.len())?;
+            let out = rt::frame_mut_len(buf, frame_len, &[0x7E])?;
+            LENGTH.put(out)?;
+            out[3] = 0x10;
+            out[4] = v_frame_id;
+            out[5..13].copy_from_slice(&v_destination64.to_be_bytes());
+            out[13..15].copy_from_slice(&v_destination16.to_be_bytes());
+            out[15] = v_radius;
+            out[16] = v_options;
+            rt::write_elements(v_data.as_slice(), 1, false, &mut out[17..]);
+            rt::Ok(out.len())
+        }
     }
     impl response::AtResponse {
         pub const NAME: &'static str = "at_response";
@@ -1089,6 +1039,25 @@ pub mod xbee_api2 {
         }
         pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             Response::AtResponse(*self).encode(address, buf)
+        }
+        /// Writes this message's frame for `address`, as the direction's `encode` does.
+        #[inline(always)]
+        fn write(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            let Self {
+                frame_id: v_frame_id,
+                command: v_command,
+                status: v_status,
+                data: v_data,
+            } = *self;
+            let frame_len = REPEAT_AT_RESPONSE.encode_len(v_data.len())?;
+            let out = rt::frame_mut_len(buf, frame_len, &[0x7E])?;
+            LENGTH.put(out)?;
+            out[3] = 0x88;
+            out[4] = v_frame_id;
+            out[5..7].copy_from_slice(&v_command.0);
+            out[7] = v_status.raw();
+            rt::write_elements(v_data.as_slice(), 1, false, &mut out[8..]);
+            rt::Ok(out.len())
         }
     }
     impl response::TransmitStatus {
@@ -1110,6 +1079,24 @@ pub mod xbee_api2 {
         }
         pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             Response::TransmitStatus(*self).encode(address, buf)
+        }
+        /// Writes this message's frame for `address`, as the direction's `encode` does.
+        #[inline(always)]
+        fn write(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            let Self {
+                frame_id: v_frame_id,
+                destination16: v_destination16,
+                retries: v_retries,
+                delivery: v_delivery,
+                discovery: v_discovery,
+            } = *self;
+            let out = rt::frame_mut::<11>(buf, &[0x7E, 0x00, 0x07, 0x8B])?;
+            out[4] = v_frame_id;
+            out[5..7].copy_from_slice(&v_destination16.to_be_bytes());
+            out[7] = v_retries;
+            out[8] = v_delivery.raw();
+            out[9] = v_discovery;
+            rt::Ok(out.len())
         }
         /// Reads this message from a frame whose framing and code are checked.
         #[inline(always)]
@@ -1135,6 +1122,14 @@ pub mod xbee_api2 {
         }
         pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             Response::ModemStatus(*self).encode(address, buf)
+        }
+        /// Writes this message's frame for `address`, as the direction's `encode` does.
+        #[inline(always)]
+        fn write(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            let Self { status: v_status } = *self;
+            let out = rt::frame_mut::<6>(buf, &[0x7E, 0x00, 0x02, 0x8A])?;
+            out[4] = v_status.raw();
+            rt::Ok(out.len())
         }
         /// Reads this message from a frame whose framing and code are checked.
         #[inline(always)]
@@ -1163,6 +1158,25 @@ pub mod xbee_api2 {
         }
         pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             Response::ReceivePacket(*self).encode(address, buf)
+        }
+        /// Writes this message's frame for `address`, as the direction's `encode` does.
+        #[inline(always)]
+        fn write(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            let Self {
+                source64: v_source64,
+                source16: v_source16,
+                options: v_options,
+                data: v_data,
+            } = *self;
+            let frame_len = REPEAT_RECEIVE_PACKET.encode_len(v_data.len())?;
+            let out = rt::frame_mut_len(buf, frame_len, &[0x7E])?;
+            LENGTH.put(out)?;
+            out[3] = 0x90;
+            out[4..12].copy_from_slice(&v_source64.to_be_bytes());
+            out[12..14].copy_from_slice(&v_source16.to_be_bytes());
+            out[14] = v_options;
+            rt::write_elements(v_data.as_slice(), 1, false, &mut out[15..]);
+            rt::Ok(out.len())
         }
     }
     /// Each request as a struct of its own; its constants (`DESC`, which names it as
