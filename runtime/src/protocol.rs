@@ -72,6 +72,9 @@ pub trait ResponseMessage<Q>: Message {
     fn is_unasked(&self) -> bool {
         false
     }
+    /// Whether any response of the protocol is sent unasked ([`Self::is_unasked`]): where
+    /// none is, a master need not look for one in what it receives.
+    const HAS_UNASKED: bool = false;
     /// Decodes `frame` as a response, the reply to `request` where one is given (only the
     /// responses it may get); a response only its request tells apart is
     /// [`DecodeError::Ambiguous`] without one. What [`Protocol::decode_response`] and

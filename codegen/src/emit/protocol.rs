@@ -339,6 +339,7 @@ pub(super) fn emit_protocol_impl(p: &Protocol) -> TokenStream {
             fn is_unasked(&self) -> bool {
                 Response::is_unasked(self)
             }
+            const HAS_UNASKED: bool = true;
         }
     };
     let doc_text = format!(

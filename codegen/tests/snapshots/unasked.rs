@@ -576,6 +576,7 @@ pub mod unasked {
         fn is_unasked(&self) -> bool {
             Response::is_unasked(self)
         }
+        const HAS_UNASKED: bool = true;
         #[inline]
         fn decode_as_reply(
             frame: &[u8],
