@@ -70,6 +70,7 @@ fn cases() -> Vec<Case> {
         built_in("modbus", "spec/modbus.yaml"),
         built_in("dynamixel", "spec/dynamixel.yaml"),
         spec("model/tests/fixtures/valid/unaddressed.yaml"),
+        spec("model/tests/fixtures/valid/unasked.yaml"),
         spec("model/tests/fixtures/valid/ubx_like.yaml"),
         spec("model/tests/fixtures/valid/pelco_p.yaml"),
         spec("model/tests/fixtures/valid/ft12_fixed.yaml"),
@@ -527,7 +528,13 @@ fn compare(p: &Protocol, case: &Case, dir: &Path) -> Counts {
                 let r = p.find_in(m, Direction::Request).unwrap();
                 last = Some((i + 1, r.index, offset));
             } else {
-                if let Some((n, _, _)) = last {
+                // A response sent unasked that the request does not get is not its reply.
+                let r = p.find_in(m, Direction::Response).unwrap();
+                let reply = |c: usize| {
+                    !p.message(r).unasked
+                        || p.commands[c].responses.iter().any(|(x, _)| *x == r.index)
+                };
+                if let Some((n, _, _)) = last.filter(|&(_, c, _)| reply(c)) {
                     expected_response_to[i] = Some(n);
                     response_in.insert(n, i + 1);
                 }

@@ -478,6 +478,14 @@ fn escaped_specs_generate_their_snapshots() {
     check("model/tests/fixtures/valid/kiss.yaml", "kiss.rs");
 }
 
+/// Responses sent unasked (`unasked: true`): `Response::is_unasked` and the
+/// `ResponseMessage::is_unasked` override; `snapshots_compile.rs` compiles it and holds it to
+/// the interpreter.
+#[test]
+fn unasked_spec_generates_its_snapshot() {
+    check("model/tests/fixtures/valid/unasked.yaml", "unasked.rs");
+}
+
 /// A preamble of wake-up bytes (`framing.preamble`, DL/T 645's `FE FE FE FE`):
 /// `snapshots_compile.rs` compiles it and holds it to the interpreter.
 #[test]

@@ -32,6 +32,7 @@ include!("snapshots/cobs_link.rs");
 include!("snapshots/dynamixel2_stuffed.rs");
 include!("snapshots/xbee_api2.rs");
 include!("snapshots/kiss.rs");
+include!("snapshots/unasked.rs");
 include!("snapshots/lists_after.rs");
 include!("snapshots/lists_length.rs");
 include!("snapshots/packed_channels.rs");
@@ -3338,4 +3339,67 @@ fn terminated_frame_fast_path_is_the_rule() {
         }
     }
     assert!(decided > 2000, "{decided} decided");
+}
+
+/// Responses a device sends unasked (`unasked: true`): the generated `is_unasked` says which,
+/// a heartbeat heard right after a request is not its reply (`answers`, `decode_reply` refuse
+/// it as the interpreter does, in the same words) and both stream decoders report it on its
+/// own, then the request's reply after it; captures of the examples stream alike.
+#[test]
+fn unasked_snapshot_streams_as_the_interpreter_does() {
+    use unasked::{Request, Response, Unasked};
+    let file = "model/tests/fixtures/valid/unasked.yaml";
+    replay::<Unasked>(file);
+    let p = fixture(file);
+    let get_status = busspec_model::interp::parse_hex("AA 21 40 01 0C").unwrap();
+    let heartbeat = busspec_model::interp::parse_hex("AA 21 70 00 00 00 0A 45").unwrap();
+    let status = busspec_model::interp::parse_hex("AA 21 40 01 00 05 11").unwrap();
+    let go_to = busspec_model::interp::parse_hex("AA 21 20 00 05 F0").unwrap();
+    let alarm = busspec_model::interp::parse_hex("AA 21 71 03 3F").unwrap();
+    let q = Request::decode(&get_status).unwrap().message;
+    let hb = Response::decode(&heartbeat).unwrap().message;
+    assert!(hb.is_unasked() && rt_is_unasked(&hb));
+    assert!(!hb.answers(&q));
+    let st = Response::decode(&status).unwrap().message;
+    assert!(!st.is_unasked() && !rt_is_unasked(&st) && st.answers(&q));
+    let al = Response::decode(&alarm).unwrap().message;
+    let g = Request::decode(&go_to).unwrap().message;
+    assert!(al.is_unasked() && al.answers(&g) && !al.answers(&q));
+    // As the reply to get_status, the heartbeat is refused alike by both engines.
+    let gen = Unasked::decode_reply(&heartbeat, &q).unwrap_err();
+    let iq =
+        busspec_model::interp::decode(&p, Some(Direction::Request), None, &get_status).unwrap();
+    let int = busspec_model::interp::decode_reply(&p, &iq, &heartbeat).unwrap_err();
+    assert_eq!(gen.to_string(), int.to_string());
+    assert!(gen.to_string().contains("heartbeat"), "{gen}");
+    // Request, heartbeat, its reply; go_to, the alarm as its reply, a heartbeat again.
+    let cap: Vec<u8> = [&get_status, &heartbeat, &status, &go_to, &alarm, &heartbeat]
+        .into_iter()
+        .flatten()
+        .copied()
+        .collect();
+    let names = [
+        "get_status",
+        "heartbeat",
+        "status",
+        "go_to",
+        "alarm",
+        "heartbeat",
+    ];
+    for cuts in [&[1usize][..], &[3, 7], &[64]] {
+        let want = interp_seen(&p, &cap, cuts);
+        let got = generated_seen::<Unasked>(&cap, cuts);
+        assert_eq!(got, want, "cuts {cuts:?}");
+        let seen: Vec<&str> = got.iter().map(|s| s.0.as_str()).collect();
+        assert_eq!(seen, names, "cuts {cuts:?}");
+    }
+    let t = agree::agree::<Unasked>(&p);
+    assert!(t.accepted >= 5 && t.refused > 100, "{t:?}");
+    let found = examples_stream_alike::<Unasked>(&p, 0x0A5E, "heartbeat");
+    assert!(found > 100, "only {found} heartbeat frames found");
+}
+
+/// The trait's `is_unasked`, as code generic over protocols sees it.
+fn rt_is_unasked<R: busspec_runtime::ResponseMessage<unasked::Request>>(r: &R) -> bool {
+    r.is_unasked()
 }

@@ -267,6 +267,9 @@ enum Own {
     /// Messages without a checksum (`checksum: none`, RoboClaw's reads): whether a spec tries
     /// them, and which messages.
     Unchecked = 0x8010_8010_8010_8010,
+    /// Responses sent unasked (`unasked: true`): a reply made also sent unasked, a response
+    /// no command lists.
+    Unasked = 0x0A5E_0A5E_0A5E_0A5E,
 }
 
 /// The generator of `what` for the spec of `seed`.
@@ -2331,12 +2334,45 @@ fn random_spec_without_examples(seed: u64) -> (String, usize) {
         });
         k += 1;
     }
+    // Responses sent unasked (`unasked: true`), drawn by a generator of their own so every
+    // spec drawn without them is as it was: in about a fifth of the specs, replies that need
+    // no request made also sent unasked, and often a response no command lists (a
+    // heartbeat), which the stream decoders meet after requests whose reply it is not.
+    let mut unlisted: Vec<usize> = Vec::new();
+    g.with_own(seed, Own::Unasked, |g| {
+        if !g.chance(20) {
+            return;
+        }
+        for r in responses.iter_mut() {
+            let alone = !r.extra.contains("code_from_request")
+                && !r.extra.contains("needs_request")
+                && !r.fields.iter().any(|f| f.yaml.contains("request:"));
+            if alone && g.chance(30) {
+                r.extra.push_str(", unasked: true");
+            }
+        }
+        if g.chance(70) {
+            let code = code_for(g, &resp_lens, &mut resp_used1, &mut resp_used2, true);
+            let fields = g.fields(None, None);
+            let kind = g.pick(&["ack", "nak", "data", "echo"]);
+            unlisted.push(k);
+            responses.push(Gm {
+                name: format!("r{k}"),
+                code,
+                fields,
+                extra: format!(", kind: {kind}, unasked: true"),
+            });
+            k += 1;
+        }
+    });
     // Responses sharing a code that are not a needs_request pair must not clash: the codes
     // were drawn distinct, so only code-less ones share one, which the validator allows.
-    // Every response is listed by some command (or is common).
+    // Every response is listed by some command (or is common), but one sent unasked only.
     for (j, r) in responses.iter().enumerate() {
         let idx: usize = r.name[1..].parse().unwrap_or(0);
-        let listed = common.contains(&idx) || lists.iter().any(|l| l.contains(&idx));
+        let listed = common.contains(&idx)
+            || unlisted.contains(&idx)
+            || lists.iter().any(|l| l.contains(&idx));
         if !listed {
             lists[j % n_cmd].push(idx);
         }
@@ -2348,7 +2384,7 @@ fn random_spec_without_examples(seed: u64) -> (String, usize) {
         .filter(|r| !r.extra.contains("code_from_request") && !r.extra.contains("needs_request"))
         .filter(|r| !r.fields.iter().any(|f| f.yaml.contains("request:")))
         .filter_map(|r| r.name[1..].parse().ok())
-        .filter(|k| !common.contains(k))
+        .filter(|k| !common.contains(k) && !unlisted.contains(k))
         .collect();
     #[allow(clippy::needless_range_loop)]
     for c in 0..n_cmd {
@@ -3633,6 +3669,18 @@ pub fn constructs(p: &ir::Protocol) -> Vec<&'static str> {
         "code_from_request",
     );
     add(p.responses.iter().any(|m| m.needs_request), "needs_request");
+    add(
+        p.responses
+            .iter()
+            .any(|m| m.unasked && !m.answers.is_empty()),
+        "a reply also sent unasked",
+    );
+    add(
+        p.responses
+            .iter()
+            .any(|m| m.unasked && m.answers.is_empty()),
+        "a response sent unasked only",
+    );
     add(!p.common_responses.is_empty(), "common responses");
     add(
         p.commands.iter().any(|m| m.broadcast.is_some()),

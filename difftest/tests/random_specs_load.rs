@@ -26,3 +26,26 @@ fn a_record_of_one_byte_field_stays_a_record_beside_counted_text() {
 fn the_first_five_hundred_seeds_give_valid_specs() {
     assert_eq!(refusals(1..=500), Vec::<String>::new());
 }
+
+/// The generator draws responses sent unasked (`unasked: true`): replies also sent unasked and
+/// responses no command lists, so the differential meets them after requests.
+#[test]
+fn some_seeds_draw_responses_sent_unasked() {
+    let (mut also, mut only) = (0, 0);
+    for s in 1..=300 {
+        let Ok(p) = busspec_model::load_str(&format!("s{s}.yaml"), &random_spec(s)) else {
+            continue;
+        };
+        also += usize::from(
+            p.responses
+                .iter()
+                .any(|m| m.unasked && !m.answers.is_empty()),
+        );
+        only += usize::from(
+            p.responses
+                .iter()
+                .any(|m| m.unasked && m.answers.is_empty()),
+        );
+    }
+    assert!(also >= 5 && only >= 10, "also {also}, only {only}");
+}

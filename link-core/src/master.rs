@@ -338,6 +338,9 @@ pub struct MasterCore<P: Link, const CAP: usize = RX> {
     frame_len: usize,
     rx: [u8; CAP],
     rx_len: usize,
+    /// Frames set aside while waiting for a reply: responses sent unasked that the request
+    /// does not get ([`Self::unasked_seen`]).
+    unasked: u32,
     last_error: Option<Failure<P>>,
     outcome: Option<Result<Reply<P>, Failure<P>>>,
     events: heapless::Deque<Event, 4>,
@@ -384,6 +387,7 @@ impl<P: Link, const CAP: usize> MasterCore<P, CAP> {
             frame_len: 0,
             rx: [0; CAP],
             rx_len: 0,
+            unasked: 0,
             last_error: None,
             outcome: None,
             events: heapless::Deque::new(),
@@ -417,6 +421,15 @@ impl<P: Link, const CAP: usize> MasterCore<P, CAP> {
     }
 
     /// The bytes last received: the reply being read or judged, or bytes discarded.
+    /// How many frames the master has set aside since it was made: while waiting for a reply,
+    /// a frame that decodes as a response the device sends unasked (`unasked: true`,
+    /// [`ResponseMessage::is_unasked`](ResponseMessage::is_unasked)) and that the
+    /// request in flight does not get is not the reply and not a failure: its bytes are
+    /// dropped, this count goes up, and the master keeps waiting within the same timeout.
+    pub fn unasked_seen(&self) -> u32 {
+        self.unasked
+    }
+
     pub fn reply(&self) -> &[u8] {
         &self.rx[..self.rx_len.min(CAP)]
     }
@@ -933,6 +946,28 @@ impl<P: Link, const CAP: usize> MasterCore<P, CAP> {
         }
     }
 
+    /// Sets aside the shortest frame at the head of the received bytes that decodes as a
+    /// response sent unasked the request in flight does not get: its bytes dropped, counted
+    /// ([`Self::unasked_seen`]). `false` where there is none (or the protocol has no unasked
+    /// response, or the bytes overflowed the buffer).
+    fn set_aside_unasked(&mut self) -> bool {
+        if !<P::Response as ResponseMessage<P::Request>>::HAS_UNASKED || self.rx_len > CAP {
+            return false;
+        }
+        let request = self.current();
+        for n in 1..=self.rx_len {
+            if let Ok(d) = P::Response::decode_as_reply(&self.rx[..n], None) {
+                if d.message.is_unasked() && !d.message.answers(&request) {
+                    self.rx.copy_within(n..self.rx_len, 0);
+                    self.rx_len -= n;
+                    self.unasked = self.unasked.saturating_add(1);
+                    return true;
+                }
+            }
+        }
+        false
+    }
+
     fn store(&mut self, bytes: &[u8]) {
         let start = self.rx_len.min(CAP);
         let n = bytes.len().min(CAP - start);
@@ -978,8 +1013,19 @@ impl<P: Link, const CAP: usize> MasterCore<P, CAP> {
                     deadline,
                     quiet_until: Some(now + self.timing.byte_gap),
                 };
+                let mut verdict = self.accept();
+                while verdict.is_err() && self.set_aside_unasked() {
+                    if self.rx_len == 0 {
+                        // Only unasked frames so far: keep waiting for the reply.
+                        self.state = State::Reply {
+                            deadline,
+                            quiet_until: None,
+                        };
+                        return;
+                    }
+                    verdict = self.accept();
+                }
                 // A babbling line cannot keep us here: a reply is never longer than this.
-                let verdict = self.accept();
                 if verdict.is_ok() || self.rx_len >= 4 * P::MAX_FRAME_LEN {
                     self.judge_verdict(verdict);
                 }

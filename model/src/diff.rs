@@ -1481,6 +1481,29 @@ impl<'a> Differ<'a> {
                 ),
             );
         }
+        // Sent unasked (`unasked: true`): made so, a decoder that took it as a reply still does,
+        // and one heard after another request is set aside rather than refused; no longer
+        // so, a device that still sends it on its own breaks the master waiting for a reply
+        // (and the response must now be listed by a command).
+        match (m.unasked, x.unasked) {
+            (false, true) => self.compatible(
+                "unasked_added",
+                format!("{path}.unasked"),
+                format!(
+                    "response `{}` is now also sent unasked: heard after a request that does not list it, it is set aside, not that request's reply",
+                    x.name
+                ),
+            ),
+            (true, false) => self.wire(
+                "unasked_removed",
+                format!("{path}.unasked"),
+                format!(
+                    "response `{}` is no longer sent unasked: heard after a request that does not list it, it is refused as that request's reply (a master waiting for one fails)",
+                    x.name
+                ),
+            ),
+            _ => {}
+        }
         if m.reply != x.reply {
             let word = |r: crate::ir::Reply| format!("{r:?}").to_lowercase();
             self.wire(

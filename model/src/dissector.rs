@@ -438,6 +438,11 @@ fn message(m: &Message, index: usize, framing: &Framing) -> String {
         // It travels without a checksum (`checksum: none`).
         s.push_str("      unchecked = true,\n");
     }
+    if m.unasked {
+        // The device sends it on its own (`unasked: true`): after a request that does not
+        // get it, it is not that request's reply.
+        s.push_str("      unasked = true,\n");
+    }
     if let Some(from) = m.over_request {
         // Its checksum takes in the request's bytes, then its own from `over`.
         let _ = writeln!(s, "      over = {from},");

@@ -1644,7 +1644,8 @@ local function setup(P)
         end
         state.last = { num = num, idx = m.idx, cov = cov }
       else
-        if prev then
+        -- A response sent unasked that the request before it does not get is not its reply.
+        if prev and not (m.unasked and not P.commands[prev.idx + 1].gets[m.idx]) then
           rec.response_to = prev
           state.response_in[prev.num] = num
         end

@@ -983,7 +983,21 @@ pub fn render(p: &Protocol, source: &str) -> String {
                         )
                     })
                     .collect();
-                let _ = writeln!(o, "Answers: {}.\n", names.join(", "));
+                match (names.is_empty(), m.unasked) {
+                    (true, _) => o.push_str(
+                        "Sent unasked: the device sends it on its own, not as a reply to any command.\n\n",
+                    ),
+                    (false, true) => {
+                        let _ = writeln!(
+                            o,
+                            "Answers: {}; also sent unasked: the device sends it on its own too, and heard after any other request it is not that request's reply.\n",
+                            names.join(", ")
+                        );
+                    }
+                    (false, false) => {
+                        let _ = writeln!(o, "Answers: {}.\n", names.join(", "));
+                    }
+                }
             }
             examples_of(
                 &mut o,

@@ -1127,6 +1127,11 @@ pub struct Message {
     /// fields, address or checksum; its `layout.len` and `max_len` are the bytes' length. Such
     /// messages come after every framed one of their direction ([`Protocol::framed`]).
     pub frame: Option<Vec<u8>>,
+    /// Responses: the device sends it on its own (`unasked: true`), not only as a reply;
+    /// `answers` may then be empty (sent unasked only). A frame of it heard after a request
+    /// that does not list it is not that request's reply: the stream decoders report it on
+    /// its own, and the master sets it aside and keeps waiting.
+    pub unasked: bool,
 }
 
 impl Message {

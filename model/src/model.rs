@@ -805,6 +805,11 @@ pub struct Response {
     pub fields: Vec<Field>,
     #[serde(default)]
     pub needs_request: bool,
+    /// The device sends this frame on its own (`unasked: true`), not only (or not at all) as
+    /// the reply to a request: a KISS TNC's received data frames, a GNSS receiver's periodic
+    /// output. Such a response need not be listed by any command.
+    #[serde(default)]
+    pub unasked: bool,
     /// The reply's code derives from the request's: for every command that lists it, its
     /// code is the command's code with these bits set (Modbus exceptions: `0x80`).
     #[serde(default)]

@@ -375,6 +375,7 @@ fn validate_ordered(spec: &model::Spec, sink: &mut Sink) -> Option<Protocol> {
             over_request: None,
             unchecked: false,
             frame: None,
+            unasked: false,
         });
     }
 
@@ -395,8 +396,8 @@ fn validate_ordered(spec: &model::Spec, sink: &mut Sink) -> Option<Protocol> {
         let path = join("responses", &r.name);
         if let Some(hex) = &r.frame {
             let answers = std::mem::take(&mut answered_by[ri]);
-            if answers.is_empty() {
-                sink.error(&path, "no command lists this response (add it to a command's `responses` or to `common_responses`)");
+            if answers.is_empty() && !r.unasked {
+                sink.error(&path, "no command lists this response (add it to a command's `responses` or to `common_responses`, or mark it `unasked: true` if the device sends it on its own)");
             }
             check_section(&r.section, &path, sink);
             let frame = constant_frame(r, hex, &framing, &constants, &path, sink);
@@ -435,6 +436,7 @@ fn validate_ordered(spec: &model::Spec, sink: &mut Sink) -> Option<Protocol> {
                 over_request: None,
                 unchecked: false,
                 frame: Some(frame),
+                unasked: r.unasked,
             });
             continue;
         }
@@ -452,10 +454,13 @@ fn validate_ordered(spec: &model::Spec, sink: &mut Sink) -> Option<Protocol> {
             sink,
         );
         let answers = std::mem::take(&mut answered_by[ri]);
-        if answers.is_empty() {
-            sink.error(&path, "no command lists this response (add it to a command's `responses` or to `common_responses`)");
+        if answers.is_empty() && !r.unasked {
+            sink.error(&path, "no command lists this response (add it to a command's `responses` or to `common_responses`, or mark it `unasked: true` if the device sends it on its own)");
         }
         check_section(&r.section, &path, sink);
+        if r.unasked {
+            check_unasked(r, &fields, &path, sink);
+        }
         let code_from_request = code_from_request(r, &code, &answers, &commands, &path, sink);
         check_request_fields(&fields, &answers, &commands, &path, sink);
         let layout = frame_layout(&framing, Direction::Response, code.len(), payload_len);
@@ -489,6 +494,7 @@ fn validate_ordered(spec: &model::Spec, sink: &mut Sink) -> Option<Protocol> {
             over_request: None,
             unchecked: false,
             frame: None,
+            unasked: r.unasked,
         });
     }
     checksum_extras(spec, &mut framing, &mut commands, &mut responses, sink);
@@ -966,6 +972,44 @@ fn over_requests(
                 break;
             }
         }
+    }
+}
+
+/// A response sent unasked (`unasked: true`) must read without a request: nothing of it may
+/// come from one.
+fn check_unasked(r: &model::Response, fields: &[Field], path: &str, sink: &mut Sink) {
+    let why = "a response sent unasked (`unasked: true`) must decode without a request";
+    if r.needs_request {
+        sink.error(
+            join(path, "needs_request"),
+            format!("{why}; it cannot need one to be told apart"),
+        );
+    }
+    if r.code_from_request.is_some() {
+        sink.error(
+            join(path, "code_from_request"),
+            format!("{why}; its code cannot derive from the request's"),
+        );
+    }
+    if r.checksum_over_request.is_some() {
+        sink.error(
+            join(path, "checksum_over_request"),
+            format!("{why}; its checksum cannot take in the request's bytes"),
+        );
+    }
+    for f in fields {
+        let key = match (
+            &f.follows,
+            f.repeat.as_ref().and_then(|r| r.request.as_ref()),
+        ) {
+            (Some(Follows::Request(_)), _) => "follows",
+            (_, Some(_)) => "repeat.request",
+            _ => continue,
+        };
+        sink.error(
+            join(&join(&join(path, "fields"), &f.name), key),
+            format!("{why}; `{}` cannot take its value from the request", f.name),
+        );
     }
 }
 

@@ -1261,6 +1261,24 @@ const CASES: &[(&str, &[(&str, &str)])] = &[
         )],
     ),
     (
+        "unasked_follows_request",
+        &[(
+            "responses.status.fields.channel.follows",
+            "a response sent unasked (`unasked: true`) must decode without a request; `channel` cannot take its value from the request",
+        )],
+    ),
+    (
+        "unasked_on_command",
+        &[("commands.go_to.unasked", "unknown field `unasked`")],
+    ),
+    (
+        "unasked_missing",
+        &[(
+            "responses.heartbeat",
+            "no command lists this response (add it to a command's `responses` or to `common_responses`, or mark it `unasked: true` if the device sends it on its own)",
+        )],
+    ),
+    (
         "needs_request_alone",
         &[(
             "responses.status",

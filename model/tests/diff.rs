@@ -694,3 +694,50 @@ fn transform_changes_are_classified() {
     let (old, new) = common::revisions("dlt645", &[("section: \"5.3\", add", "add")]);
     assert_eq!(summary_of(&old, &new), []);
 }
+
+/// A response made also sent unasked (`unasked: true`) is compatible; the flag dropped (the
+/// response then listed by a command) is wire-breaking: a device that still sends it on its
+/// own breaks a master waiting for another reply. A response sent unasked only cannot lose
+/// the flag without being listed.
+#[test]
+fn unasked_changes_are_classified() {
+    let path = Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/fixtures/valid/unasked.yaml");
+    let text = std::fs::read_to_string(&path).expect("unasked.yaml");
+    let load = |t: &str| busspec_model::load_str("x.yaml", t).unwrap_or_else(|d| panic!("{d}"));
+    let base = load(&text);
+    let flag = "    code: \"0x71\"\n    unasked: true\n";
+    assert!(text.contains(flag));
+    let reply_only = load(&text.replace(flag, "    code: \"0x71\"\n"));
+    let summary_of = |a: &Protocol, b: &Protocol| {
+        diff::diff(a, b)
+            .into_iter()
+            .map(|c| (c.category, c.kind, c.path))
+            .collect::<Vec<_>>()
+    };
+    assert_eq!(
+        summary_of(&reply_only, &base),
+        [(
+            Compat,
+            "unasked_added",
+            "responses.alarm.unasked".to_owned()
+        )]
+    );
+    assert_eq!(
+        summary_of(&base, &reply_only),
+        [(
+            Wire,
+            "unasked_removed",
+            "responses.alarm.unasked".to_owned()
+        )]
+    );
+    // The heartbeat, listed by no command, cannot drop the flag alone.
+    let hb = "    code: \"0x70\"\n    unasked: true\n";
+    let Err(e) = busspec_model::load_str("x.yaml", &text.replace(hb, "    code: \"0x70\"\n"))
+    else {
+        panic!("a response listed by no command and not unasked must be refused");
+    };
+    assert!(
+        e.to_string().contains("no command lists this response"),
+        "{e}"
+    );
+}

@@ -64,6 +64,17 @@ pub trait ResponseMessage<Q>: Message {
     fn answers(&self, request: &Q) -> bool;
     /// Whether this response is a refusal: the spec marks it `kind: nak`.
     fn is_nak(&self) -> bool;
+    /// Whether the device sends this response on its own (`unasked: true`), not only as a
+    /// reply: heard after a request that does not list it ([`Self::answers`] is `false`), it
+    /// is not that request's reply, and the master sets it aside and keeps waiting. `false`
+    /// for a protocol with no such response.
+    #[inline]
+    fn is_unasked(&self) -> bool {
+        false
+    }
+    /// Whether any response of the protocol is sent unasked ([`Self::is_unasked`]): where
+    /// none is, a master need not look for one in what it receives.
+    const HAS_UNASKED: bool = false;
     /// Decodes `frame` as a response, the reply to `request` where one is given (only the
     /// responses it may get); a response only its request tells apart is
     /// [`DecodeError::Ambiguous`] without one. What [`Protocol::decode_response`] and

@@ -85,6 +85,27 @@ pub(super) fn any_of(ty: &Ident, m: &Message) -> TokenStream {
 }
 
 pub(super) fn emit_pairing(ctx: &Ctx) -> TokenStream {
+    let unasked: Vec<TokenStream> = ctx
+        .p
+        .responses
+        .iter()
+        .filter(|r| r.unasked)
+        .map(|r| any_of(&ident("Response"), r))
+        .collect();
+    let is_unasked = if unasked.is_empty() {
+        quote!()
+    } else {
+        quote! {
+            impl Response {
+                /// Whether the device sends this response on its own (`unasked: true`), not
+                /// only as a reply: after a request that does not list it, it is not that
+                /// request's reply.
+                pub fn is_unasked(&self) -> bool {
+                    matches!(self, #(#unasked)|*)
+                }
+            }
+        }
+    };
     let Some(follows) = emit_follows_request(ctx) else {
         return quote! {
             impl Response {
@@ -93,9 +114,11 @@ pub(super) fn emit_pairing(ctx: &Ctx) -> TokenStream {
                     request.replies() >> self.index() & 1 != 0
                 }
             }
+            #is_unasked
         };
     };
     quote! {
+        #is_unasked
         impl Response {
             /// Whether this response is one the document says `request` may get, and every
             /// field it takes from the request agrees with it.
@@ -301,6 +324,24 @@ pub(super) fn emit_protocol_impl(p: &Protocol) -> TokenStream {
     } else {
         quote!(matches!(self, #(#naks)|*))
     };
+    // Responses sent unasked (`unasked: true`): only a protocol with one says so.
+    let unasked: Vec<TokenStream> = p
+        .responses
+        .iter()
+        .filter(|r| r.unasked)
+        .map(|r| any_of(&ident("Response"), r))
+        .collect();
+    let is_unasked = if unasked.is_empty() {
+        quote!()
+    } else {
+        quote! {
+            #[inline]
+            fn is_unasked(&self) -> bool {
+                Response::is_unasked(self)
+            }
+            const HAS_UNASKED: bool = true;
+        }
+    };
     let doc_text = format!(
         "The {} protocol as a type: implements [`busspec_runtime::Protocol`], so code generic over protocols works with it.",
         p.name
@@ -392,6 +433,7 @@ pub(super) fn emit_protocol_impl(p: &Protocol) -> TokenStream {
             fn is_nak(&self) -> bool {
                 #is_nak
             }
+            #is_unasked
             #[inline]
             fn decode_as_reply(frame: &[u8], request: rt::Option<&Request>) -> rt::Result<Decoded<Response>, rt::DecodeError> {
                 Response::decode_for(frame, request)

@@ -26,7 +26,7 @@ pub mod kiss {
     /// The document's date.
     pub const DOCUMENT_DATE: &str = "1987-01-01";
     /// SHA-256 of the spec file this module was generated from, lowercase hex (`sha256sum`).
-    pub const SPEC_SHA256: &str = "2968108e29285a03dc7311d5d5c563fda9593568ed5efb7344177ae09ce1fbde";
+    pub const SPEC_SHA256: &str = "54cf84ba18b306cc5af2eb8848228692ccc8f4510b507c4b0ad608db3150288e";
     /// The spec's text, exactly as this module was generated from it.
     pub const SPEC_YAML: &str = include_str!(
         "../../../model/tests/fixtures/valid/kiss.yaml"
@@ -376,7 +376,7 @@ pub mod kiss {
         /// Each command's kind, whether it accepts and answers the broadcast address, and the
         /// responses it may get (bit `i`: row `i` of `Response::MESSAGES`), in spec order.
         const COMMANDS: [(rt::CommandKind, bool, bool, u64); 8] = [
-            (rt::Setter, false, false, 0x1),
+            (rt::Setter, false, false, 0x0),
             (rt::Setter, false, false, 0x0),
             (rt::Setter, false, false, 0x0),
             (rt::Setter, false, false, 0x0),
@@ -396,7 +396,7 @@ pub mod kiss {
                     answered: c.2,
                 },
                 reply: match self {
-                    Request::DataFrame(_) => rt::Reply::Optional,
+                    Request::DataFrame(_) => rt::Reply::None,
                     Request::TxDelay(_) => rt::Reply::None,
                     Request::Persistence(_) => rt::Reply::None,
                     Request::SlotTime(_) => rt::Reply::None,
@@ -607,6 +607,14 @@ pub mod kiss {
             request.replies() >> self.index() & 1 != 0
         }
     }
+    impl Response {
+        /// Whether the device sends this response on its own (`unasked: true`), not
+        /// only as a reply: after a request that does not list it, it is not that
+        /// request's reply.
+        pub fn is_unasked(&self) -> bool {
+            matches!(self, Response::ReceivedFrame(_))
+        }
+    }
     /// The kiss protocol as a type: implements [`busspec_runtime::Protocol`], so code generic over protocols works with it.
     #[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
     pub struct Kiss;
@@ -653,6 +661,11 @@ pub mod kiss {
         fn is_nak(&self) -> bool {
             false
         }
+        #[inline]
+        fn is_unasked(&self) -> bool {
+            Response::is_unasked(self)
+        }
+        const HAS_UNASKED: bool = true;
         #[inline]
         fn decode_as_reply(
             frame: &[u8],

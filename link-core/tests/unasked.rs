@@ -1,0 +1,124 @@
+//! A response the device sends unasked (`unasked: true`) heard while the master waits for a
+//! reply: set aside (counted by `unasked_seen`), neither the reply nor a failure, and the
+//! master keeps waiting within the same timeout. The protocol is the code generated for the
+//! fixture `unasked.yaml` (its snapshot).
+
+// The generated module's optional derives name features this crate does not have.
+#![allow(unexpected_cfgs)]
+
+use core::time::Duration;
+
+use busspec_link_core::master::{Action, MasterCore};
+use busspec_link_core::{Message, Plain};
+
+include!("../../codegen/tests/snapshots/unasked.rs");
+use unasked::{request, response, Request, Response, Unasked};
+
+fn ms(n: u64) -> Duration {
+    Duration::from_millis(n)
+}
+
+fn frame<M: Message>(m: &M, address: u8) -> Vec<u8> {
+    let mut buf = [0u8; 32];
+    let n = m.encode(address, &mut buf).unwrap();
+    buf[..n].to_vec()
+}
+
+fn heartbeat() -> Vec<u8> {
+    frame(
+        &Response::Heartbeat(response::Heartbeat { uptime: 10 }),
+        0x21,
+    )
+}
+
+/// Starts `q` at `t` (after any earlier traffic's gap) and polls until the master reads;
+/// the read's deadline.
+fn sent(core: &mut MasterCore<Plain<Unasked>>, q: Request, t: Duration) -> Duration {
+    core.start(0x21, q);
+    let mut t = t;
+    let mut wrote = false;
+    loop {
+        match core.poll(t) {
+            Action::Sleep(until) => t = until,
+            Action::Write(_) => wrote = true,
+            Action::Read { until } if wrote => return until,
+            Action::ClearInput => {}
+            other => panic!("{other:?}"),
+        }
+    }
+}
+
+#[test]
+fn a_heartbeat_before_the_reply_is_set_aside() {
+    let mut core: MasterCore<Plain<Unasked>> = MasterCore::new();
+    let q = Request::GetStatus(request::GetStatus { channel: 1 });
+    let deadline = sent(&mut core, q, ms(0));
+    let status = frame(
+        &Response::Status(response::Status {
+            channel: 1,
+            value: 5,
+        }),
+        0x21,
+    );
+    // A heartbeat and half the reply in one read, then the rest.
+    let mut first = heartbeat();
+    first.extend_from_slice(&status[..3]);
+    core.received(&first, ms(5));
+    assert_eq!(core.unasked_seen(), 1);
+    assert!(matches!(core.poll(ms(5)), Action::Read { .. }));
+    core.received(&status[3..], ms(6));
+    assert_eq!(core.poll(ms(6)), Action::Done);
+    let r = core.take_outcome().unwrap().unwrap();
+    assert_eq!(
+        r.response,
+        Some(Response::Status(response::Status {
+            channel: 1,
+            value: 5
+        }))
+    );
+    assert_eq!(r.attempts, 1);
+
+    // A heartbeat alone: the master keeps waiting until the same deadline, then the reply.
+    let deadline2 = sent(&mut core, q, ms(100));
+    core.received(&heartbeat(), ms(107));
+    assert_eq!(core.unasked_seen(), 2);
+    assert_eq!(core.poll(ms(108)), Action::Read { until: deadline2 });
+    core.received(&heartbeat(), ms(109));
+    core.received(&status, ms(110));
+    assert_eq!(core.unasked_seen(), 3);
+    assert_eq!(core.poll(ms(110)), Action::Done);
+    assert!(core.take_outcome().unwrap().is_ok());
+    assert!(deadline > ms(1));
+}
+
+#[test]
+fn an_unasked_frame_the_request_gets_is_its_reply() {
+    let mut core: MasterCore<Plain<Unasked>> = MasterCore::new();
+    let go = Request::GoTo(request::GoTo { target: 5 });
+    sent(&mut core, go, ms(0));
+    // The alarm is go_to's reply as well as sent unasked: taken as the reply.
+    let alarm = Response::Alarm(response::Alarm { alarm_code: 3 });
+    core.received(&frame(&alarm, 0x21), ms(5));
+    assert_eq!(core.poll(ms(5)), Action::Done);
+    assert_eq!(core.take_outcome().unwrap().unwrap().response, Some(alarm));
+    assert_eq!(core.unasked_seen(), 0);
+}
+
+#[test]
+fn only_heartbeats_until_the_deadline_is_no_reply() {
+    let mut core: MasterCore<Plain<Unasked>> = MasterCore::new();
+    let q = Request::GetStatus(request::GetStatus { channel: 1 });
+    let deadline = sent(&mut core, q, ms(0));
+    core.received(&heartbeat(), ms(5));
+    let mut t = ms(5);
+    loop {
+        match core.poll(t) {
+            Action::Done => break,
+            Action::Read { until } | Action::Sleep(until) => t = until,
+            _ => {}
+        }
+    }
+    assert!(t >= deadline);
+    assert!(core.take_outcome().unwrap().is_err());
+    assert_eq!(core.unasked_seen(), 1);
+}
