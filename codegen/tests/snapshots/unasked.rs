@@ -151,17 +151,8 @@ pub mod unasked {
         pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             rt::encode_address(address, &FRAME)?;
             let len = match *self {
-                Self::GoTo(request::GoTo { target: v_target }) => {
-                    let out = rt::frame_mut::<6>(buf, &[0xAA, address, 0x20])?;
-                    out[3..5].copy_from_slice(&v_target.to_be_bytes());
-                    rt::seal_sum8_head(out, 3, address.wrapping_add(0xCA))
-                }
-                Self::GetStatus(request::GetStatus { channel: v_channel }) => {
-                    rt::encode_in_range("channel", v_channel, 0, 3)?;
-                    let out = rt::frame_mut::<5>(buf, &[0xAA, address, 0x40])?;
-                    out[3] = v_channel;
-                    rt::seal_sum8_head(out, 3, address.wrapping_add(0xEA))
-                }
+                Self::GoTo(ref m) => m.write(address, buf)?,
+                Self::GetStatus(ref m) => m.write(address, buf)?,
             };
             rt::Ok(len)
         }
@@ -177,23 +168,8 @@ pub mod unasked {
         #[inline]
         fn dispatch(frame: &[u8]) -> rt::DecodeResult<Self> {
             match frame[2] {
-                0x20 => {
-                    let frame = rt::fixed::<6>(frame, &request::GoTo::DESC)?;
-                    rt::Ok(
-                        Self::GoTo(request::GoTo {
-                            target: u16::from_be_bytes([frame[3], frame[4]]),
-                        }),
-                    )
-                }
-                0x40 => {
-                    let frame = rt::fixed::<5>(frame, &request::GetStatus::DESC)?;
-                    rt::in_range(&request::GetStatus::CHANNEL_DESC, 3, frame[3], 0, 3)?;
-                    rt::Ok(
-                        Self::GetStatus(request::GetStatus {
-                            channel: frame[3],
-                        }),
-                    )
-                }
+                0x20 => request::GoTo::from_frame(frame).map(Self::GoTo),
+                0x40 => request::GetStatus::from_frame(frame).map(Self::GetStatus),
                 _ => rt::Err(REQUEST_CODE.unknown(frame)),
             }
         }
@@ -335,24 +311,9 @@ pub mod unasked {
                     let out = rt::frame_mut::<4>(buf, &[0xAA, address, 0x50])?;
                     rt::seal_sum8_head(out, 3, address.wrapping_add(0xFA))
                 }
-                Self::Status(
-                    response::Status { channel: v_channel, value: v_value },
-                ) => {
-                    let out = rt::frame_mut::<7>(buf, &[0xAA, address, 0x40])?;
-                    out[3] = v_channel;
-                    out[4..6].copy_from_slice(&v_value.to_be_bytes());
-                    rt::seal_sum8_head(out, 3, address.wrapping_add(0xEA))
-                }
-                Self::Heartbeat(response::Heartbeat { uptime: v_uptime }) => {
-                    let out = rt::frame_mut::<8>(buf, &[0xAA, address, 0x70])?;
-                    out[3..7].copy_from_slice(&v_uptime.to_be_bytes());
-                    rt::seal_sum8_head(out, 3, address.wrapping_add(0x1A))
-                }
-                Self::Alarm(response::Alarm { alarm_code: v_alarm_code }) => {
-                    let out = rt::frame_mut::<5>(buf, &[0xAA, address, 0x71])?;
-                    out[3] = v_alarm_code;
-                    rt::seal_sum8_head(out, 3, address.wrapping_add(0x1B))
-                }
+                Self::Status(ref m) => m.write(address, buf)?,
+                Self::Heartbeat(ref m) => m.write(address, buf)?,
+                Self::Alarm(ref m) => m.write(address, buf)?,
             };
             rt::Ok(len)
         }
@@ -400,36 +361,9 @@ pub mod unasked {
                     rt::fixed::<4>(frame, &response::Started::DESC)
                         .map(|_| Self::Started(response::Started))
                 }
-                0x40 => {
-                    let frame = rt::fixed::<7>(frame, &response::Status::DESC)?;
-                    rt::Ok(
-                        Self::Status(response::Status {
-                            channel: frame[3],
-                            value: u16::from_be_bytes([frame[4], frame[5]]),
-                        }),
-                    )
-                }
-                0x70 => {
-                    let frame = rt::fixed::<8>(frame, &response::Heartbeat::DESC)?;
-                    rt::Ok(
-                        Self::Heartbeat(response::Heartbeat {
-                            uptime: u32::from_be_bytes([
-                                frame[3],
-                                frame[4],
-                                frame[5],
-                                frame[6],
-                            ]),
-                        }),
-                    )
-                }
-                0x71 => {
-                    let frame = rt::fixed::<5>(frame, &response::Alarm::DESC)?;
-                    rt::Ok(
-                        Self::Alarm(response::Alarm {
-                            alarm_code: frame[3],
-                        }),
-                    )
-                }
+                0x40 => response::Status::from_frame(frame).map(Self::Status),
+                0x70 => response::Heartbeat::from_frame(frame).map(Self::Heartbeat),
+                0x71 => response::Alarm::from_frame(frame).map(Self::Alarm),
                 _ => rt::Err(RESPONSE_CODE.unknown(frame)),
             }
         }
@@ -652,6 +586,22 @@ pub mod unasked {
         pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             Request::GoTo(*self).encode(address, buf)
         }
+        /// Writes this message's frame for `address`, as the direction's `encode` does.
+        #[inline(always)]
+        fn write(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            let Self { target: v_target } = *self;
+            let out = rt::frame_mut::<6>(buf, &[0xAA, address, 0x20])?;
+            out[3..5].copy_from_slice(&v_target.to_be_bytes());
+            rt::Ok(rt::seal_sum8_head(out, 3, address.wrapping_add(0xCA)))
+        }
+        /// Reads this message from a frame whose framing and code are checked.
+        #[inline(always)]
+        fn from_frame(frame: &[u8]) -> rt::DecodeResult<Self> {
+            let frame = rt::fixed::<6>(frame, &Self::DESC)?;
+            rt::Ok(Self {
+                target: u16::from_be_bytes([frame[3], frame[4]]),
+            })
+        }
     }
     impl request::GetStatus {
         pub const NAME: &'static str = "get_status";
@@ -665,6 +615,22 @@ pub mod unasked {
         }
         pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             Request::GetStatus(*self).encode(address, buf)
+        }
+        /// Writes this message's frame for `address`, as the direction's `encode` does.
+        #[inline(always)]
+        fn write(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            let Self { channel: v_channel } = *self;
+            rt::encode_in_range("channel", v_channel, 0, 3)?;
+            let out = rt::frame_mut::<5>(buf, &[0xAA, address, 0x40])?;
+            out[3] = v_channel;
+            rt::Ok(rt::seal_sum8_head(out, 3, address.wrapping_add(0xEA)))
+        }
+        /// Reads this message from a frame whose framing and code are checked.
+        #[inline(always)]
+        fn from_frame(frame: &[u8]) -> rt::DecodeResult<Self> {
+            let frame = rt::fixed::<5>(frame, &Self::DESC)?;
+            rt::in_range(&Self::CHANNEL_DESC, 3, frame[3], 0, 3)?;
+            rt::Ok(Self { channel: frame[3] })
         }
     }
     impl response::Started {
@@ -691,6 +657,24 @@ pub mod unasked {
         pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             Response::Status(*self).encode(address, buf)
         }
+        /// Writes this message's frame for `address`, as the direction's `encode` does.
+        #[inline(always)]
+        fn write(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            let Self { channel: v_channel, value: v_value } = *self;
+            let out = rt::frame_mut::<7>(buf, &[0xAA, address, 0x40])?;
+            out[3] = v_channel;
+            out[4..6].copy_from_slice(&v_value.to_be_bytes());
+            rt::Ok(rt::seal_sum8_head(out, 3, address.wrapping_add(0xEA)))
+        }
+        /// Reads this message from a frame whose framing and code are checked.
+        #[inline(always)]
+        fn from_frame(frame: &[u8]) -> rt::DecodeResult<Self> {
+            let frame = rt::fixed::<7>(frame, &Self::DESC)?;
+            rt::Ok(Self {
+                channel: frame[3],
+                value: u16::from_be_bytes([frame[4], frame[5]]),
+            })
+        }
     }
     impl response::Heartbeat {
         pub const NAME: &'static str = "heartbeat";
@@ -704,6 +688,22 @@ pub mod unasked {
         pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             Response::Heartbeat(*self).encode(address, buf)
         }
+        /// Writes this message's frame for `address`, as the direction's `encode` does.
+        #[inline(always)]
+        fn write(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            let Self { uptime: v_uptime } = *self;
+            let out = rt::frame_mut::<8>(buf, &[0xAA, address, 0x70])?;
+            out[3..7].copy_from_slice(&v_uptime.to_be_bytes());
+            rt::Ok(rt::seal_sum8_head(out, 3, address.wrapping_add(0x1A)))
+        }
+        /// Reads this message from a frame whose framing and code are checked.
+        #[inline(always)]
+        fn from_frame(frame: &[u8]) -> rt::DecodeResult<Self> {
+            let frame = rt::fixed::<8>(frame, &Self::DESC)?;
+            rt::Ok(Self {
+                uptime: u32::from_be_bytes([frame[3], frame[4], frame[5], frame[6]]),
+            })
+        }
     }
     impl response::Alarm {
         pub const NAME: &'static str = "alarm";
@@ -716,6 +716,20 @@ pub mod unasked {
         }
         pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             Response::Alarm(*self).encode(address, buf)
+        }
+        /// Writes this message's frame for `address`, as the direction's `encode` does.
+        #[inline(always)]
+        fn write(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            let Self { alarm_code: v_alarm_code } = *self;
+            let out = rt::frame_mut::<5>(buf, &[0xAA, address, 0x71])?;
+            out[3] = v_alarm_code;
+            rt::Ok(rt::seal_sum8_head(out, 3, address.wrapping_add(0x1B)))
+        }
+        /// Reads this message from a frame whose framing and code are checked.
+        #[inline(always)]
+        fn from_frame(frame: &[u8]) -> rt::DecodeResult<Self> {
+            let frame = rt::fixed::<5>(frame, &Self::DESC)?;
+            rt::Ok(Self { alarm_code: frame[3] })
         }
     }
     /// Each request as a struct of its own; its constants (`DESC`, which names it as
