@@ -423,7 +423,7 @@ impl<P: Link, const CAP: usize> MasterCore<P, CAP> {
     /// The bytes last received: the reply being read or judged, or bytes discarded.
     /// How many frames the master has set aside since it was made: while waiting for a reply,
     /// a frame that decodes as a response the device sends unasked (`unasked: true`,
-    /// [`ResponseMessage::is_unasked`](ResponseMessage::is_unasked)) and that the
+    /// [`ResponseMessage::is_unasked`]) and that the
     /// request in flight does not get is not the reply and not a failure: its bytes are
     /// dropped, this count goes up, and the master keeps waiting within the same timeout.
     pub fn unasked_seen(&self) -> u32 {
