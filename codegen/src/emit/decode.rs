@@ -12,7 +12,7 @@ fn decode_optional(
     stmts: &mut Vec<TokenStream>,
 ) -> Option<(Ident, TokenStream)> {
     let (o, f) = (m.layout, &m.fields[fi]);
-    let (name, n) = (&f.name, format_ident!("field_{}", fi));
+    let (name, n) = (&f.name, wire_local(&f.name));
     let read = read_wire(f, f.frame_at(&o) - f.offset + full_shift(m, fi));
     let wt = wire_type(f);
     let (w, k, v) = (wt.ident(), usize_lit(k), local(name));
@@ -197,7 +197,7 @@ pub(super) fn decode_body(ctx: &Ctx, m: &Message) -> (Vec<TokenStream>, TokenStr
     // Each field's wire value: its read from `frame`, or the name it is bound to.
     let mut wires: Vec<TokenStream> = Vec::new();
     for (fi, f) in m.fields.iter().enumerate() {
-        let n = format_ident!("field_{}", fi);
+        let n = wire_local(&f.name);
         let read_at = usize_lit(f.frame_at(&o));
         // Where the field sits in this frame, as errors say it: after `j` lists, further by
         // their bytes (`s`, the frame taken apart by `rt::Lists`).

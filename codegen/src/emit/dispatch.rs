@@ -901,13 +901,13 @@ pub(super) fn emit_codeless_fns(ctx: &Ctx, codeless: &[&Message]) -> TokenStream
 /// same code inline in the arms (`bash benches/icount.sh`, `benches/flash/size.sh`): decode
 /// 1 to 8 instructions a frame cheaper, the subset's flash 176 bytes larger.
 fn from_frame(ctx: &Ctx, m: &Message) -> Option<TokenStream> {
-    if ctx.view.get() || m.is_variable() {
+    if ctx.view.get() {
         return None;
     }
     ctx.own.set(true);
     let (stmts, build) = decode_body(ctx, m);
     ctx.own.set(false);
-    if stmts.is_empty() && !mentions_frame(&build) {
+    if !m.is_variable() && stmts.is_empty() && !mentions_frame(&build) {
         return None;
     }
     let (v, dm) = (variant(m), direction_module(m.direction));
@@ -916,7 +916,14 @@ fn from_frame(ctx: &Ctx, m: &Message) -> Option<TokenStream> {
         .iter()
         .any(|(d, n, _)| *d == m.direction && *n == m.name)
     {
-        let len = usize_lit(ctx.p.frame_len(m));
+        // A variable-length frame is split into its fixed part and its lists' bytes; a
+        // fixed-length one is checked to have its length.
+        let head = if m.is_variable() {
+            split_frame(m, &stmts, &build)
+        } else {
+            let len = usize_lit(ctx.p.frame_len(m));
+            quote!(let frame = rt::fixed::<#len>(frame, &Self::DESC)?;)
+        };
         readers.push((
             m.direction,
             m.name.clone(),
@@ -924,7 +931,7 @@ fn from_frame(ctx: &Ctx, m: &Message) -> Option<TokenStream> {
                 /// Reads this message from a frame whose framing and code are checked.
                 #[inline(always)]
                 fn from_frame(frame: &[u8]) -> rt::DecodeResult<Self> {
-                    let frame = rt::fixed::<#len>(frame, &Self::DESC)?;
+                    #head
                     #(#stmts)*
                     rt::Ok(#build)
                 }
@@ -979,6 +986,10 @@ pub(super) fn emit_group(
                     let (frame, elements, count) = #rc.split::<#at>(frame)?;
                     Self::#f(frame, elements, count)
                 }};
+            }
+            if let Some(read) = from_frame(ctx, m) {
+                let v = variant(m);
+                return quote!(#read(frame).map(Self::#v));
             }
             let (stmts, build) = decode_body(ctx, m);
             let split = split_frame(m, &stmts, &build);

@@ -199,10 +199,10 @@ pub(super) fn emit_encode_arm(
                 quote!(#l as #w)
             }
         } else if let Some(other) = f.equals {
-            let n = format_ident!("field_{}", other);
+            let n = wire_local(&m.fields[other].name);
             quote!(#n)
         } else if let Some((other, rel)) = follows_field(f) {
-            let (n, args) = (format_ident!("field_{}", other), relation_args(rel));
+            let (n, args) = (wire_local(&m.fields[other].name), relation_args(rel));
             fits(f, wt, quote!(rt::follows(#n as i64, #args)))
         } else if let (true, Some((_, c, v))) = (counter == Some(fi), &repeat) {
             fits(f, wt, quote!(#c.count_value(#v.len()) as u64))
@@ -233,7 +233,7 @@ pub(super) fn emit_encode_arm(
             || f.constant.is_some()
             || agrees.is_some()
         {
-            let n = format_ident!("field_{}", fi);
+            let n = wire_local(&f.name);
             stmts.push(quote!(let #n: #w = #value;));
             if let Some((c, v)) = agrees {
                 // A count computed from another field must count the list.
@@ -358,7 +358,7 @@ fn fits(f: &Field, wt: IntType, v: TokenStream) -> TokenStream {
 /// The check that optional field `f` is given exactly where its condition `c` holds.
 fn presence_check(m: &Message, f: &Field, c: &Presence) -> TokenStream {
     let (name, v) = (&f.name, local(&f.name));
-    let cond = format_ident!("field_{}", c.field);
+    let cond = wire_local(&m.fields[c.field].name);
     let on = match c.when {
         PresentWhen::Bit(b) => {
             let mask = hex_lit(1u64 << b);

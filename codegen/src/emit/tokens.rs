@@ -22,6 +22,13 @@ pub(super) fn local(name: &str) -> Ident {
     format_ident!("v_{}", name)
 }
 
+/// The local a field's wire value is bound to (`w_quantity`), where a later field, a list's
+/// count or an optional field's condition reads it: named after the field, as `local` names
+/// its typed value.
+pub(super) fn wire_local(name: &str) -> Ident {
+    format_ident!("w_{}", name)
+}
+
 pub(super) fn type_ident(snake: &str) -> Ident {
     let c = camel(snake);
     // A name starting with a digit after an underscore split cannot happen: names start with a letter.

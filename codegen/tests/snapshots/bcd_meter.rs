@@ -605,20 +605,20 @@ pub mod bcd_meter {
         #[inline(always)]
         fn from_frame(frame: &[u8]) -> rt::DecodeResult<Self> {
             let frame = rt::fixed::<9>(frame, &Self::DESC)?;
-            let field_0: u8 = rt::bcd(&Self::HOUR_DESC, 3, frame[3] as u64)? as u8;
-            rt::in_range(&Self::HOUR_DESC, 3, field_0, 0, 23)?;
-            let field_1: u8 = rt::bcd(&Self::MINUTE_DESC, 4, frame[4] as u64)? as u8;
-            rt::in_range(&Self::MINUTE_DESC, 4, field_1, 0, 59)?;
-            let field_2: u16 = rt::bcd(
+            let w_hour: u8 = rt::bcd(&Self::HOUR_DESC, 3, frame[3] as u64)? as u8;
+            rt::in_range(&Self::HOUR_DESC, 3, w_hour, 0, 23)?;
+            let w_minute: u8 = rt::bcd(&Self::MINUTE_DESC, 4, frame[4] as u64)? as u8;
+            rt::in_range(&Self::MINUTE_DESC, 4, w_minute, 0, 59)?;
+            let w_year: u16 = rt::bcd(
                 &Self::YEAR_DESC,
                 5,
                 u16::from_le_bytes([frame[5], frame[6]]) as u64,
             )? as u16;
-            rt::in_range(&Self::YEAR_DESC, 5, field_2, 0, 9999)?;
+            rt::in_range(&Self::YEAR_DESC, 5, w_year, 0, 9999)?;
             rt::Ok(Self {
-                hour: field_0,
-                minute: field_1,
-                year: field_2,
+                hour: w_hour,
+                minute: w_minute,
+                year: w_year,
             })
         }
     }
@@ -656,17 +656,17 @@ pub mod bcd_meter {
         #[inline(always)]
         fn from_frame(frame: &[u8]) -> rt::DecodeResult<Self> {
             let frame = rt::fixed::<10>(frame, &Self::DESC)?;
-            let field_0: u32 = rt::bcd(
+            let w_energy: u32 = rt::bcd(
                 &Self::ENERGY_DESC,
                 3,
                 u32::from_le_bytes([frame[3], frame[4], frame[5], frame[6]]) as u64,
             )? as u32;
-            rt::in_range(&Self::ENERGY_DESC, 3, field_0, 0, 99999999)?;
-            let field_1: u8 = rt::bcd(&Self::TARIFF_DESC, 7, frame[7] as u64)? as u8;
-            rt::in_range(&Self::TARIFF_DESC, 7, field_1, 1, 4)?;
+            rt::in_range(&Self::ENERGY_DESC, 3, w_energy, 0, 99999999)?;
+            let w_tariff: u8 = rt::bcd(&Self::TARIFF_DESC, 7, frame[7] as u64)? as u8;
+            rt::in_range(&Self::TARIFF_DESC, 7, w_tariff, 1, 4)?;
             rt::Ok(Self {
-                energy: KilowattHours::from_raw(field_0),
-                tariff: field_1,
+                energy: KilowattHours::from_raw(w_energy),
+                tariff: w_tariff,
             })
         }
     }

@@ -465,15 +465,7 @@ pub mod cobs_link {
                     rt::fixed::<4>(frame, &response::Ack::DESC)
                         .map(|_| Self::Ack(response::Ack))
                 }
-                0xB0 => {
-                    let (_, elements, _) = REPEAT_LOG.split::<2>(frame)?;
-                    rt::Ok(
-                        Self::Log(response::Log {
-                            entries: REPEAT_LOG
-                                .elements::<u8, 254>(elements, true, false)?,
-                        }),
-                    )
-                }
+                0xB0 => response::Log::from_frame(frame).map(Self::Log),
                 _ => rt::Err(RESPONSE_CODE.unknown(frame)),
             }
         }
@@ -735,6 +727,14 @@ pub mod cobs_link {
             out[1] = 0xB0;
             rt::write_elements(v_entries.as_slice(), 1, true, &mut out[2..]);
             rt::Ok(out.len())
+        }
+        /// Reads this message from a frame whose framing and code are checked.
+        #[inline(always)]
+        fn from_frame(frame: &[u8]) -> rt::DecodeResult<Self> {
+            let (_, elements, _) = REPEAT_LOG.split::<2>(frame)?;
+            rt::Ok(Self {
+                entries: REPEAT_LOG.elements::<u8, 254>(elements, true, false)?,
+            })
         }
     }
     /// Each request as a struct of its own; its constants (`DESC`, which names it as

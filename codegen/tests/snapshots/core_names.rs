@@ -772,11 +772,11 @@ pub mod clash {
         fn from_frame(frame: &[u8]) -> rt::DecodeResult<Self> {
             let frame = rt::fixed::<7>(frame, &Self::DESC)?;
             rt::no_broadcast(frame[1], 0x00, &Self::DESC)?;
-            let field_1: u16 = u16::from_le_bytes([frame[4], frame[5]]);
-            rt::in_range(&Self::CORE_DESC, 4, field_1, 0, 1000)?;
+            let w_core: u16 = u16::from_le_bytes([frame[4], frame[5]]);
+            rt::in_range(&Self::CORE_DESC, 4, w_core, 0, 1000)?;
             rt::Ok(Self {
                 some: Result::from_raw(frame[3]),
-                core: Option::from_raw(field_1),
+                core: Option::from_raw(w_core),
             })
         }
     }
@@ -866,9 +866,9 @@ pub mod clash {
             let Self { f: v_f } = *self;
             rt::encode_broadcast(address, 0x00, &request::Rt::DESC)?;
             let out = rt::frame_mut::<6>(buf, &[0xAA, address, 0x13])?;
-            let field_0: u8 = v_f;
-            out[3] = field_0;
-            out[4] = field_0;
+            let w_f: u8 = v_f;
+            out[3] = w_f;
+            out[4] = w_f;
             rt::Ok(rt::seal_sum8_head(out, 3, address.wrapping_add(0xBD)))
         }
         /// Reads this message from a frame whose framing and code are checked.
@@ -951,9 +951,9 @@ pub mod clash {
             let Self { asked: v_asked, none: v_none, some: v_some } = *self;
             let out = rt::frame_mut::<7>(buf, &[0xAA, address, 0x52])?;
             out[3..5].copy_from_slice(&v_asked.0);
-            let field_1: u8 = ((rt::fits("none", v_none, 0, 15)? as u8) << 4)
+            let w_request: u8 = ((rt::fits("none", v_none, 0, 15)? as u8) << 4)
                 | ((rt::fits("some", v_some.raw(), -8, 7)? as u8) & 0xF);
-            out[5] = field_1;
+            out[5] = w_request;
             rt::Ok(rt::seal_sum8_head(out, 3, address.wrapping_add(0xFC)))
         }
         /// Reads this message from a frame whose framing and code are checked.

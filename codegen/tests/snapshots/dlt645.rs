@@ -906,12 +906,12 @@ pub mod dlt645 {
         #[inline(always)]
         fn from_frame(frame: &[u8]) -> rt::DecodeResult<Self> {
             let frame = rt::fixed::<20>(frame, &Self::DESC)?;
-            let field_3: u32 = rt::bcd(
+            let w_value: u32 = rt::bcd(
                 &Self::VALUE_DESC,
                 14,
                 u32::from_le_bytes([frame[14], frame[15], frame[16], frame[17]]) as u64,
             )? as u32;
-            rt::in_range(&Self::VALUE_DESC, 14, field_3, 0, 99999999)?;
+            rt::in_range(&Self::VALUE_DESC, 14, w_value, 0, 99999999)?;
             rt::Ok(Self {
                 address_low: rt::u24([frame[1], frame[2], frame[3]], true),
                 address_high: rt::u24([frame[4], frame[5], frame[6]], true),
@@ -921,7 +921,7 @@ pub mod dlt645 {
                     frame[12],
                     frame[13],
                 ]),
-                value: field_3,
+                value: w_value,
             })
         }
     }

@@ -279,26 +279,8 @@ pub mod dynamixel {
             match frame[4] {
                 0x01 => request::Ping::from_frame(frame).map(Self::Ping),
                 0x02 => request::Read::from_frame(frame).map(Self::Read),
-                0x03 => {
-                    let (frame, elements, _) = REPEAT_WRITE.split::<6>(frame)?;
-                    rt::Ok(
-                        Self::Write(request::Write {
-                            address: frame[5],
-                            data: REPEAT_WRITE
-                                .elements::<u8, 252>(elements, true, false)?,
-                        }),
-                    )
-                }
-                0x04 => {
-                    let (frame, elements, _) = REPEAT_REG_WRITE.split::<6>(frame)?;
-                    rt::Ok(
-                        Self::RegWrite(request::RegWrite {
-                            address: frame[5],
-                            data: REPEAT_REG_WRITE
-                                .elements::<u8, 252>(elements, true, false)?,
-                        }),
-                    )
-                }
+                0x03 => request::Write::from_frame(frame).map(Self::Write),
+                0x04 => request::RegWrite::from_frame(frame).map(Self::RegWrite),
                 0x05 => {
                     rt::fixed::<6>(frame, &request::Action::DESC)
                         .map(|_| Self::Action(request::Action))
@@ -307,17 +289,7 @@ pub mod dynamixel {
                     rt::fixed::<6>(frame, &request::Reset::DESC)
                         .map(|_| Self::Reset(request::Reset))
                 }
-                0x83 => {
-                    let (frame, elements, _) = REPEAT_SYNC_WRITE.split::<7>(frame)?;
-                    rt::Ok(
-                        Self::SyncWrite(request::SyncWrite {
-                            address: frame[5],
-                            data_length: frame[6],
-                            blocks: REPEAT_SYNC_WRITE
-                                .elements::<u8, 251>(elements, true, false)?,
-                        }),
-                    )
-                }
+                0x83 => request::SyncWrite::from_frame(frame).map(Self::SyncWrite),
                 _ => rt::Err(REQUEST_CODE.unknown(frame)),
             }
         }
@@ -1157,6 +1129,15 @@ pub mod dynamixel {
             rt::write_elements(v_data.as_slice(), 1, true, &mut out[6..]);
             rt::Ok(out.len())
         }
+        /// Reads this message from a frame whose framing and code are checked.
+        #[inline(always)]
+        fn from_frame(frame: &[u8]) -> rt::DecodeResult<Self> {
+            let (frame, elements, _) = REPEAT_WRITE.split::<6>(frame)?;
+            rt::Ok(Self {
+                address: frame[5],
+                data: REPEAT_WRITE.elements::<u8, 252>(elements, true, false)?,
+            })
+        }
     }
     impl request::RegWrite {
         pub const NAME: &'static str = "reg_write";
@@ -1184,6 +1165,15 @@ pub mod dynamixel {
             out[5] = v_address;
             rt::write_elements(v_data.as_slice(), 1, true, &mut out[6..]);
             rt::Ok(out.len())
+        }
+        /// Reads this message from a frame whose framing and code are checked.
+        #[inline(always)]
+        fn from_frame(frame: &[u8]) -> rt::DecodeResult<Self> {
+            let (frame, elements, _) = REPEAT_REG_WRITE.split::<6>(frame)?;
+            rt::Ok(Self {
+                address: frame[5],
+                data: REPEAT_REG_WRITE.elements::<u8, 252>(elements, true, false)?,
+            })
         }
     }
     impl request::Action {
@@ -1237,6 +1227,16 @@ pub mod dynamixel {
             out[6] = v_data_length;
             rt::write_elements(v_blocks.as_slice(), 1, true, &mut out[7..]);
             rt::Ok(out.len())
+        }
+        /// Reads this message from a frame whose framing and code are checked.
+        #[inline(always)]
+        fn from_frame(frame: &[u8]) -> rt::DecodeResult<Self> {
+            let (frame, elements, _) = REPEAT_SYNC_WRITE.split::<7>(frame)?;
+            rt::Ok(Self {
+                address: frame[5],
+                data_length: frame[6],
+                blocks: REPEAT_SYNC_WRITE.elements::<u8, 251>(elements, true, false)?,
+            })
         }
     }
     impl response::Status {

@@ -195,25 +195,7 @@ pub mod ending {
         fn dispatch(frame: &[u8]) -> rt::DecodeResult<Self> {
             match frame[3] {
                 0x01 => request::Read::from_frame(frame).map(Self::Read),
-                0x02 => {
-                    let (frame, elements, _) = REPEAT_WRITE.split::<6>(frame)?;
-                    rt::in_range(&request::Write::QUANTITY_DESC, 4, frame[4], 1, 16)?;
-                    rt::following(
-                        &request::Write::BYTE_COUNT_DESC,
-                        5,
-                        frame[5],
-                        frame[4] as i64,
-                        (2, 1),
-                        "2 × quantity",
-                    )?;
-                    rt::Ok(
-                        Self::Write(request::Write {
-                            quantity: frame[4],
-                            values: REPEAT_WRITE
-                                .elements::<u16, 16>(elements, false, false)?,
-                        }),
-                    )
-                }
+                0x02 => request::Write::from_frame(frame).map(Self::Write),
                 0x03 => request::Stamp::from_frame(frame).map(Self::Stamp),
                 _ => rt::Err(REQUEST_CODE.unknown(frame)),
             }
@@ -419,15 +401,7 @@ pub mod ending {
         #[inline]
         fn dispatch(frame: &[u8]) -> rt::DecodeResult<Self> {
             match frame[3] {
-                0x01 => {
-                    let (_, elements, _) = REPEAT_READ_REPLY.split::<4>(frame)?;
-                    rt::Ok(
-                        Self::ReadReply(response::ReadReply {
-                            values: REPEAT_READ_REPLY
-                                .elements::<u16, 16>(elements, false, false)?,
-                        }),
-                    )
-                }
+                0x01 => response::ReadReply::from_frame(frame).map(Self::ReadReply),
                 0x81 => response::ReadError::from_frame(frame).map(Self::ReadError),
                 0x02 => response::WriteReply::from_frame(frame).map(Self::WriteReply),
                 _ => rt::Err(RESPONSE_CODE.unknown(frame)),
@@ -920,18 +894,36 @@ pub mod ending {
             rt::encode_in_range("quantity", v_quantity, 1, 16)?;
             let frame_len = REPEAT_WRITE.encode_len(v_values.len())?;
             let out = rt::frame_mut_len(buf, frame_len, &[0xA5, 0x5A, address, 0x02])?;
-            let field_0: u8 = v_quantity;
-            out[4] = field_0;
-            let field_1: u8 = rt::fits(
+            let w_quantity: u8 = v_quantity;
+            out[4] = w_quantity;
+            let w_byte_count: u8 = rt::fits(
                 "byte_count",
-                rt::follows(field_0 as i64, 2, 1),
+                rt::follows(w_quantity as i64, 2, 1),
                 0,
                 255,
             )? as u8;
-            REPEAT_WRITE.encode_agrees(v_values.len(), field_1 as u64)?;
-            out[5] = field_1;
+            REPEAT_WRITE.encode_agrees(v_values.len(), w_byte_count as u64)?;
+            out[5] = w_byte_count;
             rt::write_elements(v_values.as_slice(), 2, false, &mut out[6..]);
             rt::Ok(out.len())
+        }
+        /// Reads this message from a frame whose framing and code are checked.
+        #[inline(always)]
+        fn from_frame(frame: &[u8]) -> rt::DecodeResult<Self> {
+            let (frame, elements, _) = REPEAT_WRITE.split::<6>(frame)?;
+            rt::in_range(&Self::QUANTITY_DESC, 4, frame[4], 1, 16)?;
+            rt::following(
+                &Self::BYTE_COUNT_DESC,
+                5,
+                frame[5],
+                frame[4] as i64,
+                (2, 1),
+                "2 × quantity",
+            )?;
+            rt::Ok(Self {
+                quantity: frame[4],
+                values: REPEAT_WRITE.elements::<u16, 16>(elements, false, false)?,
+            })
         }
     }
     impl request::Stamp {
@@ -990,6 +982,14 @@ pub mod ending {
             let out = rt::frame_mut_len(buf, frame_len, &[0xA5, 0x5A, address, 0x01])?;
             rt::write_elements(v_values.as_slice(), 2, false, &mut out[4..]);
             rt::Ok(out.len())
+        }
+        /// Reads this message from a frame whose framing and code are checked.
+        #[inline(always)]
+        fn from_frame(frame: &[u8]) -> rt::DecodeResult<Self> {
+            let (_, elements, _) = REPEAT_READ_REPLY.split::<4>(frame)?;
+            rt::Ok(Self {
+                values: REPEAT_READ_REPLY.elements::<u16, 16>(elements, false, false)?,
+            })
         }
     }
     impl response::ReadError {

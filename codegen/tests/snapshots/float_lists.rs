@@ -464,43 +464,9 @@ pub mod float_lists {
         #[inline]
         fn dispatch(frame: &[u8]) -> rt::DecodeResult<Self> {
             match frame[1] {
-                0x03 => {
-                    let (_, elements, _) = REPEAT_FLOATS.split::<3>(frame)?;
-                    let v_values = REPEAT_FLOATS
-                        .words::<f32, 8>(elements, false, false)?;
-                    REPEAT_FLOATS.in_range(v_values.as_slice(), 3296329728, 1148846080)?;
-                    rt::Ok(
-                        Self::Floats(response::Floats {
-                            values: v_values,
-                        }),
-                    )
-                }
-                0x41 => {
-                    let s = LISTS_COUNTERS.split::<6, 2>(frame)?;
-                    let frame = &s.frame;
-                    let v_drifts = s
-                        .lists[1]
-                        .elements::<i64, 2>(s.elements(1), false, true)?;
-                    s.lists[1]
-                        .in_range(v_drifts.as_slice(), -9000000000000, 9000000000000)?;
-                    rt::Ok(
-                        Self::Counters(response::Counters {
-                            totals: s
-                                .lists[0]
-                                .elements::<u64, 4>(s.elements(0), false, false)?,
-                            drifts: v_drifts,
-                        }),
-                    )
-                }
-                0x42 => {
-                    let (_, elements, _) = REPEAT_SAMPLES.split::<3>(frame)?;
-                    rt::Ok(
-                        Self::Samples(response::Samples {
-                            samples: REPEAT_SAMPLES
-                                .words::<f64, 4>(elements, false, false)?,
-                        }),
-                    )
-                }
+                0x03 => response::Floats::from_frame(frame).map(Self::Floats),
+                0x41 => response::Counters::from_frame(frame).map(Self::Counters),
+                0x42 => response::Samples::from_frame(frame).map(Self::Samples),
                 _ => rt::Err(RESPONSE_CODE.unknown(frame)),
             }
         }
@@ -872,11 +838,11 @@ pub mod float_lists {
         fn from_frame(frame: &[u8]) -> rt::DecodeResult<Self> {
             let frame = rt::fixed::<8>(frame, &Self::DESC)?;
             rt::no_broadcast(frame[0], 0x00, &Self::DESC)?;
-            let field_1: u16 = u16::from_be_bytes([frame[4], frame[5]]);
-            rt::in_range(&Self::QUANTITY_DESC, 4, field_1, 2, 16)?;
+            let w_quantity: u16 = u16::from_be_bytes([frame[4], frame[5]]);
+            rt::in_range(&Self::QUANTITY_DESC, 4, w_quantity, 2, 16)?;
             rt::Ok(Self {
                 start: u16::from_be_bytes([frame[2], frame[3]]),
-                quantity: field_1,
+                quantity: w_quantity,
             })
         }
     }
@@ -941,6 +907,14 @@ pub mod float_lists {
             rt::write_words(v_values.as_slice(), 4, false, &mut out[3..]);
             rt::Ok(out.len())
         }
+        /// Reads this message from a frame whose framing and code are checked.
+        #[inline(always)]
+        fn from_frame(frame: &[u8]) -> rt::DecodeResult<Self> {
+            let (_, elements, _) = REPEAT_FLOATS.split::<3>(frame)?;
+            let v_values = REPEAT_FLOATS.words::<f32, 8>(elements, false, false)?;
+            REPEAT_FLOATS.in_range(v_values.as_slice(), 3296329728, 1148846080)?;
+            rt::Ok(Self { values: v_values })
+        }
     }
     impl response::Counters {
         pub const NAME: &'static str = "counters";
@@ -990,6 +964,18 @@ pub mod float_lists {
             rt::write_elements(v_drifts.as_slice(), 8, false, &mut out[4 + bytes_0..]);
             rt::Ok(out.len())
         }
+        /// Reads this message from a frame whose framing and code are checked.
+        #[inline(always)]
+        fn from_frame(frame: &[u8]) -> rt::DecodeResult<Self> {
+            let s = LISTS_COUNTERS.split::<6, 2>(frame)?;
+            let frame = &s.frame;
+            let v_drifts = s.lists[1].elements::<i64, 2>(s.elements(1), false, true)?;
+            s.lists[1].in_range(v_drifts.as_slice(), -9000000000000, 9000000000000)?;
+            rt::Ok(Self {
+                totals: s.lists[0].elements::<u64, 4>(s.elements(0), false, false)?,
+                drifts: v_drifts,
+            })
+        }
     }
     impl response::Samples {
         pub const NAME: &'static str = "samples";
@@ -1018,6 +1004,14 @@ pub mod float_lists {
             )? as u8;
             rt::write_words(v_samples.as_slice(), 8, false, &mut out[3..]);
             rt::Ok(out.len())
+        }
+        /// Reads this message from a frame whose framing and code are checked.
+        #[inline(always)]
+        fn from_frame(frame: &[u8]) -> rt::DecodeResult<Self> {
+            let (_, elements, _) = REPEAT_SAMPLES.split::<3>(frame)?;
+            rt::Ok(Self {
+                samples: REPEAT_SAMPLES.words::<f64, 4>(elements, false, false)?,
+            })
         }
     }
     /// Each request as a struct of its own; its constants (`DESC`, which names it as

@@ -632,16 +632,16 @@ pub mod ft12_variable {
         fn from_frame(frame: &[u8]) -> rt::DecodeResult<Self> {
             let frame = rt::fixed::<27>(frame, &Self::DESC)?;
             rt::equal(&Self::CI_DESC, 6, frame[6], 0x72)?;
-            let field_1: u32 = rt::bcd(
+            let w_identification: u32 = rt::bcd(
                 &Self::IDENTIFICATION_DESC,
                 7,
                 u32::from_le_bytes([frame[7], frame[8], frame[9], frame[10]]) as u64,
             )? as u32;
-            rt::in_range(&Self::IDENTIFICATION_DESC, 7, field_1, 0, 99999999)?;
+            rt::in_range(&Self::IDENTIFICATION_DESC, 7, w_identification, 0, 99999999)?;
             rt::equal(&Self::DIF_DESC, 19, frame[19], 0x4)?;
             rt::equal(&Self::VIF_DESC, 20, frame[20], 0x13)?;
             rt::Ok(Self {
-                identification: field_1,
+                identification: w_identification,
                 manufacturer: u16::from_le_bytes([frame[11], frame[12]]),
                 version: frame[13],
                 medium: frame[14],

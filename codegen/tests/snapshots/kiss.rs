@@ -264,29 +264,13 @@ pub mod kiss {
         #[inline]
         fn dispatch(frame: &[u8]) -> rt::DecodeResult<Self> {
             match frame[1] {
-                0x00 => {
-                    let (frame, elements, _) = REPEAT_DATA_FRAME.split::<2>(frame)?;
-                    rt::Ok(
-                        Self::DataFrame(request::DataFrame {
-                            frame: REPEAT_DATA_FRAME
-                                .elements::<u8, 1024>(elements, false, false)?,
-                        }),
-                    )
-                }
+                0x00 => request::DataFrame::from_frame(frame).map(Self::DataFrame),
                 0x01 => request::TxDelay::from_frame(frame).map(Self::TxDelay),
                 0x02 => request::Persistence::from_frame(frame).map(Self::Persistence),
                 0x03 => request::SlotTime::from_frame(frame).map(Self::SlotTime),
                 0x04 => request::TxTail::from_frame(frame).map(Self::TxTail),
                 0x05 => request::FullDuplex::from_frame(frame).map(Self::FullDuplex),
-                0x06 => {
-                    let (_, elements, _) = REPEAT_SET_HARDWARE.split::<2>(frame)?;
-                    rt::Ok(
-                        Self::SetHardware(request::SetHardware {
-                            data: REPEAT_SET_HARDWARE
-                                .elements::<u8, 1024>(elements, false, false)?,
-                        }),
-                    )
-                }
+                0x06 => request::SetHardware::from_frame(frame).map(Self::SetHardware),
                 0xFF => {
                     rt::fixed::<3>(frame, &request::ReturnFromKiss::DESC)
                         .map(|_| Self::ReturnFromKiss(request::ReturnFromKiss))
@@ -543,13 +527,7 @@ pub mod kiss {
         fn dispatch(frame: &[u8]) -> rt::DecodeResult<Self> {
             match frame[1] {
                 0x00 => {
-                    let (frame, elements, _) = REPEAT_RECEIVED_FRAME.split::<2>(frame)?;
-                    rt::Ok(
-                        Self::ReceivedFrame(response::ReceivedFrame {
-                            frame: REPEAT_RECEIVED_FRAME
-                                .elements::<u8, 1024>(elements, false, false)?,
-                        }),
-                    )
+                    response::ReceivedFrame::from_frame(frame).map(Self::ReceivedFrame)
                 }
                 _ => rt::Err(RESPONSE_CODE.unknown(frame)),
             }
@@ -734,6 +712,14 @@ pub mod kiss {
             rt::write_elements(v_frame.as_slice(), 1, false, &mut out[2..]);
             rt::Ok(out.len())
         }
+        /// Reads this message from a frame whose framing and code are checked.
+        #[inline(always)]
+        fn from_frame(frame: &[u8]) -> rt::DecodeResult<Self> {
+            let (frame, elements, _) = REPEAT_DATA_FRAME.split::<2>(frame)?;
+            rt::Ok(Self {
+                frame: REPEAT_DATA_FRAME.elements::<u8, 1024>(elements, false, false)?,
+            })
+        }
     }
     impl request::TxDelay {
         pub const NAME: &'static str = "tx_delay";
@@ -892,6 +878,14 @@ pub mod kiss {
             rt::write_elements(v_data.as_slice(), 1, false, &mut out[2..]);
             rt::Ok(out.len())
         }
+        /// Reads this message from a frame whose framing and code are checked.
+        #[inline(always)]
+        fn from_frame(frame: &[u8]) -> rt::DecodeResult<Self> {
+            let (_, elements, _) = REPEAT_SET_HARDWARE.split::<2>(frame)?;
+            rt::Ok(Self {
+                data: REPEAT_SET_HARDWARE.elements::<u8, 1024>(elements, false, false)?,
+            })
+        }
     }
     impl request::ReturnFromKiss {
         pub const NAME: &'static str = "return_from_kiss";
@@ -923,6 +917,15 @@ pub mod kiss {
             let out = rt::frame_mut_len(buf, frame_len, &[0xC0, 0x00])?;
             rt::write_elements(v_frame.as_slice(), 1, false, &mut out[2..]);
             rt::Ok(out.len())
+        }
+        /// Reads this message from a frame whose framing and code are checked.
+        #[inline(always)]
+        fn from_frame(frame: &[u8]) -> rt::DecodeResult<Self> {
+            let (frame, elements, _) = REPEAT_RECEIVED_FRAME.split::<2>(frame)?;
+            rt::Ok(Self {
+                frame: REPEAT_RECEIVED_FRAME
+                    .elements::<u8, 1024>(elements, false, false)?,
+            })
         }
     }
     /// Each request as a struct of its own; its constants (`DESC`, which names it as

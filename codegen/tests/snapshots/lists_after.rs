@@ -269,43 +269,8 @@ pub mod lists_after {
         fn dispatch(frame: &[u8]) -> rt::DecodeResult<Self> {
             match frame[2] {
                 0x10 => request::ReadBlock::from_frame(frame).map(Self::ReadBlock),
-                0x11 => {
-                    let s = LISTS_WRITE_BLOCK.split::<7, 1>(frame)?;
-                    let frame = &s.frame;
-                    let field_2: u16 = u16::from_be_bytes([frame[4], frame[5]]);
-                    rt::in_range(
-                        &request::WriteBlock::FLAGS_DESC,
-                        4 + s.shift(1),
-                        field_2,
-                        0,
-                        255,
-                    )?;
-                    rt::Ok(
-                        Self::WriteBlock(request::WriteBlock {
-                            values: s
-                                .lists[0]
-                                .elements::<u16, 8>(s.elements(0), false, false)?,
-                            flags: field_2,
-                        }),
-                    )
-                }
-                0x12 => {
-                    let s = LISTS_COPY.split::<7, 2>(frame)?;
-                    let frame = &s.frame;
-                    let v_targets = s
-                        .lists[1]
-                        .elements::<u16, 4>(s.elements(1), false, false)?;
-                    s.lists[1].in_range(v_targets.as_slice(), 1, 1000)?;
-                    rt::equal(&request::Copy::MODE_DESC, 5 + s.shift(2), frame[5], 0x1)?;
-                    rt::Ok(
-                        Self::Copy(request::Copy {
-                            sources: s
-                                .lists[0]
-                                .elements::<u8, 4>(s.elements(0), false, false)?,
-                            targets: v_targets,
-                        }),
-                    )
-                }
+                0x11 => request::WriteBlock::from_frame(frame).map(Self::WriteBlock),
+                0x12 => request::Copy::from_frame(frame).map(Self::Copy),
                 _ => rt::Err(REQUEST_CODE.unknown(frame)),
             }
         }
@@ -521,18 +486,7 @@ pub mod lists_after {
         #[inline]
         fn dispatch(frame: &[u8]) -> rt::DecodeResult<Self> {
             match frame[2] {
-                0x10 => {
-                    let s = LISTS_BLOCK_REPLY.split::<6, 1>(frame)?;
-                    let frame = &s.frame;
-                    rt::Ok(
-                        Self::BlockReply(response::BlockReply {
-                            values: s
-                                .lists[0]
-                                .elements::<u16, 8>(s.elements(0), false, false)?,
-                            status: u16::from_be_bytes([frame[3], frame[4]]),
-                        }),
-                    )
-                }
+                0x10 => response::BlockReply::from_frame(frame).map(Self::BlockReply),
                 0x11 => response::Ack::from_frame(frame).map(Self::Ack),
                 _ => rt::Err(RESPONSE_CODE.unknown(frame)),
             }
@@ -649,17 +603,17 @@ pub mod lists_after {
                 0x11 => {
                     let s = LISTS_WRITE_BLOCK.split::<7, 1>(frame)?;
                     let frame = &s.frame;
-                    let field_2: u16 = u16::from_be_bytes([frame[4], frame[5]]);
+                    let w_flags: u16 = u16::from_be_bytes([frame[4], frame[5]]);
                     rt::in_range(
                         &request::WriteBlock::FLAGS_DESC,
                         4 + s.shift(1),
-                        field_2,
+                        w_flags,
                         0,
                         255,
                     )?;
                     rt::Ok(Self::WriteBlock {
                         values: s.lists[0].view::<u16, 8>(s.elements(0), false, false)?,
-                        flags: field_2,
+                        flags: w_flags,
                     })
                 }
                 0x12 => {
@@ -1039,6 +993,18 @@ pub mod lists_after {
             rt::write_elements(v_values.as_slice(), 2, false, &mut out[4..]);
             rt::Ok(out.len())
         }
+        /// Reads this message from a frame whose framing and code are checked.
+        #[inline(always)]
+        fn from_frame(frame: &[u8]) -> rt::DecodeResult<Self> {
+            let s = LISTS_WRITE_BLOCK.split::<7, 1>(frame)?;
+            let frame = &s.frame;
+            let w_flags: u16 = u16::from_be_bytes([frame[4], frame[5]]);
+            rt::in_range(&Self::FLAGS_DESC, 4 + s.shift(1), w_flags, 0, 255)?;
+            rt::Ok(Self {
+                values: s.lists[0].elements::<u16, 8>(s.elements(0), false, false)?,
+                flags: w_flags,
+            })
+        }
     }
     impl request::Copy {
         pub const NAME: &'static str = "copy";
@@ -1088,6 +1054,19 @@ pub mod lists_after {
             rt::write_elements(v_targets.as_slice(), 2, false, &mut out[5 + bytes_0..]);
             rt::Ok(out.len())
         }
+        /// Reads this message from a frame whose framing and code are checked.
+        #[inline(always)]
+        fn from_frame(frame: &[u8]) -> rt::DecodeResult<Self> {
+            let s = LISTS_COPY.split::<7, 2>(frame)?;
+            let frame = &s.frame;
+            let v_targets = s.lists[1].elements::<u16, 4>(s.elements(1), false, false)?;
+            s.lists[1].in_range(v_targets.as_slice(), 1, 1000)?;
+            rt::equal(&Self::MODE_DESC, 5 + s.shift(2), frame[5], 0x1)?;
+            rt::Ok(Self {
+                sources: s.lists[0].elements::<u8, 4>(s.elements(0), false, false)?,
+                targets: v_targets,
+            })
+        }
     }
     impl response::BlockReply {
         pub const NAME: &'static str = "block_reply";
@@ -1118,6 +1097,16 @@ pub mod lists_after {
             let out = LISTS_BLOCK_REPLY.expand(&compact, &[bytes_0], buf)?;
             rt::write_elements(v_values.as_slice(), 2, false, &mut out[3..]);
             rt::Ok(out.len())
+        }
+        /// Reads this message from a frame whose framing and code are checked.
+        #[inline(always)]
+        fn from_frame(frame: &[u8]) -> rt::DecodeResult<Self> {
+            let s = LISTS_BLOCK_REPLY.split::<6, 1>(frame)?;
+            let frame = &s.frame;
+            rt::Ok(Self {
+                values: s.lists[0].elements::<u16, 8>(s.elements(0), false, false)?,
+                status: u16::from_be_bytes([frame[3], frame[4]]),
+            })
         }
     }
     impl response::Ack {

@@ -324,33 +324,8 @@ pub mod lists_length {
         #[inline]
         fn dispatch(frame: &[u8]) -> rt::DecodeResult<Self> {
             match frame[2] {
-                0x20 => {
-                    let s = LISTS_LOG.split::<7, 2>(frame)?;
-                    let frame = &s.frame;
-                    let v_channels = s
-                        .lists[0]
-                        .elements::<u8, 6>(s.elements(0), true, false)?;
-                    s.lists[0].in_range(v_channels.as_slice(), 0, 15)?;
-                    rt::Ok(
-                        Self::Log(request::Log {
-                            channels: v_channels,
-                            samples: s
-                                .lists[1]
-                                .elements::<Millivolts, 6>(s.elements(1), true, true)?,
-                            seq: u16::from_le_bytes([frame[4], frame[5]]),
-                        }),
-                    )
-                }
-                0x21 => {
-                    let s = LISTS_SET_OUTPUTS.split::<7, 1>(frame)?;
-                    let frame = &s.frame;
-                    rt::Ok(
-                        Self::SetOutputs(request::SetOutputs {
-                            outputs: s.lists[0].bits::<2>(s.elements(0), s.n[0])?,
-                            mask: u16::from_le_bytes([frame[4], frame[5]]),
-                        }),
-                    )
-                }
+                0x20 => request::Log::from_frame(frame).map(Self::Log),
+                0x21 => request::SetOutputs::from_frame(frame).map(Self::SetOutputs),
                 _ => rt::Err(REQUEST_CODE.unknown(frame)),
             }
         }
@@ -854,6 +829,21 @@ pub mod lists_length {
             LENGTH.put(out)?;
             rt::Ok(out.len())
         }
+        /// Reads this message from a frame whose framing and code are checked.
+        #[inline(always)]
+        fn from_frame(frame: &[u8]) -> rt::DecodeResult<Self> {
+            let s = LISTS_LOG.split::<7, 2>(frame)?;
+            let frame = &s.frame;
+            let v_channels = s.lists[0].elements::<u8, 6>(s.elements(0), true, false)?;
+            s.lists[0].in_range(v_channels.as_slice(), 0, 15)?;
+            rt::Ok(Self {
+                channels: v_channels,
+                samples: s
+                    .lists[1]
+                    .elements::<Millivolts, 6>(s.elements(1), true, true)?,
+                seq: u16::from_le_bytes([frame[4], frame[5]]),
+            })
+        }
     }
     impl request::SetOutputs {
         pub const NAME: &'static str = "set_outputs";
@@ -892,6 +882,16 @@ pub mod lists_length {
             rt::write_bits(&v_outputs, &mut out[4..]);
             LENGTH.put(out)?;
             rt::Ok(out.len())
+        }
+        /// Reads this message from a frame whose framing and code are checked.
+        #[inline(always)]
+        fn from_frame(frame: &[u8]) -> rt::DecodeResult<Self> {
+            let s = LISTS_SET_OUTPUTS.split::<7, 1>(frame)?;
+            let frame = &s.frame;
+            rt::Ok(Self {
+                outputs: s.lists[0].bits::<2>(s.elements(0), s.n[0])?,
+                mask: u16::from_le_bytes([frame[4], frame[5]]),
+            })
         }
     }
     impl response::LogAck {

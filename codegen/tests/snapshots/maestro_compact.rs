@@ -569,10 +569,10 @@ pub mod maestro_compact {
             rt::encode_in_range("channel", v_channel, 0, 23)?;
             let out = rt::frame_mut::<4>(buf, &[0x84])?;
             out[1] = v_channel;
-            let field_1: u16 = (((rt::fits("target_high", v_target_high.raw(), 0, 127)?
+            let w_target: u16 = (((rt::fits("target_high", v_target_high.raw(), 0, 127)?
                 as u16) & 0x7F) << 8)
                 | ((rt::fits("target_low", v_target_low.raw(), 0, 127)? as u16) & 0x7F);
-            out[2..4].copy_from_slice(&field_1.to_le_bytes());
+            out[2..4].copy_from_slice(&w_target.to_le_bytes());
             rt::Ok(out.len())
         }
         /// Reads this message from a frame whose framing and code are checked.
@@ -580,16 +580,16 @@ pub mod maestro_compact {
         fn from_frame(frame: &[u8]) -> rt::DecodeResult<Self> {
             let frame = rt::fixed::<4>(frame, &Self::DESC)?;
             rt::in_range(&Self::CHANNEL_DESC, 1, frame[1], 0, 23)?;
-            let field_1: u16 = u16::from_le_bytes([frame[2], frame[3]]);
-            rt::equal(&Self::ZERO_HIGH_DESC, 2, field_1 >> 15, 0x0)?;
-            rt::equal(&Self::ZERO_LOW_DESC, 2, (field_1 >> 7) & 0x1, 0x0)?;
+            let w_target: u16 = u16::from_le_bytes([frame[2], frame[3]]);
+            rt::equal(&Self::ZERO_HIGH_DESC, 2, w_target >> 15, 0x0)?;
+            rt::equal(&Self::ZERO_LOW_DESC, 2, (w_target >> 7) & 0x1, 0x0)?;
             rt::Ok(Self {
                 channel: frame[1],
                 target_high: QuarterMicroseconds::from_raw(
-                    (((field_1 >> 8) & 0x7F) as u8) as u16,
+                    (((w_target >> 8) & 0x7F) as u8) as u16,
                 ),
                 target_low: QuarterMicroseconds::from_raw(
-                    ((field_1 & 0x7F) as u8) as u16,
+                    ((w_target & 0x7F) as u8) as u16,
                 ),
             })
         }

@@ -582,7 +582,7 @@ pub mod meter_floats {
         fn from_frame(frame: &[u8]) -> rt::DecodeResult<Self> {
             let frame = rt::fixed::<16>(frame, &Self::DESC)?;
             rt::no_broadcast(frame[0], 0x00, &Self::DESC)?;
-            let field_0: f32 = f32::from_be_bytes([
+            let w_voltage_limit: f32 = f32::from_be_bytes([
                 frame[2],
                 frame[3],
                 frame[4],
@@ -591,12 +591,12 @@ pub mod meter_floats {
             rt::in_range(
                 &Self::VOLTAGE_LIMIT_DESC,
                 2,
-                field_0,
+                w_voltage_limit,
                 rt::f32_raw(0f32),
                 rt::f32_raw(300.5f32),
             )?;
             rt::Ok(Self {
-                voltage_limit: field_0,
+                voltage_limit: w_voltage_limit,
                 serial: u64::from_be_bytes([
                     frame[6],
                     frame[7],
@@ -686,7 +686,7 @@ pub mod meter_floats {
         #[inline(always)]
         fn from_frame(frame: &[u8]) -> rt::DecodeResult<Self> {
             let frame = rt::fixed::<52>(frame, &Self::DESC)?;
-            let field_1: f32 = f32::from_be_bytes([
+            let w_frequency: f32 = f32::from_be_bytes([
                 frame[6],
                 frame[7],
                 frame[8],
@@ -695,11 +695,11 @@ pub mod meter_floats {
             rt::in_range(
                 &Self::FREQUENCY_DESC,
                 6,
-                field_1,
+                w_frequency,
                 rt::f32_raw(45f32),
                 rt::f32_raw(65f32),
             )?;
-            let field_5: i64 = i64::from_be_bytes([
+            let w_drift: i64 = i64::from_be_bytes([
                 frame[34],
                 frame[35],
                 frame[36],
@@ -709,10 +709,10 @@ pub mod meter_floats {
                 frame[40],
                 frame[41],
             ]);
-            rt::in_range(&Self::DRIFT_DESC, 34, field_5, -9000000000000, 9000000000000)?;
+            rt::in_range(&Self::DRIFT_DESC, 34, w_drift, -9000000000000, 9000000000000)?;
             rt::Ok(Self {
                 voltage: f32::from_be_bytes([frame[4], frame[5], frame[2], frame[3]]),
-                frequency: field_1,
+                frequency: w_frequency,
                 energy: f64::from_be_bytes([
                     frame[10],
                     frame[11],
@@ -743,7 +743,7 @@ pub mod meter_floats {
                     frame[32],
                     frame[33],
                 ]),
-                drift: field_5,
+                drift: w_drift,
                 counter: u32::from_be_bytes([
                     frame[44],
                     frame[45],
@@ -790,7 +790,7 @@ pub mod meter_floats {
         #[inline(always)]
         fn from_frame(frame: &[u8]) -> rt::DecodeResult<Self> {
             let frame = rt::fixed::<12>(frame, &Self::DESC)?;
-            let field_0: u64 = u64::from_be_bytes([
+            let w_serial: u64 = u64::from_be_bytes([
                 frame[2],
                 frame[3],
                 frame[4],
@@ -803,11 +803,11 @@ pub mod meter_floats {
             rt::in_range(
                 &Self::SERIAL_DESC,
                 2,
-                field_0,
+                w_serial,
                 rt::u64_raw(1u64),
                 rt::u64_raw(18446744073709551615u64),
             )?;
-            rt::Ok(Self { serial: field_0 })
+            rt::Ok(Self { serial: w_serial })
         }
     }
     /// Each request as a struct of its own; its constants (`DESC`, which names it as

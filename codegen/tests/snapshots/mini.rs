@@ -816,15 +816,15 @@ pub mod mini {
         #[inline(always)]
         fn from_frame(frame: &[u8]) -> rt::DecodeResult<Self> {
             let frame = rt::fixed::<9>(frame, &Self::DESC)?;
-            let field_0: u32 = u32::from_le_bytes([
+            let w_target: u32 = u32::from_le_bytes([
                 frame[4],
                 frame[5],
                 frame[6],
                 frame[7],
             ]);
-            rt::in_range(&Self::TARGET_DESC, 4, field_0, 0, 100000)?;
+            rt::in_range(&Self::TARGET_DESC, 4, w_target, 0, 100000)?;
             rt::Ok(Self {
-                target: Capacitance::from_raw(field_0),
+                target: Capacitance::from_raw(w_target),
             })
         }
     }
@@ -946,11 +946,11 @@ pub mod mini {
             let out = rt::frame_mut::<13>(buf, &[0xAA, address, 0x40, 0x00])?;
             out[11] = 0x00;
             out[4] = v_error_bits.raw();
-            let field_1: u16 = ((rt::fits("freshness", v_freshness, 0, 15)? as u16)
-                << 12)
+            let w_position_word: u16 = ((rt::fits("freshness", v_freshness, 0, 15)?
+                as u16) << 12)
                 | ((rt::fits("position", v_position.raw(), -2048, 2047)? as u16)
                     & 0xFFF);
-            out[5..7].copy_from_slice(&field_1.to_le_bytes());
+            out[5..7].copy_from_slice(&w_position_word.to_le_bytes());
             out[7..10].copy_from_slice(&v_firmware.0);
             out[10] = v_temperature.raw();
             rt::Ok(rt::seal_sum8_head(out, 4, address.wrapping_add(0xEA)))
@@ -959,12 +959,14 @@ pub mod mini {
         #[inline(always)]
         fn from_frame(frame: &[u8]) -> rt::DecodeResult<Self> {
             let frame = rt::fixed::<13>(frame, &Self::DESC)?;
-            let field_1: u16 = u16::from_le_bytes([frame[5], frame[6]]);
+            let w_position_word: u16 = u16::from_le_bytes([frame[5], frame[6]]);
             rt::equal(&Self::RESERVED_DESC, 11, frame[11], 0x0)?;
             rt::Ok(Self {
                 error_bits: StatusBits::from_raw(frame[4]),
-                freshness: (field_1 >> 12) as u8,
-                position: Angle::from_raw((((field_1 & 0xFFF) as u16) << 4) as i16 >> 4),
+                freshness: (w_position_word >> 12) as u8,
+                position: Angle::from_raw(
+                    (((w_position_word & 0xFFF) as u16) << 4) as i16 >> 4,
+                ),
                 firmware: rt::Ascii(frame[7..10].try_into().unwrap_or([0; 3])),
                 temperature: Celsius::from_raw(frame[10]),
             })

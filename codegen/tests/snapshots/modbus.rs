@@ -412,60 +412,12 @@ pub mod modbus {
                         .map(Self::WriteSingleRegister)
                 }
                 0x0F => {
-                    let (frame, elements, count) = REPEAT_WRITE_MULTIPLE_COILS
-                        .split::<7>(frame)?;
-                    let field_1: u16 = u16::from_be_bytes([frame[4], frame[5]]);
-                    rt::in_range(
-                        &request::WriteMultipleCoils::QUANTITY_DESC,
-                        4,
-                        field_1,
-                        1,
-                        1968,
-                    )?;
-                    rt::following(
-                        &request::WriteMultipleCoils::BYTE_COUNT_DESC,
-                        6,
-                        frame[6],
-                        field_1 as i64,
-                        (1, 8),
-                        "ceil(quantity / 8)",
-                    )?;
-                    rt::Ok(
-                        Self::WriteMultipleCoils(request::WriteMultipleCoils {
-                            starting_address: u16::from_be_bytes([frame[2], frame[3]]),
-                            quantity: field_1,
-                            outputs: REPEAT_WRITE_MULTIPLE_COILS
-                                .bits::<246>(elements, count)?,
-                        }),
-                    )
+                    request::WriteMultipleCoils::from_frame(frame)
+                        .map(Self::WriteMultipleCoils)
                 }
                 0x10 => {
-                    let (frame, elements, _) = REPEAT_WRITE_MULTIPLE_REGISTERS
-                        .split::<7>(frame)?;
-                    let field_1: u16 = u16::from_be_bytes([frame[4], frame[5]]);
-                    rt::in_range(
-                        &request::WriteMultipleRegisters::QUANTITY_DESC,
-                        4,
-                        field_1,
-                        1,
-                        123,
-                    )?;
-                    rt::following(
-                        &request::WriteMultipleRegisters::BYTE_COUNT_DESC,
-                        6,
-                        frame[6],
-                        field_1 as i64,
-                        (2, 1),
-                        "2 × quantity",
-                    )?;
-                    rt::Ok(
-                        Self::WriteMultipleRegisters(request::WriteMultipleRegisters {
-                            starting_address: u16::from_be_bytes([frame[2], frame[3]]),
-                            quantity: field_1,
-                            values: REPEAT_WRITE_MULTIPLE_REGISTERS
-                                .elements::<u16, 123>(elements, false, false)?,
-                        }),
-                    )
+                    request::WriteMultipleRegisters::from_frame(frame)
+                        .map(Self::WriteMultipleRegisters)
                 }
                 _ => rt::Err(REQUEST_CODE.unknown(frame)),
             }
@@ -842,55 +794,31 @@ pub mod modbus {
         fn dispatch(frame: &[u8]) -> rt::DecodeResult<Self> {
             match frame[1] {
                 0x01 => {
-                    let (_, elements, count) = REPEAT_READ_COILS_REPLY
-                        .split::<3>(frame)?;
-                    rt::Ok(
-                        Self::ReadCoilsReply(response::ReadCoilsReply {
-                            coils: REPEAT_READ_COILS_REPLY.bits::<250>(elements, count)?,
-                        }),
-                    )
+                    response::ReadCoilsReply::from_frame(frame).map(Self::ReadCoilsReply)
                 }
                 0x81 => {
                     response::ReadCoilsException::from_frame(frame)
                         .map(Self::ReadCoilsException)
                 }
                 0x02 => {
-                    let (_, elements, count) = REPEAT_READ_DISCRETE_INPUTS_REPLY
-                        .split::<3>(frame)?;
-                    rt::Ok(
-                        Self::ReadDiscreteInputsReply(response::ReadDiscreteInputsReply {
-                            inputs: REPEAT_READ_DISCRETE_INPUTS_REPLY
-                                .bits::<250>(elements, count)?,
-                        }),
-                    )
+                    response::ReadDiscreteInputsReply::from_frame(frame)
+                        .map(Self::ReadDiscreteInputsReply)
                 }
                 0x82 => {
                     response::ReadDiscreteInputsException::from_frame(frame)
                         .map(Self::ReadDiscreteInputsException)
                 }
                 0x03 => {
-                    let (_, elements, _) = REPEAT_READ_HOLDING_REGISTERS_REPLY
-                        .split::<3>(frame)?;
-                    rt::Ok(
-                        Self::ReadHoldingRegistersReply(response::ReadHoldingRegistersReply {
-                            registers: REPEAT_READ_HOLDING_REGISTERS_REPLY
-                                .elements::<u16, 125>(elements, false, false)?,
-                        }),
-                    )
+                    response::ReadHoldingRegistersReply::from_frame(frame)
+                        .map(Self::ReadHoldingRegistersReply)
                 }
                 0x83 => {
                     response::ReadHoldingRegistersException::from_frame(frame)
                         .map(Self::ReadHoldingRegistersException)
                 }
                 0x04 => {
-                    let (_, elements, _) = REPEAT_READ_INPUT_REGISTERS_REPLY
-                        .split::<3>(frame)?;
-                    rt::Ok(
-                        Self::ReadInputRegistersReply(response::ReadInputRegistersReply {
-                            registers: REPEAT_READ_INPUT_REGISTERS_REPLY
-                                .elements::<u16, 125>(elements, false, false)?,
-                        }),
-                    )
+                    response::ReadInputRegistersReply::from_frame(frame)
+                        .map(Self::ReadInputRegistersReply)
                 }
                 0x84 => {
                     response::ReadInputRegistersException::from_frame(frame)
@@ -1290,17 +1218,17 @@ pub mod modbus {
                 0x01 => {
                     let frame = rt::fixed::<8>(frame, &request::ReadCoils::DESC)?;
                     rt::no_broadcast(frame[0], 0x00, &request::ReadCoils::DESC)?;
-                    let field_1: u16 = u16::from_be_bytes([frame[4], frame[5]]);
+                    let w_quantity: u16 = u16::from_be_bytes([frame[4], frame[5]]);
                     rt::in_range(
                         &request::ReadCoils::QUANTITY_DESC,
                         4,
-                        field_1,
+                        w_quantity,
                         1,
                         2000,
                     )?;
                     rt::Ok(Self::ReadCoils {
                         starting_address: u16::from_be_bytes([frame[2], frame[3]]),
-                        quantity: field_1,
+                        quantity: w_quantity,
                     })
                 }
                 0x02 => {
@@ -1312,17 +1240,17 @@ pub mod modbus {
                         0x00,
                         &request::ReadDiscreteInputs::DESC,
                     )?;
-                    let field_1: u16 = u16::from_be_bytes([frame[4], frame[5]]);
+                    let w_quantity: u16 = u16::from_be_bytes([frame[4], frame[5]]);
                     rt::in_range(
                         &request::ReadDiscreteInputs::QUANTITY_DESC,
                         4,
-                        field_1,
+                        w_quantity,
                         1,
                         2000,
                     )?;
                     rt::Ok(Self::ReadDiscreteInputs {
                         starting_address: u16::from_be_bytes([frame[2], frame[3]]),
-                        quantity: field_1,
+                        quantity: w_quantity,
                     })
                 }
                 0x03 => {
@@ -1334,17 +1262,17 @@ pub mod modbus {
                         0x00,
                         &request::ReadHoldingRegisters::DESC,
                     )?;
-                    let field_1: u16 = u16::from_be_bytes([frame[4], frame[5]]);
+                    let w_quantity: u16 = u16::from_be_bytes([frame[4], frame[5]]);
                     rt::in_range(
                         &request::ReadHoldingRegisters::QUANTITY_DESC,
                         4,
-                        field_1,
+                        w_quantity,
                         1,
                         125,
                     )?;
                     rt::Ok(Self::ReadHoldingRegisters {
                         starting_address: u16::from_be_bytes([frame[2], frame[3]]),
-                        quantity: field_1,
+                        quantity: w_quantity,
                     })
                 }
                 0x04 => {
@@ -1356,17 +1284,17 @@ pub mod modbus {
                         0x00,
                         &request::ReadInputRegisters::DESC,
                     )?;
-                    let field_1: u16 = u16::from_be_bytes([frame[4], frame[5]]);
+                    let w_quantity: u16 = u16::from_be_bytes([frame[4], frame[5]]);
                     rt::in_range(
                         &request::ReadInputRegisters::QUANTITY_DESC,
                         4,
-                        field_1,
+                        w_quantity,
                         1,
                         125,
                     )?;
                     rt::Ok(Self::ReadInputRegisters {
                         starting_address: u16::from_be_bytes([frame[2], frame[3]]),
-                        quantity: field_1,
+                        quantity: w_quantity,
                     })
                 }
                 0x05 => {
@@ -1390,11 +1318,11 @@ pub mod modbus {
                 0x0F => {
                     let (frame, elements, count) = REPEAT_WRITE_MULTIPLE_COILS
                         .split::<7>(frame)?;
-                    let field_1: u16 = u16::from_be_bytes([frame[4], frame[5]]);
+                    let w_quantity: u16 = u16::from_be_bytes([frame[4], frame[5]]);
                     rt::in_range(
                         &request::WriteMultipleCoils::QUANTITY_DESC,
                         4,
-                        field_1,
+                        w_quantity,
                         1,
                         1968,
                     )?;
@@ -1402,13 +1330,13 @@ pub mod modbus {
                         &request::WriteMultipleCoils::BYTE_COUNT_DESC,
                         6,
                         frame[6],
-                        field_1 as i64,
+                        w_quantity as i64,
                         (1, 8),
                         "ceil(quantity / 8)",
                     )?;
                     rt::Ok(Self::WriteMultipleCoils {
                         starting_address: u16::from_be_bytes([frame[2], frame[3]]),
-                        quantity: field_1,
+                        quantity: w_quantity,
                         outputs: REPEAT_WRITE_MULTIPLE_COILS
                             .view_bits::<246>(elements, count)?,
                     })
@@ -1416,11 +1344,11 @@ pub mod modbus {
                 0x10 => {
                     let (frame, elements, _) = REPEAT_WRITE_MULTIPLE_REGISTERS
                         .split::<7>(frame)?;
-                    let field_1: u16 = u16::from_be_bytes([frame[4], frame[5]]);
+                    let w_quantity: u16 = u16::from_be_bytes([frame[4], frame[5]]);
                     rt::in_range(
                         &request::WriteMultipleRegisters::QUANTITY_DESC,
                         4,
-                        field_1,
+                        w_quantity,
                         1,
                         123,
                     )?;
@@ -1428,13 +1356,13 @@ pub mod modbus {
                         &request::WriteMultipleRegisters::BYTE_COUNT_DESC,
                         6,
                         frame[6],
-                        field_1 as i64,
+                        w_quantity as i64,
                         (2, 1),
                         "2 × quantity",
                     )?;
                     rt::Ok(Self::WriteMultipleRegisters {
                         starting_address: u16::from_be_bytes([frame[2], frame[3]]),
-                        quantity: field_1,
+                        quantity: w_quantity,
                         values: REPEAT_WRITE_MULTIPLE_REGISTERS
                             .view::<u16, 123>(elements, false, false)?,
                     })
@@ -1659,11 +1587,11 @@ pub mod modbus {
                     let frame = rt::fixed::<
                         8,
                     >(frame, &response::WriteSingleCoilReply::DESC)?;
-                    let field_0: u16 = u16::from_be_bytes([frame[2], frame[3]]);
-                    let field_1: u16 = u16::from_be_bytes([frame[4], frame[5]]);
+                    let w_output_address: u16 = u16::from_be_bytes([frame[2], frame[3]]);
+                    let w_output_value: u16 = u16::from_be_bytes([frame[4], frame[5]]);
                     rt::Ok(Self::WriteSingleCoilReply {
-                        output_address: field_0,
-                        output_value: CoilState::from_raw(field_1),
+                        output_address: w_output_address,
+                        output_value: CoilState::from_raw(w_output_value),
                     })
                 }
                 0x85 => {
@@ -1678,11 +1606,14 @@ pub mod modbus {
                     let frame = rt::fixed::<
                         8,
                     >(frame, &response::WriteSingleRegisterReply::DESC)?;
-                    let field_0: u16 = u16::from_be_bytes([frame[2], frame[3]]);
-                    let field_1: u16 = u16::from_be_bytes([frame[4], frame[5]]);
+                    let w_register_address: u16 = u16::from_be_bytes([
+                        frame[2],
+                        frame[3],
+                    ]);
+                    let w_register_value: u16 = u16::from_be_bytes([frame[4], frame[5]]);
                     rt::Ok(Self::WriteSingleRegisterReply {
-                        register_address: field_0,
-                        register_value: field_1,
+                        register_address: w_register_address,
+                        register_value: w_register_value,
                     })
                 }
                 0x86 => {
@@ -1697,11 +1628,14 @@ pub mod modbus {
                     let frame = rt::fixed::<
                         8,
                     >(frame, &response::WriteMultipleCoilsReply::DESC)?;
-                    let field_0: u16 = u16::from_be_bytes([frame[2], frame[3]]);
-                    let field_1: u16 = u16::from_be_bytes([frame[4], frame[5]]);
+                    let w_starting_address: u16 = u16::from_be_bytes([
+                        frame[2],
+                        frame[3],
+                    ]);
+                    let w_quantity: u16 = u16::from_be_bytes([frame[4], frame[5]]);
                     rt::Ok(Self::WriteMultipleCoilsReply {
-                        starting_address: field_0,
-                        quantity: field_1,
+                        starting_address: w_starting_address,
+                        quantity: w_quantity,
                     })
                 }
                 0x8F => {
@@ -1716,11 +1650,14 @@ pub mod modbus {
                     let frame = rt::fixed::<
                         8,
                     >(frame, &response::WriteMultipleRegistersReply::DESC)?;
-                    let field_0: u16 = u16::from_be_bytes([frame[2], frame[3]]);
-                    let field_1: u16 = u16::from_be_bytes([frame[4], frame[5]]);
+                    let w_starting_address: u16 = u16::from_be_bytes([
+                        frame[2],
+                        frame[3],
+                    ]);
+                    let w_quantity: u16 = u16::from_be_bytes([frame[4], frame[5]]);
                     rt::Ok(Self::WriteMultipleRegistersReply {
-                        starting_address: field_0,
-                        quantity: field_1,
+                        starting_address: w_starting_address,
+                        quantity: w_quantity,
                     })
                 }
                 0x90 => {
@@ -2288,11 +2225,11 @@ pub mod modbus {
         fn from_frame(frame: &[u8]) -> rt::DecodeResult<Self> {
             let frame = rt::fixed::<8>(frame, &Self::DESC)?;
             rt::no_broadcast(frame[0], 0x00, &Self::DESC)?;
-            let field_1: u16 = u16::from_be_bytes([frame[4], frame[5]]);
-            rt::in_range(&Self::QUANTITY_DESC, 4, field_1, 1, 2000)?;
+            let w_quantity: u16 = u16::from_be_bytes([frame[4], frame[5]]);
+            rt::in_range(&Self::QUANTITY_DESC, 4, w_quantity, 1, 2000)?;
             rt::Ok(Self {
                 starting_address: u16::from_be_bytes([frame[2], frame[3]]),
-                quantity: field_1,
+                quantity: w_quantity,
             })
         }
     }
@@ -2327,11 +2264,11 @@ pub mod modbus {
         fn from_frame(frame: &[u8]) -> rt::DecodeResult<Self> {
             let frame = rt::fixed::<8>(frame, &Self::DESC)?;
             rt::no_broadcast(frame[0], 0x00, &Self::DESC)?;
-            let field_1: u16 = u16::from_be_bytes([frame[4], frame[5]]);
-            rt::in_range(&Self::QUANTITY_DESC, 4, field_1, 1, 2000)?;
+            let w_quantity: u16 = u16::from_be_bytes([frame[4], frame[5]]);
+            rt::in_range(&Self::QUANTITY_DESC, 4, w_quantity, 1, 2000)?;
             rt::Ok(Self {
                 starting_address: u16::from_be_bytes([frame[2], frame[3]]),
-                quantity: field_1,
+                quantity: w_quantity,
             })
         }
     }
@@ -2366,11 +2303,11 @@ pub mod modbus {
         fn from_frame(frame: &[u8]) -> rt::DecodeResult<Self> {
             let frame = rt::fixed::<8>(frame, &Self::DESC)?;
             rt::no_broadcast(frame[0], 0x00, &Self::DESC)?;
-            let field_1: u16 = u16::from_be_bytes([frame[4], frame[5]]);
-            rt::in_range(&Self::QUANTITY_DESC, 4, field_1, 1, 125)?;
+            let w_quantity: u16 = u16::from_be_bytes([frame[4], frame[5]]);
+            rt::in_range(&Self::QUANTITY_DESC, 4, w_quantity, 1, 125)?;
             rt::Ok(Self {
                 starting_address: u16::from_be_bytes([frame[2], frame[3]]),
-                quantity: field_1,
+                quantity: w_quantity,
             })
         }
     }
@@ -2405,11 +2342,11 @@ pub mod modbus {
         fn from_frame(frame: &[u8]) -> rt::DecodeResult<Self> {
             let frame = rt::fixed::<8>(frame, &Self::DESC)?;
             rt::no_broadcast(frame[0], 0x00, &Self::DESC)?;
-            let field_1: u16 = u16::from_be_bytes([frame[4], frame[5]]);
-            rt::in_range(&Self::QUANTITY_DESC, 4, field_1, 1, 125)?;
+            let w_quantity: u16 = u16::from_be_bytes([frame[4], frame[5]]);
+            rt::in_range(&Self::QUANTITY_DESC, 4, w_quantity, 1, 125)?;
             rt::Ok(Self {
                 starting_address: u16::from_be_bytes([frame[2], frame[3]]),
-                quantity: field_1,
+                quantity: w_quantity,
             })
         }
     }
@@ -2518,18 +2455,40 @@ pub mod modbus {
             let frame_len = REPEAT_WRITE_MULTIPLE_COILS.encode_len(v_outputs.len())?;
             let out = rt::frame_mut_len(buf, frame_len, &[address, 0x0F])?;
             out[2..4].copy_from_slice(&v_starting_address.to_be_bytes());
-            let field_1: u16 = v_quantity;
-            out[4..6].copy_from_slice(&field_1.to_be_bytes());
-            let field_2: u8 = rt::fits(
+            let w_quantity: u16 = v_quantity;
+            out[4..6].copy_from_slice(&w_quantity.to_be_bytes());
+            let w_byte_count: u8 = rt::fits(
                 "byte_count",
-                rt::follows(field_1 as i64, 1, 8),
+                rt::follows(w_quantity as i64, 1, 8),
                 0,
                 255,
             )? as u8;
-            REPEAT_WRITE_MULTIPLE_COILS.encode_agrees(v_outputs.len(), field_2 as u64)?;
-            out[6] = field_2;
+            REPEAT_WRITE_MULTIPLE_COILS
+                .encode_agrees(v_outputs.len(), w_byte_count as u64)?;
+            out[6] = w_byte_count;
             rt::write_bits(&v_outputs, &mut out[7..]);
             rt::Ok(out.len())
+        }
+        /// Reads this message from a frame whose framing and code are checked.
+        #[inline(always)]
+        fn from_frame(frame: &[u8]) -> rt::DecodeResult<Self> {
+            let (frame, elements, count) = REPEAT_WRITE_MULTIPLE_COILS
+                .split::<7>(frame)?;
+            let w_quantity: u16 = u16::from_be_bytes([frame[4], frame[5]]);
+            rt::in_range(&Self::QUANTITY_DESC, 4, w_quantity, 1, 1968)?;
+            rt::following(
+                &Self::BYTE_COUNT_DESC,
+                6,
+                frame[6],
+                w_quantity as i64,
+                (1, 8),
+                "ceil(quantity / 8)",
+            )?;
+            rt::Ok(Self {
+                starting_address: u16::from_be_bytes([frame[2], frame[3]]),
+                quantity: w_quantity,
+                outputs: REPEAT_WRITE_MULTIPLE_COILS.bits::<246>(elements, count)?,
+            })
         }
     }
     impl request::WriteMultipleRegisters {
@@ -2563,19 +2522,41 @@ pub mod modbus {
             let frame_len = REPEAT_WRITE_MULTIPLE_REGISTERS.encode_len(v_values.len())?;
             let out = rt::frame_mut_len(buf, frame_len, &[address, 0x10])?;
             out[2..4].copy_from_slice(&v_starting_address.to_be_bytes());
-            let field_1: u16 = v_quantity;
-            out[4..6].copy_from_slice(&field_1.to_be_bytes());
-            let field_2: u8 = rt::fits(
+            let w_quantity: u16 = v_quantity;
+            out[4..6].copy_from_slice(&w_quantity.to_be_bytes());
+            let w_byte_count: u8 = rt::fits(
                 "byte_count",
-                rt::follows(field_1 as i64, 2, 1),
+                rt::follows(w_quantity as i64, 2, 1),
                 0,
                 255,
             )? as u8;
             REPEAT_WRITE_MULTIPLE_REGISTERS
-                .encode_agrees(v_values.len(), field_2 as u64)?;
-            out[6] = field_2;
+                .encode_agrees(v_values.len(), w_byte_count as u64)?;
+            out[6] = w_byte_count;
             rt::write_elements(v_values.as_slice(), 2, false, &mut out[7..]);
             rt::Ok(out.len())
+        }
+        /// Reads this message from a frame whose framing and code are checked.
+        #[inline(always)]
+        fn from_frame(frame: &[u8]) -> rt::DecodeResult<Self> {
+            let (frame, elements, _) = REPEAT_WRITE_MULTIPLE_REGISTERS
+                .split::<7>(frame)?;
+            let w_quantity: u16 = u16::from_be_bytes([frame[4], frame[5]]);
+            rt::in_range(&Self::QUANTITY_DESC, 4, w_quantity, 1, 123)?;
+            rt::following(
+                &Self::BYTE_COUNT_DESC,
+                6,
+                frame[6],
+                w_quantity as i64,
+                (2, 1),
+                "2 × quantity",
+            )?;
+            rt::Ok(Self {
+                starting_address: u16::from_be_bytes([frame[2], frame[3]]),
+                quantity: w_quantity,
+                values: REPEAT_WRITE_MULTIPLE_REGISTERS
+                    .elements::<u16, 123>(elements, false, false)?,
+            })
         }
     }
     impl response::ReadCoilsReply {
@@ -2606,6 +2587,14 @@ pub mod modbus {
             )? as u8;
             rt::write_bits(&v_coils, &mut out[3..]);
             rt::Ok(out.len())
+        }
+        /// Reads this message from a frame whose framing and code are checked.
+        #[inline(always)]
+        fn from_frame(frame: &[u8]) -> rt::DecodeResult<Self> {
+            let (_, elements, count) = REPEAT_READ_COILS_REPLY.split::<3>(frame)?;
+            rt::Ok(Self {
+                coils: REPEAT_READ_COILS_REPLY.bits::<250>(elements, count)?,
+            })
         }
     }
     impl response::ReadCoilsException {
@@ -2666,6 +2655,15 @@ pub mod modbus {
             )? as u8;
             rt::write_bits(&v_inputs, &mut out[3..]);
             rt::Ok(out.len())
+        }
+        /// Reads this message from a frame whose framing and code are checked.
+        #[inline(always)]
+        fn from_frame(frame: &[u8]) -> rt::DecodeResult<Self> {
+            let (_, elements, count) = REPEAT_READ_DISCRETE_INPUTS_REPLY
+                .split::<3>(frame)?;
+            rt::Ok(Self {
+                inputs: REPEAT_READ_DISCRETE_INPUTS_REPLY.bits::<250>(elements, count)?,
+            })
         }
     }
     impl response::ReadDiscreteInputsException {
@@ -2728,6 +2726,16 @@ pub mod modbus {
             rt::write_elements(v_registers.as_slice(), 2, false, &mut out[3..]);
             rt::Ok(out.len())
         }
+        /// Reads this message from a frame whose framing and code are checked.
+        #[inline(always)]
+        fn from_frame(frame: &[u8]) -> rt::DecodeResult<Self> {
+            let (_, elements, _) = REPEAT_READ_HOLDING_REGISTERS_REPLY
+                .split::<3>(frame)?;
+            rt::Ok(Self {
+                registers: REPEAT_READ_HOLDING_REGISTERS_REPLY
+                    .elements::<u16, 125>(elements, false, false)?,
+            })
+        }
     }
     impl response::ReadHoldingRegistersException {
         pub const NAME: &'static str = "read_holding_registers_exception";
@@ -2787,6 +2795,15 @@ pub mod modbus {
             )? as u8;
             rt::write_elements(v_registers.as_slice(), 2, false, &mut out[3..]);
             rt::Ok(out.len())
+        }
+        /// Reads this message from a frame whose framing and code are checked.
+        #[inline(always)]
+        fn from_frame(frame: &[u8]) -> rt::DecodeResult<Self> {
+            let (_, elements, _) = REPEAT_READ_INPUT_REGISTERS_REPLY.split::<3>(frame)?;
+            rt::Ok(Self {
+                registers: REPEAT_READ_INPUT_REGISTERS_REPLY
+                    .elements::<u16, 125>(elements, false, false)?,
+            })
         }
     }
     impl response::ReadInputRegistersException {
@@ -2856,11 +2873,11 @@ pub mod modbus {
         #[inline(always)]
         fn from_frame(frame: &[u8]) -> rt::DecodeResult<Self> {
             let frame = rt::fixed::<8>(frame, &Self::DESC)?;
-            let field_0: u16 = u16::from_be_bytes([frame[2], frame[3]]);
-            let field_1: u16 = u16::from_be_bytes([frame[4], frame[5]]);
+            let w_output_address: u16 = u16::from_be_bytes([frame[2], frame[3]]);
+            let w_output_value: u16 = u16::from_be_bytes([frame[4], frame[5]]);
             rt::Ok(Self {
-                output_address: field_0,
-                output_value: CoilState::from_raw(field_1),
+                output_address: w_output_address,
+                output_value: CoilState::from_raw(w_output_value),
             })
         }
     }
@@ -2931,11 +2948,11 @@ pub mod modbus {
         #[inline(always)]
         fn from_frame(frame: &[u8]) -> rt::DecodeResult<Self> {
             let frame = rt::fixed::<8>(frame, &Self::DESC)?;
-            let field_0: u16 = u16::from_be_bytes([frame[2], frame[3]]);
-            let field_1: u16 = u16::from_be_bytes([frame[4], frame[5]]);
+            let w_register_address: u16 = u16::from_be_bytes([frame[2], frame[3]]);
+            let w_register_value: u16 = u16::from_be_bytes([frame[4], frame[5]]);
             rt::Ok(Self {
-                register_address: field_0,
-                register_value: field_1,
+                register_address: w_register_address,
+                register_value: w_register_value,
             })
         }
     }
@@ -3000,11 +3017,11 @@ pub mod modbus {
         #[inline(always)]
         fn from_frame(frame: &[u8]) -> rt::DecodeResult<Self> {
             let frame = rt::fixed::<8>(frame, &Self::DESC)?;
-            let field_0: u16 = u16::from_be_bytes([frame[2], frame[3]]);
-            let field_1: u16 = u16::from_be_bytes([frame[4], frame[5]]);
+            let w_starting_address: u16 = u16::from_be_bytes([frame[2], frame[3]]);
+            let w_quantity: u16 = u16::from_be_bytes([frame[4], frame[5]]);
             rt::Ok(Self {
-                starting_address: field_0,
-                quantity: field_1,
+                starting_address: w_starting_address,
+                quantity: w_quantity,
             })
         }
     }
@@ -3069,11 +3086,11 @@ pub mod modbus {
         #[inline(always)]
         fn from_frame(frame: &[u8]) -> rt::DecodeResult<Self> {
             let frame = rt::fixed::<8>(frame, &Self::DESC)?;
-            let field_0: u16 = u16::from_be_bytes([frame[2], frame[3]]);
-            let field_1: u16 = u16::from_be_bytes([frame[4], frame[5]]);
+            let w_starting_address: u16 = u16::from_be_bytes([frame[2], frame[3]]);
+            let w_quantity: u16 = u16::from_be_bytes([frame[4], frame[5]]);
             rt::Ok(Self {
-                starting_address: field_0,
-                quantity: field_1,
+                starting_address: w_starting_address,
+                quantity: w_quantity,
             })
         }
     }

@@ -425,15 +425,7 @@ pub mod msp_by_direction {
                     response::ApiVersionReply::from_frame(frame)
                         .map(Self::ApiVersionReply)
                 }
-                0x69 => {
-                    let (_, elements, _) = REPEAT_RC_REPLY.split::<5>(frame)?;
-                    rt::Ok(
-                        Self::RcReply(response::RcReply {
-                            channels: REPEAT_RC_REPLY
-                                .elements::<u16, 18>(elements, true, false)?,
-                        }),
-                    )
-                }
+                0x69 => response::RcReply::from_frame(frame).map(Self::RcReply),
                 0x6C => {
                     response::AttitudeReply::from_frame(frame).map(Self::AttitudeReply)
                 }
@@ -870,6 +862,14 @@ pub mod msp_by_direction {
             out[4] = 0x69;
             rt::write_elements(v_channels.as_slice(), 2, true, &mut out[5..]);
             rt::Ok(out.len())
+        }
+        /// Reads this message from a frame whose framing and code are checked.
+        #[inline(always)]
+        fn from_frame(frame: &[u8]) -> rt::DecodeResult<Self> {
+            let (_, elements, _) = REPEAT_RC_REPLY.split::<5>(frame)?;
+            rt::Ok(Self {
+                channels: REPEAT_RC_REPLY.elements::<u16, 18>(elements, true, false)?,
+            })
         }
     }
     impl response::AttitudeReply {

@@ -583,8 +583,8 @@ pub mod msp_v2 {
             let Self { dont_reply: v_dont_reply } = *self;
             let out = rt::head(out, &[0x24, 0x58, 0x3C]);
             out[4..8].copy_from_slice(&[0x01, 0x00, 0x00, 0x00]);
-            let field_0: u8 = v_dont_reply as u8;
-            out[3] = field_0;
+            let w_flags: u8 = v_dont_reply as u8;
+            out[3] = w_flags;
             rt::Ok(out.len())
         }
         /// Reads this message from a frame whose framing and code are checked.
@@ -618,8 +618,8 @@ pub mod msp_v2 {
             let Self { dont_reply: v_dont_reply } = *self;
             let out = rt::head(out, &[0x24, 0x58, 0x3C]);
             out[4..8].copy_from_slice(&[0x02, 0x00, 0x00, 0x00]);
-            let field_0: u8 = v_dont_reply as u8;
-            out[3] = field_0;
+            let w_flags: u8 = v_dont_reply as u8;
+            out[3] = w_flags;
             rt::Ok(out.len())
         }
         /// Reads this message from a frame whose framing and code are checked.
@@ -664,8 +664,8 @@ pub mod msp_v2 {
             } = *self;
             let out = rt::frame_mut::<12>(buf, &[0x24, 0x58, 0x3E])?;
             out[4..8].copy_from_slice(&[0x01, 0x00, 0x03, 0x00]);
-            let field_0: u8 = v_dont_reply as u8;
-            out[3] = field_0;
+            let w_flags: u8 = v_dont_reply as u8;
+            out[3] = w_flags;
             out[8] = v_protocol_version;
             out[9] = v_api_major;
             out[10] = v_api_minor;
@@ -707,8 +707,8 @@ pub mod msp_v2 {
             let Self { dont_reply: v_dont_reply, variant: v_variant } = *self;
             let out = rt::frame_mut::<13>(buf, &[0x24, 0x58, 0x3E])?;
             out[4..8].copy_from_slice(&[0x02, 0x00, 0x04, 0x00]);
-            let field_0: u8 = v_dont_reply as u8;
-            out[3] = field_0;
+            let w_flags: u8 = v_dont_reply as u8;
+            out[3] = w_flags;
             out[8..12].copy_from_slice(&v_variant.0);
             rt::Ok(out.len())
         }

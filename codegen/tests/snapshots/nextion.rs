@@ -223,15 +223,7 @@ pub mod nextion {
         /// The message of a frame that passed the checks every frame passes, by its code.
         #[inline]
         fn dispatch(frame: &[u8]) -> rt::DecodeResult<Self> {
-            {
-                let (_, elements, _) = REPEAT_INSTRUCTION.split::<0>(frame)?;
-                rt::Ok(
-                    Self::Instruction(request::Instruction {
-                        text: REPEAT_INSTRUCTION
-                            .elements::<u8, 200>(elements, true, false)?,
-                    }),
-                )
-            }
+            request::Instruction::from_frame(frame).map(Self::Instruction)
         }
         /// The message called `name` in the spec, from each field's raw wire value by its spec
         /// name, as [`Self::visit`] gives them (`None`: no value); constant and repeated fields
@@ -469,15 +461,7 @@ pub mod nextion {
                 }
                 0x65 => response::TouchEvent::from_frame(frame).map(Self::TouchEvent),
                 0x66 => response::CurrentPage::from_frame(frame).map(Self::CurrentPage),
-                0x70 => {
-                    let (_, elements, _) = REPEAT_STRING.split::<1>(frame)?;
-                    rt::Ok(
-                        Self::String(response::String {
-                            text: REPEAT_STRING
-                                .elements::<u8, 100>(elements, true, false)?,
-                        }),
-                    )
-                }
+                0x70 => response::String::from_frame(frame).map(Self::String),
                 0x71 => response::Number::from_frame(frame).map(Self::Number),
                 _ => rt::Err(RESPONSE_CODE.unknown(frame)),
             }
@@ -937,6 +921,14 @@ pub mod nextion {
             REPEAT_INSTRUCTION.encode_delimited(out)?;
             rt::Ok(out.len())
         }
+        /// Reads this message from a frame whose framing and code are checked.
+        #[inline(always)]
+        fn from_frame(frame: &[u8]) -> rt::DecodeResult<Self> {
+            let (_, elements, _) = REPEAT_INSTRUCTION.split::<0>(frame)?;
+            rt::Ok(Self {
+                text: REPEAT_INSTRUCTION.elements::<u8, 200>(elements, true, false)?,
+            })
+        }
     }
     impl response::InvalidInstruction {
         pub const NAME: &'static str = "invalid_instruction";
@@ -1069,6 +1061,14 @@ pub mod nextion {
             rt::write_elements(v_text.as_slice(), 1, true, &mut out[1..]);
             REPEAT_STRING.encode_delimited(out)?;
             rt::Ok(out.len())
+        }
+        /// Reads this message from a frame whose framing and code are checked.
+        #[inline(always)]
+        fn from_frame(frame: &[u8]) -> rt::DecodeResult<Self> {
+            let (_, elements, _) = REPEAT_STRING.split::<1>(frame)?;
+            rt::Ok(Self {
+                text: REPEAT_STRING.elements::<u8, 100>(elements, true, false)?,
+            })
         }
     }
     impl response::Number {

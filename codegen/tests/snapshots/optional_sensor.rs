@@ -584,60 +584,8 @@ pub mod optional_sensor {
         #[inline]
         fn dispatch(frame: &[u8]) -> rt::DecodeResult<Self> {
             match frame[3] {
-                0x81 => {
-                    let s = OPTIONAL_READING.split::<14>(frame)?;
-                    let frame = &s.frame;
-                    let v_humidity = if s.has(0) {
-                        let field_2: u16 = u16::from_be_bytes([frame[7], frame[8]]);
-                        rt::in_range(
-                            &response::Reading::HUMIDITY_DESC,
-                            s.at(0),
-                            field_2,
-                            0,
-                            1000,
-                        )?;
-                        rt::Some(Permille::from_raw(field_2))
-                    } else {
-                        rt::None
-                    };
-                    let v_pressure = if s.has(1) {
-                        rt::Some(
-                            u32::from_be_bytes([
-                                frame[9],
-                                frame[10],
-                                frame[11],
-                                frame[12],
-                            ]),
-                        )
-                    } else {
-                        rt::None
-                    };
-                    rt::Ok(
-                        Self::Reading(response::Reading {
-                            status: ReadingPresent::from_raw(frame[4]),
-                            temperature: Decicelsius::from_raw(
-                                i16::from_be_bytes([frame[5], frame[6]]),
-                            ),
-                            humidity: v_humidity,
-                            pressure: v_pressure,
-                        }),
-                    )
-                }
-                0x82 => {
-                    let s = OPTIONAL_EVENT.split::<8>(frame)?;
-                    let frame = &s.frame;
-                    let v_detail = if s.has(0) {
-                        rt::Some(u16::from_be_bytes([frame[5], frame[6]]))
-                    } else {
-                        rt::None
-                    };
-                    rt::Ok(
-                        Self::Event(response::Event {
-                            kind: EventKind::from_raw(frame[4]),
-                            detail: v_detail,
-                        }),
-                    )
-                }
+                0x81 => response::Reading::from_frame(frame).map(Self::Reading),
+                0x82 => response::Event::from_frame(frame).map(Self::Event),
                 _ => rt::Err(RESPONSE_CODE.unknown(frame)),
             }
         }
@@ -901,12 +849,12 @@ pub mod optional_sensor {
                 &mut compact
             };
             out[3] = 0x81;
-            let field_0: u8 = v_status.raw();
-            out[4] = field_0;
+            let w_status: u8 = v_status.raw();
+            out[4] = w_status;
             out[5..7].copy_from_slice(&v_temperature.raw().to_be_bytes());
             rt::presence(
                 "humidity",
-                field_0 & 0x1 != 0,
+                w_status & 0x1 != 0,
                 v_humidity.is_some(),
                 "bit 0 of `status` is set",
             )?;
@@ -915,7 +863,7 @@ pub mod optional_sensor {
             }
             rt::presence(
                 "pressure",
-                field_0 & 0x2 != 0,
+                w_status & 0x2 != 0,
                 v_pressure.is_some(),
                 "bit 1 of `status` is set",
             )?;
@@ -926,6 +874,32 @@ pub mod optional_sensor {
                 .pack(&compact, &[v_humidity.is_some(), v_pressure.is_some()], buf)?;
             LENGTH.put(out)?;
             rt::Ok(out.len())
+        }
+        /// Reads this message from a frame whose framing and code are checked.
+        #[inline(always)]
+        fn from_frame(frame: &[u8]) -> rt::DecodeResult<Self> {
+            let s = OPTIONAL_READING.split::<14>(frame)?;
+            let frame = &s.frame;
+            let v_humidity = if s.has(0) {
+                let w_humidity: u16 = u16::from_be_bytes([frame[7], frame[8]]);
+                rt::in_range(&Self::HUMIDITY_DESC, s.at(0), w_humidity, 0, 1000)?;
+                rt::Some(Permille::from_raw(w_humidity))
+            } else {
+                rt::None
+            };
+            let v_pressure = if s.has(1) {
+                rt::Some(u32::from_be_bytes([frame[9], frame[10], frame[11], frame[12]]))
+            } else {
+                rt::None
+            };
+            rt::Ok(Self {
+                status: ReadingPresent::from_raw(frame[4]),
+                temperature: Decicelsius::from_raw(
+                    i16::from_be_bytes([frame[5], frame[6]]),
+                ),
+                humidity: v_humidity,
+                pressure: v_pressure,
+            })
         }
     }
     impl response::Event {
@@ -954,15 +928,30 @@ pub mod optional_sensor {
                 &mut compact
             };
             out[3] = 0x82;
-            let field_0: u8 = v_kind.raw();
-            out[4] = field_0;
-            rt::presence("detail", field_0 == 2, v_detail.is_some(), "`kind` = 2")?;
+            let w_kind: u8 = v_kind.raw();
+            out[4] = w_kind;
+            rt::presence("detail", w_kind == 2, v_detail.is_some(), "`kind` = 2")?;
             if let rt::Some(v_detail) = v_detail {
                 out[5..7].copy_from_slice(&v_detail.to_be_bytes());
             }
             let out = OPTIONAL_EVENT.pack(&compact, &[v_detail.is_some()], buf)?;
             LENGTH.put(out)?;
             rt::Ok(out.len())
+        }
+        /// Reads this message from a frame whose framing and code are checked.
+        #[inline(always)]
+        fn from_frame(frame: &[u8]) -> rt::DecodeResult<Self> {
+            let s = OPTIONAL_EVENT.split::<8>(frame)?;
+            let frame = &s.frame;
+            let v_detail = if s.has(0) {
+                rt::Some(u16::from_be_bytes([frame[5], frame[6]]))
+            } else {
+                rt::None
+            };
+            rt::Ok(Self {
+                kind: EventKind::from_raw(frame[4]),
+                detail: v_detail,
+            })
         }
     }
     /// Each request as a struct of its own; its constants (`DESC`, which names it as

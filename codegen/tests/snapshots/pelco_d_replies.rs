@@ -342,26 +342,26 @@ pub mod pelco_d_replies {
         /// `ptz` (no code) from a frame whose checks every frame passes, as `dispatch` tries it.
         #[inline]
         fn codeless_ptz(frame: &[u8; 7]) -> rt::DecodeResult<Self> {
-            let field_0: u16 = u16::from_be_bytes([frame[2], frame[3]]);
-            rt::equal(&request::Ptz::RESERVED_DESC, 2, (field_0 >> 13) & 0x3, 0x0)?;
-            rt::equal(&request::Ptz::EXTENDED_DESC, 2, field_0 & 0x1, 0x0)?;
+            let w_command: u16 = u16::from_be_bytes([frame[2], frame[3]]);
+            rt::equal(&request::Ptz::RESERVED_DESC, 2, (w_command >> 13) & 0x3, 0x0)?;
+            rt::equal(&request::Ptz::EXTENDED_DESC, 2, w_command & 0x1, 0x0)?;
             rt::in_range_or(&request::Ptz::PAN_SPEED_DESC, 4, frame[4], 0, 63, &[255])?;
             rt::in_range(&request::Ptz::TILT_SPEED_DESC, 5, frame[5], 0, 63)?;
             rt::Ok(
                 Self::Ptz(request::Ptz {
-                    sense: (field_0 >> 15) != 0,
-                    auto_scan: ((field_0 >> 12) & 0x1) != 0,
-                    camera_on: ((field_0 >> 11) & 0x1) != 0,
-                    iris_close: ((field_0 >> 10) & 0x1) != 0,
-                    iris_open: ((field_0 >> 9) & 0x1) != 0,
-                    focus_near: ((field_0 >> 8) & 0x1) != 0,
-                    focus_far: ((field_0 >> 7) & 0x1) != 0,
-                    zoom_wide: ((field_0 >> 6) & 0x1) != 0,
-                    zoom_tele: ((field_0 >> 5) & 0x1) != 0,
-                    tilt_down: ((field_0 >> 4) & 0x1) != 0,
-                    tilt_up: ((field_0 >> 3) & 0x1) != 0,
-                    pan_left: ((field_0 >> 2) & 0x1) != 0,
-                    pan_right: ((field_0 >> 1) & 0x1) != 0,
+                    sense: (w_command >> 15) != 0,
+                    auto_scan: ((w_command >> 12) & 0x1) != 0,
+                    camera_on: ((w_command >> 11) & 0x1) != 0,
+                    iris_close: ((w_command >> 10) & 0x1) != 0,
+                    iris_open: ((w_command >> 9) & 0x1) != 0,
+                    focus_near: ((w_command >> 8) & 0x1) != 0,
+                    focus_far: ((w_command >> 7) & 0x1) != 0,
+                    zoom_wide: ((w_command >> 6) & 0x1) != 0,
+                    zoom_tele: ((w_command >> 5) & 0x1) != 0,
+                    tilt_down: ((w_command >> 4) & 0x1) != 0,
+                    tilt_up: ((w_command >> 3) & 0x1) != 0,
+                    pan_left: ((w_command >> 2) & 0x1) != 0,
+                    pan_right: ((w_command >> 1) & 0x1) != 0,
                     pan_speed: frame[4],
                     tilt_speed: frame[5],
                 }),
@@ -928,14 +928,14 @@ pub mod pelco_d_replies {
             rt::encode_in_range_or("pan_speed", v_pan_speed, 0, 63, &[255])?;
             rt::encode_in_range("tilt_speed", v_tilt_speed, 0, 63)?;
             let out = rt::head(out, &[0xFF, address]);
-            let field_0: u16 = ((v_sense as u16) << 15) | ((v_auto_scan as u16) << 12)
+            let w_command: u16 = ((v_sense as u16) << 15) | ((v_auto_scan as u16) << 12)
                 | ((v_camera_on as u16) << 11) | ((v_iris_close as u16) << 10)
                 | ((v_iris_open as u16) << 9) | ((v_focus_near as u16) << 8)
                 | ((v_focus_far as u16) << 7) | ((v_zoom_wide as u16) << 6)
                 | ((v_zoom_tele as u16) << 5) | ((v_tilt_down as u16) << 4)
                 | ((v_tilt_up as u16) << 3) | ((v_pan_left as u16) << 2)
                 | ((v_pan_right as u16) << 1);
-            out[2..4].copy_from_slice(&field_0.to_be_bytes());
+            out[2..4].copy_from_slice(&w_command.to_be_bytes());
             out[4] = v_pan_speed;
             out[5] = v_tilt_speed;
             rt::Ok(out.len())

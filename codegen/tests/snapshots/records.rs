@@ -533,34 +533,8 @@ pub mod records {
         #[inline]
         fn dispatch(frame: &[u8]) -> rt::DecodeResult<Self> {
             match frame[2] {
-                0x83 => {
-                    let s = LISTS_SYNC_WRITE.split::<6, 1>(frame)?;
-                    let frame = &s.frame;
-                    let mut v_blocks = rt::Repeated::<SyncWriteBlocks, 8>::new();
-                    for (k, bytes) in s.elements(0).chunks_exact(4).enumerate() {
-                        let bytes = <[u8; 4]>::try_from(bytes).unwrap_or([0; 4]);
-                        let _ = v_blocks.push(SyncWriteBlocks::read(&bytes, 4 + k * 4)?);
-                    }
-                    rt::Ok(
-                        Self::SyncWrite(request::SyncWrite {
-                            blocks: v_blocks,
-                            flags: frame[4],
-                        }),
-                    )
-                }
-                0x84 => {
-                    let (_, elements, _) = REPEAT_WRITE_PAIRS.split::<4>(frame)?;
-                    let mut v_pairs = rt::Repeated::<WritePairsPairs, 3>::new();
-                    for (k, bytes) in elements.chunks_exact(5).enumerate() {
-                        let bytes = <[u8; 5]>::try_from(bytes).unwrap_or([0; 5]);
-                        let _ = v_pairs.push(WritePairsPairs::read(&bytes, 4 + k * 5)?);
-                    }
-                    rt::Ok(
-                        Self::WritePairs(request::WritePairs {
-                            pairs: v_pairs,
-                        }),
-                    )
-                }
+                0x83 => request::SyncWrite::from_frame(frame).map(Self::SyncWrite),
+                0x84 => request::WritePairs::from_frame(frame).map(Self::WritePairs),
                 0x85 => request::ReadStatus::from_frame(frame).map(Self::ReadStatus),
                 _ => rt::Err(REQUEST_CODE.unknown(frame)),
             }
@@ -837,20 +811,7 @@ pub mod records {
         fn dispatch(frame: &[u8]) -> rt::DecodeResult<Self> {
             match frame[2] {
                 0x80 => response::Ack::from_frame(frame).map(Self::Ack),
-                0x85 => {
-                    let (_, elements, _) = REPEAT_STATUS_REPLY.split::<3>(frame)?;
-                    let mut v_readings = rt::Repeated::<StatusReplyReadings, 6>::new();
-                    for (k, bytes) in elements.chunks_exact(4).enumerate() {
-                        let bytes = <[u8; 4]>::try_from(bytes).unwrap_or([0; 4]);
-                        let _ = v_readings
-                            .push(StatusReplyReadings::read(&bytes, 3 + k * 4)?);
-                    }
-                    rt::Ok(
-                        Self::StatusReply(response::StatusReply {
-                            readings: v_readings,
-                        }),
-                    )
-                }
+                0x85 => response::StatusReply::from_frame(frame).map(Self::StatusReply),
                 _ => rt::Err(RESPONSE_CODE.unknown(frame)),
             }
         }
@@ -1109,6 +1070,21 @@ pub mod records {
             }
             rt::Ok(out.len())
         }
+        /// Reads this message from a frame whose framing and code are checked.
+        #[inline(always)]
+        fn from_frame(frame: &[u8]) -> rt::DecodeResult<Self> {
+            let s = LISTS_SYNC_WRITE.split::<6, 1>(frame)?;
+            let frame = &s.frame;
+            let mut v_blocks = rt::Repeated::<SyncWriteBlocks, 8>::new();
+            for (k, bytes) in s.elements(0).chunks_exact(4).enumerate() {
+                let bytes = <[u8; 4]>::try_from(bytes).unwrap_or([0; 4]);
+                let _ = v_blocks.push(SyncWriteBlocks::read(&bytes, 4 + k * 4)?);
+            }
+            rt::Ok(Self {
+                blocks: v_blocks,
+                flags: frame[4],
+            })
+        }
     }
     impl request::WritePairs {
         pub const NAME: &'static str = "write_pairs";
@@ -1145,6 +1121,17 @@ pub mod records {
                 }
             }
             rt::Ok(out.len())
+        }
+        /// Reads this message from a frame whose framing and code are checked.
+        #[inline(always)]
+        fn from_frame(frame: &[u8]) -> rt::DecodeResult<Self> {
+            let (_, elements, _) = REPEAT_WRITE_PAIRS.split::<4>(frame)?;
+            let mut v_pairs = rt::Repeated::<WritePairsPairs, 3>::new();
+            for (k, bytes) in elements.chunks_exact(5).enumerate() {
+                let bytes = <[u8; 5]>::try_from(bytes).unwrap_or([0; 5]);
+                let _ = v_pairs.push(WritePairsPairs::read(&bytes, 4 + k * 5)?);
+            }
+            rt::Ok(Self { pairs: v_pairs })
         }
     }
     impl request::ReadStatus {
@@ -1232,6 +1219,17 @@ pub mod records {
                 }
             }
             rt::Ok(out.len())
+        }
+        /// Reads this message from a frame whose framing and code are checked.
+        #[inline(always)]
+        fn from_frame(frame: &[u8]) -> rt::DecodeResult<Self> {
+            let (_, elements, _) = REPEAT_STATUS_REPLY.split::<3>(frame)?;
+            let mut v_readings = rt::Repeated::<StatusReplyReadings, 6>::new();
+            for (k, bytes) in elements.chunks_exact(4).enumerate() {
+                let bytes = <[u8; 4]>::try_from(bytes).unwrap_or([0; 4]);
+                let _ = v_readings.push(StatusReplyReadings::read(&bytes, 3 + k * 4)?);
+            }
+            rt::Ok(Self { readings: v_readings })
         }
     }
     /// Each request as a struct of its own; its constants (`DESC`, which names it as

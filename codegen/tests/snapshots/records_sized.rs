@@ -432,54 +432,8 @@ pub mod records_sized {
         #[inline]
         fn dispatch(frame: &[u8]) -> rt::DecodeResult<Self> {
             match frame[3] {
-                0x83 => {
-                    let (frame, elements, _) = REPEAT_SYNC_WRITE.split::<8>(frame)?;
-                    let rec_width = REPEAT_SYNC_WRITE.element_width(frame);
-                    let mut v_blocks = rt::Repeated::<SyncWriteBlocks, 6>::new();
-                    for (k, chunk) in elements.chunks_exact(rec_width).enumerate() {
-                        let mut bytes = [0u8; 5];
-                        if let rt::Some(to) = bytes.get_mut(..rec_width) {
-                            to.copy_from_slice(chunk);
-                        }
-                        let _ = v_blocks
-                            .push(
-                                SyncWriteBlocks::read(
-                                    &bytes,
-                                    8 + k * rec_width,
-                                    rec_width - 1,
-                                )?,
-                            );
-                    }
-                    rt::Ok(
-                        Self::SyncWrite(request::SyncWrite {
-                            start_address: u16::from_le_bytes([frame[4], frame[5]]),
-                            data_length: u16::from_le_bytes([frame[6], frame[7]]),
-                            blocks: v_blocks,
-                        }),
-                    )
-                }
-                0x84 => {
-                    let (frame, elements, _) = REPEAT_TRIM.split::<5>(frame)?;
-                    rt::no_broadcast(frame[1], 0xFE, &request::Trim::DESC)?;
-                    let rec_width = REPEAT_TRIM.element_width(frame);
-                    let mut v_offsets = rt::Repeated::<TrimOffsets, 4>::new();
-                    for (k, chunk) in elements.chunks_exact(rec_width).enumerate() {
-                        let mut bytes = [0u8; 3];
-                        if let rt::Some(to) = bytes.get_mut(..rec_width) {
-                            to.copy_from_slice(chunk);
-                        }
-                        let _ = v_offsets
-                            .push(
-                                TrimOffsets::read(&bytes, 5 + k * rec_width, rec_width - 1)?,
-                            );
-                    }
-                    rt::Ok(
-                        Self::Trim(request::Trim {
-                            width: frame[4],
-                            offsets: v_offsets,
-                        }),
-                    )
-                }
+                0x83 => request::SyncWrite::from_frame(frame).map(Self::SyncWrite),
+                0x84 => request::Trim::from_frame(frame).map(Self::Trim),
                 _ => rt::Err(REQUEST_CODE.unknown(frame)),
             }
         }
@@ -896,6 +850,28 @@ pub mod records_sized {
             }
             rt::Ok(out.len())
         }
+        /// Reads this message from a frame whose framing and code are checked.
+        #[inline(always)]
+        fn from_frame(frame: &[u8]) -> rt::DecodeResult<Self> {
+            let (frame, elements, _) = REPEAT_SYNC_WRITE.split::<8>(frame)?;
+            let rec_width = REPEAT_SYNC_WRITE.element_width(frame);
+            let mut v_blocks = rt::Repeated::<SyncWriteBlocks, 6>::new();
+            for (k, chunk) in elements.chunks_exact(rec_width).enumerate() {
+                let mut bytes = [0u8; 5];
+                if let rt::Some(to) = bytes.get_mut(..rec_width) {
+                    to.copy_from_slice(chunk);
+                }
+                let _ = v_blocks
+                    .push(
+                        SyncWriteBlocks::read(&bytes, 8 + k * rec_width, rec_width - 1)?,
+                    );
+            }
+            rt::Ok(Self {
+                start_address: u16::from_le_bytes([frame[4], frame[5]]),
+                data_length: u16::from_le_bytes([frame[6], frame[7]]),
+                blocks: v_blocks,
+            })
+        }
     }
     impl request::Trim {
         pub const NAME: &'static str = "trim";
@@ -941,6 +917,26 @@ pub mod records_sized {
                 }
             }
             rt::Ok(out.len())
+        }
+        /// Reads this message from a frame whose framing and code are checked.
+        #[inline(always)]
+        fn from_frame(frame: &[u8]) -> rt::DecodeResult<Self> {
+            let (frame, elements, _) = REPEAT_TRIM.split::<5>(frame)?;
+            rt::no_broadcast(frame[1], 0xFE, &Self::DESC)?;
+            let rec_width = REPEAT_TRIM.element_width(frame);
+            let mut v_offsets = rt::Repeated::<TrimOffsets, 4>::new();
+            for (k, chunk) in elements.chunks_exact(rec_width).enumerate() {
+                let mut bytes = [0u8; 3];
+                if let rt::Some(to) = bytes.get_mut(..rec_width) {
+                    to.copy_from_slice(chunk);
+                }
+                let _ = v_offsets
+                    .push(TrimOffsets::read(&bytes, 5 + k * rec_width, rec_width - 1)?);
+            }
+            rt::Ok(Self {
+                width: frame[4],
+                offsets: v_offsets,
+            })
         }
     }
     impl response::Ack {

@@ -1776,9 +1776,9 @@ pub mod roboclaw {
         #[inline(always)]
         fn from_frame(frame: &[u8]) -> rt::DecodeResult<Self> {
             let frame = rt::fixed::<6>(frame, &Self::DESC)?;
-            let field_0: i16 = i16::from_be_bytes([frame[2], frame[3]]);
-            rt::in_range(&Self::DUTY_DESC, 2, field_0, -32767, 32767)?;
-            rt::Ok(Self { duty: field_0 })
+            let w_duty: i16 = i16::from_be_bytes([frame[2], frame[3]]);
+            rt::in_range(&Self::DUTY_DESC, 2, w_duty, -32767, 32767)?;
+            rt::Ok(Self { duty: w_duty })
         }
     }
     impl request::SpeedM1 {

@@ -215,16 +215,16 @@ pub mod rtcm3_frame {
                 g.attempt_split(
                     &REPEAT_STATION_ARP,
                     |frame: &[u8; 5], elements: &[u8], _: usize| {
-                        let field_0: u16 = u16::from_be_bytes([frame[3], frame[4]]);
+                        let w_head: u16 = u16::from_be_bytes([frame[3], frame[4]]);
                         rt::equal(
                             &request::StationArp::NUMBER_DESC,
                             3,
-                            field_0 >> 4,
+                            w_head >> 4,
                             0x3ED,
                         )?;
                         rt::Ok(
                             Self::StationArp(request::StationArp {
-                                station_high: (field_0 & 0xF) as u8,
+                                station_high: (w_head & 0xF) as u8,
                                 rest: REPEAT_STATION_ARP
                                     .elements::<u8, 17>(elements, false, false)?,
                             }),
@@ -234,16 +234,16 @@ pub mod rtcm3_frame {
                 g.attempt_split(
                     &REPEAT_ANTENNA,
                     |frame: &[u8; 5], elements: &[u8], _: usize| {
-                        let field_0: u16 = u16::from_be_bytes([frame[3], frame[4]]);
+                        let w_head: u16 = u16::from_be_bytes([frame[3], frame[4]]);
                         rt::equal(
                             &request::Antenna::NUMBER_DESC,
                             3,
-                            field_0 >> 4,
+                            w_head >> 4,
                             0x3EF,
                         )?;
                         rt::Ok(
                             Self::Antenna(request::Antenna {
-                                station_high: (field_0 & 0xF) as u8,
+                                station_high: (w_head & 0xF) as u8,
                                 rest: REPEAT_ANTENNA
                                     .elements::<u8, 34>(elements, false, false)?,
                             }),
@@ -506,15 +506,15 @@ pub mod rtcm3_frame {
                 g.attempt_split(
                     &REPEAT_STATION_ARP,
                     |frame: &'a [u8; 5], elements: &'a [u8], _: usize| {
-                        let field_0: u16 = u16::from_be_bytes([frame[3], frame[4]]);
+                        let w_head: u16 = u16::from_be_bytes([frame[3], frame[4]]);
                         rt::equal(
                             &request::StationArp::NUMBER_DESC,
                             3,
-                            field_0 >> 4,
+                            w_head >> 4,
                             0x3ED,
                         )?;
                         rt::Ok(Self::StationArp {
-                            station_high: (field_0 & 0xF) as u8,
+                            station_high: (w_head & 0xF) as u8,
                             rest: REPEAT_STATION_ARP
                                 .view::<u8, 17>(elements, false, false)?,
                         })
@@ -523,15 +523,15 @@ pub mod rtcm3_frame {
                 g.attempt_split(
                     &REPEAT_ANTENNA,
                     |frame: &'a [u8; 5], elements: &'a [u8], _: usize| {
-                        let field_0: u16 = u16::from_be_bytes([frame[3], frame[4]]);
+                        let w_head: u16 = u16::from_be_bytes([frame[3], frame[4]]);
                         rt::equal(
                             &request::Antenna::NUMBER_DESC,
                             3,
-                            field_0 >> 4,
+                            w_head >> 4,
                             0x3EF,
                         )?;
                         rt::Ok(Self::Antenna {
-                            station_high: (field_0 & 0xF) as u8,
+                            station_high: (w_head & 0xF) as u8,
                             rest: REPEAT_ANTENNA.view::<u8, 34>(elements, false, false)?,
                         })
                     },
@@ -731,9 +731,9 @@ pub mod rtcm3_frame {
             let frame_len = REPEAT_STATION_ARP.encode_len(v_rest.len())?;
             let out = rt::frame_mut_len(buf, frame_len, &[0xD3])?;
             LENGTH.put(out)?;
-            let field_0: u16 = (0x3ED << 4)
+            let w_head: u16 = (0x3ED << 4)
                 | ((rt::fits("station_high", v_station_high, 0, 15)? as u16) & 0xF);
-            out[3..5].copy_from_slice(&field_0.to_be_bytes());
+            out[3..5].copy_from_slice(&w_head.to_be_bytes());
             rt::write_elements(v_rest.as_slice(), 1, false, &mut out[5..]);
             rt::Ok(out.len())
         }
@@ -760,9 +760,9 @@ pub mod rtcm3_frame {
             let frame_len = REPEAT_ANTENNA.encode_len(v_rest.len())?;
             let out = rt::frame_mut_len(buf, frame_len, &[0xD3])?;
             LENGTH.put(out)?;
-            let field_0: u16 = (0x3EF << 4)
+            let w_head: u16 = (0x3EF << 4)
                 | ((rt::fits("station_high", v_station_high, 0, 15)? as u16) & 0xF);
-            out[3..5].copy_from_slice(&field_0.to_be_bytes());
+            out[3..5].copy_from_slice(&w_head.to_be_bytes());
             rt::write_elements(v_rest.as_slice(), 1, false, &mut out[5..]);
             rt::Ok(out.len())
         }

@@ -2309,21 +2309,23 @@ pub mod sd {
         fn write(&self, address: u8, out: &mut [u8; 6]) -> rt::EncodeResult {
             let Self { freshness: v_freshness, position: v_position } = *self;
             let out = rt::head(out, &[0x76, address]);
-            let field_0: u16 = ((rt::fits("freshness", v_freshness, 0, 15)? as u16)
-                << 12)
+            let w_set_point_word: u16 = ((rt::fits("freshness", v_freshness, 0, 15)?
+                as u16) << 12)
                 | ((rt::fits("position", v_position.raw(), -2048, 2047)? as u16)
                     & 0xFFF);
-            out[2..4].copy_from_slice(&field_0.to_be_bytes());
+            out[2..4].copy_from_slice(&w_set_point_word.to_be_bytes());
             rt::Ok(out.len())
         }
         /// Reads this message from a frame whose framing and code are checked.
         #[inline(always)]
         fn from_frame(frame: &[u8]) -> rt::DecodeResult<Self> {
             let frame = rt::fixed::<6>(frame, &Self::DESC)?;
-            let field_0: u16 = u16::from_be_bytes([frame[2], frame[3]]);
+            let w_set_point_word: u16 = u16::from_be_bytes([frame[2], frame[3]]);
             rt::Ok(Self {
-                freshness: (field_0 >> 12) as u8,
-                position: Angle::from_raw((((field_0 & 0xFFF) as u16) << 4) as i16 >> 4),
+                freshness: (w_set_point_word >> 12) as u8,
+                position: Angle::from_raw(
+                    (((w_set_point_word & 0xFFF) as u16) << 4) as i16 >> 4,
+                ),
             })
         }
     }
@@ -2419,9 +2421,9 @@ pub mod sd {
             let Self { new_id: v_new_id } = *self;
             rt::encode_in_range("new_id", v_new_id, 1, 30)?;
             let out = rt::head(out, &[0xAA, address]);
-            let field_0: u8 = v_new_id;
-            out[2] = field_0;
-            out[3] = field_0;
+            let w_new_id: u8 = v_new_id;
+            out[2] = w_new_id;
+            out[3] = w_new_id;
             rt::Ok(out.len())
         }
         /// Reads this message from a frame whose framing and code are checked.
@@ -3269,21 +3271,23 @@ pub mod sd {
         fn write(&self, address: u8, out: &mut [u8; 6]) -> rt::EncodeResult {
             let Self { freshness: v_freshness, position: v_position } = *self;
             let out = rt::head(out, &[0x56, address]);
-            let field_0: u16 = ((rt::fits("freshness", v_freshness, 0, 15)? as u16)
-                << 12)
+            let w_position_word: u16 = ((rt::fits("freshness", v_freshness, 0, 15)?
+                as u16) << 12)
                 | ((rt::fits("position", v_position.raw(), -2048, 2047)? as u16)
                     & 0xFFF);
-            out[2..4].copy_from_slice(&field_0.to_be_bytes());
+            out[2..4].copy_from_slice(&w_position_word.to_be_bytes());
             rt::Ok(out.len())
         }
         /// Reads this message from a frame whose framing and code are checked.
         #[inline(always)]
         fn from_frame(frame: &[u8]) -> rt::DecodeResult<Self> {
             let frame = rt::fixed::<6>(frame, &Self::DESC)?;
-            let field_0: u16 = u16::from_be_bytes([frame[2], frame[3]]);
+            let w_position_word: u16 = u16::from_be_bytes([frame[2], frame[3]]);
             rt::Ok(Self {
-                freshness: (field_0 >> 12) as u8,
-                position: Angle::from_raw((((field_0 & 0xFFF) as u16) << 4) as i16 >> 4),
+                freshness: (w_position_word >> 12) as u8,
+                position: Angle::from_raw(
+                    (((w_position_word & 0xFFF) as u16) << 4) as i16 >> 4,
+                ),
             })
         }
     }
@@ -3304,19 +3308,25 @@ pub mod sd {
         fn write(&self, address: u8, out: &mut [u8; 6]) -> rt::EncodeResult {
             let Self { position: v_position } = *self;
             let out = rt::head(out, &[0x49, address]);
-            let field_0: u16 = (rt::fits("position", v_position.raw(), -2048, 2047)?
-                as u16) & 0xFFF;
-            out[2..4].copy_from_slice(&field_0.to_be_bytes());
+            let w_position_word: u16 = (rt::fits(
+                "position",
+                v_position.raw(),
+                -2048,
+                2047,
+            )? as u16) & 0xFFF;
+            out[2..4].copy_from_slice(&w_position_word.to_be_bytes());
             rt::Ok(out.len())
         }
         /// Reads this message from a frame whose framing and code are checked.
         #[inline(always)]
         fn from_frame(frame: &[u8]) -> rt::DecodeResult<Self> {
             let frame = rt::fixed::<6>(frame, &Self::DESC)?;
-            let field_0: u16 = u16::from_be_bytes([frame[2], frame[3]]);
-            rt::equal(&Self::ZERO_DESC, 2, field_0 >> 12, 0x0)?;
+            let w_position_word: u16 = u16::from_be_bytes([frame[2], frame[3]]);
+            rt::equal(&Self::ZERO_DESC, 2, w_position_word >> 12, 0x0)?;
             rt::Ok(Self {
-                position: Angle::from_raw((((field_0 & 0xFFF) as u16) << 4) as i16 >> 4),
+                position: Angle::from_raw(
+                    (((w_position_word & 0xFFF) as u16) << 4) as i16 >> 4,
+                ),
             })
         }
     }
@@ -3405,9 +3415,9 @@ pub mod sd {
             let Self { new_id: v_new_id } = *self;
             rt::encode_in_range("new_id", v_new_id, 1, 30)?;
             let out = rt::head(out, &[0x55, address]);
-            let field_0: u8 = v_new_id;
-            out[2] = field_0;
-            out[3] = field_0;
+            let w_new_id: u8 = v_new_id;
+            out[2] = w_new_id;
+            out[3] = w_new_id;
             rt::Ok(out.len())
         }
         /// Reads this message from a frame whose framing and code are checked.
@@ -3439,9 +3449,9 @@ pub mod sd {
             let Self { id: v_id } = *self;
             rt::encode_in_range("id", v_id, 1, 30)?;
             let out = rt::head(out, &[0x6D, address]);
-            let field_0: u8 = v_id;
-            out[2] = field_0;
-            out[3] = field_0;
+            let w_id: u8 = v_id;
+            out[2] = w_id;
+            out[3] = w_id;
             rt::Ok(out.len())
         }
         /// Reads this message from a frame whose framing and code are checked.
@@ -3474,9 +3484,9 @@ pub mod sd {
         fn write(&self, address: u8, out: &mut [u8; 6]) -> rt::EncodeResult {
             let Self { current: v_current } = *self;
             let out = rt::head(out, &[0x30, address]);
-            let field_0: u8 = rt::fits("current", v_current.raw(), 0, 255)? as u8;
-            out[2] = field_0;
-            out[3] = field_0;
+            let w_current: u8 = rt::fits("current", v_current.raw(), 0, 255)? as u8;
+            out[2] = w_current;
+            out[3] = w_current;
             rt::Ok(out.len())
         }
         /// Reads this message from a frame whose framing and code are checked.
@@ -3623,9 +3633,9 @@ pub mod sd {
             let Self { humidity: v_humidity } = *self;
             rt::encode_in_range_or("humidity", v_humidity, 1, 100, &[0])?;
             let out = rt::head(out, &[0x21, address]);
-            let field_0: u8 = v_humidity;
-            out[2] = field_0;
-            out[3] = field_0;
+            let w_humidity: u8 = v_humidity;
+            out[2] = w_humidity;
+            out[3] = w_humidity;
             rt::Ok(out.len())
         }
         /// Reads this message from a frame whose framing and code are checked.
@@ -3774,24 +3784,24 @@ pub mod sd {
         fn write(&self, address: u8, out: &mut [u8; 6]) -> rt::EncodeResult {
             let Self { zero_offset: v_zero_offset } = *self;
             let out = rt::head(out, &[0x4C, address]);
-            let field_0: u16 = (rt::fits(
+            let w_offset_word: u16 = (rt::fits(
                 "zero_offset",
                 v_zero_offset.raw(),
                 -2048,
                 2047,
             )? as u16) & 0xFFF;
-            out[2..4].copy_from_slice(&field_0.to_be_bytes());
+            out[2..4].copy_from_slice(&w_offset_word.to_be_bytes());
             rt::Ok(out.len())
         }
         /// Reads this message from a frame whose framing and code are checked.
         #[inline(always)]
         fn from_frame(frame: &[u8]) -> rt::DecodeResult<Self> {
             let frame = rt::fixed::<6>(frame, &Self::DESC)?;
-            let field_0: u16 = u16::from_be_bytes([frame[2], frame[3]]);
-            rt::equal(&Self::ZERO_DESC, 2, field_0 >> 12, 0x0)?;
+            let w_offset_word: u16 = u16::from_be_bytes([frame[2], frame[3]]);
+            rt::equal(&Self::ZERO_DESC, 2, w_offset_word >> 12, 0x0)?;
             rt::Ok(Self {
                 zero_offset: Angle::from_raw(
-                    (((field_0 & 0xFFF) as u16) << 4) as i16 >> 4,
+                    (((w_offset_word & 0xFFF) as u16) << 4) as i16 >> 4,
                 ),
             })
         }
@@ -3813,24 +3823,24 @@ pub mod sd {
         fn write(&self, address: u8, out: &mut [u8; 6]) -> rt::EncodeResult {
             let Self { zero_offset: v_zero_offset } = *self;
             let out = rt::head(out, &[0x65, address]);
-            let field_0: u16 = (rt::fits(
+            let w_offset_word: u16 = (rt::fits(
                 "zero_offset",
                 v_zero_offset.raw(),
                 -2048,
                 2047,
             )? as u16) & 0xFFF;
-            out[2..4].copy_from_slice(&field_0.to_be_bytes());
+            out[2..4].copy_from_slice(&w_offset_word.to_be_bytes());
             rt::Ok(out.len())
         }
         /// Reads this message from a frame whose framing and code are checked.
         #[inline(always)]
         fn from_frame(frame: &[u8]) -> rt::DecodeResult<Self> {
             let frame = rt::fixed::<6>(frame, &Self::DESC)?;
-            let field_0: u16 = u16::from_be_bytes([frame[2], frame[3]]);
-            rt::equal(&Self::ZERO_DESC, 2, field_0 >> 12, 0x0)?;
+            let w_offset_word: u16 = u16::from_be_bytes([frame[2], frame[3]]);
+            rt::equal(&Self::ZERO_DESC, 2, w_offset_word >> 12, 0x0)?;
             rt::Ok(Self {
                 zero_offset: Angle::from_raw(
-                    (((field_0 & 0xFFF) as u16) << 4) as i16 >> 4,
+                    (((w_offset_word & 0xFFF) as u16) << 4) as i16 >> 4,
                 ),
             })
         }

@@ -781,16 +781,8 @@ pub mod shdlc {
                 0x10 => response::Asleep::from_frame(frame).map(Self::Asleep),
                 0x11 => response::Awake::from_frame(frame).map(Self::Awake),
                 0xD0 => {
-                    let s = LISTS_INFORMATION_TEXT.split::<7, 1>(frame)?;
-                    let frame = &s.frame;
-                    rt::Ok(
-                        Self::InformationText(response::InformationText {
-                            state: State::from_raw(frame[3]),
-                            text: s
-                                .lists[0]
-                                .elements::<u8, 32>(s.elements(0), false, false)?,
-                        }),
-                    )
+                    response::InformationText::from_frame(frame)
+                        .map(Self::InformationText)
                 }
                 0xD3 => response::ResetDone::from_frame(frame).map(Self::ResetDone),
                 _ => rt::Err(RESPONSE_CODE.unknown(frame)),
@@ -1505,6 +1497,16 @@ pub mod shdlc {
             }
             RESPONSE_LENGTH.put(out)?;
             rt::Ok(out.len())
+        }
+        /// Reads this message from a frame whose framing and code are checked.
+        #[inline(always)]
+        fn from_frame(frame: &[u8]) -> rt::DecodeResult<Self> {
+            let s = LISTS_INFORMATION_TEXT.split::<7, 1>(frame)?;
+            let frame = &s.frame;
+            rt::Ok(Self {
+                state: State::from_raw(frame[3]),
+                text: s.lists[0].elements::<u8, 32>(s.elements(0), false, false)?,
+            })
         }
     }
     impl response::ResetDone {

@@ -500,15 +500,7 @@ pub mod slip_sensor {
                     rt::fixed::<4>(frame, &response::Ack::DESC)
                         .map(|_| Self::Ack(response::Ack))
                 }
-                0x83 => {
-                    let (_, elements, _) = REPEAT_SAMPLES.split::<1>(frame)?;
-                    rt::Ok(
-                        Self::Samples(response::Samples {
-                            samples: REPEAT_SAMPLES
-                                .elements::<u8, 8>(elements, false, false)?,
-                        }),
-                    )
-                }
+                0x83 => response::Samples::from_frame(frame).map(Self::Samples),
                 _ => rt::Err(RESPONSE_CODE.unknown(frame)),
             }
         }
@@ -772,6 +764,14 @@ pub mod slip_sensor {
             let out = rt::frame_mut_len(buf, frame_len, &[0x83])?;
             rt::write_elements(v_samples.as_slice(), 1, false, &mut out[1..]);
             rt::Ok(out.len())
+        }
+        /// Reads this message from a frame whose framing and code are checked.
+        #[inline(always)]
+        fn from_frame(frame: &[u8]) -> rt::DecodeResult<Self> {
+            let (_, elements, _) = REPEAT_SAMPLES.split::<1>(frame)?;
+            rt::Ok(Self {
+                samples: REPEAT_SAMPLES.elements::<u8, 8>(elements, false, false)?,
+            })
         }
     }
     /// Each request as a struct of its own; its constants (`DESC`, which names it as

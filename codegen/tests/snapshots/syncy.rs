@@ -687,10 +687,10 @@ pub mod syncy {
         fn from_frame(frame: &[u8]) -> rt::DecodeResult<Self> {
             let frame = rt::fixed::<9>(frame, &Self::DESC)?;
             rt::no_broadcast(frame[2], 0xFE, &Self::DESC)?;
-            let field_0: i32 = rt::i24([frame[5], frame[6], frame[7]], false);
-            rt::in_range(&Self::TARGET_DESC, 5, field_0, -1000000, 1000000)?;
+            let w_target: i32 = rt::i24([frame[5], frame[6], frame[7]], false);
+            rt::in_range(&Self::TARGET_DESC, 5, w_target, -1000000, 1000000)?;
             rt::Ok(Self {
-                target: Millimetre::from_raw(field_0 as i32),
+                target: Millimetre::from_raw(w_target as i32),
             })
         }
     }
@@ -733,9 +733,9 @@ pub mod syncy {
             rt::encode_broadcast(address, 0xFE, &request::SetPair::DESC)?;
             rt::encode_in_range("quantity", v_quantity, 1, 100)?;
             let out = rt::frame_mut::<10>(buf, &[0xFF, 0xFF, address, 0x06, 0x05])?;
-            let field_0: u8 = v_quantity;
-            out[5] = field_0;
-            out[6] = rt::fits("doubled", rt::follows(field_0 as i64, 2, 1), 0, 255)?
+            let w_quantity: u8 = v_quantity;
+            out[5] = w_quantity;
+            out[6] = rt::fits("doubled", rt::follows(w_quantity as i64, 2, 1), 0, 255)?
                 as u8;
             out[7..9].copy_from_slice(&v_level.to_be_bytes());
             rt::Ok(out.len())
@@ -795,20 +795,20 @@ pub mod syncy {
                         false,
                     ),
                 );
-            let field_1: u32 = (((rt::fits("tag", v_tag, 0, 15)? as u32) & 0xF) << 20)
+            let w_packed: u32 = (((rt::fits("tag", v_tag, 0, 15)? as u32) & 0xF) << 20)
                 | ((rt::fits("offset", v_offset, -524288, 524287)? as u32) & 0xFFFFF);
-            out[8..11].copy_from_slice(&rt::bytes24(field_1 as u32, false));
+            out[8..11].copy_from_slice(&rt::bytes24(w_packed as u32, false));
             rt::Ok(out.len())
         }
         /// Reads this message from a frame whose framing and code are checked.
         #[inline(always)]
         fn from_frame(frame: &[u8]) -> rt::DecodeResult<Self> {
             let frame = rt::fixed::<12>(frame, &Self::DESC)?;
-            let field_1: u32 = rt::u24([frame[8], frame[9], frame[10]], false);
+            let w_packed: u32 = rt::u24([frame[8], frame[9], frame[10]], false);
             rt::Ok(Self {
                 total: rt::u24([frame[5], frame[6], frame[7]], false),
-                tag: ((field_1 >> 20) & 0xF) as u8,
-                offset: (((field_1 & 0xFFFFF) as u32) << 12) as i32 >> 12,
+                tag: ((w_packed >> 20) & 0xF) as u8,
+                offset: (((w_packed & 0xFFFFF) as u32) << 12) as i32 >> 12,
             })
         }
     }

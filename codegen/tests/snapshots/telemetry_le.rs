@@ -587,7 +587,7 @@ pub mod telemetry_le {
         #[inline(always)]
         fn from_frame(frame: &[u8]) -> rt::DecodeResult<Self> {
             let frame = rt::fixed::<21>(frame, &Self::DESC)?;
-            let field_0: f64 = f64::from_le_bytes([
+            let w_lat: f64 = f64::from_le_bytes([
                 frame[4],
                 frame[5],
                 frame[6],
@@ -600,11 +600,11 @@ pub mod telemetry_le {
             rt::in_range(
                 &Self::LAT_DESC,
                 4,
-                field_0,
+                w_lat,
                 rt::f64_raw(-90f64),
                 rt::f64_raw(90f64),
             )?;
-            let field_1: f64 = f64::from_le_bytes([
+            let w_lon: f64 = f64::from_le_bytes([
                 frame[12],
                 frame[13],
                 frame[14],
@@ -617,11 +617,11 @@ pub mod telemetry_le {
             rt::in_range(
                 &Self::LON_DESC,
                 12,
-                field_1,
+                w_lon,
                 rt::f64_raw(-180f64),
                 rt::f64_raw(180f64),
             )?;
-            rt::Ok(Self { lat: field_0, lon: field_1 })
+            rt::Ok(Self { lat: w_lat, lon: w_lon })
         }
     }
     impl response::State {
@@ -683,7 +683,7 @@ pub mod telemetry_le {
         #[inline(always)]
         fn from_frame(frame: &[u8]) -> rt::DecodeResult<Self> {
             let frame = rt::fixed::<41>(frame, &Self::DESC)?;
-            let field_4: f32 = f32::from_le_bytes([
+            let w_pressure: f32 = f32::from_le_bytes([
                 frame[34],
                 frame[35],
                 frame[32],
@@ -692,7 +692,7 @@ pub mod telemetry_le {
             rt::in_range(
                 &Self::PRESSURE_DESC,
                 32,
-                field_4,
+                w_pressure,
                 rt::f32_raw(300f32),
                 rt::f32_raw(1100.5f32),
             )?;
@@ -733,7 +733,7 @@ pub mod telemetry_le {
                     frame[30],
                     frame[31],
                 ]),
-                pressure: field_4,
+                pressure: w_pressure,
                 total: u32::from_le_bytes([frame[38], frame[39], frame[36], frame[37]]),
             })
         }

@@ -211,25 +211,7 @@ pub mod text_counted {
         #[inline]
         fn dispatch(frame: &[u8]) -> rt::DecodeResult<Self> {
             match frame[2] {
-                0x20 => {
-                    let s = LISTS_SET_NAME.split::<6, 1>(frame)?;
-                    let frame = &s.frame;
-                    rt::in_range(
-                        &request::SetName::CHANNEL_DESC,
-                        4 + s.shift(1),
-                        frame[4],
-                        0,
-                        7,
-                    )?;
-                    rt::Ok(
-                        Self::SetName(request::SetName {
-                            name: s
-                                .lists[0]
-                                .elements::<u8, 16>(s.elements(0), false, false)?,
-                            channel: frame[4],
-                        }),
-                    )
-                }
+                0x20 => request::SetName::from_frame(frame).map(Self::SetName),
                 0x21 => {
                     rt::fixed::<4>(frame, &request::GetInfo::DESC)
                         .map(|_| Self::GetInfo(request::GetInfo))
@@ -447,24 +429,7 @@ pub mod text_counted {
         fn dispatch(frame: &[u8]) -> rt::DecodeResult<Self> {
             match frame[2] {
                 0x20 => response::Ack::from_frame(frame).map(Self::Ack),
-                0x21 => {
-                    let s = LISTS_DEVICE_INFO.split::<10, 1>(frame)?;
-                    let frame = &s.frame;
-                    rt::Ok(
-                        Self::DeviceInfo(response::DeviceInfo {
-                            name: s
-                                .lists[0]
-                                .elements::<u8, 16>(s.elements(0), false, false)?,
-                            serial: u32::from_be_bytes([
-                                frame[4],
-                                frame[5],
-                                frame[6],
-                                frame[7],
-                            ]),
-                            version: frame[8],
-                        }),
-                    )
-                }
+                0x21 => response::DeviceInfo::from_frame(frame).map(Self::DeviceInfo),
                 _ => rt::Err(RESPONSE_CODE.unknown(frame)),
             }
         }
@@ -874,6 +839,17 @@ pub mod text_counted {
             rt::write_elements(v_name.as_slice(), 1, false, &mut out[4..]);
             rt::Ok(out.len())
         }
+        /// Reads this message from a frame whose framing and code are checked.
+        #[inline(always)]
+        fn from_frame(frame: &[u8]) -> rt::DecodeResult<Self> {
+            let s = LISTS_SET_NAME.split::<6, 1>(frame)?;
+            let frame = &s.frame;
+            rt::in_range(&Self::CHANNEL_DESC, 4 + s.shift(1), frame[4], 0, 7)?;
+            rt::Ok(Self {
+                name: s.lists[0].elements::<u8, 16>(s.elements(0), false, false)?,
+                channel: frame[4],
+            })
+        }
     }
     impl request::GetInfo {
         pub const NAME: &'static str = "get_info";
@@ -948,6 +924,17 @@ pub mod text_counted {
             let out = LISTS_DEVICE_INFO.expand(&compact, &[bytes_0], buf)?;
             rt::write_elements(v_name.as_slice(), 1, false, &mut out[4..]);
             rt::Ok(out.len())
+        }
+        /// Reads this message from a frame whose framing and code are checked.
+        #[inline(always)]
+        fn from_frame(frame: &[u8]) -> rt::DecodeResult<Self> {
+            let s = LISTS_DEVICE_INFO.split::<10, 1>(frame)?;
+            let frame = &s.frame;
+            rt::Ok(Self {
+                name: s.lists[0].elements::<u8, 16>(s.elements(0), false, false)?,
+                serial: u32::from_be_bytes([frame[4], frame[5], frame[6], frame[7]]),
+                version: frame[8],
+            })
         }
     }
     /// Each request as a struct of its own; its constants (`DESC`, which names it as

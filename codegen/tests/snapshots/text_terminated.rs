@@ -217,25 +217,7 @@ pub mod text_terminated {
                     rt::fixed::<4>(frame, &request::Ping::DESC)
                         .map(|_| Self::Ping(request::Ping))
                 }
-                0x2A => {
-                    let s = LISTS_SET_NAME.split::<5, 1>(frame)?;
-                    let frame = &s.frame;
-                    rt::in_range(
-                        &request::SetName::CHANNEL_DESC,
-                        3 + s.shift(1),
-                        frame[3],
-                        0,
-                        7,
-                    )?;
-                    rt::Ok(
-                        Self::SetName(request::SetName {
-                            name: s
-                                .lists[0]
-                                .elements::<u8, 16>(s.elements(0), false, false)?,
-                            channel: frame[3],
-                        }),
-                    )
-                }
+                0x2A => request::SetName::from_frame(frame).map(Self::SetName),
                 0x2C => {
                     request::ReadParameter::from_frame(frame).map(Self::ReadParameter)
                 }
@@ -492,54 +474,9 @@ pub mod text_terminated {
         #[inline]
         fn dispatch(frame: &[u8]) -> rt::DecodeResult<Self> {
             match frame[2] {
-                0x29 => {
-                    let s = LISTS_DEVICE_INFO.split::<18, 1>(frame)?;
-                    let frame = &s.frame;
-                    rt::Ok(
-                        Self::DeviceInfo(response::DeviceInfo {
-                            name: s
-                                .lists[0]
-                                .elements::<u8, 24>(s.elements(0), false, false)?,
-                            serial: u32::from_be_bytes([
-                                frame[3],
-                                frame[4],
-                                frame[5],
-                                frame[6],
-                            ]),
-                            hardware: u32::from_be_bytes([
-                                frame[7],
-                                frame[8],
-                                frame[9],
-                                frame[10],
-                            ]),
-                            firmware: u32::from_be_bytes([
-                                frame[11],
-                                frame[12],
-                                frame[13],
-                                frame[14],
-                            ]),
-                            parameters: frame[15],
-                            version: frame[16],
-                        }),
-                    )
-                }
+                0x29 => response::DeviceInfo::from_frame(frame).map(Self::DeviceInfo),
                 0x2A => response::Ack::from_frame(frame).map(Self::Ack),
-                0x2B => {
-                    let s = LISTS_PARAMETER.split::<7, 2>(frame)?;
-                    let frame = &s.frame;
-                    rt::Ok(
-                        Self::Parameter(response::Parameter {
-                            index: frame[3],
-                            label: s
-                                .lists[0]
-                                .elements::<u8, 16>(s.elements(0), false, false)?,
-                            unit: s
-                                .lists[1]
-                                .elements::<u8, 8>(s.elements(1), false, false)?,
-                            value: i16::from_be_bytes([frame[4], frame[5]]),
-                        }),
-                    )
-                }
+                0x2B => response::Parameter::from_frame(frame).map(Self::Parameter),
                 _ => rt::Err(RESPONSE_CODE.unknown(frame)),
             }
         }
@@ -1064,6 +1001,17 @@ pub mod text_terminated {
             LENGTH.put(out)?;
             rt::Ok(out.len())
         }
+        /// Reads this message from a frame whose framing and code are checked.
+        #[inline(always)]
+        fn from_frame(frame: &[u8]) -> rt::DecodeResult<Self> {
+            let s = LISTS_SET_NAME.split::<5, 1>(frame)?;
+            let frame = &s.frame;
+            rt::in_range(&Self::CHANNEL_DESC, 3 + s.shift(1), frame[3], 0, 7)?;
+            rt::Ok(Self {
+                name: s.lists[0].elements::<u8, 16>(s.elements(0), false, false)?,
+                channel: frame[3],
+            })
+        }
     }
     impl request::ReadParameter {
         pub const NAME: &'static str = "read_parameter";
@@ -1146,6 +1094,25 @@ pub mod text_terminated {
             LENGTH.put(out)?;
             rt::Ok(out.len())
         }
+        /// Reads this message from a frame whose framing and code are checked.
+        #[inline(always)]
+        fn from_frame(frame: &[u8]) -> rt::DecodeResult<Self> {
+            let s = LISTS_DEVICE_INFO.split::<18, 1>(frame)?;
+            let frame = &s.frame;
+            rt::Ok(Self {
+                name: s.lists[0].elements::<u8, 24>(s.elements(0), false, false)?,
+                serial: u32::from_be_bytes([frame[3], frame[4], frame[5], frame[6]]),
+                hardware: u32::from_be_bytes([frame[7], frame[8], frame[9], frame[10]]),
+                firmware: u32::from_be_bytes([
+                    frame[11],
+                    frame[12],
+                    frame[13],
+                    frame[14],
+                ]),
+                parameters: frame[15],
+                version: frame[16],
+            })
+        }
     }
     impl response::Ack {
         pub const NAME: &'static str = "ack";
@@ -1227,6 +1194,18 @@ pub mod text_terminated {
             }
             LENGTH.put(out)?;
             rt::Ok(out.len())
+        }
+        /// Reads this message from a frame whose framing and code are checked.
+        #[inline(always)]
+        fn from_frame(frame: &[u8]) -> rt::DecodeResult<Self> {
+            let s = LISTS_PARAMETER.split::<7, 2>(frame)?;
+            let frame = &s.frame;
+            rt::Ok(Self {
+                index: frame[3],
+                label: s.lists[0].elements::<u8, 16>(s.elements(0), false, false)?,
+                unit: s.lists[1].elements::<u8, 8>(s.elements(1), false, false)?,
+                value: i16::from_be_bytes([frame[4], frame[5]]),
+            })
         }
     }
     /// Each request as a struct of its own; its constants (`DESC`, which names it as

@@ -2787,9 +2787,9 @@ pub mod ub2 {
         #[inline(always)]
         fn from_frame(frame: &[u8]) -> rt::DecodeResult<Self> {
             let frame = rt::fixed::<7>(frame, &Self::DESC)?;
-            let field_0: u16 = u16::from_le_bytes([frame[4], frame[5]]);
-            rt::in_range(&Self::INDEX_DESC, 4, field_0, 0, 499)?;
-            rt::Ok(Self { index: field_0 })
+            let w_index: u16 = u16::from_le_bytes([frame[4], frame[5]]);
+            rt::in_range(&Self::INDEX_DESC, 4, w_index, 0, 499)?;
+            rt::Ok(Self { index: w_index })
         }
     }
     impl request::GetControllerTemperature {
@@ -3410,10 +3410,10 @@ pub mod ub2 {
         #[inline(always)]
         fn from_frame(frame: &[u8]) -> rt::DecodeResult<Self> {
             let frame = rt::fixed::<13>(frame, &Self::DESC)?;
-            let field_0: u16 = u16::from_le_bytes([frame[4], frame[5]]);
-            rt::in_range(&Self::INDEX_DESC, 4, field_0, 0, 499)?;
+            let w_index: u16 = u16::from_le_bytes([frame[4], frame[5]]);
+            rt::in_range(&Self::INDEX_DESC, 4, w_index, 0, 499)?;
             rt::Ok(Self {
-                index: field_0,
+                index: w_index,
                 full_steps: u16::from_le_bytes([frame[6], frame[7]]),
                 capacitance: Capacitance::from_raw(
                     u32::from_le_bytes([frame[8], frame[9], frame[10], frame[11]]),

@@ -407,23 +407,7 @@ pub mod ubx_fixed_blocks {
                     rt::fixed::<8>(frame, &request::PollSatBlocks::DESC)
                         .map(|_| Self::PollSatBlocks(request::PollSatBlocks))
                 }
-                0x0613 => {
-                    let s = LISTS_SET_PORTS.split::<9, 2>(frame)?;
-                    let frame = &s.frame;
-                    let mut v_ports = rt::Repeated::<SetPortsPorts, 2>::new();
-                    for (k, bytes) in s.elements(0).chunks_exact(3).enumerate() {
-                        let bytes = <[u8; 3]>::try_from(bytes).unwrap_or([0; 3]);
-                        let _ = v_ports.push(SetPortsPorts::read(&bytes, 6 + k * 3)?);
-                    }
-                    rt::Ok(
-                        Self::SetPorts(request::SetPorts {
-                            ports: v_ports,
-                            pins: s
-                                .lists[1]
-                                .elements::<u8, 8>(s.elements(1), true, false)?,
-                        }),
-                    )
-                }
+                0x0613 => request::SetPorts::from_frame(frame).map(Self::SetPorts),
                 _ => rt::Err(REQUEST_CODE.unknown(frame)),
             }
         }
@@ -755,28 +739,7 @@ pub mod ubx_fixed_blocks {
         #[inline]
         fn dispatch(frame: &[u8]) -> rt::DecodeResult<Self> {
             match u16::from_be_bytes([frame[2], frame[3]]) {
-                0x0136 => {
-                    let s = LISTS_SAT_BLOCKS.split::<13, 1>(frame)?;
-                    let frame = &s.frame;
-                    let mut v_blocks = rt::Repeated::<SatBlocksBlocks, 3>::new();
-                    for (k, bytes) in s.elements(0).chunks_exact(6).enumerate() {
-                        let bytes = <[u8; 6]>::try_from(bytes).unwrap_or([0; 6]);
-                        let _ = v_blocks
-                            .push(SatBlocksBlocks::read(&bytes, 10 + k * 6)?);
-                    }
-                    rt::Ok(
-                        Self::SatBlocks(response::SatBlocks {
-                            itow: u32::from_le_bytes([
-                                frame[6],
-                                frame[7],
-                                frame[8],
-                                frame[9],
-                            ]),
-                            blocks: v_blocks,
-                            flags: frame[10],
-                        }),
-                    )
-                }
+                0x0136 => response::SatBlocks::from_frame(frame).map(Self::SatBlocks),
                 0x0501 => response::Ack::from_frame(frame).map(Self::Ack),
                 _ => rt::Err(RESPONSE_CODE.unknown(frame)),
             }
@@ -1130,6 +1093,21 @@ pub mod ubx_fixed_blocks {
             LENGTH.put(out)?;
             rt::Ok(out.len())
         }
+        /// Reads this message from a frame whose framing and code are checked.
+        #[inline(always)]
+        fn from_frame(frame: &[u8]) -> rt::DecodeResult<Self> {
+            let s = LISTS_SET_PORTS.split::<9, 2>(frame)?;
+            let frame = &s.frame;
+            let mut v_ports = rt::Repeated::<SetPortsPorts, 2>::new();
+            for (k, bytes) in s.elements(0).chunks_exact(3).enumerate() {
+                let bytes = <[u8; 3]>::try_from(bytes).unwrap_or([0; 3]);
+                let _ = v_ports.push(SetPortsPorts::read(&bytes, 6 + k * 3)?);
+            }
+            rt::Ok(Self {
+                ports: v_ports,
+                pins: s.lists[1].elements::<u8, 8>(s.elements(1), true, false)?,
+            })
+        }
     }
     impl response::SatBlocks {
         pub const NAME: &'static str = "sat_blocks";
@@ -1173,6 +1151,22 @@ pub mod ubx_fixed_blocks {
             }
             LENGTH.put(out)?;
             rt::Ok(out.len())
+        }
+        /// Reads this message from a frame whose framing and code are checked.
+        #[inline(always)]
+        fn from_frame(frame: &[u8]) -> rt::DecodeResult<Self> {
+            let s = LISTS_SAT_BLOCKS.split::<13, 1>(frame)?;
+            let frame = &s.frame;
+            let mut v_blocks = rt::Repeated::<SatBlocksBlocks, 3>::new();
+            for (k, bytes) in s.elements(0).chunks_exact(6).enumerate() {
+                let bytes = <[u8; 6]>::try_from(bytes).unwrap_or([0; 6]);
+                let _ = v_blocks.push(SatBlocksBlocks::read(&bytes, 10 + k * 6)?);
+            }
+            rt::Ok(Self {
+                itow: u32::from_le_bytes([frame[6], frame[7], frame[8], frame[9]]),
+                blocks: v_blocks,
+                flags: frame[10],
+            })
         }
     }
     impl response::Ack {

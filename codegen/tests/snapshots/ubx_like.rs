@@ -643,27 +643,7 @@ pub mod ubx_like {
                 0x0608 => response::Rate::from_frame(frame).map(Self::Rate),
                 0x0501 => response::Ack::from_frame(frame).map(Self::Ack),
                 0x0500 => response::Nak::from_frame(frame).map(Self::Nak),
-                0x0135 => {
-                    let (frame, elements, _) = REPEAT_SATELLITES.split::<14>(frame)?;
-                    rt::equal(&response::Satellites::VERSION_DESC, 10, frame[10], 0x1)?;
-                    let mut v_svs = rt::Repeated::<SatellitesSvs, 80>::new();
-                    for (k, bytes) in elements.chunks_exact(12).enumerate() {
-                        let bytes = <[u8; 12]>::try_from(bytes).unwrap_or([0; 12]);
-                        let _ = v_svs.push(SatellitesSvs::read(&bytes, 14 + k * 12)?);
-                    }
-                    rt::Ok(
-                        Self::Satellites(response::Satellites {
-                            itow: u32::from_le_bytes([
-                                frame[6],
-                                frame[7],
-                                frame[8],
-                                frame[9],
-                            ]),
-                            reserved1: u16::from_le_bytes([frame[12], frame[13]]),
-                            svs: v_svs,
-                        }),
-                    )
-                }
+                0x0135 => response::Satellites::from_frame(frame).map(Self::Satellites),
                 _ => rt::Err(RESPONSE_CODE.unknown(frame)),
             }
         }
@@ -925,13 +905,13 @@ pub mod ubx_like {
         #[inline(always)]
         fn from_frame(frame: &[u8]) -> rt::DecodeResult<Self> {
             let frame = rt::fixed::<14>(frame, &Self::DESC)?;
-            let field_0: u16 = u16::from_le_bytes([frame[6], frame[7]]);
-            rt::in_range(&Self::MEAS_RATE_DESC, 6, field_0, 25, 65535)?;
-            let field_1: u16 = u16::from_le_bytes([frame[8], frame[9]]);
-            rt::in_range(&Self::NAV_RATE_DESC, 8, field_1, 1, 127)?;
+            let w_meas_rate: u16 = u16::from_le_bytes([frame[6], frame[7]]);
+            rt::in_range(&Self::MEAS_RATE_DESC, 6, w_meas_rate, 25, 65535)?;
+            let w_nav_rate: u16 = u16::from_le_bytes([frame[8], frame[9]]);
+            rt::in_range(&Self::NAV_RATE_DESC, 8, w_nav_rate, 1, 127)?;
             rt::Ok(Self {
-                meas_rate: field_0,
-                nav_rate: field_1,
+                meas_rate: w_meas_rate,
+                nav_rate: w_nav_rate,
                 time_ref: TimeRef::from_raw(u16::from_le_bytes([frame[10], frame[11]])),
             })
         }
@@ -1095,6 +1075,22 @@ pub mod ubx_like {
                 }
             }
             rt::Ok(out.len())
+        }
+        /// Reads this message from a frame whose framing and code are checked.
+        #[inline(always)]
+        fn from_frame(frame: &[u8]) -> rt::DecodeResult<Self> {
+            let (frame, elements, _) = REPEAT_SATELLITES.split::<14>(frame)?;
+            rt::equal(&Self::VERSION_DESC, 10, frame[10], 0x1)?;
+            let mut v_svs = rt::Repeated::<SatellitesSvs, 80>::new();
+            for (k, bytes) in elements.chunks_exact(12).enumerate() {
+                let bytes = <[u8; 12]>::try_from(bytes).unwrap_or([0; 12]);
+                let _ = v_svs.push(SatellitesSvs::read(&bytes, 14 + k * 12)?);
+            }
+            rt::Ok(Self {
+                itow: u32::from_le_bytes([frame[6], frame[7], frame[8], frame[9]]),
+                reserved1: u16::from_le_bytes([frame[12], frame[13]]),
+                svs: v_svs,
+            })
         }
     }
     /// Each request as a struct of its own; its constants (`DESC`, which names it as

@@ -636,9 +636,9 @@ pub mod unaddressed {
         #[inline(always)]
         fn from_frame(frame: &[u8]) -> rt::DecodeResult<Self> {
             let frame = rt::fixed::<7>(frame, &Self::DESC)?;
-            let field_0: u16 = u16::from_le_bytes([frame[4], frame[5]]);
-            rt::in_range(&Self::RATE_DESC, 4, field_0, 1, 1000)?;
-            rt::Ok(Self { rate: field_0 })
+            let w_rate: u16 = u16::from_le_bytes([frame[4], frame[5]]);
+            rt::in_range(&Self::RATE_DESC, 4, w_rate, 1, 1000)?;
+            rt::Ok(Self { rate: w_rate })
         }
     }
     impl request::ReadVersion {
@@ -676,10 +676,10 @@ pub mod unaddressed {
         #[inline(always)]
         fn from_frame(frame: &[u8]) -> rt::DecodeResult<Self> {
             let frame = rt::fixed::<7>(frame, &Self::DESC)?;
-            let field_0: i16 = i16::from_le_bytes([frame[4], frame[5]]);
-            rt::in_range(&Self::TEMPERATURE_DESC, 4, field_0, -4000, 12500)?;
+            let w_temperature: i16 = i16::from_le_bytes([frame[4], frame[5]]);
+            rt::in_range(&Self::TEMPERATURE_DESC, 4, w_temperature, -4000, 12500)?;
             rt::Ok(Self {
-                temperature: Centidegrees::from_raw(field_0),
+                temperature: Centidegrees::from_raw(w_temperature),
             })
         }
     }

@@ -640,20 +640,8 @@ pub mod vesc {
                         .map(|_| Self::FwVersion(request::FwVersion))
                 }
                 0x03 => {
-                    let (frame, elements, _) = REPEAT_WRITE_NEW_APP_DATA
-                        .split::<8>(frame)?;
-                    rt::Ok(
-                        Self::WriteNewAppData(request::WriteNewAppData {
-                            offset: u32::from_be_bytes([
-                                frame[4],
-                                frame[5],
-                                frame[6],
-                                frame[7],
-                            ]),
-                            data: REPEAT_WRITE_NEW_APP_DATA
-                                .elements::<u8, 512>(elements, false, false)?,
-                        }),
-                    )
+                    request::WriteNewAppData::from_frame(frame)
+                        .map(Self::WriteNewAppData)
                 }
                 0x04 => {
                     rt::fixed::<7>(frame, &request::GetValues::DESC)
@@ -924,16 +912,7 @@ pub mod vesc {
         fn dispatch(frame: &[u8]) -> rt::DecodeResult<Self> {
             match frame[3] {
                 0x00 => {
-                    let (frame, elements, _) = REPEAT_FW_VERSION_REPLY
-                        .split::<6>(frame)?;
-                    rt::Ok(
-                        Self::FwVersionReply(response::FwVersionReply {
-                            fw_major: frame[4],
-                            fw_minor: frame[5],
-                            rest: REPEAT_FW_VERSION_REPLY
-                                .elements::<u8, 60>(elements, false, false)?,
-                        }),
-                    )
+                    response::FwVersionReply::from_frame(frame).map(Self::FwVersionReply)
                 }
                 0x03 => {
                     response::WriteNewAppDataReply::from_frame(frame)
@@ -1177,6 +1156,16 @@ pub mod vesc {
             rt::write_elements(v_data.as_slice(), 1, false, &mut out[8..]);
             rt::Ok(out.len())
         }
+        /// Reads this message from a frame whose framing and code are checked.
+        #[inline(always)]
+        fn from_frame(frame: &[u8]) -> rt::DecodeResult<Self> {
+            let (frame, elements, _) = REPEAT_WRITE_NEW_APP_DATA.split::<8>(frame)?;
+            rt::Ok(Self {
+                offset: u32::from_be_bytes([frame[4], frame[5], frame[6], frame[7]]),
+                data: REPEAT_WRITE_NEW_APP_DATA
+                    .elements::<u8, 512>(elements, false, false)?,
+            })
+        }
     }
     impl request::GetValues {
         pub const NAME: &'static str = "get_values";
@@ -1378,6 +1367,16 @@ pub mod vesc {
             out[5] = v_fw_minor;
             rt::write_elements(v_rest.as_slice(), 1, false, &mut out[6..]);
             rt::Ok(out.len())
+        }
+        /// Reads this message from a frame whose framing and code are checked.
+        #[inline(always)]
+        fn from_frame(frame: &[u8]) -> rt::DecodeResult<Self> {
+            let (frame, elements, _) = REPEAT_FW_VERSION_REPLY.split::<6>(frame)?;
+            rt::Ok(Self {
+                fw_major: frame[4],
+                fw_minor: frame[5],
+                rest: REPEAT_FW_VERSION_REPLY.elements::<u8, 60>(elements, false, false)?,
+            })
         }
     }
     impl response::WriteNewAppDataReply {

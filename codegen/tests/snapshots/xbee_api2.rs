@@ -444,40 +444,10 @@ pub mod xbee_api2 {
         #[inline]
         fn dispatch(frame: &[u8]) -> rt::DecodeResult<Self> {
             match frame[3] {
-                0x08 => {
-                    let (frame, elements, _) = REPEAT_AT_COMMAND.split::<7>(frame)?;
-                    rt::Ok(
-                        Self::AtCommand(request::AtCommand {
-                            frame_id: frame[4],
-                            command: rt::Ascii(frame[5..7].try_into().unwrap_or([0; 2])),
-                            parameter: REPEAT_AT_COMMAND
-                                .elements::<u8, 20>(elements, false, false)?,
-                        }),
-                    )
-                }
+                0x08 => request::AtCommand::from_frame(frame).map(Self::AtCommand),
                 0x10 => {
-                    let (frame, elements, _) = REPEAT_TRANSMIT_REQUEST
-                        .split::<17>(frame)?;
-                    rt::Ok(
-                        Self::TransmitRequest(request::TransmitRequest {
-                            frame_id: frame[4],
-                            destination64: u64::from_be_bytes([
-                                frame[5],
-                                frame[6],
-                                frame[7],
-                                frame[8],
-                                frame[9],
-                                frame[10],
-                                frame[11],
-                                frame[12],
-                            ]),
-                            destination16: u16::from_be_bytes([frame[13], frame[14]]),
-                            radius: frame[15],
-                            options: frame[16],
-                            data: REPEAT_TRANSMIT_REQUEST
-                                .elements::<u8, 72>(elements, false, false)?,
-                        }),
-                    )
+                    request::TransmitRequest::from_frame(frame)
+                        .map(Self::TransmitRequest)
                 }
                 _ => rt::Err(REQUEST_CODE.unknown(frame)),
             }
@@ -728,42 +698,13 @@ pub mod xbee_api2 {
         #[inline]
         fn dispatch(frame: &[u8]) -> rt::DecodeResult<Self> {
             match frame[3] {
-                0x88 => {
-                    let (frame, elements, _) = REPEAT_AT_RESPONSE.split::<8>(frame)?;
-                    rt::Ok(
-                        Self::AtResponse(response::AtResponse {
-                            frame_id: frame[4],
-                            command: rt::Ascii(frame[5..7].try_into().unwrap_or([0; 2])),
-                            status: AtStatus::from_raw(frame[7]),
-                            data: REPEAT_AT_RESPONSE
-                                .elements::<u8, 20>(elements, false, false)?,
-                        }),
-                    )
-                }
+                0x88 => response::AtResponse::from_frame(frame).map(Self::AtResponse),
                 0x8B => {
                     response::TransmitStatus::from_frame(frame).map(Self::TransmitStatus)
                 }
                 0x8A => response::ModemStatus::from_frame(frame).map(Self::ModemStatus),
                 0x90 => {
-                    let (frame, elements, _) = REPEAT_RECEIVE_PACKET.split::<15>(frame)?;
-                    rt::Ok(
-                        Self::ReceivePacket(response::ReceivePacket {
-                            source64: u64::from_be_bytes([
-                                frame[4],
-                                frame[5],
-                                frame[6],
-                                frame[7],
-                                frame[8],
-                                frame[9],
-                                frame[10],
-                                frame[11],
-                            ]),
-                            source16: u16::from_be_bytes([frame[12], frame[13]]),
-                            options: frame[14],
-                            data: REPEAT_RECEIVE_PACKET
-                                .elements::<u8, 72>(elements, false, false)?,
-                        }),
-                    )
+                    response::ReceivePacket::from_frame(frame).map(Self::ReceivePacket)
                 }
                 _ => rt::Err(RESPONSE_CODE.unknown(frame)),
             }
@@ -973,6 +914,16 @@ pub mod xbee_api2 {
             rt::write_elements(v_parameter.as_slice(), 1, false, &mut out[7..]);
             rt::Ok(out.len())
         }
+        /// Reads this message from a frame whose framing and code are checked.
+        #[inline(always)]
+        fn from_frame(frame: &[u8]) -> rt::DecodeResult<Self> {
+            let (frame, elements, _) = REPEAT_AT_COMMAND.split::<7>(frame)?;
+            rt::Ok(Self {
+                frame_id: frame[4],
+                command: rt::Ascii(frame[5..7].try_into().unwrap_or([0; 2])),
+                parameter: REPEAT_AT_COMMAND.elements::<u8, 20>(elements, false, false)?,
+            })
+        }
     }
     impl request::TransmitRequest {
         pub const NAME: &'static str = "transmit_request";
@@ -1020,6 +971,28 @@ pub mod xbee_api2 {
             rt::write_elements(v_data.as_slice(), 1, false, &mut out[17..]);
             rt::Ok(out.len())
         }
+        /// Reads this message from a frame whose framing and code are checked.
+        #[inline(always)]
+        fn from_frame(frame: &[u8]) -> rt::DecodeResult<Self> {
+            let (frame, elements, _) = REPEAT_TRANSMIT_REQUEST.split::<17>(frame)?;
+            rt::Ok(Self {
+                frame_id: frame[4],
+                destination64: u64::from_be_bytes([
+                    frame[5],
+                    frame[6],
+                    frame[7],
+                    frame[8],
+                    frame[9],
+                    frame[10],
+                    frame[11],
+                    frame[12],
+                ]),
+                destination16: u16::from_be_bytes([frame[13], frame[14]]),
+                radius: frame[15],
+                options: frame[16],
+                data: REPEAT_TRANSMIT_REQUEST.elements::<u8, 72>(elements, false, false)?,
+            })
+        }
     }
     impl response::AtResponse {
         pub const NAME: &'static str = "at_response";
@@ -1058,6 +1031,17 @@ pub mod xbee_api2 {
             out[7] = v_status.raw();
             rt::write_elements(v_data.as_slice(), 1, false, &mut out[8..]);
             rt::Ok(out.len())
+        }
+        /// Reads this message from a frame whose framing and code are checked.
+        #[inline(always)]
+        fn from_frame(frame: &[u8]) -> rt::DecodeResult<Self> {
+            let (frame, elements, _) = REPEAT_AT_RESPONSE.split::<8>(frame)?;
+            rt::Ok(Self {
+                frame_id: frame[4],
+                command: rt::Ascii(frame[5..7].try_into().unwrap_or([0; 2])),
+                status: AtStatus::from_raw(frame[7]),
+                data: REPEAT_AT_RESPONSE.elements::<u8, 20>(elements, false, false)?,
+            })
         }
     }
     impl response::TransmitStatus {
@@ -1177,6 +1161,26 @@ pub mod xbee_api2 {
             out[14] = v_options;
             rt::write_elements(v_data.as_slice(), 1, false, &mut out[15..]);
             rt::Ok(out.len())
+        }
+        /// Reads this message from a frame whose framing and code are checked.
+        #[inline(always)]
+        fn from_frame(frame: &[u8]) -> rt::DecodeResult<Self> {
+            let (frame, elements, _) = REPEAT_RECEIVE_PACKET.split::<15>(frame)?;
+            rt::Ok(Self {
+                source64: u64::from_be_bytes([
+                    frame[4],
+                    frame[5],
+                    frame[6],
+                    frame[7],
+                    frame[8],
+                    frame[9],
+                    frame[10],
+                    frame[11],
+                ]),
+                source16: u16::from_be_bytes([frame[12], frame[13]]),
+                options: frame[14],
+                data: REPEAT_RECEIVE_PACKET.elements::<u8, 72>(elements, false, false)?,
+            })
         }
     }
     /// Each request as a struct of its own; its constants (`DESC`, which names it as
