@@ -904,41 +904,46 @@ fn from_frame(ctx: &Ctx, m: &Message) -> Option<TokenStream> {
     if ctx.view.get() {
         return None;
     }
+    let (v, dm) = (variant(m), direction_module(m.direction));
+    let path = quote!(#dm::#v::from_frame);
+    // Written once, where the message is first dispatched; later arms (a group's, an
+    // escaped frame's) call it.
+    let written = ctx
+        .readers
+        .borrow()
+        .iter()
+        .any(|(d, n, _)| *d == m.direction && *n == m.name);
+    if written {
+        return Some(path);
+    }
     ctx.own.set(true);
     let (stmts, build) = decode_body(ctx, m);
     ctx.own.set(false);
     if !m.is_variable() && stmts.is_empty() && !mentions_frame(&build) {
         return None;
     }
-    let (v, dm) = (variant(m), direction_module(m.direction));
-    let mut readers = ctx.readers.borrow_mut();
-    if !readers
-        .iter()
-        .any(|(d, n, _)| *d == m.direction && *n == m.name)
-    {
-        // A variable-length frame is split into its fixed part and its lists' bytes; a
-        // fixed-length one is checked to have its length.
-        let head = if m.is_variable() {
-            split_frame(m, &stmts, &build)
-        } else {
-            let len = usize_lit(ctx.p.frame_len(m));
-            quote!(let frame = rt::fixed::<#len>(frame, &Self::DESC)?;)
-        };
-        readers.push((
-            m.direction,
-            m.name.clone(),
-            quote! {
-                /// Reads this message from a frame whose framing and code are checked.
-                #[inline(always)]
-                fn from_frame(frame: &[u8]) -> rt::DecodeResult<Self> {
-                    #head
-                    #(#stmts)*
-                    rt::Ok(#build)
-                }
-            },
-        ));
-    }
-    Some(quote!(#dm::#v::from_frame))
+    // A variable-length frame is split into its fixed part and its lists' bytes; a
+    // fixed-length one is checked to have its length.
+    let head = if m.is_variable() {
+        split_frame(m, &stmts, &build)
+    } else {
+        let len = usize_lit(ctx.p.frame_len(m));
+        quote!(let frame = rt::fixed::<#len>(frame, &Self::DESC)?;)
+    };
+    ctx.readers.borrow_mut().push((
+        m.direction,
+        m.name.clone(),
+        quote! {
+            /// Reads this message from a frame whose framing and code are checked.
+            #[inline(always)]
+            fn from_frame(frame: &[u8]) -> rt::DecodeResult<Self> {
+                #head
+                #(#stmts)*
+                rt::Ok(#build)
+            }
+        },
+    ));
+    Some(path)
 }
 
 /// The dispatch arm for the messages of one code: a lone message is decoded in the arm;

@@ -295,10 +295,7 @@ fn write_arm(
         return sealed(m, pattern, stmts, end);
     }
     let v = variant(m);
-    let fields = ls.iter().map(|l| {
-        let (n, v) = (ident(l.name), local(l.name));
-        quote!(#n: #v)
-    });
+    let this = fields_binding(quote!(Self), ls);
     let (param, arg) = if taken {
         let len = usize_lit(ctx.p.frame_len(m));
         (quote!(out: &mut [u8; #len]), quote!(out))
@@ -317,7 +314,7 @@ fn write_arm(
                 /// Writes this message's frame for `address`, as the direction's `encode` does.
                 #[inline(always)]
                 fn write(&self, address: u8, #param) -> rt::EncodeResult {
-                    let Self { #(#fields),* } = *self;
+                    let #this = *self;
                     #stmts
                     rt::Ok(#end)
                 }

@@ -722,11 +722,17 @@ fn message_struct(
 /// each field to its `v_<name>` local.
 pub(super) fn own_binding(m: &Message, ls: &[Leaf]) -> TokenStream {
     let (v, dm) = (variant(m), direction_module(m.direction));
+    fields_binding(quote!(#dm::#v), ls)
+}
+
+/// `path { a: v_a, b: v_b }`: a struct pattern (or literal) over leaves `ls`, each field
+/// bound to its `v_<name>` local.
+pub(super) fn fields_binding(path: TokenStream, ls: &[Leaf]) -> TokenStream {
     let fields = ls.iter().map(|l| {
         let (n, v) = (ident(l.name), local(l.name));
         quote!(#n: #v)
     });
-    quote!(#dm::#v { #(#fields),* })
+    quote!(#path { #(#fields),* })
 }
 
 /// Message `m`'s constants and methods: `NAME`, `CODE`, its frame length (`LEN`, or `MIN_LEN`
