@@ -32,11 +32,13 @@
 //!   (`rt::FrameChecks`, `rt::in_range`, `rt::frame_mut`, `rt::Group`, ...);
 //! - per-message constants are tables (`MESSAGES`: name, code, length; `COMMANDS`: kind,
 //!   broadcast rule, replies), indexed by one `match` (`index`);
-//! - `dispatch` has one arm per code; a message of a fixed length with anything to check or
-//!   read is decoded by its struct's own `from_frame` (`request::ReadCoils::from_frame(frame)
-//!   .map(Self::ReadCoils)`: its length, then each field's rule, naming its descriptors
-//!   through `Self`), one without by the arm itself; codes, start bytes and addresses are
-//!   written in hex as the documents print them;
+//! - `dispatch` has one arm per code; a message with anything to check or read is decoded
+//!   by its struct's own `from_frame` (`request::ReadCoils::from_frame(frame)
+//!   .map(Self::ReadCoils)`: its length, or a variable-length frame split into its fixed part
+//!   and lists, then each field's rule, naming its descriptors through `Self`), a fixed-length
+//!   one without by the arm itself (a group's variable-length members by closures in it);
+//!   the wire values it binds are named after their fields (`w_quantity`); codes, start bytes
+//!   and addresses are written in hex as the documents print them;
 //! - encode writes the bytes known before any field in one `copy_from_slice`, and keeps a sum-8
 //!   in each arm, where it folds the constant header bytes; a message with fields is written
 //!   by its struct's own `write` (`Self::ReadCoils(ref m) => m.write(address, buf)?`), one
