@@ -145,6 +145,10 @@ pub(super) struct Ctx<'a> {
     /// Each message's `write` (its direction and name, the function: the encoder's arm of a
     /// message with fields, `encode::emit_encode_arm`), emitted in its `impl` likewise.
     pub(super) writers: std::cell::RefCell<Vec<(Direction, String, TokenStream)>>,
+    /// Each response's checks against a request it answers (`follows_<command>`, its
+    /// direction and name, the function: `protocol::emit_follows_request`), emitted in its
+    /// `impl` likewise; the owned and the view's `follows_request` both call it.
+    pub(super) followers: std::cell::RefCell<Vec<(Direction, String, TokenStream)>>,
 }
 
 impl<'a> Ctx<'a> {
@@ -231,6 +235,7 @@ impl<'a> Ctx<'a> {
             own: std::cell::Cell::new(false),
             readers: std::cell::RefCell::new(Vec::new()),
             writers: std::cell::RefCell::new(Vec::new()),
+            followers: std::cell::RefCell::new(Vec::new()),
         }
     }
 

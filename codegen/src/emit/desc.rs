@@ -11,10 +11,12 @@ pub(super) fn emit_descs(ctx: &Ctx) -> TokenStream {
     let fields = ctx.field_descs.borrow();
     let impls = ctx.impls.borrow();
     let (readers, writers) = (ctx.readers.borrow(), ctx.writers.borrow());
+    let followers = ctx.followers.borrow();
     let impls = impls.iter().map(|(d, name, path, consts, fns)| {
         let read = writers
             .iter()
             .chain(readers.iter())
+            .chain(followers.iter())
             .filter(|(rd, rn, _)| rd == d && rn == name)
             .map(|(.., f)| f);
         let descs = fields

@@ -220,7 +220,11 @@ pub(super) fn emit_follows_request(ctx: &Ctx) -> Option<TokenStream> {
         for &c in &m.answers {
             let cmd = &p.commands[c];
             let cls = leaves(cmd);
-            let mut own = Vec::new();
+            // The checks are one function of the response's struct a pair (`follows_<command>`,
+            // written once, in its `impl`, by the owned decoder's pass), which takes the
+            // values it compares and the request's struct `r`; the owned and the view's
+            // `follows_request` call it with their own.
+            let (mut own, mut params, mut values) = (Vec::new(), Vec::new(), Vec::new());
             let mut theirs = Vec::new();
             let mut checks = Vec::new();
             // An owned response's field is read where its struct holds it (`m.coils`), a view's
@@ -233,8 +237,9 @@ pub(super) fn emit_follows_request(ctx: &Ctx) -> Option<TokenStream> {
                     quote!(m.#n)
                 }
             };
+            ctx.own.set(true);
             for (l, rel) in &follows {
-                let (n, mine) = (ident(l.name), field(l.name));
+                let (n, mine) = (ident(l.name), local(l.name));
                 let (Some((_, a)), Some(b)) = (
                     raw_of(ctx, l, &mine),
                     request_value(ctx, cmd, &cls, &rel.field, &mut theirs),
@@ -242,6 +247,9 @@ pub(super) fn emit_follows_request(ctx: &Ctx) -> Option<TokenStream> {
                     continue;
                 };
                 own.push(quote!(#n: #mine));
+                let ty = ctx.rust_type(l);
+                params.push(quote!(#mine: #ty));
+                values.push(field(l.name));
                 let fd = ctx.field_desc(m, l.name);
                 let at = usize_lit(m.layout.payload + l.field.offset);
                 let args = relation_args(rel);
@@ -250,14 +258,17 @@ pub(super) fn emit_follows_request(ctx: &Ctx) -> Option<TokenStream> {
             }
             if let Some(list) = list {
                 let rc = repeat_const(m);
-                let (n, mine) = (ident(list.name), field(list.name));
+                let (n, len) = (ident(list.name), format_ident!("n_{}", list.name));
                 let mut bound = false;
                 for (f, rel, is_count) in &counted {
                     let Some(b) = request_value(ctx, cmd, &cls, &rel.field, &mut theirs) else {
                         continue;
                     };
                     if !bound {
-                        own.push(quote!(#n: #mine));
+                        let (l, mine) = (local(list.name), field(list.name));
+                        own.push(quote!(#n: #l));
+                        params.push(quote!(#len: usize));
+                        values.push(quote!(#mine.len()));
                         bound = true;
                     }
                     let args = relation_args(rel);
@@ -265,16 +276,39 @@ pub(super) fn emit_follows_request(ctx: &Ctx) -> Option<TokenStream> {
                         let fd = ctx.field_desc(m, &f.name);
                         let at = usize_lit(m.layout.payload + f.offset);
                         let rule = format!("{} of the request", rel.describe(&rel.field));
-                        checks.push(quote!(rt::following(#fd, #at, #rc.count_value(#mine.len()) as u64, #b as i64, (#args), #rule)?;));
+                        checks.push(quote!(rt::following(#fd, #at, #rc.count_value(#len) as u64, #b as i64, (#args), #rule)?;));
                     } else {
                         let rule = rel.describe(&rel.field);
-                        checks.push(
-                            quote!(#rc.follows_request(#mine.len(), #b as i64, (#args), #rule)?;),
-                        );
+                        checks.push(quote!(#rc.follows_request(#len, #b as i64, (#args), #rule)?;));
                     }
                 }
             }
+            ctx.own.set(false);
             let cv = variant(cmd);
+            let check = format_ident!("follows_{}", cmd.name);
+            if !ctx.view.get() {
+                let r = if theirs.is_empty() {
+                    quote!(_)
+                } else {
+                    quote!(r)
+                };
+                let doc = doc(&format!(
+                    "Checks the fields this response takes from its request, `{}` (`r`).",
+                    cmd.name
+                ));
+                ctx.followers.borrow_mut().push((
+                    m.direction,
+                    m.name.clone(),
+                    quote! {
+                        #doc
+                        #[inline(always)]
+                        fn #check(#(#params,)* #r: &request::#cv) -> rt::DecodeResult<()> {
+                            #(#checks)*
+                            rt::Ok(())
+                        }
+                    },
+                ));
+            }
             // A view's variant holds its fields, bound by name; an owned response's, its
             // message's struct (`m`); the request's struct is `r`.
             let mine_pat = match (ctx.view.get(), own.is_empty()) {
@@ -282,15 +316,8 @@ pub(super) fn emit_follows_request(ctx: &Ctx) -> Option<TokenStream> {
                 (false, false) => quote!(Self::#v(m)),
                 (false, true) => quote!(Self::#v(_)),
             };
-            let theirs_pat = if theirs.is_empty() {
-                quote!(Request::#cv(_))
-            } else {
-                quote!(Request::#cv(r))
-            };
             arms.push(quote! {
-                (#mine_pat, #theirs_pat) => {
-                    #(#checks)*
-                }
+                (#mine_pat, Request::#cv(r)) => response::#v::#check(#(#values,)* r)?,
             });
         }
     }

@@ -591,13 +591,7 @@ pub mod dynamixel {
         pub fn follows_request(&self, request: &Request) -> rt::DecodeResult<()> {
             match (self, request) {
                 (Self::ReadStatus(m), Request::Read(r)) => {
-                    REPEAT_READ_STATUS
-                        .follows_request(
-                            m.data.len(),
-                            r.length as i64,
-                            (1, 1),
-                            "length",
-                        )?;
+                    response::ReadStatus::follows_read(m.data.len(), r)?
                 }
                 _ => {}
             }
@@ -826,13 +820,7 @@ pub mod dynamixel {
         pub fn follows_request(&self, request: &Request) -> rt::DecodeResult<()> {
             match (self, request) {
                 (&Self::ReadStatus { data: v_data, .. }, Request::Read(r)) => {
-                    REPEAT_READ_STATUS
-                        .follows_request(
-                            v_data.len(),
-                            r.length as i64,
-                            (1, 1),
-                            "length",
-                        )?;
+                    response::ReadStatus::follows_read(v_data.len(), r)?
                 }
                 _ => {}
             }
@@ -1293,6 +1281,13 @@ pub mod dynamixel {
             out[4] = v_error.raw();
             rt::write_elements(v_data.as_slice(), 1, true, &mut out[5..]);
             rt::Ok(out.len())
+        }
+        /// Checks the fields this response takes from its request, `read` (`r`).
+        #[inline(always)]
+        fn follows_read(n_data: usize, r: &request::Read) -> rt::DecodeResult<()> {
+            REPEAT_READ_STATUS
+                .follows_request(n_data, r.length as i64, (1, 1), "length")?;
+            rt::Ok(())
         }
     }
     /// Each request as a struct of its own; its constants (`DESC`, which names it as

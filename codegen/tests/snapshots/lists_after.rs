@@ -556,13 +556,7 @@ pub mod lists_after {
         pub fn follows_request(&self, request: &Request) -> rt::DecodeResult<()> {
             match (self, request) {
                 (Self::BlockReply(m), Request::ReadBlock(r)) => {
-                    REPEAT_BLOCK_REPLY
-                        .follows_request(
-                            m.values.len(),
-                            r.quantity as i64,
-                            (1, 1),
-                            "quantity",
-                        )?;
+                    response::BlockReply::follows_read_block(m.values.len(), r)?
                 }
                 _ => {}
             }
@@ -760,13 +754,7 @@ pub mod lists_after {
         pub fn follows_request(&self, request: &Request) -> rt::DecodeResult<()> {
             match (self, request) {
                 (&Self::BlockReply { values: v_values, .. }, Request::ReadBlock(r)) => {
-                    REPEAT_BLOCK_REPLY
-                        .follows_request(
-                            v_values.len(),
-                            r.quantity as i64,
-                            (1, 1),
-                            "quantity",
-                        )?;
+                    response::BlockReply::follows_read_block(v_values.len(), r)?
                 }
                 _ => {}
             }
@@ -1107,6 +1095,16 @@ pub mod lists_after {
                 values: s.lists[0].elements::<u16, 8>(s.elements(0), false, false)?,
                 status: u16::from_be_bytes([frame[3], frame[4]]),
             })
+        }
+        /// Checks the fields this response takes from its request, `read_block` (`r`).
+        #[inline(always)]
+        fn follows_read_block(
+            n_values: usize,
+            r: &request::ReadBlock,
+        ) -> rt::DecodeResult<()> {
+            REPEAT_BLOCK_REPLY
+                .follows_request(n_values, r.quantity as i64, (1, 1), "quantity")?;
+            rt::Ok(())
         }
     }
     impl response::Ack {

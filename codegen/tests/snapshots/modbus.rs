@@ -1021,153 +1021,59 @@ pub mod modbus {
         pub fn follows_request(&self, request: &Request) -> rt::DecodeResult<()> {
             match (self, request) {
                 (Self::ReadCoilsReply(m), Request::ReadCoils(r)) => {
-                    rt::following(
-                        &response::ReadCoilsReply::BYTE_COUNT_DESC,
-                        2,
-                        REPEAT_READ_COILS_REPLY.count_value(m.coils.len()) as u64,
-                        r.quantity as i64,
-                        (1, 8),
-                        "ceil(quantity / 8) of the request",
-                    )?;
-                    REPEAT_READ_COILS_REPLY
-                        .follows_request(
-                            m.coils.len(),
-                            r.quantity as i64,
-                            (1, 1),
-                            "quantity",
-                        )?;
+                    response::ReadCoilsReply::follows_read_coils(m.coils.len(), r)?
                 }
                 (Self::ReadDiscreteInputsReply(m), Request::ReadDiscreteInputs(r)) => {
-                    rt::following(
-                        &response::ReadDiscreteInputsReply::BYTE_COUNT_DESC,
-                        2,
-                        REPEAT_READ_DISCRETE_INPUTS_REPLY.count_value(m.inputs.len())
-                            as u64,
-                        r.quantity as i64,
-                        (1, 8),
-                        "ceil(quantity / 8) of the request",
-                    )?;
-                    REPEAT_READ_DISCRETE_INPUTS_REPLY
-                        .follows_request(
-                            m.inputs.len(),
-                            r.quantity as i64,
-                            (1, 1),
-                            "quantity",
-                        )?;
+                    response::ReadDiscreteInputsReply::follows_read_discrete_inputs(
+                        m.inputs.len(),
+                        r,
+                    )?
                 }
                 (
                     Self::ReadHoldingRegistersReply(m),
                     Request::ReadHoldingRegisters(r),
                 ) => {
-                    rt::following(
-                        &response::ReadHoldingRegistersReply::BYTE_COUNT_DESC,
-                        2,
-                        REPEAT_READ_HOLDING_REGISTERS_REPLY
-                            .count_value(m.registers.len()) as u64,
-                        r.quantity as i64,
-                        (2, 1),
-                        "2 × quantity of the request",
-                    )?;
-                    REPEAT_READ_HOLDING_REGISTERS_REPLY
-                        .follows_request(
-                            m.registers.len(),
-                            r.quantity as i64,
-                            (1, 1),
-                            "quantity",
-                        )?;
+                    response::ReadHoldingRegistersReply::follows_read_holding_registers(
+                        m.registers.len(),
+                        r,
+                    )?
                 }
                 (Self::ReadInputRegistersReply(m), Request::ReadInputRegisters(r)) => {
-                    rt::following(
-                        &response::ReadInputRegistersReply::BYTE_COUNT_DESC,
-                        2,
-                        REPEAT_READ_INPUT_REGISTERS_REPLY.count_value(m.registers.len())
-                            as u64,
-                        r.quantity as i64,
-                        (2, 1),
-                        "2 × quantity of the request",
-                    )?;
-                    REPEAT_READ_INPUT_REGISTERS_REPLY
-                        .follows_request(
-                            m.registers.len(),
-                            r.quantity as i64,
-                            (1, 1),
-                            "quantity",
-                        )?;
+                    response::ReadInputRegistersReply::follows_read_input_registers(
+                        m.registers.len(),
+                        r,
+                    )?
                 }
                 (Self::WriteSingleCoilReply(m), Request::WriteSingleCoil(r)) => {
-                    rt::following(
-                        &response::WriteSingleCoilReply::OUTPUT_ADDRESS_DESC,
-                        2,
+                    response::WriteSingleCoilReply::follows_write_single_coil(
                         m.output_address,
-                        r.output_address as i64,
-                        (1, 1),
-                        "output_address of the request",
-                    )?;
-                    rt::following(
-                        &response::WriteSingleCoilReply::OUTPUT_VALUE_DESC,
-                        4,
-                        m.output_value.raw(),
-                        r.output_value.raw() as i64,
-                        (1, 1),
-                        "output_value of the request",
-                    )?;
+                        m.output_value,
+                        r,
+                    )?
                 }
                 (Self::WriteSingleRegisterReply(m), Request::WriteSingleRegister(r)) => {
-                    rt::following(
-                        &response::WriteSingleRegisterReply::REGISTER_ADDRESS_DESC,
-                        2,
+                    response::WriteSingleRegisterReply::follows_write_single_register(
                         m.register_address,
-                        r.register_address as i64,
-                        (1, 1),
-                        "register_address of the request",
-                    )?;
-                    rt::following(
-                        &response::WriteSingleRegisterReply::REGISTER_VALUE_DESC,
-                        4,
                         m.register_value,
-                        r.register_value as i64,
-                        (1, 1),
-                        "register_value of the request",
-                    )?;
+                        r,
+                    )?
                 }
                 (Self::WriteMultipleCoilsReply(m), Request::WriteMultipleCoils(r)) => {
-                    rt::following(
-                        &response::WriteMultipleCoilsReply::STARTING_ADDRESS_DESC,
-                        2,
+                    response::WriteMultipleCoilsReply::follows_write_multiple_coils(
                         m.starting_address,
-                        r.starting_address as i64,
-                        (1, 1),
-                        "starting_address of the request",
-                    )?;
-                    rt::following(
-                        &response::WriteMultipleCoilsReply::QUANTITY_DESC,
-                        4,
                         m.quantity,
-                        r.quantity as i64,
-                        (1, 1),
-                        "quantity of the request",
-                    )?;
+                        r,
+                    )?
                 }
                 (
                     Self::WriteMultipleRegistersReply(m),
                     Request::WriteMultipleRegisters(r),
                 ) => {
-                    rt::following(
-                        &response::WriteMultipleRegistersReply::STARTING_ADDRESS_DESC,
-                        2,
+                    response::WriteMultipleRegistersReply::follows_write_multiple_registers(
                         m.starting_address,
-                        r.starting_address as i64,
-                        (1, 1),
-                        "starting_address of the request",
-                    )?;
-                    rt::following(
-                        &response::WriteMultipleRegistersReply::QUANTITY_DESC,
-                        4,
                         m.quantity,
-                        r.quantity as i64,
-                        (1, 1),
-                        "quantity of the request",
-                    )?;
+                        r,
+                    )?
                 }
                 _ => {}
             }
@@ -1789,88 +1695,35 @@ pub mod modbus {
         /// spec): [`busspec_runtime::DecodeError::InvalidValue`] names the first that differs.
         pub fn follows_request(&self, request: &Request) -> rt::DecodeResult<()> {
             match (self, request) {
-                (
-                    &Self::ReadCoilsReply { coils: v_coils, .. },
-                    Request::ReadCoils(r),
-                ) => {
-                    rt::following(
-                        &response::ReadCoilsReply::BYTE_COUNT_DESC,
-                        2,
-                        REPEAT_READ_COILS_REPLY.count_value(v_coils.len()) as u64,
-                        r.quantity as i64,
-                        (1, 8),
-                        "ceil(quantity / 8) of the request",
-                    )?;
-                    REPEAT_READ_COILS_REPLY
-                        .follows_request(
-                            v_coils.len(),
-                            r.quantity as i64,
-                            (1, 1),
-                            "quantity",
-                        )?;
+                (&Self::ReadCoilsReply { coils: v_coils, .. }, Request::ReadCoils(r)) => {
+                    response::ReadCoilsReply::follows_read_coils(v_coils.len(), r)?
                 }
                 (
                     &Self::ReadDiscreteInputsReply { inputs: v_inputs, .. },
                     Request::ReadDiscreteInputs(r),
                 ) => {
-                    rt::following(
-                        &response::ReadDiscreteInputsReply::BYTE_COUNT_DESC,
-                        2,
-                        REPEAT_READ_DISCRETE_INPUTS_REPLY.count_value(v_inputs.len())
-                            as u64,
-                        r.quantity as i64,
-                        (1, 8),
-                        "ceil(quantity / 8) of the request",
-                    )?;
-                    REPEAT_READ_DISCRETE_INPUTS_REPLY
-                        .follows_request(
-                            v_inputs.len(),
-                            r.quantity as i64,
-                            (1, 1),
-                            "quantity",
-                        )?;
+                    response::ReadDiscreteInputsReply::follows_read_discrete_inputs(
+                        v_inputs.len(),
+                        r,
+                    )?
                 }
                 (
                     &Self::ReadHoldingRegistersReply { registers: v_registers, .. },
                     Request::ReadHoldingRegisters(r),
                 ) => {
-                    rt::following(
-                        &response::ReadHoldingRegistersReply::BYTE_COUNT_DESC,
-                        2,
-                        REPEAT_READ_HOLDING_REGISTERS_REPLY
-                            .count_value(v_registers.len()) as u64,
-                        r.quantity as i64,
-                        (2, 1),
-                        "2 × quantity of the request",
-                    )?;
-                    REPEAT_READ_HOLDING_REGISTERS_REPLY
-                        .follows_request(
-                            v_registers.len(),
-                            r.quantity as i64,
-                            (1, 1),
-                            "quantity",
-                        )?;
+                    response::ReadHoldingRegistersReply::follows_read_holding_registers(
+                        v_registers.len(),
+                        r,
+                    )?
                 }
                 (
                     &Self::ReadInputRegistersReply { registers: v_registers, .. },
                     Request::ReadInputRegisters(r),
                 ) => {
-                    rt::following(
-                        &response::ReadInputRegistersReply::BYTE_COUNT_DESC,
-                        2,
-                        REPEAT_READ_INPUT_REGISTERS_REPLY.count_value(v_registers.len())
-                            as u64,
-                        r.quantity as i64,
-                        (2, 1),
-                        "2 × quantity of the request",
-                    )?;
-                    REPEAT_READ_INPUT_REGISTERS_REPLY
-                        .follows_request(
-                            v_registers.len(),
-                            r.quantity as i64,
-                            (1, 1),
-                            "quantity",
-                        )?;
+                    response::ReadInputRegistersReply::follows_read_input_registers(
+                        v_registers.len(),
+                        r,
+                    )?
                 }
                 (
                     &Self::WriteSingleCoilReply {
@@ -1880,22 +1733,11 @@ pub mod modbus {
                     },
                     Request::WriteSingleCoil(r),
                 ) => {
-                    rt::following(
-                        &response::WriteSingleCoilReply::OUTPUT_ADDRESS_DESC,
-                        2,
+                    response::WriteSingleCoilReply::follows_write_single_coil(
                         v_output_address,
-                        r.output_address as i64,
-                        (1, 1),
-                        "output_address of the request",
-                    )?;
-                    rt::following(
-                        &response::WriteSingleCoilReply::OUTPUT_VALUE_DESC,
-                        4,
-                        v_output_value.raw(),
-                        r.output_value.raw() as i64,
-                        (1, 1),
-                        "output_value of the request",
-                    )?;
+                        v_output_value,
+                        r,
+                    )?
                 }
                 (
                     &Self::WriteSingleRegisterReply {
@@ -1905,22 +1747,11 @@ pub mod modbus {
                     },
                     Request::WriteSingleRegister(r),
                 ) => {
-                    rt::following(
-                        &response::WriteSingleRegisterReply::REGISTER_ADDRESS_DESC,
-                        2,
+                    response::WriteSingleRegisterReply::follows_write_single_register(
                         v_register_address,
-                        r.register_address as i64,
-                        (1, 1),
-                        "register_address of the request",
-                    )?;
-                    rt::following(
-                        &response::WriteSingleRegisterReply::REGISTER_VALUE_DESC,
-                        4,
                         v_register_value,
-                        r.register_value as i64,
-                        (1, 1),
-                        "register_value of the request",
-                    )?;
+                        r,
+                    )?
                 }
                 (
                     &Self::WriteMultipleCoilsReply {
@@ -1930,22 +1761,11 @@ pub mod modbus {
                     },
                     Request::WriteMultipleCoils(r),
                 ) => {
-                    rt::following(
-                        &response::WriteMultipleCoilsReply::STARTING_ADDRESS_DESC,
-                        2,
+                    response::WriteMultipleCoilsReply::follows_write_multiple_coils(
                         v_starting_address,
-                        r.starting_address as i64,
-                        (1, 1),
-                        "starting_address of the request",
-                    )?;
-                    rt::following(
-                        &response::WriteMultipleCoilsReply::QUANTITY_DESC,
-                        4,
                         v_quantity,
-                        r.quantity as i64,
-                        (1, 1),
-                        "quantity of the request",
-                    )?;
+                        r,
+                    )?
                 }
                 (
                     &Self::WriteMultipleRegistersReply {
@@ -1955,22 +1775,11 @@ pub mod modbus {
                     },
                     Request::WriteMultipleRegisters(r),
                 ) => {
-                    rt::following(
-                        &response::WriteMultipleRegistersReply::STARTING_ADDRESS_DESC,
-                        2,
+                    response::WriteMultipleRegistersReply::follows_write_multiple_registers(
                         v_starting_address,
-                        r.starting_address as i64,
-                        (1, 1),
-                        "starting_address of the request",
-                    )?;
-                    rt::following(
-                        &response::WriteMultipleRegistersReply::QUANTITY_DESC,
-                        4,
                         v_quantity,
-                        r.quantity as i64,
-                        (1, 1),
-                        "quantity of the request",
-                    )?;
+                        r,
+                    )?
                 }
                 _ => {}
             }
@@ -2596,6 +2405,24 @@ pub mod modbus {
                 coils: REPEAT_READ_COILS_REPLY.bits::<250>(elements, count)?,
             })
         }
+        /// Checks the fields this response takes from its request, `read_coils` (`r`).
+        #[inline(always)]
+        fn follows_read_coils(
+            n_coils: usize,
+            r: &request::ReadCoils,
+        ) -> rt::DecodeResult<()> {
+            rt::following(
+                &Self::BYTE_COUNT_DESC,
+                2,
+                REPEAT_READ_COILS_REPLY.count_value(n_coils) as u64,
+                r.quantity as i64,
+                (1, 8),
+                "ceil(quantity / 8) of the request",
+            )?;
+            REPEAT_READ_COILS_REPLY
+                .follows_request(n_coils, r.quantity as i64, (1, 1), "quantity")?;
+            rt::Ok(())
+        }
     }
     impl response::ReadCoilsException {
         pub const NAME: &'static str = "read_coils_exception";
@@ -2664,6 +2491,24 @@ pub mod modbus {
             rt::Ok(Self {
                 inputs: REPEAT_READ_DISCRETE_INPUTS_REPLY.bits::<250>(elements, count)?,
             })
+        }
+        /// Checks the fields this response takes from its request, `read_discrete_inputs` (`r`).
+        #[inline(always)]
+        fn follows_read_discrete_inputs(
+            n_inputs: usize,
+            r: &request::ReadDiscreteInputs,
+        ) -> rt::DecodeResult<()> {
+            rt::following(
+                &Self::BYTE_COUNT_DESC,
+                2,
+                REPEAT_READ_DISCRETE_INPUTS_REPLY.count_value(n_inputs) as u64,
+                r.quantity as i64,
+                (1, 8),
+                "ceil(quantity / 8) of the request",
+            )?;
+            REPEAT_READ_DISCRETE_INPUTS_REPLY
+                .follows_request(n_inputs, r.quantity as i64, (1, 1), "quantity")?;
+            rt::Ok(())
         }
     }
     impl response::ReadDiscreteInputsException {
@@ -2736,6 +2581,24 @@ pub mod modbus {
                     .elements::<u16, 125>(elements, false, false)?,
             })
         }
+        /// Checks the fields this response takes from its request, `read_holding_registers` (`r`).
+        #[inline(always)]
+        fn follows_read_holding_registers(
+            n_registers: usize,
+            r: &request::ReadHoldingRegisters,
+        ) -> rt::DecodeResult<()> {
+            rt::following(
+                &Self::BYTE_COUNT_DESC,
+                2,
+                REPEAT_READ_HOLDING_REGISTERS_REPLY.count_value(n_registers) as u64,
+                r.quantity as i64,
+                (2, 1),
+                "2 × quantity of the request",
+            )?;
+            REPEAT_READ_HOLDING_REGISTERS_REPLY
+                .follows_request(n_registers, r.quantity as i64, (1, 1), "quantity")?;
+            rt::Ok(())
+        }
     }
     impl response::ReadHoldingRegistersException {
         pub const NAME: &'static str = "read_holding_registers_exception";
@@ -2804,6 +2667,24 @@ pub mod modbus {
                 registers: REPEAT_READ_INPUT_REGISTERS_REPLY
                     .elements::<u16, 125>(elements, false, false)?,
             })
+        }
+        /// Checks the fields this response takes from its request, `read_input_registers` (`r`).
+        #[inline(always)]
+        fn follows_read_input_registers(
+            n_registers: usize,
+            r: &request::ReadInputRegisters,
+        ) -> rt::DecodeResult<()> {
+            rt::following(
+                &Self::BYTE_COUNT_DESC,
+                2,
+                REPEAT_READ_INPUT_REGISTERS_REPLY.count_value(n_registers) as u64,
+                r.quantity as i64,
+                (2, 1),
+                "2 × quantity of the request",
+            )?;
+            REPEAT_READ_INPUT_REGISTERS_REPLY
+                .follows_request(n_registers, r.quantity as i64, (1, 1), "quantity")?;
+            rt::Ok(())
         }
     }
     impl response::ReadInputRegistersException {
@@ -2880,6 +2761,31 @@ pub mod modbus {
                 output_value: CoilState::from_raw(w_output_value),
             })
         }
+        /// Checks the fields this response takes from its request, `write_single_coil` (`r`).
+        #[inline(always)]
+        fn follows_write_single_coil(
+            v_output_address: u16,
+            v_output_value: CoilState,
+            r: &request::WriteSingleCoil,
+        ) -> rt::DecodeResult<()> {
+            rt::following(
+                &Self::OUTPUT_ADDRESS_DESC,
+                2,
+                v_output_address,
+                r.output_address as i64,
+                (1, 1),
+                "output_address of the request",
+            )?;
+            rt::following(
+                &Self::OUTPUT_VALUE_DESC,
+                4,
+                v_output_value.raw(),
+                r.output_value.raw() as i64,
+                (1, 1),
+                "output_value of the request",
+            )?;
+            rt::Ok(())
+        }
     }
     impl response::WriteSingleCoilException {
         pub const NAME: &'static str = "write_single_coil_exception";
@@ -2955,6 +2861,31 @@ pub mod modbus {
                 register_value: w_register_value,
             })
         }
+        /// Checks the fields this response takes from its request, `write_single_register` (`r`).
+        #[inline(always)]
+        fn follows_write_single_register(
+            v_register_address: u16,
+            v_register_value: u16,
+            r: &request::WriteSingleRegister,
+        ) -> rt::DecodeResult<()> {
+            rt::following(
+                &Self::REGISTER_ADDRESS_DESC,
+                2,
+                v_register_address,
+                r.register_address as i64,
+                (1, 1),
+                "register_address of the request",
+            )?;
+            rt::following(
+                &Self::REGISTER_VALUE_DESC,
+                4,
+                v_register_value,
+                r.register_value as i64,
+                (1, 1),
+                "register_value of the request",
+            )?;
+            rt::Ok(())
+        }
     }
     impl response::WriteSingleRegisterException {
         pub const NAME: &'static str = "write_single_register_exception";
@@ -3024,6 +2955,31 @@ pub mod modbus {
                 quantity: w_quantity,
             })
         }
+        /// Checks the fields this response takes from its request, `write_multiple_coils` (`r`).
+        #[inline(always)]
+        fn follows_write_multiple_coils(
+            v_starting_address: u16,
+            v_quantity: u16,
+            r: &request::WriteMultipleCoils,
+        ) -> rt::DecodeResult<()> {
+            rt::following(
+                &Self::STARTING_ADDRESS_DESC,
+                2,
+                v_starting_address,
+                r.starting_address as i64,
+                (1, 1),
+                "starting_address of the request",
+            )?;
+            rt::following(
+                &Self::QUANTITY_DESC,
+                4,
+                v_quantity,
+                r.quantity as i64,
+                (1, 1),
+                "quantity of the request",
+            )?;
+            rt::Ok(())
+        }
     }
     impl response::WriteMultipleCoilsException {
         pub const NAME: &'static str = "write_multiple_coils_exception";
@@ -3092,6 +3048,31 @@ pub mod modbus {
                 starting_address: w_starting_address,
                 quantity: w_quantity,
             })
+        }
+        /// Checks the fields this response takes from its request, `write_multiple_registers` (`r`).
+        #[inline(always)]
+        fn follows_write_multiple_registers(
+            v_starting_address: u16,
+            v_quantity: u16,
+            r: &request::WriteMultipleRegisters,
+        ) -> rt::DecodeResult<()> {
+            rt::following(
+                &Self::STARTING_ADDRESS_DESC,
+                2,
+                v_starting_address,
+                r.starting_address as i64,
+                (1, 1),
+                "starting_address of the request",
+            )?;
+            rt::following(
+                &Self::QUANTITY_DESC,
+                4,
+                v_quantity,
+                r.quantity as i64,
+                (1, 1),
+                "quantity of the request",
+            )?;
+            rt::Ok(())
         }
     }
     impl response::WriteMultipleRegistersException {

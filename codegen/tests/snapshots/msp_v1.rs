@@ -490,25 +490,11 @@ pub mod msp_v1 {
         /// spec): [`busspec_runtime::DecodeError::InvalidValue`] names the first that differs.
         pub fn follows_request(&self, request: &Request) -> rt::DecodeResult<()> {
             match (self, request) {
-                (Self::Error(m), Request::ApiVersion(_)) => {
-                    rt::following(
-                        &response::Error::CMD_DESC,
-                        4,
-                        m.cmd,
-                        1 as i64,
-                        (1, 1),
-                        "cmd of the request",
-                    )?;
+                (Self::Error(m), Request::ApiVersion(r)) => {
+                    response::Error::follows_api_version(m.cmd, r)?
                 }
-                (Self::Error(m), Request::Attitude(_)) => {
-                    rt::following(
-                        &response::Error::CMD_DESC,
-                        4,
-                        m.cmd,
-                        108 as i64,
-                        (1, 1),
-                        "cmd of the request",
-                    )?;
+                (Self::Error(m), Request::Attitude(r)) => {
+                    response::Error::follows_attitude(m.cmd, r)?
                 }
                 _ => {}
             }
@@ -775,6 +761,35 @@ pub mod msp_v1 {
         fn from_frame(frame: &[u8]) -> rt::DecodeResult<Self> {
             let frame = rt::fixed::<6>(frame, &Self::DESC)?;
             rt::Ok(Self { cmd: frame[4] })
+        }
+        /// Checks the fields this response takes from its request, `api_version` (`r`).
+        #[inline(always)]
+        fn follows_api_version(
+            v_cmd: u8,
+            _: &request::ApiVersion,
+        ) -> rt::DecodeResult<()> {
+            rt::following(
+                &Self::CMD_DESC,
+                4,
+                v_cmd,
+                1 as i64,
+                (1, 1),
+                "cmd of the request",
+            )?;
+            rt::Ok(())
+        }
+        /// Checks the fields this response takes from its request, `attitude` (`r`).
+        #[inline(always)]
+        fn follows_attitude(v_cmd: u8, _: &request::Attitude) -> rt::DecodeResult<()> {
+            rt::following(
+                &Self::CMD_DESC,
+                4,
+                v_cmd,
+                108 as i64,
+                (1, 1),
+                "cmd of the request",
+            )?;
+            rt::Ok(())
         }
     }
     /// Each request as a struct of its own; its constants (`DESC`, which names it as

@@ -882,13 +882,7 @@ pub mod records {
         pub fn follows_request(&self, request: &Request) -> rt::DecodeResult<()> {
             match (self, request) {
                 (Self::StatusReply(m), Request::ReadStatus(r)) => {
-                    REPEAT_STATUS_REPLY
-                        .follows_request(
-                            m.readings.len(),
-                            r.quantity as i64,
-                            (1, 1),
-                            "quantity",
-                        )?;
+                    response::StatusReply::follows_read_status(m.readings.len(), r)?
                 }
                 _ => {}
             }
@@ -1230,6 +1224,16 @@ pub mod records {
                 let _ = v_readings.push(StatusReplyReadings::read(&bytes, 3 + k * 4)?);
             }
             rt::Ok(Self { readings: v_readings })
+        }
+        /// Checks the fields this response takes from its request, `read_status` (`r`).
+        #[inline(always)]
+        fn follows_read_status(
+            n_readings: usize,
+            r: &request::ReadStatus,
+        ) -> rt::DecodeResult<()> {
+            REPEAT_STATUS_REPLY
+                .follows_request(n_readings, r.quantity as i64, (1, 1), "quantity")?;
+            rt::Ok(())
         }
     }
     /// Each request as a struct of its own; its constants (`DESC`, which names it as

@@ -512,22 +512,7 @@ pub mod syncy {
         pub fn follows_request(&self, request: &Request) -> rt::DecodeResult<()> {
             match (self, request) {
                 (Self::SetPairReply(m), Request::SetPair(r)) => {
-                    rt::following(
-                        &response::SetPairReply::QUANTITY_DESC,
-                        5,
-                        m.quantity,
-                        r.quantity as i64,
-                        (1, 1),
-                        "quantity of the request",
-                    )?;
-                    rt::following(
-                        &response::SetPairReply::GROUPS_DESC,
-                        6,
-                        m.groups,
-                        r.quantity as i64,
-                        (1, 8),
-                        "ceil(quantity / 8) of the request",
-                    )?;
+                    response::SetPairReply::follows_set_pair(m.quantity, m.groups, r)?
                 }
                 _ => {}
             }
@@ -845,6 +830,31 @@ pub mod syncy {
                 quantity: frame[5],
                 groups: frame[6],
             })
+        }
+        /// Checks the fields this response takes from its request, `set_pair` (`r`).
+        #[inline(always)]
+        fn follows_set_pair(
+            v_quantity: u8,
+            v_groups: u8,
+            r: &request::SetPair,
+        ) -> rt::DecodeResult<()> {
+            rt::following(
+                &Self::QUANTITY_DESC,
+                5,
+                v_quantity,
+                r.quantity as i64,
+                (1, 1),
+                "quantity of the request",
+            )?;
+            rt::following(
+                &Self::GROUPS_DESC,
+                6,
+                v_groups,
+                r.quantity as i64,
+                (1, 8),
+                "ceil(quantity / 8) of the request",
+            )?;
+            rt::Ok(())
         }
     }
     impl response::SetPairError {

@@ -446,14 +446,7 @@ pub mod unasked {
         pub fn follows_request(&self, request: &Request) -> rt::DecodeResult<()> {
             match (self, request) {
                 (Self::Status(m), Request::GetStatus(r)) => {
-                    rt::following(
-                        &response::Status::CHANNEL_DESC,
-                        3,
-                        m.channel,
-                        r.channel as i64,
-                        (1, 1),
-                        "channel of the request",
-                    )?;
+                    response::Status::follows_get_status(m.channel, r)?
                 }
                 _ => {}
             }
@@ -674,6 +667,22 @@ pub mod unasked {
                 channel: frame[3],
                 value: u16::from_be_bytes([frame[4], frame[5]]),
             })
+        }
+        /// Checks the fields this response takes from its request, `get_status` (`r`).
+        #[inline(always)]
+        fn follows_get_status(
+            v_channel: u8,
+            r: &request::GetStatus,
+        ) -> rt::DecodeResult<()> {
+            rt::following(
+                &Self::CHANNEL_DESC,
+                3,
+                v_channel,
+                r.channel as i64,
+                (1, 1),
+                "channel of the request",
+            )?;
+            rt::Ok(())
         }
     }
     impl response::Heartbeat {

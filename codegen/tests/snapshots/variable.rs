@@ -486,13 +486,7 @@ pub mod vario {
         pub fn follows_request(&self, request: &Request) -> rt::DecodeResult<()> {
             match (self, request) {
                 (Self::ReadReply(m), Request::Read(r)) => {
-                    REPEAT_READ_REPLY
-                        .follows_request(
-                            m.values.len(),
-                            r.quantity as i64,
-                            (1, 1),
-                            "quantity",
-                        )?;
+                    response::ReadReply::follows_read(m.values.len(), r)?
                 }
                 _ => {}
             }
@@ -691,13 +685,7 @@ pub mod vario {
         pub fn follows_request(&self, request: &Request) -> rt::DecodeResult<()> {
             match (self, request) {
                 (&Self::ReadReply { values: v_values, .. }, Request::Read(r)) => {
-                    REPEAT_READ_REPLY
-                        .follows_request(
-                            v_values.len(),
-                            r.quantity as i64,
-                            (1, 1),
-                            "quantity",
-                        )?;
+                    response::ReadReply::follows_read(v_values.len(), r)?
                 }
                 _ => {}
             }
@@ -1035,6 +1023,13 @@ pub mod vario {
             rt::Ok(Self {
                 values: REPEAT_READ_REPLY.elements::<u16, 16>(elements, false, false)?,
             })
+        }
+        /// Checks the fields this response takes from its request, `read` (`r`).
+        #[inline(always)]
+        fn follows_read(n_values: usize, r: &request::Read) -> rt::DecodeResult<()> {
+            REPEAT_READ_REPLY
+                .follows_request(n_values, r.quantity as i64, (1, 1), "quantity")?;
+            rt::Ok(())
         }
     }
     impl response::ReadError {
