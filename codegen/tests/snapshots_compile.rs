@@ -3371,7 +3371,26 @@ fn unasked_snapshot_streams_as_the_interpreter_does() {
         busspec_model::interp::decode(&p, Some(Direction::Request), None, &get_status).unwrap();
     let int = busspec_model::interp::decode_reply(&p, &iq, &heartbeat).unwrap_err();
     assert_eq!(gen.to_string(), int.to_string());
-    assert!(gen.to_string().contains("heartbeat"), "{gen}");
+    assert_eq!(
+        gen.to_string(),
+        "heartbeat is sent unasked, not a reply get_status gets"
+    );
+    assert!(matches!(
+        gen,
+        busspec_runtime::DecodeError::NotAReply { unasked: true, .. }
+    ));
+    // The alarm, also go_to's reply, is sent unasked all the same; `started`, go_to's reply
+    // alone, is a wrong reply worded as before.
+    let started = busspec_model::interp::parse_hex("AA 21 50 1B").unwrap();
+    for (frame, words) in [
+        (&alarm, "alarm is sent unasked, not a reply get_status gets"),
+        (&started, "started is not a reply get_status gets"),
+    ] {
+        let gen = Unasked::decode_reply(frame, &q).unwrap_err();
+        let int = busspec_model::interp::decode_reply(&p, &iq, frame).unwrap_err();
+        assert_eq!(gen.to_string(), words);
+        assert_eq!(int.to_string(), words);
+    }
     // Request, heartbeat, its reply; go_to, the alarm as its reply, a heartbeat again.
     let cap: Vec<u8> = [&get_status, &heartbeat, &status, &go_to, &alarm, &heartbeat]
         .into_iter()

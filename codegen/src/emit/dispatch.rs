@@ -385,11 +385,22 @@ fn answered(p: &Protocol, replies: bool) -> TokenStream {
     } else {
         quote!()
     };
+    // Where responses are sent unasked, the refusal says whether this one is (the
+    // interpreter's words); elsewhere the code is what it was.
+    let refused = if p.responses.iter().any(|r| r.unasked) {
+        quote!(rt::not_a_reply_unasked(
+            message.name(),
+            request.name(),
+            message.is_unasked()
+        ))
+    } else {
+        quote!(rt::not_a_reply(message.name(), request.name()))
+    };
     if replies {
         quote! {
             if let rt::Some(request) = request {
                 if request.replies() >> message.index() & 1 == 0 {
-                    return rt::Err(rt::not_a_reply(message.name(), request.name()));
+                    return rt::Err(#refused);
                 }
                 #follows
             }
