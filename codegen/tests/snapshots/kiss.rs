@@ -537,7 +537,7 @@ pub mod kiss {
                         rt::not_a_reply_unasked(
                             message.name(),
                             request.name(),
-                            message.is_unasked(),
+                            1u64 >> message.index() & 1 != 0,
                         ),
                     );
                 }

@@ -351,7 +351,7 @@ pub mod unasked {
                         rt::not_a_reply_unasked(
                             message.name(),
                             request.name(),
-                            message.is_unasked(),
+                            12u64 >> message.index() & 1 != 0,
                         ),
                     );
                 }
