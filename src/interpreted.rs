@@ -494,9 +494,14 @@ fn decode_error(e: interp::DecodeError) -> DecodeError {
             expected,
             found,
         },
-        I::NotAnAnswer { message, request } => DecodeError::NotAReply {
+        I::NotAnAnswer {
+            message,
+            request,
+            unasked,
+        } => DecodeError::NotAReply {
             message: keep(&message),
             request: keep(&request),
+            unasked,
         },
         I::BadEscape { offset, fault } => DecodeError::BadEscape {
             offset,

@@ -2,8 +2,9 @@
 //!
 //! Out ([`Writer`]): one Enhanced Packet Block per stream event, in capture order: every frame,
 //! and also the bytes that start no frame (skipped, ambiguous, out of spec), so that the
-//! packets concatenated are the capture byte for byte (but that a flag two frames share,
-//! `ir::Framing::shared_flag`, is in both frames' packets). The link type is `LINKTYPE_USER0`
+//! packets concatenated are the capture byte for byte (a flag two frames share,
+//! `ir::Framing::shared_flag`, is in the later frame's packet alone: the earlier frame's
+//! packet lacks its closing flag, which the dissector puts back). The link type is `LINKTYPE_USER0`
 //! (147): a packet's data is the frame's wire bytes and nothing else, where issue 25's
 //! generated dissector registers. The one interface names the protocol in `if_description`
 //! (`busspec PROTOCOL`) and the capture in `if_name`, its `if_speed` is the spec's baud rate.

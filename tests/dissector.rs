@@ -135,6 +135,9 @@ fn cases() -> Vec<Case> {
         spec("model/tests/fixtures/valid/shdlc.yaml"),
         // Frames only end bytes delimit (Nextion): a list ends at the first FF FF FF.
         spec("model/tests/fixtures/valid/nextion.yaml"),
+        // A flag two frames share (KISS's FEND): the earlier frame's packet lacks its closing
+        // flag, the next packet's first byte.
+        spec("model/tests/fixtures/valid/kiss.yaml"),
         // A 24-bit CRC (RTCM 3's CRC-24Q).
         spec("model/tests/fixtures/valid/rtcm3_frame.yaml"),
         // A reply whose checksum takes in its request's bytes (Pelco D's general response).
@@ -593,13 +596,21 @@ fn compare(p: &Protocol, case: &Case, dir: &Path) -> Counts {
                     assert_eq!(one(packet, &key("checksum.status")), Some("1"), "{what}");
                 }
                 // The raw values, as busspec decodes them with the spec's rules lifted.
+                let end = events
+                    .get(i + 1)
+                    .map_or(bytes.len(), |n| n["offset"].get().parse().unwrap());
                 let frame_bytes = match &hex {
                     Some(h) => interp::parse_hex(h).unwrap(),
-                    None => bytes[offset as usize
-                        ..events
-                            .get(i + 1)
-                            .map_or(bytes.len(), |n| n["offset"].get().parse().unwrap())]
-                        .to_vec(),
+                    // A flag two frames share is the later one's packet's: this frame's
+                    // closing flag is the next event's first byte.
+                    None => match p.framing.shared_flag() {
+                        Some(f)
+                            if bytes[..end].last() != Some(&f) && bytes.get(end) == Some(&f) =>
+                        {
+                            bytes[offset as usize..=end].to_vec()
+                        }
+                        _ => bytes[offset as usize..end].to_vec(),
+                    },
                 };
                 // The stream decodes an out-of-spec frame without its request.
                 let reply_to = match d {

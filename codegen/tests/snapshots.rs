@@ -486,6 +486,16 @@ fn unasked_spec_generates_its_snapshot() {
     check("model/tests/fixtures/valid/unasked.yaml", "unasked.rs");
 }
 
+/// A response sent unasked whose list runs to the end of its frame, without a length field or
+/// end bytes: `link-core/tests/unasked.rs` holds the master to it.
+#[test]
+fn unasked_to_end_spec_generates_its_snapshot() {
+    check(
+        "model/tests/fixtures/valid/unasked_to_end.yaml",
+        "unasked_to_end.rs",
+    );
+}
+
 /// A preamble of wake-up bytes (`framing.preamble`, DL/T 645's `FE FE FE FE`):
 /// `snapshots_compile.rs` compiles it and holds it to the interpreter.
 #[test]

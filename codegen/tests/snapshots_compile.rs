@@ -33,6 +33,7 @@ include!("snapshots/dynamixel2_stuffed.rs");
 include!("snapshots/xbee_api2.rs");
 include!("snapshots/kiss.rs");
 include!("snapshots/unasked.rs");
+include!("snapshots/unasked_to_end.rs");
 include!("snapshots/lists_after.rs");
 include!("snapshots/lists_length.rs");
 include!("snapshots/packed_channels.rs");
@@ -64,6 +65,7 @@ crate::views!(msp_by_direction::MspByDirection, msp_by_direction, -, response);
 crate::views!(text_counted::TextCounted, text_counted, request, response);
 crate::views!(nextion::Nextion, nextion, request, response);
 crate::views!(float_lists::FloatLists, float_lists, -, response);
+crate::views!(unasked_to_end::UnaskedToEnd, unasked_to_end, -, response);
 crate::views!(
     ubx_fixed_blocks::UbxFixedBlocks,
     ubx_fixed_blocks,
@@ -100,6 +102,7 @@ fn fixture_views_agree_with_the_owned_decode() {
     one::<nextion::Nextion>("model/tests/fixtures/valid/nextion.yaml");
     one::<float_lists::FloatLists>("model/tests/fixtures/valid/float_lists.yaml");
     one::<ubx_fixed_blocks::UbxFixedBlocks>("model/tests/fixtures/valid/ubx_fixed_blocks.yaml");
+    one::<unasked_to_end::UnaskedToEnd>("model/tests/fixtures/valid/unasked_to_end.yaml");
 }
 
 use busspec_model::ir::{self, Direction};
@@ -3371,7 +3374,26 @@ fn unasked_snapshot_streams_as_the_interpreter_does() {
         busspec_model::interp::decode(&p, Some(Direction::Request), None, &get_status).unwrap();
     let int = busspec_model::interp::decode_reply(&p, &iq, &heartbeat).unwrap_err();
     assert_eq!(gen.to_string(), int.to_string());
-    assert!(gen.to_string().contains("heartbeat"), "{gen}");
+    assert_eq!(
+        gen.to_string(),
+        "heartbeat is sent unasked, not a reply get_status gets"
+    );
+    assert!(matches!(
+        gen,
+        busspec_runtime::DecodeError::NotAReply { unasked: true, .. }
+    ));
+    // The alarm, also go_to's reply, is sent unasked all the same; `started`, go_to's reply
+    // alone, is a wrong reply worded as before.
+    let started = busspec_model::interp::parse_hex("AA 21 50 1B").unwrap();
+    for (frame, words) in [
+        (&alarm, "alarm is sent unasked, not a reply get_status gets"),
+        (&started, "started is not a reply get_status gets"),
+    ] {
+        let gen = Unasked::decode_reply(frame, &q).unwrap_err();
+        let int = busspec_model::interp::decode_reply(&p, &iq, frame).unwrap_err();
+        assert_eq!(gen.to_string(), words);
+        assert_eq!(int.to_string(), words);
+    }
     // Request, heartbeat, its reply; go_to, the alarm as its reply, a heartbeat again.
     let cap: Vec<u8> = [&get_status, &heartbeat, &status, &go_to, &alarm, &heartbeat]
         .into_iter()
@@ -3397,6 +3419,30 @@ fn unasked_snapshot_streams_as_the_interpreter_does() {
     assert!(t.accepted >= 5 && t.refused > 100, "{t:?}");
     let found = examples_stream_alike::<Unasked>(&p, 0x0A5E, "heartbeat");
     assert!(found > 100, "only {found} heartbeat frames found");
+}
+
+/// A response sent unasked whose list runs to its end, which gives it a borrowed view: the
+/// view refuses it as a reply in the words of the owned decode and the interpreter.
+#[test]
+fn unasked_to_end_snapshot_refuses_alike_through_its_view() {
+    use unasked_to_end::{Request, Response, ResponseView, UnaskedToEnd};
+    let file = "model/tests/fixtures/valid/unasked_to_end.yaml";
+    replay::<UnaskedToEnd>(file);
+    let p = fixture(file);
+    let get_status = busspec_model::interp::parse_hex("AA 21 40 01 0C").unwrap();
+    let log = busspec_model::interp::parse_hex("AA 21 72 3D 02 7C").unwrap();
+    let q = Request::decode(&get_status).unwrap().message;
+    let iq =
+        busspec_model::interp::decode(&p, Some(Direction::Request), None, &get_status).unwrap();
+    let words = "log is sent unasked, not a reply get_status gets";
+    let owned = Response::decode_reply(&log, &q).unwrap_err();
+    let view = ResponseView::decode_reply(&log, &q).unwrap_err();
+    let int = busspec_model::interp::decode_reply(&p, &iq, &log).unwrap_err();
+    assert_eq!(owned.to_string(), words);
+    assert_eq!(view.to_string(), words);
+    assert_eq!(int.to_string(), words);
+    let t = agree::agree::<UnaskedToEnd>(&p);
+    assert!(t.accepted >= 3 && t.refused > 100, "{t:?}");
 }
 
 /// The trait's `is_unasked`, as code generic over protocols sees it.

@@ -37,7 +37,7 @@ use core::fmt;
 use core::time::Duration;
 
 use busspec_runtime::{
-    DecodeError, EncodeError, FrameBuffer, Message, Reply as ReplyRule, RequestMessage,
+    DecodeError, EncodeError, FrameBuffer, Framing, Message, Reply as ReplyRule, RequestMessage,
     ResponseMessage,
 };
 
@@ -799,7 +799,7 @@ impl<P: Link, const CAP: usize> MasterCore<P, CAP> {
                         );
                     }
                     Some(q) if now < q => return Action::Read { until: q },
-                    Some(_) => self.judge(),
+                    Some(_) => self.judge_quiet(deadline),
                 },
                 State::Settle { quiet_until, .. } => {
                     if now < quiet_until {
@@ -901,11 +901,6 @@ impl<P: Link, const CAP: usize> MasterCore<P, CAP> {
         Ok((from, response))
     }
 
-    fn judge(&mut self) {
-        let verdict = self.accept();
-        self.judge_verdict(verdict);
-    }
-
     fn judge_verdict(&mut self, verdict: Result<(u8, P::Response), Rejection>) {
         let (request, address, attempt) = (self.current(), self.address, self.attempt);
         match verdict {
@@ -946,26 +941,70 @@ impl<P: Link, const CAP: usize> MasterCore<P, CAP> {
         }
     }
 
-    /// Sets aside the shortest frame at the head of the received bytes that decodes as a
-    /// response sent unasked the request in flight does not get: its bytes dropped, counted
+    /// The line went quiet after the bytes read: they are judged as the reply, once any
+    /// unasked frames at their head are set aside (where only those came, the master keeps
+    /// waiting until `deadline`).
+    fn judge_quiet(&mut self, deadline: Duration) {
+        let mut verdict = self.accept();
+        while verdict.is_err() && self.set_aside_unasked(true) {
+            if self.rx_len == 0 {
+                self.state = State::Reply {
+                    deadline,
+                    quiet_until: None,
+                };
+                return;
+            }
+            verdict = self.accept();
+        }
+        self.judge_verdict(verdict);
+    }
+
+    /// Sets aside a frame at the head of the received bytes that decodes as a response sent
+    /// unasked the request in flight does not get: its bytes dropped, counted
     /// ([`Self::unasked_seen`]). `false` where there is none (or the protocol has no unasked
     /// response, or the bytes overflowed the buffer).
-    fn set_aside_unasked(&mut self) -> bool {
+    ///
+    /// A head whose start byte and code admit a longer response frame (a list that runs to
+    /// the frame's end without a length field or end bytes) may be a frame cut short, its
+    /// last byte a checksum by chance: only the line's quiet time ends such a frame. Before it
+    /// (`quiet` false) the shortest head that decodes is set aside only where no longer
+    /// response frame can start with it, else nothing is (the bytes wait for the quiet gap);
+    /// once the line is quiet, the longest head that decodes is.
+    fn set_aside_unasked(&mut self, quiet: bool) -> bool {
         if !<P::Response as ResponseMessage<P::Request>>::HAS_UNASKED || self.rx_len > CAP {
             return false;
         }
         let request = self.current();
-        for n in 1..=self.rx_len {
-            if let Ok(d) = P::Response::decode_as_reply(&self.rx[..n], None) {
-                if d.message.is_unasked() && !d.message.answers(&request) {
-                    self.rx.copy_within(n..self.rx_len, 0);
-                    self.rx_len -= n;
-                    self.unasked = self.unasked.saturating_add(1);
-                    return true;
-                }
+        let unasked = |head: &[u8]| {
+            P::Response::decode_as_reply(head, None)
+                .is_ok_and(|d| d.message.is_unasked() && !d.message.answers(&request))
+        };
+        let found = if quiet {
+            (1..=self.rx_len).rev().find(|&n| unasked(&self.rx[..n]))
+        } else {
+            match (1..=self.rx_len).find(|&n| unasked(&self.rx[..n])) {
+                Some(n) if !self.longer_response_may_start(n) => Some(n),
+                _ => None,
             }
-        }
-        false
+        };
+        let Some(n) = found else {
+            return false;
+        };
+        self.rx.copy_within(n..self.rx_len, 0);
+        self.rx_len -= n;
+        self.unasked = self.unasked.saturating_add(1);
+        true
+    }
+
+    /// Whether a response frame longer than `n` bytes may begin with the received bytes (its
+    /// start byte and code agree with theirs: [`Framing::candidates`]).
+    fn longer_response_may_start(&self, n: usize) -> bool {
+        let responses = <P as Framing>::candidates(&self.rx[..self.rx_len]).responses;
+        <P as Framing>::FRAME_LENGTHS
+            .iter()
+            .take(64)
+            .enumerate()
+            .any(|(i, &len)| responses >> i & 1 != 0 && len > n)
     }
 
     fn store(&mut self, bytes: &[u8]) {
@@ -1014,7 +1053,7 @@ impl<P: Link, const CAP: usize> MasterCore<P, CAP> {
                     quiet_until: Some(now + self.timing.byte_gap),
                 };
                 let mut verdict = self.accept();
-                while verdict.is_err() && self.set_aside_unasked() {
+                while verdict.is_err() && self.set_aside_unasked(false) {
                     if self.rx_len == 0 {
                         // Only unasked frames so far: keep waiting for the reply.
                         self.state = State::Reply {

@@ -1,7 +1,8 @@
 //! A response the device sends unasked (`unasked: true`) heard while the master waits for a
 //! reply: set aside (counted by `unasked_seen`), neither the reply nor a failure, and the
 //! master keeps waiting within the same timeout. The protocol is the code generated for the
-//! fixture `unasked.yaml` (its snapshot).
+//! fixture `unasked.yaml` (its snapshot), and for `unasked_to_end.yaml` where the unasked
+//! frame's list runs to its end.
 
 // The generated module's optional derives name features this crate does not have.
 #![allow(unexpected_cfgs)]
@@ -9,9 +10,10 @@
 use core::time::Duration;
 
 use busspec_link_core::master::{Action, MasterCore};
-use busspec_link_core::{Message, Plain};
+use busspec_link_core::{Message, Plain, Protocol};
 
 include!("../../codegen/tests/snapshots/unasked.rs");
+include!("../../codegen/tests/snapshots/unasked_to_end.rs");
 use unasked::{request, response, Request, Response, Unasked};
 
 fn ms(n: u64) -> Duration {
@@ -33,7 +35,7 @@ fn heartbeat() -> Vec<u8> {
 
 /// Starts `q` at `t` (after any earlier traffic's gap) and polls until the master reads;
 /// the read's deadline.
-fn sent(core: &mut MasterCore<Plain<Unasked>>, q: Request, t: Duration) -> Duration {
+fn sent<P: Protocol>(core: &mut MasterCore<Plain<P>>, q: P::Request, t: Duration) -> Duration {
     core.start(0x21, q);
     let mut t = t;
     let mut wrote = false;
@@ -120,5 +122,57 @@ fn only_heartbeats_until_the_deadline_is_no_reply() {
     }
     assert!(t >= deadline);
     assert!(core.take_outcome().unwrap().is_err());
+    assert_eq!(core.unasked_seen(), 1);
+}
+
+/// A log frame (sent unasked, its list running to the frame's end: no length field, no end
+/// bytes) whose head `AA 21 72 3D` decodes as a log frame too, `3D` being the sum of the bytes
+/// before it. Only the line's quiet time says where such a frame ends: the master sets aside
+/// the whole frame, not the head, whether it comes with the reply in one read or cut at that
+/// head across two reads.
+#[test]
+fn an_unasked_frame_to_its_end_is_set_aside_whole() {
+    use unasked_to_end::{request, response, Request, Response, UnaskedToEnd};
+    let log = [0xAA, 0x21, 0x72, 0x3D, 0x02, 0x7C];
+    let status = [0xAA, 0x21, 0x40, 0x00, 0x05, 0x10];
+    assert_eq!(Response::decode(&log[..4]).unwrap().message.name(), "log");
+    assert_eq!(Response::decode(&log).unwrap().message.name(), "log");
+    let q = Request::GetStatus(request::GetStatus { channel: 1 });
+    let want = Some(Response::Status(response::Status { value: 5 }));
+
+    // The log and the reply in one read.
+    let mut core: MasterCore<Plain<UnaskedToEnd>> = MasterCore::new();
+    sent(&mut core, q, ms(0));
+    core.received(&[&log[..], &status[..]].concat(), ms(5));
+    let mut t = ms(5);
+    loop {
+        match core.poll(t) {
+            Action::Done => break,
+            Action::Read { until } | Action::Sleep(until) => t = until,
+            other => panic!("{other:?}"),
+        }
+    }
+    let r = core.take_outcome().unwrap().unwrap();
+    assert_eq!((r.response, r.attempts), (want, 1));
+    assert_eq!(core.unasked_seen(), 1);
+
+    // The log cut at its head across two reads, then the reply after a quiet gap.
+    let mut core: MasterCore<Plain<UnaskedToEnd>> = MasterCore::new();
+    let deadline = sent(&mut core, q, ms(0));
+    core.received(&log[..4], ms(5));
+    core.received(&log[4..], ms(6));
+    let mut t = ms(6);
+    while let Action::Read { until } = core.poll(t) {
+        if until == deadline {
+            break;
+        }
+        t = until;
+    }
+    assert_eq!(core.unasked_seen(), 1);
+    assert_eq!(core.poll(t), Action::Read { until: deadline });
+    core.received(&status, t + ms(10));
+    assert_eq!(core.poll(t + ms(10)), Action::Done);
+    let r = core.take_outcome().unwrap().unwrap();
+    assert_eq!((r.response, r.attempts), (want, 1));
     assert_eq!(core.unasked_seen(), 1);
 }

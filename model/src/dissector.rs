@@ -570,6 +570,10 @@ fn protocol(p: &Protocol) -> String {
         None => "false".to_owned(),
     };
     let _ = writeln!(s, "  preamble = {preamble},");
+    // The flag of flag framing two frames may share (KISS's C0, HDLC's 7E): a packet holds
+    // it once, in the later frame's packet, so an earlier frame's packet lacks its closing
+    // flag.
+    let _ = writeln!(s, "  shared_flag = {},", opt_num(f.shared_flag()));
     // A per-byte transform of the payload (`framing.transform`): where the payload begins and
     // each byte as it travelled, transformed back (a table: no bit operators needed).
     let transform = match &f.transform {

@@ -1410,6 +1410,17 @@ local function setup(P)
   -- frame") and dissected from it; a bad escape is shown as busspec refuses it.
   local function dissect(tvb, pinfo, tree)
     local n = tvb:len()
+    -- A flag two frames share (`Framing::shared_flag`, KISS's C0) is in the later frame's
+    -- packet alone: a packet that opens with the flag and does not end with it is a frame
+    -- whose closing flag is the next packet's first byte, dissected with it put back.
+    local flag = P.shared_flag
+    if flag and n > 1 and tvb:range(0, 1):uint() == flag and tvb:range(n - 1, 1):uint() ~= flag then
+      local ba = tvb:range(0, n):bytes()
+      ba:set_size(n + 1)
+      ba:set_index(n, flag)
+      tvb = ba:tvb("Frame with its shared closing flag")
+      n = n + 1
+    end
     -- Wake-up bytes before the frame (`framing.preamble`, 0 to its most): shown apart, the
     -- frame dissected from the byte after them, as busspec decodes it.
     local pre = P.preamble

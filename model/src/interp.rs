@@ -224,8 +224,13 @@ pub enum DecodeError {
         expected: i64,
         found: i64,
     },
-    /// A reply the request does not get.
-    NotAnAnswer { message: String, request: String },
+    /// A reply the request does not get; `unasked` where `message` is a response the device
+    /// sends on its own (`unasked: true`), a frame that came unasked rather than a wrong reply.
+    NotAnAnswer {
+        message: String,
+        request: String,
+        unasked: bool,
+    },
     /// The escaped bytes break the protocol's escaping (`framing.escaping`); `offset` counts
     /// the bytes as they travel.
     BadEscape { offset: usize, fault: EscapeFault },
@@ -410,10 +415,12 @@ impl fmt::Display for DecodeError {
                 f,
                 "invalid value for {message}.{field} at offset {offset}: must be {rule} ({expected}), found {found}"
             ),
-            DecodeError::NotAnAnswer { message, request } => write!(
-                f,
-                "{message} is not a reply {request} gets"
-            ),
+            DecodeError::NotAnAnswer { message, request, unasked: false } => {
+                write!(f, "{message} is not a reply {request} gets")
+            }
+            DecodeError::NotAnAnswer { message, request, unasked: true } => {
+                write!(f, "{message} is sent unasked, not a reply {request} gets")
+            }
             DecodeError::BadEscape { offset, fault } => {
                 write!(f, "bad escape at offset {offset}: {fault}")
             }
@@ -1534,6 +1541,7 @@ fn decide<'p>(
                 // The frame is one of several replies, none of them the request's.
                 return Err(DecodeError::NotAnAnswer {
                     message: p.message(fitting[0]).name.clone(),
+                    unasked: p.message(fitting[0]).unasked,
                     request: p
                         .commands
                         .get(cmd)
@@ -1551,6 +1559,7 @@ fn decide<'p>(
             (Some((r, misfit)), _, _) => misfit.error(p.message(r)),
             (None, Some(r), _) => DecodeError::NotAnAnswer {
                 message: p.message(r).name.clone(),
+                unasked: p.message(r).unasked,
                 request: reply_to
                     .and_then(|c| p.commands.get(c))
                     .map(|c| c.name.clone())
@@ -2792,6 +2801,7 @@ pub fn answers(p: &Protocol, request: &Frame, reply: &Frame) -> Result<(), Decod
         return Err(DecodeError::NotAnAnswer {
             message: m.name.clone(),
             request: cmd.name.clone(),
+            unasked: reply.message.direction == Direction::Response && m.unasked,
         });
     }
     let req_int = |name: &str| match request.get(name) {

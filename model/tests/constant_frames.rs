@@ -158,7 +158,8 @@ fn the_constant_is_the_reply_only_of_the_commands_that_list_it() {
         e,
         DecodeError::NotAnAnswer {
             message: "ack".into(),
-            request: "req_ske".into()
+            request: "req_ske".into(),
+            unasked: false
         }
     );
     assert!(interp::decode_reply(&p, &request, &STATUS).is_ok());

@@ -56,10 +56,20 @@ fn an_unasked_frame_after_a_request_is_not_its_reply() {
     assert_eq!(p.message(alone.message).name, "heartbeat");
     let e = interp::decode_reply(&p, &q, &heartbeat).unwrap_err();
     assert!(
-        matches!(&e, DecodeError::NotAnAnswer { message, request } if message == "heartbeat" && request == "get_status"),
+        matches!(&e, DecodeError::NotAnAnswer { message, request, .. } if message == "heartbeat" && request == "get_status"),
         "{e:?}"
     );
-    assert_eq!(e.to_string(), "heartbeat is not a reply get_status gets");
+    // Worded as sent unasked, not as a wrong reply.
+    assert_eq!(
+        e.to_string(),
+        "heartbeat is sent unasked, not a reply get_status gets"
+    );
+    // A reply the request does not get, sent only as a reply, is worded as before.
+    let started = interp::decode_reply(&p, &q, &hex("AA 21 50 1B")).unwrap_err();
+    assert_eq!(
+        started.to_string(),
+        "started is not a reply get_status gets"
+    );
     // The alarm is go_to's reply as well as sent unasked.
     let go_to = interp::decode(
         &p,
@@ -71,7 +81,12 @@ fn an_unasked_frame_after_a_request_is_not_its_reply() {
     let alarm = hex("AA 21 71 03 3F");
     let r = interp::decode_reply(&p, &go_to, &alarm).unwrap();
     assert_eq!(p.message(r.message).name, "alarm");
-    assert!(interp::decode_reply(&p, &q, &alarm).is_err());
+    assert_eq!(
+        interp::decode_reply(&p, &q, &alarm)
+            .unwrap_err()
+            .to_string(),
+        "alarm is sent unasked, not a reply get_status gets"
+    );
 }
 
 #[test]

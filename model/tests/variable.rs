@@ -193,7 +193,8 @@ fn a_reply_is_checked_against_its_request() {
         interp::decode_reply(&p, &read, &ack),
         Err(DecodeError::NotAnAnswer {
             message: "write_reply".into(),
-            request: "read".into()
+            request: "read".into(),
+            unasked: false
         })
     );
 }

@@ -525,7 +525,26 @@ pub fn wrong_length(frame: &[u8], message: &'static MessageDesc) -> DecodeError 
 /// spec does not list it among the request's responses.
 #[cold]
 pub fn not_a_reply(message: &'static str, request: &'static str) -> DecodeError {
-    DecodeError::NotAReply { message, request }
+    DecodeError::NotAReply {
+        message,
+        request,
+        unasked: false,
+    }
+}
+
+/// [`not_a_reply`] where the protocol has responses sent unasked: `unasked` says whether
+/// `message` is one (`unasked: true`), worded as such.
+#[cold]
+pub fn not_a_reply_unasked(
+    message: &'static str,
+    request: &'static str,
+    unasked: bool,
+) -> DecodeError {
+    DecodeError::NotAReply {
+        message,
+        request,
+        unasked,
+    }
 }
 
 /// Where the code of a direction's frames sits (each generated module's `REQUEST_CODE` and

@@ -734,10 +734,13 @@ pub enum DecodeError {
     /// Several responses share this code and length, and `candidates` all decode from the
     /// frame; decode it with `decode_reply`.
     Ambiguous { code: u32, candidates: MessageNames },
-    /// The frame is a valid response `message`, but not one the spec lists for `request`.
+    /// The frame is a valid response `message`, but not one the spec lists for `request`;
+    /// `unasked` where `message` is one the device sends on its own (`unasked: true`), a frame
+    /// that came unasked rather than a wrong reply.
     NotAReply {
         message: &'static str,
         request: &'static str,
+        unasked: bool,
     },
     /// More bytes than the protocol's longest frame (of the direction decoded): refused for
     /// its length before anything else is looked at.
@@ -1134,9 +1137,16 @@ impl fmt::Display for DecodeError {
                 f,
                 "ambiguous frame: could be {candidates}; decode it together with the request it answers"
             ),
-            DecodeError::NotAReply { message, request } => {
-                write!(f, "{message} is not a reply {request} gets")
-            }
+            DecodeError::NotAReply {
+                message,
+                request,
+                unasked: false,
+            } => write!(f, "{message} is not a reply {request} gets"),
+            DecodeError::NotAReply {
+                message,
+                request,
+                unasked: true,
+            } => write!(f, "{message} is sent unasked, not a reply {request} gets"),
             DecodeError::TooLong { max, found } => write!(
                 f,
                 "frame too long: {found} bytes, the longest frame has {max}"

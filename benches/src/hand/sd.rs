@@ -370,6 +370,7 @@ pub fn decode_response(
                 return Err(DecodeError::NotAReply {
                     message: "total_runtime_hours",
                     request: q.name(),
+                    unasked: false,
                 })
             }
             None => {
@@ -395,6 +396,7 @@ pub fn decode_response(
             return Err(DecodeError::NotAReply {
                 message: message.name(),
                 request: q.name(),
+                unasked: false,
             });
         }
     }

@@ -303,6 +303,7 @@ pub fn decode_response(
             return Err(DecodeError::NotAReply {
                 message: message.name(),
                 request: q.name(),
+                unasked: false,
             });
         }
     }

@@ -385,11 +385,34 @@ fn answered(p: &Protocol, replies: bool) -> TokenStream {
     } else {
         quote!()
     };
+    // Where responses are sent unasked, the refusal says whether this one is (the
+    // interpreter's words), by its row in a mask of them (a borrowed view has no
+    // `is_unasked`); elsewhere the code is what it was.
+    let unasked = p
+        .responses
+        .iter()
+        .enumerate()
+        .filter(|(_, r)| r.unasked)
+        .fold(0u128, |a, (i, _)| a | 1 << i);
+    let refused = if unasked != 0 {
+        let mask = if p.responses.len() <= 64 {
+            Literal::u64_suffixed(unasked as u64)
+        } else {
+            Literal::u128_suffixed(unasked)
+        };
+        quote!(rt::not_a_reply_unasked(
+            message.name(),
+            request.name(),
+            #mask >> message.index() & 1 != 0
+        ))
+    } else {
+        quote!(rt::not_a_reply(message.name(), request.name()))
+    };
     if replies {
         quote! {
             if let rt::Some(request) = request {
                 if request.replies() >> message.index() & 1 == 0 {
-                    return rt::Err(rt::not_a_reply(message.name(), request.name()));
+                    return rt::Err(#refused);
                 }
                 #follows
             }

@@ -347,7 +347,13 @@ pub mod unasked {
             let message = Self::dispatch(frame)?;
             if let rt::Some(request) = request {
                 if request.replies() >> message.index() & 1 == 0 {
-                    return rt::Err(rt::not_a_reply(message.name(), request.name()));
+                    return rt::Err(
+                        rt::not_a_reply_unasked(
+                            message.name(),
+                            request.name(),
+                            12u64 >> message.index() & 1 != 0,
+                        ),
+                    );
                 }
                 message.follows_request(request)?;
             }

@@ -214,7 +214,8 @@ fn documented_frames_decode_as_documented() {
         ),
         Err(DecodeError::NotAReply {
             message: "nak",
-            request: "read_temperature"
+            request: "read_temperature",
+            unasked: false
         })
     );
 
