@@ -352,14 +352,7 @@ pub mod unasked_to_end {
         fn dispatch(frame: &[u8]) -> rt::DecodeResult<Self> {
             match frame[2] {
                 0x40 => response::Status::from_frame(frame).map(Self::Status),
-                0x72 => {
-                    let (_, elements, _) = REPEAT_LOG.split::<3>(frame)?;
-                    rt::Ok(
-                        Self::Log(response::Log {
-                            text: REPEAT_LOG.elements::<u8, 16>(elements, false, false)?,
-                        }),
-                    )
-                }
+                0x72 => response::Log::from_frame(frame).map(Self::Log),
                 _ => rt::Err(RESPONSE_CODE.unknown(frame)),
             }
         }
@@ -726,6 +719,14 @@ pub mod unasked_to_end {
             let out = rt::frame_mut_len(buf, frame_len, &[0xAA, address, 0x72])?;
             rt::write_elements(v_text.as_slice(), 1, false, &mut out[3..]);
             rt::Ok(rt::seal_sum8_len(out))
+        }
+        /// Reads this message from a frame whose framing and code are checked.
+        #[inline(always)]
+        fn from_frame(frame: &[u8]) -> rt::DecodeResult<Self> {
+            let (_, elements, _) = REPEAT_LOG.split::<3>(frame)?;
+            rt::Ok(Self {
+                text: REPEAT_LOG.elements::<u8, 16>(elements, false, false)?,
+            })
         }
     }
     /// Each request as a struct of its own; its constants (`DESC`, which names it as
