@@ -100,6 +100,8 @@ fn cases() -> Vec<Case> {
         spec("model/tests/fixtures/valid/cobs_link.yaml"),
         spec("model/tests/fixtures/valid/dynamixel2_stuffed.yaml"),
         spec("model/tests/fixtures/valid/xbee_api2.yaml"),
+        // FrSky F.Port v1: the end-around sum (`sum8_end_around`) in Lua, over stuffed frames.
+        spec("model/tests/fixtures/valid/fport.yaml"),
         // Wake-up bytes before frames (DL/T 645's preamble): the dissector skips them; its
         // payload travels +33H (`framing.transform`): shown transformed back.
         spec("model/tests/fixtures/valid/dlt645.yaml"),

@@ -478,6 +478,14 @@ fn escaped_specs_generate_their_snapshots() {
     check("model/tests/fixtures/valid/kiss.yaml", "kiss.rs");
 }
 
+/// FrSky F.Port v1: its CRC the end-around sum (`sum8_end_around`, `rt::sum8_end_around`) from
+/// the length byte, 7E and 7D stuffed, a shared 7E flag, 16 packed 11-bit channels
+/// (`snapshots_compile.rs` compiles it and holds it to the interpreter).
+#[test]
+fn end_around_sum_spec_generates_its_snapshot() {
+    check("model/tests/fixtures/valid/fport.yaml", "fport.rs");
+}
+
 /// Responses sent unasked (`unasked: true`): `Response::is_unasked` and the
 /// `ResponseMessage::is_unasked` override; `snapshots_compile.rs` compiles it and holds it to
 /// the interpreter.

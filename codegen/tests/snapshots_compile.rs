@@ -32,6 +32,7 @@ include!("snapshots/cobs_link.rs");
 include!("snapshots/dynamixel2_stuffed.rs");
 include!("snapshots/xbee_api2.rs");
 include!("snapshots/kiss.rs");
+include!("snapshots/fport.rs");
 include!("snapshots/unasked.rs");
 include!("snapshots/unasked_to_end.rs");
 include!("snapshots/lists_after.rs");
@@ -2054,7 +2055,13 @@ fn escaped_snapshots_agree_with_the_interpreter() {
         // A data frame reads alike both ways (a stream reports it ambiguous): count TXDELAY.
         "tx_delay",
     );
+    let fport = escaped_agree::<fport::Fport>(
+        "model/tests/fixtures/valid/fport.yaml",
+        0x7E5D,
+        "downlink_data",
+    );
     for (name, (accepted, refused, found)) in [
+        ("fport", fport),
         ("slip", slip),
         ("kiss", kiss),
         ("hdlc", hdlc),
@@ -3448,4 +3455,45 @@ fn unasked_to_end_snapshot_refuses_alike_through_its_view() {
 /// The trait's `is_unasked`, as code generic over protocols sees it.
 fn rt_is_unasked<R: busspec_runtime::ResponseMessage<unasked::Request>>(r: &R) -> bool {
     r.is_unasked()
+}
+
+/// FrSky F.Port v1 (`sum8_end_around`): the generated checksum is the end-around sum inverted
+/// (ArduPilot's control frame's FA, where the plain sum inverted is 04, and 0x21 over
+/// "123456789"); both engines decode ArduPilot's frame to the same channels and refuse it with
+/// the plain sum's CRC in the same words; the encoder stuffs a CRC of 7D.
+#[test]
+fn end_around_sum_snapshot_agrees_with_the_interpreter() {
+    use fport::{Fport, Request};
+    let file = "model/tests/fixtures/valid/fport.yaml";
+    replay::<Fport>(file);
+    let p = fixture(file);
+    let ardupilot = [
+        0x7E, 0x19, 0x00, 0xE7, 0x3B, 0xDF, 0x5A, 0xCE, 0x07, 0x10, 0x75, 0x49, 0x9C, 0x15, 0xE0,
+        0x03, 0x1F, 0xF8, 0xC0, 0x07, 0x3E, 0xF0, 0x81, 0x0F, 0x7C, 0x00, 0x38, 0xFA, 0x7E,
+    ];
+    assert_eq!(fport::checksum(&ardupilot[1..27]), 0xFA);
+    assert_eq!(fport::checksum(b"123456789"), 0x21);
+    match Request::decode(&ardupilot).map(|d| d.message) {
+        Ok(Request::Control(c)) => {
+            assert_eq!(c.channels[..8], [999, 999, 363, 999, 256, 746, 1810, 172]);
+            assert_eq!(c.rssi, 56);
+        }
+        other => panic!("decoded as {other:?}"),
+    }
+    let mut plain = ardupilot;
+    plain[27] = 0x04;
+    let g = Request::decode(&plain).map(|_| ());
+    let i = busspec_model::interp::decode(&p, Some(Direction::Request), None, &plain);
+    assert_eq!(
+        g.unwrap_err().to_string(),
+        "checksum mismatch at offset 27: expected 0xFA, found 0x04"
+    );
+    same_text(g, i.map(|_| ()));
+    // The failsafe example's CRC is 7D: encoded, it travels as 7D 5D.
+    let failsafe = &p.examples[2].wire;
+    let decoded = Request::decode(failsafe).unwrap().message;
+    let mut buf = [0u8; fport::MAX_FRAME_LEN];
+    let n = decoded.encode(0, &mut buf).unwrap();
+    assert_eq!(&buf[..n], &failsafe[..]);
+    assert_eq!(buf[n - 3..n], [0x7D, 0x5D, 0x7E]);
 }

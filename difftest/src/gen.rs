@@ -166,6 +166,8 @@ struct G {
     fixed_elements: fastrand::Rng,
     /// Whether a 32-bit CRC as drawn becomes a 24-bit one (`Own::Crc24`).
     crc24: fastrand::Rng,
+    /// Whether an 8-bit sum or XOR as drawn becomes FrSky's end-around sum (`Own::EndAround`).
+    end_around: fastrand::Rng,
 }
 
 /// The types a record's field may have: name, bytes, signed.
@@ -270,6 +272,9 @@ enum Own {
     /// Responses sent unasked (`unasked: true`): a reply made also sent unasked, a response
     /// no command lists.
     Unasked = 0x0A5E_0A5E_0A5E_0A5E,
+    /// FrSky's end-around-carry sum (`sum8_end_around`, S.Port and F.Port) in place of an 8-bit
+    /// sum or XOR as drawn, masked or not.
+    EndAround = 0x7E7D_5E5D_7E7D_5E5D,
 }
 
 /// The generator of `what` for the spec of `seed`.
@@ -1060,7 +1065,18 @@ impl G {
 fn checksum_yaml(g: &mut G) -> (String, usize) {
     let check = |a: &ChecksumAlgorithm| checksum::compute(a, b"123456789");
     let order = |g: &mut G| *g.pick(&["big", "little"]);
-    match g.rng.u8(..16) {
+    let draw = g.rng.u8(..16);
+    // About two 8-bit sums or XORs in five (unmasked: draws 0 to 3, which draw nothing more
+    // from the spec's generator) become FrSky's end-around sum, drawn by a generator of its
+    // own, so the rest of the spec is as it was.
+    if draw <= 3 && g.end_around.u8(..100) < 40 {
+        let c = check(&ChecksumAlgorithm::Sum8EndAround);
+        return (
+            format!("algorithm: sum8_end_around, width: 8, check: {c}"),
+            1,
+        );
+    }
+    match draw {
         10 => (String::new(), 0),
         // The 16-bit sums.
         11..=13 => {
@@ -1101,6 +1117,13 @@ fn checksum_yaml(g: &mut G) -> (String, usize) {
                 ])
                 .clone();
             let mask = g.rng.u64(1..1 << width);
+            // An 8-bit one masked becomes the end-around sum masked as often (after the spec's
+            // generator drew the mask, so nothing else changes).
+            let (name, a) = if width == 8 && g.end_around.u8(..100) < 40 {
+                ("sum8_end_around", ChecksumAlgorithm::Sum8EndAround)
+            } else {
+                (name, a)
+            };
             let c = check(&ChecksumAlgorithm::Masked(Box::new(a), mask));
             let mut y =
                 format!("algorithm: {name}, width: {width}, mask: {mask:#X}, check: {c:#X}");
@@ -1699,6 +1722,7 @@ fn random_spec_without_examples(seed: u64) -> (String, usize) {
         fixed: truncation_draw(seed).0,
         fixed_elements: own_rng(seed, Own::FixedElements),
         crc24: own_rng(seed, Own::Crc24),
+        end_around: own_rng(seed, Own::EndAround),
     };
     let mut y = String::new();
     let _ = writeln!(y, "# busspec-difftest random spec, seed {seed}");
@@ -3690,12 +3714,16 @@ pub fn constructs(p: &ir::Protocol) -> Vec<&'static str> {
         ChecksumAlgorithm::Sum8 => "sum8",
         ChecksumAlgorithm::Sum8OnesComplement => "sum8_ones_complement",
         ChecksumAlgorithm::Sum8TwosComplement => "sum8_twos_complement",
+        ChecksumAlgorithm::Sum8EndAround => "sum8_end_around",
         ChecksumAlgorithm::Xor8 => "xor8",
         ChecksumAlgorithm::Sum16 => "sum16",
         ChecksumAlgorithm::Sum16OnesComplement => "sum16_ones_complement",
         ChecksumAlgorithm::Sum16TwosComplement => "sum16_twos_complement",
         ChecksumAlgorithm::Fletcher8 => "fletcher8",
         ChecksumAlgorithm::Fletcher16 => "fletcher16",
+        ChecksumAlgorithm::Masked(a, _) if **a == ChecksumAlgorithm::Sum8EndAround => {
+            "masked sum8_end_around"
+        }
         ChecksumAlgorithm::Masked(..) => "masked sum",
         ChecksumAlgorithm::None => "no checksum",
         ChecksumAlgorithm::Crc(c) => match c.width {

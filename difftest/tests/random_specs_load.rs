@@ -49,3 +49,22 @@ fn some_seeds_draw_responses_sent_unasked() {
     }
     assert!(also >= 5 && only >= 10, "also {also}, only {only}");
 }
+
+/// The generator draws FrSky's end-around sum (`sum8_end_around`), masked and not, so the
+/// differential holds the generated `rt::sum8_end_around` to the interpreter's.
+#[test]
+fn some_seeds_draw_the_end_around_sum() {
+    use busspec_model::ir::ChecksumAlgorithm as A;
+    let (mut plain, mut masked) = (0, 0);
+    for s in 1..=300 {
+        let Ok(p) = busspec_model::load_str(&format!("s{s}.yaml"), &random_spec(s)) else {
+            continue;
+        };
+        match &p.framing.checksum.algorithm {
+            A::Sum8EndAround => plain += 1,
+            A::Masked(a, _) if **a == A::Sum8EndAround => masked += 1,
+            _ => {}
+        }
+    }
+    assert!(plain >= 15 && masked >= 1, "plain {plain}, masked {masked}");
+}

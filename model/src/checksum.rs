@@ -18,11 +18,22 @@ fn sum16(data: &[u8]) -> u64 {
     data.iter().fold(0u64, |s, b| (s + u64::from(*b)) & 0xFFFF)
 }
 
+/// The 8-bit sum of `data` with each carry out of bit 7 added back in (end-around carry, as
+/// ones'-complement addition has it): always 0 to 0xFF.
+fn sum8_end_around(data: &[u8]) -> u8 {
+    let s = data.iter().fold(0u16, |s, b| {
+        let s = s + u16::from(*b);
+        (s & 0xFF) + (s >> 8)
+    });
+    s as u8
+}
+
 pub fn compute(algorithm: &ChecksumAlgorithm, data: &[u8]) -> u64 {
     match algorithm {
         ChecksumAlgorithm::Sum8 => u64::from(sum8(data)),
         ChecksumAlgorithm::Sum8OnesComplement => u64::from(!sum8(data)),
         ChecksumAlgorithm::Sum8TwosComplement => u64::from(sum8(data).wrapping_neg()),
+        ChecksumAlgorithm::Sum8EndAround => u64::from(0xFF - sum8_end_around(data)),
         ChecksumAlgorithm::Xor8 => u64::from(data.iter().fold(0u8, |s, b| s ^ b)),
         ChecksumAlgorithm::Sum16 => sum16(data),
         ChecksumAlgorithm::Sum16OnesComplement => !sum16(data) & 0xFFFF,
@@ -279,6 +290,53 @@ mod tests {
             assert_eq!((neg + 0xFFFF) & 0xFFFF, inv);
             assert_eq!((compute(&ChecksumAlgorithm::Sum16, data) + neg) & 0xFFFF, 0);
         }
+    }
+
+    #[test]
+    fn sum8_end_around_adds_each_carry_back_in() {
+        let a = ChecksumAlgorithm::Sum8EndAround;
+        // "123456789": 0x31 + … + 0x36 = 0x135 carries once: 0x35 + 1 = 0x36; then + 0x37,
+        // 0x38, 0x39 = 0xDE; inverted 0x21. The plain sum is 0x1DD, inverted 0x22.
+        assert_eq!(compute(&a, CHECK_INPUT), 0x21);
+        assert_eq!(
+            compute(&ChecksumAlgorithm::Sum8OnesComplement, CHECK_INPUT),
+            0x22
+        );
+        // No carry: the same as the plain sum inverted.
+        assert_eq!(compute(&a, &[]), 0xFF);
+        assert_eq!(compute(&a, &[0x08, 0x01]), 0xF6);
+        // FF + 01 = 0x100 carries: 0x00 + 1 = 0x01, inverted 0xFE (the plain sum's: 0xFF).
+        assert_eq!(compute(&a, &[0xFF, 0x01]), 0xFE);
+        assert_eq!(
+            compute(&ChecksumAlgorithm::Sum8OnesComplement, &[0xFF, 0x01]),
+            0xFF
+        );
+        // FF + FF = 0x1FE: 0xFE + 1 = 0xFF, inverted 0; a carry in every step of FF × 3.
+        assert_eq!(compute(&a, &[0xFF, 0xFF]), 0x00);
+        assert_eq!(compute(&a, &[0xFF, 0xFF, 0xFF]), 0x00);
+        assert_eq!(compute(&a, &[0x80, 0x80, 0x80]), 0x7E);
+        // ArduPilot's F.Port control frame (RCProtocolTest.cpp): 7E 19 00 … 00 38 FA 7E, its
+        // CRC FA over the length byte through the RSSI byte; the plain sum's would be 0x04.
+        let control = [
+            0x19, 0x00, 0xE7, 0x3B, 0xDF, 0x5A, 0xCE, 0x07, 0x10, 0x75, 0x49, 0x9C, 0x15, 0xE0,
+            0x03, 0x1F, 0xF8, 0xC0, 0x07, 0x3E, 0xF0, 0x81, 0x0F, 0x7C, 0x00, 0x38,
+        ];
+        assert_eq!(compute(&a, &control), 0xFA);
+        assert_eq!(
+            compute(&ChecksumAlgorithm::Sum8OnesComplement, &control),
+            0x04
+        );
+        // The receiver's rule: the end-around sum of the covered bytes and the CRC is 0xFF.
+        let mut with_crc = control.to_vec();
+        with_crc.push(0xFA);
+        assert_eq!(compute(&a, &with_crc), 0x00);
+        // It is the sum modulo 255 (0xFF for a non-zero multiple of 255), inverted.
+        for data in [&control[..], CHECK_INPUT, &[0xFF; 300], &[0x01; 255]] {
+            let total: u64 = data.iter().map(|b| u64::from(*b)).sum();
+            let folded = if total == 0 { 0 } else { (total - 1) % 255 + 1 };
+            assert_eq!(compute(&a, data), 0xFF - folded);
+        }
+        assert_eq!(Prepared::new(&a).compute(&control), 0xFA);
     }
 
     #[test]

@@ -466,6 +466,11 @@ fn checksum_fn(algorithm: &ChecksumAlgorithm) -> String {
         ChecksumAlgorithm::Sum8 => sum("s = (s + b[i]) % 256", "s"),
         ChecksumAlgorithm::Sum8OnesComplement => sum("s = (s + b[i]) % 256", "255 - s"),
         ChecksumAlgorithm::Sum8TwosComplement => sum("s = (s + b[i]) % 256", "(256 - s) % 256"),
+        // Each carry out of bit 7 added back in: s + b is at most 510, so once.
+        ChecksumAlgorithm::Sum8EndAround => sum(
+            "s = s + b[i] if s > 255 then s = s - 255 end",
+            "255 - s",
+        ),
         ChecksumAlgorithm::Xor8 => sum("s = bit32.bxor(s, b[i])", "s"),
         ChecksumAlgorithm::Sum16 => sum("s = (s + b[i]) % 65536", "s"),
         ChecksumAlgorithm::Sum16OnesComplement => sum("s = (s + b[i]) % 65536", "65535 - s"),

@@ -1044,6 +1044,11 @@ fn sum_text(a: &ChecksumAlgorithm) -> (String, &'static str) {
             "8-bit sum of the bytes, negated".to_owned(),
             "two's complement; ",
         ),
+        ChecksumAlgorithm::Sum8EndAround => (
+            "8-bit sum of the bytes, each carry out of bit 7 added back in, inverted (0xFF minus the sum)"
+                .to_owned(),
+            "end-around carry, FrSky's; ",
+        ),
         ChecksumAlgorithm::Xor8 => ("XOR of the bytes".to_owned(), ""),
         ChecksumAlgorithm::Sum16 => ("16-bit sum of the bytes, modulo 65536".to_owned(), ""),
         ChecksumAlgorithm::Sum16OnesComplement => (

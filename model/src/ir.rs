@@ -853,6 +853,9 @@ pub enum ChecksumAlgorithm {
     Sum8OnesComplement,
     /// The 8-bit sum negated (two's complement).
     Sum8TwosComplement,
+    /// The 8-bit sum with each carry added back in (end-around carry), inverted: FrSky's S.Port
+    /// and F.Port checksum (`sum8_end_around`).
+    Sum8EndAround,
     /// 8-bit XOR of every byte.
     Xor8,
     /// 16-bit sum of every byte, modulo 65536.
@@ -879,6 +882,7 @@ impl ChecksumAlgorithm {
             ChecksumAlgorithm::Sum8 => "sum8".to_owned(),
             ChecksumAlgorithm::Sum8OnesComplement => "sum8_ones_complement".to_owned(),
             ChecksumAlgorithm::Sum8TwosComplement => "sum8_twos_complement".to_owned(),
+            ChecksumAlgorithm::Sum8EndAround => "sum8_end_around".to_owned(),
             ChecksumAlgorithm::Xor8 => "xor8".to_owned(),
             ChecksumAlgorithm::Sum16 => "sum16".to_owned(),
             ChecksumAlgorithm::Sum16OnesComplement => "sum16_ones_complement".to_owned(),

@@ -487,6 +487,10 @@ pub enum ChecksumAlgorithm {
     Sum8OnesComplement,
     /// The 8-bit sum, negated (two's complement): `-sum`, so all bytes sum to zero.
     Sum8TwosComplement,
+    /// FrSky's S.Port and F.Port checksum: an 8-bit sum in which each carry out of the top bit
+    /// is added back in (end-around carry: `s += byte; s = (s & 0xFF) + (s >> 8)`), sent
+    /// inverted (`0xFF - s`). Not `sum8_ones_complement`, which inverts the plain sum.
+    Sum8EndAround,
     /// 8-bit XOR of every byte.
     Xor8,
     /// Modbus ASCII's longitudinal redundancy check: the 8-bit sum negated, the same as

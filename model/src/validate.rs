@@ -3102,6 +3102,7 @@ fn checksum_params(c: &model::Checksum, byte_order: ByteOrder, sink: &mut Sink) 
         A::Sum8
         | A::Sum8OnesComplement
         | A::Sum8TwosComplement
+        | A::Sum8EndAround
         | A::Lrc
         | A::Xor8
         | A::Sum16
@@ -3120,6 +3121,7 @@ fn checksum_params(c: &model::Checksum, byte_order: ByteOrder, sink: &mut Sink) 
                     8,
                     ChecksumAlgorithm::Sum8TwosComplement,
                 ),
+                A::Sum8EndAround => ("sum8_end_around", 8, ChecksumAlgorithm::Sum8EndAround),
                 A::Lrc => ("lrc", 8, ChecksumAlgorithm::Sum8TwosComplement),
                 A::Xor8 => ("xor8", 8, ChecksumAlgorithm::Xor8),
                 A::Sum16 => ("sum16", 16, ChecksumAlgorithm::Sum16),
@@ -3183,6 +3185,7 @@ fn checksum_params(c: &model::Checksum, byte_order: ByteOrder, sink: &mut Sink) 
                 ChecksumAlgorithm::Sum8
                     | ChecksumAlgorithm::Sum8OnesComplement
                     | ChecksumAlgorithm::Sum8TwosComplement
+                    | ChecksumAlgorithm::Sum8EndAround
                     | ChecksumAlgorithm::Xor8
                     | ChecksumAlgorithm::Sum16
                     | ChecksumAlgorithm::Sum16OnesComplement
@@ -3191,7 +3194,7 @@ fn checksum_params(c: &model::Checksum, byte_order: ByteOrder, sink: &mut Sink) 
             if !sum {
                 sink.error(
                     join(path, "mask"),
-                    "a mask keeps some bits of a sum or XOR (sum8, sum8_ones_complement, sum8_twos_complement, lrc, xor8, sum16, sum16_ones_complement, sum16_twos_complement), not of this algorithm",
+                    "a mask keeps some bits of a sum or XOR (sum8, sum8_ones_complement, sum8_twos_complement, sum8_end_around, lrc, xor8, sum16, sum16_ones_complement, sum16_twos_complement), not of this algorithm",
                 );
             }
             let mask = fits(m, "mask", sink);

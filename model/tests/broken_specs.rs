@@ -860,6 +860,14 @@ const CASES: &[(&str, &[(&str, &str)])] = &[
         &[("framing.checksum.width", "sum16_twos_complement is 16 bits wide")],
     ),
     (
+        "sum8_end_around_sixteen_bits",
+        &[("framing.checksum.width", "sum8_end_around is 8 bits wide")],
+    ),
+    (
+        "sum8_end_around_plain_check",
+        &[("framing.checksum.check", "check value 0x22 does not match the parameters, which give 0x21 over \"123456789\"")],
+    ),
+    (
         "mask_zero",
         &[("framing.checksum.mask", "a mask of 0 keeps no bit")],
     ),

@@ -20,13 +20,14 @@ fn fixture(name: &str) -> Protocol {
     busspec_model::load_file(std::path::Path::new(&path)).unwrap_or_else(|d| panic!("{d}"))
 }
 
-const ESCAPED: [&str; 6] = [
+const ESCAPED: [&str; 7] = [
     "slip_sensor",
     "kiss",
     "hdlc_like",
     "cobs_link",
     "dynamixel2_stuffed",
     "xbee_api2",
+    "fport",
 ];
 
 fn values(frame: &Frame) -> Vec<Value<'static>> {
@@ -383,4 +384,58 @@ fn shared_flags_open_the_next_frame() {
         let (a, b) = capture.split_at(cut);
         assert_eq!(run(&capture, &[a, b]), got, "cut at {cut}");
     }
+}
+
+/// FrSky F.Port v1 (fixture `fport`): its CRC is the end-around sum (`sum8_end_around`) of the
+/// unstuffed length through payload. ArduPilot's control frame decodes with its CRC FA; the
+/// same frame with the plain sum inverted (04, what `sum8_ones_complement` gives) is refused
+/// at the CRC; a CRC of 7D travels stuffed; and frames sharing their 7E flag all decode from
+/// one stream.
+#[test]
+fn fport_frames_check_their_end_around_sum() {
+    let p = fixture("fport");
+    assert_eq!(p.framing.shared_flag(), Some(0x7E));
+    assert_eq!(p.framing.checksum.algorithm.name(), "sum8_end_around");
+    let ardupilot = parse_hex(
+        "7E 19 00 E7 3B DF 5A CE 07 10 75 49 9C 15 E0 03 1F F8 C0 07 3E F0 81 0F 7C 00 38 FA 7E",
+    )
+    .unwrap();
+    let f = interp::decode(&p, None, None, &ardupilot).unwrap();
+    assert_eq!(p.message(f.message).name, "control");
+    let mut plain = ardupilot.clone();
+    plain[27] = 0x04;
+    assert_eq!(
+        interp::decode(&p, None, None, &plain)
+            .unwrap_err()
+            .to_string(),
+        "checksum mismatch at offset 27: expected 0xFA, found 0x04"
+    );
+    // The CRC 7D of the derived failsafe frame travels as 7D 5D, before the closing flag.
+    let failsafe = &p.examples[2].wire;
+    assert_eq!(failsafe[failsafe.len() - 3..], [0x7D, 0x5D, 0x7E]);
+    let plain_frame = unescape_bytes(&p.framing, failsafe).unwrap();
+    assert_eq!(plain_frame[plain_frame.len() - 2], 0x7D);
+    // Control frame, poll, control frame: each sharing the flag before it.
+    let poll = &p.examples[1].wire;
+    let mut capture = ardupilot.clone();
+    capture.extend_from_slice(&poll[1..]);
+    capture.extend_from_slice(&failsafe[1..]);
+    let mut d = StreamDecoder::new(&p, None);
+    let mut events = d.push(&capture);
+    events.extend(d.flush());
+    let seen: Vec<(u64, String)> = events
+        .iter()
+        .map(|e| match e {
+            Event::Frame { offset, frame, .. } => (*offset, p.message(frame.message).name.clone()),
+            other => (other.offset(), format!("{other:?}")),
+        })
+        .collect();
+    assert_eq!(
+        seen,
+        [
+            (0, "control".to_owned()),
+            (28, "downlink_data".to_owned()),
+            (39, "control".to_owned()),
+        ]
+    );
 }

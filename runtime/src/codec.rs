@@ -1365,6 +1365,17 @@ pub fn sum8_twos(bytes: &[u8]) -> u8 {
     sum8(bytes).wrapping_neg()
 }
 
+/// The 8-bit sum of `bytes` with each carry out of bit 7 added back in (end-around carry),
+/// inverted: `0xFF` less it (`sum8_end_around`: FrSky's S.Port and F.Port checksum).
+#[inline]
+pub fn sum8_end_around(bytes: &[u8]) -> u8 {
+    let s = bytes.iter().fold(0u16, |s, b| {
+        let s = s + u16::from(*b);
+        (s & 0xFF) + (s >> 8)
+    });
+    0xFF - s as u8
+}
+
 /// The bytes of `frame` (the frame before its checksum) that a checksum covering from offset
 /// `from` on covers: none when the frame is that short.
 #[inline]
@@ -1639,6 +1650,14 @@ mod lang_tests {
         // Dynamixel PING of ID 1: FF FF 01 02 01, checksum over 01 02 01 is !4 = 0xFB.
         assert_eq!(sum8_ones(&[0x01, 0x02, 0x01]), 0xFB);
         assert_eq!(sum8_twos(&[0x01, 0x02, 0x01]), 0xFC);
+        // FrSky's: no carry, the plain sum inverted; FF + 01 carries (0x00 + 1, inverted FE,
+        // where the plain sum's is FF); "123456789" gives 0x21 (the plain sum's 0x22).
+        assert_eq!(sum8_end_around(&[]), 0xFF);
+        assert_eq!(sum8_end_around(&[0x08, 0x01]), 0xF6);
+        assert_eq!(sum8_end_around(&[0xFF, 0x01]), 0xFE);
+        assert_eq!(sum8_end_around(&[0xFF, 0xFF, 0xFF]), 0x00);
+        assert_eq!(sum8_end_around(b"123456789"), 0x21);
+        assert_eq!(sum8_ones(b"123456789"), 0x22);
         assert_eq!(xor8(&[0x0F, 0xF0, 0x01]), 0xFE);
         assert_eq!(covered(&[1, 2, 3], 2), &[3]);
         assert_eq!(covered(&[1], 2), &[] as &[u8]);

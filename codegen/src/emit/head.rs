@@ -365,6 +365,11 @@ pub(super) fn sum_checksum(a: &ChecksumAlgorithm) -> Option<(String, TokenStream
             quote!(u8),
             quote!(rt::sum8_twos(bytes)),
         ),
+        ChecksumAlgorithm::Sum8EndAround => (
+            "the 8-bit sum of the bytes it covers, each carry added back in, inverted",
+            quote!(u8),
+            quote!(rt::sum8_end_around(bytes)),
+        ),
         ChecksumAlgorithm::Xor8 => (
             "8-bit XOR of the bytes it covers",
             quote!(u8),
