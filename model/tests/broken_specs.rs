@@ -27,6 +27,10 @@ const CASES: &[(&str, &[(&str, &str)])] = &[
         &[("framing.layout.response", "the response's layout has no `checksum`, the other direction's has: `checksum` in one")],
     ),
     (
+        "layout_dir_start_one_direction",
+        &[("framing.layout.response", "the response's layout has no `start`, the other direction's has: `start` in one")],
+    ),
+    (
         "layout_dir_counts_missing",
         &[("framing.length.counts", "counts `header`, which the layout does not have")],
     ),
