@@ -525,11 +525,7 @@ pub fn wrong_length(frame: &[u8], message: &'static MessageDesc) -> DecodeError 
 /// spec does not list it among the request's responses.
 #[cold]
 pub fn not_a_reply(message: &'static str, request: &'static str) -> DecodeError {
-    DecodeError::NotAReply {
-        message,
-        request,
-        unasked: false,
-    }
+    not_a_reply_unasked(message, request, false)
 }
 
 /// [`not_a_reply`] where the protocol has responses sent unasked: `unasked` says whether

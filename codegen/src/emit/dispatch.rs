@@ -917,10 +917,11 @@ pub(super) fn emit_codeless_fns(ctx: &Ctx, codeless: &[&Message]) -> TokenStream
 
 /// `request::ReadCoils::from_frame`: the owned decoder of message `m`, a function of its
 /// struct (emitted in its `impl` by `emit_descs`), which checks a fixed-length frame's length
-/// (or splits a variable-length one into its fixed part and lists), then each field's rule, naming its descriptors through `Self`; the dispatch wraps
-/// it in its direction's variant (`.map(Self::ReadCoils)`), a lone message's arm and a
-/// fixed-length group member's closure alike. `None` in a view (whose variants are no
-/// structs) and for a fixed-length message with nothing to check or read, which the arm decodes in one line. Measured against the
+/// (or splits a variable-length one into its fixed part and lists), then each field's rule,
+/// naming its descriptors through `Self`; the dispatch wraps it in its direction's variant
+/// (`.map(Self::ReadCoils)`), a lone message's arm and a fixed-length group member's closure
+/// alike. `None` in a view (whose variants are no structs) and for a fixed-length message
+/// with nothing to check or read, which the arm decodes in one line. Measured against the
 /// same code inline in the arms (`bash benches/icount.sh`, `benches/flash/size.sh`): decode
 /// 1 to 8 instructions a frame cheaper, the subset's flash 176 bytes larger.
 fn from_frame(ctx: &Ctx, m: &Message) -> Option<TokenStream> {
