@@ -1097,3 +1097,45 @@ fn a_wrong_count_is_refused_in_the_same_words_by_both_encoders() {
     assert_eq!(generated.to_string(), interpreted.to_string());
     assert_eq!(generated.to_string(), "data takes 1..=253 elements, got 0");
 }
+
+/// Values with two faults are refused for the same one by both encoders: the lists' counts
+/// before the fields at their places. Modbus's `write_multiple_registers` given a quantity out
+/// of its range and no values: both name the values' count. (The generated encoder named the
+/// quantity, `quantity = 0 is outside its range 1..=123`, until it checked in the
+/// interpreter's order.)
+#[test]
+fn two_faults_are_refused_for_the_same_one_by_both_encoders() {
+    use busspec_protocols::modbus;
+    let generated =
+        modbus::Request::WriteMultipleRegisters(modbus::request::WriteMultipleRegisters {
+            starting_address: 0,
+            quantity: 0,
+            values: busspec_runtime::Repeated::new(),
+        })
+        .encode(1, &mut [0; modbus::MAX_FRAME_LEN])
+        .unwrap_err();
+    let p = spec::<modbus::Modbus>();
+    let r = p.find("write_multiple_registers").unwrap();
+    fn value(name: &'static str, raw: Raw) -> Value<'static> {
+        Value {
+            name: name.into(),
+            raw,
+        }
+    }
+    let interpreted = interp::encode(
+        &p,
+        r,
+        1,
+        &[
+            value("starting_address", Raw::Int(0)),
+            value("quantity", Raw::Int(0)),
+            value("values", Raw::List(vec![])),
+        ],
+    )
+    .unwrap_err();
+    assert_eq!(generated.to_string(), interpreted.to_string());
+    assert_eq!(
+        generated.to_string(),
+        "values takes 1..=123 elements, got 0"
+    );
+}

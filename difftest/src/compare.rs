@@ -7,10 +7,9 @@
 //! The decoded values and stream events are reduced to what both engines report by
 //! `busspec_fuzz_bodies` (`oracle::interp_values`, `visit_values`, `events::interp_events`,
 //! `seen`, `stream_events`), the same reductions the fuzz targets compare. A frame both refuse
-//! is refused in the same words ([`same_error`]); a message both encoders refuse agrees
-//! whatever each says first ([`same_encode_error`]): the generated code checks what its types
-//! can hold before the spec's address and ranges, the interpreter the spec's rules in frame
-//! order, and either refusal names a value the spec does not allow.
+//! is refused in the same words ([`same_error`]); a message both encoders refuse is refused
+//! for the same fault of the same field ([`same_encode_error`]), but where the generated code's
+//! typed check (`from_fields`) refuses first: the interpreter's values are untyped.
 
 use std::cell::RefCell;
 use std::fmt;
@@ -253,6 +252,7 @@ fn encode_class(g: &GenEncodeError) -> &'static str {
         GenEncodeError::Encode(EncodeError::HoldsTerminator { .. }) => "holds its terminator",
         GenEncodeError::Encode(EncodeError::HoldsEnd { .. }) => "holds the end bytes",
         GenEncodeError::Encode(EncodeError::NeedsRequest { .. }) => "needs the request",
+        GenEncodeError::Encode(EncodeError::Optional { .. }) => "optional",
         #[allow(unreachable_patterns)]
         GenEncodeError::Encode(_) => "other",
     }
@@ -280,27 +280,48 @@ fn interp_encode_class(i: &interp::EncodeError) -> &'static str {
     }
 }
 
-/// Whether the two encoders refuse alike: both refuse, whatever each names first (see the
-/// module docs).
-///
-/// Why the refusals are not compared: the engines check in different orders, so values with
-/// two faults get a different first refusal, and even the refusals after the typed checks
-/// differ. The generated code runs `from_fields` (each value present, of its kind, within its
-/// Rust type, a list within its capacity, text of its length) before `encode` (the address,
-/// then the spec's rules); the interpreter checks the address, then every list's count
-/// (`Message::repeats`), then the fields in frame order. Comparing the refusal's class
-/// (`encode_class` against `interp_encode_class`) only where `from_fields` accepted
-/// (`GenEncodeError::Encode`) was tried: `--seed 7 --specs 12` gave 14 disagreements on 8 of
-/// 12 specs, every one the interpreter naming a list's count (`WrongCount`) where the
-/// generated `encode` named something else (9 `NotInRange`, 5 `OutOfRange`). Two causes:
-/// the generated `encode` checks fields' ranges before the lists' counts (a scalar before the
-/// list, `NotInRange { field: "f0", .. }` against `WrongCount { field: "f2", .. }`, or an
-/// element of the list itself against its count); and it refuses a list of a fixed count
-/// given too few elements as `OutOfRange { field: "f0" }` where the interpreter says
-/// `WrongCount { field: "f0", min: 6, max: 6, found: 5 }`. Comparing them needs the generated
-/// `encode` to check every list's count first and word a fixed count's as `WrongCount`.
-pub fn same_encode_error(_: &GenEncodeError, _: &interp::EncodeError) -> bool {
-    true
+/// Whether the two encoders refuse alike. Where the generated `from_fields` accepted the
+/// values (each present, of its kind, within its Rust type, a list within its capacity), both
+/// name the same fault of the same field: the generated `encode` checks in the interpreter's
+/// order (the address, then each list's count and elements, then the fields in frame order, a
+/// list of a fixed count its count first). A refusal of `from_fields` is a typed check the
+/// interpreter has no counterpart for (its values are untyped), so there only both refusing
+/// is compared.
+pub fn same_encode_error(g: &GenEncodeError, i: &interp::EncodeError) -> bool {
+    match g {
+        GenEncodeError::Fields(_) => true,
+        GenEncodeError::Encode(e) => {
+            encode_class(g) == interp_encode_class(i)
+                && gen_encode_field(e) == interp_encode_field(i)
+        }
+    }
+}
+
+/// The field a generated encoder's refusal names, if any.
+fn gen_encode_field(e: &EncodeError) -> Option<&str> {
+    match e {
+        EncodeError::OutOfRange { field }
+        | EncodeError::NotInRange { field, .. }
+        | EncodeError::WrongCount { field, .. }
+        | EncodeError::Optional { field, .. }
+        | EncodeError::HoldsTerminator { field, .. }
+        | EncodeError::HoldsEnd { field, .. } => Some(field),
+        _ => None,
+    }
+}
+
+/// The field the interpreter's refusal names, if any.
+fn interp_encode_field(e: &interp::EncodeError) -> Option<&str> {
+    use interp::EncodeError as E;
+    match e {
+        E::OutOfRange { field, .. }
+        | E::NotInRange { field, .. }
+        | E::WrongCount { field, .. }
+        | E::Optional { field, .. }
+        | E::HoldsTerminator { field, .. }
+        | E::HoldsEnd { field, .. } => Some(field),
+        _ => None,
+    }
 }
 
 /// How a frame is decoded.

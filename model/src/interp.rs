@@ -2898,18 +2898,7 @@ pub fn encode_with(
                 continue;
             }
             match &v.raw {
-                Raw::Text(t) => {
-                    if let Some(t0) = f.terminator() {
-                        if let Some(index) = t.iter().position(|&b| b == t0) {
-                            return Err(EncodeError::HoldsTerminator {
-                                field: f.name.clone(),
-                                index,
-                                terminator: t0,
-                            });
-                        }
-                    }
-                    v.raw = Raw::List(t.iter().map(|&b| i64::from(b)).collect())
-                }
+                Raw::Text(t) => v.raw = Raw::List(t.iter().map(|&b| i64::from(b)).collect()),
                 _ => {
                     return Err(EncodeError::NotText {
                         field: f.name.clone(),
@@ -3019,6 +3008,16 @@ fn encode_values(
                 })
             }
         };
+        // Text up to a terminator must not hold it: the frame would end the text there.
+        if let Some(t0) = f.terminator() {
+            if let Some(index) = list.iter().position(|&b| b == i64::from(t0)) {
+                return Err(EncodeError::HoldsTerminator {
+                    field: f.name.clone(),
+                    index,
+                    terminator: t0,
+                });
+            }
+        }
         // Bits come eight to a byte: decode reads whole bytes, so a bound counts the bytes.
         let (lo, hi) = if f.ty == FieldType::Bit {
             (r.min, r.max.div_ceil(8) * 8)
@@ -3353,6 +3352,9 @@ fn encode_values(
             word as i64
         });
     }
+    for (_, f, recs) in &records {
+        check_records(f, recs)?;
+    }
     // The payload as it travels (`framing.transform`), then the checksum over it.
     p.framing.transform_in_place(&mut out);
     if !m.unchecked {
@@ -3406,9 +3408,8 @@ fn encode_values(
     Ok(out)
 }
 
-/// The records given for repeated record `f` (repeat `r`), each checked: as many as the repeat
-/// allows, each with one value for each of the record's fields, each value within its field's
-/// spec range and its type.
+/// The records given for repeated record `f` (repeat `r`): as many as the repeat allows, each
+/// with one value for each of the record's fields (their ranges: [`check_records`]).
 #[cfg(feature = "tools")]
 fn record_list<'v>(
     f: &Field,
@@ -3442,11 +3443,22 @@ fn record_list<'v>(
                 field: format!("{}[{}]", f.name, f.record.len()),
             });
         }
-        for (j, g) in f.record.iter().enumerate() {
+        if rec.len() < f.record.len() {
+            return Err(EncodeError::MissingValue {
+                field: f.record_field_name(rec.len()),
+            });
+        }
+    }
+    Ok(recs)
+}
+
+/// Each field of each record of `f` within its range and its wire type: checked once the
+/// fields at their places are, as generated code writes (and checks) records last.
+#[cfg(feature = "tools")]
+fn check_records(f: &Field, recs: &[Vec<i64>]) -> Result<(), EncodeError> {
+    for rec in recs {
+        for (j, (g, &v)) in f.record.iter().zip(rec).enumerate() {
             let name = f.record_field_name(j);
-            let Some(&v) = rec.get(j) else {
-                return Err(EncodeError::MissingValue { field: name });
-            };
             if let Some((min, max)) = range_violation(g, None, v) {
                 return Err(EncodeError::NotInRange {
                     field: name,
@@ -3467,7 +3479,7 @@ fn record_list<'v>(
             }
         }
     }
-    Ok(recs)
+    Ok(())
 }
 
 /// Reorders a frame between the document's printed byte order and the wire's: every multi-byte

@@ -1370,8 +1370,9 @@ pub fn packed_padding(bytes: &[u8], count: usize, bits: usize, lsb: bool) -> u8 
 }
 
 /// Writes `items` as `count` packed elements of `bits` bits each into `out` (at least
-/// `ceil(count × bits / 8)` bytes, which it zeroes first). A list of another length than `count`, or an element wider
-/// than `bits`, is refused for `field`.
+/// `ceil(count × bits / 8)` bytes, which it zeroes first). A list of another length than
+/// `count` is refused for `field` as [`EncodeError::WrongCount`], an element wider than `bits`
+/// as [`EncodeError::OutOfRange`].
 #[inline]
 pub fn pack<T: crate::codec::Wire>(
     field: &'static str,
@@ -1382,7 +1383,12 @@ pub fn pack<T: crate::codec::Wire>(
     out: &mut [u8],
 ) -> Result<(), EncodeError> {
     if items.len() != count {
-        return Err(EncodeError::OutOfRange { field });
+        return Err(EncodeError::WrongCount {
+            field,
+            min: count,
+            max: count,
+            found: items.len(),
+        });
     }
     let max = (1u64 << bits) - 1;
     let len = (count * bits).div_ceil(8);
@@ -1455,7 +1461,12 @@ pub fn write_fixed<T: crate::codec::Wire>(
     out: &mut [u8],
 ) -> Result<(), EncodeError> {
     if items.len() != count {
-        return Err(EncodeError::OutOfRange { field });
+        return Err(EncodeError::WrongCount {
+            field,
+            min: count,
+            max: count,
+            found: items.len(),
+        });
     }
     let width = width.clamp(1, 8);
     let swapped = swapped && (width == 4 || width == 8);
@@ -1498,14 +1509,24 @@ pub fn packed_in_range<T: crate::codec::Wire>(
     Ok(())
 }
 
-/// Every packed element to encode within its spec range `min..=max`.
+/// A packed list to encode of its `count` elements ([`EncodeError::WrongCount`]), each within
+/// its spec range `min..=max`.
 #[inline]
 pub fn encode_packed_in_range<T: crate::codec::Wire>(
     field: &'static str,
     items: &[T],
+    count: usize,
     min: i64,
     max: i64,
 ) -> Result<(), EncodeError> {
+    if items.len() != count {
+        return Err(EncodeError::WrongCount {
+            field,
+            min: count,
+            max: count,
+            found: items.len(),
+        });
+    }
     for v in items {
         let value = v.to_i64();
         if !T::within(value, min, max) {
@@ -1715,7 +1736,29 @@ mod tests {
         assert_eq!(unpack::<u8, 5>(&out, 3, false).as_slice(), &levels);
         assert_eq!(packed_padding(&[0x29, 0xCB], 5, 3, false), 1);
 
-        assert!(pack("levels", &levels[..4], 5, 3, false, &mut out).is_err());
-        assert!(pack("levels", &[1u8, 2, 3, 4, 8], 5, 3, false, &mut out).is_err());
+        // A wrong count in the interpreter's words (it was a value out of range), an element
+        // past its bits as a value out of range.
+        let count = EncodeError::WrongCount {
+            field: "levels",
+            min: 5,
+            max: 5,
+            found: 4,
+        };
+        assert_eq!(
+            pack("levels", &levels[..4], 5, 3, false, &mut out),
+            Err(count)
+        );
+        assert_eq!(
+            write_fixed("levels", &levels[..4], 5, 1, false, false, &mut out),
+            Err(count)
+        );
+        assert_eq!(
+            encode_packed_in_range("levels", &levels[..4], 5, 0, 7),
+            Err(count)
+        );
+        assert_eq!(
+            pack("levels", &[1u8, 2, 3, 4, 8], 5, 3, false, &mut out),
+            Err(EncodeError::OutOfRange { field: "levels" })
+        );
     }
 }

@@ -43,7 +43,6 @@ pub(super) fn emit_encode_arm(
         let (desc, b) = (message_desc(m), hex_u8(b));
         stmts.push(quote!(rt::encode_broadcast(address, #b, #desc)?;));
     }
-    stmts.extend(range_checks(ctx, ls));
     let repeat = m
         .repeat()
         .filter(|_| !has_lists(m))
@@ -63,16 +62,17 @@ pub(super) fn emit_encode_arm(
         .iter()
         .map(|(k, ..)| format_ident!("bytes_{}", k))
         .collect();
+    // The lists first, as the interpreter checks them: each its terminator, count, elements.
     for ((k, _, f, v), b) in lists.iter().zip(&list_bytes) {
         let k = usize_lit(*k);
-        if let Some((lo, hi)) = element_range(ctx, f) {
-            let (lo, hi) = (i64_lit(lo), i64_lit(hi));
-            stmts.push(quote!(#lc.lists[#k].encode_in_range(#v.as_slice(), #lo, #hi)?;));
-        }
         if f.terminator().is_some() {
             stmts.push(quote!(#lc.lists[#k].encode_until(#v.as_slice())?;));
         }
         stmts.push(quote!(let #b: usize = #lc.lists[#k].encode_len(#v.len())? - #lc.base;));
+        if let Some((lo, hi)) = element_range(ctx, f) {
+            let (lo, hi) = (i64_lit(lo), i64_lit(hi));
+            stmts.push(quote!(#lc.lists[#k].encode_in_range(#v.as_slice(), #lo, #hi)?;));
+        }
     }
     // The list (its index among the lists, its value) whose count field is field `fi`.
     let list_counted = |fi: usize| {
@@ -83,12 +83,8 @@ pub(super) fn emit_encode_arm(
             .map(|(k, _, _, v)| (usize_lit(*k), v.clone()))
     };
     if let Some((f, c, v)) = &repeat {
-        // Each element within its range, then the count within its bounds, which gives the
-        // frame's length.
-        if let Some((lo, hi)) = element_range(ctx, f) {
-            let (lo, hi) = (i64_lit(lo), i64_lit(hi));
-            stmts.push(quote!(#c.encode_in_range(#v.as_slice(), #lo, #hi)?;));
-        }
+        // The count within its bounds, which gives the frame's length, then each element
+        // within its range.
         match sized_record(m, f).and_then(|(wf, ..)| {
             let l = ls
                 .iter()
@@ -102,6 +98,10 @@ pub(super) fn emit_encode_arm(
                 stmts.push(quote!(let #last = (#raw) as usize;));
             }
             None => stmts.push(quote!(let frame_len = #c.encode_len(#v.len())?;)),
+        }
+        if let Some((lo, hi)) = element_range(ctx, f) {
+            let (lo, hi) = (i64_lit(lo), i64_lit(hi));
+            stmts.push(quote!(#c.encode_in_range(#v.as_slice(), #lo, #hi)?;));
         }
     }
     // The bytes known without a field value (start byte, address, code, constant fields), one
@@ -133,6 +133,7 @@ pub(super) fn emit_encode_arm(
         quote!(rt::frame_mut::<#len>(buf, &[#(#first),*])?)
     };
     if i == known.len() && repeat.is_none() && lists.is_empty() && !m.has_optional() {
+        stmts.extend(range_checks(ctx, ls));
         if checksum_in_arms(p) {
             // The frame taken, then sealed: two short lines rather than one nested call.
             let end = encode_end(p, quote!(out), false, head);
@@ -176,7 +177,11 @@ pub(super) fn emit_encode_arm(
             stmts.push(write_list(f, v, quote!(#at)));
             continue;
         }
+        // The fields after the lists, in frame order: each its presence (where optional),
+        // then its range, then its value.
+        let checks = range_checks(ctx, ls.iter().filter(|l| l.field.name == f.name));
         if let Some(pk) = &f.packed {
+            stmts.extend(checks);
             stmts.push(write_packed(f, pk, full));
             continue;
         }
@@ -226,6 +231,7 @@ pub(super) fn emit_encode_arm(
             // Written where a value is given, which must be exactly where its condition holds.
             let v = local(&f.name);
             stmts.push(presence_check(m, f, c));
+            stmts.extend(checks);
             let put = put(value);
             stmts.push(quote!(if let rt::Some(#v) = #v { #put }));
         } else if named.contains(&fi)
@@ -233,6 +239,7 @@ pub(super) fn emit_encode_arm(
             || f.constant.is_some()
             || agrees.is_some()
         {
+            stmts.extend(checks);
             let n = wire_local(&f.name);
             stmts.push(quote!(let #n: #w = #value;));
             if let Some((c, v)) = agrees {
@@ -241,6 +248,7 @@ pub(super) fn emit_encode_arm(
             }
             stmts.push(put(quote!(#n)));
         } else {
+            stmts.extend(checks);
             stmts.push(put(value));
         }
     }
@@ -372,12 +380,14 @@ fn presence_check(m: &Message, f: &Field, c: &Presence) -> TokenStream {
 
 /// Each field's value within its range (the spec's, or its wire type's where the Rust type
 /// is wider), a packed list's elements too; an optional field where a value is given.
-fn range_checks(ctx: &Ctx, ls: &[Leaf]) -> Vec<TokenStream> {
+fn range_checks<'a>(ctx: &Ctx, ls: impl IntoIterator<Item = &'a Leaf<'a>>) -> Vec<TokenStream> {
     let mut checks = Vec::new();
     for l in ls {
-        if let (Some(_), Some((lo, hi)), None) = (l.field.packed, l.field.range, l.bits) {
+        if let (Some(pk), Some((lo, hi)), None) = (&l.field.packed, l.field.range, l.bits) {
             let (name, v, lo, hi) = (l.name, local(l.name), i64_lit(lo), i64_lit(hi));
-            checks.push(quote!(rt::encode_packed_in_range(#name, #v.as_slice(), #lo, #hi)?;));
+            let count = usize_lit(pk.count);
+            checks
+                .push(quote!(rt::encode_packed_in_range(#name, #v.as_slice(), #count, #lo, #hi)?;));
             continue;
         }
         let Some((raw_t, raw)) = raw_of(ctx, l, &local(l.name)) else {

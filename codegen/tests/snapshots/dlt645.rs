@@ -878,7 +878,6 @@ pub mod dlt645 {
                 data_id: v_data_id,
                 value: v_value,
             } = *self;
-            rt::encode_in_range("value", v_value, 0, 99999999)?;
             let out = rt::frame_mut::<20>(buf, &[0x68])?;
             out[7..10].copy_from_slice(&[0x68, 0x91, 0x08]);
             out[1..4]
@@ -898,6 +897,7 @@ pub mod dlt645 {
                     ),
                 );
             out[10..14].copy_from_slice(&v_data_id.to_le_bytes());
+            rt::encode_in_range("value", v_value, 0, 99999999)?;
             out[14..18]
                 .copy_from_slice(&(rt::to_bcd(v_value as u64) as u32).to_le_bytes());
             rt::Ok(out.len())

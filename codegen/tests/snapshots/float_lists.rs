@@ -827,9 +827,9 @@ pub mod float_lists {
         fn write(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             let Self { start: v_start, quantity: v_quantity } = *self;
             rt::encode_broadcast(address, 0x00, &request::ReadFloats::DESC)?;
-            rt::encode_in_range("quantity", v_quantity, 2, 16)?;
             let out = rt::frame_mut::<8>(buf, &[address, 0x03])?;
             out[2..4].copy_from_slice(&v_start.to_be_bytes());
+            rt::encode_in_range("quantity", v_quantity, 2, 16)?;
             out[4..6].copy_from_slice(&v_quantity.to_be_bytes());
             rt::Ok(out.len())
         }
@@ -895,8 +895,8 @@ pub mod float_lists {
         #[inline(always)]
         fn write(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             let Self { values: v_values } = *self;
-            REPEAT_FLOATS.encode_in_range(v_values.as_slice(), 3296329728, 1148846080)?;
             let frame_len = REPEAT_FLOATS.encode_len(v_values.len())?;
+            REPEAT_FLOATS.encode_in_range(v_values.as_slice(), 3296329728, 1148846080)?;
             let out = rt::frame_mut_len(buf, frame_len, &[address, 0x03])?;
             out[2] = rt::fits(
                 "byte_count",
@@ -937,11 +937,11 @@ pub mod float_lists {
             let Self { totals: v_totals, drifts: v_drifts } = *self;
             let bytes_0: usize = LISTS_COUNTERS.lists[0].encode_len(v_totals.len())?
                 - LISTS_COUNTERS.base;
+            let bytes_1: usize = LISTS_COUNTERS.lists[1].encode_len(v_drifts.len())?
+                - LISTS_COUNTERS.base;
             LISTS_COUNTERS
                 .lists[1]
                 .encode_in_range(v_drifts.as_slice(), -9000000000000, 9000000000000)?;
-            let bytes_1: usize = LISTS_COUNTERS.lists[1].encode_len(v_drifts.len())?
-                - LISTS_COUNTERS.base;
             let mut compact = [0u8; 6];
             let out = {
                 compact[..2].copy_from_slice(&[address, 0x41]);

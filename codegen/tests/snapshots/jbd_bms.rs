@@ -1494,9 +1494,8 @@ pub mod jbd_bms {
                 cells: v_cells,
                 temperatures: v_temperatures,
             } = *self;
-            rt::encode_in_range("soc", v_soc, 0, 100)?;
-            REPEAT_BASIC_INFO.encode_in_range(v_temperatures.as_slice(), 0, 65535)?;
             let frame_len = REPEAT_BASIC_INFO.encode_len(v_temperatures.len())?;
+            REPEAT_BASIC_INFO.encode_in_range(v_temperatures.as_slice(), 0, 65535)?;
             let out = rt::frame_mut_len(buf, frame_len, &[0xDD, 0x03])?;
             LENGTH.put(out)?;
             out[2] = v_status.raw();
@@ -1510,6 +1509,7 @@ pub mod jbd_bms {
             out[18..20].copy_from_slice(&v_balance_high.to_be_bytes());
             out[20..22].copy_from_slice(&v_protection.to_be_bytes());
             out[22] = v_software_version;
+            rt::encode_in_range("soc", v_soc, 0, 100)?;
             out[23] = v_soc;
             out[24] = v_fet_control;
             out[25] = v_cells;

@@ -926,9 +926,9 @@ pub mod lists_after {
         #[inline(always)]
         fn write(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             let Self { first: v_first, quantity: v_quantity } = *self;
-            rt::encode_in_range("quantity", v_quantity, 1, 8)?;
             let out = rt::frame_mut::<7>(buf, &[0x7E, address, 0x10])?;
             out[3..5].copy_from_slice(&v_first.to_be_bytes());
+            rt::encode_in_range("quantity", v_quantity, 1, 8)?;
             out[5] = v_quantity;
             rt::Ok(out.len())
         }
@@ -962,7 +962,6 @@ pub mod lists_after {
         #[inline(always)]
         fn write(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             let Self { values: v_values, flags: v_flags } = *self;
-            rt::encode_in_range("flags", v_flags, 0, 255)?;
             let bytes_0: usize = LISTS_WRITE_BLOCK.lists[0].encode_len(v_values.len())?
                 - LISTS_WRITE_BLOCK.base;
             let mut compact = [0u8; 7];
@@ -976,6 +975,7 @@ pub mod lists_after {
                 0,
                 255,
             )? as u8;
+            rt::encode_in_range("flags", v_flags, 0, 255)?;
             out[4..6].copy_from_slice(&v_flags.to_be_bytes());
             let out = LISTS_WRITE_BLOCK.expand(&compact, &[bytes_0], buf)?;
             rt::write_elements(v_values.as_slice(), 2, false, &mut out[4..]);
@@ -1016,9 +1016,9 @@ pub mod lists_after {
             let Self { sources: v_sources, targets: v_targets } = *self;
             let bytes_0: usize = LISTS_COPY.lists[0].encode_len(v_sources.len())?
                 - LISTS_COPY.base;
-            LISTS_COPY.lists[1].encode_in_range(v_targets.as_slice(), 1, 1000)?;
             let bytes_1: usize = LISTS_COPY.lists[1].encode_len(v_targets.len())?
                 - LISTS_COPY.base;
+            LISTS_COPY.lists[1].encode_in_range(v_targets.as_slice(), 1, 1000)?;
             let mut compact = [0u8; 7];
             let out = {
                 compact[..3].copy_from_slice(&[0x7E, address, 0x12]);

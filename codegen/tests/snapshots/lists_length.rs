@@ -804,12 +804,12 @@ pub mod lists_length {
         #[inline(always)]
         fn write(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             let Self { channels: v_channels, samples: v_samples, seq: v_seq } = *self;
-            LISTS_LOG.lists[0].encode_in_range(v_channels.as_slice(), 0, 15)?;
             let bytes_0: usize = LISTS_LOG.lists[0].encode_len(v_channels.len())?
                 - LISTS_LOG.base;
-            LISTS_LOG.lists[1].encode_in_range(v_samples.as_slice(), -32768, 32767)?;
+            LISTS_LOG.lists[0].encode_in_range(v_channels.as_slice(), 0, 15)?;
             let bytes_1: usize = LISTS_LOG.lists[1].encode_len(v_samples.len())?
                 - LISTS_LOG.base;
+            LISTS_LOG.lists[1].encode_in_range(v_samples.as_slice(), -32768, 32767)?;
             let mut compact = [0u8; 7];
             let out = {
                 compact[..1].copy_from_slice(&[0xC5]);

@@ -566,8 +566,8 @@ pub mod maestro_compact {
                 target_high: v_target_high,
                 target_low: v_target_low,
             } = *self;
-            rt::encode_in_range("channel", v_channel, 0, 23)?;
             let out = rt::frame_mut::<4>(buf, &[0x84])?;
+            rt::encode_in_range("channel", v_channel, 0, 23)?;
             out[1] = v_channel;
             let w_target: u16 = (((rt::fits("target_high", v_target_high.raw(), 0, 127)?
                 as u16) & 0x7F) << 8)
@@ -611,8 +611,8 @@ pub mod maestro_compact {
         #[inline(always)]
         fn write(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             let Self { channel: v_channel } = *self;
-            rt::encode_in_range("channel", v_channel, 0, 23)?;
             let out = rt::frame_mut::<2>(buf, &[0x90])?;
+            rt::encode_in_range("channel", v_channel, 0, 23)?;
             out[1] = v_channel;
             rt::Ok(out.len())
         }

@@ -840,9 +840,6 @@ pub mod optional_sensor {
                 humidity: v_humidity,
                 pressure: v_pressure,
             } = *self;
-            if let rt::Some(v_humidity) = v_humidity {
-                rt::encode_in_range("humidity", v_humidity.raw(), 0, 1000)?;
-            }
             let mut compact = [0u8; 14];
             let out = {
                 compact[..2].copy_from_slice(&[0xA5, address]);
@@ -858,6 +855,9 @@ pub mod optional_sensor {
                 v_humidity.is_some(),
                 "bit 0 of `status` is set",
             )?;
+            if let rt::Some(v_humidity) = v_humidity {
+                rt::encode_in_range("humidity", v_humidity.raw(), 0, 1000)?;
+            }
             if let rt::Some(v_humidity) = v_humidity {
                 out[7..9].copy_from_slice(&v_humidity.raw().to_be_bytes());
             }

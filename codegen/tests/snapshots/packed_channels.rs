@@ -751,8 +751,8 @@ pub mod packed_channels {
         #[inline(always)]
         fn write(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             let Self { channels: v_channels, flags: v_flags } = *self;
-            rt::encode_packed_in_range("channels", v_channels.as_slice(), 0, 1999)?;
             let out = rt::frame_mut::<11>(buf, &[0xC8, 0x09, 0x16])?;
+            rt::encode_packed_in_range("channels", v_channels.as_slice(), 4, 0, 1999)?;
             rt::pack("channels", v_channels.as_slice(), 4, 11, true, &mut out[3..9])?;
             out[9] = v_flags;
             rt::Ok(out.len())
@@ -801,9 +801,9 @@ pub mod packed_channels {
         #[inline(always)]
         fn write(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             let Self { bank: v_bank, levels: v_levels } = *self;
-            rt::encode_packed_in_range("levels", v_levels.as_slice(), 0, 6)?;
             let out = rt::frame_mut::<7>(buf, &[0xC8, 0x05, 0x17])?;
             out[3] = v_bank;
+            rt::encode_packed_in_range("levels", v_levels.as_slice(), 5, 0, 6)?;
             rt::pack("levels", v_levels.as_slice(), 5, 3, false, &mut out[4..6])?;
             rt::Ok(out.len())
         }
@@ -845,9 +845,9 @@ pub mod packed_channels {
         #[inline(always)]
         fn write(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             let Self { offsets: v_offsets, gains: v_gains } = *self;
-            rt::encode_packed_in_range("gains", v_gains.as_slice(), 1, 9)?;
             let out = rt::frame_mut::<12>(buf, &[0xC8, 0x0A, 0x19])?;
             rt::pack("offsets", v_offsets.as_slice(), 3, 16, false, &mut out[3..9])?;
+            rt::encode_packed_in_range("gains", v_gains.as_slice(), 2, 1, 9)?;
             rt::pack("gains", v_gains.as_slice(), 2, 8, false, &mut out[9..11])?;
             rt::Ok(out.len())
         }
@@ -915,14 +915,8 @@ pub mod packed_channels {
                 stamp: v_stamp,
                 scale: v_scale,
             } = *self;
-            rt::encode_packed_in_range("deltas", v_deltas.as_slice(), -900, 900)?;
-            rt::encode_packed_in_range(
-                "factors",
-                v_factors.as_slice(),
-                3221225472,
-                1073741824,
-            )?;
             let out = rt::frame_mut::<40>(buf, &[0xC8, 0x26, 0x1A])?;
+            rt::encode_packed_in_range("deltas", v_deltas.as_slice(), 2, -900, 900)?;
             rt::write_fixed(
                 "deltas",
                 v_deltas.as_slice(),
@@ -931,6 +925,13 @@ pub mod packed_channels {
                 false,
                 false,
                 &mut out[3..7],
+            )?;
+            rt::encode_packed_in_range(
+                "factors",
+                v_factors.as_slice(),
+                2,
+                3221225472,
+                1073741824,
             )?;
             rt::write_fixed(
                 "factors",

@@ -655,8 +655,8 @@ pub mod syncy {
         fn write(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             let Self { target: v_target } = *self;
             rt::encode_broadcast(address, 0xFE, &request::MoveTo::DESC)?;
-            rt::encode_in_range("target", v_target.raw(), -1000000, 1000000)?;
             let out = rt::frame_mut::<9>(buf, &[0xFF, 0xFF, address, 0x05, 0x03])?;
+            rt::encode_in_range("target", v_target.raw(), -1000000, 1000000)?;
             out[5..8]
                 .copy_from_slice(
                     &rt::bytes24(
@@ -716,8 +716,8 @@ pub mod syncy {
         fn write(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             let Self { quantity: v_quantity, level: v_level } = *self;
             rt::encode_broadcast(address, 0xFE, &request::SetPair::DESC)?;
-            rt::encode_in_range("quantity", v_quantity, 1, 100)?;
             let out = rt::frame_mut::<10>(buf, &[0xFF, 0xFF, address, 0x06, 0x05])?;
+            rt::encode_in_range("quantity", v_quantity, 1, 100)?;
             let w_quantity: u8 = v_quantity;
             out[5] = w_quantity;
             out[6] = rt::fits("doubled", rt::follows(w_quantity as i64, 2, 1), 0, 255)?

@@ -820,7 +820,6 @@ pub mod text_counted {
         #[inline(always)]
         fn write(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             let Self { name: v_name, channel: v_channel } = *self;
-            rt::encode_in_range("channel", v_channel, 0, 7)?;
             let bytes_0: usize = LISTS_SET_NAME.lists[0].encode_len(v_name.len())?
                 - LISTS_SET_NAME.base;
             let mut compact = [0u8; 6];
@@ -834,6 +833,7 @@ pub mod text_counted {
                 0,
                 255,
             )? as u8;
+            rt::encode_in_range("channel", v_channel, 0, 7)?;
             out[4] = v_channel;
             let out = LISTS_SET_NAME.expand(&compact, &[bytes_0], buf)?;
             rt::write_elements(v_name.as_slice(), 1, false, &mut out[4..]);

@@ -979,7 +979,6 @@ pub mod text_terminated {
         #[inline(always)]
         fn write(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             let Self { name: v_name, channel: v_channel } = *self;
-            rt::encode_in_range("channel", v_channel, 0, 7)?;
             LISTS_SET_NAME.lists[0].encode_until(v_name.as_slice())?;
             let bytes_0: usize = LISTS_SET_NAME.lists[0].encode_len(v_name.len())?
                 - LISTS_SET_NAME.base;
@@ -989,6 +988,7 @@ pub mod text_terminated {
                 &mut compact
             };
             out[2] = 0x2A;
+            rt::encode_in_range("channel", v_channel, 0, 7)?;
             out[3] = v_channel;
             let out = LISTS_SET_NAME.expand(&compact, &[bytes_0], buf)?;
             {

@@ -882,9 +882,9 @@ pub mod vario {
         #[inline(always)]
         fn write(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             let Self { first: v_first, quantity: v_quantity } = *self;
-            rt::encode_in_range("quantity", v_quantity, 1, 16)?;
             let out = rt::frame_mut::<9>(buf, &[0xA5, 0x5A, address, 0x05, 0x01])?;
             out[5..7].copy_from_slice(&v_first.to_be_bytes());
+            rt::encode_in_range("quantity", v_quantity, 1, 16)?;
             out[7] = v_quantity;
             rt::Ok(out.len())
         }
@@ -920,11 +920,11 @@ pub mod vario {
         #[inline(always)]
         fn write(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             let Self { quantity: v_quantity, values: v_values } = *self;
-            rt::encode_in_range("quantity", v_quantity, 1, 16)?;
             let frame_len = REPEAT_WRITE.encode_len(v_values.len())?;
             let out = rt::frame_mut_len(buf, frame_len, &[0xA5, 0x5A, address])?;
             LENGTH.put(out)?;
             out[4] = 0x02;
+            rt::encode_in_range("quantity", v_quantity, 1, 16)?;
             let w_quantity: u8 = v_quantity;
             out[5] = w_quantity;
             let w_byte_count: u8 = rt::fits(
