@@ -152,3 +152,52 @@ fn dynamixel2_generated_and_interpreter_agree_on_random_inputs() {
         "only {accepted} of {n} random Dynamixel 2.0 inputs decoded"
     );
 }
+
+/// CRSF's telemetry is sent unasked on the receiver-to-flight-controller link (`unasked:
+/// true`): the generated code says so of each telemetry frame, and a telemetry frame heard
+/// after a device ping is refused as its reply in the same words by both engines, as sent
+/// unasked. The module's answers only in the handset's slot (device information, timing
+/// correction) are not.
+#[test]
+fn crsf_telemetry_is_sent_unasked_in_both_engines() {
+    use busspec_protocols::{Message, ResponseMessage};
+    let p = spec::<Crsf>();
+    let wire_of = |name: &str| {
+        p.examples
+            .iter()
+            .find(|e| p.message(e.message).name == name)
+            .unwrap_or_else(|| panic!("an example of {name}"))
+            .wire
+            .clone()
+    };
+    let mut unasked = Vec::new();
+    for m in &p.responses {
+        let d = Crsf::decode_response(&wire_of(&m.name)).unwrap();
+        assert_eq!(d.message.name(), m.name);
+        assert_eq!(d.message.is_unasked(), m.unasked, "{}", m.name);
+        if m.unasked {
+            unasked.push(m.name.as_str());
+        }
+    }
+    assert_eq!(
+        unasked,
+        [
+            "gps",
+            "battery_sensor",
+            "heartbeat",
+            "link_statistics",
+            "attitude",
+            "flight_mode"
+        ]
+    );
+    let ping = wire_of("device_ping");
+    let stats = wire_of("link_statistics");
+    let generated = Crsf::decode_reply_to(&stats, &ping).unwrap_err();
+    let request = busspec_model::interp::decode(&p, Some(Direction::Request), None, &ping).unwrap();
+    let interpreted = busspec_model::interp::decode_reply(&p, &request, &stats).unwrap_err();
+    assert_eq!(generated.to_string(), interpreted.to_string());
+    assert_eq!(
+        generated.to_string(),
+        "link_statistics is sent unasked, not a reply device_ping gets"
+    );
+}

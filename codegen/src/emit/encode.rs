@@ -150,7 +150,10 @@ pub(super) fn emit_encode_arm(
         let (check, end) = (stmts, encode_end(p, take, false, head));
         return write_arm(ctx, m, ls, taken, pattern, quote!(#(#check)*), end);
     }
+    let take_at = stmts.len();
     stmts.push(quote!(let out = #take;));
+    // Where each field's range checks went, to hoist them before the frame is taken.
+    let mut checked: Vec<usize> = Vec::new();
     if repeat.is_some() {
         // The length field of a frame of variable length, from its length.
         stmts.extend(put_lengths(p, m.direction));
@@ -181,7 +184,7 @@ pub(super) fn emit_encode_arm(
         // then its range, then its value.
         let checks = range_checks(ctx, ls.iter().filter(|l| l.field.name == f.name));
         if let Some(pk) = &f.packed {
-            stmts.extend(checks);
+            place(&mut stmts, &mut checked, checks);
             stmts.push(write_packed(f, pk, full));
             continue;
         }
@@ -231,7 +234,7 @@ pub(super) fn emit_encode_arm(
             // Written where a value is given, which must be exactly where its condition holds.
             let v = local(&f.name);
             stmts.push(presence_check(m, f, c));
-            stmts.extend(checks);
+            place(&mut stmts, &mut checked, checks);
             let put = put(value);
             stmts.push(quote!(if let rt::Some(#v) = #v { #put }));
         } else if named.contains(&fi)
@@ -239,7 +242,7 @@ pub(super) fn emit_encode_arm(
             || f.constant.is_some()
             || agrees.is_some()
         {
-            stmts.extend(checks);
+            place(&mut stmts, &mut checked, checks);
             let n = wire_local(&f.name);
             stmts.push(quote!(let #n: #w = #value;));
             if let Some((c, v)) = agrees {
@@ -248,10 +251,11 @@ pub(super) fn emit_encode_arm(
             }
             stmts.push(put(quote!(#n)));
         } else {
-            stmts.extend(checks);
+            place(&mut stmts, &mut checked, checks);
             stmts.push(put(value));
         }
     }
+    hoist_checks(&mut stmts, take_at, &checked);
     if !lists.is_empty() {
         stmts.push(quote!(let out = #lc.expand(&compact, &[#(#list_bytes),*], buf)?;));
         for ((k, _, f, v), _) in lists.iter().zip(&list_bytes) {
@@ -281,6 +285,36 @@ pub(super) fn emit_encode_arm(
     let variable = repeat.is_some() || !lists.is_empty() || m.has_optional();
     let end = encode_end(p, quote!(out), variable, head);
     write_arm(ctx, m, ls, taken, pattern, quote!(#(#stmts)*), end)
+}
+
+/// Pushes a field's range checks `checks` onto `stmts`, noting where they went in `checked`.
+fn place(stmts: &mut Vec<TokenStream>, checked: &mut Vec<usize>, checks: Vec<TokenStream>) {
+    for c in checks {
+        checked.push(stmts.len());
+        stmts.push(c);
+    }
+}
+
+/// The fields' range checks (at `checked`, in frame order) moved before the frame is taken
+/// (`stmts[take_at]`) where nothing else the fields write can refuse: the same refusal first,
+/// and no stores into the buffer before them (which the compiler may not move past a check).
+fn hoist_checks(stmts: &mut Vec<TokenStream>, take_at: usize, checked: &[usize]) {
+    let fallible = |t: &TokenStream| t.to_string().contains('?');
+    let others_refuse = stmts
+        .iter()
+        .enumerate()
+        .skip(take_at + 1)
+        .any(|(i, t)| !checked.contains(&i) && fallible(t));
+    if others_refuse || checked.is_empty() {
+        return;
+    }
+    let checks: Vec<TokenStream> = checked.iter().map(|&i| stmts[i].clone()).collect();
+    let mut i = 0;
+    stmts.retain(|_| {
+        i += 1;
+        !checked.contains(&(i - 1))
+    });
+    stmts.splice(take_at..take_at, checks);
 }
 
 /// The encoder's arm of message `m`: a message with fields is written by its struct's own

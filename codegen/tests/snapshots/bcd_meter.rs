@@ -592,12 +592,12 @@ pub mod bcd_meter {
         #[inline(always)]
         fn write(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             let Self { hour: v_hour, minute: v_minute, year: v_year } = *self;
-            let out = rt::frame_mut::<9>(buf, &[0x68, address, 0x08])?;
             rt::encode_in_range("hour", v_hour, 0, 23)?;
-            out[3] = rt::to_bcd(v_hour as u64) as u8;
             rt::encode_in_range("minute", v_minute, 0, 59)?;
-            out[4] = rt::to_bcd(v_minute as u64) as u8;
             rt::encode_in_range("year", v_year, 0, 9999)?;
+            let out = rt::frame_mut::<9>(buf, &[0x68, address, 0x08])?;
+            out[3] = rt::to_bcd(v_hour as u64) as u8;
+            out[4] = rt::to_bcd(v_minute as u64) as u8;
             out[5..7].copy_from_slice(&(rt::to_bcd(v_year as u64) as u16).to_le_bytes());
             rt::Ok(out.len())
         }
@@ -642,13 +642,13 @@ pub mod bcd_meter {
         #[inline(always)]
         fn write(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             let Self { energy: v_energy, tariff: v_tariff } = *self;
-            let out = rt::frame_mut::<10>(buf, &[0x68, address, 0x91])?;
             rt::encode_in_range("energy", v_energy.raw(), 0, 99999999)?;
+            rt::encode_in_range("tariff", v_tariff, 1, 4)?;
+            let out = rt::frame_mut::<10>(buf, &[0x68, address, 0x91])?;
             out[3..7]
                 .copy_from_slice(
                     &(rt::to_bcd(v_energy.raw() as u64) as u32).to_le_bytes(),
                 );
-            rt::encode_in_range("tariff", v_tariff, 1, 4)?;
             out[7] = rt::to_bcd(v_tariff as u64) as u8;
             rt::Ok(out.len())
         }

@@ -761,9 +761,9 @@ pub mod clash {
         fn write(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             let Self { some: v_some, core: v_core } = *self;
             rt::encode_broadcast(address, 0x00, &request::Option::DESC)?;
+            rt::encode_in_range("core", v_core.raw(), 0, 1000)?;
             let out = rt::frame_mut::<7>(buf, &[0xAA, address, 0x10])?;
             out[3] = v_some.raw();
-            rt::encode_in_range("core", v_core.raw(), 0, 1000)?;
             out[4..6].copy_from_slice(&v_core.raw().to_le_bytes());
             rt::Ok(rt::seal_sum8_head(out, 3, address.wrapping_add(0xBA)))
         }

@@ -665,12 +665,12 @@ pub mod crc_extra {
                 req_stream_id: v_req_stream_id,
                 start_stop: v_start_stop,
             } = *self;
+            rt::encode_in_range("start_stop", v_start_stop, 0, 1)?;
             let out = rt::frame_mut::<11>(buf, &[0xFE, 0x06, 0x42])?;
             out[3..5].copy_from_slice(&v_req_message_rate.to_le_bytes());
             out[5] = v_target_system;
             out[6] = v_target_component;
             out[7] = v_req_stream_id;
-            rt::encode_in_range("start_stop", v_start_stop, 0, 1)?;
             out[8] = v_start_stop;
             rt::Ok(out.len())
         }

@@ -1072,9 +1072,9 @@ pub mod dynamixel {
         fn write(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             let Self { address: v_address, length: v_length } = *self;
             rt::encode_broadcast(address, 0xFE, &request::Read::DESC)?;
+            rt::encode_in_range("length", v_length, 1, 253)?;
             let out = rt::frame_mut::<8>(buf, &[0xFF, 0xFF, address, 0x04, 0x02])?;
             out[5] = v_address;
-            rt::encode_in_range("length", v_length, 1, 253)?;
             out[6] = v_length;
             rt::Ok(out.len())
         }

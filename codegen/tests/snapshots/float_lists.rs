@@ -827,9 +827,9 @@ pub mod float_lists {
         fn write(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             let Self { start: v_start, quantity: v_quantity } = *self;
             rt::encode_broadcast(address, 0x00, &request::ReadFloats::DESC)?;
+            rt::encode_in_range("quantity", v_quantity, 2, 16)?;
             let out = rt::frame_mut::<8>(buf, &[address, 0x03])?;
             out[2..4].copy_from_slice(&v_start.to_be_bytes());
-            rt::encode_in_range("quantity", v_quantity, 2, 16)?;
             out[4..6].copy_from_slice(&v_quantity.to_be_bytes());
             rt::Ok(out.len())
         }

@@ -611,9 +611,9 @@ pub mod ft12_variable {
                 signature: v_signature,
                 volume: v_volume,
             } = *self;
+            rt::encode_in_range("identification", v_identification, 0, 99999999)?;
             let out = rt::head(out, &[0x68, 0x15, 0x15, 0x68, 0x08, address, 0x72]);
             out[19..21].copy_from_slice(&[0x04, 0x13]);
-            rt::encode_in_range("identification", v_identification, 0, 99999999)?;
             out[7..11]
                 .copy_from_slice(
                     &(rt::to_bcd(v_identification as u64) as u32).to_le_bytes(),

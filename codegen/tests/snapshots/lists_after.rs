@@ -926,9 +926,9 @@ pub mod lists_after {
         #[inline(always)]
         fn write(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             let Self { first: v_first, quantity: v_quantity } = *self;
+            rt::encode_in_range("quantity", v_quantity, 1, 8)?;
             let out = rt::frame_mut::<7>(buf, &[0x7E, address, 0x10])?;
             out[3..5].copy_from_slice(&v_first.to_be_bytes());
-            rt::encode_in_range("quantity", v_quantity, 1, 8)?;
             out[5] = v_quantity;
             rt::Ok(out.len())
         }

@@ -611,8 +611,8 @@ pub mod maestro_compact {
         #[inline(always)]
         fn write(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             let Self { channel: v_channel } = *self;
-            let out = rt::frame_mut::<2>(buf, &[0x90])?;
             rt::encode_in_range("channel", v_channel, 0, 23)?;
+            let out = rt::frame_mut::<2>(buf, &[0x90])?;
             out[1] = v_channel;
             rt::Ok(out.len())
         }

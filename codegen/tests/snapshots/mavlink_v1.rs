@@ -759,6 +759,7 @@ pub mod mavlink_v1 {
                 req_stream_id: v_req_stream_id,
                 start_stop: v_start_stop,
             } = *self;
+            rt::encode_in_range("start_stop", v_start_stop, 0, 1)?;
             let out = rt::frame_mut::<14>(buf, &[0xFE, 0x06])?;
             out[5] = 0x42;
             out[2] = v_sequence;
@@ -768,7 +769,6 @@ pub mod mavlink_v1 {
             out[8] = v_target_system;
             out[9] = v_target_component;
             out[10] = v_req_stream_id;
-            rt::encode_in_range("start_stop", v_start_stop, 0, 1)?;
             out[11] = v_start_stop;
             rt::Ok(out.len())
         }

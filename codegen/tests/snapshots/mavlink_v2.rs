@@ -798,9 +798,9 @@ pub mod mavlink_v2 {
                 target_system: v_target_system,
                 target_component: v_target_component,
             } = *self;
+            rt::encode_in_range("incompat_flags", v_incompat_flags, 0, 0)?;
             let out = rt::frame_mut::<26>(buf, &[0xFD, 0x0E])?;
             out[7..10].copy_from_slice(&[0x04, 0x00, 0x00]);
-            rt::encode_in_range("incompat_flags", v_incompat_flags, 0, 0)?;
             out[2] = v_incompat_flags;
             out[3] = v_compat_flags;
             out[4] = v_sequence;
@@ -889,9 +889,10 @@ pub mod mavlink_v2 {
                 req_stream_id: v_req_stream_id,
                 start_stop: v_start_stop,
             } = *self;
+            rt::encode_in_range("incompat_flags", v_incompat_flags, 0, 0)?;
+            rt::encode_in_range("start_stop", v_start_stop, 0, 1)?;
             let out = rt::frame_mut::<18>(buf, &[0xFD, 0x06])?;
             out[7..10].copy_from_slice(&[0x42, 0x00, 0x00]);
-            rt::encode_in_range("incompat_flags", v_incompat_flags, 0, 0)?;
             out[2] = v_incompat_flags;
             out[3] = v_compat_flags;
             out[4] = v_sequence;
@@ -901,7 +902,6 @@ pub mod mavlink_v2 {
             out[12] = v_target_system;
             out[13] = v_target_component;
             out[14] = v_req_stream_id;
-            rt::encode_in_range("start_stop", v_start_stop, 0, 1)?;
             out[15] = v_start_stop;
             rt::Ok(out.len())
         }
@@ -971,9 +971,9 @@ pub mod mavlink_v2 {
                 target_system: v_target_system,
                 target_component: v_target_component,
             } = *self;
+            rt::encode_in_range("incompat_flags", v_incompat_flags, 0, 0)?;
             let out = rt::frame_mut::<26>(buf, &[0xFD, 0x0E])?;
             out[7..10].copy_from_slice(&[0x04, 0x00, 0x00]);
-            rt::encode_in_range("incompat_flags", v_incompat_flags, 0, 0)?;
             out[2] = v_incompat_flags;
             out[3] = v_compat_flags;
             out[4] = v_sequence;
@@ -1064,9 +1064,9 @@ pub mod mavlink_v2 {
                 system_status: v_system_status,
                 mavlink_version: v_mavlink_version,
             } = *self;
+            rt::encode_in_range("incompat_flags", v_incompat_flags, 0, 0)?;
             let out = rt::frame_mut::<21>(buf, &[0xFD, 0x09])?;
             out[7..10].copy_from_slice(&[0x00, 0x00, 0x00]);
-            rt::encode_in_range("incompat_flags", v_incompat_flags, 0, 0)?;
             out[2] = v_incompat_flags;
             out[3] = v_compat_flags;
             out[4] = v_sequence;
@@ -1205,9 +1205,9 @@ pub mod mavlink_v2 {
                 onboard_control_sensors_enabled_extended: v_onboard_control_sensors_enabled_extended,
                 onboard_control_sensors_health_extended: v_onboard_control_sensors_health_extended,
             } = *self;
+            rt::encode_in_range("incompat_flags", v_incompat_flags, 0, 0)?;
             let out = rt::frame_mut::<55>(buf, &[0xFD, 0x2B])?;
             out[7..10].copy_from_slice(&[0x01, 0x00, 0x00]);
-            rt::encode_in_range("incompat_flags", v_incompat_flags, 0, 0)?;
             out[2] = v_incompat_flags;
             out[3] = v_compat_flags;
             out[4] = v_sequence;
@@ -1357,9 +1357,9 @@ pub mod mavlink_v2 {
                 pitchspeed: v_pitchspeed,
                 yawspeed: v_yawspeed,
             } = *self;
+            rt::encode_in_range("incompat_flags", v_incompat_flags, 0, 0)?;
             let out = rt::frame_mut::<40>(buf, &[0xFD, 0x1C])?;
             out[7..10].copy_from_slice(&[0x1E, 0x00, 0x00]);
-            rt::encode_in_range("incompat_flags", v_incompat_flags, 0, 0)?;
             out[2] = v_incompat_flags;
             out[3] = v_compat_flags;
             out[4] = v_sequence;
@@ -1600,9 +1600,9 @@ pub mod mavlink_v2 {
                 frequency: v_frequency,
                 index: v_index,
             } = *self;
+            rt::encode_in_range("incompat_flags", v_incompat_flags, 0, 0)?;
             let out = rt::frame_mut::<17>(buf, &[0xFD, 0x05])?;
             out[7..10].copy_from_slice(&[0x53, 0x01, 0x00]);
-            rt::encode_in_range("incompat_flags", v_incompat_flags, 0, 0)?;
             out[2] = v_incompat_flags;
             out[3] = v_compat_flags;
             out[4] = v_sequence;

@@ -566,13 +566,13 @@ pub mod meter_floats {
         fn write(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             let Self { voltage_limit: v_voltage_limit, serial: v_serial } = *self;
             rt::encode_broadcast(address, 0x00, &request::SetLimits::DESC)?;
-            let out = rt::frame_mut::<16>(buf, &[address, 0x10])?;
             rt::encode_in_range(
                 "voltage_limit",
                 v_voltage_limit,
                 rt::f32_raw(0f32),
                 rt::f32_raw(300.5f32),
             )?;
+            let out = rt::frame_mut::<16>(buf, &[address, 0x10])?;
             out[2..6].copy_from_slice(&v_voltage_limit.to_be_bytes());
             out[6..14].copy_from_slice(&v_serial.to_be_bytes());
             rt::Ok(out.len())
@@ -651,17 +651,18 @@ pub mod meter_floats {
                 counter: v_counter,
                 temperature: v_temperature,
             } = *self;
-            let out = rt::frame_mut::<52>(buf, &[address, 0x04])?;
-            {
-                let b = v_voltage.to_be_bytes();
-                out[2..6].copy_from_slice(&[b[2], b[3], b[0], b[1]]);
-            }
             rt::encode_in_range(
                 "frequency",
                 v_frequency,
                 rt::f32_raw(45f32),
                 rt::f32_raw(65f32),
             )?;
+            rt::encode_in_range("drift", v_drift, -9000000000000, 9000000000000)?;
+            let out = rt::frame_mut::<52>(buf, &[address, 0x04])?;
+            {
+                let b = v_voltage.to_be_bytes();
+                out[2..6].copy_from_slice(&[b[2], b[3], b[0], b[1]]);
+            }
             out[6..10].copy_from_slice(&v_frequency.to_be_bytes());
             out[10..18].copy_from_slice(&v_energy.to_be_bytes());
             {
@@ -670,7 +671,6 @@ pub mod meter_floats {
                     .copy_from_slice(&[b[6], b[7], b[4], b[5], b[2], b[3], b[0], b[1]]);
             }
             out[26..34].copy_from_slice(&v_pulses.to_be_bytes());
-            rt::encode_in_range("drift", v_drift, -9000000000000, 9000000000000)?;
             out[34..42].copy_from_slice(&v_drift.to_be_bytes());
             {
                 let b = v_counter.to_be_bytes();
@@ -776,13 +776,13 @@ pub mod meter_floats {
         #[inline(always)]
         fn write(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             let Self { serial: v_serial } = *self;
-            let out = rt::frame_mut::<12>(buf, &[address, 0x10])?;
             rt::encode_in_range(
                 "serial",
                 v_serial,
                 rt::u64_raw(1u64),
                 rt::u64_raw(18446744073709551615u64),
             )?;
+            let out = rt::frame_mut::<12>(buf, &[address, 0x10])?;
             out[2..10].copy_from_slice(&v_serial.to_be_bytes());
             rt::Ok(out.len())
         }

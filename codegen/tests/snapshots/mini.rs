@@ -807,8 +807,8 @@ pub mod mini {
         #[inline(always)]
         fn write(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             let Self { target: v_target } = *self;
-            let out = rt::frame_mut::<9>(buf, &[0xAA, address, 0x20, 0x00])?;
             rt::encode_in_range("target", v_target.raw(), 0, 100000)?;
+            let out = rt::frame_mut::<9>(buf, &[0xAA, address, 0x20, 0x00])?;
             out[4..8].copy_from_slice(&v_target.raw().to_le_bytes());
             rt::Ok(rt::seal_sum8_head(out, 4, address.wrapping_add(0xCA)))
         }
@@ -874,8 +874,8 @@ pub mod mini {
         #[inline(always)]
         fn write(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             let Self { channel: v_channel } = *self;
-            let out = rt::frame_mut::<6>(buf, &[0xAA, address, 0x40, 0x00])?;
             rt::encode_in_range("channel", v_channel, 0, 3)?;
+            let out = rt::frame_mut::<6>(buf, &[0xAA, address, 0x40, 0x00])?;
             out[4] = v_channel;
             rt::Ok(rt::seal_sum8_head(out, 4, address.wrapping_add(0xEA)))
         }

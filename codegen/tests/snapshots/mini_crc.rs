@@ -683,10 +683,10 @@ pub mod mini_crc {
         #[inline(always)]
         fn write(&self, address: u8, out: &mut [u8; 6]) -> rt::EncodeResult {
             let Self { minutes: v_minutes, seconds: v_seconds } = *self;
-            let out = rt::head(out, &[0x22, address]);
             rt::encode_in_range("minutes", v_minutes, 0, 59)?;
-            out[2] = v_minutes;
             rt::encode_in_range("seconds", v_seconds, 0, 59)?;
+            let out = rt::head(out, &[0x22, address]);
+            out[2] = v_minutes;
             out[3] = v_seconds;
             rt::Ok(out.len())
         }

@@ -2023,9 +2023,9 @@ pub mod modbus {
         fn write(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             let Self { starting_address: v_starting_address, quantity: v_quantity } = *self;
             rt::encode_broadcast(address, 0x00, &request::ReadCoils::DESC)?;
+            rt::encode_in_range("quantity", v_quantity, 1, 2000)?;
             let out = rt::frame_mut::<8>(buf, &[address, 0x01])?;
             out[2..4].copy_from_slice(&v_starting_address.to_be_bytes());
-            rt::encode_in_range("quantity", v_quantity, 1, 2000)?;
             out[4..6].copy_from_slice(&v_quantity.to_be_bytes());
             rt::Ok(out.len())
         }
@@ -2062,9 +2062,9 @@ pub mod modbus {
         fn write(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             let Self { starting_address: v_starting_address, quantity: v_quantity } = *self;
             rt::encode_broadcast(address, 0x00, &request::ReadDiscreteInputs::DESC)?;
+            rt::encode_in_range("quantity", v_quantity, 1, 2000)?;
             let out = rt::frame_mut::<8>(buf, &[address, 0x02])?;
             out[2..4].copy_from_slice(&v_starting_address.to_be_bytes());
-            rt::encode_in_range("quantity", v_quantity, 1, 2000)?;
             out[4..6].copy_from_slice(&v_quantity.to_be_bytes());
             rt::Ok(out.len())
         }
@@ -2101,9 +2101,9 @@ pub mod modbus {
         fn write(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             let Self { starting_address: v_starting_address, quantity: v_quantity } = *self;
             rt::encode_broadcast(address, 0x00, &request::ReadHoldingRegisters::DESC)?;
+            rt::encode_in_range("quantity", v_quantity, 1, 125)?;
             let out = rt::frame_mut::<8>(buf, &[address, 0x03])?;
             out[2..4].copy_from_slice(&v_starting_address.to_be_bytes());
-            rt::encode_in_range("quantity", v_quantity, 1, 125)?;
             out[4..6].copy_from_slice(&v_quantity.to_be_bytes());
             rt::Ok(out.len())
         }
@@ -2140,9 +2140,9 @@ pub mod modbus {
         fn write(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             let Self { starting_address: v_starting_address, quantity: v_quantity } = *self;
             rt::encode_broadcast(address, 0x00, &request::ReadInputRegisters::DESC)?;
+            rt::encode_in_range("quantity", v_quantity, 1, 125)?;
             let out = rt::frame_mut::<8>(buf, &[address, 0x04])?;
             out[2..4].copy_from_slice(&v_starting_address.to_be_bytes());
-            rt::encode_in_range("quantity", v_quantity, 1, 125)?;
             out[4..6].copy_from_slice(&v_quantity.to_be_bytes());
             rt::Ok(out.len())
         }

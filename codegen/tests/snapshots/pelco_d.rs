@@ -685,6 +685,8 @@ pub mod pelco_d2 {
                 pan_speed: v_pan_speed,
                 tilt_speed: v_tilt_speed,
             } = *self;
+            rt::encode_in_range_or("pan_speed", v_pan_speed, 0, 63, &[255])?;
+            rt::encode_in_range("tilt_speed", v_tilt_speed, 0, 63)?;
             let out = rt::head(out, &[0xFF, address]);
             let w_command: u16 = ((v_sense as u16) << 15) | ((v_auto_scan as u16) << 12)
                 | ((v_camera_on as u16) << 11) | ((v_iris_close as u16) << 10)
@@ -694,9 +696,7 @@ pub mod pelco_d2 {
                 | ((v_tilt_up as u16) << 3) | ((v_pan_left as u16) << 2)
                 | ((v_pan_right as u16) << 1);
             out[2..4].copy_from_slice(&w_command.to_be_bytes());
-            rt::encode_in_range_or("pan_speed", v_pan_speed, 0, 63, &[255])?;
             out[4] = v_pan_speed;
-            rt::encode_in_range("tilt_speed", v_tilt_speed, 0, 63)?;
             out[5] = v_tilt_speed;
             rt::Ok(out.len())
         }
@@ -719,8 +719,8 @@ pub mod pelco_d2 {
         #[inline(always)]
         fn write(&self, address: u8, out: &mut [u8; 7]) -> rt::EncodeResult {
             let Self { preset: v_preset } = *self;
-            let out = rt::head(out, &[0xFF, address, 0x00, 0x03, 0x00]);
             rt::encode_in_range("preset", v_preset, 1, 255)?;
+            let out = rt::head(out, &[0xFF, address, 0x00, 0x03, 0x00]);
             out[5] = v_preset;
             rt::Ok(out.len())
         }
@@ -751,8 +751,8 @@ pub mod pelco_d2 {
         #[inline(always)]
         fn write(&self, address: u8, out: &mut [u8; 7]) -> rt::EncodeResult {
             let Self { preset: v_preset } = *self;
-            let out = rt::head(out, &[0xFF, address, 0x00, 0x07, 0x00]);
             rt::encode_in_range("preset", v_preset, 1, 255)?;
+            let out = rt::head(out, &[0xFF, address, 0x00, 0x07, 0x00]);
             out[5] = v_preset;
             rt::Ok(out.len())
         }

@@ -633,6 +633,8 @@ pub mod pelco_p {
                 pan_speed: v_pan_speed,
                 tilt_speed: v_tilt_speed,
             } = *self;
+            rt::encode_in_range("pan_speed", v_pan_speed, 0, 64)?;
+            rt::encode_in_range("tilt_speed", v_tilt_speed, 0, 63)?;
             let out = rt::head(out, &[0xA0, address]);
             let w_command: u16 = ((v_camera_on as u16) << 14)
                 | ((v_auto_scan as u16) << 13) | ((v_camera_on_off as u16) << 12)
@@ -642,9 +644,7 @@ pub mod pelco_p {
                 | ((v_tilt_down as u16) << 4) | ((v_tilt_up as u16) << 3)
                 | ((v_pan_left as u16) << 2) | ((v_pan_right as u16) << 1);
             out[2..4].copy_from_slice(&w_command.to_be_bytes());
-            rt::encode_in_range("pan_speed", v_pan_speed, 0, 64)?;
             out[4] = v_pan_speed;
-            rt::encode_in_range("tilt_speed", v_tilt_speed, 0, 63)?;
             out[5] = v_tilt_speed;
             rt::Ok(out.len())
         }
@@ -667,8 +667,8 @@ pub mod pelco_p {
         #[inline(always)]
         fn write(&self, address: u8, out: &mut [u8; 8]) -> rt::EncodeResult {
             let Self { preset: v_preset } = *self;
-            let out = rt::head(out, &[0xA0, address, 0x00, 0x03, 0x00]);
             rt::encode_in_range("preset", v_preset, 1, 255)?;
+            let out = rt::head(out, &[0xA0, address, 0x00, 0x03, 0x00]);
             out[5] = v_preset;
             rt::Ok(out.len())
         }
@@ -699,8 +699,8 @@ pub mod pelco_p {
         #[inline(always)]
         fn write(&self, address: u8, out: &mut [u8; 8]) -> rt::EncodeResult {
             let Self { preset: v_preset } = *self;
-            let out = rt::head(out, &[0xA0, address, 0x00, 0x07, 0x00]);
             rt::encode_in_range("preset", v_preset, 1, 255)?;
+            let out = rt::head(out, &[0xA0, address, 0x00, 0x07, 0x00]);
             out[5] = v_preset;
             rt::Ok(out.len())
         }

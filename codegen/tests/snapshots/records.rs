@@ -1145,8 +1145,8 @@ pub mod records {
         #[inline(always)]
         fn write(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             let Self { quantity: v_quantity } = *self;
-            let out = rt::frame_mut::<5>(buf, &[0x7E, address, 0x85])?;
             rt::encode_in_range("quantity", v_quantity, 1, 6)?;
+            let out = rt::frame_mut::<5>(buf, &[0x7E, address, 0x85])?;
             out[3] = v_quantity;
             rt::Ok(out.len())
         }

@@ -1653,8 +1653,8 @@ pub mod roboclaw {
         #[inline(always)]
         fn write(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             let Self { speed: v_speed } = *self;
-            let out = rt::frame_mut::<5>(buf, &[address, 0x00])?;
             rt::encode_in_range("speed", v_speed, 0, 127)?;
+            let out = rt::frame_mut::<5>(buf, &[address, 0x00])?;
             out[2] = v_speed;
             rt::Ok(out.len())
         }
@@ -1683,8 +1683,8 @@ pub mod roboclaw {
         #[inline(always)]
         fn write(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             let Self { speed: v_speed } = *self;
-            let out = rt::frame_mut::<5>(buf, &[address, 0x01])?;
             rt::encode_in_range("speed", v_speed, 0, 127)?;
+            let out = rt::frame_mut::<5>(buf, &[address, 0x01])?;
             out[2] = v_speed;
             rt::Ok(out.len())
         }
@@ -1767,8 +1767,8 @@ pub mod roboclaw {
         #[inline(always)]
         fn write(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             let Self { duty: v_duty } = *self;
-            let out = rt::frame_mut::<6>(buf, &[address, 0x20])?;
             rt::encode_in_range("duty", v_duty, -32767, 32767)?;
+            let out = rt::frame_mut::<6>(buf, &[address, 0x20])?;
             out[2..4].copy_from_slice(&v_duty.to_be_bytes());
             rt::Ok(out.len())
         }

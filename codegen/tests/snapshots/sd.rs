@@ -2419,8 +2419,8 @@ pub mod sd {
         #[inline(always)]
         fn write(&self, address: u8, out: &mut [u8; 6]) -> rt::EncodeResult {
             let Self { new_id: v_new_id } = *self;
-            let out = rt::head(out, &[0xAA, address]);
             rt::encode_in_range("new_id", v_new_id, 1, 30)?;
+            let out = rt::head(out, &[0xAA, address]);
             let w_new_id: u8 = v_new_id;
             out[2] = w_new_id;
             out[3] = w_new_id;
@@ -2737,8 +2737,8 @@ pub mod sd {
                 0x1F,
                 &request::ReadElectronicSerialNumber::DESC,
             )?;
-            let out = rt::head(out, &[0xF0, address, 0x00]);
             rt::encode_in_range("byte_number", v_byte_number, 0, 31)?;
+            let out = rt::head(out, &[0xF0, address, 0x00]);
             out[3] = v_byte_number;
             rt::Ok(out.len())
         }
@@ -2771,8 +2771,8 @@ pub mod sd {
         fn write(&self, address: u8, out: &mut [u8; 6]) -> rt::EncodeResult {
             let Self { byte_number: v_byte_number } = *self;
             rt::encode_broadcast(address, 0x1F, &request::ReadProductDescription::DESC)?;
-            let out = rt::head(out, &[0xF1, address, 0x00]);
             rt::encode_in_range("byte_number", v_byte_number, 0, 31)?;
+            let out = rt::head(out, &[0xF1, address, 0x00]);
             out[3] = v_byte_number;
             rt::Ok(out.len())
         }
@@ -2805,8 +2805,8 @@ pub mod sd {
         fn write(&self, address: u8, out: &mut [u8; 6]) -> rt::EncodeResult {
             let Self { byte_number: v_byte_number } = *self;
             rt::encode_broadcast(address, 0x1F, &request::ReadSoftwareRevision::DESC)?;
-            let out = rt::head(out, &[0xF2, address, 0x00]);
             rt::encode_in_range("byte_number", v_byte_number, 0, 31)?;
+            let out = rt::head(out, &[0xF2, address, 0x00]);
             out[3] = v_byte_number;
             rt::Ok(out.len())
         }
@@ -2839,8 +2839,8 @@ pub mod sd {
         fn write(&self, address: u8, out: &mut [u8; 6]) -> rt::EncodeResult {
             let Self { byte_number: v_byte_number } = *self;
             rt::encode_broadcast(address, 0x1F, &request::ReadHardwareRevision::DESC)?;
-            let out = rt::head(out, &[0xF3, address, 0x00]);
             rt::encode_in_range("byte_number", v_byte_number, 0, 31)?;
+            let out = rt::head(out, &[0xF3, address, 0x00]);
             out[3] = v_byte_number;
             rt::Ok(out.len())
         }
@@ -3413,8 +3413,8 @@ pub mod sd {
         #[inline(always)]
         fn write(&self, address: u8, out: &mut [u8; 6]) -> rt::EncodeResult {
             let Self { new_id: v_new_id } = *self;
-            let out = rt::head(out, &[0x55, address]);
             rt::encode_in_range("new_id", v_new_id, 1, 30)?;
+            let out = rt::head(out, &[0x55, address]);
             let w_new_id: u8 = v_new_id;
             out[2] = w_new_id;
             out[3] = w_new_id;
@@ -3447,8 +3447,8 @@ pub mod sd {
         #[inline(always)]
         fn write(&self, address: u8, out: &mut [u8; 6]) -> rt::EncodeResult {
             let Self { id: v_id } = *self;
-            let out = rt::head(out, &[0x6D, address]);
             rt::encode_in_range("id", v_id, 1, 30)?;
+            let out = rt::head(out, &[0x6D, address]);
             let w_id: u8 = v_id;
             out[2] = w_id;
             out[3] = w_id;
@@ -3631,8 +3631,8 @@ pub mod sd {
         #[inline(always)]
         fn write(&self, address: u8, out: &mut [u8; 6]) -> rt::EncodeResult {
             let Self { humidity: v_humidity } = *self;
-            let out = rt::head(out, &[0x21, address]);
             rt::encode_in_range_or("humidity", v_humidity, 1, 100, &[0])?;
+            let out = rt::head(out, &[0x21, address]);
             let w_humidity: u8 = v_humidity;
             out[2] = w_humidity;
             out[3] = w_humidity;
@@ -3886,9 +3886,9 @@ pub mod sd {
         #[inline(always)]
         fn write(&self, address: u8, out: &mut [u8; 6]) -> rt::EncodeResult {
             let Self { character: v_character, string_length: v_string_length } = *self;
+            rt::encode_in_range("string_length", v_string_length, 0, 32)?;
             let out = rt::head(out, &[0x10, address]);
             out[2] = v_character;
-            rt::encode_in_range("string_length", v_string_length, 0, 32)?;
             out[3] = v_string_length;
             rt::Ok(out.len())
         }
@@ -3925,9 +3925,9 @@ pub mod sd {
         #[inline(always)]
         fn write(&self, address: u8, out: &mut [u8; 6]) -> rt::EncodeResult {
             let Self { character: v_character, string_length: v_string_length } = *self;
+            rt::encode_in_range("string_length", v_string_length, 0, 32)?;
             let out = rt::head(out, &[0x11, address]);
             out[2] = v_character;
-            rt::encode_in_range("string_length", v_string_length, 0, 32)?;
             out[3] = v_string_length;
             rt::Ok(out.len())
         }
@@ -3964,9 +3964,9 @@ pub mod sd {
         #[inline(always)]
         fn write(&self, address: u8, out: &mut [u8; 6]) -> rt::EncodeResult {
             let Self { character: v_character, string_length: v_string_length } = *self;
+            rt::encode_in_range("string_length", v_string_length, 0, 32)?;
             let out = rt::head(out, &[0x12, address]);
             out[2] = v_character;
-            rt::encode_in_range("string_length", v_string_length, 0, 32)?;
             out[3] = v_string_length;
             rt::Ok(out.len())
         }
@@ -4003,9 +4003,9 @@ pub mod sd {
         #[inline(always)]
         fn write(&self, address: u8, out: &mut [u8; 6]) -> rt::EncodeResult {
             let Self { character: v_character, string_length: v_string_length } = *self;
+            rt::encode_in_range("string_length", v_string_length, 0, 32)?;
             let out = rt::head(out, &[0x13, address]);
             out[2] = v_character;
-            rt::encode_in_range("string_length", v_string_length, 0, 32)?;
             out[3] = v_string_length;
             rt::Ok(out.len())
         }
@@ -4078,10 +4078,10 @@ pub mod sd {
                 runtime_minutes: v_runtime_minutes,
                 runtime_seconds: v_runtime_seconds,
             } = *self;
-            let out = rt::head(out, &[0x22, address]);
             rt::encode_in_range("runtime_minutes", v_runtime_minutes, 0, 59)?;
-            out[2] = v_runtime_minutes;
             rt::encode_in_range("runtime_seconds", v_runtime_seconds, 0, 59)?;
+            let out = rt::head(out, &[0x22, address]);
+            out[2] = v_runtime_minutes;
             out[3] = v_runtime_seconds;
             rt::Ok(out.len())
         }
@@ -4155,10 +4155,10 @@ pub mod sd {
                 runtime_minutes: v_runtime_minutes,
                 runtime_seconds: v_runtime_seconds,
             } = *self;
-            let out = rt::head(out, &[0x23, address]);
             rt::encode_in_range("runtime_minutes", v_runtime_minutes, 0, 59)?;
-            out[2] = v_runtime_minutes;
             rt::encode_in_range("runtime_seconds", v_runtime_seconds, 0, 59)?;
+            let out = rt::head(out, &[0x23, address]);
+            out[2] = v_runtime_minutes;
             out[3] = v_runtime_seconds;
             rt::Ok(out.len())
         }
@@ -4264,10 +4264,10 @@ pub mod sd {
                 runtime_minutes: v_runtime_minutes,
                 runtime_seconds: v_runtime_seconds,
             } = *self;
-            let out = rt::head(out, &[0x24, address]);
             rt::encode_in_range("runtime_minutes", v_runtime_minutes, 0, 59)?;
-            out[2] = v_runtime_minutes;
             rt::encode_in_range("runtime_seconds", v_runtime_seconds, 0, 59)?;
+            let out = rt::head(out, &[0x24, address]);
+            out[2] = v_runtime_minutes;
             out[3] = v_runtime_seconds;
             rt::Ok(out.len())
         }
@@ -4373,10 +4373,10 @@ pub mod sd {
                 runtime_minutes: v_runtime_minutes,
                 runtime_seconds: v_runtime_seconds,
             } = *self;
-            let out = rt::head(out, &[0x25, address]);
             rt::encode_in_range("runtime_minutes", v_runtime_minutes, 0, 59)?;
-            out[2] = v_runtime_minutes;
             rt::encode_in_range("runtime_seconds", v_runtime_seconds, 0, 59)?;
+            let out = rt::head(out, &[0x25, address]);
+            out[2] = v_runtime_minutes;
             out[3] = v_runtime_seconds;
             rt::Ok(out.len())
         }
@@ -4482,10 +4482,10 @@ pub mod sd {
                 runtime_minutes: v_runtime_minutes,
                 runtime_seconds: v_runtime_seconds,
             } = *self;
-            let out = rt::head(out, &[0x26, address]);
             rt::encode_in_range("runtime_minutes", v_runtime_minutes, 0, 59)?;
-            out[2] = v_runtime_minutes;
             rt::encode_in_range("runtime_seconds", v_runtime_seconds, 0, 59)?;
+            let out = rt::head(out, &[0x26, address]);
+            out[2] = v_runtime_minutes;
             out[3] = v_runtime_seconds;
             rt::Ok(out.len())
         }
@@ -4591,10 +4591,10 @@ pub mod sd {
                 runtime_minutes: v_runtime_minutes,
                 runtime_seconds: v_runtime_seconds,
             } = *self;
-            let out = rt::head(out, &[0x27, address]);
             rt::encode_in_range("runtime_minutes", v_runtime_minutes, 0, 59)?;
-            out[2] = v_runtime_minutes;
             rt::encode_in_range("runtime_seconds", v_runtime_seconds, 0, 59)?;
+            let out = rt::head(out, &[0x27, address]);
+            out[2] = v_runtime_minutes;
             out[3] = v_runtime_seconds;
             rt::Ok(out.len())
         }

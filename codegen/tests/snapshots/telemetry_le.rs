@@ -571,15 +571,15 @@ pub mod telemetry_le {
         #[inline(always)]
         fn write(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             let Self { lat: v_lat, lon: v_lon } = *self;
-            let out = rt::frame_mut::<21>(buf, &[0xA5, 0x5A, 0x11, 0x02])?;
             rt::encode_in_range("lat", v_lat, rt::f64_raw(-90f64), rt::f64_raw(90f64))?;
-            out[4..12].copy_from_slice(&v_lat.to_le_bytes());
             rt::encode_in_range(
                 "lon",
                 v_lon,
                 rt::f64_raw(-180f64),
                 rt::f64_raw(180f64),
             )?;
+            let out = rt::frame_mut::<21>(buf, &[0xA5, 0x5A, 0x11, 0x02])?;
+            out[4..12].copy_from_slice(&v_lat.to_le_bytes());
             out[12..20].copy_from_slice(&v_lon.to_le_bytes());
             rt::Ok(out.len())
         }
@@ -658,17 +658,17 @@ pub mod telemetry_le {
                 pressure: v_pressure,
                 total: v_total,
             } = *self;
-            let out = rt::frame_mut::<41>(buf, &[0xA5, 0x5A, 0x25, 0x81])?;
-            out[4..12].copy_from_slice(&v_time_us.to_le_bytes());
-            out[12..16].copy_from_slice(&v_altitude.to_le_bytes());
-            out[16..24].copy_from_slice(&v_lat.to_le_bytes());
-            out[24..32].copy_from_slice(&v_offset.to_le_bytes());
             rt::encode_in_range(
                 "pressure",
                 v_pressure,
                 rt::f32_raw(300f32),
                 rt::f32_raw(1100.5f32),
             )?;
+            let out = rt::frame_mut::<41>(buf, &[0xA5, 0x5A, 0x25, 0x81])?;
+            out[4..12].copy_from_slice(&v_time_us.to_le_bytes());
+            out[12..16].copy_from_slice(&v_altitude.to_le_bytes());
+            out[16..24].copy_from_slice(&v_lat.to_le_bytes());
+            out[24..32].copy_from_slice(&v_offset.to_le_bytes());
             {
                 let b = v_pressure.to_le_bytes();
                 out[32..36].copy_from_slice(&[b[2], b[3], b[0], b[1]]);

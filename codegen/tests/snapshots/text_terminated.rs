@@ -983,12 +983,12 @@ pub mod text_terminated {
             let bytes_0: usize = LISTS_SET_NAME.lists[0].encode_len(v_name.len())?
                 - LISTS_SET_NAME.base;
             let mut compact = [0u8; 5];
+            rt::encode_in_range("channel", v_channel, 0, 7)?;
             let out = {
                 compact[..1].copy_from_slice(&[0xC8]);
                 &mut compact
             };
             out[2] = 0x2A;
-            rt::encode_in_range("channel", v_channel, 0, 7)?;
             out[3] = v_channel;
             let out = LISTS_SET_NAME.expand(&compact, &[bytes_0], buf)?;
             {

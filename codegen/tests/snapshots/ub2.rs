@@ -2421,8 +2421,8 @@ pub mod ub2 {
         #[inline(always)]
         fn write(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             let Self { index: v_index } = *self;
-            let out = rt::frame_mut::<6>(buf, &[0xAA, address, 0x27, 0x00])?;
             rt::encode_in_range("index", v_index, 0, 9)?;
+            let out = rt::frame_mut::<6>(buf, &[0xAA, address, 0x27, 0x00])?;
             out[4] = v_index;
             rt::Ok(rt::seal_sum8_head(out, 4, address.wrapping_add(0xD1)))
         }
@@ -2469,10 +2469,10 @@ pub mod ub2 {
                 acceleration_index: v_acceleration_index,
                 speed_index: v_speed_index,
             } = *self;
-            let out = rt::frame_mut::<7>(buf, &[0xAA, address, 0x43, 0x00])?;
             rt::encode_in_range("acceleration_index", v_acceleration_index, 0, 18)?;
-            out[4] = v_acceleration_index;
             rt::encode_in_range("speed_index", v_speed_index, 0, 18)?;
+            let out = rt::frame_mut::<7>(buf, &[0xAA, address, 0x43, 0x00])?;
+            out[4] = v_acceleration_index;
             out[5] = v_speed_index;
             rt::Ok(rt::seal_sum8_head(out, 4, address.wrapping_add(0xED)))
         }
@@ -2538,8 +2538,8 @@ pub mod ub2 {
         #[inline(always)]
         fn write(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             let Self { address: v_address } = *self;
-            let out = rt::frame_mut::<6>(buf, &[0xAA, address, 0x60, 0x00])?;
             rt::encode_in_range("address", v_address, 33, 64)?;
+            let out = rt::frame_mut::<6>(buf, &[0xAA, address, 0x60, 0x00])?;
             out[4] = v_address;
             rt::Ok(rt::seal_sum8_head(out, 4, address.wrapping_add(0x0A)))
         }
@@ -2661,8 +2661,8 @@ pub mod ub2 {
         #[inline(always)]
         fn write(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             let Self { index: v_index, position: v_position } = *self;
-            let out = rt::frame_mut::<8>(buf, &[0xAA, address, 0x75, 0x00])?;
             rt::encode_in_range("index", v_index, 0, 9)?;
+            let out = rt::frame_mut::<8>(buf, &[0xAA, address, 0x75, 0x00])?;
             out[4] = v_index;
             out[5..7].copy_from_slice(&v_position.to_le_bytes());
             rt::Ok(rt::seal_sum8_head(out, 4, address.wrapping_add(0x1F)))
@@ -2778,8 +2778,8 @@ pub mod ub2 {
         #[inline(always)]
         fn write(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             let Self { index: v_index } = *self;
-            let out = rt::frame_mut::<7>(buf, &[0xAA, address, 0x40, 0x30])?;
             rt::encode_in_range("index", v_index, 0, 499)?;
+            let out = rt::frame_mut::<7>(buf, &[0xAA, address, 0x40, 0x30])?;
             out[4..6].copy_from_slice(&v_index.to_le_bytes());
             rt::Ok(rt::seal_sum8_head(out, 4, address.wrapping_add(0x1A)))
         }
@@ -2965,8 +2965,8 @@ pub mod ub2 {
         #[inline(always)]
         fn write(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             let Self { index: v_index } = *self;
-            let out = rt::frame_mut::<6>(buf, &[0xAA, address, 0x40, 0x75])?;
             rt::encode_in_range("index", v_index, 0, 9)?;
+            let out = rt::frame_mut::<6>(buf, &[0xAA, address, 0x40, 0x75])?;
             out[4] = v_index;
             rt::Ok(rt::seal_sum8_head(out, 4, address.wrapping_add(0x5F)))
         }
@@ -3322,10 +3322,10 @@ pub mod ub2 {
                 acceleration_index: v_acceleration_index,
                 speed_index: v_speed_index,
             } = *self;
-            let out = rt::frame_mut::<7>(buf, &[0xAA, address, 0x41, 0x21])?;
             rt::encode_in_range("acceleration_index", v_acceleration_index, 0, 18)?;
-            out[4] = v_acceleration_index;
             rt::encode_in_range("speed_index", v_speed_index, 0, 18)?;
+            let out = rt::frame_mut::<7>(buf, &[0xAA, address, 0x41, 0x21])?;
+            out[4] = v_acceleration_index;
             out[5] = v_speed_index;
             rt::Ok(rt::seal_sum8_head(out, 4, address.wrapping_add(0x0C)))
         }
@@ -3399,8 +3399,8 @@ pub mod ub2 {
                 full_steps: v_full_steps,
                 capacitance: v_capacitance,
             } = *self;
-            let out = rt::frame_mut::<13>(buf, &[0xAA, address, 0x41, 0x30])?;
             rt::encode_in_range("index", v_index, 0, 499)?;
+            let out = rt::frame_mut::<13>(buf, &[0xAA, address, 0x41, 0x30])?;
             out[4..6].copy_from_slice(&v_index.to_le_bytes());
             out[6..8].copy_from_slice(&v_full_steps.to_le_bytes());
             out[8..12].copy_from_slice(&v_capacitance.raw().to_le_bytes());
@@ -3812,8 +3812,8 @@ pub mod ub2 {
         #[inline(always)]
         fn write(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             let Self { index: v_index, full_steps: v_full_steps } = *self;
-            let out = rt::frame_mut::<8>(buf, &[0xAA, address, 0x41, 0x75])?;
             rt::encode_in_range("index", v_index, 0, 9)?;
+            let out = rt::frame_mut::<8>(buf, &[0xAA, address, 0x41, 0x75])?;
             out[4] = v_index;
             out[5..7].copy_from_slice(&v_full_steps.to_le_bytes());
             rt::Ok(rt::seal_sum8_head(out, 4, address.wrapping_add(0x60)))

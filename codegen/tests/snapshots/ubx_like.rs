@@ -893,10 +893,10 @@ pub mod ubx_like {
                 nav_rate: v_nav_rate,
                 time_ref: v_time_ref,
             } = *self;
-            let out = rt::frame_mut::<14>(buf, &[0xB5, 0x62, 0x06, 0x08, 0x06, 0x00])?;
             rt::encode_in_range("meas_rate", v_meas_rate, 25, 65535)?;
-            out[6..8].copy_from_slice(&v_meas_rate.to_le_bytes());
             rt::encode_in_range("nav_rate", v_nav_rate, 1, 127)?;
+            let out = rt::frame_mut::<14>(buf, &[0xB5, 0x62, 0x06, 0x08, 0x06, 0x00])?;
+            out[6..8].copy_from_slice(&v_meas_rate.to_le_bytes());
             out[8..10].copy_from_slice(&v_nav_rate.to_le_bytes());
             out[10..12].copy_from_slice(&v_time_ref.raw().to_le_bytes());
             rt::Ok(out.len())

@@ -627,8 +627,8 @@ pub mod unaddressed {
         #[inline(always)]
         fn write(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             let Self { rate: v_rate } = *self;
-            let out = rt::frame_mut::<7>(buf, &[0xA5, 0x5A, 0x03, 0x20])?;
             rt::encode_in_range("rate", v_rate, 1, 1000)?;
+            let out = rt::frame_mut::<7>(buf, &[0xA5, 0x5A, 0x03, 0x20])?;
             out[4..6].copy_from_slice(&v_rate.to_le_bytes());
             rt::Ok(out.len())
         }
@@ -667,8 +667,8 @@ pub mod unaddressed {
         #[inline(always)]
         fn write(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             let Self { temperature: v_temperature } = *self;
-            let out = rt::frame_mut::<7>(buf, &[0xA5, 0x5A, 0x03, 0x90])?;
             rt::encode_in_range("temperature", v_temperature.raw(), -4000, 12500)?;
+            let out = rt::frame_mut::<7>(buf, &[0xA5, 0x5A, 0x03, 0x90])?;
             out[4..6].copy_from_slice(&v_temperature.raw().to_le_bytes());
             rt::Ok(out.len())
         }

@@ -619,8 +619,8 @@ pub mod unasked {
         #[inline(always)]
         fn write(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             let Self { channel: v_channel } = *self;
-            let out = rt::frame_mut::<5>(buf, &[0xAA, address, 0x40])?;
             rt::encode_in_range("channel", v_channel, 0, 3)?;
+            let out = rt::frame_mut::<5>(buf, &[0xAA, address, 0x40])?;
             out[3] = v_channel;
             rt::Ok(rt::seal_sum8_head(out, 3, address.wrapping_add(0xEA)))
         }

@@ -656,8 +656,8 @@ pub mod unasked_to_end {
         #[inline(always)]
         fn write(&self, address: u8, out: &mut [u8; 5]) -> rt::EncodeResult {
             let Self { channel: v_channel } = *self;
-            let out = rt::head(out, &[0xAA, address, 0x40]);
             rt::encode_in_range("channel", v_channel, 0, 3)?;
+            let out = rt::head(out, &[0xAA, address, 0x40]);
             out[3] = v_channel;
             rt::Ok(rt::seal_sum8_head(out, 3, address.wrapping_add(0xEA)))
         }

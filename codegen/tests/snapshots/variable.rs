@@ -882,9 +882,9 @@ pub mod vario {
         #[inline(always)]
         fn write(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             let Self { first: v_first, quantity: v_quantity } = *self;
+            rt::encode_in_range("quantity", v_quantity, 1, 16)?;
             let out = rt::frame_mut::<9>(buf, &[0xA5, 0x5A, address, 0x05, 0x01])?;
             out[5..7].copy_from_slice(&v_first.to_be_bytes());
-            rt::encode_in_range("quantity", v_quantity, 1, 16)?;
             out[7] = v_quantity;
             rt::Ok(out.len())
         }

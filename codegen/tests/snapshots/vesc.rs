@@ -1398,8 +1398,8 @@ pub mod vesc {
         #[inline(always)]
         fn write(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             let Self { ok: v_ok, offset: v_offset } = *self;
-            let out = rt::frame_mut::<12>(buf, &[0x02, 0x00, 0x06, 0x03])?;
             rt::encode_in_range("ok", v_ok, 0, 1)?;
+            let out = rt::frame_mut::<12>(buf, &[0x02, 0x00, 0x06, 0x03])?;
             out[4] = v_ok;
             out[5..9].copy_from_slice(&v_offset.to_be_bytes());
             rt::Ok(out.len())
