@@ -386,6 +386,49 @@ fn shared_flags_open_the_next_frame() {
     }
 }
 
+/// F.Port's uplink data frames, as the `fport` fixture's comment gives them (computed: no
+/// independent source quotes one byte for byte): 08 81 PRIM APPID DATA CRC without the 7E
+/// flags, stuffed throughout. Each unstuffs to a frame whose length counts the type and the
+/// payload and whose CRC is the one the fixture's checksum (`sum8_end_around`, from the length)
+/// computes; no 7E travels in one; and the language cannot carry the uplink yet (broken fixture
+/// `layout_dir_fport_uplink`), so the comment is checked here rather than by the examples.
+#[test]
+fn fport_uplink_frames_in_the_comment_check() {
+    let p = fixture("fport");
+    let text = std::fs::read_to_string(format!(
+        "{}/tests/fixtures/valid/fport.yaml",
+        env!("CARGO_MANIFEST_DIR")
+    ))
+    .unwrap();
+    let uplink = [
+        "08 81 00 00 00 00 00 00 00 76",
+        "08 81 10 10 01 7D 5E 00 00 00 D6",
+        "08 81 32 7D 5D 0D 78 56 34 12 A4",
+    ];
+    for hex in uplink {
+        assert!(
+            text.contains(&format!("\"{hex}\"")),
+            "{hex} not in the comment"
+        );
+        let wire = parse_hex(hex).unwrap();
+        assert!(!wire.contains(&0x7E), "{hex}");
+        let mut plain = Vec::new();
+        let mut bytes = wire.iter();
+        while let Some(&b) = bytes.next() {
+            plain.push(if b == 0x7D {
+                bytes.next().unwrap() ^ 0x20
+            } else {
+                b
+            });
+        }
+        assert_eq!(plain.len(), 10, "{hex}");
+        assert_eq!(plain[0] as usize, plain.len() - 2, "{hex}");
+        assert_eq!(plain[1], 0x81, "{hex}");
+        let crc = p.framing.checksum.compute(&plain[..plain.len() - 1]);
+        assert_eq!(crc, u64::from(plain[plain.len() - 1]), "{hex}");
+    }
+}
+
 /// FrSky F.Port v1 (fixture `fport`): its CRC is the end-around sum (`sum8_end_around`) of the
 /// unstuffed length through payload. ArduPilot's control frame decodes with its CRC FA; the
 /// same frame with the plain sum inverted (04, what `sum8_ones_complement` gives) is refused
