@@ -102,6 +102,8 @@ fn cases() -> Vec<Case> {
         spec("model/tests/fixtures/valid/xbee_api2.yaml"),
         // FrSky F.Port v1: the end-around sum (`sum8_end_around`) in Lua, over stuffed frames.
         spec("model/tests/fixtures/valid/fport.yaml"),
+        // Its uplink alone: escaped from the first byte, no flags, found by the length field.
+        spec("model/tests/fixtures/valid/fport_uplink.yaml"),
         // Wake-up bytes before frames (DL/T 645's preamble): the dissector skips them; its
         // payload travels +33H (`framing.transform`): shown transformed back.
         spec("model/tests/fixtures/valid/dlt645.yaml"),

@@ -486,6 +486,17 @@ fn end_around_sum_spec_generates_its_snapshot() {
     check("model/tests/fixtures/valid/fport.yaml", "fport.rs");
 }
 
+/// F.Port's uplink data frames alone: escaped from the first byte to the last, without start
+/// or end bytes, framed by the length field at offset 0 as the bytes unstuff
+/// (`snapshots_compile.rs` compiles it and holds it to the interpreter).
+#[test]
+fn escaped_without_start_or_end_generates_its_snapshot() {
+    check(
+        "model/tests/fixtures/valid/fport_uplink.yaml",
+        "fport_uplink.rs",
+    );
+}
+
 /// Responses sent unasked (`unasked: true`): `Response::is_unasked` and the
 /// `ResponseMessage::is_unasked` override; `snapshots_compile.rs` compiles it and holds it to
 /// the interpreter.

@@ -33,6 +33,7 @@ include!("snapshots/dynamixel2_stuffed.rs");
 include!("snapshots/xbee_api2.rs");
 include!("snapshots/kiss.rs");
 include!("snapshots/fport.rs");
+include!("snapshots/fport_uplink.rs");
 include!("snapshots/unasked.rs");
 include!("snapshots/unasked_to_end.rs");
 include!("snapshots/lists_after.rs");
@@ -2060,8 +2061,14 @@ fn escaped_snapshots_agree_with_the_interpreter() {
         0x7E5D,
         "downlink_data",
     );
+    let uplink = escaped_agree::<fport_uplink::FportUplink>(
+        "model/tests/fixtures/valid/fport_uplink.yaml",
+        0x0881,
+        "uplink_data",
+    );
     for (name, (accepted, refused, found)) in [
         ("fport", fport),
+        ("fport_uplink", uplink),
         ("slip", slip),
         ("kiss", kiss),
         ("hdlc", hdlc),

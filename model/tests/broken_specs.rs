@@ -31,6 +31,22 @@ const CASES: &[(&str, &[(&str, &str)])] = &[
         &[("framing.layout.response", "the response's layout has no `start`, the other direction's has: `start` in one")],
     ),
     (
+        "layout_dir_end_one_direction",
+        &[("framing.layout.response", "the response's layout has no `end`, the other direction's has: `end` in one direction only")],
+    ),
+    (
+        "layout_dir_length_one_direction",
+        &[("framing.layout.response", "the response's layout has no `length`, the other direction's has: `length` in one")],
+    ),
+    (
+        "layout_dir_fport_uplink",
+        &[
+            ("framing.escaping", "escaping without an end byte (frames found by their length field) is not expressible with"),
+            ("framing.layout.response", "the response's layout has no `start`, the other direction's has: `start` in one"),
+            ("framing.layout.response", "the response's layout has no `end`, the other direction's has: `end` in one"),
+        ],
+    ),
+    (
         "layout_dir_counts_missing",
         &[("framing.length.counts", "counts `header`, which the layout does not have")],
     ),

@@ -20,7 +20,7 @@ fn fixture(name: &str) -> Protocol {
     busspec_model::load_file(std::path::Path::new(&path)).unwrap_or_else(|d| panic!("{d}"))
 }
 
-const ESCAPED: [&str; 7] = [
+const ESCAPED: [&str; 8] = [
     "slip_sensor",
     "kiss",
     "hdlc_like",
@@ -28,6 +28,7 @@ const ESCAPED: [&str; 7] = [
     "dynamixel2_stuffed",
     "xbee_api2",
     "fport",
+    "fport_uplink",
 ];
 
 fn values(frame: &Frame) -> Vec<Value<'static>> {
@@ -384,6 +385,107 @@ fn shared_flags_open_the_next_frame() {
         let (a, b) = capture.split_at(cut);
         assert_eq!(run(&capture, &[a, b]), got, "cut at {cut}");
     }
+}
+
+/// F.Port's uplink data frames, as the `fport` fixture's comment gives them (computed: no
+/// independent source quotes one byte for byte): 08 81 PRIM APPID DATA CRC without the 7E
+/// flags, stuffed throughout. Each unstuffs to a frame whose length counts the type and the
+/// payload and whose CRC is the one the fixture's checksum (`sum8_end_around`, from the length)
+/// computes; no 7E travels in one; and the language cannot carry the uplink yet (broken fixture
+/// `layout_dir_fport_uplink`), so the comment is checked here rather than by the examples.
+#[test]
+fn fport_uplink_frames_in_the_comment_check() {
+    let p = fixture("fport");
+    let text = std::fs::read_to_string(format!(
+        "{}/tests/fixtures/valid/fport.yaml",
+        env!("CARGO_MANIFEST_DIR")
+    ))
+    .unwrap();
+    let uplink = [
+        "08 81 00 00 00 00 00 00 00 76",
+        "08 81 10 10 01 7D 5E 00 00 00 D6",
+        "08 81 32 7D 5D 0D 78 56 34 12 A4",
+    ];
+    for hex in uplink {
+        assert!(
+            text.contains(&format!("\"{hex}\"")),
+            "{hex} not in the comment"
+        );
+        let wire = parse_hex(hex).unwrap();
+        assert!(!wire.contains(&0x7E), "{hex}");
+        let mut plain = Vec::new();
+        let mut bytes = wire.iter();
+        while let Some(&b) = bytes.next() {
+            plain.push(if b == 0x7D {
+                bytes.next().unwrap() ^ 0x20
+            } else {
+                b
+            });
+        }
+        assert_eq!(plain.len(), 10, "{hex}");
+        assert_eq!(plain[0] as usize, plain.len() - 2, "{hex}");
+        assert_eq!(plain[1], 0x81, "{hex}");
+        let crc = p.framing.checksum.compute(&plain[..plain.len() - 1]);
+        assert_eq!(crc, u64::from(plain[plain.len() - 1]), "{hex}");
+    }
+}
+
+/// F.Port's uplink alone (fixture `fport_uplink`): frames escaped from their first byte, with
+/// neither start nor end bytes, found by the length field as the bytes unstuff. A stream with
+/// ArduPilot's FF pad byte before some frames (`fport_pad`) reports each pad as noise and every
+/// frame, however the capture is cut; a frame whose CRC is wrong is no frame.
+#[test]
+fn fport_uplink_stream_skips_the_pad_byte() {
+    let p = fixture("fport_uplink");
+    let wire: Vec<&[u8]> = p.examples.iter().map(|e| e.wire.as_slice()).collect();
+    let mut capture = vec![0xFF];
+    capture.extend_from_slice(wire[0]);
+    capture.extend_from_slice(wire[1]);
+    capture.push(0xFF);
+    capture.extend_from_slice(wire[2]);
+    let run = |chunks: &[&[u8]]| {
+        let mut d = StreamDecoder::new(&p, None);
+        let mut events = Vec::new();
+        for c in chunks {
+            events.extend(d.push(c));
+        }
+        events.extend(d.flush());
+        events
+            .iter()
+            .map(|e| match e {
+                Event::Frame { offset, frame, .. } => {
+                    (*offset, p.message(frame.message).name.clone())
+                }
+                Event::Skipped { offset, bytes } => (*offset, format!("skipped {bytes:02X?}")),
+                other => (other.offset(), format!("{other:?}")),
+            })
+            .collect::<Vec<_>>()
+    };
+    let got = run(&[&capture]);
+    let second = 1 + wire[0].len() as u64;
+    let pad = second + wire[1].len() as u64;
+    assert_eq!(
+        got,
+        [
+            (0, "skipped [FF]".to_string()),
+            (1, "uplink_data".to_string()),
+            (second, "uplink_data".to_string()),
+            (pad, "skipped [FF]".to_string()),
+            (pad + 1, "uplink_data".to_string()),
+        ],
+        "{capture:02X?}"
+    );
+    for cut in 0..capture.len() {
+        let (a, b) = capture.split_at(cut);
+        assert_eq!(run(&[a, b]), got, "cut at {cut}");
+    }
+    let mut bad = wire[0].to_vec();
+    *bad.last_mut().unwrap() ^= 1;
+    assert_eq!(
+        refusal(&p, "08 81 00 00 00 00 00 00 00 77"),
+        "checksum mismatch at offset 9: expected 0x76, found 0x77"
+    );
+    assert!(run(&[&bad]).iter().all(|(_, e)| e != "uplink_data"));
 }
 
 /// FrSky F.Port v1 (fixture `fport`): its CRC is the end-around sum (`sum8_end_around`) of the
