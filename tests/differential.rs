@@ -160,7 +160,6 @@ fn dynamixel2_generated_and_interpreter_agree_on_random_inputs() {
 /// correction) are not.
 #[test]
 fn crsf_telemetry_is_sent_unasked_in_both_engines() {
-    use busspec_protocols::{Message, ResponseMessage};
     let p = spec::<Crsf>();
     let wire_of = |name: &str| {
         p.examples
