@@ -519,7 +519,8 @@ fn compare(p: &Protocol, case: &Case, dir: &Path) -> Counts {
     };
     let mut counts = Counts::default();
     // busspec's pairing: the last request since the previous response (packet number, command
-    // index, offset); a response, an out-of-spec or an ambiguous frame ends it.
+    // index, offset); a response (but one sent unasked the request does not get), an
+    // out-of-spec or an ambiguous frame ends it.
     let mut last: Option<(usize, usize, u64)> = None;
     let mut response_in: BTreeMap<usize, usize> = BTreeMap::new();
     let mut expected_response_to: Vec<Option<usize>> = vec![None; events.len()];
@@ -535,17 +536,21 @@ fn compare(p: &Protocol, case: &Case, dir: &Path) -> Counts {
                 let r = p.find_in(m, Direction::Request).unwrap();
                 last = Some((i + 1, r.index, offset));
             } else {
-                // A response sent unasked that the request does not get is not its reply.
+                // A response sent unasked that the request does not get is not its reply,
+                // and leaves the request waiting for it.
                 let r = p.find_in(m, Direction::Response).unwrap();
                 let reply = |c: usize| {
                     !p.message(r).unasked
                         || p.commands[c].responses.iter().any(|(x, _)| *x == r.index)
                 };
+                let aside = last.is_some_and(|(_, c, _)| !reply(c));
                 if let Some((n, _, _)) = last.filter(|&(_, c, _)| reply(c)) {
                     expected_response_to[i] = Some(n);
                     response_in.insert(n, i + 1);
                 }
-                last = None;
+                if !aside {
+                    last = None;
+                }
             }
         }
     }
@@ -669,11 +674,19 @@ fn compare(p: &Protocol, case: &Case, dir: &Path) -> Counts {
                     None => {
                         assert_eq!(packet.get(&key("out_of_spec")), None, "{what}");
                         counts.frames += 1;
-                        last_request = match d {
-                            Direction::Request => Some((r.index, offset)),
-                            Direction::Response => None,
-                        };
-                        last_bytes = frame_bytes.clone();
+                        // An unasked response its request does not get leaves it waiting.
+                        let aside = d == Direction::Response
+                            && p.message(r).unasked
+                            && last_request.is_some_and(|(c, _)| {
+                                !p.commands[c].responses.iter().any(|(x, _)| *x == r.index)
+                            });
+                        if !aside {
+                            last_request = match d {
+                                Direction::Request => Some((r.index, offset)),
+                                Direction::Response => None,
+                            };
+                            last_bytes = frame_bytes.clone();
+                        }
                     }
                 }
                 // Pairing and the time between request and response.

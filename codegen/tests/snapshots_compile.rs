@@ -3408,12 +3408,26 @@ fn unasked_snapshot_streams_as_the_interpreter_does() {
         assert_eq!(gen.to_string(), words);
         assert_eq!(int.to_string(), words);
     }
-    // Request, heartbeat, its reply; go_to, the alarm as its reply, a heartbeat again.
-    let cap: Vec<u8> = [&get_status, &heartbeat, &status, &go_to, &alarm, &heartbeat]
-        .into_iter()
-        .flatten()
-        .copied()
-        .collect();
+    // Request, heartbeat, its reply; go_to, the alarm as its reply, a heartbeat again; then
+    // get_limit, a heartbeat, its reply, which only the request tells from a span: the
+    // heartbeat leaves the request waiting in both stream decoders.
+    let get_limit = busspec_model::interp::parse_hex("AA 21 41 0C").unwrap();
+    let limit = busspec_model::interp::parse_hex("AA 21 42 02 00 10 1F").unwrap();
+    let cap: Vec<u8> = [
+        &get_status,
+        &heartbeat,
+        &status,
+        &go_to,
+        &alarm,
+        &heartbeat,
+        &get_limit,
+        &heartbeat,
+        &limit,
+    ]
+    .into_iter()
+    .flatten()
+    .copied()
+    .collect();
     let names = [
         "get_status",
         "heartbeat",
@@ -3421,6 +3435,9 @@ fn unasked_snapshot_streams_as_the_interpreter_does() {
         "go_to",
         "alarm",
         "heartbeat",
+        "get_limit",
+        "heartbeat",
+        "limit",
     ];
     for cuts in [&[1usize][..], &[3, 7], &[64]] {
         let want = interp_seen(&p, &cap, cuts);

@@ -1655,12 +1655,14 @@ local function setup(P)
         end
         state.last = { num = num, idx = m.idx, cov = cov }
       else
-        -- A response sent unasked that the request before it does not get is not its reply.
-        if prev and not (m.unasked and not P.commands[prev.idx + 1].gets[m.idx]) then
+        -- A response sent unasked that the request before it does not get is not its reply,
+        -- and leaves the request waiting for it.
+        local aside = prev and m.unasked and not P.commands[prev.idx + 1].gets[m.idx]
+        if prev and not aside then
           rec.response_to = prev
           state.response_in[prev.num] = num
         end
-        state.last = nil
+        if not aside then state.last = nil end
       end
     end
 

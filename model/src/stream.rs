@@ -117,7 +117,9 @@
 //!
 //! A response that only its request can identify is decoded as the answer to the last request
 //! seen since the previous response (a sniffer sees the request just before its reply). A
-//! response ends the pairing, since a request gets one reply; failing a current request, the
+//! response ends the pairing, since a request gets one reply, but one sent unasked that is not
+//! the request's reply (a heartbeat between a request and its reply), which leaves the request
+//! waiting for its reply; failing a current request, the
 //! default request given to [`StreamDecoder::with_default_request`] is used (for a capture of
 //! one direction only). If that still leaves it open, the frame is [`Event::Ambiguous`]. An
 //! out-of-spec frame ends the pairing, as an ambiguous one does.
@@ -740,8 +742,10 @@ impl<'p> StreamDecoder<'p> {
                 let offset = self.head;
                 self.report_noise(out);
                 self.consume(len);
-                self.pair(message);
-                self.last_frame = None;
+                if !self.unasked_aside(&interp::constant_frame(message)) {
+                    self.pair(message);
+                    self.last_frame = None;
+                }
                 out.push(Event::Frame {
                     offset,
                     bytes,
@@ -1239,12 +1243,14 @@ impl<'p> StreamDecoder<'p> {
         self.consume_frame(len);
         out.push(match found {
             Ok(frame) => {
-                self.pair(frame.message);
-                self.last_frame = self.last_request.map(|_| frame.clone());
-                if self.last_request.is_some() && self.over_request {
-                    self.last_covered.clear();
-                    let span = self.p.checksum_span(&bytes).unwrap_or(&[]);
-                    self.last_covered.extend_from_slice(span);
+                if !self.unasked_aside(&frame) {
+                    self.pair(frame.message);
+                    self.last_frame = self.last_request.map(|_| frame.clone());
+                    if self.last_request.is_some() && self.over_request {
+                        self.last_covered.clear();
+                        let span = self.p.checksum_span(&bytes).unwrap_or(&[]);
+                        self.last_covered.extend_from_slice(span);
+                    }
                 }
                 Event::Frame {
                     offset,
@@ -1262,6 +1268,32 @@ impl<'p> StreamDecoder<'p> {
             }
         });
         Ok(())
+    }
+
+    /// Whether `frame` is a response sent unasked (`unasked: true`) that is not the reply to
+    /// the request before it: it leaves the pairing as it was, that request still waiting for
+    /// its reply.
+    fn unasked_aside(&self, frame: &Frame<'p>) -> bool {
+        let r = frame.message;
+        if r.direction != Direction::Response || !self.p.message(r).unasked {
+            return false;
+        }
+        let Some(q) = self.last_request else {
+            return false;
+        };
+        match &self.last_frame {
+            Some(request) => interp::answers(self.p, request, frame).is_err(),
+            // A constant request frame: nothing of it for a reply to follow.
+            None => !self
+                .p
+                .message(MessageRef {
+                    direction: Direction::Request,
+                    index: q,
+                })
+                .responses
+                .iter()
+                .any(|(i, _)| *i == r.index),
+        }
     }
 
     fn pair(&mut self, r: MessageRef) {

@@ -41,6 +41,8 @@ fn the_flag_reaches_the_ir() {
         [
             ("started", false, 1),
             ("status", false, 1),
+            ("limit", false, 1),
+            ("span", false, 1),
             ("heartbeat", true, 0),
             ("alarm", true, 1)
         ]
@@ -89,6 +91,9 @@ fn an_unasked_frame_after_a_request_is_not_its_reply() {
     );
 }
 
+/// An unasked frame between a request and its reply leaves the request waiting: the reply is
+/// still paired with it (`limit` and `span` share code and length, only the request tells
+/// them apart; the heartbeat ended the pairing and left the reply ambiguous until it did not).
 #[test]
 fn the_stream_reports_an_unasked_frame_wherever_it_appears() {
     let p = fixture();
@@ -102,6 +107,9 @@ fn the_stream_reports_an_unasked_frame_wherever_it_appears() {
         "AA 21 40 02 0D",          // get_status, channel 2
         "AA 21 71 03 3F",          // alarm, unasked after a request that does not list it
         "AA 21 40 02 00 05 12",    // status, its reply
+        "AA 21 41 0C",             // get_limit
+        "AA 21 70 00 00 00 0A 45", // heartbeat, between the request and its reply
+        "AA 21 42 02 00 10 1F",    // limit, its reply: only the request tells it from span
     ]
     .iter()
     .flat_map(|s| hex(s))
@@ -131,7 +139,10 @@ fn the_stream_reports_an_unasked_frame_wherever_it_appears() {
                 "alarm",
                 "get_status",
                 "alarm",
-                "status"
+                "status",
+                "get_limit",
+                "heartbeat",
+                "limit"
             ],
             "cut {cut}"
         );

@@ -37,7 +37,8 @@
 //! reasons and the limits; the two are tested against each other.
 //!
 //! A response only its request can identify (SD 0x22..0x28, 0x38) is decoded as the answer to
-//! the last request seen since the previous response, or else to the default request
+//! the last request seen since the previous response (a response sent unasked that is not
+//! that request's reply leaves it waiting), or else to the default request
 //! ([`StreamDecoder::with_default_request`]); failing both it is an [`Event::Ambiguous`].
 //! Pairing says which response a frame is, never whether it is one: a frame that decodes as a
 //! request and as a response (a Modbus echo) is an [`Event::Ambiguous`] whatever request came
@@ -760,7 +761,7 @@ impl<C: Protocol> Core<C> {
                 Found::Request(request)
             }
             (None, Some(Ok(frame))) => {
-                self.last_request = None;
+                self.last_request = self.kept_after(&frame.message);
                 Found::Response(frame)
             }
             (None, Some(Err(code))) => {
@@ -842,8 +843,23 @@ impl<C: Protocol> Core<C> {
         C::response_decodes(frame, None, covered)
     }
 
+    /// The request a response leaves for the next one to pair with: none, since a request gets
+    /// one reply, but where the response is sent unasked and is not the reply to the request
+    /// before it (a heartbeat between a request and its reply), which leaves that request
+    /// waiting. Decided at compile time where no response is sent unasked.
+    #[inline(always)]
+    fn kept_after(&self, response: &C::Response) -> Option<C::Request> {
+        if !<C::Response as ResponseMessage<C::Request>>::HAS_UNASKED {
+            return None;
+        }
+        match self.last_request {
+            Some(q) if response.is_unasked() && !response.answers(&q) => Some(q),
+            _ => None,
+        }
+    }
+
     /// The request the next response pairs with, after a frame (`None` after any but a
-    /// request); not kept where no response's decoding depends on it
+    /// request, or an unasked response that is not its reply: [`Self::kept_after`]); not kept where no response's decoding depends on it
     /// ([`Framing::REPLY_BY_REQUEST`](crate::Framing::REPLY_BY_REQUEST)), which saves copying
     /// every request (Modbus: a request is 250 bytes).
     #[inline(always)]
@@ -1006,7 +1022,11 @@ impl<C: Protocol> Core<C> {
                         }
                     };
                     match reply {
-                        Ok(frame) => settle!(None, len, Event::Response { offset, len, frame }),
+                        Ok(frame) => settle!(
+                            self.kept_after(&frame.message),
+                            len,
+                            Event::Response { offset, len, frame }
+                        ),
                         Err(DecodeError::Ambiguous { code, .. }) => {
                             settle!(None, len, Event::Ambiguous { offset, len, code })
                         }
@@ -1142,7 +1162,11 @@ impl<C: Protocol> Core<C> {
                     Err(_) => slow!(),
                 },
                 Err(q) => match self.response(frame) {
-                    Ok(frame) => settle!(None, len, Event::Response { offset, len, frame }),
+                    Ok(frame) => settle!(
+                        self.kept_after(&frame.message),
+                        len,
+                        Event::Response { offset, len, frame }
+                    ),
                     Err(DecodeError::Ambiguous { code, .. }) => {
                         settle!(None, len, Event::Ambiguous { offset, len, code })
                     }

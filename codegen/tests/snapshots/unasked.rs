@@ -26,7 +26,7 @@ pub mod unasked {
     /// The document's date.
     pub const DOCUMENT_DATE: &str = "2026-01-01";
     /// SHA-256 of the spec file this module was generated from, lowercase hex (`sha256sum`).
-    pub const SPEC_SHA256: &str = "d69adfc41cf37bbb0726ead0c914b8833b6c29fd3704b9cdbe2174d79b867160";
+    pub const SPEC_SHA256: &str = "bc3b966d9103f15c5450e9dbc24542fc942ec5231964d3583576f7ac6e939b3a";
     /// The spec's text, exactly as this module was generated from it.
     pub const SPEC_YAML: &str = include_str!(
         "../../../model/tests/fixtures/valid/unasked.yaml"
@@ -87,11 +87,11 @@ pub mod unasked {
     fn frame_sum(bytes: &[u8]) -> u32 {
         u32::from(checksum(bytes))
     }
-    /// The checks every request passes before its code is read: 5 to 6 bytes, then its start byte, its checksum, its address (offset 1).
+    /// The checks every request passes before its code is read: 4 to 6 bytes, then its start byte, its checksum, its address (offset 1).
     const REQUEST_CHECKS: rt::FrameChecks = rt::FrameChecks {
         sync: &[],
         frame: &FRAME,
-        min: 5,
+        min: 4,
         max: 6,
         address_at: 1,
     };
@@ -111,18 +111,24 @@ pub mod unasked {
     pub enum Request {
         GoTo(request::GoTo),
         GetStatus(request::GetStatus),
+        GetLimit(request::GetLimit),
+        GetSpan(request::GetSpan),
     }
     impl Request {
         /// Each message's spec name, code and frame length, in spec order.
-        const MESSAGES: [(&'static str, &'static [u8], usize); 2] = [
+        const MESSAGES: [(&'static str, &'static [u8], usize); 4] = [
             ("go_to", &[0x20], 6),
             ("get_status", &[0x40], 5),
+            ("get_limit", &[0x41], 4),
+            ("get_span", &[0x43], 4),
         ];
         /// This message's row in [`Self::MESSAGES`].
         const fn index(&self) -> usize {
             match *self {
                 Self::GoTo(_) => 0,
                 Self::GetStatus(_) => 1,
+                Self::GetLimit(_) => 2,
+                Self::GetSpan(_) => 3,
             }
         }
         /// The spec's snake_case name of this message.
@@ -143,6 +149,7 @@ pub mod unasked {
             match self {
                 Self::GoTo(m) => m.visit(f),
                 Self::GetStatus(m) => m.visit(f),
+                _ => {}
             }
         }
         /// Encodes the frame for `address` into `buf`; returns the frame length. Refuses what
@@ -153,6 +160,14 @@ pub mod unasked {
             let len = match *self {
                 Self::GoTo(ref m) => m.write(address, buf)?,
                 Self::GetStatus(ref m) => m.write(address, buf)?,
+                Self::GetLimit(_) => {
+                    let out = rt::frame_mut::<4>(buf, &[0xAA, address, 0x41])?;
+                    rt::seal_sum8_head(out, 3, address.wrapping_add(0xEB))
+                }
+                Self::GetSpan(_) => {
+                    let out = rt::frame_mut::<4>(buf, &[0xAA, address, 0x43])?;
+                    rt::seal_sum8_head(out, 3, address.wrapping_add(0xED))
+                }
             };
             rt::Ok(len)
         }
@@ -170,6 +185,14 @@ pub mod unasked {
             match frame[2] {
                 0x20 => request::GoTo::from_frame(frame).map(Self::GoTo),
                 0x40 => request::GetStatus::from_frame(frame).map(Self::GetStatus),
+                0x41 => {
+                    rt::fixed::<4>(frame, &request::GetLimit::DESC)
+                        .map(|_| Self::GetLimit(request::GetLimit))
+                }
+                0x43 => {
+                    rt::fixed::<4>(frame, &request::GetSpan::DESC)
+                        .map(|_| Self::GetSpan(request::GetSpan))
+                }
                 _ => rt::Err(REQUEST_CODE.unknown(frame)),
             }
         }
@@ -191,6 +214,8 @@ pub mod unasked {
                         channel: rt::get(&mut field, "channel")?,
                     })
                 }
+                "get_limit" => Self::GetLimit(request::GetLimit),
+                "get_span" => Self::GetSpan(request::GetSpan),
                 _ => return rt::Err(rt::FieldError::UnknownMessage),
             };
             rt::Ok(message)
@@ -228,9 +253,11 @@ pub mod unasked {
     impl Request {
         /// Each command's kind, whether it accepts and answers the broadcast address, and the
         /// responses it may get (bit `i`: row `i` of `Response::MESSAGES`), in spec order.
-        const COMMANDS: [(rt::CommandKind, bool, bool, u64); 2] = [
-            (rt::Movement, false, false, 0x9),
+        const COMMANDS: [(rt::CommandKind, bool, bool, u64); 4] = [
+            (rt::Movement, false, false, 0x21),
             (rt::Getter, false, false, 0x2),
+            (rt::Getter, false, false, 0x4),
+            (rt::Getter, false, false, 0x8),
         ];
         /// What the spec says of the command beyond its frame: its kind, the broadcast
         /// address, its reply, whether a master may send it again.
@@ -259,14 +286,18 @@ pub mod unasked {
     pub enum Response {
         Started(response::Started),
         Status(response::Status),
+        Limit(response::Limit),
+        Span(response::Span),
         Heartbeat(response::Heartbeat),
         Alarm(response::Alarm),
     }
     impl Response {
         /// Each message's spec name, code and frame length, in spec order.
-        const MESSAGES: [(&'static str, &'static [u8], usize); 4] = [
+        const MESSAGES: [(&'static str, &'static [u8], usize); 6] = [
             ("started", &[0x50], 4),
             ("status", &[0x40], 7),
+            ("limit", &[0x42], 7),
+            ("span", &[0x42], 7),
             ("heartbeat", &[0x70], 8),
             ("alarm", &[0x71], 5),
         ];
@@ -275,8 +306,10 @@ pub mod unasked {
             match *self {
                 Self::Started(_) => 0,
                 Self::Status(_) => 1,
-                Self::Heartbeat(_) => 2,
-                Self::Alarm(_) => 3,
+                Self::Limit(_) => 2,
+                Self::Span(_) => 3,
+                Self::Heartbeat(_) => 4,
+                Self::Alarm(_) => 5,
             }
         }
         /// The spec's snake_case name of this message.
@@ -296,6 +329,8 @@ pub mod unasked {
         pub fn visit(&self, f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
             match self {
                 Self::Status(m) => m.visit(f),
+                Self::Limit(m) => m.visit(f),
+                Self::Span(m) => m.visit(f),
                 Self::Heartbeat(m) => m.visit(f),
                 Self::Alarm(m) => m.visit(f),
                 _ => {}
@@ -312,6 +347,8 @@ pub mod unasked {
                     rt::seal_sum8_head(out, 3, address.wrapping_add(0xFA))
                 }
                 Self::Status(ref m) => m.write(address, buf)?,
+                Self::Limit(ref m) => m.write(address, buf)?,
+                Self::Span(ref m) => m.write(address, buf)?,
                 Self::Heartbeat(ref m) => m.write(address, buf)?,
                 Self::Alarm(ref m) => m.write(address, buf)?,
             };
@@ -344,14 +381,14 @@ pub mod unasked {
             request: rt::Option<&Request>,
         ) -> rt::Result<Decoded<Response>, rt::DecodeError> {
             let address = RESPONSE_CHECKS.check(frame, frame_sum)?;
-            let message = Self::dispatch(frame)?;
+            let message = Self::dispatch(frame, request)?;
             if let rt::Some(request) = request {
                 if request.replies() >> message.index() & 1 == 0 {
                     return rt::Err(
                         rt::not_a_reply_unasked(
                             message.name(),
                             request.name(),
-                            12u64 >> message.index() & 1 != 0,
+                            48u64 >> message.index() & 1 != 0,
                         ),
                     );
                 }
@@ -361,13 +398,35 @@ pub mod unasked {
         }
         /// The message of a frame that passed the checks every frame passes, by its code.
         #[inline]
-        fn dispatch(frame: &[u8]) -> rt::DecodeResult<Self> {
+        fn dispatch(
+            frame: &[u8],
+            request: rt::Option<&Request>,
+        ) -> rt::DecodeResult<Self> {
+            let asked: u64 = request.map_or(!0, Request::replies);
             match frame[2] {
                 0x50 => {
                     rt::fixed::<4>(frame, &response::Started::DESC)
                         .map(|_| Self::Started(response::Started))
                 }
                 0x40 => response::Status::from_frame(frame).map(Self::Status),
+                0x42 => {
+                    let mut g = rt::Group::new(frame, 0x42, request.map(Request::name));
+                    g.ambiguous(
+                        asked >> 2 & 1 != 0,
+                        &response::Limit::DESC,
+                        |frame: &[u8; 7]| {
+                            response::Limit::from_frame(frame).map(Self::Limit)
+                        },
+                    );
+                    g.ambiguous(
+                        asked >> 3 & 1 != 0,
+                        &response::Span::DESC,
+                        |frame: &[u8; 7]| {
+                            response::Span::from_frame(frame).map(Self::Span)
+                        },
+                    );
+                    g.end(&response::Limit::DESC)
+                }
                 0x70 => response::Heartbeat::from_frame(frame).map(Self::Heartbeat),
                 0x71 => response::Alarm::from_frame(frame).map(Self::Alarm),
                 _ => rt::Err(RESPONSE_CODE.unknown(frame)),
@@ -386,6 +445,18 @@ pub mod unasked {
                     Self::Status(response::Status {
                         channel: rt::get(&mut field, "channel")?,
                         value: rt::get(&mut field, "value")?,
+                    })
+                }
+                "limit" => {
+                    Self::Limit(response::Limit {
+                        low: rt::get(&mut field, "low")?,
+                        high: rt::get(&mut field, "high")?,
+                    })
+                }
+                "span" => {
+                    Self::Span(response::Span {
+                        start: rt::get(&mut field, "start")?,
+                        length: rt::get(&mut field, "length")?,
                     })
                 }
                 "heartbeat" => {
@@ -524,7 +595,6 @@ pub mod unasked {
         const FRAME_LENGTHS: &'static [usize] = &[8, 7, 6, 5, 4];
         type Span = [u8; 0];
         const EMPTY_SPAN: [u8; 0] = [];
-        const REPLY_BY_REQUEST: bool = false;
         #[inline]
         fn candidates(head: &[u8]) -> rt::Candidates {
             if head.first().is_some_and(|&b| b != 0xAA) {
@@ -533,7 +603,7 @@ pub mod unasked {
                     responses: 0,
                 };
             }
-            static TABLE: [u8; 528] = *b"\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\x10\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0 \0\0\0\0\0\0\0\0\0\0\0\0\0\0\x000\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0@P\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\x04\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\x08\0\0\0\0\0\0\0\x02\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\x10\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\x01\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\x08\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0";
+            static TABLE: [u8; 528] = *b"\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\x10\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0 0@0\0\0\0\0\0\0\0\0\0\0\0\0P\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0`p\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\x04\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\x08\0\0\0\0\0\0\0\x02\0\0\0\0\0\0\0\x10\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\x02\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\x10\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\x01\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\x08\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0";
             let mask = match head.get(2) {
                 rt::Some(&b) => {
                     let i = 256 + TABLE[b as usize] as usize;
@@ -541,7 +611,7 @@ pub mod unasked {
                     m.copy_from_slice(&TABLE[i..i + 16]);
                     u128::from_le_bytes(m)
                 }
-                rt::None => 0x1b000000000000000c,
+                rt::None => 0x1b000000000000001c,
             };
             rt::Candidates {
                 requests: mask as u64,
@@ -553,7 +623,7 @@ pub mod unasked {
             if head.first().is_some_and(|&b| b != 0xAA) {
                 return rt::Candidate::NONE;
             }
-            static CELLS: [u8; 512] = *b"\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\x06\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\x87\x05\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\x84\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\x88\0\x85\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0";
+            static CELLS: [u8; 512] = *b"\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\x06\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\x87\x05\x04\0\x87\0\x04\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\x84\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\x88\0\x85\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0";
             match head.get(2) {
                 rt::Some(&b) => {
                     let i = 2 * b as usize;
@@ -632,6 +702,24 @@ pub mod unasked {
             rt::Ok(Self { channel: frame[3] })
         }
     }
+    impl request::GetLimit {
+        pub const NAME: &'static str = "get_limit";
+        pub const CODE: &'static [u8] = &[0x41];
+        pub const LEN: usize = 4;
+        pub const DESC: rt::MessageDesc = rt::desc(Self::NAME, 0x41, 1, &[4]);
+        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            Request::GetLimit(*self).encode(address, buf)
+        }
+    }
+    impl request::GetSpan {
+        pub const NAME: &'static str = "get_span";
+        pub const CODE: &'static [u8] = &[0x43];
+        pub const LEN: usize = 4;
+        pub const DESC: rt::MessageDesc = rt::desc(Self::NAME, 0x43, 1, &[4]);
+        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            Request::GetSpan(*self).encode(address, buf)
+        }
+    }
     impl response::Started {
         pub const NAME: &'static str = "started";
         pub const CODE: &'static [u8] = &[0x50];
@@ -689,6 +777,72 @@ pub mod unasked {
                 "channel of the request",
             )?;
             rt::Ok(())
+        }
+    }
+    impl response::Limit {
+        pub const NAME: &'static str = "limit";
+        pub const CODE: &'static [u8] = &[0x42];
+        pub const LEN: usize = 7;
+        pub const DESC: rt::MessageDesc = rt::desc(Self::NAME, 0x42, 1, &[7]);
+        pub const LOW: rt::Range<usize> = 3..4;
+        pub const HIGH: rt::Range<usize> = 4..6;
+        pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
+            f("low", rt::Int(self.low as i64));
+            f("high", rt::Int(self.high as i64));
+        }
+        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            Response::Limit(*self).encode(address, buf)
+        }
+        /// Writes this message's frame for `address`, as the direction's `encode` does.
+        #[inline(always)]
+        fn write(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            let Self { low: v_low, high: v_high } = *self;
+            let out = rt::frame_mut::<7>(buf, &[0xAA, address, 0x42])?;
+            out[3] = v_low;
+            out[4..6].copy_from_slice(&v_high.to_be_bytes());
+            rt::Ok(rt::seal_sum8_head(out, 3, address.wrapping_add(0xEC)))
+        }
+        /// Reads this message from a frame whose framing and code are checked.
+        #[inline(always)]
+        fn from_frame(frame: &[u8]) -> rt::DecodeResult<Self> {
+            let frame = rt::fixed::<7>(frame, &Self::DESC)?;
+            rt::Ok(Self {
+                low: frame[3],
+                high: u16::from_be_bytes([frame[4], frame[5]]),
+            })
+        }
+    }
+    impl response::Span {
+        pub const NAME: &'static str = "span";
+        pub const CODE: &'static [u8] = &[0x42];
+        pub const LEN: usize = 7;
+        pub const DESC: rt::MessageDesc = rt::desc(Self::NAME, 0x42, 1, &[7]);
+        pub const START: rt::Range<usize> = 3..4;
+        pub const LENGTH: rt::Range<usize> = 4..6;
+        pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
+            f("start", rt::Int(self.start as i64));
+            f("length", rt::Int(self.length as i64));
+        }
+        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            Response::Span(*self).encode(address, buf)
+        }
+        /// Writes this message's frame for `address`, as the direction's `encode` does.
+        #[inline(always)]
+        fn write(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            let Self { start: v_start, length: v_length } = *self;
+            let out = rt::frame_mut::<7>(buf, &[0xAA, address, 0x42])?;
+            out[3] = v_start;
+            out[4..6].copy_from_slice(&v_length.to_be_bytes());
+            rt::Ok(rt::seal_sum8_head(out, 3, address.wrapping_add(0xEC)))
+        }
+        /// Reads this message from a frame whose framing and code are checked.
+        #[inline(always)]
+        fn from_frame(frame: &[u8]) -> rt::DecodeResult<Self> {
+            let frame = rt::fixed::<7>(frame, &Self::DESC)?;
+            rt::Ok(Self {
+                start: frame[3],
+                length: u16::from_be_bytes([frame[4], frame[5]]),
+            })
         }
     }
     impl response::Heartbeat {
@@ -768,6 +922,16 @@ pub mod unasked {
             /// Valid raw range 0..=3.
             pub channel: u8,
         }
+        /// Get limit (§3.3; code `0x41`, 4 bytes).
+        #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+        #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
+        #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]
+        pub struct GetLimit;
+        /// Get span (§3.4; code `0x43`, 4 bytes).
+        #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+        #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
+        #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]
+        pub struct GetSpan;
     }
     /// Each response as a struct of its own.
     pub mod response {
@@ -784,6 +948,24 @@ pub mod unasked {
         pub struct Status {
             pub channel: u8,
             pub value: u16,
+        }
+        /// Limit (§4.5; code `0x42`, 7 bytes).
+        #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+        #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
+        #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]
+        #[repr(align(4))]
+        pub struct Limit {
+            pub low: u8,
+            pub high: u16,
+        }
+        /// Span (§4.6; code `0x42`, 7 bytes).
+        #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+        #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
+        #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]
+        #[repr(align(4))]
+        pub struct Span {
+            pub start: u8,
+            pub length: u16,
         }
         /// Heartbeat (§4.3; code `0x70`, 8 bytes). Sent once a second on the device's own, whatever the host asks.
         #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
