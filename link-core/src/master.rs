@@ -878,10 +878,16 @@ impl<P: Link, const CAP: usize> MasterCore<P, CAP> {
 
     /// Decodes the received bytes as the reply to the request in flight.
     fn accept(&self) -> Result<(u8, P::Response), Rejection> {
+        self.accept_bytes(self.reply())
+    }
+
+    /// Decodes `bytes` (the received bytes or a tail of them) as the reply to the request in
+    /// flight.
+    fn accept_bytes(&self, bytes: &[u8]) -> Result<(u8, P::Response), Rejection> {
         let request = self.current();
         // With the request's frame as sent, which a reply's checksum may take in.
         let covered = P::Request::covered(self.sent());
-        let reply = P::Response::decode_as_reply_over(self.reply(), Some(&request), Some(covered))
+        let reply = P::Response::decode_as_reply_over(bytes, Some(&request), Some(covered))
             .map_err(Rejection::Decode)?;
         let (from, response) = (reply.address, reply.message);
         // Replies without an address (RoboClaw's): from the device asked.
@@ -969,7 +975,11 @@ impl<P: Link, const CAP: usize> MasterCore<P, CAP> {
     /// last byte a checksum by chance: only the line's quiet time ends such a frame. Before it
     /// (`quiet` false) the shortest head that decodes is set aside only where no longer
     /// response frame can start with it, else nothing is (the bytes wait for the quiet gap);
-    /// once the line is quiet, the longest head that decodes is.
+    /// once the line is quiet, the longest head after which the rest is the reply is, else
+    /// the longest head that decodes. So a reply that came in the same gap is not swallowed
+    /// by a longer unasked frame whose checksum its bytes happen to match; where several
+    /// unasked frames to their end come before the reply in one gap, only the last is split
+    /// off this way (the first ones are taken longest, as a stream decoder takes them).
     fn set_aside_unasked(&mut self, quiet: bool) -> bool {
         if !<P::Response as ResponseMessage<P::Request>>::HAS_UNASKED || self.rx_len > CAP {
             return false;
@@ -980,7 +990,13 @@ impl<P: Link, const CAP: usize> MasterCore<P, CAP> {
                 .is_ok_and(|d| d.message.is_unasked() && !d.message.answers(&request))
         };
         let found = if quiet {
-            (1..=self.rx_len).rev().find(|&n| unasked(&self.rx[..n]))
+            let mut longest = None;
+            let mut heads = (1..=self.rx_len).rev().filter(|&n| unasked(&self.rx[..n]));
+            let leaves_reply = heads.find(|&n| {
+                longest.get_or_insert(n);
+                self.accept_bytes(&self.rx[n..self.rx_len]).is_ok()
+            });
+            leaves_reply.or(longest)
         } else {
             match (1..=self.rx_len).find(|&n| unasked(&self.rx[..n])) {
                 Some(n) if !self.longer_response_may_start(n) => Some(n),

@@ -176,3 +176,34 @@ fn an_unasked_frame_to_its_end_is_set_aside_whole() {
     assert_eq!((r.response, r.attempts), (want, 1));
     assert_eq!(core.unasked_seen(), 1);
 }
+
+/// A log frame `AA 21 72 43 80` whose bytes sum to zero, then the reply in the same quiet gap:
+/// the twelve bytes also decode as one longer log frame (`43 80 AA 21 40 00 05` its text, the
+/// reply's checksum `10` the sum of all before it). The master splits them where the rest is
+/// the reply, rather than setting aside the longest head and the reply with it.
+#[test]
+fn a_reply_after_an_unasked_frame_to_its_end_is_not_swallowed() {
+    use unasked_to_end::{request, response, Request, Response, UnaskedToEnd};
+    let log = [0xAA, 0x21, 0x72, 0x43, 0x80];
+    let status = [0xAA, 0x21, 0x40, 0x00, 0x05, 0x10];
+    let both = [&log[..], &status[..]].concat();
+    assert_eq!(Response::decode(&log).unwrap().message.name(), "log");
+    assert_eq!(Response::decode(&both).unwrap().message.name(), "log");
+    let q = Request::GetStatus(request::GetStatus { channel: 1 });
+
+    let mut core: MasterCore<Plain<UnaskedToEnd>> = MasterCore::new();
+    sent(&mut core, q, ms(0));
+    core.received(&both, ms(5));
+    let mut t = ms(5);
+    loop {
+        match core.poll(t) {
+            Action::Done => break,
+            Action::Read { until } | Action::Sleep(until) => t = until,
+            other => panic!("{other:?}"),
+        }
+    }
+    let r = core.take_outcome().unwrap().unwrap();
+    let want = Some(Response::Status(response::Status { value: 5 }));
+    assert_eq!((r.response, r.attempts), (want, 1));
+    assert_eq!(core.unasked_seen(), 1);
+}
