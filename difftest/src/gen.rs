@@ -275,6 +275,9 @@ enum Own {
     /// FrSky's end-around-carry sum (`sum8_end_around`, S.Port and F.Port) in place of an 8-bit
     /// sum or XOR as drawn, masked or not.
     EndAround = 0x7E7D_5E5D_7E7D_5E5D,
+    /// A message's own values for its header fields (`header:`, JBD's request state and reply
+    /// status): whether a spec tries them, which messages, which fields, which values.
+    HeaderValues = 0xA55A_A55A_A55A_A55A,
 }
 
 /// The generator of `what` for the spec of `seed`.
@@ -1282,6 +1285,15 @@ pub fn random_spec(seed: u64) -> String {
             break;
         }
     }
+    // A message's own header values (JBD's read state A5, a reply's status 00 or 80): tried
+    // on about half the specs with header fields, kept where the validator accepts them;
+    // drawn by a generator of its own.
+    for with in header_values(seed, &text, &p) {
+        if let Ok(q) = busspec_model::load_str("generated.yaml", &with) {
+            (text, p) = (with, q);
+            break;
+        }
+    }
     let mut rng = own_rng(seed, Own::Examples);
     match examples(&p, &mut rng) {
         Some(examples) => format!("{text}examples:\n{examples}errata: []\n"),
@@ -1348,6 +1360,85 @@ fn over_request(seed: u64, text: &str, p: &ir::Protocol) -> Vec<String> {
     for r in alone {
         out.push(with(&[(r, parts[rng.usize(..parts.len())])]));
     }
+    out
+}
+
+/// `text` with messages that give their header fields a value (`Own::HeaderValues`), in
+/// about half the specs whose messages carry header fields: one to three framed messages
+/// drawn, each giving one or all of its whole (not sub-divided) header fields a value within
+/// its range (or one of its enum's values, or any of its width); the variants in the order
+/// tried (the drawn messages, then each alone, in an order drawn).
+fn header_values(seed: u64, text: &str, p: &ir::Protocol) -> Vec<String> {
+    let mut rng = own_rng(seed, Own::HeaderValues);
+    if rng.bool() {
+        return Vec::new();
+    }
+    let messages: Vec<&ir::Message> = [Direction::Request, Direction::Response]
+        .into_iter()
+        .flat_map(|d| p.framed(d))
+        .filter(|m| {
+            m.fields
+                .first()
+                .is_some_and(|f| f.header && f.bits.is_empty())
+        })
+        .collect();
+    if messages.is_empty() {
+        return Vec::new();
+    }
+    let value = |rng: &mut fastrand::Rng, f: &ir::Field| -> u64 {
+        let bits = 8 * f.width as u32;
+        let mask = if bits >= 64 {
+            u64::MAX
+        } else {
+            (1u64 << bits) - 1
+        };
+        if let Some(e) = f
+            .enumeration
+            .map(|e| &p.enums[e])
+            .filter(|e| !e.values.is_empty())
+        {
+            return e.values[rng.usize(..e.values.len())].value & mask;
+        }
+        match f.range {
+            Some((lo, hi)) => (rng.i64(lo..=hi) as u64) & mask,
+            None => rng.u64(..=mask),
+        }
+    };
+    let mut given: Vec<(String, String)> = Vec::new();
+    for _ in 0..rng.usize(1..=3) {
+        let m = messages[rng.usize(..messages.len())];
+        if given.iter().any(|(n, _)| *n == m.name) {
+            continue;
+        }
+        let whole: Vec<&ir::Field> = m
+            .fields
+            .iter()
+            .take_while(|f| f.header)
+            .filter(|f| f.bits.is_empty())
+            .collect();
+        let chosen: Vec<&ir::Field> = if rng.bool() {
+            whole.clone()
+        } else {
+            vec![whole[rng.usize(..whole.len())]]
+        };
+        let items: Vec<String> = chosen
+            .iter()
+            .map(|f| format!("{}: 0x{:X}", f.name, value(&mut rng, f)))
+            .collect();
+        given.push((m.name.clone(), items.join(", ")));
+    }
+    let with = |chosen: &[(String, String)]| {
+        let mut t = text.to_owned();
+        for (m, items) in chosen {
+            let line = format!("  - {{name: {m}, ");
+            t = t.replacen(&line, &format!("{line}header: {{{items}}}, "), 1);
+        }
+        t
+    };
+    let mut out = vec![with(&given)];
+    let mut alone = given.clone();
+    rng.shuffle(&mut alone);
+    out.extend(alone.iter().map(|g| with(std::slice::from_ref(g))));
     out
 }
 
@@ -3435,6 +3526,13 @@ pub fn constructs(p: &ir::Protocol) -> Vec<&'static str> {
     add(pos(Part::Code) < pos(Part::Address), "code before address");
     add(!f.has_address(), "no address");
     add(!f.header.is_empty(), "header fields");
+    add(
+        p.commands
+            .iter()
+            .chain(&p.responses)
+            .any(|m| m.fields.iter().any(|h| h.header && h.constant.is_some())),
+        "header values",
+    );
     add(
         p.responses.iter().any(|m| m.frame.is_some()),
         "constant frame",

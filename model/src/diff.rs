@@ -1414,6 +1414,28 @@ impl<'a> Differ<'a> {
         // `header` carry them.
         let headers = |m: &Message| m.fields.iter().take_while(|f| f.header).count();
         let (mh, xh) = (headers(m), headers(x));
+        // A message's own values for its header fields (`header:`): a frame with another value
+        // is not this message, so giving, taking away or changing one reads frames differently.
+        for f in &m.fields[..mh] {
+            let Some(g) = x.fields[..xh].iter().find(|g| g.name == f.name) else {
+                continue;
+            };
+            if f.constant != g.constant {
+                let show =
+                    |c: Option<u64>| c.map_or("any value".to_owned(), |c| format!("0x{c:02X}"));
+                self.wire(
+                    "header_value_changed",
+                    format!("{path}.header.{}", f.name),
+                    format!(
+                        "{word} `{}`: header field `{}` holds {} → {}",
+                        x.name,
+                        f.name,
+                        show(f.constant),
+                        show(g.constant)
+                    ),
+                );
+            }
+        }
         let (mf, xf) = (
             &m.fields[mh.min(m.fields.len())..],
             &x.fields[xh.min(x.fields.len())..],

@@ -3,6 +3,8 @@
 //! Every struct rejects unknown keys, so a misspelt key is an error and never silently ignored.
 //! `spec/SCHEMA.md` documents the format for the people who edit it; keep the two in step.
 
+use std::collections::BTreeMap;
+
 // The trait from `serde::de`: serde's root also exports the derive when another crate of the
 // build turns on its `derive` feature, and the derive here is serde_derive's.
 use serde::de::{Deserialize, Deserializer};
@@ -778,6 +780,10 @@ pub struct Command {
     /// `checksum: none`: this command's frames travel without the framing's checksum.
     #[serde(default)]
     pub checksum: Option<MessageChecksum>,
+    /// Values this command's header fields (`framing.header`) always hold, by name: JBD's
+    /// BMS sends every read with the state byte `0xA5`, every write with `0x5A`.
+    #[serde(default)]
+    pub header: BTreeMap<String, i64>,
 }
 
 /// A message's own `checksum:` (`none`: its frames travel without the framing's checksum,
@@ -829,6 +835,9 @@ pub struct Response {
     /// As [`Command::checksum`].
     #[serde(default)]
     pub checksum: Option<MessageChecksum>,
+    /// As [`Command::header`].
+    #[serde(default)]
+    pub header: BTreeMap<String, i64>,
 }
 
 /// A reply's `checksum_over_request`.

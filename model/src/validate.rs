@@ -255,6 +255,7 @@ fn validate_ordered(spec: &model::Spec, sink: &mut Sink) -> Option<Protocol> {
         let (code, fields, payload_len, max_payload) = message_body(
             Some(&c.code),
             &c.fields,
+            &c.header,
             &path,
             Direction::Request,
             &framing,
@@ -446,6 +447,7 @@ fn validate_ordered(spec: &model::Spec, sink: &mut Sink) -> Option<Protocol> {
                 None
             }),
             &r.fields,
+            &r.header,
             &path,
             Direction::Response,
             &framing,
@@ -3372,6 +3374,79 @@ fn constant_frame(
     frame
 }
 
+/// A message's `header:` values: each names a whole header field of its direction
+/// (`framing.header`) and becomes that field's constant in this message's copy of it, which
+/// both engines check and write as any constant field's (a frame with another value is not
+/// this message). Header constants do not tell messages apart: two messages with one code
+/// and length are refused as before (`template` leaves header fields out).
+fn header_constants(
+    values: &BTreeMap<String, i64>,
+    headers: &mut [Field],
+    path: &str,
+    direction: Direction,
+    sink: &mut Sink,
+) {
+    let hpath = join(path, "header");
+    for (name, &v) in values {
+        let p = join(&hpath, name);
+        let Some(f) = headers.iter_mut().find(|f| &f.name == name) else {
+            let sub = headers
+                .iter()
+                .find(|f| f.bits.iter().any(|b| &b.name == name));
+            let why = match sub {
+                Some(f) => format!(
+                    "`{name}` is a sub-field of header field `{}`: give the whole field's value",
+                    f.name
+                ),
+                None if headers.is_empty() => format!(
+                    "{}s carry no header fields (framing.header, with `header` in their layout)",
+                    direction.as_str()
+                ),
+                None => format!(
+                    "no header field `{name}` in {}s; they carry {}",
+                    direction.as_str(),
+                    headers
+                        .iter()
+                        .map(|f| format!("`{}`", f.name))
+                        .collect::<Vec<_>>()
+                        .join(", ")
+                ),
+            };
+            sink.error(p, why);
+            continue;
+        };
+        let bits = 8 * f.width as u32;
+        if !fits_unsigned(v, bits) {
+            sink.error(
+                p,
+                format!(
+                    "{} does not fit in the {bits}-bit header field `{name}`",
+                    hex_or_negative(v)
+                ),
+            );
+            continue;
+        }
+        if !f.bits.is_empty() {
+            sink.error(
+                p,
+                format!("header field `{name}` has sub-fields (`bits`): a value for the whole of it is not expressible yet"),
+            );
+            continue;
+        }
+        f.constant = Some(v as u64);
+        let read = f.constant_value().unwrap_or(v);
+        if let Some((min, max)) = f.range.filter(|&(lo, hi)| read < lo || read > hi) {
+            sink.error(
+                p,
+                format!(
+                    "{} is outside header field `{name}`'s range {min}..={max}",
+                    hex_or_negative(v)
+                ),
+            );
+        }
+    }
+}
+
 /// Bytes as `E5 00`.
 fn spaced_hex(bytes: &[u8]) -> String {
     let hex: Vec<String> = bytes.iter().map(|b| format!("{b:02X}")).collect();
@@ -3382,6 +3457,7 @@ fn spaced_hex(bytes: &[u8]) -> String {
 fn message_body(
     code: Option<&str>,
     fields: &[model::Field],
+    header_values: &BTreeMap<String, i64>,
     path: &str,
     direction: Direction,
     framing: &Framing,
@@ -3426,8 +3502,10 @@ fn message_body(
             own.into_iter().chain(h.bits.iter().map(|b| b.name.clone()))
         })
         .collect();
-    // The header fields every message carries come first (they sit in the frame's header).
+    // The header fields every message carries come first (they sit in the frame's header),
+    // each with the value this message gives it, if any.
     let mut out: Vec<Field> = headers.to_vec();
+    header_constants(header_values, &mut out, path, direction, sink);
     let mut offset = 0usize;
     let mut tail = 0usize;
     let mut min_tail = 0usize;

@@ -31,6 +31,14 @@ const CASES: &[(&str, &[(&str, &str)])] = &[
         &[("framing.layout.response", "the response's layout has no `start`, the other direction's has: `start` in one")],
     ),
     (
+        "header_value_unfit",
+        &[
+            ("commands.read_basic_info.header.state", "0x1A5 does not fit in the 8-bit header field `state`"),
+            ("commands.read_cell_voltages.header.mode", "no header field `mode` in requests; they carry `state`"),
+            ("commands.read_version.header.status", "no header field `status` in requests; they carry `state`"),
+        ],
+    ),
+    (
         "layout_dir_end_one_direction",
         &[("framing.layout.response", "the response's layout has no `end`, the other direction's has: `end` in one direction only")],
     ),

@@ -396,7 +396,10 @@ fn header_fields_lead_their_own_directions_messages() {
     );
     let (_, new) = common::revisions(
         "jbd_bms",
-        &[("{name: status, type: u8", "{name: outcome, type: u8")],
+        &[
+            ("{name: status, type: u8", "{name: outcome, type: u8"),
+            ("{status: 0x", "{outcome: 0x"),
+        ],
     );
     let changes = busspec_model::diff::diff(&p, &new);
     let header: Vec<_> = changes
@@ -438,6 +441,79 @@ fn header_fields_lead_their_own_directions_messages() {
         "{changes:?}"
     );
     assert!(busspec_model::diff::diff(&p, &p).is_empty());
+    // A message's own header value (`header:`) changed or taken away: frames read otherwise.
+    let (_, write) = common::revisions(
+        "jbd_bms",
+        &[(
+            "code: \"0x05\", header: {state: 0xA5}",
+            "code: \"0x05\", header: {state: 0x5A}",
+        )],
+    );
+    let (_, any) = common::revisions(
+        "jbd_bms",
+        &[(
+            "code: \"0x04\", header: {status: 0x80}, ",
+            "code: \"0x04\", ",
+        )],
+    );
+    let kinds = |new: &busspec_model::Protocol| -> Vec<(String, &'static str, _, String)> {
+        // The revisions leave the examples out.
+        busspec_model::diff::diff(&p, new)
+            .into_iter()
+            .filter(|c| c.path != "examples")
+            .map(|c| (c.path, c.kind, c.category, c.text))
+            .collect()
+    };
+    assert_eq!(
+        kinds(&write),
+        [(
+            "commands.read_version.header.state".to_owned(),
+            "header_value_changed",
+            WireBreaking,
+            "command `read_version`: header field `state` holds 0xA5 → 0x5A".to_owned()
+        )]
+    );
+    assert_eq!(
+        kinds(&any),
+        [(
+            "responses.cell_voltages_error.header.status".to_owned(),
+            "header_value_changed",
+            WireBreaking,
+            "response `cell_voltages_error`: header field `status` holds 0x80 → any value"
+                .to_owned()
+        )]
+    );
+}
+
+/// Each message's `header:` values: a frame whose header field holds another value is not
+/// that message, in a stream as alone. A read's state is A5, a data reply's status 00 and an
+/// error reply's 80 (fixture `jbd_bms`); the interpreter refuses the others at the header
+/// field's offset.
+#[test]
+fn a_message_header_value_is_checked() {
+    let p = fixture("jbd_bms.yaml");
+    let read = &p.framed(Direction::Request)[0];
+    assert_eq!(
+        (read.fields[0].name.as_str(), read.fields[0].constant),
+        ("state", Some(0xA5))
+    );
+    let write = interp::decode(&p, None, None, &[0xDD, 0x5A, 0x03, 0x00, 0xFF, 0xFD, 0x77]);
+    assert_eq!(
+        write.unwrap_err().to_string(),
+        "invalid value for read_basic_info.state at offset 1: expected 0xA5, found 0x5A"
+    );
+    // The error reply's status 80 with the version's data: no message of that code fits.
+    let reply = [
+        0xDD, 0x05, 0x80, 0x09, 0x4A, 0x42, 0x44, 0x2D, 0x53, 0x50, 0x30, 0x34, 0x53, 0xFD, 0x20,
+        0x77,
+    ];
+    let e = interp::decode(&p, Some(Direction::Response), None, &reply).unwrap_err();
+    assert_eq!(
+        e.to_string(),
+        "invalid value for version.status at offset 2: expected 0x00, found 0x80"
+    );
+    let ok = interp::decode(&p, None, None, &[0xDD, 0x03, 0x80, 0x00, 0xFF, 0x80, 0x77]).unwrap();
+    assert_eq!(p.message(ok.message).name, "basic_info_error");
 }
 
 /// `covers_from` as neither a part nor a mapping (a list, a number) is refused at its path in

@@ -26,7 +26,7 @@ pub mod jbd_bms {
     /// The document's date.
     pub const DOCUMENT_DATE: &str = "2026-11-27";
     /// SHA-256 of the spec file this module was generated from, lowercase hex (`sha256sum`).
-    pub const SPEC_SHA256: &str = "217c69774ad260a42967fc59aa16abb1907629e51d9e25df02a58bf4fbef8f80";
+    pub const SPEC_SHA256: &str = "73dccf39ad392c49ba40286a382651331d58a5e732b718918b3012b765e27c3c";
     /// The spec's text, exactly as this module was generated from it.
     pub const SPEC_YAML: &str = include_str!(
         "../../../model/tests/fixtures/valid/jbd_bms.yaml"
@@ -431,13 +431,7 @@ pub mod jbd_bms {
         }
         /// Calls `f` with each field's spec name and raw wire value (sign-extended where the
         /// field is signed), in frame order; constant and repeated fields are not visited.
-        pub fn visit(&self, f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
-            match self {
-                Self::ReadBasicInfo(m) => m.visit(f),
-                Self::ReadCellVoltages(m) => m.visit(f),
-                Self::ReadVersion(m) => m.visit(f),
-            }
-        }
+        pub fn visit(&self, _f: impl FnMut(&'static str, rt::FieldValue<'_>)) {}
         /// Encodes the frame for `address` into `buf`; returns the frame length. Refuses what
         /// decode refuses: an address no frame may carry, the broadcast address for a command
         /// that does not accept it, a value outside its field's range.
@@ -445,9 +439,11 @@ pub mod jbd_bms {
             rt::encode_address(address, &FRAME)?;
             let out = rt::frame_mut::<7>(buf, &[])?;
             let len = match *self {
-                Self::ReadBasicInfo(ref m) => m.write(address, out)?,
-                Self::ReadCellVoltages(ref m) => m.write(address, out)?,
-                Self::ReadVersion(ref m) => m.write(address, out)?,
+                Self::ReadBasicInfo(_) => rt::head(out, &[0xDD, 0xA5, 0x03, 0x00]).len(),
+                Self::ReadCellVoltages(_) => {
+                    rt::head(out, &[0xDD, 0xA5, 0x04, 0x00]).len()
+                }
+                Self::ReadVersion(_) => rt::head(out, &[0xDD, 0xA5, 0x05, 0x00]).len(),
             };
             FRAME.seal(buf, len, frame_sum);
             rt::Ok(len)
@@ -481,24 +477,12 @@ pub mod jbd_bms {
         /// are not asked for. See [`::busspec_runtime::Message::from_fields`].
         pub fn from_fields<'v>(
             name: &str,
-            mut field: impl FnMut(&'static str) -> rt::Option<rt::FieldValue<'v>>,
+            _field: impl FnMut(&'static str) -> rt::Option<rt::FieldValue<'v>>,
         ) -> rt::Result<Self, rt::FieldError> {
             let message = match name {
-                "read_basic_info" => {
-                    Self::ReadBasicInfo(request::ReadBasicInfo {
-                        state: State::from_raw(rt::get(&mut field, "state")?),
-                    })
-                }
-                "read_cell_voltages" => {
-                    Self::ReadCellVoltages(request::ReadCellVoltages {
-                        state: State::from_raw(rt::get(&mut field, "state")?),
-                    })
-                }
-                "read_version" => {
-                    Self::ReadVersion(request::ReadVersion {
-                        state: State::from_raw(rt::get(&mut field, "state")?),
-                    })
-                }
+                "read_basic_info" => Self::ReadBasicInfo(request::ReadBasicInfo),
+                "read_cell_voltages" => Self::ReadCellVoltages(request::ReadCellVoltages),
+                "read_version" => Self::ReadVersion(request::ReadVersion),
                 _ => return rt::Err(rt::FieldError::UnknownMessage),
             };
             rt::Ok(message)
@@ -661,9 +645,7 @@ pub mod jbd_bms {
                 Self::BasicInfo(m) => m.visit(f),
                 Self::CellVoltages(m) => m.visit(f),
                 Self::Version(m) => m.visit(f),
-                Self::BasicInfoError(m) => m.visit(f),
-                Self::CellVoltagesError(m) => m.visit(f),
-                Self::VersionError(m) => m.visit(f),
+                _ => {}
             }
         }
         /// Encodes the frame for `address` into `buf`; returns the frame length. Refuses what
@@ -675,9 +657,15 @@ pub mod jbd_bms {
                 Self::BasicInfo(ref m) => m.write(address, buf)?,
                 Self::CellVoltages(ref m) => m.write(address, buf)?,
                 Self::Version(ref m) => m.write(address, buf)?,
-                Self::BasicInfoError(ref m) => m.write(address, buf)?,
-                Self::CellVoltagesError(ref m) => m.write(address, buf)?,
-                Self::VersionError(ref m) => m.write(address, buf)?,
+                Self::BasicInfoError(_) => {
+                    rt::frame_mut::<7>(buf, &[0xDD, 0x03, 0x80, 0x00])?.len()
+                }
+                Self::CellVoltagesError(_) => {
+                    rt::frame_mut::<7>(buf, &[0xDD, 0x04, 0x80, 0x00])?.len()
+                }
+                Self::VersionError(_) => {
+                    rt::frame_mut::<7>(buf, &[0xDD, 0x05, 0x80, 0x00])?.len()
+                }
             };
             FRAME.seal(buf, len, frame_sum);
             rt::Ok(len)
@@ -730,6 +718,12 @@ pub mod jbd_bms {
                     g.attempt_split(
                         &REPEAT_BASIC_INFO,
                         |frame: &[u8; 27], elements: &[u8], _: usize| {
+                            rt::equal(
+                                &response::BasicInfo::STATUS_DESC,
+                                2,
+                                frame[2],
+                                0x0,
+                            )?;
                             rt::in_range(
                                 &response::BasicInfo::SOC_DESC,
                                 23,
@@ -739,7 +733,6 @@ pub mod jbd_bms {
                             )?;
                             rt::Ok(
                                 Self::BasicInfo(response::BasicInfo {
-                                    status: Status::from_raw(frame[2]),
                                     total_voltage: Centivolts::from_raw(
                                         u16::from_be_bytes([frame[4], frame[5]]),
                                     ),
@@ -778,9 +771,14 @@ pub mod jbd_bms {
                     g.attempt_split(
                         &REPEAT_CELL_VOLTAGES,
                         |frame: &[u8; 4], elements: &[u8], _: usize| {
+                            rt::equal(
+                                &response::CellVoltages::STATUS_DESC,
+                                2,
+                                frame[2],
+                                0x0,
+                            )?;
                             rt::Ok(
                                 Self::CellVoltages(response::CellVoltages {
-                                    status: Status::from_raw(frame[2]),
                                     cell_voltages: REPEAT_CELL_VOLTAGES
                                         .elements::<u16, 32>(elements, false, false)?,
                                 }),
@@ -798,9 +796,14 @@ pub mod jbd_bms {
                     g.attempt_split(
                         &REPEAT_VERSION,
                         |frame: &[u8; 4], elements: &[u8], _: usize| {
+                            rt::equal(
+                                &response::Version::STATUS_DESC,
+                                2,
+                                frame[2],
+                                0x0,
+                            )?;
                             rt::Ok(
                                 Self::Version(response::Version {
-                                    status: Status::from_raw(frame[2]),
                                     version: REPEAT_VERSION
                                         .elements::<u8, 32>(elements, false, false)?,
                                 }),
@@ -825,7 +828,6 @@ pub mod jbd_bms {
             let message = match name {
                 "basic_info" => {
                     Self::BasicInfo(response::BasicInfo {
-                        status: Status::from_raw(rt::get(&mut field, "status")?),
                         total_voltage: Centivolts::from_raw(
                             rt::get(&mut field, "total_voltage")?,
                         ),
@@ -853,7 +855,6 @@ pub mod jbd_bms {
                 }
                 "cell_voltages" => {
                     Self::CellVoltages(response::CellVoltages {
-                        status: Status::from_raw(rt::get(&mut field, "status")?),
                         cell_voltages: rt::list::<
                             u16,
                             32,
@@ -862,25 +863,14 @@ pub mod jbd_bms {
                 }
                 "version" => {
                     Self::Version(response::Version {
-                        status: Status::from_raw(rt::get(&mut field, "status")?),
                         version: rt::list_text::<32>(&mut field, "version")?,
                     })
                 }
-                "basic_info_error" => {
-                    Self::BasicInfoError(response::BasicInfoError {
-                        status: Status::from_raw(rt::get(&mut field, "status")?),
-                    })
-                }
+                "basic_info_error" => Self::BasicInfoError(response::BasicInfoError),
                 "cell_voltages_error" => {
-                    Self::CellVoltagesError(response::CellVoltagesError {
-                        status: Status::from_raw(rt::get(&mut field, "status")?),
-                    })
+                    Self::CellVoltagesError(response::CellVoltagesError)
                 }
-                "version_error" => {
-                    Self::VersionError(response::VersionError {
-                        status: Status::from_raw(rt::get(&mut field, "status")?),
-                    })
-                }
+                "version_error" => Self::VersionError(response::VersionError),
                 _ => return rt::Err(rt::FieldError::UnknownMessage),
             };
             rt::Ok(message)
@@ -926,7 +916,6 @@ pub mod jbd_bms {
     pub enum ResponseView<'a> {
         /// [`response::BasicInfo`], read from the frame.
         BasicInfo {
-            status: Status,
             total_voltage: Centivolts,
             current: Centiamps,
             remaining_capacity: CentiampHours,
@@ -943,15 +932,15 @@ pub mod jbd_bms {
             temperatures: rt::ListView<'a, DeciKelvin>,
         },
         /// [`response::CellVoltages`], read from the frame.
-        CellVoltages { status: Status, cell_voltages: rt::ListView<'a, u16> },
+        CellVoltages { cell_voltages: rt::ListView<'a, u16> },
         /// [`response::Version`], read from the frame.
-        Version { status: Status, version: rt::ListView<'a, u8> },
+        Version { version: rt::ListView<'a, u8> },
         /// [`response::BasicInfoError`], read from the frame.
-        BasicInfoError { status: Status },
+        BasicInfoError,
         /// [`response::CellVoltagesError`], read from the frame.
-        CellVoltagesError { status: Status },
+        CellVoltagesError,
         /// [`response::VersionError`], read from the frame.
-        VersionError { status: Status },
+        VersionError,
     }
     impl<'a> ResponseView<'a> {
         /// Decodes one whole frame: refuses one longer than the longest, checks its start byte,
@@ -1002,6 +991,12 @@ pub mod jbd_bms {
                     g.attempt_split(
                         &REPEAT_BASIC_INFO,
                         |frame: &'a [u8; 27], elements: &'a [u8], _: usize| {
+                            rt::equal(
+                                &response::BasicInfo::STATUS_DESC,
+                                2,
+                                frame[2],
+                                0x0,
+                            )?;
                             rt::in_range(
                                 &response::BasicInfo::SOC_DESC,
                                 23,
@@ -1010,7 +1005,6 @@ pub mod jbd_bms {
                                 100,
                             )?;
                             rt::Ok(Self::BasicInfo {
-                                status: Status::from_raw(frame[2]),
                                 total_voltage: Centivolts::from_raw(
                                     u16::from_be_bytes([frame[4], frame[5]]),
                                 ),
@@ -1038,9 +1032,13 @@ pub mod jbd_bms {
                         },
                     );
                     g.attempt(|frame: &[u8; 7]| {
-                        rt::Ok(Self::BasicInfoError {
-                            status: Status::from_raw(frame[2]),
-                        })
+                        rt::equal(
+                            &response::BasicInfoError::STATUS_DESC,
+                            2,
+                            frame[2],
+                            0x80,
+                        )?;
+                        rt::Ok(Self::BasicInfoError)
                     });
                     g.end(&response::BasicInfo::DESC)
                 }
@@ -1049,17 +1047,26 @@ pub mod jbd_bms {
                     g.attempt_split(
                         &REPEAT_CELL_VOLTAGES,
                         |frame: &'a [u8; 4], elements: &'a [u8], _: usize| {
+                            rt::equal(
+                                &response::CellVoltages::STATUS_DESC,
+                                2,
+                                frame[2],
+                                0x0,
+                            )?;
                             rt::Ok(Self::CellVoltages {
-                                status: Status::from_raw(frame[2]),
                                 cell_voltages: REPEAT_CELL_VOLTAGES
                                     .view::<u16, 32>(elements, false, false)?,
                             })
                         },
                     );
                     g.attempt(|frame: &[u8; 7]| {
-                        rt::Ok(Self::CellVoltagesError {
-                            status: Status::from_raw(frame[2]),
-                        })
+                        rt::equal(
+                            &response::CellVoltagesError::STATUS_DESC,
+                            2,
+                            frame[2],
+                            0x80,
+                        )?;
+                        rt::Ok(Self::CellVoltagesError)
                     });
                     g.end(&response::CellVoltages::DESC)
                 }
@@ -1068,17 +1075,26 @@ pub mod jbd_bms {
                     g.attempt_split(
                         &REPEAT_VERSION,
                         |frame: &'a [u8; 4], elements: &'a [u8], _: usize| {
+                            rt::equal(
+                                &response::Version::STATUS_DESC,
+                                2,
+                                frame[2],
+                                0x0,
+                            )?;
                             rt::Ok(Self::Version {
-                                status: Status::from_raw(frame[2]),
                                 version: REPEAT_VERSION
                                     .view::<u8, 32>(elements, false, false)?,
                             })
                         },
                     );
                     g.attempt(|frame: &[u8; 7]| {
-                        rt::Ok(Self::VersionError {
-                            status: Status::from_raw(frame[2]),
-                        })
+                        rt::equal(
+                            &response::VersionError::STATUS_DESC,
+                            2,
+                            frame[2],
+                            0x80,
+                        )?;
+                        rt::Ok(Self::VersionError)
                     });
                     g.end(&response::Version::DESC)
                 }
@@ -1091,9 +1107,9 @@ pub mod jbd_bms {
                 Self::BasicInfo { .. } => 0,
                 Self::CellVoltages { .. } => 1,
                 Self::Version { .. } => 2,
-                Self::BasicInfoError { .. } => 3,
-                Self::CellVoltagesError { .. } => 4,
-                Self::VersionError { .. } => 5,
+                Self::BasicInfoError => 3,
+                Self::CellVoltagesError => 4,
+                Self::VersionError => 5,
             }
         }
         /// The spec's snake_case name of this message.
@@ -1104,7 +1120,6 @@ pub mod jbd_bms {
         pub fn to_owned(self) -> Response {
             match self {
                 Self::BasicInfo {
-                    status,
                     total_voltage,
                     current,
                     remaining_capacity,
@@ -1121,7 +1136,6 @@ pub mod jbd_bms {
                     temperatures,
                 } => {
                     Response::BasicInfo(response::BasicInfo {
-                        status,
                         total_voltage,
                         current,
                         remaining_capacity,
@@ -1138,29 +1152,23 @@ pub mod jbd_bms {
                         temperatures: temperatures.to_repeated(),
                     })
                 }
-                Self::CellVoltages { status, cell_voltages } => {
+                Self::CellVoltages { cell_voltages } => {
                     Response::CellVoltages(response::CellVoltages {
-                        status,
                         cell_voltages: cell_voltages.to_repeated(),
                     })
                 }
-                Self::Version { status, version } => {
+                Self::Version { version } => {
                     Response::Version(response::Version {
-                        status,
                         version: version.to_repeated(),
                     })
                 }
-                Self::BasicInfoError { status } => {
-                    Response::BasicInfoError(response::BasicInfoError { status })
+                Self::BasicInfoError => {
+                    Response::BasicInfoError(response::BasicInfoError)
                 }
-                Self::CellVoltagesError { status } => {
-                    Response::CellVoltagesError(response::CellVoltagesError {
-                        status,
-                    })
+                Self::CellVoltagesError => {
+                    Response::CellVoltagesError(response::CellVoltagesError)
                 }
-                Self::VersionError { status } => {
-                    Response::VersionError(response::VersionError { status })
-                }
+                Self::VersionError => Response::VersionError(response::VersionError),
             }
         }
     }
@@ -1344,29 +1352,16 @@ pub mod jbd_bms {
         pub const CODE: &'static [u8] = &[0x03];
         pub const LEN: usize = 7;
         pub const DESC: rt::MessageDesc = rt::desc(Self::NAME, 0x03, 1, &[7]);
-        pub const STATE: rt::Range<usize> = 1..2;
-        pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
-            f("state", rt::Int(self.state.raw() as i64));
-        }
+        pub const STATE_DESC: rt::FieldDesc = rt::field(Self::NAME, "state");
         pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             Request::ReadBasicInfo(*self).encode(address, buf)
-        }
-        /// Writes this message's frame for `address`, as the direction's `encode` does.
-        #[inline(always)]
-        fn write(&self, address: u8, out: &mut [u8; 7]) -> rt::EncodeResult {
-            let Self { state: v_state } = *self;
-            let out = rt::head(out, &[0xDD]);
-            out[2..4].copy_from_slice(&[0x03, 0x00]);
-            out[1] = v_state.raw();
-            rt::Ok(out.len())
         }
         /// Reads this message from a frame whose framing and code are checked.
         #[inline(always)]
         fn from_frame(frame: &[u8]) -> rt::DecodeResult<Self> {
             let frame = rt::fixed::<7>(frame, &Self::DESC)?;
-            rt::Ok(Self {
-                state: State::from_raw(frame[1]),
-            })
+            rt::equal(&Self::STATE_DESC, 1, frame[1], 0xA5)?;
+            rt::Ok(Self)
         }
     }
     impl request::ReadCellVoltages {
@@ -1374,29 +1369,16 @@ pub mod jbd_bms {
         pub const CODE: &'static [u8] = &[0x04];
         pub const LEN: usize = 7;
         pub const DESC: rt::MessageDesc = rt::desc(Self::NAME, 0x04, 1, &[7]);
-        pub const STATE: rt::Range<usize> = 1..2;
-        pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
-            f("state", rt::Int(self.state.raw() as i64));
-        }
+        pub const STATE_DESC: rt::FieldDesc = rt::field(Self::NAME, "state");
         pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             Request::ReadCellVoltages(*self).encode(address, buf)
-        }
-        /// Writes this message's frame for `address`, as the direction's `encode` does.
-        #[inline(always)]
-        fn write(&self, address: u8, out: &mut [u8; 7]) -> rt::EncodeResult {
-            let Self { state: v_state } = *self;
-            let out = rt::head(out, &[0xDD]);
-            out[2..4].copy_from_slice(&[0x04, 0x00]);
-            out[1] = v_state.raw();
-            rt::Ok(out.len())
         }
         /// Reads this message from a frame whose framing and code are checked.
         #[inline(always)]
         fn from_frame(frame: &[u8]) -> rt::DecodeResult<Self> {
             let frame = rt::fixed::<7>(frame, &Self::DESC)?;
-            rt::Ok(Self {
-                state: State::from_raw(frame[1]),
-            })
+            rt::equal(&Self::STATE_DESC, 1, frame[1], 0xA5)?;
+            rt::Ok(Self)
         }
     }
     impl request::ReadVersion {
@@ -1404,29 +1386,16 @@ pub mod jbd_bms {
         pub const CODE: &'static [u8] = &[0x05];
         pub const LEN: usize = 7;
         pub const DESC: rt::MessageDesc = rt::desc(Self::NAME, 0x05, 1, &[7]);
-        pub const STATE: rt::Range<usize> = 1..2;
-        pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
-            f("state", rt::Int(self.state.raw() as i64));
-        }
+        pub const STATE_DESC: rt::FieldDesc = rt::field(Self::NAME, "state");
         pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             Request::ReadVersion(*self).encode(address, buf)
-        }
-        /// Writes this message's frame for `address`, as the direction's `encode` does.
-        #[inline(always)]
-        fn write(&self, address: u8, out: &mut [u8; 7]) -> rt::EncodeResult {
-            let Self { state: v_state } = *self;
-            let out = rt::head(out, &[0xDD]);
-            out[2..4].copy_from_slice(&[0x05, 0x00]);
-            out[1] = v_state.raw();
-            rt::Ok(out.len())
         }
         /// Reads this message from a frame whose framing and code are checked.
         #[inline(always)]
         fn from_frame(frame: &[u8]) -> rt::DecodeResult<Self> {
             let frame = rt::fixed::<7>(frame, &Self::DESC)?;
-            rt::Ok(Self {
-                state: State::from_raw(frame[1]),
-            })
+            rt::equal(&Self::STATE_DESC, 1, frame[1], 0xA5)?;
+            rt::Ok(Self)
         }
     }
     impl response::BasicInfo {
@@ -1435,7 +1404,6 @@ pub mod jbd_bms {
         pub const MIN_LEN: usize = 30;
         pub const MAX_LEN: usize = 46;
         pub const DESC: rt::MessageDesc = rt::desc(Self::NAME, 0x03, 1, &[7, 30]);
-        pub const STATUS: rt::Range<usize> = 2..3;
         pub const TOTAL_VOLTAGE: rt::Range<usize> = 4..6;
         pub const CURRENT: rt::Range<usize> = 6..8;
         pub const REMAINING_CAPACITY: rt::Range<usize> = 8..10;
@@ -1453,9 +1421,9 @@ pub mod jbd_bms {
             Self::NAME,
             "temperatures",
         );
+        pub const STATUS_DESC: rt::FieldDesc = rt::field(Self::NAME, "status");
         pub const SOC_DESC: rt::FieldDesc = rt::field(Self::NAME, "soc");
         pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
-            f("status", rt::Int(self.status.raw() as i64));
             f("total_voltage", rt::Int(self.total_voltage.raw() as i64));
             f("current", rt::Int(self.current.raw() as i64));
             f("remaining_capacity", rt::Int(self.remaining_capacity.raw() as i64));
@@ -1478,7 +1446,6 @@ pub mod jbd_bms {
         #[inline(always)]
         fn write(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             let Self {
-                status: v_status,
                 total_voltage: v_total_voltage,
                 current: v_current,
                 remaining_capacity: v_remaining_capacity,
@@ -1496,9 +1463,8 @@ pub mod jbd_bms {
             } = *self;
             let frame_len = REPEAT_BASIC_INFO.encode_len(v_temperatures.len())?;
             REPEAT_BASIC_INFO.encode_in_range(v_temperatures.as_slice(), 0, 65535)?;
-            let out = rt::frame_mut_len(buf, frame_len, &[0xDD, 0x03])?;
+            let out = rt::frame_mut_len(buf, frame_len, &[0xDD, 0x03, 0x00])?;
             LENGTH.put(out)?;
-            out[2] = v_status.raw();
             out[4..6].copy_from_slice(&v_total_voltage.raw().to_be_bytes());
             out[6..8].copy_from_slice(&v_current.raw().to_be_bytes());
             out[8..10].copy_from_slice(&v_remaining_capacity.raw().to_be_bytes());
@@ -1529,13 +1495,12 @@ pub mod jbd_bms {
         pub const MIN_LEN: usize = 9;
         pub const MAX_LEN: usize = 71;
         pub const DESC: rt::MessageDesc = rt::desc(Self::NAME, 0x04, 1, &[7]);
-        pub const STATUS: rt::Range<usize> = 2..3;
         pub const CELL_VOLTAGES_DESC: rt::FieldDesc = rt::field(
             Self::NAME,
             "cell_voltages",
         );
+        pub const STATUS_DESC: rt::FieldDesc = rt::field(Self::NAME, "status");
         pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
-            f("status", rt::Int(self.status.raw() as i64));
             f("cell_voltages", rt::List(self.cell_voltages.elements()));
         }
         pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
@@ -1544,11 +1509,10 @@ pub mod jbd_bms {
         /// Writes this message's frame for `address`, as the direction's `encode` does.
         #[inline(always)]
         fn write(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
-            let Self { status: v_status, cell_voltages: v_cell_voltages } = *self;
+            let Self { cell_voltages: v_cell_voltages } = *self;
             let frame_len = REPEAT_CELL_VOLTAGES.encode_len(v_cell_voltages.len())?;
-            let out = rt::frame_mut_len(buf, frame_len, &[0xDD, 0x04])?;
+            let out = rt::frame_mut_len(buf, frame_len, &[0xDD, 0x04, 0x00])?;
             LENGTH.put(out)?;
-            out[2] = v_status.raw();
             rt::write_elements(v_cell_voltages.as_slice(), 2, false, &mut out[4..]);
             rt::Ok(out.len())
         }
@@ -1559,10 +1523,9 @@ pub mod jbd_bms {
         pub const MIN_LEN: usize = 8;
         pub const MAX_LEN: usize = 39;
         pub const DESC: rt::MessageDesc = rt::desc(Self::NAME, 0x05, 1, &[7]);
-        pub const STATUS: rt::Range<usize> = 2..3;
         pub const VERSION_DESC: rt::FieldDesc = rt::field(Self::NAME, "version");
+        pub const STATUS_DESC: rt::FieldDesc = rt::field(Self::NAME, "status");
         pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
-            f("status", rt::Int(self.status.raw() as i64));
             f("version", rt::Text(self.version.as_slice()));
         }
         pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
@@ -1571,11 +1534,10 @@ pub mod jbd_bms {
         /// Writes this message's frame for `address`, as the direction's `encode` does.
         #[inline(always)]
         fn write(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
-            let Self { status: v_status, version: v_version } = *self;
+            let Self { version: v_version } = *self;
             let frame_len = REPEAT_VERSION.encode_len(v_version.len())?;
-            let out = rt::frame_mut_len(buf, frame_len, &[0xDD, 0x05])?;
+            let out = rt::frame_mut_len(buf, frame_len, &[0xDD, 0x05, 0x00])?;
             LENGTH.put(out)?;
-            out[2] = v_status.raw();
             rt::write_elements(v_version.as_slice(), 1, false, &mut out[4..]);
             rt::Ok(out.len())
         }
@@ -1585,29 +1547,16 @@ pub mod jbd_bms {
         pub const CODE: &'static [u8] = &[0x03];
         pub const LEN: usize = 7;
         pub const DESC: rt::MessageDesc = rt::desc(Self::NAME, 0x03, 1, &[7, 30]);
-        pub const STATUS: rt::Range<usize> = 2..3;
-        pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
-            f("status", rt::Int(self.status.raw() as i64));
-        }
+        pub const STATUS_DESC: rt::FieldDesc = rt::field(Self::NAME, "status");
         pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             Response::BasicInfoError(*self).encode(address, buf)
-        }
-        /// Writes this message's frame for `address`, as the direction's `encode` does.
-        #[inline(always)]
-        fn write(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
-            let Self { status: v_status } = *self;
-            let out = rt::frame_mut::<7>(buf, &[0xDD, 0x03])?;
-            out[3] = 0x00;
-            out[2] = v_status.raw();
-            rt::Ok(out.len())
         }
         /// Reads this message from a frame whose framing and code are checked.
         #[inline(always)]
         fn from_frame(frame: &[u8]) -> rt::DecodeResult<Self> {
             let frame = rt::fixed::<7>(frame, &Self::DESC)?;
-            rt::Ok(Self {
-                status: Status::from_raw(frame[2]),
-            })
+            rt::equal(&Self::STATUS_DESC, 2, frame[2], 0x80)?;
+            rt::Ok(Self)
         }
     }
     impl response::CellVoltagesError {
@@ -1615,29 +1564,16 @@ pub mod jbd_bms {
         pub const CODE: &'static [u8] = &[0x04];
         pub const LEN: usize = 7;
         pub const DESC: rt::MessageDesc = rt::desc(Self::NAME, 0x04, 1, &[7]);
-        pub const STATUS: rt::Range<usize> = 2..3;
-        pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
-            f("status", rt::Int(self.status.raw() as i64));
-        }
+        pub const STATUS_DESC: rt::FieldDesc = rt::field(Self::NAME, "status");
         pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             Response::CellVoltagesError(*self).encode(address, buf)
-        }
-        /// Writes this message's frame for `address`, as the direction's `encode` does.
-        #[inline(always)]
-        fn write(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
-            let Self { status: v_status } = *self;
-            let out = rt::frame_mut::<7>(buf, &[0xDD, 0x04])?;
-            out[3] = 0x00;
-            out[2] = v_status.raw();
-            rt::Ok(out.len())
         }
         /// Reads this message from a frame whose framing and code are checked.
         #[inline(always)]
         fn from_frame(frame: &[u8]) -> rt::DecodeResult<Self> {
             let frame = rt::fixed::<7>(frame, &Self::DESC)?;
-            rt::Ok(Self {
-                status: Status::from_raw(frame[2]),
-            })
+            rt::equal(&Self::STATUS_DESC, 2, frame[2], 0x80)?;
+            rt::Ok(Self)
         }
     }
     impl response::VersionError {
@@ -1645,29 +1581,16 @@ pub mod jbd_bms {
         pub const CODE: &'static [u8] = &[0x05];
         pub const LEN: usize = 7;
         pub const DESC: rt::MessageDesc = rt::desc(Self::NAME, 0x05, 1, &[7]);
-        pub const STATUS: rt::Range<usize> = 2..3;
-        pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
-            f("status", rt::Int(self.status.raw() as i64));
-        }
+        pub const STATUS_DESC: rt::FieldDesc = rt::field(Self::NAME, "status");
         pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             Response::VersionError(*self).encode(address, buf)
-        }
-        /// Writes this message's frame for `address`, as the direction's `encode` does.
-        #[inline(always)]
-        fn write(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
-            let Self { status: v_status } = *self;
-            let out = rt::frame_mut::<7>(buf, &[0xDD, 0x05])?;
-            out[3] = 0x00;
-            out[2] = v_status.raw();
-            rt::Ok(out.len())
         }
         /// Reads this message from a frame whose framing and code are checked.
         #[inline(always)]
         fn from_frame(frame: &[u8]) -> rt::DecodeResult<Self> {
             let frame = rt::fixed::<7>(frame, &Self::DESC)?;
-            rt::Ok(Self {
-                status: Status::from_raw(frame[2]),
-            })
+            rt::equal(&Self::STATUS_DESC, 2, frame[2], 0x80)?;
+            rt::Ok(Self)
         }
     }
     /// Each request as a struct of its own; its constants (`DESC`, which names it as
@@ -1678,29 +1601,17 @@ pub mod jbd_bms {
         #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
         #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
         #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]
-        #[repr(align(4))]
-        pub struct ReadBasicInfo {
-            /// Read (0xA5) or write (0x5A).
-            pub state: super::State,
-        }
+        pub struct ReadBasicInfo;
         /// Read cell voltages (04) (§3; code `0x04`, 7 bytes).
         #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
         #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
         #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]
-        #[repr(align(4))]
-        pub struct ReadCellVoltages {
-            /// Read (0xA5) or write (0x5A).
-            pub state: super::State,
-        }
+        pub struct ReadCellVoltages;
         /// Read the hardware version (05) (§3; code `0x05`, 7 bytes).
         #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
         #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
         #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]
-        #[repr(align(4))]
-        pub struct ReadVersion {
-            /// Read (0xA5) or write (0x5A).
-            pub state: super::State,
-        }
+        pub struct ReadVersion;
     }
     /// Each response as a struct of its own.
     pub mod response {
@@ -1710,8 +1621,6 @@ pub mod jbd_bms {
         #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]
         #[repr(align(4))]
         pub struct BasicInfo {
-            /// 0x00 where the register was read, 0x80 where it was not.
-            pub status: super::Status,
             /// \[V\]
             pub total_voltage: super::Centivolts,
             /// Positive charging, negative discharging \[A\]
@@ -1745,8 +1654,6 @@ pub mod jbd_bms {
         #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]
         #[repr(align(4))]
         pub struct CellVoltages {
-            /// 0x00 where the register was read, 0x80 where it was not.
-            pub status: super::Status,
             /// \[mV\]
             pub cell_voltages: super::rt::Repeated<u16, 32>,
         }
@@ -1756,36 +1663,22 @@ pub mod jbd_bms {
         #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]
         #[repr(align(4))]
         pub struct Version {
-            /// 0x00 where the register was read, 0x80 where it was not.
-            pub status: super::Status,
             pub version: super::rt::Repeated<u8, 32>,
         }
         /// Basic information not read (status 80) (§3; code `0x03`, 7 bytes).
         #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
         #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
         #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]
-        #[repr(align(4))]
-        pub struct BasicInfoError {
-            /// 0x00 where the register was read, 0x80 where it was not.
-            pub status: super::Status,
-        }
+        pub struct BasicInfoError;
         /// Cell voltages not read (status 80) (§3; code `0x04`, 7 bytes).
         #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
         #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
         #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]
-        #[repr(align(4))]
-        pub struct CellVoltagesError {
-            /// 0x00 where the register was read, 0x80 where it was not.
-            pub status: super::Status,
-        }
+        pub struct CellVoltagesError;
         /// Hardware version not read (status 80) (§3; code `0x05`, 7 bytes).
         #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
         #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
         #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]
-        #[repr(align(4))]
-        pub struct VersionError {
-            /// 0x00 where the register was read, 0x80 where it was not.
-            pub status: super::Status,
-        }
+        pub struct VersionError;
     }
 }
