@@ -205,7 +205,8 @@ fn load(file: &str) -> Protocol {
 }
 
 /// The frame of example `e` with one value past its range (a whole field, not repeated, with
-/// room in its width), or with an address no device has, resealed: out of spec, good checksum.
+/// room in its width), with a header field holding another value than its message gives it,
+/// or with an address no device has, resealed: out of spec or no frame, good checksum.
 fn out_of_spec(p: &Protocol, wire: &[u8], r: busspec_model::ir::MessageRef) -> Vec<Vec<u8>> {
     let m = p.message(r);
     let mut frames = Vec::new();
@@ -241,6 +242,15 @@ fn out_of_spec(p: &Protocol, wire: &[u8], r: busspec_model::ir::MessageRef) -> V
         interp::reseal_as(p, r.direction, &mut w);
         frames.push(sent(p, w));
         break;
+    }
+    // A header field the message gives a value (`header:`) holding another: not that message.
+    if let Some(f) = m.fields.iter().find(|f| f.header && f.constant.is_some()) {
+        let mut w = laid(p, wire);
+        let at = f.frame_at(&m.layout);
+        let other = f.constant.unwrap_or(0) ^ 1;
+        interp::write_uint(other, &mut w[at..at + f.width], f.byte_order);
+        interp::reseal_as(p, r.direction, &mut w);
+        frames.push(sent(p, w));
     }
     if let Some(at) = m.layout.address {
         let bad = (0..=255u8).rev().find(|a| !interp::address_allowed(p, *a));
