@@ -363,7 +363,75 @@ fn capture(p: &Protocol) -> (Vec<u8>, Vec<(Vec<u8>, String)>) {
         }
         bytes.extend_from_slice(&good);
     }
+    // Each reply whose values follow from its request's (`follows: {request}`, a count from
+    // the request) after a request whose field says otherwise: busspec decodes it as if
+    // unpaired (ambiguous where only the request told it apart), the dissector alike.
+    for (request, reply) in mismatched_pairs(p) {
+        bytes.extend_from_slice(&request);
+        bytes.extend_from_slice(&reply);
+        bytes.extend_from_slice(&good);
+    }
     (bytes, bad)
+}
+
+/// For each example reply with a field that follows from its request's field `x` (its value or
+/// its element count), an example of that request with `x` one more (or one less, within its
+/// range), and the reply as it is.
+fn mismatched_pairs(p: &Protocol) -> Vec<(Vec<u8>, Vec<u8>)> {
+    use busspec_model::ir::Follows;
+    let mut out = Vec::new();
+    for e in &p.examples {
+        let Some(c) = e.reply_to else { continue };
+        let m = p.message(e.message);
+        let rules: Vec<&str> = m
+            .fields
+            .iter()
+            .filter_map(|f| {
+                match (
+                    &f.follows,
+                    f.repeat.as_ref().and_then(|r| r.request.as_ref()),
+                ) {
+                    (Some(Follows::Request(rel)), _) | (_, Some(rel)) => Some(rel.field.as_str()),
+                    _ => None,
+                }
+            })
+            .collect();
+        let Some(q) = p
+            .examples
+            .iter()
+            .find(|x| x.message.direction == Direction::Request && x.message.index == c)
+        else {
+            continue;
+        };
+        let Ok(frame) = interp::decode(p, Some(Direction::Request), None, &q.wire) else {
+            continue;
+        };
+        let cmd = &p.commands[c];
+        for name in rules {
+            let Some(f) = cmd.fields.iter().find(|f| f.name == name) else {
+                continue;
+            };
+            let (lo, hi) = f
+                .range
+                .unwrap_or(interp::raw_limits(8 * f.width as u32, f.signed));
+            let mut values = frame.values.clone();
+            let Some(v) = values.iter_mut().find(|v| v.name == name) else {
+                continue;
+            };
+            let Raw::Int(x) = v.raw else { continue };
+            v.raw = Raw::Int(if x < hi {
+                x + 1
+            } else if x > lo {
+                x - 1
+            } else {
+                continue;
+            });
+            if let Ok(w) = interp::encode(p, q.message, frame.address, &values) {
+                out.push((w, e.wire.clone()));
+            }
+        }
+    }
+    out
 }
 
 /// Every (key, value) of a packet's layers as tshark prints them, trees flattened.

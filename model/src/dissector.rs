@@ -30,12 +30,15 @@
 //! An optional field (`present:`) shows only where its condition holds; a frame whose length
 //! disagrees with the optional fields present is no frame of its message.
 //!
-//! Not shown yet: values that follow from the request's fields (`follows: {request}`, a
-//! reply's element count from the request) are shown but not checked against the request,
-//! as busspec's stream does not check them either; a unit whose exact value needs dividing
-//! by a factor (other than 2 and 5) above 9 × 10^8 of its denominator prints the nearest
-//! double, as busspec does for units with no finite decimal; physical values are exact only
-//! while `raw × scale` in integers stays below 2^53 where the decimal does not terminate.
+//! Values that follow from the request's fields (`follows: {request}`, a reply's element
+//! count from the request) are shown, and checked against the request only where they choose
+//! the reply among responses only the request tells apart, as busspec's stream pairs them (a
+//! reply that breaks them is decoded as if unpaired: ambiguous there).
+//!
+//! Not shown yet: a unit whose exact value needs dividing by a factor (other than 2 and 5)
+//! above 9 × 10^8 of its denominator prints the nearest double, as busspec does for units
+//! with no finite decimal; physical values are exact only while `raw × scale` in integers
+//! stays below 2^53 where the decimal does not terminate.
 
 use std::fmt::Write;
 
@@ -290,6 +293,10 @@ fn field(f: &Field, lay: &FrameLayout) -> String {
             rel.divide.min(EXACT as u64)
         );
     }
+    if let Some(Follows::Request(rel)) = &f.follows {
+        // Its value follows from the request's field `name` (a reply's byte count).
+        let _ = write!(o, ", freq = {}", relation(rel));
+    }
     if let Some(c) = &f.present {
         // An optional field: on the wire where field `by`'s bit is set or its value is `eq`.
         let when = match c.when {
@@ -383,12 +390,27 @@ fn repeat(f: &Field, o: &mut String) {
         };
         let _ = write!(
             o,
-            ", rep = {{ count = \"{count}\", by = {by}, min = {}, max = {}, bit = {} }}",
+            ", rep = {{ count = \"{count}\", by = {by}, min = {}, max = {}, bit = {}",
             r.min,
             r.max,
             lua_bool(f.ty == FieldType::Bit)
         );
+        if let Some(rel) = &r.request {
+            // Its element count follows from the request's field `name`.
+            let _ = write!(o, ", req = {}", relation(rel));
+        }
+        o.push_str(" }");
     }
+}
+
+/// A value that follows from the request's field: `{ name = "quantity", mul = 1, div = 8 }`.
+fn relation(rel: &Relation) -> String {
+    format!(
+        "{{ name = {}, mul = {}, div = {} }}",
+        lua_str(&rel.field),
+        rel.multiply.min(EXACT as u64),
+        rel.divide.min(EXACT as u64)
+    )
 }
 
 fn message(m: &Message, index: usize, framing: &Framing) -> String {

@@ -787,6 +787,48 @@ local function trailer_of(P, m)
 end
 
 -- Whether the frame has message m's shape: start, code, end bytes, length field and length.
+-- The request's whole number fields by name (raw values), for the rules of its replies that
+-- follow from them.
+local function request_values(P, m, b, n)
+  local vals = {}
+  local pos = places(m, b, n, n - trailer_of(P, m))
+  for i, f in ipairs(m.fields) do
+    if not (f.rep or f.pk or f.wide or f.ascii or f.opt or f.rec or f.bcd) and #f.bits == 0 then
+      local _, v = int_of(f, b, pos[i])
+      vals[f.name] = v
+    end
+  end
+  return vals
+end
+
+-- Whether reply m's values that follow from its request's (`follows: {request}`, a count from
+-- the request) do, as busspec's pairing checks them; true where it has none, or no values
+-- of the request were kept.
+local function follows_request(P, m, b, n, vals)
+  if not vals then return true end
+  local pos, lens = places(m, b, n, n - trailer_of(P, m))
+  for i, f in ipairs(m.fields) do
+    if f.freq and vals[f.freq.name] ~= nil then
+      local _, v = int_of(f, b, pos[i])
+      if v ~= apply(f.freq, vals[f.freq.name]) then return false end
+    end
+    local req = f.rep and f.rep.req
+    if req and vals[req.name] ~= nil then
+      local e = apply(req, vals[req.name])
+      local want
+      if e < 0 then
+        want = -1
+      elseif f.rep.bit then
+        want = math.ceil(e / 8)
+      else
+        want = e * math.max(f.width, 1)
+      end
+      if want ~= lens[i] then return false end
+    end
+  end
+  return true
+end
+
 local function structural(P, m, b, n)
   if n < m.len or n > m.max_len then return false end
   if m.start_at then
@@ -1617,7 +1659,12 @@ local function setup(P)
           answering[#answering + 1] = c
         end
       end
-      if #answering == 1 then chosen = answering[1] end
+      -- Its values that follow from the request's must (busspec's pairing checks them; a
+      -- reply that breaks them is decoded as if unpaired, which its code and length alone
+      -- leave ambiguous).
+      if #answering == 1 and follows_request(P, answering[1].m, b, n, prev.vals) then
+        chosen = answering[1]
+      end
     end
 
     if not chosen then
@@ -1653,7 +1700,7 @@ local function setup(P)
           -- To the checksum, or to the frame's end where the request has none.
           for i = ck.covers_from, (ck_at or n) - 1 do cov[#cov + 1] = b[i] end
         end
-        state.last = { num = num, idx = m.idx, cov = cov }
+        state.last = { num = num, idx = m.idx, cov = cov, vals = request_values(P, m, b, n) }
       else
         -- A response sent unasked that the request before it does not get is not its reply,
         -- and leaves the request waiting for it.
