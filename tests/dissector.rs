@@ -602,6 +602,8 @@ fn compare(p: &Protocol, case: &Case, dir: &Path) -> Counts {
     let mut last: Option<(usize, usize, u64)> = None;
     let mut response_in: BTreeMap<usize, usize> = BTreeMap::new();
     let mut expected_response_to: Vec<Option<usize>> = vec![None; events.len()];
+    // Whether each event is a response sent unasked that the request before it does not get.
+    let mut aside = vec![false; events.len()];
     for (i, e) in events.iter().enumerate() {
         let get = |k: &str| e.get(k).map(|v| v.get().to_owned());
         let offset: u64 = get("offset").unwrap().parse().unwrap();
@@ -617,16 +619,13 @@ fn compare(p: &Protocol, case: &Case, dir: &Path) -> Counts {
                 // A response sent unasked that the request does not get is not its reply,
                 // and leaves the request waiting for it.
                 let r = p.find_in(m, Direction::Response).unwrap();
-                let reply = |c: usize| {
-                    !p.message(r).unasked
-                        || p.commands[c].responses.iter().any(|(x, _)| *x == r.index)
-                };
-                let aside = last.is_some_and(|(_, c, _)| !reply(c));
+                let reply = |c: usize| !p.message(r).unasked || p.commands[c].gets(r.index);
+                aside[i] = last.is_some_and(|(_, c, _)| !reply(c));
                 if let Some((n, _, _)) = last.filter(|&(_, c, _)| reply(c)) {
                     expected_response_to[i] = Some(n);
                     response_in.insert(n, i + 1);
                 }
-                if !aside {
+                if !aside[i] {
                     last = None;
                 }
             }
@@ -753,12 +752,7 @@ fn compare(p: &Protocol, case: &Case, dir: &Path) -> Counts {
                         assert_eq!(packet.get(&key("out_of_spec")), None, "{what}");
                         counts.frames += 1;
                         // An unasked response its request does not get leaves it waiting.
-                        let aside = d == Direction::Response
-                            && p.message(r).unasked
-                            && last_request.is_some_and(|(c, _)| {
-                                !p.commands[c].responses.iter().any(|(x, _)| *x == r.index)
-                            });
-                        if !aside {
+                        if !aside[i] {
                             last_request = match d {
                                 Direction::Request => Some((r.index, offset)),
                                 Direction::Response => None,

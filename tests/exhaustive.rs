@@ -233,7 +233,7 @@ fn pairing_matrix<P: Generated>() {
         };
         let frame = frame_of(&p, r);
         for (i, request) in requests.iter().enumerate() {
-            let listed = p.commands[i].responses.iter().any(|(x, _)| *x == j);
+            let listed = p.commands[i].gets(j);
             let reply = P::decode_reply(&frame, request);
             match reply {
                 Ok(d) => {
@@ -245,7 +245,7 @@ fn pairing_matrix<P: Generated>() {
                         .position(|x| x.name == d.message.name())
                         .unwrap();
                     assert!(
-                        p.commands[i].responses.iter().any(|(x, _)| *x == k),
+                        p.commands[i].gets(k),
                         "{} decodes as a reply to {} but is not listed",
                         d.message.name(),
                         p.commands[i].name

@@ -1638,7 +1638,7 @@ fn examples(p: &ir::Protocol, rng: &mut fastrand::Rng) -> Option<String> {
                 index,
             };
             let answering: Vec<usize> = (0..p.commands.len())
-                .filter(|&c| p.commands[c].responses.iter().any(|(x, _)| *x == index))
+                .filter(|&c| p.commands[c].gets(index))
                 .collect();
             let mut kept = 0;
             for _ in 0..6 {

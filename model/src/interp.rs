@@ -1485,10 +1485,7 @@ fn decide<'p>(
         };
     }
     let answers = |cmd: usize, r: &MessageRef| {
-        r.direction == Direction::Response
-            && p.commands
-                .get(cmd)
-                .is_some_and(|c| c.responses.iter().any(|(i, _)| *i == r.index))
+        r.direction == Direction::Response && p.commands.get(cmd).is_some_and(|c| c.gets(r.index))
     };
     // Decoded as the reply to a request, the responses only the request tells apart that it
     // does not get are set aside: one that fits is not the request's reply, and one that does
@@ -2796,7 +2793,7 @@ pub fn answers(p: &Protocol, request: &Frame, reply: &Frame) -> Result<(), Decod
     let m = p.message(reply.message);
     if request.message.direction != Direction::Request
         || reply.message.direction != Direction::Response
-        || !cmd.responses.iter().any(|(i, _)| *i == reply.message.index)
+        || !cmd.gets(reply.message.index)
     {
         return Err(DecodeError::NotAnAnswer {
             message: m.name.clone(),

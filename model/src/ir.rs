@@ -1242,6 +1242,12 @@ impl Message {
                 .sum::<usize>()
     }
 
+    /// A command: whether it may get response `index` (of `Protocol::responses`): its own
+    /// responses and the common ones.
+    pub fn gets(&self, index: usize) -> bool {
+        self.responses.iter().any(|(i, _)| *i == index)
+    }
+
     /// Whether its frames vary in length: a repeated field, or optional fields.
     pub fn is_variable(&self) -> bool {
         self.repeat().is_some() || self.has_optional()

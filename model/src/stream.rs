@@ -1284,15 +1284,7 @@ impl<'p> StreamDecoder<'p> {
         match &self.last_frame {
             Some(request) => interp::answers(self.p, request, frame).is_err(),
             // A constant request frame: nothing of it for a reply to follow.
-            None => !self
-                .p
-                .message(MessageRef {
-                    direction: Direction::Request,
-                    index: q,
-                })
-                .responses
-                .iter()
-                .any(|(i, _)| *i == r.index),
+            None => !self.p.commands[q].gets(r.index),
         }
     }
 

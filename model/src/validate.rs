@@ -5535,7 +5535,7 @@ fn examples(spec: &model::Spec, p: &Protocol, sink: &mut Sink) -> Vec<Example> {
                 None
             }
             (Some(name), Direction::Response) => match commands.get(name.as_str()).copied() {
-                Some(c) if p.commands[c].responses.iter().any(|(x, _)| *x == r.index) => Some(c),
+                Some(c) if p.commands[c].gets(r.index) => Some(c),
                 Some(_) => {
                     sink.error(
                         join(&path, "reply_to"),
