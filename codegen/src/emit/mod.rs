@@ -100,7 +100,7 @@ use types::*;
 use view::*;
 
 use proc_macro2::{Ident, Literal, Span, TokenStream};
-use quote::{format_ident, quote};
+use quote::{format_ident, quote, ToTokens};
 
 use busspec_model::interp::raw_limits;
 use busspec_model::ir::*;

@@ -250,11 +250,18 @@ pub(super) fn emit_follows_request(ctx: &Ctx) -> Option<TokenStream> {
                 let ty = ctx.rust_type(l);
                 params.push(quote!(#mine: #ty));
                 values.push(field(l.name));
-                let fd = ctx.field_desc(m, l.name);
-                let at = usize_lit(m.layout.payload + l.field.offset);
+                let at = m.layout.payload + l.field.offset;
                 let args = relation_args(rel);
                 let rule = format!("{} of the request", rel.describe(&rel.field));
-                checks.push(quote!(rt::following(#fd, #at, #a, #b as i64, (#args), #rule)?;));
+                let rel = quote!(.follows(#args, #rule));
+                let c = ctx.field_check(
+                    m,
+                    l.name,
+                    (at, &usize_lit(at).to_token_stream()),
+                    None,
+                    Some(rel),
+                );
+                checks.push(quote!(rt::following(#c, #a, #b as i64)?;));
             }
             if let Some(list) = list {
                 let rc = repeat_const(m);
@@ -273,10 +280,19 @@ pub(super) fn emit_follows_request(ctx: &Ctx) -> Option<TokenStream> {
                     }
                     let args = relation_args(rel);
                     if *is_count {
-                        let fd = ctx.field_desc(m, &f.name);
-                        let at = usize_lit(m.layout.payload + f.offset);
+                        let at = m.layout.payload + f.offset;
                         let rule = format!("{} of the request", rel.describe(&rel.field));
-                        checks.push(quote!(rt::following(#fd, #at, #rc.count_value(#len) as u64, #b as i64, (#args), #rule)?;));
+                        let rel = quote!(.follows(#args, #rule));
+                        let c = ctx.field_check(
+                            m,
+                            &f.name,
+                            (at, &usize_lit(at).to_token_stream()),
+                            None,
+                            Some(rel),
+                        );
+                        checks.push(
+                            quote!(rt::following(#c, #rc.count_value(#len) as u64, #b as i64)?;),
+                        );
                     } else {
                         let rule = rel.describe(&rel.field);
                         checks.push(quote!(#rc.follows_request(#len, #b as i64, (#args), #rule)?;));

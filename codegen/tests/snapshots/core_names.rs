@@ -749,6 +749,8 @@ pub mod clash {
         pub const SOME: rt::Range<usize> = 3..4;
         pub const CORE: rt::Range<usize> = 4..6;
         pub const CORE_DESC: rt::FieldDesc = rt::field(Self::NAME, "core");
+        pub const CORE_CHECK: rt::FieldCheck = rt::check(&Self::CORE_DESC, 4)
+            .range(0, 1000);
         pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
             f("some", rt::Int(self.some.raw() as i64));
             f("core", rt::Int(self.core.raw() as i64));
@@ -760,8 +762,8 @@ pub mod clash {
         #[inline(always)]
         fn write(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             let Self { some: v_some, core: v_core } = *self;
-            rt::encode_broadcast(address, 0x00, &request::Option::DESC)?;
-            rt::encode_in_range("core", v_core.raw(), 0, 1000)?;
+            rt::encode_broadcast(address, 0x00, &Self::DESC)?;
+            rt::encode_in_range(&Self::CORE_CHECK, v_core.raw())?;
             let out = rt::frame_mut::<7>(buf, &[0xAA, address, 0x10])?;
             out[3] = v_some.raw();
             out[4..6].copy_from_slice(&v_core.raw().to_le_bytes());
@@ -773,7 +775,7 @@ pub mod clash {
             let frame = rt::fixed::<7>(frame, &Self::DESC)?;
             rt::no_broadcast(frame[1], 0x00, &Self::DESC)?;
             let w_core: u16 = u16::from_le_bytes([frame[4], frame[5]]);
-            rt::in_range(&Self::CORE_DESC, 4, w_core, 0, 1000)?;
+            rt::in_range(&Self::CORE_CHECK, w_core)?;
             rt::Ok(Self {
                 some: Result::from_raw(frame[3]),
                 core: Option::from_raw(w_core),
@@ -796,7 +798,7 @@ pub mod clash {
         #[inline(always)]
         fn write(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             let Self { frame: v_frame } = *self;
-            rt::encode_broadcast(address, 0x00, &request::U8::DESC)?;
+            rt::encode_broadcast(address, 0x00, &Self::DESC)?;
             let out = rt::frame_mut::<5>(buf, &[0xAA, address, 0x11])?;
             out[3] = rt::fits("frame", v_frame.raw(), 0, 255)? as u8;
             rt::Ok(rt::seal_sum8_head(out, 3, address.wrapping_add(0xBB)))
@@ -864,7 +866,7 @@ pub mod clash {
         #[inline(always)]
         fn write(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             let Self { f: v_f } = *self;
-            rt::encode_broadcast(address, 0x00, &request::Rt::DESC)?;
+            rt::encode_broadcast(address, 0x00, &Self::DESC)?;
             let out = rt::frame_mut::<6>(buf, &[0xAA, address, 0x13])?;
             let w_f: u8 = v_f;
             out[3] = w_f;

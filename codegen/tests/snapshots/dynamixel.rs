@@ -638,7 +638,7 @@ pub mod dynamixel {
                 0x02 => {
                     let frame = rt::fixed::<8>(frame, &request::Read::DESC)?;
                     rt::no_broadcast(frame[2], 0xFE, &request::Read::DESC)?;
-                    rt::in_range(&request::Read::LENGTH_DESC, 6, frame[6], 1, 253)?;
+                    rt::in_range(&request::Read::LENGTH_CHECK, frame[6])?;
                     rt::Ok(Self::Read {
                         address: frame[5],
                         length: frame[6],
@@ -1060,6 +1060,8 @@ pub mod dynamixel {
         pub const ADDRESS: rt::Range<usize> = 5..6;
         pub const LENGTH: rt::Range<usize> = 6..7;
         pub const LENGTH_DESC: rt::FieldDesc = rt::field(Self::NAME, "length");
+        pub const LENGTH_CHECK: rt::FieldCheck = rt::check(&Self::LENGTH_DESC, 6)
+            .range(1, 253);
         pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
             f("address", rt::Int(self.address as i64));
             f("length", rt::Int(self.length as i64));
@@ -1071,8 +1073,8 @@ pub mod dynamixel {
         #[inline(always)]
         fn write(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             let Self { address: v_address, length: v_length } = *self;
-            rt::encode_broadcast(address, 0xFE, &request::Read::DESC)?;
-            rt::encode_in_range("length", v_length, 1, 253)?;
+            rt::encode_broadcast(address, 0xFE, &Self::DESC)?;
+            rt::encode_in_range(&Self::LENGTH_CHECK, v_length)?;
             let out = rt::frame_mut::<8>(buf, &[0xFF, 0xFF, address, 0x04, 0x02])?;
             out[5] = v_address;
             out[6] = v_length;
@@ -1083,7 +1085,7 @@ pub mod dynamixel {
         fn from_frame(frame: &[u8]) -> rt::DecodeResult<Self> {
             let frame = rt::fixed::<8>(frame, &Self::DESC)?;
             rt::no_broadcast(frame[2], 0xFE, &Self::DESC)?;
-            rt::in_range(&Self::LENGTH_DESC, 6, frame[6], 1, 253)?;
+            rt::in_range(&Self::LENGTH_CHECK, frame[6])?;
             rt::Ok(Self {
                 address: frame[5],
                 length: frame[6],

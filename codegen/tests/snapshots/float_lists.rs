@@ -815,6 +815,8 @@ pub mod float_lists {
         pub const START: rt::Range<usize> = 2..4;
         pub const QUANTITY: rt::Range<usize> = 4..6;
         pub const QUANTITY_DESC: rt::FieldDesc = rt::field(Self::NAME, "quantity");
+        pub const QUANTITY_CHECK: rt::FieldCheck = rt::check(&Self::QUANTITY_DESC, 4)
+            .range(2, 16);
         pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
             f("start", rt::Int(self.start as i64));
             f("quantity", rt::Int(self.quantity as i64));
@@ -826,8 +828,8 @@ pub mod float_lists {
         #[inline(always)]
         fn write(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             let Self { start: v_start, quantity: v_quantity } = *self;
-            rt::encode_broadcast(address, 0x00, &request::ReadFloats::DESC)?;
-            rt::encode_in_range("quantity", v_quantity, 2, 16)?;
+            rt::encode_broadcast(address, 0x00, &Self::DESC)?;
+            rt::encode_in_range(&Self::QUANTITY_CHECK, v_quantity)?;
             let out = rt::frame_mut::<8>(buf, &[address, 0x03])?;
             out[2..4].copy_from_slice(&v_start.to_be_bytes());
             out[4..6].copy_from_slice(&v_quantity.to_be_bytes());
@@ -839,7 +841,7 @@ pub mod float_lists {
             let frame = rt::fixed::<8>(frame, &Self::DESC)?;
             rt::no_broadcast(frame[0], 0x00, &Self::DESC)?;
             let w_quantity: u16 = u16::from_be_bytes([frame[4], frame[5]]);
-            rt::in_range(&Self::QUANTITY_DESC, 4, w_quantity, 2, 16)?;
+            rt::in_range(&Self::QUANTITY_CHECK, w_quantity)?;
             rt::Ok(Self {
                 start: u16::from_be_bytes([frame[2], frame[3]]),
                 quantity: w_quantity,

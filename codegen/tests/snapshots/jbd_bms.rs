@@ -730,13 +730,7 @@ pub mod jbd_bms {
                     g.attempt_split(
                         &REPEAT_BASIC_INFO,
                         |frame: &[u8; 27], elements: &[u8], _: usize| {
-                            rt::in_range(
-                                &response::BasicInfo::SOC_DESC,
-                                23,
-                                frame[23],
-                                0,
-                                100,
-                            )?;
+                            rt::in_range(&response::BasicInfo::SOC_CHECK, frame[23])?;
                             rt::Ok(
                                 Self::BasicInfo(response::BasicInfo {
                                     status: Status::from_raw(frame[2]),
@@ -1002,13 +996,7 @@ pub mod jbd_bms {
                     g.attempt_split(
                         &REPEAT_BASIC_INFO,
                         |frame: &'a [u8; 27], elements: &'a [u8], _: usize| {
-                            rt::in_range(
-                                &response::BasicInfo::SOC_DESC,
-                                23,
-                                frame[23],
-                                0,
-                                100,
-                            )?;
+                            rt::in_range(&response::BasicInfo::SOC_CHECK, frame[23])?;
                             rt::Ok(Self::BasicInfo {
                                 status: Status::from_raw(frame[2]),
                                 total_voltage: Centivolts::from_raw(
@@ -1449,11 +1437,13 @@ pub mod jbd_bms {
         pub const SOC: rt::Range<usize> = 23..24;
         pub const FET_CONTROL: rt::Range<usize> = 24..25;
         pub const CELLS: rt::Range<usize> = 25..26;
+        pub const SOC_DESC: rt::FieldDesc = rt::field(Self::NAME, "soc");
+        pub const SOC_CHECK: rt::FieldCheck = rt::check(&Self::SOC_DESC, 23)
+            .range(0, 100);
         pub const TEMPERATURES_DESC: rt::FieldDesc = rt::field(
             Self::NAME,
             "temperatures",
         );
-        pub const SOC_DESC: rt::FieldDesc = rt::field(Self::NAME, "soc");
         pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
             f("status", rt::Int(self.status.raw() as i64));
             f("total_voltage", rt::Int(self.total_voltage.raw() as i64));
@@ -1509,7 +1499,7 @@ pub mod jbd_bms {
             out[18..20].copy_from_slice(&v_balance_high.to_be_bytes());
             out[20..22].copy_from_slice(&v_protection.to_be_bytes());
             out[22] = v_software_version;
-            rt::encode_in_range("soc", v_soc, 0, 100)?;
+            rt::encode_in_range(&Self::SOC_CHECK, v_soc)?;
             out[23] = v_soc;
             out[24] = v_fet_control;
             out[25] = v_cells;

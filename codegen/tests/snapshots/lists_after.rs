@@ -588,7 +588,7 @@ pub mod lists_after {
             match frame[2] {
                 0x10 => {
                     let frame = rt::fixed::<7>(frame, &request::ReadBlock::DESC)?;
-                    rt::in_range(&request::ReadBlock::QUANTITY_DESC, 5, frame[5], 1, 8)?;
+                    rt::in_range(&request::ReadBlock::QUANTITY_CHECK, frame[5])?;
                     rt::Ok(Self::ReadBlock {
                         first: u16::from_be_bytes([frame[3], frame[4]]),
                         quantity: frame[5],
@@ -599,11 +599,8 @@ pub mod lists_after {
                     let frame = &s.frame;
                     let w_flags: u16 = u16::from_be_bytes([frame[4], frame[5]]);
                     rt::in_range(
-                        &request::WriteBlock::FLAGS_DESC,
-                        4 + s.shift(1),
+                        &request::WriteBlock::FLAGS_CHECK.at(4 + s.shift(1)),
                         w_flags,
-                        0,
-                        255,
                     )?;
                     rt::Ok(Self::WriteBlock {
                         values: s.lists[0].view::<u16, 8>(s.elements(0), false, false)?,
@@ -915,6 +912,8 @@ pub mod lists_after {
         pub const FIRST: rt::Range<usize> = 3..5;
         pub const QUANTITY: rt::Range<usize> = 5..6;
         pub const QUANTITY_DESC: rt::FieldDesc = rt::field(Self::NAME, "quantity");
+        pub const QUANTITY_CHECK: rt::FieldCheck = rt::check(&Self::QUANTITY_DESC, 5)
+            .range(1, 8);
         pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
             f("first", rt::Int(self.first as i64));
             f("quantity", rt::Int(self.quantity as i64));
@@ -926,7 +925,7 @@ pub mod lists_after {
         #[inline(always)]
         fn write(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             let Self { first: v_first, quantity: v_quantity } = *self;
-            rt::encode_in_range("quantity", v_quantity, 1, 8)?;
+            rt::encode_in_range(&Self::QUANTITY_CHECK, v_quantity)?;
             let out = rt::frame_mut::<7>(buf, &[0x7E, address, 0x10])?;
             out[3..5].copy_from_slice(&v_first.to_be_bytes());
             out[5] = v_quantity;
@@ -936,7 +935,7 @@ pub mod lists_after {
         #[inline(always)]
         fn from_frame(frame: &[u8]) -> rt::DecodeResult<Self> {
             let frame = rt::fixed::<7>(frame, &Self::DESC)?;
-            rt::in_range(&Self::QUANTITY_DESC, 5, frame[5], 1, 8)?;
+            rt::in_range(&Self::QUANTITY_CHECK, frame[5])?;
             rt::Ok(Self {
                 first: u16::from_be_bytes([frame[3], frame[4]]),
                 quantity: frame[5],
@@ -949,8 +948,10 @@ pub mod lists_after {
         pub const MIN_LEN: usize = 9;
         pub const MAX_LEN: usize = 23;
         pub const DESC: rt::MessageDesc = rt::desc(Self::NAME, 0x11, 1, &[7]);
-        pub const VALUES_DESC: rt::FieldDesc = rt::field(Self::NAME, "values");
         pub const FLAGS_DESC: rt::FieldDesc = rt::field(Self::NAME, "flags");
+        pub const FLAGS_CHECK: rt::FieldCheck = rt::check(&Self::FLAGS_DESC, 4)
+            .range(0, 255);
+        pub const VALUES_DESC: rt::FieldDesc = rt::field(Self::NAME, "values");
         pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
             f("values", rt::List(self.values.elements()));
             f("flags", rt::Int(self.flags as i64));
@@ -975,7 +976,7 @@ pub mod lists_after {
                 0,
                 255,
             )? as u8;
-            rt::encode_in_range("flags", v_flags, 0, 255)?;
+            rt::encode_in_range(&Self::FLAGS_CHECK, v_flags)?;
             out[4..6].copy_from_slice(&v_flags.to_be_bytes());
             let out = LISTS_WRITE_BLOCK.expand(&compact, &[bytes_0], buf)?;
             rt::write_elements(v_values.as_slice(), 2, false, &mut out[4..]);
@@ -987,7 +988,7 @@ pub mod lists_after {
             let s = LISTS_WRITE_BLOCK.split::<7, 1>(frame)?;
             let frame = &s.frame;
             let w_flags: u16 = u16::from_be_bytes([frame[4], frame[5]]);
-            rt::in_range(&Self::FLAGS_DESC, 4 + s.shift(1), w_flags, 0, 255)?;
+            rt::in_range(&Self::FLAGS_CHECK.at(4 + s.shift(1)), w_flags)?;
             rt::Ok(Self {
                 values: s.lists[0].elements::<u16, 8>(s.elements(0), false, false)?,
                 flags: w_flags,

@@ -671,7 +671,11 @@ pub mod mini_crc {
         pub const MINUTES: rt::Range<usize> = 2..3;
         pub const SECONDS: rt::Range<usize> = 3..4;
         pub const MINUTES_DESC: rt::FieldDesc = rt::field(Self::NAME, "minutes");
+        pub const MINUTES_CHECK: rt::FieldCheck = rt::check(&Self::MINUTES_DESC, 2)
+            .range(0, 59);
         pub const SECONDS_DESC: rt::FieldDesc = rt::field(Self::NAME, "seconds");
+        pub const SECONDS_CHECK: rt::FieldCheck = rt::check(&Self::SECONDS_DESC, 3)
+            .range(0, 59);
         pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
             f("minutes", rt::Int(self.minutes as i64));
             f("seconds", rt::Int(self.seconds as i64));
@@ -683,8 +687,8 @@ pub mod mini_crc {
         #[inline(always)]
         fn write(&self, address: u8, out: &mut [u8; 6]) -> rt::EncodeResult {
             let Self { minutes: v_minutes, seconds: v_seconds } = *self;
-            rt::encode_in_range("minutes", v_minutes, 0, 59)?;
-            rt::encode_in_range("seconds", v_seconds, 0, 59)?;
+            rt::encode_in_range(&Self::MINUTES_CHECK, v_minutes)?;
+            rt::encode_in_range(&Self::SECONDS_CHECK, v_seconds)?;
             let out = rt::head(out, &[0x22, address]);
             out[2] = v_minutes;
             out[3] = v_seconds;
@@ -694,8 +698,8 @@ pub mod mini_crc {
         #[inline(always)]
         fn from_frame(frame: &[u8]) -> rt::DecodeResult<Self> {
             let frame = rt::fixed::<6>(frame, &Self::DESC)?;
-            rt::in_range(&Self::MINUTES_DESC, 2, frame[2], 0, 59)?;
-            rt::in_range(&Self::SECONDS_DESC, 3, frame[3], 0, 59)?;
+            rt::in_range(&Self::MINUTES_CHECK, frame[2])?;
+            rt::in_range(&Self::SECONDS_CHECK, frame[3])?;
             rt::Ok(Self {
                 minutes: frame[2],
                 seconds: frame[3],

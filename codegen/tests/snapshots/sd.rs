@@ -2405,6 +2405,8 @@ pub mod sd {
         pub const DESC: rt::MessageDesc = rt::desc(Self::NAME, 0xAA, 1, &[6]);
         pub const NEW_ID: rt::Range<usize> = 2..3;
         pub const NEW_ID_DESC: rt::FieldDesc = rt::field(Self::NAME, "new_id");
+        pub const NEW_ID_CHECK: rt::FieldCheck = rt::check(&Self::NEW_ID_DESC, 2)
+            .range(1, 30);
         pub const NEW_ID_REPEAT_DESC: rt::FieldDesc = rt::field(
             Self::NAME,
             "new_id_repeat",
@@ -2419,7 +2421,7 @@ pub mod sd {
         #[inline(always)]
         fn write(&self, address: u8, out: &mut [u8; 6]) -> rt::EncodeResult {
             let Self { new_id: v_new_id } = *self;
-            rt::encode_in_range("new_id", v_new_id, 1, 30)?;
+            rt::encode_in_range(&Self::NEW_ID_CHECK, v_new_id)?;
             let out = rt::head(out, &[0xAA, address]);
             let w_new_id: u8 = v_new_id;
             out[2] = w_new_id;
@@ -2430,7 +2432,7 @@ pub mod sd {
         #[inline(always)]
         fn from_frame(frame: &[u8]) -> rt::DecodeResult<Self> {
             let frame = rt::fixed::<6>(frame, &Self::DESC)?;
-            rt::in_range(&Self::NEW_ID_DESC, 2, frame[2], 1, 30)?;
+            rt::in_range(&Self::NEW_ID_CHECK, frame[2])?;
             rt::same(&Self::NEW_ID_REPEAT_DESC, 3, frame[3], "new_id", frame[2])?;
             rt::Ok(Self { new_id: frame[2] })
         }
@@ -2720,8 +2722,13 @@ pub mod sd {
         pub const LEN: usize = 6;
         pub const DESC: rt::MessageDesc = rt::desc(Self::NAME, 0xF0, 1, &[6]);
         pub const BYTE_NUMBER: rt::Range<usize> = 3..4;
-        pub const ARG1_DESC: rt::FieldDesc = rt::field(Self::NAME, "arg1");
         pub const BYTE_NUMBER_DESC: rt::FieldDesc = rt::field(Self::NAME, "byte_number");
+        pub const BYTE_NUMBER_CHECK: rt::FieldCheck = rt::check(
+                &Self::BYTE_NUMBER_DESC,
+                3,
+            )
+            .range(0, 31);
+        pub const ARG1_DESC: rt::FieldDesc = rt::field(Self::NAME, "arg1");
         pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
             f("byte_number", rt::Int(self.byte_number as i64));
         }
@@ -2732,12 +2739,8 @@ pub mod sd {
         #[inline(always)]
         fn write(&self, address: u8, out: &mut [u8; 6]) -> rt::EncodeResult {
             let Self { byte_number: v_byte_number } = *self;
-            rt::encode_broadcast(
-                address,
-                0x1F,
-                &request::ReadElectronicSerialNumber::DESC,
-            )?;
-            rt::encode_in_range("byte_number", v_byte_number, 0, 31)?;
+            rt::encode_broadcast(address, 0x1F, &Self::DESC)?;
+            rt::encode_in_range(&Self::BYTE_NUMBER_CHECK, v_byte_number)?;
             let out = rt::head(out, &[0xF0, address, 0x00]);
             out[3] = v_byte_number;
             rt::Ok(out.len())
@@ -2748,7 +2751,7 @@ pub mod sd {
             let frame = rt::fixed::<6>(frame, &Self::DESC)?;
             rt::no_broadcast(frame[1], 0x1F, &Self::DESC)?;
             rt::equal(&Self::ARG1_DESC, 2, frame[2], 0x0)?;
-            rt::in_range(&Self::BYTE_NUMBER_DESC, 3, frame[3], 0, 31)?;
+            rt::in_range(&Self::BYTE_NUMBER_CHECK, frame[3])?;
             rt::Ok(Self { byte_number: frame[3] })
         }
     }
@@ -2758,8 +2761,13 @@ pub mod sd {
         pub const LEN: usize = 6;
         pub const DESC: rt::MessageDesc = rt::desc(Self::NAME, 0xF1, 1, &[6]);
         pub const BYTE_NUMBER: rt::Range<usize> = 3..4;
-        pub const ARG1_DESC: rt::FieldDesc = rt::field(Self::NAME, "arg1");
         pub const BYTE_NUMBER_DESC: rt::FieldDesc = rt::field(Self::NAME, "byte_number");
+        pub const BYTE_NUMBER_CHECK: rt::FieldCheck = rt::check(
+                &Self::BYTE_NUMBER_DESC,
+                3,
+            )
+            .range(0, 31);
+        pub const ARG1_DESC: rt::FieldDesc = rt::field(Self::NAME, "arg1");
         pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
             f("byte_number", rt::Int(self.byte_number as i64));
         }
@@ -2770,8 +2778,8 @@ pub mod sd {
         #[inline(always)]
         fn write(&self, address: u8, out: &mut [u8; 6]) -> rt::EncodeResult {
             let Self { byte_number: v_byte_number } = *self;
-            rt::encode_broadcast(address, 0x1F, &request::ReadProductDescription::DESC)?;
-            rt::encode_in_range("byte_number", v_byte_number, 0, 31)?;
+            rt::encode_broadcast(address, 0x1F, &Self::DESC)?;
+            rt::encode_in_range(&Self::BYTE_NUMBER_CHECK, v_byte_number)?;
             let out = rt::head(out, &[0xF1, address, 0x00]);
             out[3] = v_byte_number;
             rt::Ok(out.len())
@@ -2782,7 +2790,7 @@ pub mod sd {
             let frame = rt::fixed::<6>(frame, &Self::DESC)?;
             rt::no_broadcast(frame[1], 0x1F, &Self::DESC)?;
             rt::equal(&Self::ARG1_DESC, 2, frame[2], 0x0)?;
-            rt::in_range(&Self::BYTE_NUMBER_DESC, 3, frame[3], 0, 31)?;
+            rt::in_range(&Self::BYTE_NUMBER_CHECK, frame[3])?;
             rt::Ok(Self { byte_number: frame[3] })
         }
     }
@@ -2792,8 +2800,13 @@ pub mod sd {
         pub const LEN: usize = 6;
         pub const DESC: rt::MessageDesc = rt::desc(Self::NAME, 0xF2, 1, &[6]);
         pub const BYTE_NUMBER: rt::Range<usize> = 3..4;
-        pub const ARG1_DESC: rt::FieldDesc = rt::field(Self::NAME, "arg1");
         pub const BYTE_NUMBER_DESC: rt::FieldDesc = rt::field(Self::NAME, "byte_number");
+        pub const BYTE_NUMBER_CHECK: rt::FieldCheck = rt::check(
+                &Self::BYTE_NUMBER_DESC,
+                3,
+            )
+            .range(0, 31);
+        pub const ARG1_DESC: rt::FieldDesc = rt::field(Self::NAME, "arg1");
         pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
             f("byte_number", rt::Int(self.byte_number as i64));
         }
@@ -2804,8 +2817,8 @@ pub mod sd {
         #[inline(always)]
         fn write(&self, address: u8, out: &mut [u8; 6]) -> rt::EncodeResult {
             let Self { byte_number: v_byte_number } = *self;
-            rt::encode_broadcast(address, 0x1F, &request::ReadSoftwareRevision::DESC)?;
-            rt::encode_in_range("byte_number", v_byte_number, 0, 31)?;
+            rt::encode_broadcast(address, 0x1F, &Self::DESC)?;
+            rt::encode_in_range(&Self::BYTE_NUMBER_CHECK, v_byte_number)?;
             let out = rt::head(out, &[0xF2, address, 0x00]);
             out[3] = v_byte_number;
             rt::Ok(out.len())
@@ -2816,7 +2829,7 @@ pub mod sd {
             let frame = rt::fixed::<6>(frame, &Self::DESC)?;
             rt::no_broadcast(frame[1], 0x1F, &Self::DESC)?;
             rt::equal(&Self::ARG1_DESC, 2, frame[2], 0x0)?;
-            rt::in_range(&Self::BYTE_NUMBER_DESC, 3, frame[3], 0, 31)?;
+            rt::in_range(&Self::BYTE_NUMBER_CHECK, frame[3])?;
             rt::Ok(Self { byte_number: frame[3] })
         }
     }
@@ -2826,8 +2839,13 @@ pub mod sd {
         pub const LEN: usize = 6;
         pub const DESC: rt::MessageDesc = rt::desc(Self::NAME, 0xF3, 1, &[6]);
         pub const BYTE_NUMBER: rt::Range<usize> = 3..4;
-        pub const ARG1_DESC: rt::FieldDesc = rt::field(Self::NAME, "arg1");
         pub const BYTE_NUMBER_DESC: rt::FieldDesc = rt::field(Self::NAME, "byte_number");
+        pub const BYTE_NUMBER_CHECK: rt::FieldCheck = rt::check(
+                &Self::BYTE_NUMBER_DESC,
+                3,
+            )
+            .range(0, 31);
+        pub const ARG1_DESC: rt::FieldDesc = rt::field(Self::NAME, "arg1");
         pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
             f("byte_number", rt::Int(self.byte_number as i64));
         }
@@ -2838,8 +2856,8 @@ pub mod sd {
         #[inline(always)]
         fn write(&self, address: u8, out: &mut [u8; 6]) -> rt::EncodeResult {
             let Self { byte_number: v_byte_number } = *self;
-            rt::encode_broadcast(address, 0x1F, &request::ReadHardwareRevision::DESC)?;
-            rt::encode_in_range("byte_number", v_byte_number, 0, 31)?;
+            rt::encode_broadcast(address, 0x1F, &Self::DESC)?;
+            rt::encode_in_range(&Self::BYTE_NUMBER_CHECK, v_byte_number)?;
             let out = rt::head(out, &[0xF3, address, 0x00]);
             out[3] = v_byte_number;
             rt::Ok(out.len())
@@ -2850,7 +2868,7 @@ pub mod sd {
             let frame = rt::fixed::<6>(frame, &Self::DESC)?;
             rt::no_broadcast(frame[1], 0x1F, &Self::DESC)?;
             rt::equal(&Self::ARG1_DESC, 2, frame[2], 0x0)?;
-            rt::in_range(&Self::BYTE_NUMBER_DESC, 3, frame[3], 0, 31)?;
+            rt::in_range(&Self::BYTE_NUMBER_CHECK, frame[3])?;
             rt::Ok(Self { byte_number: frame[3] })
         }
     }
@@ -3399,6 +3417,8 @@ pub mod sd {
         pub const DESC: rt::MessageDesc = rt::desc(Self::NAME, 0x55, 1, &[6]);
         pub const NEW_ID: rt::Range<usize> = 2..3;
         pub const NEW_ID_DESC: rt::FieldDesc = rt::field(Self::NAME, "new_id");
+        pub const NEW_ID_CHECK: rt::FieldCheck = rt::check(&Self::NEW_ID_DESC, 2)
+            .range(1, 30);
         pub const NEW_ID_REPEAT_DESC: rt::FieldDesc = rt::field(
             Self::NAME,
             "new_id_repeat",
@@ -3413,7 +3433,7 @@ pub mod sd {
         #[inline(always)]
         fn write(&self, address: u8, out: &mut [u8; 6]) -> rt::EncodeResult {
             let Self { new_id: v_new_id } = *self;
-            rt::encode_in_range("new_id", v_new_id, 1, 30)?;
+            rt::encode_in_range(&Self::NEW_ID_CHECK, v_new_id)?;
             let out = rt::head(out, &[0x55, address]);
             let w_new_id: u8 = v_new_id;
             out[2] = w_new_id;
@@ -3424,7 +3444,7 @@ pub mod sd {
         #[inline(always)]
         fn from_frame(frame: &[u8]) -> rt::DecodeResult<Self> {
             let frame = rt::fixed::<6>(frame, &Self::DESC)?;
-            rt::in_range(&Self::NEW_ID_DESC, 2, frame[2], 1, 30)?;
+            rt::in_range(&Self::NEW_ID_CHECK, frame[2])?;
             rt::same(&Self::NEW_ID_REPEAT_DESC, 3, frame[3], "new_id", frame[2])?;
             rt::Ok(Self { new_id: frame[2] })
         }
@@ -3436,6 +3456,7 @@ pub mod sd {
         pub const DESC: rt::MessageDesc = rt::desc(Self::NAME, 0x6D, 1, &[6]);
         pub const ID: rt::Range<usize> = 2..3;
         pub const ID_DESC: rt::FieldDesc = rt::field(Self::NAME, "id");
+        pub const ID_CHECK: rt::FieldCheck = rt::check(&Self::ID_DESC, 2).range(1, 30);
         pub const ID_REPEAT_DESC: rt::FieldDesc = rt::field(Self::NAME, "id_repeat");
         pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
             f("id", rt::Int(self.id as i64));
@@ -3447,7 +3468,7 @@ pub mod sd {
         #[inline(always)]
         fn write(&self, address: u8, out: &mut [u8; 6]) -> rt::EncodeResult {
             let Self { id: v_id } = *self;
-            rt::encode_in_range("id", v_id, 1, 30)?;
+            rt::encode_in_range(&Self::ID_CHECK, v_id)?;
             let out = rt::head(out, &[0x6D, address]);
             let w_id: u8 = v_id;
             out[2] = w_id;
@@ -3458,7 +3479,7 @@ pub mod sd {
         #[inline(always)]
         fn from_frame(frame: &[u8]) -> rt::DecodeResult<Self> {
             let frame = rt::fixed::<6>(frame, &Self::DESC)?;
-            rt::in_range(&Self::ID_DESC, 2, frame[2], 1, 30)?;
+            rt::in_range(&Self::ID_CHECK, frame[2])?;
             rt::same(&Self::ID_REPEAT_DESC, 3, frame[3], "id", frame[2])?;
             rt::Ok(Self { id: frame[2] })
         }
@@ -3617,6 +3638,9 @@ pub mod sd {
         /// `humidity`'s special value `no_sensor`: no sensor available
         pub const HUMIDITY_NO_SENSOR: u8 = 0x00;
         pub const HUMIDITY_DESC: rt::FieldDesc = rt::field(Self::NAME, "humidity");
+        pub const HUMIDITY_CHECK: rt::FieldCheck = rt::check(&Self::HUMIDITY_DESC, 2)
+            .range(1, 100)
+            .or(&[0]);
         pub const HUMIDITY_REPEAT_DESC: rt::FieldDesc = rt::field(
             Self::NAME,
             "humidity_repeat",
@@ -3631,7 +3655,7 @@ pub mod sd {
         #[inline(always)]
         fn write(&self, address: u8, out: &mut [u8; 6]) -> rt::EncodeResult {
             let Self { humidity: v_humidity } = *self;
-            rt::encode_in_range_or("humidity", v_humidity, 1, 100, &[0])?;
+            rt::encode_in_range(&Self::HUMIDITY_CHECK, v_humidity)?;
             let out = rt::head(out, &[0x21, address]);
             let w_humidity: u8 = v_humidity;
             out[2] = w_humidity;
@@ -3642,7 +3666,7 @@ pub mod sd {
         #[inline(always)]
         fn from_frame(frame: &[u8]) -> rt::DecodeResult<Self> {
             let frame = rt::fixed::<6>(frame, &Self::DESC)?;
-            rt::in_range_or(&Self::HUMIDITY_DESC, 2, frame[2], 1, 100, &[0])?;
+            rt::in_range(&Self::HUMIDITY_CHECK, frame[2])?;
             rt::same(&Self::HUMIDITY_REPEAT_DESC, 3, frame[3], "humidity", frame[2])?;
             rt::Ok(Self { humidity: frame[2] })
         }
@@ -3875,6 +3899,11 @@ pub mod sd {
             Self::NAME,
             "string_length",
         );
+        pub const STRING_LENGTH_CHECK: rt::FieldCheck = rt::check(
+                &Self::STRING_LENGTH_DESC,
+                3,
+            )
+            .range(0, 32);
         pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
             f("character", rt::Int(self.character as i64));
             f("string_length", rt::Int(self.string_length as i64));
@@ -3886,7 +3915,7 @@ pub mod sd {
         #[inline(always)]
         fn write(&self, address: u8, out: &mut [u8; 6]) -> rt::EncodeResult {
             let Self { character: v_character, string_length: v_string_length } = *self;
-            rt::encode_in_range("string_length", v_string_length, 0, 32)?;
+            rt::encode_in_range(&Self::STRING_LENGTH_CHECK, v_string_length)?;
             let out = rt::head(out, &[0x10, address]);
             out[2] = v_character;
             out[3] = v_string_length;
@@ -3896,7 +3925,7 @@ pub mod sd {
         #[inline(always)]
         fn from_frame(frame: &[u8]) -> rt::DecodeResult<Self> {
             let frame = rt::fixed::<6>(frame, &Self::DESC)?;
-            rt::in_range(&Self::STRING_LENGTH_DESC, 3, frame[3], 0, 32)?;
+            rt::in_range(&Self::STRING_LENGTH_CHECK, frame[3])?;
             rt::Ok(Self {
                 character: frame[2],
                 string_length: frame[3],
@@ -3914,6 +3943,11 @@ pub mod sd {
             Self::NAME,
             "string_length",
         );
+        pub const STRING_LENGTH_CHECK: rt::FieldCheck = rt::check(
+                &Self::STRING_LENGTH_DESC,
+                3,
+            )
+            .range(0, 32);
         pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
             f("character", rt::Int(self.character as i64));
             f("string_length", rt::Int(self.string_length as i64));
@@ -3925,7 +3959,7 @@ pub mod sd {
         #[inline(always)]
         fn write(&self, address: u8, out: &mut [u8; 6]) -> rt::EncodeResult {
             let Self { character: v_character, string_length: v_string_length } = *self;
-            rt::encode_in_range("string_length", v_string_length, 0, 32)?;
+            rt::encode_in_range(&Self::STRING_LENGTH_CHECK, v_string_length)?;
             let out = rt::head(out, &[0x11, address]);
             out[2] = v_character;
             out[3] = v_string_length;
@@ -3935,7 +3969,7 @@ pub mod sd {
         #[inline(always)]
         fn from_frame(frame: &[u8]) -> rt::DecodeResult<Self> {
             let frame = rt::fixed::<6>(frame, &Self::DESC)?;
-            rt::in_range(&Self::STRING_LENGTH_DESC, 3, frame[3], 0, 32)?;
+            rt::in_range(&Self::STRING_LENGTH_CHECK, frame[3])?;
             rt::Ok(Self {
                 character: frame[2],
                 string_length: frame[3],
@@ -3953,6 +3987,11 @@ pub mod sd {
             Self::NAME,
             "string_length",
         );
+        pub const STRING_LENGTH_CHECK: rt::FieldCheck = rt::check(
+                &Self::STRING_LENGTH_DESC,
+                3,
+            )
+            .range(0, 32);
         pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
             f("character", rt::Int(self.character as i64));
             f("string_length", rt::Int(self.string_length as i64));
@@ -3964,7 +4003,7 @@ pub mod sd {
         #[inline(always)]
         fn write(&self, address: u8, out: &mut [u8; 6]) -> rt::EncodeResult {
             let Self { character: v_character, string_length: v_string_length } = *self;
-            rt::encode_in_range("string_length", v_string_length, 0, 32)?;
+            rt::encode_in_range(&Self::STRING_LENGTH_CHECK, v_string_length)?;
             let out = rt::head(out, &[0x12, address]);
             out[2] = v_character;
             out[3] = v_string_length;
@@ -3974,7 +4013,7 @@ pub mod sd {
         #[inline(always)]
         fn from_frame(frame: &[u8]) -> rt::DecodeResult<Self> {
             let frame = rt::fixed::<6>(frame, &Self::DESC)?;
-            rt::in_range(&Self::STRING_LENGTH_DESC, 3, frame[3], 0, 32)?;
+            rt::in_range(&Self::STRING_LENGTH_CHECK, frame[3])?;
             rt::Ok(Self {
                 character: frame[2],
                 string_length: frame[3],
@@ -3992,6 +4031,11 @@ pub mod sd {
             Self::NAME,
             "string_length",
         );
+        pub const STRING_LENGTH_CHECK: rt::FieldCheck = rt::check(
+                &Self::STRING_LENGTH_DESC,
+                3,
+            )
+            .range(0, 32);
         pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
             f("character", rt::Int(self.character as i64));
             f("string_length", rt::Int(self.string_length as i64));
@@ -4003,7 +4047,7 @@ pub mod sd {
         #[inline(always)]
         fn write(&self, address: u8, out: &mut [u8; 6]) -> rt::EncodeResult {
             let Self { character: v_character, string_length: v_string_length } = *self;
-            rt::encode_in_range("string_length", v_string_length, 0, 32)?;
+            rt::encode_in_range(&Self::STRING_LENGTH_CHECK, v_string_length)?;
             let out = rt::head(out, &[0x13, address]);
             out[2] = v_character;
             out[3] = v_string_length;
@@ -4013,7 +4057,7 @@ pub mod sd {
         #[inline(always)]
         fn from_frame(frame: &[u8]) -> rt::DecodeResult<Self> {
             let frame = rt::fixed::<6>(frame, &Self::DESC)?;
-            rt::in_range(&Self::STRING_LENGTH_DESC, 3, frame[3], 0, 32)?;
+            rt::in_range(&Self::STRING_LENGTH_CHECK, frame[3])?;
             rt::Ok(Self {
                 character: frame[2],
                 string_length: frame[3],
@@ -4060,10 +4104,20 @@ pub mod sd {
             Self::NAME,
             "runtime_minutes",
         );
+        pub const RUNTIME_MINUTES_CHECK: rt::FieldCheck = rt::check(
+                &Self::RUNTIME_MINUTES_DESC,
+                2,
+            )
+            .range(0, 59);
         pub const RUNTIME_SECONDS_DESC: rt::FieldDesc = rt::field(
             Self::NAME,
             "runtime_seconds",
         );
+        pub const RUNTIME_SECONDS_CHECK: rt::FieldCheck = rt::check(
+                &Self::RUNTIME_SECONDS_DESC,
+                3,
+            )
+            .range(0, 59);
         pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
             f("runtime_minutes", rt::Int(self.runtime_minutes as i64));
             f("runtime_seconds", rt::Int(self.runtime_seconds as i64));
@@ -4078,8 +4132,8 @@ pub mod sd {
                 runtime_minutes: v_runtime_minutes,
                 runtime_seconds: v_runtime_seconds,
             } = *self;
-            rt::encode_in_range("runtime_minutes", v_runtime_minutes, 0, 59)?;
-            rt::encode_in_range("runtime_seconds", v_runtime_seconds, 0, 59)?;
+            rt::encode_in_range(&Self::RUNTIME_MINUTES_CHECK, v_runtime_minutes)?;
+            rt::encode_in_range(&Self::RUNTIME_SECONDS_CHECK, v_runtime_seconds)?;
             let out = rt::head(out, &[0x22, address]);
             out[2] = v_runtime_minutes;
             out[3] = v_runtime_seconds;
@@ -4089,8 +4143,8 @@ pub mod sd {
         #[inline(always)]
         fn from_frame(frame: &[u8]) -> rt::DecodeResult<Self> {
             let frame = rt::fixed::<6>(frame, &Self::DESC)?;
-            rt::in_range(&Self::RUNTIME_MINUTES_DESC, 2, frame[2], 0, 59)?;
-            rt::in_range(&Self::RUNTIME_SECONDS_DESC, 3, frame[3], 0, 59)?;
+            rt::in_range(&Self::RUNTIME_MINUTES_CHECK, frame[2])?;
+            rt::in_range(&Self::RUNTIME_SECONDS_CHECK, frame[3])?;
             rt::Ok(Self {
                 runtime_minutes: frame[2],
                 runtime_seconds: frame[3],
@@ -4137,10 +4191,20 @@ pub mod sd {
             Self::NAME,
             "runtime_minutes",
         );
+        pub const RUNTIME_MINUTES_CHECK: rt::FieldCheck = rt::check(
+                &Self::RUNTIME_MINUTES_DESC,
+                2,
+            )
+            .range(0, 59);
         pub const RUNTIME_SECONDS_DESC: rt::FieldDesc = rt::field(
             Self::NAME,
             "runtime_seconds",
         );
+        pub const RUNTIME_SECONDS_CHECK: rt::FieldCheck = rt::check(
+                &Self::RUNTIME_SECONDS_DESC,
+                3,
+            )
+            .range(0, 59);
         pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
             f("runtime_minutes", rt::Int(self.runtime_minutes as i64));
             f("runtime_seconds", rt::Int(self.runtime_seconds as i64));
@@ -4155,8 +4219,8 @@ pub mod sd {
                 runtime_minutes: v_runtime_minutes,
                 runtime_seconds: v_runtime_seconds,
             } = *self;
-            rt::encode_in_range("runtime_minutes", v_runtime_minutes, 0, 59)?;
-            rt::encode_in_range("runtime_seconds", v_runtime_seconds, 0, 59)?;
+            rt::encode_in_range(&Self::RUNTIME_MINUTES_CHECK, v_runtime_minutes)?;
+            rt::encode_in_range(&Self::RUNTIME_SECONDS_CHECK, v_runtime_seconds)?;
             let out = rt::head(out, &[0x23, address]);
             out[2] = v_runtime_minutes;
             out[3] = v_runtime_seconds;
@@ -4166,8 +4230,8 @@ pub mod sd {
         #[inline(always)]
         fn from_frame(frame: &[u8]) -> rt::DecodeResult<Self> {
             let frame = rt::fixed::<6>(frame, &Self::DESC)?;
-            rt::in_range(&Self::RUNTIME_MINUTES_DESC, 2, frame[2], 0, 59)?;
-            rt::in_range(&Self::RUNTIME_SECONDS_DESC, 3, frame[3], 0, 59)?;
+            rt::in_range(&Self::RUNTIME_MINUTES_CHECK, frame[2])?;
+            rt::in_range(&Self::RUNTIME_SECONDS_CHECK, frame[3])?;
             rt::Ok(Self {
                 runtime_minutes: frame[2],
                 runtime_seconds: frame[3],
@@ -4246,10 +4310,20 @@ pub mod sd {
             Self::NAME,
             "runtime_minutes",
         );
+        pub const RUNTIME_MINUTES_CHECK: rt::FieldCheck = rt::check(
+                &Self::RUNTIME_MINUTES_DESC,
+                2,
+            )
+            .range(0, 59);
         pub const RUNTIME_SECONDS_DESC: rt::FieldDesc = rt::field(
             Self::NAME,
             "runtime_seconds",
         );
+        pub const RUNTIME_SECONDS_CHECK: rt::FieldCheck = rt::check(
+                &Self::RUNTIME_SECONDS_DESC,
+                3,
+            )
+            .range(0, 59);
         pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
             f("runtime_minutes", rt::Int(self.runtime_minutes as i64));
             f("runtime_seconds", rt::Int(self.runtime_seconds as i64));
@@ -4264,8 +4338,8 @@ pub mod sd {
                 runtime_minutes: v_runtime_minutes,
                 runtime_seconds: v_runtime_seconds,
             } = *self;
-            rt::encode_in_range("runtime_minutes", v_runtime_minutes, 0, 59)?;
-            rt::encode_in_range("runtime_seconds", v_runtime_seconds, 0, 59)?;
+            rt::encode_in_range(&Self::RUNTIME_MINUTES_CHECK, v_runtime_minutes)?;
+            rt::encode_in_range(&Self::RUNTIME_SECONDS_CHECK, v_runtime_seconds)?;
             let out = rt::head(out, &[0x24, address]);
             out[2] = v_runtime_minutes;
             out[3] = v_runtime_seconds;
@@ -4275,8 +4349,8 @@ pub mod sd {
         #[inline(always)]
         fn from_frame(frame: &[u8]) -> rt::DecodeResult<Self> {
             let frame = rt::fixed::<6>(frame, &Self::DESC)?;
-            rt::in_range(&Self::RUNTIME_MINUTES_DESC, 2, frame[2], 0, 59)?;
-            rt::in_range(&Self::RUNTIME_SECONDS_DESC, 3, frame[3], 0, 59)?;
+            rt::in_range(&Self::RUNTIME_MINUTES_CHECK, frame[2])?;
+            rt::in_range(&Self::RUNTIME_SECONDS_CHECK, frame[3])?;
             rt::Ok(Self {
                 runtime_minutes: frame[2],
                 runtime_seconds: frame[3],
@@ -4355,10 +4429,20 @@ pub mod sd {
             Self::NAME,
             "runtime_minutes",
         );
+        pub const RUNTIME_MINUTES_CHECK: rt::FieldCheck = rt::check(
+                &Self::RUNTIME_MINUTES_DESC,
+                2,
+            )
+            .range(0, 59);
         pub const RUNTIME_SECONDS_DESC: rt::FieldDesc = rt::field(
             Self::NAME,
             "runtime_seconds",
         );
+        pub const RUNTIME_SECONDS_CHECK: rt::FieldCheck = rt::check(
+                &Self::RUNTIME_SECONDS_DESC,
+                3,
+            )
+            .range(0, 59);
         pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
             f("runtime_minutes", rt::Int(self.runtime_minutes as i64));
             f("runtime_seconds", rt::Int(self.runtime_seconds as i64));
@@ -4373,8 +4457,8 @@ pub mod sd {
                 runtime_minutes: v_runtime_minutes,
                 runtime_seconds: v_runtime_seconds,
             } = *self;
-            rt::encode_in_range("runtime_minutes", v_runtime_minutes, 0, 59)?;
-            rt::encode_in_range("runtime_seconds", v_runtime_seconds, 0, 59)?;
+            rt::encode_in_range(&Self::RUNTIME_MINUTES_CHECK, v_runtime_minutes)?;
+            rt::encode_in_range(&Self::RUNTIME_SECONDS_CHECK, v_runtime_seconds)?;
             let out = rt::head(out, &[0x25, address]);
             out[2] = v_runtime_minutes;
             out[3] = v_runtime_seconds;
@@ -4384,8 +4468,8 @@ pub mod sd {
         #[inline(always)]
         fn from_frame(frame: &[u8]) -> rt::DecodeResult<Self> {
             let frame = rt::fixed::<6>(frame, &Self::DESC)?;
-            rt::in_range(&Self::RUNTIME_MINUTES_DESC, 2, frame[2], 0, 59)?;
-            rt::in_range(&Self::RUNTIME_SECONDS_DESC, 3, frame[3], 0, 59)?;
+            rt::in_range(&Self::RUNTIME_MINUTES_CHECK, frame[2])?;
+            rt::in_range(&Self::RUNTIME_SECONDS_CHECK, frame[3])?;
             rt::Ok(Self {
                 runtime_minutes: frame[2],
                 runtime_seconds: frame[3],
@@ -4464,10 +4548,20 @@ pub mod sd {
             Self::NAME,
             "runtime_minutes",
         );
+        pub const RUNTIME_MINUTES_CHECK: rt::FieldCheck = rt::check(
+                &Self::RUNTIME_MINUTES_DESC,
+                2,
+            )
+            .range(0, 59);
         pub const RUNTIME_SECONDS_DESC: rt::FieldDesc = rt::field(
             Self::NAME,
             "runtime_seconds",
         );
+        pub const RUNTIME_SECONDS_CHECK: rt::FieldCheck = rt::check(
+                &Self::RUNTIME_SECONDS_DESC,
+                3,
+            )
+            .range(0, 59);
         pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
             f("runtime_minutes", rt::Int(self.runtime_minutes as i64));
             f("runtime_seconds", rt::Int(self.runtime_seconds as i64));
@@ -4482,8 +4576,8 @@ pub mod sd {
                 runtime_minutes: v_runtime_minutes,
                 runtime_seconds: v_runtime_seconds,
             } = *self;
-            rt::encode_in_range("runtime_minutes", v_runtime_minutes, 0, 59)?;
-            rt::encode_in_range("runtime_seconds", v_runtime_seconds, 0, 59)?;
+            rt::encode_in_range(&Self::RUNTIME_MINUTES_CHECK, v_runtime_minutes)?;
+            rt::encode_in_range(&Self::RUNTIME_SECONDS_CHECK, v_runtime_seconds)?;
             let out = rt::head(out, &[0x26, address]);
             out[2] = v_runtime_minutes;
             out[3] = v_runtime_seconds;
@@ -4493,8 +4587,8 @@ pub mod sd {
         #[inline(always)]
         fn from_frame(frame: &[u8]) -> rt::DecodeResult<Self> {
             let frame = rt::fixed::<6>(frame, &Self::DESC)?;
-            rt::in_range(&Self::RUNTIME_MINUTES_DESC, 2, frame[2], 0, 59)?;
-            rt::in_range(&Self::RUNTIME_SECONDS_DESC, 3, frame[3], 0, 59)?;
+            rt::in_range(&Self::RUNTIME_MINUTES_CHECK, frame[2])?;
+            rt::in_range(&Self::RUNTIME_SECONDS_CHECK, frame[3])?;
             rt::Ok(Self {
                 runtime_minutes: frame[2],
                 runtime_seconds: frame[3],
@@ -4573,10 +4667,20 @@ pub mod sd {
             Self::NAME,
             "runtime_minutes",
         );
+        pub const RUNTIME_MINUTES_CHECK: rt::FieldCheck = rt::check(
+                &Self::RUNTIME_MINUTES_DESC,
+                2,
+            )
+            .range(0, 59);
         pub const RUNTIME_SECONDS_DESC: rt::FieldDesc = rt::field(
             Self::NAME,
             "runtime_seconds",
         );
+        pub const RUNTIME_SECONDS_CHECK: rt::FieldCheck = rt::check(
+                &Self::RUNTIME_SECONDS_DESC,
+                3,
+            )
+            .range(0, 59);
         pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
             f("runtime_minutes", rt::Int(self.runtime_minutes as i64));
             f("runtime_seconds", rt::Int(self.runtime_seconds as i64));
@@ -4591,8 +4695,8 @@ pub mod sd {
                 runtime_minutes: v_runtime_minutes,
                 runtime_seconds: v_runtime_seconds,
             } = *self;
-            rt::encode_in_range("runtime_minutes", v_runtime_minutes, 0, 59)?;
-            rt::encode_in_range("runtime_seconds", v_runtime_seconds, 0, 59)?;
+            rt::encode_in_range(&Self::RUNTIME_MINUTES_CHECK, v_runtime_minutes)?;
+            rt::encode_in_range(&Self::RUNTIME_SECONDS_CHECK, v_runtime_seconds)?;
             let out = rt::head(out, &[0x27, address]);
             out[2] = v_runtime_minutes;
             out[3] = v_runtime_seconds;
@@ -4602,8 +4706,8 @@ pub mod sd {
         #[inline(always)]
         fn from_frame(frame: &[u8]) -> rt::DecodeResult<Self> {
             let frame = rt::fixed::<6>(frame, &Self::DESC)?;
-            rt::in_range(&Self::RUNTIME_MINUTES_DESC, 2, frame[2], 0, 59)?;
-            rt::in_range(&Self::RUNTIME_SECONDS_DESC, 3, frame[3], 0, 59)?;
+            rt::in_range(&Self::RUNTIME_MINUTES_CHECK, frame[2])?;
+            rt::in_range(&Self::RUNTIME_SECONDS_CHECK, frame[3])?;
             rt::Ok(Self {
                 runtime_minutes: frame[2],
                 runtime_seconds: frame[3],

@@ -644,6 +644,8 @@ pub mod syncy {
         pub const DESC: rt::MessageDesc = rt::desc(Self::NAME, 0x03, 1, &[9]);
         pub const TARGET: rt::Range<usize> = 5..8;
         pub const TARGET_DESC: rt::FieldDesc = rt::field(Self::NAME, "target");
+        pub const TARGET_CHECK: rt::FieldCheck = rt::check(&Self::TARGET_DESC, 5)
+            .range(-1000000, 1000000);
         pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
             f("target", rt::Int(self.target.raw() as i64));
         }
@@ -654,9 +656,9 @@ pub mod syncy {
         #[inline(always)]
         fn write(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             let Self { target: v_target } = *self;
-            rt::encode_broadcast(address, 0xFE, &request::MoveTo::DESC)?;
+            rt::encode_broadcast(address, 0xFE, &Self::DESC)?;
             let out = rt::frame_mut::<9>(buf, &[0xFF, 0xFF, address, 0x05, 0x03])?;
-            rt::encode_in_range("target", v_target.raw(), -1000000, 1000000)?;
+            rt::encode_in_range(&Self::TARGET_CHECK, v_target.raw())?;
             out[5..8]
                 .copy_from_slice(
                     &rt::bytes24(
@@ -673,7 +675,7 @@ pub mod syncy {
             let frame = rt::fixed::<9>(frame, &Self::DESC)?;
             rt::no_broadcast(frame[2], 0xFE, &Self::DESC)?;
             let w_target: i32 = rt::i24([frame[5], frame[6], frame[7]], false);
-            rt::in_range(&Self::TARGET_DESC, 5, w_target, -1000000, 1000000)?;
+            rt::in_range(&Self::TARGET_CHECK, w_target)?;
             rt::Ok(Self {
                 target: Millimetre::from_raw(w_target as i32),
             })
@@ -703,7 +705,11 @@ pub mod syncy {
         pub const QUANTITY: rt::Range<usize> = 5..6;
         pub const LEVEL: rt::Range<usize> = 7..9;
         pub const QUANTITY_DESC: rt::FieldDesc = rt::field(Self::NAME, "quantity");
+        pub const QUANTITY_CHECK: rt::FieldCheck = rt::check(&Self::QUANTITY_DESC, 5)
+            .range(1, 100);
         pub const DOUBLED_DESC: rt::FieldDesc = rt::field(Self::NAME, "doubled");
+        pub const DOUBLED_CHECK: rt::FieldCheck = rt::check(&Self::DOUBLED_DESC, 6)
+            .follows(2, 1, "2 × quantity");
         pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
             f("quantity", rt::Int(self.quantity as i64));
             f("level", rt::Int(self.level as i64));
@@ -715,9 +721,9 @@ pub mod syncy {
         #[inline(always)]
         fn write(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             let Self { quantity: v_quantity, level: v_level } = *self;
-            rt::encode_broadcast(address, 0xFE, &request::SetPair::DESC)?;
+            rt::encode_broadcast(address, 0xFE, &Self::DESC)?;
             let out = rt::frame_mut::<10>(buf, &[0xFF, 0xFF, address, 0x06, 0x05])?;
-            rt::encode_in_range("quantity", v_quantity, 1, 100)?;
+            rt::encode_in_range(&Self::QUANTITY_CHECK, v_quantity)?;
             let w_quantity: u8 = v_quantity;
             out[5] = w_quantity;
             out[6] = rt::fits("doubled", rt::follows(w_quantity as i64, 2, 1), 0, 255)?
@@ -730,15 +736,8 @@ pub mod syncy {
         fn from_frame(frame: &[u8]) -> rt::DecodeResult<Self> {
             let frame = rt::fixed::<10>(frame, &Self::DESC)?;
             rt::no_broadcast(frame[2], 0xFE, &Self::DESC)?;
-            rt::in_range(&Self::QUANTITY_DESC, 5, frame[5], 1, 100)?;
-            rt::following(
-                &Self::DOUBLED_DESC,
-                6,
-                frame[6],
-                frame[5] as i64,
-                (2, 1),
-                "2 × quantity",
-            )?;
+            rt::in_range(&Self::QUANTITY_CHECK, frame[5])?;
+            rt::following(&Self::DOUBLED_CHECK, frame[6], frame[5] as i64)?;
             rt::Ok(Self {
                 quantity: frame[5],
                 level: u16::from_be_bytes([frame[7], frame[8]]),
@@ -805,7 +804,11 @@ pub mod syncy {
         pub const QUANTITY: rt::Range<usize> = 5..6;
         pub const GROUPS: rt::Range<usize> = 6..7;
         pub const QUANTITY_DESC: rt::FieldDesc = rt::field(Self::NAME, "quantity");
+        pub const QUANTITY_CHECK: rt::FieldCheck = rt::check(&Self::QUANTITY_DESC, 5)
+            .follows(1, 1, "quantity of the request");
         pub const GROUPS_DESC: rt::FieldDesc = rt::field(Self::NAME, "groups");
+        pub const GROUPS_CHECK: rt::FieldCheck = rt::check(&Self::GROUPS_DESC, 6)
+            .follows(1, 8, "ceil(quantity / 8) of the request");
         pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
             f("quantity", rt::Int(self.quantity as i64));
             f("groups", rt::Int(self.groups as i64));
@@ -838,22 +841,8 @@ pub mod syncy {
             v_groups: u8,
             r: &request::SetPair,
         ) -> rt::DecodeResult<()> {
-            rt::following(
-                &Self::QUANTITY_DESC,
-                5,
-                v_quantity,
-                r.quantity as i64,
-                (1, 1),
-                "quantity of the request",
-            )?;
-            rt::following(
-                &Self::GROUPS_DESC,
-                6,
-                v_groups,
-                r.quantity as i64,
-                (1, 8),
-                "ceil(quantity / 8) of the request",
-            )?;
+            rt::following(&Self::QUANTITY_CHECK, v_quantity, r.quantity as i64)?;
+            rt::following(&Self::GROUPS_CHECK, v_groups, r.quantity as i64)?;
             rt::Ok(())
         }
     }

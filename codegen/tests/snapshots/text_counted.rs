@@ -518,11 +518,8 @@ pub mod text_counted {
                     let s = LISTS_SET_NAME.split::<6, 1>(frame)?;
                     let frame = &s.frame;
                     rt::in_range(
-                        &request::SetName::CHANNEL_DESC,
-                        4 + s.shift(1),
+                        &request::SetName::CHANNEL_CHECK.at(4 + s.shift(1)),
                         frame[4],
-                        0,
-                        7,
                     )?;
                     rt::Ok(Self::SetName {
                         name: s.lists[0].view::<u8, 16>(s.elements(0), false, false)?,
@@ -807,8 +804,10 @@ pub mod text_counted {
         pub const MIN_LEN: usize = 6;
         pub const MAX_LEN: usize = 22;
         pub const DESC: rt::MessageDesc = rt::desc(Self::NAME, 0x20, 1, &[6]);
-        pub const NAME_DESC: rt::FieldDesc = rt::field(Self::NAME, "name");
         pub const CHANNEL_DESC: rt::FieldDesc = rt::field(Self::NAME, "channel");
+        pub const CHANNEL_CHECK: rt::FieldCheck = rt::check(&Self::CHANNEL_DESC, 4)
+            .range(0, 7);
+        pub const NAME_DESC: rt::FieldDesc = rt::field(Self::NAME, "name");
         pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
             f("name", rt::Text(self.name.as_slice()));
             f("channel", rt::Int(self.channel as i64));
@@ -833,7 +832,7 @@ pub mod text_counted {
                 0,
                 255,
             )? as u8;
-            rt::encode_in_range("channel", v_channel, 0, 7)?;
+            rt::encode_in_range(&Self::CHANNEL_CHECK, v_channel)?;
             out[4] = v_channel;
             let out = LISTS_SET_NAME.expand(&compact, &[bytes_0], buf)?;
             rt::write_elements(v_name.as_slice(), 1, false, &mut out[4..]);
@@ -844,7 +843,7 @@ pub mod text_counted {
         fn from_frame(frame: &[u8]) -> rt::DecodeResult<Self> {
             let s = LISTS_SET_NAME.split::<6, 1>(frame)?;
             let frame = &s.frame;
-            rt::in_range(&Self::CHANNEL_DESC, 4 + s.shift(1), frame[4], 0, 7)?;
+            rt::in_range(&Self::CHANNEL_CHECK.at(4 + s.shift(1)), frame[4])?;
             rt::Ok(Self {
                 name: s.lists[0].elements::<u8, 16>(s.elements(0), false, false)?,
                 channel: frame[4],

@@ -580,11 +580,8 @@ pub mod text_terminated {
                     let s = LISTS_SET_NAME.split::<5, 1>(frame)?;
                     let frame = &s.frame;
                     rt::in_range(
-                        &request::SetName::CHANNEL_DESC,
-                        3 + s.shift(1),
+                        &request::SetName::CHANNEL_CHECK.at(3 + s.shift(1)),
                         frame[3],
-                        0,
-                        7,
                     )?;
                     rt::Ok(Self::SetName {
                         name: s.lists[0].view::<u8, 16>(s.elements(0), false, false)?,
@@ -966,8 +963,10 @@ pub mod text_terminated {
         pub const MIN_LEN: usize = 6;
         pub const MAX_LEN: usize = 22;
         pub const DESC: rt::MessageDesc = rt::desc(Self::NAME, 0x2A, 1, &[5]);
-        pub const NAME_DESC: rt::FieldDesc = rt::field(Self::NAME, "name");
         pub const CHANNEL_DESC: rt::FieldDesc = rt::field(Self::NAME, "channel");
+        pub const CHANNEL_CHECK: rt::FieldCheck = rt::check(&Self::CHANNEL_DESC, 3)
+            .range(0, 7);
+        pub const NAME_DESC: rt::FieldDesc = rt::field(Self::NAME, "name");
         pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
             f("name", rt::Text(self.name.as_slice()));
             f("channel", rt::Int(self.channel as i64));
@@ -983,7 +982,7 @@ pub mod text_terminated {
             let bytes_0: usize = LISTS_SET_NAME.lists[0].encode_len(v_name.len())?
                 - LISTS_SET_NAME.base;
             let mut compact = [0u8; 5];
-            rt::encode_in_range("channel", v_channel, 0, 7)?;
+            rt::encode_in_range(&Self::CHANNEL_CHECK, v_channel)?;
             let out = {
                 compact[..1].copy_from_slice(&[0xC8]);
                 &mut compact
@@ -1006,7 +1005,7 @@ pub mod text_terminated {
         fn from_frame(frame: &[u8]) -> rt::DecodeResult<Self> {
             let s = LISTS_SET_NAME.split::<5, 1>(frame)?;
             let frame = &s.frame;
-            rt::in_range(&Self::CHANNEL_DESC, 3 + s.shift(1), frame[3], 0, 7)?;
+            rt::in_range(&Self::CHANNEL_CHECK.at(3 + s.shift(1)), frame[3])?;
             rt::Ok(Self {
                 name: s.lists[0].elements::<u8, 16>(s.elements(0), false, false)?,
                 channel: frame[3],

@@ -1387,6 +1387,7 @@ pub mod vesc {
         pub const OK: rt::Range<usize> = 4..5;
         pub const OFFSET: rt::Range<usize> = 5..9;
         pub const OK_DESC: rt::FieldDesc = rt::field(Self::NAME, "ok");
+        pub const OK_CHECK: rt::FieldCheck = rt::check(&Self::OK_DESC, 4).range(0, 1);
         pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
             f("ok", rt::Int(self.ok as i64));
             f("offset", rt::Int(self.offset as i64));
@@ -1398,7 +1399,7 @@ pub mod vesc {
         #[inline(always)]
         fn write(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             let Self { ok: v_ok, offset: v_offset } = *self;
-            rt::encode_in_range("ok", v_ok, 0, 1)?;
+            rt::encode_in_range(&Self::OK_CHECK, v_ok)?;
             let out = rt::frame_mut::<12>(buf, &[0x02, 0x00, 0x06, 0x03])?;
             out[4] = v_ok;
             out[5..9].copy_from_slice(&v_offset.to_be_bytes());
@@ -1408,7 +1409,7 @@ pub mod vesc {
         #[inline(always)]
         fn from_frame(frame: &[u8]) -> rt::DecodeResult<Self> {
             let frame = rt::fixed::<12>(frame, &Self::DESC)?;
-            rt::in_range(&Self::OK_DESC, 4, frame[4], 0, 1)?;
+            rt::in_range(&Self::OK_CHECK, frame[4])?;
             rt::Ok(Self {
                 ok: frame[4],
                 offset: u32::from_be_bytes([frame[5], frame[6], frame[7], frame[8]]),
