@@ -283,6 +283,46 @@ impl Frame {
         }
     }
 
+    /// A refusal of the broadcast address by a command (`message`) that does not accept it,
+    /// in a decoded frame addressed to `address` (`FRAME.no_broadcast(frame[0], &Self::DESC)`).
+    #[inline(always)]
+    pub fn no_broadcast(
+        &self,
+        address: u8,
+        message: &'static MessageDesc,
+    ) -> Result<(), DecodeError> {
+        match self.broadcast {
+            Some(b) if b == address => Err(DecodeError::BroadcastNotAccepted {
+                message,
+                address: b,
+            }),
+            _ => Ok(()),
+        }
+    }
+
+    /// [`Frame::no_broadcast`] for an encoder.
+    #[inline(always)]
+    pub fn encode_broadcast(
+        &self,
+        address: u8,
+        message: &'static MessageDesc,
+    ) -> Result<(), EncodeError> {
+        match self.broadcast {
+            Some(b) if b == address => Err(EncodeError::BroadcastNotAccepted { message, address }),
+            _ => Ok(()),
+        }
+    }
+
+    /// Whether `frame` ends in the checksum (`checksum` of the bytes before it, at least one)
+    /// and the end bytes, and nothing else: `FRAME.checksum_ok(frame, frame_sum)`.
+    #[inline(always)]
+    pub fn checksum_ok(&self, frame: &[u8], checksum: impl FnOnce(&[u8]) -> u32) -> bool {
+        match frame.len().checked_sub(self.checksum_len + self.end.len()) {
+            Some(n) if n > 0 => check_sum(frame, n, self, checksum),
+            _ => false,
+        }
+    }
+
     /// Whether a frame may carry `address`: a device's, the broadcast or the host address.
     #[inline(always)]
     pub const fn address_ok(&self, address: u8) -> bool {
@@ -305,7 +345,7 @@ fn sums<T>(frame: &[u8], at: usize, f: &Frame, checksum: impl FnOnce(&[u8]) -> T
 /// Whether `frame` ends in the checksum of its first `at` bytes and the end bytes, and nothing
 /// else.
 #[inline(always)]
-pub fn check_sum(frame: &[u8], at: usize, f: &Frame, checksum: impl FnOnce(&[u8]) -> u32) -> bool {
+fn check_sum(frame: &[u8], at: usize, f: &Frame, checksum: impl FnOnce(&[u8]) -> u32) -> bool {
     if frame.len() != at + f.checksum_len + f.end.len() {
         return false;
     }
@@ -868,18 +908,6 @@ impl<'f, T> Group<'f, T> {
     }
 }
 
-/// A refusal of the broadcast address `b` by a command (`message`) that does not accept it.
-#[inline(always)]
-pub fn no_broadcast(address: u8, b: u8, message: &'static MessageDesc) -> Result<(), DecodeError> {
-    if address == b {
-        return Err(DecodeError::BroadcastNotAccepted {
-            message,
-            address: b,
-        });
-    }
-    Ok(())
-}
-
 /// The bytes a message fixes at its start, as the stream decoder tells its variable-length
 /// messages apart: its code at `code_at`, and the constants that lead its payload at `lead_at`
 /// (what tells code-less messages apart).
@@ -1203,19 +1231,6 @@ pub fn encode_address(address: u8, f: &Frame) -> Result<(), EncodeError> {
         min: f.devices.0,
         max: f.devices.1,
     })
-}
-
-/// [`no_broadcast`] for an encoder.
-#[inline(always)]
-pub fn encode_broadcast(
-    address: u8,
-    b: u8,
-    message: &'static MessageDesc,
-) -> Result<(), EncodeError> {
-    if address == b {
-        return Err(EncodeError::BroadcastNotAccepted { message, address });
-    }
-    Ok(())
 }
 
 /// A value to encode checked against its field's spec range and special values (`check`, the

@@ -189,14 +189,14 @@ pub(super) fn decode_body(ctx: &Ctx, m: &Message) -> (Vec<TokenStream>, TokenStr
     let o = m.layout;
     let v = variant(m);
     let mut stmts = Vec::new();
-    if let (Some(b), Some(at)) = (refuses_broadcast(p, m), o.address) {
+    if let (Some(_), Some(at)) = (refuses_broadcast(p, m), o.address) {
         let desc = if ctx.own.get() {
             quote!(&Self::DESC)
         } else {
             message_desc(m)
         };
-        let (at, b) = (usize_lit(at), hex_u8(b));
-        stmts.push(quote!(rt::no_broadcast(frame[#at], #b, #desc)?;));
+        let at = usize_lit(at);
+        stmts.push(quote!(FRAME.no_broadcast(frame[#at], #desc)?;));
     }
     let named = repeated(m);
     // Each leaf's value: an expression over `frame` or over a named wire value.

@@ -54,14 +54,13 @@ fn encode_arm(
     let len = usize_lit(p.frame_len(m));
     let o = m.layout;
     let mut stmts = Vec::new();
-    if let Some(b) = refuses_broadcast(p, m) {
+    if refuses_broadcast(p, m).is_some() {
         let desc = if ctx.own.get() {
             quote!(&Self::DESC)
         } else {
             message_desc(m)
         };
-        let b = hex_u8(b);
-        stmts.push(quote!(rt::encode_broadcast(address, #b, #desc)?;));
+        stmts.push(quote!(FRAME.encode_broadcast(address, #desc)?;));
     }
     let repeat = m
         .repeat()

@@ -493,13 +493,12 @@ pub(super) fn emit_protocol_impl(p: &Protocol) -> TokenStream {
 /// Where each direction's checksum covers from its own byte (`covers_from: {request,
 /// response}`), a frame passes whose checksum is either direction's.
 pub(super) fn checksum_ok_fn(p: &Protocol) -> TokenStream {
-    let ck_len = usize_lit(p.framing.trailer_len());
     let sum = frame_sum(p, Direction::Request);
     let check = if p.framing.checksum.covers_by_direction() {
         let rs = frame_sum(p, Direction::Response);
-        quote!(rt::check_sum(frame, n, &FRAME, #sum) || rt::check_sum(frame, n, &FRAME, #rs))
+        quote!(FRAME.checksum_ok(frame, #sum) || FRAME.checksum_ok(frame, #rs))
     } else {
-        quote!(rt::check_sum(frame, n, &FRAME, #sum))
+        quote!(FRAME.checksum_ok(frame, #sum))
     };
     let skip_preamble = if p.framing.preamble.is_some() {
         quote!(let frame = PREAMBLE.skip(frame);)
@@ -519,10 +518,7 @@ pub(super) fn checksum_ok_fn(p: &Protocol) -> TokenStream {
                 let rt::Ok((frame, _)) = #lay.lay_out(frame, &mut laid) else {
                     return false;
                 };
-                match frame.len().checked_sub(#ck_len) {
-                    rt::Some(n) if n > 0 => #check,
-                    _ => false,
-                }
+                #check
             }
         }
     } else if p.framing.escaping.is_none() {
@@ -538,10 +534,7 @@ pub(super) fn checksum_ok_fn(p: &Protocol) -> TokenStream {
             fn checksum_ok(frame: &[u8]) -> bool {
                 #skip_preamble
                 #(#unchecked)*
-                match frame.len().checked_sub(#ck_len) {
-                    rt::Some(n) if n > 0 => #check,
-                    _ => false,
-                }
+                #check
             }
         }
     } else {
@@ -555,10 +548,7 @@ pub(super) fn checksum_ok_fn(p: &Protocol) -> TokenStream {
                 let rt::Some(frame) = plain.get(..un.len) else {
                     return false;
                 };
-                match frame.len().checked_sub(#ck_len) {
-                    rt::Some(n) if n > 0 => #check,
-                    _ => false,
-                }
+                #check
             }
         }
     }

@@ -731,10 +731,7 @@ pub mod clash {
             }
         }
         fn checksum_ok(frame: &[u8]) -> bool {
-            match frame.len().checked_sub(1) {
-                rt::Some(n) if n > 0 => rt::check_sum(frame, n, &FRAME, frame_sum),
-                _ => false,
-            }
+            FRAME.checksum_ok(frame, frame_sum)
         }
     }
     /// A streaming decoder for this protocol: see [`busspec_runtime::stream`].
@@ -762,7 +759,7 @@ pub mod clash {
         #[inline(always)]
         fn write(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             let Self { some: v_some, core: v_core } = *self;
-            rt::encode_broadcast(address, 0x00, &Self::DESC)?;
+            FRAME.encode_broadcast(address, &Self::DESC)?;
             rt::encode_in_range(&Self::CORE_CHECK, v_core.raw())?;
             let out = rt::frame_mut::<7>(buf, &[0xAA, address, 0x10])?;
             out[3] = v_some.raw();
@@ -773,7 +770,7 @@ pub mod clash {
         #[inline(always)]
         fn from_frame(frame: &[u8]) -> rt::DecodeResult<Self> {
             let frame = rt::fixed::<7>(frame, &Self::DESC)?;
-            rt::no_broadcast(frame[1], 0x00, &Self::DESC)?;
+            FRAME.no_broadcast(frame[1], &Self::DESC)?;
             let w_core: u16 = u16::from_le_bytes([frame[4], frame[5]]);
             rt::in_range(&Self::CORE_CHECK, w_core)?;
             rt::Ok(Self {
@@ -798,7 +795,7 @@ pub mod clash {
         #[inline(always)]
         fn write(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             let Self { frame: v_frame } = *self;
-            rt::encode_broadcast(address, 0x00, &Self::DESC)?;
+            FRAME.encode_broadcast(address, &Self::DESC)?;
             let out = rt::frame_mut::<5>(buf, &[0xAA, address, 0x11])?;
             out[3] = rt::fits("frame", v_frame.raw(), 0, 255)? as u8;
             rt::Ok(rt::seal_sum8_head(out, 3, address.wrapping_add(0xBB)))
@@ -807,7 +804,7 @@ pub mod clash {
         #[inline(always)]
         fn from_frame(frame: &[u8]) -> rt::DecodeResult<Self> {
             let frame = rt::fixed::<5>(frame, &Self::DESC)?;
-            rt::no_broadcast(frame[1], 0x00, &Self::DESC)?;
+            FRAME.no_broadcast(frame[1], &Self::DESC)?;
             rt::Ok(Self {
                 frame: Some::from_raw(frame[3] as i16),
             })
@@ -866,7 +863,7 @@ pub mod clash {
         #[inline(always)]
         fn write(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             let Self { f: v_f } = *self;
-            rt::encode_broadcast(address, 0x00, &Self::DESC)?;
+            FRAME.encode_broadcast(address, &Self::DESC)?;
             let out = rt::frame_mut::<6>(buf, &[0xAA, address, 0x13])?;
             let w_f: u8 = v_f;
             out[3] = w_f;
@@ -877,7 +874,7 @@ pub mod clash {
         #[inline(always)]
         fn from_frame(frame: &[u8]) -> rt::DecodeResult<Self> {
             let frame = rt::fixed::<6>(frame, &Self::DESC)?;
-            rt::no_broadcast(frame[1], 0x00, &Self::DESC)?;
+            FRAME.no_broadcast(frame[1], &Self::DESC)?;
             rt::same(&Self::FIELD_DESC, 4, frame[4], "f", frame[3])?;
             rt::Ok(Self { f: frame[3] })
         }

@@ -247,7 +247,7 @@ pub mod dynamixel {
             rt::encode_address(address, &FRAME)?;
             let len = match *self {
                 Self::Ping(_) => {
-                    rt::encode_broadcast(address, 0xFE, &request::Ping::DESC)?;
+                    FRAME.encode_broadcast(address, &request::Ping::DESC)?;
                     rt::frame_mut::<6>(buf, &[0xFF, 0xFF, address, 0x02, 0x01])?.len()
                 }
                 Self::Read(ref m) => m.write(address, buf)?,
@@ -632,12 +632,12 @@ pub mod dynamixel {
             match frame[4] {
                 0x01 => {
                     let frame = rt::fixed::<6>(frame, &request::Ping::DESC)?;
-                    rt::no_broadcast(frame[2], 0xFE, &request::Ping::DESC)?;
+                    FRAME.no_broadcast(frame[2], &request::Ping::DESC)?;
                     rt::Ok(Self::Ping)
                 }
                 0x02 => {
                     let frame = rt::fixed::<8>(frame, &request::Read::DESC)?;
-                    rt::no_broadcast(frame[2], 0xFE, &request::Read::DESC)?;
+                    FRAME.no_broadcast(frame[2], &request::Read::DESC)?;
                     rt::in_range(&request::Read::LENGTH_CHECK, frame[6])?;
                     rt::Ok(Self::Read {
                         address: frame[5],
@@ -1026,10 +1026,7 @@ pub mod dynamixel {
             )
         }
         fn checksum_ok(frame: &[u8]) -> bool {
-            match frame.len().checked_sub(1) {
-                rt::Some(n) if n > 0 => rt::check_sum(frame, n, &FRAME, frame_sum),
-                _ => false,
-            }
+            FRAME.checksum_ok(frame, frame_sum)
         }
     }
     /// A streaming decoder for this protocol: see [`busspec_runtime::stream`].
@@ -1048,7 +1045,7 @@ pub mod dynamixel {
         #[inline(always)]
         fn from_frame(frame: &[u8]) -> rt::DecodeResult<Self> {
             let frame = rt::fixed::<6>(frame, &Self::DESC)?;
-            rt::no_broadcast(frame[2], 0xFE, &Self::DESC)?;
+            FRAME.no_broadcast(frame[2], &Self::DESC)?;
             rt::Ok(Self)
         }
     }
@@ -1073,7 +1070,7 @@ pub mod dynamixel {
         #[inline(always)]
         fn write(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             let Self { address: v_address, length: v_length } = *self;
-            rt::encode_broadcast(address, 0xFE, &Self::DESC)?;
+            FRAME.encode_broadcast(address, &Self::DESC)?;
             rt::encode_in_range(&Self::LENGTH_CHECK, v_length)?;
             let out = rt::frame_mut::<8>(buf, &[0xFF, 0xFF, address, 0x04, 0x02])?;
             out[5] = v_address;
@@ -1084,7 +1081,7 @@ pub mod dynamixel {
         #[inline(always)]
         fn from_frame(frame: &[u8]) -> rt::DecodeResult<Self> {
             let frame = rt::fixed::<8>(frame, &Self::DESC)?;
-            rt::no_broadcast(frame[2], 0xFE, &Self::DESC)?;
+            FRAME.no_broadcast(frame[2], &Self::DESC)?;
             rt::in_range(&Self::LENGTH_CHECK, frame[6])?;
             rt::Ok(Self {
                 address: frame[5],

@@ -168,11 +168,11 @@ pub mod float_lists {
             let len = match *self {
                 Self::ReadFloats(ref m) => m.write(address, buf)?,
                 Self::ReadCounters(_) => {
-                    rt::encode_broadcast(address, 0x00, &request::ReadCounters::DESC)?;
+                    FRAME.encode_broadcast(address, &request::ReadCounters::DESC)?;
                     rt::frame_mut::<4>(buf, &[address, 0x41])?.len()
                 }
                 Self::ReadSamples(_) => {
-                    rt::encode_broadcast(address, 0x00, &request::ReadSamples::DESC)?;
+                    FRAME.encode_broadcast(address, &request::ReadSamples::DESC)?;
                     rt::frame_mut::<4>(buf, &[address, 0x42])?.len()
                 }
             };
@@ -797,10 +797,7 @@ pub mod float_lists {
             ResponseView::decode_for(frame, request).map(|_| ())
         }
         fn checksum_ok(frame: &[u8]) -> bool {
-            match frame.len().checked_sub(2) {
-                rt::Some(n) if n > 0 => rt::check_sum(frame, n, &FRAME, frame_sum),
-                _ => false,
-            }
+            FRAME.checksum_ok(frame, frame_sum)
         }
     }
     /// A streaming decoder for this protocol: see [`busspec_runtime::stream`].
@@ -828,7 +825,7 @@ pub mod float_lists {
         #[inline(always)]
         fn write(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             let Self { start: v_start, quantity: v_quantity } = *self;
-            rt::encode_broadcast(address, 0x00, &Self::DESC)?;
+            FRAME.encode_broadcast(address, &Self::DESC)?;
             rt::encode_in_range(&Self::QUANTITY_CHECK, v_quantity)?;
             let out = rt::frame_mut::<8>(buf, &[address, 0x03])?;
             out[2..4].copy_from_slice(&v_start.to_be_bytes());
@@ -839,7 +836,7 @@ pub mod float_lists {
         #[inline(always)]
         fn from_frame(frame: &[u8]) -> rt::DecodeResult<Self> {
             let frame = rt::fixed::<8>(frame, &Self::DESC)?;
-            rt::no_broadcast(frame[0], 0x00, &Self::DESC)?;
+            FRAME.no_broadcast(frame[0], &Self::DESC)?;
             let w_quantity: u16 = u16::from_be_bytes([frame[4], frame[5]]);
             rt::in_range(&Self::QUANTITY_CHECK, w_quantity)?;
             rt::Ok(Self {
@@ -860,7 +857,7 @@ pub mod float_lists {
         #[inline(always)]
         fn from_frame(frame: &[u8]) -> rt::DecodeResult<Self> {
             let frame = rt::fixed::<4>(frame, &Self::DESC)?;
-            rt::no_broadcast(frame[0], 0x00, &Self::DESC)?;
+            FRAME.no_broadcast(frame[0], &Self::DESC)?;
             rt::Ok(Self)
         }
     }
@@ -876,7 +873,7 @@ pub mod float_lists {
         #[inline(always)]
         fn from_frame(frame: &[u8]) -> rt::DecodeResult<Self> {
             let frame = rt::fixed::<4>(frame, &Self::DESC)?;
-            rt::no_broadcast(frame[0], 0x00, &Self::DESC)?;
+            FRAME.no_broadcast(frame[0], &Self::DESC)?;
             rt::Ok(Self)
         }
     }

@@ -167,7 +167,7 @@ pub mod ft12_variable {
                     rt::head(out, &[0x68, 0x03, 0x03, 0x68, 0x53, address, 0x50]).len()
                 }
                 Self::ReadData(_) => {
-                    rt::encode_broadcast(address, 0xFE, &request::ReadData::DESC)?;
+                    FRAME.encode_broadcast(address, &request::ReadData::DESC)?;
                     rt::head(out, &[0x68, 0x03, 0x03, 0x68, 0x7B, address, 0x5B]).len()
                 }
             };
@@ -520,10 +520,7 @@ pub mod ft12_variable {
             }
         }
         fn checksum_ok(frame: &[u8]) -> bool {
-            match frame.len().checked_sub(2) {
-                rt::Some(n) if n > 0 => rt::check_sum(frame, n, &FRAME, frame_sum),
-                _ => false,
-            }
+            FRAME.checksum_ok(frame, frame_sum)
         }
     }
     /// A streaming decoder for this protocol: see [`busspec_runtime::stream`].
@@ -560,7 +557,7 @@ pub mod ft12_variable {
         #[inline(always)]
         fn from_frame(frame: &[u8]) -> rt::DecodeResult<Self> {
             let frame = rt::fixed::<9>(frame, &Self::DESC)?;
-            rt::no_broadcast(frame[5], 0xFE, &Self::DESC)?;
+            FRAME.no_broadcast(frame[5], &Self::DESC)?;
             rt::equal(&Self::CI_DESC, 6, frame[6], 0x5B)?;
             rt::Ok(Self)
         }

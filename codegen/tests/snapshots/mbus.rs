@@ -196,7 +196,7 @@ pub mod mbus {
                         .len()
                 }
                 Self::ReqUd2(_) => {
-                    rt::encode_broadcast(address, 0xFF, &request::ReqUd2::DESC)?;
+                    FRAME.encode_broadcast(address, &request::ReqUd2::DESC)?;
                     rt::frame_mut::<8>(buf, &[0x68, 0x02, 0x02, 0x68, 0x5B, address])?
                         .len()
                 }
@@ -606,10 +606,7 @@ pub mod mbus {
             let rt::Ok((frame, _)) = FORM.lay_out(frame, &mut laid) else {
                 return false;
             };
-            match frame.len().checked_sub(2) {
-                rt::Some(n) if n > 0 => rt::check_sum(frame, n, &FRAME, frame_sum),
-                _ => false,
-            }
+            FRAME.checksum_ok(frame, frame_sum)
         }
     }
     /// A streaming decoder for this protocol: see [`busspec_runtime::stream`].
@@ -637,7 +634,7 @@ pub mod mbus {
         #[inline(always)]
         fn from_frame(frame: &[u8]) -> rt::DecodeResult<Self> {
             let frame = rt::fixed::<8>(frame, &Self::DESC)?;
-            rt::no_broadcast(frame[5], 0xFF, &Self::DESC)?;
+            FRAME.no_broadcast(frame[5], &Self::DESC)?;
             rt::Ok(Self)
         }
     }

@@ -164,7 +164,7 @@ pub mod meter_floats {
             rt::encode_address(address, &FRAME)?;
             let len = match *self {
                 Self::ReadReadings(_) => {
-                    rt::encode_broadcast(address, 0x00, &request::ReadReadings::DESC)?;
+                    FRAME.encode_broadcast(address, &request::ReadReadings::DESC)?;
                     rt::frame_mut::<4>(buf, &[address, 0x04])?.len()
                 }
                 Self::SetLimits(ref m) => m.write(address, buf)?,
@@ -517,10 +517,7 @@ pub mod meter_floats {
             }
         }
         fn checksum_ok(frame: &[u8]) -> bool {
-            match frame.len().checked_sub(2) {
-                rt::Some(n) if n > 0 => rt::check_sum(frame, n, &FRAME, frame_sum),
-                _ => false,
-            }
+            FRAME.checksum_ok(frame, frame_sum)
         }
     }
     /// A streaming decoder for this protocol: see [`busspec_runtime::stream`].
@@ -539,7 +536,7 @@ pub mod meter_floats {
         #[inline(always)]
         fn from_frame(frame: &[u8]) -> rt::DecodeResult<Self> {
             let frame = rt::fixed::<4>(frame, &Self::DESC)?;
-            rt::no_broadcast(frame[0], 0x00, &Self::DESC)?;
+            FRAME.no_broadcast(frame[0], &Self::DESC)?;
             rt::Ok(Self)
         }
     }
@@ -570,7 +567,7 @@ pub mod meter_floats {
         #[inline(always)]
         fn write(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             let Self { voltage_limit: v_voltage_limit, serial: v_serial } = *self;
-            rt::encode_broadcast(address, 0x00, &Self::DESC)?;
+            FRAME.encode_broadcast(address, &Self::DESC)?;
             rt::encode_in_range(&Self::VOLTAGE_LIMIT_CHECK, v_voltage_limit)?;
             let out = rt::frame_mut::<16>(buf, &[address, 0x10])?;
             out[2..6].copy_from_slice(&v_voltage_limit.to_be_bytes());
@@ -581,7 +578,7 @@ pub mod meter_floats {
         #[inline(always)]
         fn from_frame(frame: &[u8]) -> rt::DecodeResult<Self> {
             let frame = rt::fixed::<16>(frame, &Self::DESC)?;
-            rt::no_broadcast(frame[0], 0x00, &Self::DESC)?;
+            FRAME.no_broadcast(frame[0], &Self::DESC)?;
             let w_voltage_limit: f32 = f32::from_be_bytes([
                 frame[2],
                 frame[3],

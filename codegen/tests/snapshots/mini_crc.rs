@@ -160,19 +160,11 @@ pub mod mini_crc {
             let out = rt::frame_mut::<6>(buf, &[])?;
             let len = match *self {
                 Self::ReadRuntimeHours(_) => {
-                    rt::encode_broadcast(
-                        address,
-                        0x1F,
-                        &request::ReadRuntimeHours::DESC,
-                    )?;
+                    FRAME.encode_broadcast(address, &request::ReadRuntimeHours::DESC)?;
                     rt::head(out, &[0x69, address, 0x01, 0x00]).len()
                 }
                 Self::ReadRuntimeMinSec(_) => {
-                    rt::encode_broadcast(
-                        address,
-                        0x1F,
-                        &request::ReadRuntimeMinSec::DESC,
-                    )?;
+                    FRAME.encode_broadcast(address, &request::ReadRuntimeMinSec::DESC)?;
                     rt::head(out, &[0x69, address, 0x02, 0x00]).len()
                 }
                 Self::SetCounter(ref m) => m.write(address, out)?,
@@ -555,10 +547,7 @@ pub mod mini_crc {
             }
         }
         fn checksum_ok(frame: &[u8]) -> bool {
-            match frame.len().checked_sub(2) {
-                rt::Some(n) if n > 0 => rt::check_sum(frame, n, &FRAME, frame_sum),
-                _ => false,
-            }
+            FRAME.checksum_ok(frame, frame_sum)
         }
     }
     /// A streaming decoder for this protocol: see [`busspec_runtime::stream`].
@@ -579,7 +568,7 @@ pub mod mini_crc {
         #[inline(always)]
         fn from_frame(frame: &[u8]) -> rt::DecodeResult<Self> {
             let frame = rt::fixed::<6>(frame, &Self::DESC)?;
-            rt::no_broadcast(frame[1], 0x1F, &Self::DESC)?;
+            FRAME.no_broadcast(frame[1], &Self::DESC)?;
             rt::equal(&Self::SELECTOR_DESC, 2, frame[2], 0x1)?;
             rt::equal(&Self::ARG2_DESC, 3, frame[3], 0x0)?;
             rt::Ok(Self)
@@ -599,7 +588,7 @@ pub mod mini_crc {
         #[inline(always)]
         fn from_frame(frame: &[u8]) -> rt::DecodeResult<Self> {
             let frame = rt::fixed::<6>(frame, &Self::DESC)?;
-            rt::no_broadcast(frame[1], 0x1F, &Self::DESC)?;
+            FRAME.no_broadcast(frame[1], &Self::DESC)?;
             rt::equal(&Self::SELECTOR_DESC, 2, frame[2], 0x2)?;
             rt::equal(&Self::ARG2_DESC, 3, frame[3], 0x0)?;
             rt::Ok(Self)

@@ -1123,7 +1123,7 @@ pub mod modbus {
             match frame[1] {
                 0x01 => {
                     let frame = rt::fixed::<8>(frame, &request::ReadCoils::DESC)?;
-                    rt::no_broadcast(frame[0], 0x00, &request::ReadCoils::DESC)?;
+                    FRAME.no_broadcast(frame[0], &request::ReadCoils::DESC)?;
                     let w_quantity: u16 = u16::from_be_bytes([frame[4], frame[5]]);
                     rt::in_range(&request::ReadCoils::QUANTITY_CHECK, w_quantity)?;
                     rt::Ok(Self::ReadCoils {
@@ -1135,11 +1135,7 @@ pub mod modbus {
                     let frame = rt::fixed::<
                         8,
                     >(frame, &request::ReadDiscreteInputs::DESC)?;
-                    rt::no_broadcast(
-                        frame[0],
-                        0x00,
-                        &request::ReadDiscreteInputs::DESC,
-                    )?;
+                    FRAME.no_broadcast(frame[0], &request::ReadDiscreteInputs::DESC)?;
                     let w_quantity: u16 = u16::from_be_bytes([frame[4], frame[5]]);
                     rt::in_range(
                         &request::ReadDiscreteInputs::QUANTITY_CHECK,
@@ -1154,11 +1150,7 @@ pub mod modbus {
                     let frame = rt::fixed::<
                         8,
                     >(frame, &request::ReadHoldingRegisters::DESC)?;
-                    rt::no_broadcast(
-                        frame[0],
-                        0x00,
-                        &request::ReadHoldingRegisters::DESC,
-                    )?;
+                    FRAME.no_broadcast(frame[0], &request::ReadHoldingRegisters::DESC)?;
                     let w_quantity: u16 = u16::from_be_bytes([frame[4], frame[5]]);
                     rt::in_range(
                         &request::ReadHoldingRegisters::QUANTITY_CHECK,
@@ -1173,11 +1165,7 @@ pub mod modbus {
                     let frame = rt::fixed::<
                         8,
                     >(frame, &request::ReadInputRegisters::DESC)?;
-                    rt::no_broadcast(
-                        frame[0],
-                        0x00,
-                        &request::ReadInputRegisters::DESC,
-                    )?;
+                    FRAME.no_broadcast(frame[0], &request::ReadInputRegisters::DESC)?;
                     let w_quantity: u16 = u16::from_be_bytes([frame[4], frame[5]]);
                     rt::in_range(
                         &request::ReadInputRegisters::QUANTITY_CHECK,
@@ -1966,10 +1954,7 @@ pub mod modbus {
             !(8..=255).contains(&frame.len()) || RequestView::dispatch(frame).is_ok()
         }
         fn checksum_ok(frame: &[u8]) -> bool {
-            match frame.len().checked_sub(2) {
-                rt::Some(n) if n > 0 => rt::check_sum(frame, n, &FRAME, frame_sum),
-                _ => false,
-            }
+            FRAME.checksum_ok(frame, frame_sum)
         }
     }
     /// A streaming decoder for this protocol: see [`busspec_runtime::stream`].
@@ -1997,7 +1982,7 @@ pub mod modbus {
         #[inline(always)]
         fn write(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             let Self { starting_address: v_starting_address, quantity: v_quantity } = *self;
-            rt::encode_broadcast(address, 0x00, &Self::DESC)?;
+            FRAME.encode_broadcast(address, &Self::DESC)?;
             rt::encode_in_range(&Self::QUANTITY_CHECK, v_quantity)?;
             let out = rt::frame_mut::<8>(buf, &[address, 0x01])?;
             out[2..4].copy_from_slice(&v_starting_address.to_be_bytes());
@@ -2008,7 +1993,7 @@ pub mod modbus {
         #[inline(always)]
         fn from_frame(frame: &[u8]) -> rt::DecodeResult<Self> {
             let frame = rt::fixed::<8>(frame, &Self::DESC)?;
-            rt::no_broadcast(frame[0], 0x00, &Self::DESC)?;
+            FRAME.no_broadcast(frame[0], &Self::DESC)?;
             let w_quantity: u16 = u16::from_be_bytes([frame[4], frame[5]]);
             rt::in_range(&Self::QUANTITY_CHECK, w_quantity)?;
             rt::Ok(Self {
@@ -2038,7 +2023,7 @@ pub mod modbus {
         #[inline(always)]
         fn write(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             let Self { starting_address: v_starting_address, quantity: v_quantity } = *self;
-            rt::encode_broadcast(address, 0x00, &Self::DESC)?;
+            FRAME.encode_broadcast(address, &Self::DESC)?;
             rt::encode_in_range(&Self::QUANTITY_CHECK, v_quantity)?;
             let out = rt::frame_mut::<8>(buf, &[address, 0x02])?;
             out[2..4].copy_from_slice(&v_starting_address.to_be_bytes());
@@ -2049,7 +2034,7 @@ pub mod modbus {
         #[inline(always)]
         fn from_frame(frame: &[u8]) -> rt::DecodeResult<Self> {
             let frame = rt::fixed::<8>(frame, &Self::DESC)?;
-            rt::no_broadcast(frame[0], 0x00, &Self::DESC)?;
+            FRAME.no_broadcast(frame[0], &Self::DESC)?;
             let w_quantity: u16 = u16::from_be_bytes([frame[4], frame[5]]);
             rt::in_range(&Self::QUANTITY_CHECK, w_quantity)?;
             rt::Ok(Self {
@@ -2079,7 +2064,7 @@ pub mod modbus {
         #[inline(always)]
         fn write(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             let Self { starting_address: v_starting_address, quantity: v_quantity } = *self;
-            rt::encode_broadcast(address, 0x00, &Self::DESC)?;
+            FRAME.encode_broadcast(address, &Self::DESC)?;
             rt::encode_in_range(&Self::QUANTITY_CHECK, v_quantity)?;
             let out = rt::frame_mut::<8>(buf, &[address, 0x03])?;
             out[2..4].copy_from_slice(&v_starting_address.to_be_bytes());
@@ -2090,7 +2075,7 @@ pub mod modbus {
         #[inline(always)]
         fn from_frame(frame: &[u8]) -> rt::DecodeResult<Self> {
             let frame = rt::fixed::<8>(frame, &Self::DESC)?;
-            rt::no_broadcast(frame[0], 0x00, &Self::DESC)?;
+            FRAME.no_broadcast(frame[0], &Self::DESC)?;
             let w_quantity: u16 = u16::from_be_bytes([frame[4], frame[5]]);
             rt::in_range(&Self::QUANTITY_CHECK, w_quantity)?;
             rt::Ok(Self {
@@ -2120,7 +2105,7 @@ pub mod modbus {
         #[inline(always)]
         fn write(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             let Self { starting_address: v_starting_address, quantity: v_quantity } = *self;
-            rt::encode_broadcast(address, 0x00, &Self::DESC)?;
+            FRAME.encode_broadcast(address, &Self::DESC)?;
             rt::encode_in_range(&Self::QUANTITY_CHECK, v_quantity)?;
             let out = rt::frame_mut::<8>(buf, &[address, 0x04])?;
             out[2..4].copy_from_slice(&v_starting_address.to_be_bytes());
@@ -2131,7 +2116,7 @@ pub mod modbus {
         #[inline(always)]
         fn from_frame(frame: &[u8]) -> rt::DecodeResult<Self> {
             let frame = rt::fixed::<8>(frame, &Self::DESC)?;
-            rt::no_broadcast(frame[0], 0x00, &Self::DESC)?;
+            FRAME.no_broadcast(frame[0], &Self::DESC)?;
             let w_quantity: u16 = u16::from_be_bytes([frame[4], frame[5]]);
             rt::in_range(&Self::QUANTITY_CHECK, w_quantity)?;
             rt::Ok(Self {

@@ -888,10 +888,7 @@ pub mod nextion {
             !(4..=203).contains(&frame.len()) || RequestView::dispatch(frame).is_ok()
         }
         fn checksum_ok(frame: &[u8]) -> bool {
-            match frame.len().checked_sub(3) {
-                rt::Some(n) if n > 0 => rt::check_sum(frame, n, &FRAME, frame_sum),
-                _ => false,
-            }
+            FRAME.checksum_ok(frame, frame_sum)
         }
     }
     /// A streaming decoder for this protocol: see [`busspec_runtime::stream`].

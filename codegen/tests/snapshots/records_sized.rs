@@ -786,10 +786,7 @@ pub mod records_sized {
             }
         }
         fn checksum_ok(frame: &[u8]) -> bool {
-            match frame.len().checked_sub(1) {
-                rt::Some(n) if n > 0 => rt::check_sum(frame, n, &FRAME, frame_sum),
-                _ => false,
-            }
+            FRAME.checksum_ok(frame, frame_sum)
         }
     }
     /// A streaming decoder for this protocol: see [`busspec_runtime::stream`].
@@ -897,7 +894,7 @@ pub mod records_sized {
         #[inline(always)]
         fn write(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             let Self { width: v_width, offsets: v_offsets } = *self;
-            rt::encode_broadcast(address, 0xFE, &Self::DESC)?;
+            FRAME.encode_broadcast(address, &Self::DESC)?;
             let frame_len = REPEAT_TRIM
                 .encode_len_sized(v_offsets.len(), (v_width) as u64)?;
             let last_width = (v_width) as usize;
@@ -923,7 +920,7 @@ pub mod records_sized {
         #[inline(always)]
         fn from_frame(frame: &[u8]) -> rt::DecodeResult<Self> {
             let (frame, elements, _) = REPEAT_TRIM.split::<5>(frame)?;
-            rt::no_broadcast(frame[1], 0xFE, &Self::DESC)?;
+            FRAME.no_broadcast(frame[1], &Self::DESC)?;
             let rec_width = REPEAT_TRIM.element_width(frame);
             let mut v_offsets = rt::Repeated::<TrimOffsets, 4>::new();
             for (k, chunk) in elements.chunks_exact(rec_width).enumerate() {

@@ -1626,10 +1626,7 @@ pub mod roboclaw {
             if unchecked_response(frame) {
                 return true;
             }
-            match frame.len().checked_sub(2) {
-                rt::Some(n) if n > 0 => rt::check_sum(frame, n, &FRAME, frame_sum),
-                _ => false,
-            }
+            FRAME.checksum_ok(frame, frame_sum)
         }
     }
     /// A streaming decoder for this protocol: see [`busspec_runtime::stream`].

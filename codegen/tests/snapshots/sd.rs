@@ -541,103 +541,91 @@ pub mod sd {
                 Self::SetServoId(ref m) => m.write(address, out)?,
                 Self::ReadServoId(_) => rt::head(out, &[0xDA, address, 0x00, 0x00]).len(),
                 Self::ReadCurrentConsumption(_) => {
-                    rt::encode_broadcast(
-                        address,
-                        0x1F,
-                        &request::ReadCurrentConsumption::DESC,
-                    )?;
+                    FRAME
+                        .encode_broadcast(
+                            address,
+                            &request::ReadCurrentConsumption::DESC,
+                        )?;
                     rt::head(out, &[0xB0, address, 0x00, 0x00]).len()
                 }
                 Self::ReadBusVoltages(_) => {
-                    rt::encode_broadcast(
-                        address,
-                        0x1F,
-                        &request::ReadBusVoltages::DESC,
-                    )?;
+                    FRAME.encode_broadcast(address, &request::ReadBusVoltages::DESC)?;
                     rt::head(out, &[0xB1, address, 0x00, 0x00]).len()
                 }
                 Self::ReadExtendedCurrentConsumption(_) => {
-                    rt::encode_broadcast(
-                        address,
-                        0x1F,
-                        &request::ReadExtendedCurrentConsumption::DESC,
-                    )?;
+                    FRAME
+                        .encode_broadcast(
+                            address,
+                            &request::ReadExtendedCurrentConsumption::DESC,
+                        )?;
                     rt::head(out, &[0xB2, address, 0x00, 0x00]).len()
                 }
                 Self::ReadTemperatures(_) => {
-                    rt::encode_broadcast(
-                        address,
-                        0x1F,
-                        &request::ReadTemperatures::DESC,
-                    )?;
+                    FRAME.encode_broadcast(address, &request::ReadTemperatures::DESC)?;
                     rt::head(out, &[0xA0, address, 0x00, 0x00]).len()
                 }
                 Self::ReadHumidity(_) => {
-                    rt::encode_broadcast(address, 0x1F, &request::ReadHumidity::DESC)?;
+                    FRAME.encode_broadcast(address, &request::ReadHumidity::DESC)?;
                     rt::head(out, &[0xA1, address, 0x00, 0x00]).len()
                 }
                 Self::ReadSkippedFramesCounter(_) => {
-                    rt::encode_broadcast(
-                        address,
-                        0x1F,
-                        &request::ReadSkippedFramesCounter::DESC,
-                    )?;
+                    FRAME
+                        .encode_broadcast(
+                            address,
+                            &request::ReadSkippedFramesCounter::DESC,
+                        )?;
                     rt::head(out, &[0x37, address, 0x00, 0x01]).len()
                 }
                 Self::ResetDroppedFramesCounter(_) => {
-                    rt::encode_broadcast(
-                        address,
-                        0x1F,
-                        &request::ResetDroppedFramesCounter::DESC,
-                    )?;
+                    FRAME
+                        .encode_broadcast(
+                            address,
+                            &request::ResetDroppedFramesCounter::DESC,
+                        )?;
                     rt::head(out, &[0x37, address, 0x00, 0x02]).len()
                 }
                 Self::ReadActuatorStatusWord(_) => {
-                    rt::encode_broadcast(
-                        address,
-                        0x1F,
-                        &request::ReadActuatorStatusWord::DESC,
-                    )?;
+                    FRAME
+                        .encode_broadcast(
+                            address,
+                            &request::ReadActuatorStatusWord::DESC,
+                        )?;
                     rt::head(out, &[0x40, address, 0xAA, 0x02]).len()
                 }
                 Self::ResetActuatorStatusWord(_) => {
-                    rt::encode_broadcast(
-                        address,
-                        0x1F,
-                        &request::ResetActuatorStatusWord::DESC,
-                    )?;
+                    FRAME
+                        .encode_broadcast(
+                            address,
+                            &request::ResetActuatorStatusWord::DESC,
+                        )?;
                     rt::head(out, &[0x40, address, 0xAA, 0x52]).len()
                 }
                 Self::ResetDefaultRoleAndErrorFlags(_) => {
-                    rt::encode_broadcast(
-                        address,
-                        0x1F,
-                        &request::ResetDefaultRoleAndErrorFlags::DESC,
-                    )?;
+                    FRAME
+                        .encode_broadcast(
+                            address,
+                            &request::ResetDefaultRoleAndErrorFlags::DESC,
+                        )?;
                     rt::head(out, &[0xB4, address, 0x41, 0x53]).len()
                 }
                 Self::SetCurrentPositionAsZero(_) => {
-                    rt::encode_broadcast(
-                        address,
-                        0x1F,
-                        &request::SetCurrentPositionAsZero::DESC,
-                    )?;
+                    FRAME
+                        .encode_broadcast(
+                            address,
+                            &request::SetCurrentPositionAsZero::DESC,
+                        )?;
                     rt::head(out, &[0x99, address, 0x00, 0x00]).len()
                 }
                 Self::ReadCurrentZeroOffset(_) => {
-                    rt::encode_broadcast(
-                        address,
-                        0x1F,
-                        &request::ReadCurrentZeroOffset::DESC,
-                    )?;
+                    FRAME
+                        .encode_broadcast(
+                            address,
+                            &request::ReadCurrentZeroOffset::DESC,
+                        )?;
                     rt::head(out, &[0x95, address, 0x00, 0x00]).len()
                 }
                 Self::ResetZeroOffset(_) => {
-                    rt::encode_broadcast(
-                        address,
-                        0x1F,
-                        &request::ResetZeroOffset::DESC,
-                    )?;
+                    FRAME.encode_broadcast(address, &request::ResetZeroOffset::DESC)?;
                     rt::head(out, &[0x98, address, 0x00, 0x00]).len()
                 }
                 Self::ReadElectronicSerialNumber(ref m) => m.write(address, out)?,
@@ -645,163 +633,153 @@ pub mod sd {
                 Self::ReadSoftwareRevision(ref m) => m.write(address, out)?,
                 Self::ReadHardwareRevision(ref m) => m.write(address, out)?,
                 Self::ReadTotalRuntimeHours(_) => {
-                    rt::encode_broadcast(
-                        address,
-                        0x1F,
-                        &request::ReadTotalRuntimeHours::DESC,
-                    )?;
+                    FRAME
+                        .encode_broadcast(
+                            address,
+                            &request::ReadTotalRuntimeHours::DESC,
+                        )?;
                     rt::head(out, &[0xA2, address, 0x00, 0x00]).len()
                 }
                 Self::ReadTotalRuntimeMinSec(_) => {
-                    rt::encode_broadcast(
-                        address,
-                        0x1F,
-                        &request::ReadTotalRuntimeMinSec::DESC,
-                    )?;
+                    FRAME
+                        .encode_broadcast(
+                            address,
+                            &request::ReadTotalRuntimeMinSec::DESC,
+                        )?;
                     rt::head(out, &[0xA2, address, 0x00, 0x01]).len()
                 }
                 Self::ReadLoadRuntime024Hours(_) => {
-                    rt::encode_broadcast(
-                        address,
-                        0x1F,
-                        &request::ReadLoadRuntime024Hours::DESC,
-                    )?;
+                    FRAME
+                        .encode_broadcast(
+                            address,
+                            &request::ReadLoadRuntime024Hours::DESC,
+                        )?;
                     rt::head(out, &[0xA3, address, 0x00, 0x00]).len()
                 }
                 Self::ReadLoadRuntime024MinSec(_) => {
-                    rt::encode_broadcast(
-                        address,
-                        0x1F,
-                        &request::ReadLoadRuntime024MinSec::DESC,
-                    )?;
+                    FRAME
+                        .encode_broadcast(
+                            address,
+                            &request::ReadLoadRuntime024MinSec::DESC,
+                        )?;
                     rt::head(out, &[0xA3, address, 0x00, 0x01]).len()
                 }
                 Self::ResetLoadRuntime024(_) => {
-                    rt::encode_broadcast(
-                        address,
-                        0x1F,
-                        &request::ResetLoadRuntime024::DESC,
-                    )?;
+                    FRAME
+                        .encode_broadcast(address, &request::ResetLoadRuntime024::DESC)?;
                     rt::head(out, &[0xA3, address, 0xAA, 0x55]).len()
                 }
                 Self::ReadLoadRuntime2549Hours(_) => {
-                    rt::encode_broadcast(
-                        address,
-                        0x1F,
-                        &request::ReadLoadRuntime2549Hours::DESC,
-                    )?;
+                    FRAME
+                        .encode_broadcast(
+                            address,
+                            &request::ReadLoadRuntime2549Hours::DESC,
+                        )?;
                     rt::head(out, &[0xA4, address, 0x00, 0x00]).len()
                 }
                 Self::ReadLoadRuntime2549MinSec(_) => {
-                    rt::encode_broadcast(
-                        address,
-                        0x1F,
-                        &request::ReadLoadRuntime2549MinSec::DESC,
-                    )?;
+                    FRAME
+                        .encode_broadcast(
+                            address,
+                            &request::ReadLoadRuntime2549MinSec::DESC,
+                        )?;
                     rt::head(out, &[0xA4, address, 0x00, 0x01]).len()
                 }
                 Self::ResetLoadRuntime2549(_) => {
-                    rt::encode_broadcast(
-                        address,
-                        0x1F,
-                        &request::ResetLoadRuntime2549::DESC,
-                    )?;
+                    FRAME
+                        .encode_broadcast(
+                            address,
+                            &request::ResetLoadRuntime2549::DESC,
+                        )?;
                     rt::head(out, &[0xA4, address, 0xAA, 0x55]).len()
                 }
                 Self::ReadLoadRuntime5074Hours(_) => {
-                    rt::encode_broadcast(
-                        address,
-                        0x1F,
-                        &request::ReadLoadRuntime5074Hours::DESC,
-                    )?;
+                    FRAME
+                        .encode_broadcast(
+                            address,
+                            &request::ReadLoadRuntime5074Hours::DESC,
+                        )?;
                     rt::head(out, &[0xA5, address, 0x00, 0x00]).len()
                 }
                 Self::ReadLoadRuntime5074MinSec(_) => {
-                    rt::encode_broadcast(
-                        address,
-                        0x1F,
-                        &request::ReadLoadRuntime5074MinSec::DESC,
-                    )?;
+                    FRAME
+                        .encode_broadcast(
+                            address,
+                            &request::ReadLoadRuntime5074MinSec::DESC,
+                        )?;
                     rt::head(out, &[0xA5, address, 0x00, 0x01]).len()
                 }
                 Self::ResetLoadRuntime5074(_) => {
-                    rt::encode_broadcast(
-                        address,
-                        0x1F,
-                        &request::ResetLoadRuntime5074::DESC,
-                    )?;
+                    FRAME
+                        .encode_broadcast(
+                            address,
+                            &request::ResetLoadRuntime5074::DESC,
+                        )?;
                     rt::head(out, &[0xA5, address, 0xAA, 0x55]).len()
                 }
                 Self::ReadLoadRuntime7599Hours(_) => {
-                    rt::encode_broadcast(
-                        address,
-                        0x1F,
-                        &request::ReadLoadRuntime7599Hours::DESC,
-                    )?;
+                    FRAME
+                        .encode_broadcast(
+                            address,
+                            &request::ReadLoadRuntime7599Hours::DESC,
+                        )?;
                     rt::head(out, &[0xA6, address, 0x00, 0x00]).len()
                 }
                 Self::ReadLoadRuntime7599MinSec(_) => {
-                    rt::encode_broadcast(
-                        address,
-                        0x1F,
-                        &request::ReadLoadRuntime7599MinSec::DESC,
-                    )?;
+                    FRAME
+                        .encode_broadcast(
+                            address,
+                            &request::ReadLoadRuntime7599MinSec::DESC,
+                        )?;
                     rt::head(out, &[0xA6, address, 0x00, 0x01]).len()
                 }
                 Self::ResetLoadRuntime7599(_) => {
-                    rt::encode_broadcast(
-                        address,
-                        0x1F,
-                        &request::ResetLoadRuntime7599::DESC,
-                    )?;
+                    FRAME
+                        .encode_broadcast(
+                            address,
+                            &request::ResetLoadRuntime7599::DESC,
+                        )?;
                     rt::head(out, &[0xA6, address, 0xAA, 0x55]).len()
                 }
                 Self::ReadLoadRuntime100Hours(_) => {
-                    rt::encode_broadcast(
-                        address,
-                        0x1F,
-                        &request::ReadLoadRuntime100Hours::DESC,
-                    )?;
+                    FRAME
+                        .encode_broadcast(
+                            address,
+                            &request::ReadLoadRuntime100Hours::DESC,
+                        )?;
                     rt::head(out, &[0xA7, address, 0x00, 0x00]).len()
                 }
                 Self::ReadLoadRuntime100MinSec(_) => {
-                    rt::encode_broadcast(
-                        address,
-                        0x1F,
-                        &request::ReadLoadRuntime100MinSec::DESC,
-                    )?;
+                    FRAME
+                        .encode_broadcast(
+                            address,
+                            &request::ReadLoadRuntime100MinSec::DESC,
+                        )?;
                     rt::head(out, &[0xA7, address, 0x00, 0x01]).len()
                 }
                 Self::ResetLoadRuntime100(_) => {
-                    rt::encode_broadcast(
-                        address,
-                        0x1F,
-                        &request::ResetLoadRuntime100::DESC,
-                    )?;
+                    FRAME
+                        .encode_broadcast(address, &request::ResetLoadRuntime100::DESC)?;
                     rt::head(out, &[0xA7, address, 0xAA, 0x55]).len()
                 }
                 Self::ReadStallEventCounter(_) => {
-                    rt::encode_broadcast(
-                        address,
-                        0x1F,
-                        &request::ReadStallEventCounter::DESC,
-                    )?;
+                    FRAME
+                        .encode_broadcast(
+                            address,
+                            &request::ReadStallEventCounter::DESC,
+                        )?;
                     rt::head(out, &[0xA8, address, 0x00, 0x00]).len()
                 }
                 Self::ResetStallEventCounter(_) => {
-                    rt::encode_broadcast(
-                        address,
-                        0x1F,
-                        &request::ResetStallEventCounter::DESC,
-                    )?;
+                    FRAME
+                        .encode_broadcast(
+                            address,
+                            &request::ResetStallEventCounter::DESC,
+                        )?;
                     rt::head(out, &[0xA8, address, 0xAA, 0x55]).len()
                 }
                 Self::ReadPowerUpCycles(_) => {
-                    rt::encode_broadcast(
-                        address,
-                        0x1F,
-                        &request::ReadPowerUpCycles::DESC,
-                    )?;
+                    FRAME.encode_broadcast(address, &request::ReadPowerUpCycles::DESC)?;
                     rt::head(out, &[0xA9, address, 0x00, 0x00]).len()
                 }
             };
@@ -2282,10 +2260,7 @@ pub mod sd {
             }
         }
         fn checksum_ok(frame: &[u8]) -> bool {
-            match frame.len().checked_sub(2) {
-                rt::Some(n) if n > 0 => rt::check_sum(frame, n, &FRAME, frame_sum),
-                _ => false,
-            }
+            FRAME.checksum_ok(frame, frame_sum)
         }
     }
     /// A streaming decoder for this protocol: see [`busspec_runtime::stream`].
@@ -2470,7 +2445,7 @@ pub mod sd {
         #[inline(always)]
         fn from_frame(frame: &[u8]) -> rt::DecodeResult<Self> {
             let frame = rt::fixed::<6>(frame, &Self::DESC)?;
-            rt::no_broadcast(frame[1], 0x1F, &Self::DESC)?;
+            FRAME.no_broadcast(frame[1], &Self::DESC)?;
             rt::equal(&Self::ARG1_DESC, 2, frame[2], 0x0)?;
             rt::equal(&Self::ARG2_DESC, 3, frame[3], 0x0)?;
             rt::Ok(Self)
@@ -2490,7 +2465,7 @@ pub mod sd {
         #[inline(always)]
         fn from_frame(frame: &[u8]) -> rt::DecodeResult<Self> {
             let frame = rt::fixed::<6>(frame, &Self::DESC)?;
-            rt::no_broadcast(frame[1], 0x1F, &Self::DESC)?;
+            FRAME.no_broadcast(frame[1], &Self::DESC)?;
             rt::equal(&Self::ARG1_DESC, 2, frame[2], 0x0)?;
             rt::equal(&Self::ARG2_DESC, 3, frame[3], 0x0)?;
             rt::Ok(Self)
@@ -2510,7 +2485,7 @@ pub mod sd {
         #[inline(always)]
         fn from_frame(frame: &[u8]) -> rt::DecodeResult<Self> {
             let frame = rt::fixed::<6>(frame, &Self::DESC)?;
-            rt::no_broadcast(frame[1], 0x1F, &Self::DESC)?;
+            FRAME.no_broadcast(frame[1], &Self::DESC)?;
             rt::equal(&Self::ARG1_DESC, 2, frame[2], 0x0)?;
             rt::equal(&Self::ARG2_DESC, 3, frame[3], 0x0)?;
             rt::Ok(Self)
@@ -2530,7 +2505,7 @@ pub mod sd {
         #[inline(always)]
         fn from_frame(frame: &[u8]) -> rt::DecodeResult<Self> {
             let frame = rt::fixed::<6>(frame, &Self::DESC)?;
-            rt::no_broadcast(frame[1], 0x1F, &Self::DESC)?;
+            FRAME.no_broadcast(frame[1], &Self::DESC)?;
             rt::equal(&Self::ARG1_DESC, 2, frame[2], 0x0)?;
             rt::equal(&Self::ARG2_DESC, 3, frame[3], 0x0)?;
             rt::Ok(Self)
@@ -2550,7 +2525,7 @@ pub mod sd {
         #[inline(always)]
         fn from_frame(frame: &[u8]) -> rt::DecodeResult<Self> {
             let frame = rt::fixed::<6>(frame, &Self::DESC)?;
-            rt::no_broadcast(frame[1], 0x1F, &Self::DESC)?;
+            FRAME.no_broadcast(frame[1], &Self::DESC)?;
             rt::equal(&Self::ARG1_DESC, 2, frame[2], 0x0)?;
             rt::equal(&Self::ARG2_DESC, 3, frame[3], 0x0)?;
             rt::Ok(Self)
@@ -2570,7 +2545,7 @@ pub mod sd {
         #[inline(always)]
         fn from_frame(frame: &[u8]) -> rt::DecodeResult<Self> {
             let frame = rt::fixed::<6>(frame, &Self::DESC)?;
-            rt::no_broadcast(frame[1], 0x1F, &Self::DESC)?;
+            FRAME.no_broadcast(frame[1], &Self::DESC)?;
             rt::equal(&Self::ARG1_DESC, 2, frame[2], 0x0)?;
             rt::equal(&Self::ARG2_DESC, 3, frame[3], 0x1)?;
             rt::Ok(Self)
@@ -2590,7 +2565,7 @@ pub mod sd {
         #[inline(always)]
         fn from_frame(frame: &[u8]) -> rt::DecodeResult<Self> {
             let frame = rt::fixed::<6>(frame, &Self::DESC)?;
-            rt::no_broadcast(frame[1], 0x1F, &Self::DESC)?;
+            FRAME.no_broadcast(frame[1], &Self::DESC)?;
             rt::equal(&Self::ARG1_DESC, 2, frame[2], 0x0)?;
             rt::equal(&Self::ARG2_DESC, 3, frame[3], 0x2)?;
             rt::Ok(Self)
@@ -2610,7 +2585,7 @@ pub mod sd {
         #[inline(always)]
         fn from_frame(frame: &[u8]) -> rt::DecodeResult<Self> {
             let frame = rt::fixed::<6>(frame, &Self::DESC)?;
-            rt::no_broadcast(frame[1], 0x1F, &Self::DESC)?;
+            FRAME.no_broadcast(frame[1], &Self::DESC)?;
             rt::equal(&Self::ARG1_DESC, 2, frame[2], 0xAA)?;
             rt::equal(&Self::ARG2_DESC, 3, frame[3], 0x2)?;
             rt::Ok(Self)
@@ -2630,7 +2605,7 @@ pub mod sd {
         #[inline(always)]
         fn from_frame(frame: &[u8]) -> rt::DecodeResult<Self> {
             let frame = rt::fixed::<6>(frame, &Self::DESC)?;
-            rt::no_broadcast(frame[1], 0x1F, &Self::DESC)?;
+            FRAME.no_broadcast(frame[1], &Self::DESC)?;
             rt::equal(&Self::ARG1_DESC, 2, frame[2], 0xAA)?;
             rt::equal(&Self::ARG2_DESC, 3, frame[3], 0x52)?;
             rt::Ok(Self)
@@ -2650,7 +2625,7 @@ pub mod sd {
         #[inline(always)]
         fn from_frame(frame: &[u8]) -> rt::DecodeResult<Self> {
             let frame = rt::fixed::<6>(frame, &Self::DESC)?;
-            rt::no_broadcast(frame[1], 0x1F, &Self::DESC)?;
+            FRAME.no_broadcast(frame[1], &Self::DESC)?;
             rt::equal(&Self::ARG1_DESC, 2, frame[2], 0x41)?;
             rt::equal(&Self::ARG2_DESC, 3, frame[3], 0x53)?;
             rt::Ok(Self)
@@ -2670,7 +2645,7 @@ pub mod sd {
         #[inline(always)]
         fn from_frame(frame: &[u8]) -> rt::DecodeResult<Self> {
             let frame = rt::fixed::<6>(frame, &Self::DESC)?;
-            rt::no_broadcast(frame[1], 0x1F, &Self::DESC)?;
+            FRAME.no_broadcast(frame[1], &Self::DESC)?;
             rt::equal(&Self::ARG1_DESC, 2, frame[2], 0x0)?;
             rt::equal(&Self::ARG2_DESC, 3, frame[3], 0x0)?;
             rt::Ok(Self)
@@ -2690,7 +2665,7 @@ pub mod sd {
         #[inline(always)]
         fn from_frame(frame: &[u8]) -> rt::DecodeResult<Self> {
             let frame = rt::fixed::<6>(frame, &Self::DESC)?;
-            rt::no_broadcast(frame[1], 0x1F, &Self::DESC)?;
+            FRAME.no_broadcast(frame[1], &Self::DESC)?;
             rt::equal(&Self::ARG1_DESC, 2, frame[2], 0x0)?;
             rt::equal(&Self::ARG2_DESC, 3, frame[3], 0x0)?;
             rt::Ok(Self)
@@ -2710,7 +2685,7 @@ pub mod sd {
         #[inline(always)]
         fn from_frame(frame: &[u8]) -> rt::DecodeResult<Self> {
             let frame = rt::fixed::<6>(frame, &Self::DESC)?;
-            rt::no_broadcast(frame[1], 0x1F, &Self::DESC)?;
+            FRAME.no_broadcast(frame[1], &Self::DESC)?;
             rt::equal(&Self::ARG1_DESC, 2, frame[2], 0x0)?;
             rt::equal(&Self::ARG2_DESC, 3, frame[3], 0x0)?;
             rt::Ok(Self)
@@ -2739,7 +2714,7 @@ pub mod sd {
         #[inline(always)]
         fn write(&self, address: u8, out: &mut [u8; 6]) -> rt::EncodeResult {
             let Self { byte_number: v_byte_number } = *self;
-            rt::encode_broadcast(address, 0x1F, &Self::DESC)?;
+            FRAME.encode_broadcast(address, &Self::DESC)?;
             rt::encode_in_range(&Self::BYTE_NUMBER_CHECK, v_byte_number)?;
             let out = rt::head(out, &[0xF0, address, 0x00]);
             out[3] = v_byte_number;
@@ -2749,7 +2724,7 @@ pub mod sd {
         #[inline(always)]
         fn from_frame(frame: &[u8]) -> rt::DecodeResult<Self> {
             let frame = rt::fixed::<6>(frame, &Self::DESC)?;
-            rt::no_broadcast(frame[1], 0x1F, &Self::DESC)?;
+            FRAME.no_broadcast(frame[1], &Self::DESC)?;
             rt::equal(&Self::ARG1_DESC, 2, frame[2], 0x0)?;
             rt::in_range(&Self::BYTE_NUMBER_CHECK, frame[3])?;
             rt::Ok(Self { byte_number: frame[3] })
@@ -2778,7 +2753,7 @@ pub mod sd {
         #[inline(always)]
         fn write(&self, address: u8, out: &mut [u8; 6]) -> rt::EncodeResult {
             let Self { byte_number: v_byte_number } = *self;
-            rt::encode_broadcast(address, 0x1F, &Self::DESC)?;
+            FRAME.encode_broadcast(address, &Self::DESC)?;
             rt::encode_in_range(&Self::BYTE_NUMBER_CHECK, v_byte_number)?;
             let out = rt::head(out, &[0xF1, address, 0x00]);
             out[3] = v_byte_number;
@@ -2788,7 +2763,7 @@ pub mod sd {
         #[inline(always)]
         fn from_frame(frame: &[u8]) -> rt::DecodeResult<Self> {
             let frame = rt::fixed::<6>(frame, &Self::DESC)?;
-            rt::no_broadcast(frame[1], 0x1F, &Self::DESC)?;
+            FRAME.no_broadcast(frame[1], &Self::DESC)?;
             rt::equal(&Self::ARG1_DESC, 2, frame[2], 0x0)?;
             rt::in_range(&Self::BYTE_NUMBER_CHECK, frame[3])?;
             rt::Ok(Self { byte_number: frame[3] })
@@ -2817,7 +2792,7 @@ pub mod sd {
         #[inline(always)]
         fn write(&self, address: u8, out: &mut [u8; 6]) -> rt::EncodeResult {
             let Self { byte_number: v_byte_number } = *self;
-            rt::encode_broadcast(address, 0x1F, &Self::DESC)?;
+            FRAME.encode_broadcast(address, &Self::DESC)?;
             rt::encode_in_range(&Self::BYTE_NUMBER_CHECK, v_byte_number)?;
             let out = rt::head(out, &[0xF2, address, 0x00]);
             out[3] = v_byte_number;
@@ -2827,7 +2802,7 @@ pub mod sd {
         #[inline(always)]
         fn from_frame(frame: &[u8]) -> rt::DecodeResult<Self> {
             let frame = rt::fixed::<6>(frame, &Self::DESC)?;
-            rt::no_broadcast(frame[1], 0x1F, &Self::DESC)?;
+            FRAME.no_broadcast(frame[1], &Self::DESC)?;
             rt::equal(&Self::ARG1_DESC, 2, frame[2], 0x0)?;
             rt::in_range(&Self::BYTE_NUMBER_CHECK, frame[3])?;
             rt::Ok(Self { byte_number: frame[3] })
@@ -2856,7 +2831,7 @@ pub mod sd {
         #[inline(always)]
         fn write(&self, address: u8, out: &mut [u8; 6]) -> rt::EncodeResult {
             let Self { byte_number: v_byte_number } = *self;
-            rt::encode_broadcast(address, 0x1F, &Self::DESC)?;
+            FRAME.encode_broadcast(address, &Self::DESC)?;
             rt::encode_in_range(&Self::BYTE_NUMBER_CHECK, v_byte_number)?;
             let out = rt::head(out, &[0xF3, address, 0x00]);
             out[3] = v_byte_number;
@@ -2866,7 +2841,7 @@ pub mod sd {
         #[inline(always)]
         fn from_frame(frame: &[u8]) -> rt::DecodeResult<Self> {
             let frame = rt::fixed::<6>(frame, &Self::DESC)?;
-            rt::no_broadcast(frame[1], 0x1F, &Self::DESC)?;
+            FRAME.no_broadcast(frame[1], &Self::DESC)?;
             rt::equal(&Self::ARG1_DESC, 2, frame[2], 0x0)?;
             rt::in_range(&Self::BYTE_NUMBER_CHECK, frame[3])?;
             rt::Ok(Self { byte_number: frame[3] })
@@ -2886,7 +2861,7 @@ pub mod sd {
         #[inline(always)]
         fn from_frame(frame: &[u8]) -> rt::DecodeResult<Self> {
             let frame = rt::fixed::<6>(frame, &Self::DESC)?;
-            rt::no_broadcast(frame[1], 0x1F, &Self::DESC)?;
+            FRAME.no_broadcast(frame[1], &Self::DESC)?;
             rt::equal(&Self::ARG1_DESC, 2, frame[2], 0x0)?;
             rt::equal(&Self::ARG2_DESC, 3, frame[3], 0x0)?;
             rt::Ok(Self)
@@ -2906,7 +2881,7 @@ pub mod sd {
         #[inline(always)]
         fn from_frame(frame: &[u8]) -> rt::DecodeResult<Self> {
             let frame = rt::fixed::<6>(frame, &Self::DESC)?;
-            rt::no_broadcast(frame[1], 0x1F, &Self::DESC)?;
+            FRAME.no_broadcast(frame[1], &Self::DESC)?;
             rt::equal(&Self::ARG1_DESC, 2, frame[2], 0x0)?;
             rt::equal(&Self::ARG2_DESC, 3, frame[3], 0x1)?;
             rt::Ok(Self)
@@ -2926,7 +2901,7 @@ pub mod sd {
         #[inline(always)]
         fn from_frame(frame: &[u8]) -> rt::DecodeResult<Self> {
             let frame = rt::fixed::<6>(frame, &Self::DESC)?;
-            rt::no_broadcast(frame[1], 0x1F, &Self::DESC)?;
+            FRAME.no_broadcast(frame[1], &Self::DESC)?;
             rt::equal(&Self::ARG1_DESC, 2, frame[2], 0x0)?;
             rt::equal(&Self::ARG2_DESC, 3, frame[3], 0x0)?;
             rt::Ok(Self)
@@ -2946,7 +2921,7 @@ pub mod sd {
         #[inline(always)]
         fn from_frame(frame: &[u8]) -> rt::DecodeResult<Self> {
             let frame = rt::fixed::<6>(frame, &Self::DESC)?;
-            rt::no_broadcast(frame[1], 0x1F, &Self::DESC)?;
+            FRAME.no_broadcast(frame[1], &Self::DESC)?;
             rt::equal(&Self::ARG1_DESC, 2, frame[2], 0x0)?;
             rt::equal(&Self::ARG2_DESC, 3, frame[3], 0x1)?;
             rt::Ok(Self)
@@ -2966,7 +2941,7 @@ pub mod sd {
         #[inline(always)]
         fn from_frame(frame: &[u8]) -> rt::DecodeResult<Self> {
             let frame = rt::fixed::<6>(frame, &Self::DESC)?;
-            rt::no_broadcast(frame[1], 0x1F, &Self::DESC)?;
+            FRAME.no_broadcast(frame[1], &Self::DESC)?;
             rt::equal(&Self::ARG1_DESC, 2, frame[2], 0xAA)?;
             rt::equal(&Self::ARG2_DESC, 3, frame[3], 0x55)?;
             rt::Ok(Self)
@@ -2986,7 +2961,7 @@ pub mod sd {
         #[inline(always)]
         fn from_frame(frame: &[u8]) -> rt::DecodeResult<Self> {
             let frame = rt::fixed::<6>(frame, &Self::DESC)?;
-            rt::no_broadcast(frame[1], 0x1F, &Self::DESC)?;
+            FRAME.no_broadcast(frame[1], &Self::DESC)?;
             rt::equal(&Self::ARG1_DESC, 2, frame[2], 0x0)?;
             rt::equal(&Self::ARG2_DESC, 3, frame[3], 0x0)?;
             rt::Ok(Self)
@@ -3006,7 +2981,7 @@ pub mod sd {
         #[inline(always)]
         fn from_frame(frame: &[u8]) -> rt::DecodeResult<Self> {
             let frame = rt::fixed::<6>(frame, &Self::DESC)?;
-            rt::no_broadcast(frame[1], 0x1F, &Self::DESC)?;
+            FRAME.no_broadcast(frame[1], &Self::DESC)?;
             rt::equal(&Self::ARG1_DESC, 2, frame[2], 0x0)?;
             rt::equal(&Self::ARG2_DESC, 3, frame[3], 0x1)?;
             rt::Ok(Self)
@@ -3026,7 +3001,7 @@ pub mod sd {
         #[inline(always)]
         fn from_frame(frame: &[u8]) -> rt::DecodeResult<Self> {
             let frame = rt::fixed::<6>(frame, &Self::DESC)?;
-            rt::no_broadcast(frame[1], 0x1F, &Self::DESC)?;
+            FRAME.no_broadcast(frame[1], &Self::DESC)?;
             rt::equal(&Self::ARG1_DESC, 2, frame[2], 0xAA)?;
             rt::equal(&Self::ARG2_DESC, 3, frame[3], 0x55)?;
             rt::Ok(Self)
@@ -3046,7 +3021,7 @@ pub mod sd {
         #[inline(always)]
         fn from_frame(frame: &[u8]) -> rt::DecodeResult<Self> {
             let frame = rt::fixed::<6>(frame, &Self::DESC)?;
-            rt::no_broadcast(frame[1], 0x1F, &Self::DESC)?;
+            FRAME.no_broadcast(frame[1], &Self::DESC)?;
             rt::equal(&Self::ARG1_DESC, 2, frame[2], 0x0)?;
             rt::equal(&Self::ARG2_DESC, 3, frame[3], 0x0)?;
             rt::Ok(Self)
@@ -3066,7 +3041,7 @@ pub mod sd {
         #[inline(always)]
         fn from_frame(frame: &[u8]) -> rt::DecodeResult<Self> {
             let frame = rt::fixed::<6>(frame, &Self::DESC)?;
-            rt::no_broadcast(frame[1], 0x1F, &Self::DESC)?;
+            FRAME.no_broadcast(frame[1], &Self::DESC)?;
             rt::equal(&Self::ARG1_DESC, 2, frame[2], 0x0)?;
             rt::equal(&Self::ARG2_DESC, 3, frame[3], 0x1)?;
             rt::Ok(Self)
@@ -3086,7 +3061,7 @@ pub mod sd {
         #[inline(always)]
         fn from_frame(frame: &[u8]) -> rt::DecodeResult<Self> {
             let frame = rt::fixed::<6>(frame, &Self::DESC)?;
-            rt::no_broadcast(frame[1], 0x1F, &Self::DESC)?;
+            FRAME.no_broadcast(frame[1], &Self::DESC)?;
             rt::equal(&Self::ARG1_DESC, 2, frame[2], 0xAA)?;
             rt::equal(&Self::ARG2_DESC, 3, frame[3], 0x55)?;
             rt::Ok(Self)
@@ -3106,7 +3081,7 @@ pub mod sd {
         #[inline(always)]
         fn from_frame(frame: &[u8]) -> rt::DecodeResult<Self> {
             let frame = rt::fixed::<6>(frame, &Self::DESC)?;
-            rt::no_broadcast(frame[1], 0x1F, &Self::DESC)?;
+            FRAME.no_broadcast(frame[1], &Self::DESC)?;
             rt::equal(&Self::ARG1_DESC, 2, frame[2], 0x0)?;
             rt::equal(&Self::ARG2_DESC, 3, frame[3], 0x0)?;
             rt::Ok(Self)
@@ -3126,7 +3101,7 @@ pub mod sd {
         #[inline(always)]
         fn from_frame(frame: &[u8]) -> rt::DecodeResult<Self> {
             let frame = rt::fixed::<6>(frame, &Self::DESC)?;
-            rt::no_broadcast(frame[1], 0x1F, &Self::DESC)?;
+            FRAME.no_broadcast(frame[1], &Self::DESC)?;
             rt::equal(&Self::ARG1_DESC, 2, frame[2], 0x0)?;
             rt::equal(&Self::ARG2_DESC, 3, frame[3], 0x1)?;
             rt::Ok(Self)
@@ -3146,7 +3121,7 @@ pub mod sd {
         #[inline(always)]
         fn from_frame(frame: &[u8]) -> rt::DecodeResult<Self> {
             let frame = rt::fixed::<6>(frame, &Self::DESC)?;
-            rt::no_broadcast(frame[1], 0x1F, &Self::DESC)?;
+            FRAME.no_broadcast(frame[1], &Self::DESC)?;
             rt::equal(&Self::ARG1_DESC, 2, frame[2], 0xAA)?;
             rt::equal(&Self::ARG2_DESC, 3, frame[3], 0x55)?;
             rt::Ok(Self)
@@ -3166,7 +3141,7 @@ pub mod sd {
         #[inline(always)]
         fn from_frame(frame: &[u8]) -> rt::DecodeResult<Self> {
             let frame = rt::fixed::<6>(frame, &Self::DESC)?;
-            rt::no_broadcast(frame[1], 0x1F, &Self::DESC)?;
+            FRAME.no_broadcast(frame[1], &Self::DESC)?;
             rt::equal(&Self::ARG1_DESC, 2, frame[2], 0x0)?;
             rt::equal(&Self::ARG2_DESC, 3, frame[3], 0x0)?;
             rt::Ok(Self)
@@ -3186,7 +3161,7 @@ pub mod sd {
         #[inline(always)]
         fn from_frame(frame: &[u8]) -> rt::DecodeResult<Self> {
             let frame = rt::fixed::<6>(frame, &Self::DESC)?;
-            rt::no_broadcast(frame[1], 0x1F, &Self::DESC)?;
+            FRAME.no_broadcast(frame[1], &Self::DESC)?;
             rt::equal(&Self::ARG1_DESC, 2, frame[2], 0x0)?;
             rt::equal(&Self::ARG2_DESC, 3, frame[3], 0x1)?;
             rt::Ok(Self)
@@ -3206,7 +3181,7 @@ pub mod sd {
         #[inline(always)]
         fn from_frame(frame: &[u8]) -> rt::DecodeResult<Self> {
             let frame = rt::fixed::<6>(frame, &Self::DESC)?;
-            rt::no_broadcast(frame[1], 0x1F, &Self::DESC)?;
+            FRAME.no_broadcast(frame[1], &Self::DESC)?;
             rt::equal(&Self::ARG1_DESC, 2, frame[2], 0xAA)?;
             rt::equal(&Self::ARG2_DESC, 3, frame[3], 0x55)?;
             rt::Ok(Self)
@@ -3226,7 +3201,7 @@ pub mod sd {
         #[inline(always)]
         fn from_frame(frame: &[u8]) -> rt::DecodeResult<Self> {
             let frame = rt::fixed::<6>(frame, &Self::DESC)?;
-            rt::no_broadcast(frame[1], 0x1F, &Self::DESC)?;
+            FRAME.no_broadcast(frame[1], &Self::DESC)?;
             rt::equal(&Self::ARG1_DESC, 2, frame[2], 0x0)?;
             rt::equal(&Self::ARG2_DESC, 3, frame[3], 0x0)?;
             rt::Ok(Self)
@@ -3246,7 +3221,7 @@ pub mod sd {
         #[inline(always)]
         fn from_frame(frame: &[u8]) -> rt::DecodeResult<Self> {
             let frame = rt::fixed::<6>(frame, &Self::DESC)?;
-            rt::no_broadcast(frame[1], 0x1F, &Self::DESC)?;
+            FRAME.no_broadcast(frame[1], &Self::DESC)?;
             rt::equal(&Self::ARG1_DESC, 2, frame[2], 0xAA)?;
             rt::equal(&Self::ARG2_DESC, 3, frame[3], 0x55)?;
             rt::Ok(Self)
@@ -3266,7 +3241,7 @@ pub mod sd {
         #[inline(always)]
         fn from_frame(frame: &[u8]) -> rt::DecodeResult<Self> {
             let frame = rt::fixed::<6>(frame, &Self::DESC)?;
-            rt::no_broadcast(frame[1], 0x1F, &Self::DESC)?;
+            FRAME.no_broadcast(frame[1], &Self::DESC)?;
             rt::equal(&Self::ARG1_DESC, 2, frame[2], 0x0)?;
             rt::equal(&Self::ARG2_DESC, 3, frame[3], 0x0)?;
             rt::Ok(Self)

@@ -205,7 +205,7 @@ pub mod syncy {
             let len = match *self {
                 Self::MoveTo(ref m) => m.write(address, buf)?,
                 Self::GetCounter(_) => {
-                    rt::encode_broadcast(address, 0xFE, &request::GetCounter::DESC)?;
+                    FRAME.encode_broadcast(address, &request::GetCounter::DESC)?;
                     rt::frame_mut::<6>(buf, &[0xFF, 0xFF, address, 0x02, 0x04])?.len()
                 }
                 Self::SetPair(ref m) => m.write(address, buf)?,
@@ -627,10 +627,7 @@ pub mod syncy {
             }
         }
         fn checksum_ok(frame: &[u8]) -> bool {
-            match frame.len().checked_sub(1) {
-                rt::Some(n) if n > 0 => rt::check_sum(frame, n, &FRAME, frame_sum),
-                _ => false,
-            }
+            FRAME.checksum_ok(frame, frame_sum)
         }
     }
     /// A streaming decoder for this protocol: see [`busspec_runtime::stream`].
@@ -656,7 +653,7 @@ pub mod syncy {
         #[inline(always)]
         fn write(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             let Self { target: v_target } = *self;
-            rt::encode_broadcast(address, 0xFE, &Self::DESC)?;
+            FRAME.encode_broadcast(address, &Self::DESC)?;
             let out = rt::frame_mut::<9>(buf, &[0xFF, 0xFF, address, 0x05, 0x03])?;
             rt::encode_in_range(&Self::TARGET_CHECK, v_target.raw())?;
             out[5..8]
@@ -673,7 +670,7 @@ pub mod syncy {
         #[inline(always)]
         fn from_frame(frame: &[u8]) -> rt::DecodeResult<Self> {
             let frame = rt::fixed::<9>(frame, &Self::DESC)?;
-            rt::no_broadcast(frame[2], 0xFE, &Self::DESC)?;
+            FRAME.no_broadcast(frame[2], &Self::DESC)?;
             let w_target: i32 = rt::i24([frame[5], frame[6], frame[7]], false);
             rt::in_range(&Self::TARGET_CHECK, w_target)?;
             rt::Ok(Self {
@@ -693,7 +690,7 @@ pub mod syncy {
         #[inline(always)]
         fn from_frame(frame: &[u8]) -> rt::DecodeResult<Self> {
             let frame = rt::fixed::<6>(frame, &Self::DESC)?;
-            rt::no_broadcast(frame[2], 0xFE, &Self::DESC)?;
+            FRAME.no_broadcast(frame[2], &Self::DESC)?;
             rt::Ok(Self)
         }
     }
@@ -721,7 +718,7 @@ pub mod syncy {
         #[inline(always)]
         fn write(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             let Self { quantity: v_quantity, level: v_level } = *self;
-            rt::encode_broadcast(address, 0xFE, &Self::DESC)?;
+            FRAME.encode_broadcast(address, &Self::DESC)?;
             let out = rt::frame_mut::<10>(buf, &[0xFF, 0xFF, address, 0x06, 0x05])?;
             rt::encode_in_range(&Self::QUANTITY_CHECK, v_quantity)?;
             let w_quantity: u8 = v_quantity;
@@ -735,7 +732,7 @@ pub mod syncy {
         #[inline(always)]
         fn from_frame(frame: &[u8]) -> rt::DecodeResult<Self> {
             let frame = rt::fixed::<10>(frame, &Self::DESC)?;
-            rt::no_broadcast(frame[2], 0xFE, &Self::DESC)?;
+            FRAME.no_broadcast(frame[2], &Self::DESC)?;
             rt::in_range(&Self::QUANTITY_CHECK, frame[5])?;
             rt::following(&Self::DOUBLED_CHECK, frame[6], frame[5] as i64)?;
             rt::Ok(Self {

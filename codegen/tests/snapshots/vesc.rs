@@ -1110,10 +1110,7 @@ pub mod vesc {
             let rt::Ok((frame, _)) = LONG.lay_out(frame, &mut laid) else {
                 return false;
             };
-            match frame.len().checked_sub(3) {
-                rt::Some(n) if n > 0 => rt::check_sum(frame, n, &FRAME, frame_sum),
-                _ => false,
-            }
+            FRAME.checksum_ok(frame, frame_sum)
         }
     }
     /// A streaming decoder for this protocol: see [`busspec_runtime::stream`].
