@@ -5,8 +5,10 @@
 //! core's.
 //!
 //! Beside the re-exports are the small checks every message or frame would otherwise repeat
-//! in the generated text. Each is `#[inline]` and takes its constants as arguments, so after
-//! inlining it compiles to what was written out before. Public only for generated code; they
+//! in the generated text. Each is `#[inline]` and takes its constants as arguments or as a
+//! named constant of the generated module (a field's [`FieldCheck`]: its offset, range and
+//! relation; the module's [`Frame`]: its broadcast address and trailer), so after inlining it
+//! compiles to what was written out before. Public only for generated code; they
 //! are not part of the runtime's documented API and may change with the generator.
 
 pub use core::fmt::{Debug, Formatter, Result as FmtResult};
