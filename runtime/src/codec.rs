@@ -24,8 +24,8 @@ pub use crate::lists::{Lists, Split};
 pub use crate::optional::{presence, OptionalAt, Optionals, Present, When};
 pub use crate::repeated::{
     encode_packed_in_range, fixed_elements, list, list_bits, list_text, pack, packed_in_range,
-    packed_padding, read_bits, read_elements, read_words, records, unpack, write_bits,
-    write_elements, write_fixed, write_words, CountBy, CountField, Element, RepeatAt, SizedBy,
+    packed_padding, read_bits, records, unpack, write_bits, write_fixed, CountBy, CountField,
+    Element, RepeatAt, SizedBy,
 };
 pub use crate::stream::{Candidate, Candidates, LengthField, VarLen, VarLens};
 pub use crate::Bits;

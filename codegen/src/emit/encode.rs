@@ -195,8 +195,8 @@ fn encode_arm(
             // Written once the frame is spread around the lists.
             continue;
         }
-        if let (Some(_), Some((_, _, v))) = (&f.repeat, &repeat) {
-            stmts.push(write_list(f, v, quote!(#at)));
+        if let (Some(_), Some((_, c, v))) = (&f.repeat, &repeat) {
+            stmts.push(write_list(f, &quote!(#c), v, quote!(#at)));
             continue;
         }
         // The fields after the lists, in frame order: each its presence (where optional),
@@ -281,7 +281,8 @@ fn encode_arm(
             let at = usize_lit(m.layout.payload + f.offset);
             let before = &list_bytes[..*k];
             let at = quote!(#at #(+ #before)*);
-            stmts.push(write_list(f, v, at));
+            let k = usize_lit(*k);
+            stmts.push(write_list(f, &quote!(#lc.lists[#k]), v, at));
         }
         stmts.extend(put_lengths(p, m.direction));
     }

@@ -147,6 +147,8 @@ pub mod dynamixel {
         base: 7,
         at: 6,
         width: 1,
+        le: true,
+        signed: false,
         count: rt::CountBy::End,
         min: 1,
         max: 252,
@@ -157,6 +159,8 @@ pub mod dynamixel {
         base: 7,
         at: 6,
         width: 1,
+        le: true,
+        signed: false,
         count: rt::CountBy::End,
         min: 1,
         max: 252,
@@ -167,6 +171,8 @@ pub mod dynamixel {
         base: 8,
         at: 7,
         width: 1,
+        le: true,
+        signed: false,
         count: rt::CountBy::End,
         min: 2,
         max: 251,
@@ -400,6 +406,8 @@ pub mod dynamixel {
         base: 6,
         at: 5,
         width: 1,
+        le: true,
+        signed: false,
         count: rt::CountBy::End,
         min: 1,
         max: 253,
@@ -517,8 +525,7 @@ pub mod dynamixel {
                         rt::Ok(
                             Self::ReadStatus(response::ReadStatus {
                                 error: StatusError::from_raw(frame[4]),
-                                data: REPEAT_READ_STATUS
-                                    .elements::<u8, 253>(elements, true, false)?,
+                                data: REPEAT_READ_STATUS.elements::<u8, 253>(elements)?,
                             }),
                         )
                     },
@@ -648,14 +655,14 @@ pub mod dynamixel {
                     let (frame, elements, _) = REPEAT_WRITE.split::<6>(frame)?;
                     rt::Ok(Self::Write {
                         address: frame[5],
-                        data: REPEAT_WRITE.view::<u8, 252>(elements, true, false)?,
+                        data: REPEAT_WRITE.view::<u8, 252>(elements)?,
                     })
                 }
                 0x04 => {
                     let (frame, elements, _) = REPEAT_REG_WRITE.split::<6>(frame)?;
                     rt::Ok(Self::RegWrite {
                         address: frame[5],
-                        data: REPEAT_REG_WRITE.view::<u8, 252>(elements, true, false)?,
+                        data: REPEAT_REG_WRITE.view::<u8, 252>(elements)?,
                     })
                 }
                 0x05 => {
@@ -667,7 +674,7 @@ pub mod dynamixel {
                     rt::Ok(Self::SyncWrite {
                         address: frame[5],
                         data_length: frame[6],
-                        blocks: REPEAT_SYNC_WRITE.view::<u8, 251>(elements, true, false)?,
+                        blocks: REPEAT_SYNC_WRITE.view::<u8, 251>(elements)?,
                     })
                 }
                 _ => rt::Err(REQUEST_CODE.unknown(frame)),
@@ -784,8 +791,7 @@ pub mod dynamixel {
                     |frame: &'a [u8; 5], elements: &'a [u8], _: usize| {
                         rt::Ok(Self::ReadStatus {
                             error: StatusError::from_raw(frame[4]),
-                            data: REPEAT_READ_STATUS
-                                .view::<u8, 253>(elements, true, false)?,
+                            data: REPEAT_READ_STATUS.view::<u8, 253>(elements)?,
                         })
                     },
                 );
@@ -1113,7 +1119,7 @@ pub mod dynamixel {
             LENGTH.put(out)?;
             out[4] = 0x03;
             out[5] = v_address;
-            rt::write_elements(v_data.as_slice(), 1, true, &mut out[6..]);
+            REPEAT_WRITE.write(v_data.as_slice(), &mut out[6..]);
             rt::Ok(out.len())
         }
         /// Reads this message from a frame whose framing and code are checked.
@@ -1122,7 +1128,7 @@ pub mod dynamixel {
             let (frame, elements, _) = REPEAT_WRITE.split::<6>(frame)?;
             rt::Ok(Self {
                 address: frame[5],
-                data: REPEAT_WRITE.elements::<u8, 252>(elements, true, false)?,
+                data: REPEAT_WRITE.elements::<u8, 252>(elements)?,
             })
         }
     }
@@ -1150,7 +1156,7 @@ pub mod dynamixel {
             LENGTH.put(out)?;
             out[4] = 0x04;
             out[5] = v_address;
-            rt::write_elements(v_data.as_slice(), 1, true, &mut out[6..]);
+            REPEAT_REG_WRITE.write(v_data.as_slice(), &mut out[6..]);
             rt::Ok(out.len())
         }
         /// Reads this message from a frame whose framing and code are checked.
@@ -1159,7 +1165,7 @@ pub mod dynamixel {
             let (frame, elements, _) = REPEAT_REG_WRITE.split::<6>(frame)?;
             rt::Ok(Self {
                 address: frame[5],
-                data: REPEAT_REG_WRITE.elements::<u8, 252>(elements, true, false)?,
+                data: REPEAT_REG_WRITE.elements::<u8, 252>(elements)?,
             })
         }
     }
@@ -1212,7 +1218,7 @@ pub mod dynamixel {
             out[4] = 0x83;
             out[5] = v_address;
             out[6] = v_data_length;
-            rt::write_elements(v_blocks.as_slice(), 1, true, &mut out[7..]);
+            REPEAT_SYNC_WRITE.write(v_blocks.as_slice(), &mut out[7..]);
             rt::Ok(out.len())
         }
         /// Reads this message from a frame whose framing and code are checked.
@@ -1222,7 +1228,7 @@ pub mod dynamixel {
             rt::Ok(Self {
                 address: frame[5],
                 data_length: frame[6],
-                blocks: REPEAT_SYNC_WRITE.elements::<u8, 251>(elements, true, false)?,
+                blocks: REPEAT_SYNC_WRITE.elements::<u8, 251>(elements)?,
             })
         }
     }
@@ -1278,7 +1284,7 @@ pub mod dynamixel {
             let out = rt::frame_mut_len(buf, frame_len, &[0xFF, 0xFF, address])?;
             LENGTH.put(out)?;
             out[4] = v_error.raw();
-            rt::write_elements(v_data.as_slice(), 1, true, &mut out[5..]);
+            REPEAT_READ_STATUS.write(v_data.as_slice(), &mut out[5..]);
             rt::Ok(out.len())
         }
         /// Checks the fields this response takes from its request, `read` (`r`).

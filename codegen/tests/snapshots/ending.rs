@@ -109,6 +109,8 @@ pub mod ending {
         base: 7,
         at: 6,
         width: 2,
+        le: false,
+        signed: false,
         count: rt::CountBy::Bytes(rt::CountField {
             name: "byte_count",
             at: 5,
@@ -293,6 +295,8 @@ pub mod ending {
         base: 5,
         at: 4,
         width: 2,
+        le: false,
+        signed: false,
         count: rt::CountBy::End,
         min: 1,
         max: 16,
@@ -524,7 +528,7 @@ pub mod ending {
                     )?;
                     rt::Ok(Self::Write {
                         quantity: frame[4],
-                        values: REPEAT_WRITE.view::<u16, 16>(elements, false, false)?,
+                        values: REPEAT_WRITE.view::<u16, 16>(elements)?,
                     })
                 }
                 0x03 => {
@@ -618,8 +622,7 @@ pub mod ending {
                 0x01 => {
                     let (_, elements, _) = REPEAT_READ_REPLY.split::<4>(frame)?;
                     rt::Ok(Self::ReadReply {
-                        values: REPEAT_READ_REPLY
-                            .view::<u16, 16>(elements, false, false)?,
+                        values: REPEAT_READ_REPLY.view::<u16, 16>(elements)?,
                     })
                 }
                 0x81 => {
@@ -892,7 +895,7 @@ pub mod ending {
             )? as u8;
             REPEAT_WRITE.encode_agrees(v_values.len(), w_byte_count as u64)?;
             out[5] = w_byte_count;
-            rt::write_elements(v_values.as_slice(), 2, false, &mut out[6..]);
+            REPEAT_WRITE.write(v_values.as_slice(), &mut out[6..]);
             rt::Ok(out.len())
         }
         /// Reads this message from a frame whose framing and code are checked.
@@ -903,7 +906,7 @@ pub mod ending {
             rt::following(&Self::BYTE_COUNT_CHECK, frame[5], frame[4] as i64)?;
             rt::Ok(Self {
                 quantity: frame[4],
-                values: REPEAT_WRITE.elements::<u16, 16>(elements, false, false)?,
+                values: REPEAT_WRITE.elements::<u16, 16>(elements)?,
             })
         }
     }
@@ -961,7 +964,7 @@ pub mod ending {
             let Self { values: v_values } = *self;
             let frame_len = REPEAT_READ_REPLY.encode_len(v_values.len())?;
             let out = rt::frame_mut_len(buf, frame_len, &[0xA5, 0x5A, address, 0x01])?;
-            rt::write_elements(v_values.as_slice(), 2, false, &mut out[4..]);
+            REPEAT_READ_REPLY.write(v_values.as_slice(), &mut out[4..]);
             rt::Ok(out.len())
         }
         /// Reads this message from a frame whose framing and code are checked.
@@ -969,7 +972,7 @@ pub mod ending {
         fn from_frame(frame: &[u8]) -> rt::DecodeResult<Self> {
             let (_, elements, _) = REPEAT_READ_REPLY.split::<4>(frame)?;
             rt::Ok(Self {
-                values: REPEAT_READ_REPLY.elements::<u16, 16>(elements, false, false)?,
+                values: REPEAT_READ_REPLY.elements::<u16, 16>(elements)?,
             })
         }
         /// Checks the fields this response takes from its request, `read` (`r`).

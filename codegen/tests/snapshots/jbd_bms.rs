@@ -566,6 +566,8 @@ pub mod jbd_bms {
         base: 30,
         at: 27,
         width: 2,
+        le: false,
+        signed: false,
         count: rt::CountBy::Elements(rt::CountField {
             name: "ntc_count",
             at: 26,
@@ -581,6 +583,8 @@ pub mod jbd_bms {
         base: 7,
         at: 4,
         width: 2,
+        le: false,
+        signed: false,
         count: rt::CountBy::End,
         min: 1,
         max: 32,
@@ -591,6 +595,8 @@ pub mod jbd_bms {
         base: 7,
         at: 4,
         width: 1,
+        le: false,
+        signed: false,
         count: rt::CountBy::End,
         min: 1,
         max: 32,
@@ -756,7 +762,7 @@ pub mod jbd_bms {
                                     fet_control: frame[24],
                                     cells: frame[25],
                                     temperatures: REPEAT_BASIC_INFO
-                                        .elements::<DeciKelvin, 8>(elements, false, false)?,
+                                        .elements::<DeciKelvin, 8>(elements)?,
                                 }),
                             )
                         },
@@ -776,7 +782,7 @@ pub mod jbd_bms {
                                 Self::CellVoltages(response::CellVoltages {
                                     status: Status::from_raw(frame[2]),
                                     cell_voltages: REPEAT_CELL_VOLTAGES
-                                        .elements::<u16, 32>(elements, false, false)?,
+                                        .elements::<u16, 32>(elements)?,
                                 }),
                             )
                         },
@@ -795,8 +801,7 @@ pub mod jbd_bms {
                             rt::Ok(
                                 Self::Version(response::Version {
                                     status: Status::from_raw(frame[2]),
-                                    version: REPEAT_VERSION
-                                        .elements::<u8, 32>(elements, false, false)?,
+                                    version: REPEAT_VERSION.elements::<u8, 32>(elements)?,
                                 }),
                             )
                         },
@@ -1021,7 +1026,7 @@ pub mod jbd_bms {
                                 fet_control: frame[24],
                                 cells: frame[25],
                                 temperatures: REPEAT_BASIC_INFO
-                                    .view::<DeciKelvin, 8>(elements, false, false)?,
+                                    .view::<DeciKelvin, 8>(elements)?,
                             })
                         },
                     );
@@ -1040,7 +1045,7 @@ pub mod jbd_bms {
                             rt::Ok(Self::CellVoltages {
                                 status: Status::from_raw(frame[2]),
                                 cell_voltages: REPEAT_CELL_VOLTAGES
-                                    .view::<u16, 32>(elements, false, false)?,
+                                    .view::<u16, 32>(elements)?,
                             })
                         },
                     );
@@ -1058,8 +1063,7 @@ pub mod jbd_bms {
                         |frame: &'a [u8; 4], elements: &'a [u8], _: usize| {
                             rt::Ok(Self::Version {
                                 status: Status::from_raw(frame[2]),
-                                version: REPEAT_VERSION
-                                    .view::<u8, 32>(elements, false, false)?,
+                                version: REPEAT_VERSION.view::<u8, 32>(elements)?,
                             })
                         },
                     );
@@ -1506,7 +1510,7 @@ pub mod jbd_bms {
                 0,
                 255,
             )? as u8;
-            rt::write_elements(v_temperatures.as_slice(), 2, false, &mut out[27..]);
+            REPEAT_BASIC_INFO.write(v_temperatures.as_slice(), &mut out[27..]);
             rt::Ok(out.len())
         }
     }
@@ -1536,7 +1540,7 @@ pub mod jbd_bms {
             let out = rt::frame_mut_len(buf, frame_len, &[0xDD, 0x04])?;
             LENGTH.put(out)?;
             out[2] = v_status.raw();
-            rt::write_elements(v_cell_voltages.as_slice(), 2, false, &mut out[4..]);
+            REPEAT_CELL_VOLTAGES.write(v_cell_voltages.as_slice(), &mut out[4..]);
             rt::Ok(out.len())
         }
     }
@@ -1563,7 +1567,7 @@ pub mod jbd_bms {
             let out = rt::frame_mut_len(buf, frame_len, &[0xDD, 0x05])?;
             LENGTH.put(out)?;
             out[2] = v_status.raw();
-            rt::write_elements(v_version.as_slice(), 1, false, &mut out[4..]);
+            REPEAT_VERSION.write(v_version.as_slice(), &mut out[4..]);
             rt::Ok(out.len())
         }
     }

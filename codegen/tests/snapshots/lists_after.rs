@@ -109,6 +109,8 @@ pub mod lists_after {
         base: 7,
         at: 4,
         width: 2,
+        le: false,
+        signed: false,
         count: rt::CountBy::Elements(rt::CountField {
             name: "n",
             at: 3,
@@ -127,6 +129,8 @@ pub mod lists_after {
                 base: 7,
                 at: 4,
                 width: 2,
+                le: false,
+                signed: false,
                 count: rt::CountBy::Elements(rt::CountField {
                     name: "n",
                     at: 3,
@@ -144,6 +148,8 @@ pub mod lists_after {
         base: 7,
         at: 4,
         width: 1,
+        le: false,
+        signed: false,
         count: rt::CountBy::Elements(rt::CountField {
             name: "na",
             at: 3,
@@ -162,6 +168,8 @@ pub mod lists_after {
                 base: 7,
                 at: 4,
                 width: 1,
+                le: false,
+                signed: false,
                 count: rt::CountBy::Elements(rt::CountField {
                     name: "na",
                     at: 3,
@@ -176,6 +184,8 @@ pub mod lists_after {
                 base: 7,
                 at: 5,
                 width: 2,
+                le: false,
+                signed: false,
                 count: rt::CountBy::Bytes(rt::CountField {
                     name: "nb",
                     at: 4,
@@ -367,6 +377,8 @@ pub mod lists_after {
         base: 6,
         at: 3,
         width: 2,
+        le: false,
+        signed: false,
         count: rt::CountBy::End,
         min: 1,
         max: 8,
@@ -380,6 +392,8 @@ pub mod lists_after {
                 base: 6,
                 at: 3,
                 width: 2,
+                le: false,
+                signed: false,
                 count: rt::CountBy::End,
                 min: 1,
                 max: 8,
@@ -603,20 +617,18 @@ pub mod lists_after {
                         w_flags,
                     )?;
                     rt::Ok(Self::WriteBlock {
-                        values: s.lists[0].view::<u16, 8>(s.elements(0), false, false)?,
+                        values: s.lists[0].view::<u16, 8>(s.elements(0))?,
                         flags: w_flags,
                     })
                 }
                 0x12 => {
                     let s = LISTS_COPY.split::<7, 2>(frame)?;
                     let frame = &s.frame;
-                    let v_targets = s
-                        .lists[1]
-                        .view::<u16, 4>(s.elements(1), false, false)?;
+                    let v_targets = s.lists[1].view::<u16, 4>(s.elements(1))?;
                     s.lists[1].view_in_range(&v_targets, 1, 1000)?;
                     rt::equal(&request::Copy::MODE_DESC, 5 + s.shift(2), frame[5], 0x1)?;
                     rt::Ok(Self::Copy {
-                        sources: s.lists[0].view::<u8, 4>(s.elements(0), false, false)?,
+                        sources: s.lists[0].view::<u8, 4>(s.elements(0))?,
                         targets: v_targets,
                     })
                 }
@@ -712,7 +724,7 @@ pub mod lists_after {
                     let s = LISTS_BLOCK_REPLY.split::<6, 1>(frame)?;
                     let frame = &s.frame;
                     rt::Ok(Self::BlockReply {
-                        values: s.lists[0].view::<u16, 8>(s.elements(0), false, false)?,
+                        values: s.lists[0].view::<u16, 8>(s.elements(0))?,
                         status: u16::from_be_bytes([frame[3], frame[4]]),
                     })
                 }
@@ -976,7 +988,7 @@ pub mod lists_after {
             rt::encode_in_range(&Self::FLAGS_CHECK, v_flags)?;
             out[4..6].copy_from_slice(&v_flags.to_be_bytes());
             let out = LISTS_WRITE_BLOCK.expand(&compact, &[bytes_0], buf)?;
-            rt::write_elements(v_values.as_slice(), 2, false, &mut out[4..]);
+            LISTS_WRITE_BLOCK.lists[0].write(v_values.as_slice(), &mut out[4..]);
             rt::Ok(out.len())
         }
         /// Reads this message from a frame whose framing and code are checked.
@@ -987,7 +999,7 @@ pub mod lists_after {
             let w_flags: u16 = u16::from_be_bytes([frame[4], frame[5]]);
             rt::in_range(&Self::FLAGS_CHECK.at(4 + s.shift(1)), w_flags)?;
             rt::Ok(Self {
-                values: s.lists[0].elements::<u16, 8>(s.elements(0), false, false)?,
+                values: s.lists[0].elements::<u16, 8>(s.elements(0))?,
                 flags: w_flags,
             })
         }
@@ -1036,8 +1048,8 @@ pub mod lists_after {
                 255,
             )? as u8;
             let out = LISTS_COPY.expand(&compact, &[bytes_0, bytes_1], buf)?;
-            rt::write_elements(v_sources.as_slice(), 1, false, &mut out[4..]);
-            rt::write_elements(v_targets.as_slice(), 2, false, &mut out[5 + bytes_0..]);
+            LISTS_COPY.lists[0].write(v_sources.as_slice(), &mut out[4..]);
+            LISTS_COPY.lists[1].write(v_targets.as_slice(), &mut out[5 + bytes_0..]);
             rt::Ok(out.len())
         }
         /// Reads this message from a frame whose framing and code are checked.
@@ -1045,11 +1057,11 @@ pub mod lists_after {
         fn from_frame(frame: &[u8]) -> rt::DecodeResult<Self> {
             let s = LISTS_COPY.split::<7, 2>(frame)?;
             let frame = &s.frame;
-            let v_targets = s.lists[1].elements::<u16, 4>(s.elements(1), false, false)?;
+            let v_targets = s.lists[1].elements::<u16, 4>(s.elements(1))?;
             s.lists[1].in_range(v_targets.as_slice(), 1, 1000)?;
             rt::equal(&Self::MODE_DESC, 5 + s.shift(2), frame[5], 0x1)?;
             rt::Ok(Self {
-                sources: s.lists[0].elements::<u8, 4>(s.elements(0), false, false)?,
+                sources: s.lists[0].elements::<u8, 4>(s.elements(0))?,
                 targets: v_targets,
             })
         }
@@ -1081,7 +1093,7 @@ pub mod lists_after {
             };
             out[3..5].copy_from_slice(&v_status.to_be_bytes());
             let out = LISTS_BLOCK_REPLY.expand(&compact, &[bytes_0], buf)?;
-            rt::write_elements(v_values.as_slice(), 2, false, &mut out[3..]);
+            LISTS_BLOCK_REPLY.lists[0].write(v_values.as_slice(), &mut out[3..]);
             rt::Ok(out.len())
         }
         /// Reads this message from a frame whose framing and code are checked.
@@ -1090,7 +1102,7 @@ pub mod lists_after {
             let s = LISTS_BLOCK_REPLY.split::<6, 1>(frame)?;
             let frame = &s.frame;
             rt::Ok(Self {
-                values: s.lists[0].elements::<u16, 8>(s.elements(0), false, false)?,
+                values: s.lists[0].elements::<u16, 8>(s.elements(0))?,
                 status: u16::from_be_bytes([frame[3], frame[4]]),
             })
         }

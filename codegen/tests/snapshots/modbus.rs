@@ -260,6 +260,8 @@ pub mod modbus {
         base: 9,
         at: 7,
         width: 0,
+        le: false,
+        signed: false,
         count: rt::CountBy::Bytes(rt::CountField {
             name: "byte_count",
             at: 6,
@@ -275,6 +277,8 @@ pub mod modbus {
         base: 9,
         at: 7,
         width: 2,
+        le: false,
+        signed: false,
         count: rt::CountBy::Bytes(rt::CountField {
             name: "byte_count",
             at: 6,
@@ -557,6 +561,8 @@ pub mod modbus {
         base: 5,
         at: 3,
         width: 0,
+        le: false,
+        signed: false,
         count: rt::CountBy::Bytes(rt::CountField {
             name: "byte_count",
             at: 2,
@@ -572,6 +578,8 @@ pub mod modbus {
         base: 5,
         at: 3,
         width: 0,
+        le: false,
+        signed: false,
         count: rt::CountBy::Bytes(rt::CountField {
             name: "byte_count",
             at: 2,
@@ -587,6 +595,8 @@ pub mod modbus {
         base: 5,
         at: 3,
         width: 2,
+        le: false,
+        signed: false,
         count: rt::CountBy::Bytes(rt::CountField {
             name: "byte_count",
             at: 2,
@@ -602,6 +612,8 @@ pub mod modbus {
         base: 5,
         at: 3,
         width: 2,
+        le: false,
+        signed: false,
         count: rt::CountBy::Bytes(rt::CountField {
             name: "byte_count",
             at: 2,
@@ -1231,7 +1243,7 @@ pub mod modbus {
                         starting_address: u16::from_be_bytes([frame[2], frame[3]]),
                         quantity: w_quantity,
                         values: REPEAT_WRITE_MULTIPLE_REGISTERS
-                            .view::<u16, 123>(elements, false, false)?,
+                            .view::<u16, 123>(elements)?,
                     })
                 }
                 _ => rt::Err(REQUEST_CODE.unknown(frame)),
@@ -1423,7 +1435,7 @@ pub mod modbus {
                         .split::<3>(frame)?;
                     rt::Ok(Self::ReadHoldingRegistersReply {
                         registers: REPEAT_READ_HOLDING_REGISTERS_REPLY
-                            .view::<u16, 125>(elements, false, false)?,
+                            .view::<u16, 125>(elements)?,
                     })
                 }
                 0x83 => {
@@ -1439,7 +1451,7 @@ pub mod modbus {
                         .split::<3>(frame)?;
                     rt::Ok(Self::ReadInputRegistersReply {
                         registers: REPEAT_READ_INPUT_REGISTERS_REPLY
-                            .view::<u16, 125>(elements, false, false)?,
+                            .view::<u16, 125>(elements)?,
                     })
                 }
                 0x84 => {
@@ -2309,7 +2321,7 @@ pub mod modbus {
             REPEAT_WRITE_MULTIPLE_REGISTERS
                 .encode_agrees(v_values.len(), w_byte_count as u64)?;
             out[6] = w_byte_count;
-            rt::write_elements(v_values.as_slice(), 2, false, &mut out[7..]);
+            REPEAT_WRITE_MULTIPLE_REGISTERS.write(v_values.as_slice(), &mut out[7..]);
             rt::Ok(out.len())
         }
         /// Reads this message from a frame whose framing and code are checked.
@@ -2323,8 +2335,7 @@ pub mod modbus {
             rt::Ok(Self {
                 starting_address: u16::from_be_bytes([frame[2], frame[3]]),
                 quantity: w_quantity,
-                values: REPEAT_WRITE_MULTIPLE_REGISTERS
-                    .elements::<u16, 123>(elements, false, false)?,
+                values: REPEAT_WRITE_MULTIPLE_REGISTERS.elements::<u16, 123>(elements)?,
             })
         }
     }
@@ -2528,7 +2539,8 @@ pub mod modbus {
                 0,
                 255,
             )? as u8;
-            rt::write_elements(v_registers.as_slice(), 2, false, &mut out[3..]);
+            REPEAT_READ_HOLDING_REGISTERS_REPLY
+                .write(v_registers.as_slice(), &mut out[3..]);
             rt::Ok(out.len())
         }
         /// Reads this message from a frame whose framing and code are checked.
@@ -2538,7 +2550,7 @@ pub mod modbus {
                 .split::<3>(frame)?;
             rt::Ok(Self {
                 registers: REPEAT_READ_HOLDING_REGISTERS_REPLY
-                    .elements::<u16, 125>(elements, false, false)?,
+                    .elements::<u16, 125>(elements)?,
             })
         }
         /// Checks the fields this response takes from its request, `read_holding_registers` (`r`).
@@ -2615,7 +2627,8 @@ pub mod modbus {
                 0,
                 255,
             )? as u8;
-            rt::write_elements(v_registers.as_slice(), 2, false, &mut out[3..]);
+            REPEAT_READ_INPUT_REGISTERS_REPLY
+                .write(v_registers.as_slice(), &mut out[3..]);
             rt::Ok(out.len())
         }
         /// Reads this message from a frame whose framing and code are checked.
@@ -2624,7 +2637,7 @@ pub mod modbus {
             let (_, elements, _) = REPEAT_READ_INPUT_REGISTERS_REPLY.split::<3>(frame)?;
             rt::Ok(Self {
                 registers: REPEAT_READ_INPUT_REGISTERS_REPLY
-                    .elements::<u16, 125>(elements, false, false)?,
+                    .elements::<u16, 125>(elements)?,
             })
         }
         /// Checks the fields this response takes from its request, `read_input_registers` (`r`).

@@ -241,6 +241,8 @@ pub mod records {
         base: 6,
         at: 4,
         width: 4,
+        le: true,
+        signed: false,
         count: rt::CountBy::Elements(rt::CountField {
             name: "n",
             at: 3,
@@ -259,6 +261,8 @@ pub mod records {
                 base: 6,
                 at: 4,
                 width: 4,
+                le: true,
+                signed: false,
                 count: rt::CountBy::Elements(rt::CountField {
                     name: "n",
                     at: 3,
@@ -276,6 +280,8 @@ pub mod records {
         base: 5,
         at: 4,
         width: 5,
+        le: true,
+        signed: false,
         count: rt::CountBy::Bytes(rt::CountField {
             name: "byte_count",
             at: 3,
@@ -630,6 +636,8 @@ pub mod records {
         base: 4,
         at: 3,
         width: 4,
+        le: true,
+        signed: false,
         count: rt::CountBy::End,
         min: 1,
         max: 6,

@@ -157,6 +157,8 @@ pub mod records_sized {
         base: 9,
         at: 8,
         width: 5,
+        le: true,
+        signed: false,
         count: rt::CountBy::EndSized(rt::SizedBy {
             field: rt::CountField {
                 name: "data_length",
@@ -176,6 +178,8 @@ pub mod records_sized {
         base: 6,
         at: 5,
         width: 3,
+        le: true,
+        signed: false,
         count: rt::CountBy::EndSized(rt::SizedBy {
             field: rt::CountField {
                 name: "width",

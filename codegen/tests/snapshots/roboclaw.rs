@@ -804,6 +804,8 @@ pub mod roboclaw {
         base: 2,
         at: 0,
         width: 1,
+        le: false,
+        signed: false,
         count: rt::CountBy::Until(0),
         min: 0,
         max: 47,
@@ -817,6 +819,8 @@ pub mod roboclaw {
                 base: 2,
                 at: 0,
                 width: 1,
+                le: false,
+                signed: false,
                 count: rt::CountBy::Until(0),
                 min: 0,
                 max: 47,
@@ -1071,9 +1075,7 @@ pub mod roboclaw {
                         let frame = &s.frame;
                         rt::Ok(
                             Self::FirmwareVersion(response::FirmwareVersion {
-                                version: s
-                                    .lists[0]
-                                    .elements::<u8, 47>(s.elements(0), false, false)?,
+                                version: s.lists[0].elements::<u8, 47>(s.elements(0))?,
                             }),
                         )
                     },
@@ -1348,9 +1350,7 @@ pub mod roboclaw {
                     |s: &rt::Split<'a, 2, 1>| {
                         let frame = &s.frame;
                         rt::Ok(Self::FirmwareVersion {
-                            version: s
-                                .lists[0]
-                                .view::<u8, 47>(s.elements(0), false, false)?,
+                            version: s.lists[0].view::<u8, 47>(s.elements(0))?,
                         })
                     },
                 );
@@ -1952,7 +1952,9 @@ pub mod roboclaw {
             let out = LISTS_FIRMWARE_VERSION.expand(&compact, &[bytes_0], buf)?;
             {
                 let at = 0;
-                rt::write_elements(v_version.as_slice(), 1, false, &mut out[at..]);
+                if let rt::Some(to) = out.get_mut(at..at + v_version.len()) {
+                    to.copy_from_slice(v_version.as_slice());
+                }
                 if let rt::Some(b) = out.get_mut(at + v_version.len()) {
                     *b = 0;
                 }

@@ -109,6 +109,8 @@ pub mod text_counted {
         base: 6,
         at: 4,
         width: 1,
+        le: false,
+        signed: false,
         count: rt::CountBy::Elements(rt::CountField {
             name: "name_len",
             at: 3,
@@ -127,6 +129,8 @@ pub mod text_counted {
                 base: 6,
                 at: 4,
                 width: 1,
+                le: false,
+                signed: false,
                 count: rt::CountBy::Elements(rt::CountField {
                     name: "name_len",
                     at: 3,
@@ -300,6 +304,8 @@ pub mod text_counted {
         base: 10,
         at: 4,
         width: 1,
+        le: false,
+        signed: false,
         count: rt::CountBy::Elements(rt::CountField {
             name: "name_len",
             at: 3,
@@ -318,6 +324,8 @@ pub mod text_counted {
                 base: 10,
                 at: 4,
                 width: 1,
+                le: false,
+                signed: false,
                 count: rt::CountBy::Elements(rt::CountField {
                     name: "name_len",
                     at: 3,
@@ -522,7 +530,7 @@ pub mod text_counted {
                         frame[4],
                     )?;
                     rt::Ok(Self::SetName {
-                        name: s.lists[0].view::<u8, 16>(s.elements(0), false, false)?,
+                        name: s.lists[0].view::<u8, 16>(s.elements(0))?,
                         channel: frame[4],
                     })
                 }
@@ -612,7 +620,7 @@ pub mod text_counted {
                     let s = LISTS_DEVICE_INFO.split::<10, 1>(frame)?;
                     let frame = &s.frame;
                     rt::Ok(Self::DeviceInfo {
-                        name: s.lists[0].view::<u8, 16>(s.elements(0), false, false)?,
+                        name: s.lists[0].view::<u8, 16>(s.elements(0))?,
                         serial: u32::from_be_bytes([
                             frame[4],
                             frame[5],
@@ -832,7 +840,7 @@ pub mod text_counted {
             rt::encode_in_range(&Self::CHANNEL_CHECK, v_channel)?;
             out[4] = v_channel;
             let out = LISTS_SET_NAME.expand(&compact, &[bytes_0], buf)?;
-            rt::write_elements(v_name.as_slice(), 1, false, &mut out[4..]);
+            LISTS_SET_NAME.lists[0].write(v_name.as_slice(), &mut out[4..]);
             rt::Ok(out.len())
         }
         /// Reads this message from a frame whose framing and code are checked.
@@ -842,7 +850,7 @@ pub mod text_counted {
             let frame = &s.frame;
             rt::in_range(&Self::CHANNEL_CHECK.at(4 + s.shift(1)), frame[4])?;
             rt::Ok(Self {
-                name: s.lists[0].elements::<u8, 16>(s.elements(0), false, false)?,
+                name: s.lists[0].elements::<u8, 16>(s.elements(0))?,
                 channel: frame[4],
             })
         }
@@ -918,7 +926,7 @@ pub mod text_counted {
             out[4..8].copy_from_slice(&v_serial.to_be_bytes());
             out[8] = v_version;
             let out = LISTS_DEVICE_INFO.expand(&compact, &[bytes_0], buf)?;
-            rt::write_elements(v_name.as_slice(), 1, false, &mut out[4..]);
+            LISTS_DEVICE_INFO.lists[0].write(v_name.as_slice(), &mut out[4..]);
             rt::Ok(out.len())
         }
         /// Reads this message from a frame whose framing and code are checked.
@@ -927,7 +935,7 @@ pub mod text_counted {
             let s = LISTS_DEVICE_INFO.split::<10, 1>(frame)?;
             let frame = &s.frame;
             rt::Ok(Self {
-                name: s.lists[0].elements::<u8, 16>(s.elements(0), false, false)?,
+                name: s.lists[0].elements::<u8, 16>(s.elements(0))?,
                 serial: u32::from_be_bytes([frame[4], frame[5], frame[6], frame[7]]),
                 version: frame[8],
             })

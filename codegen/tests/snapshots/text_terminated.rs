@@ -117,6 +117,8 @@ pub mod text_terminated {
         base: 5,
         at: 3,
         width: 1,
+        le: false,
+        signed: false,
         count: rt::CountBy::Until(0),
         min: 0,
         max: 16,
@@ -130,6 +132,8 @@ pub mod text_terminated {
                 base: 5,
                 at: 3,
                 width: 1,
+                le: false,
+                signed: false,
                 count: rt::CountBy::Until(0),
                 min: 0,
                 max: 16,
@@ -311,6 +315,8 @@ pub mod text_terminated {
         base: 18,
         at: 3,
         width: 1,
+        le: false,
+        signed: false,
         count: rt::CountBy::Until(0),
         min: 1,
         max: 24,
@@ -324,6 +330,8 @@ pub mod text_terminated {
                 base: 18,
                 at: 3,
                 width: 1,
+                le: false,
+                signed: false,
                 count: rt::CountBy::Until(0),
                 min: 1,
                 max: 24,
@@ -336,6 +344,8 @@ pub mod text_terminated {
         base: 7,
         at: 4,
         width: 1,
+        le: false,
+        signed: false,
         count: rt::CountBy::Until(0),
         min: 0,
         max: 16,
@@ -349,6 +359,8 @@ pub mod text_terminated {
                 base: 7,
                 at: 4,
                 width: 1,
+                le: false,
+                signed: false,
                 count: rt::CountBy::Until(0),
                 min: 0,
                 max: 16,
@@ -358,6 +370,8 @@ pub mod text_terminated {
                 base: 7,
                 at: 4,
                 width: 1,
+                le: false,
+                signed: false,
                 count: rt::CountBy::Until(0),
                 min: 0,
                 max: 8,
@@ -584,7 +598,7 @@ pub mod text_terminated {
                         frame[3],
                     )?;
                     rt::Ok(Self::SetName {
-                        name: s.lists[0].view::<u8, 16>(s.elements(0), false, false)?,
+                        name: s.lists[0].view::<u8, 16>(s.elements(0))?,
                         channel: frame[3],
                     })
                 }
@@ -692,7 +706,7 @@ pub mod text_terminated {
                     let s = LISTS_DEVICE_INFO.split::<18, 1>(frame)?;
                     let frame = &s.frame;
                     rt::Ok(Self::DeviceInfo {
-                        name: s.lists[0].view::<u8, 24>(s.elements(0), false, false)?,
+                        name: s.lists[0].view::<u8, 24>(s.elements(0))?,
                         serial: u32::from_be_bytes([
                             frame[3],
                             frame[4],
@@ -724,8 +738,8 @@ pub mod text_terminated {
                     let frame = &s.frame;
                     rt::Ok(Self::Parameter {
                         index: frame[3],
-                        label: s.lists[0].view::<u8, 16>(s.elements(0), false, false)?,
-                        unit: s.lists[1].view::<u8, 8>(s.elements(1), false, false)?,
+                        label: s.lists[0].view::<u8, 16>(s.elements(0))?,
+                        unit: s.lists[1].view::<u8, 8>(s.elements(1))?,
                         value: i16::from_be_bytes([frame[4], frame[5]]),
                     })
                 }
@@ -989,7 +1003,9 @@ pub mod text_terminated {
             let out = LISTS_SET_NAME.expand(&compact, &[bytes_0], buf)?;
             {
                 let at = 3;
-                rt::write_elements(v_name.as_slice(), 1, false, &mut out[at..]);
+                if let rt::Some(to) = out.get_mut(at..at + v_name.len()) {
+                    to.copy_from_slice(v_name.as_slice());
+                }
                 if let rt::Some(b) = out.get_mut(at + v_name.len()) {
                     *b = 0;
                 }
@@ -1004,7 +1020,7 @@ pub mod text_terminated {
             let frame = &s.frame;
             rt::in_range(&Self::CHANNEL_CHECK.at(3 + s.shift(1)), frame[3])?;
             rt::Ok(Self {
-                name: s.lists[0].elements::<u8, 16>(s.elements(0), false, false)?,
+                name: s.lists[0].elements::<u8, 16>(s.elements(0))?,
                 channel: frame[3],
             })
         }
@@ -1082,7 +1098,9 @@ pub mod text_terminated {
             let out = LISTS_DEVICE_INFO.expand(&compact, &[bytes_0], buf)?;
             {
                 let at = 3;
-                rt::write_elements(v_name.as_slice(), 1, false, &mut out[at..]);
+                if let rt::Some(to) = out.get_mut(at..at + v_name.len()) {
+                    to.copy_from_slice(v_name.as_slice());
+                }
                 if let rt::Some(b) = out.get_mut(at + v_name.len()) {
                     *b = 0;
                 }
@@ -1096,7 +1114,7 @@ pub mod text_terminated {
             let s = LISTS_DEVICE_INFO.split::<18, 1>(frame)?;
             let frame = &s.frame;
             rt::Ok(Self {
-                name: s.lists[0].elements::<u8, 24>(s.elements(0), false, false)?,
+                name: s.lists[0].elements::<u8, 24>(s.elements(0))?,
                 serial: u32::from_be_bytes([frame[3], frame[4], frame[5], frame[6]]),
                 hardware: u32::from_be_bytes([frame[7], frame[8], frame[9], frame[10]]),
                 firmware: u32::from_be_bytes([
@@ -1176,14 +1194,18 @@ pub mod text_terminated {
             let out = LISTS_PARAMETER.expand(&compact, &[bytes_0, bytes_1], buf)?;
             {
                 let at = 4;
-                rt::write_elements(v_label.as_slice(), 1, false, &mut out[at..]);
+                if let rt::Some(to) = out.get_mut(at..at + v_label.len()) {
+                    to.copy_from_slice(v_label.as_slice());
+                }
                 if let rt::Some(b) = out.get_mut(at + v_label.len()) {
                     *b = 0;
                 }
             }
             {
                 let at = 4 + bytes_0;
-                rt::write_elements(v_unit.as_slice(), 1, false, &mut out[at..]);
+                if let rt::Some(to) = out.get_mut(at..at + v_unit.len()) {
+                    to.copy_from_slice(v_unit.as_slice());
+                }
                 if let rt::Some(b) = out.get_mut(at + v_unit.len()) {
                     *b = 0;
                 }
@@ -1198,8 +1220,8 @@ pub mod text_terminated {
             let frame = &s.frame;
             rt::Ok(Self {
                 index: frame[3],
-                label: s.lists[0].elements::<u8, 16>(s.elements(0), false, false)?,
-                unit: s.lists[1].elements::<u8, 8>(s.elements(1), false, false)?,
+                label: s.lists[0].elements::<u8, 16>(s.elements(0))?,
+                unit: s.lists[1].elements::<u8, 8>(s.elements(1))?,
                 value: i16::from_be_bytes([frame[4], frame[5]]),
             })
         }

@@ -214,6 +214,8 @@ pub mod ubx_fixed_blocks {
         base: 9,
         at: 6,
         width: 3,
+        le: true,
+        signed: false,
         count: rt::CountBy::Fixed(2),
         min: 2,
         max: 2,
@@ -227,6 +229,8 @@ pub mod ubx_fixed_blocks {
                 base: 9,
                 at: 6,
                 width: 3,
+                le: true,
+                signed: false,
                 count: rt::CountBy::Fixed(2),
                 min: 2,
                 max: 2,
@@ -236,6 +240,8 @@ pub mod ubx_fixed_blocks {
                 base: 9,
                 at: 7,
                 width: 1,
+                le: true,
+                signed: false,
                 count: rt::CountBy::Elements(rt::CountField {
                     name: "num_pins",
                     at: 6,
@@ -489,6 +495,8 @@ pub mod ubx_fixed_blocks {
         base: 13,
         at: 10,
         width: 6,
+        le: true,
+        signed: false,
         count: rt::CountBy::Fixed(3),
         min: 3,
         max: 3,
@@ -502,6 +510,8 @@ pub mod ubx_fixed_blocks {
                 base: 13,
                 at: 10,
                 width: 6,
+                le: true,
+                signed: false,
                 count: rt::CountBy::Fixed(3),
                 min: 3,
                 max: 3,
@@ -826,7 +836,7 @@ pub mod ubx_fixed_blocks {
                     }
                     rt::Ok(Self::SetPorts {
                         ports: v_ports,
-                        pins: s.lists[1].view::<u8, 8>(s.elements(1), true, false)?,
+                        pins: s.lists[1].view::<u8, 8>(s.elements(1))?,
                     })
                 }
                 _ => rt::Err(REQUEST_CODE.unknown(frame)),
@@ -1078,7 +1088,7 @@ pub mod ubx_fixed_blocks {
                     to.copy_from_slice(&bytes);
                 }
             }
-            rt::write_elements(v_pins.as_slice(), 1, true, &mut out[7 + bytes_0..]);
+            LISTS_SET_PORTS.lists[1].write(v_pins.as_slice(), &mut out[7 + bytes_0..]);
             LENGTH.put(out)?;
             rt::Ok(out.len())
         }
@@ -1094,7 +1104,7 @@ pub mod ubx_fixed_blocks {
             }
             rt::Ok(Self {
                 ports: v_ports,
-                pins: s.lists[1].elements::<u8, 8>(s.elements(1), true, false)?,
+                pins: s.lists[1].elements::<u8, 8>(s.elements(1))?,
             })
         }
     }

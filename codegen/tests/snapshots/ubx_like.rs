@@ -377,6 +377,8 @@ pub mod ubx_like {
         base: 16,
         at: 14,
         width: 12,
+        le: true,
+        signed: false,
         count: rt::CountBy::Elements(rt::CountField {
             name: "num_svs",
             at: 11,

@@ -246,6 +246,8 @@ pub mod unasked_to_end {
         base: 4,
         at: 3,
         width: 1,
+        le: false,
+        signed: false,
         count: rt::CountBy::End,
         min: 0,
         max: 16,
@@ -485,7 +487,7 @@ pub mod unasked_to_end {
                 0x72 => {
                     let (_, elements, _) = REPEAT_LOG.split::<3>(frame)?;
                     rt::Ok(Self::Log {
-                        text: REPEAT_LOG.view::<u8, 16>(elements, false, false)?,
+                        text: REPEAT_LOG.view::<u8, 16>(elements)?,
                     })
                 }
                 _ => rt::Err(RESPONSE_CODE.unknown(frame)),
@@ -716,7 +718,7 @@ pub mod unasked_to_end {
             let Self { text: v_text } = *self;
             let frame_len = REPEAT_LOG.encode_len(v_text.len())?;
             let out = rt::frame_mut_len(buf, frame_len, &[0xAA, address, 0x72])?;
-            rt::write_elements(v_text.as_slice(), 1, false, &mut out[3..]);
+            REPEAT_LOG.write(v_text.as_slice(), &mut out[3..]);
             rt::Ok(rt::seal_sum8_len(out))
         }
         /// Reads this message from a frame whose framing and code are checked.
@@ -724,7 +726,7 @@ pub mod unasked_to_end {
         fn from_frame(frame: &[u8]) -> rt::DecodeResult<Self> {
             let (_, elements, _) = REPEAT_LOG.split::<3>(frame)?;
             rt::Ok(Self {
-                text: REPEAT_LOG.elements::<u8, 16>(elements, false, false)?,
+                text: REPEAT_LOG.elements::<u8, 16>(elements)?,
             })
         }
     }

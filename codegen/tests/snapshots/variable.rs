@@ -117,6 +117,8 @@ pub mod vario {
         base: 8,
         at: 7,
         width: 2,
+        le: false,
+        signed: false,
         count: rt::CountBy::Bytes(rt::CountField {
             name: "byte_count",
             at: 6,
@@ -302,6 +304,8 @@ pub mod vario {
         base: 6,
         at: 5,
         width: 2,
+        le: false,
+        signed: false,
         count: rt::CountBy::End,
         min: 1,
         max: 16,
@@ -535,7 +539,7 @@ pub mod vario {
                     )?;
                     rt::Ok(Self::Write {
                         quantity: frame[5],
-                        values: REPEAT_WRITE.view::<u16, 16>(elements, false, false)?,
+                        values: REPEAT_WRITE.view::<u16, 16>(elements)?,
                     })
                 }
                 0x03 => {
@@ -630,8 +634,7 @@ pub mod vario {
                 0x01 => {
                     let (_, elements, _) = REPEAT_READ_REPLY.split::<5>(frame)?;
                     rt::Ok(Self::ReadReply {
-                        values: REPEAT_READ_REPLY
-                            .view::<u16, 16>(elements, false, false)?,
+                        values: REPEAT_READ_REPLY.view::<u16, 16>(elements)?,
                     })
                 }
                 0x81 => {
@@ -935,7 +938,7 @@ pub mod vario {
             )? as u8;
             REPEAT_WRITE.encode_agrees(v_values.len(), w_byte_count as u64)?;
             out[6] = w_byte_count;
-            rt::write_elements(v_values.as_slice(), 2, false, &mut out[7..]);
+            REPEAT_WRITE.write(v_values.as_slice(), &mut out[7..]);
             rt::Ok(out.len())
         }
         /// Reads this message from a frame whose framing and code are checked.
@@ -946,7 +949,7 @@ pub mod vario {
             rt::following(&Self::BYTE_COUNT_CHECK, frame[6], frame[5] as i64)?;
             rt::Ok(Self {
                 quantity: frame[5],
-                values: REPEAT_WRITE.elements::<u16, 16>(elements, false, false)?,
+                values: REPEAT_WRITE.elements::<u16, 16>(elements)?,
             })
         }
     }
@@ -1006,7 +1009,7 @@ pub mod vario {
             let out = rt::frame_mut_len(buf, frame_len, &[0xA5, 0x5A, address])?;
             LENGTH.put(out)?;
             out[4] = 0x01;
-            rt::write_elements(v_values.as_slice(), 2, false, &mut out[5..]);
+            REPEAT_READ_REPLY.write(v_values.as_slice(), &mut out[5..]);
             rt::Ok(out.len())
         }
         /// Reads this message from a frame whose framing and code are checked.
@@ -1014,7 +1017,7 @@ pub mod vario {
         fn from_frame(frame: &[u8]) -> rt::DecodeResult<Self> {
             let (_, elements, _) = REPEAT_READ_REPLY.split::<5>(frame)?;
             rt::Ok(Self {
-                values: REPEAT_READ_REPLY.elements::<u16, 16>(elements, false, false)?,
+                values: REPEAT_READ_REPLY.elements::<u16, 16>(elements)?,
             })
         }
         /// Checks the fields this response takes from its request, `read` (`r`).

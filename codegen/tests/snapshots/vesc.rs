@@ -503,6 +503,8 @@ pub mod vesc {
         base: 11,
         at: 8,
         width: 1,
+        le: false,
+        signed: false,
         count: rt::CountBy::End,
         min: 0,
         max: 512,
@@ -785,6 +787,8 @@ pub mod vesc {
         base: 9,
         at: 6,
         width: 1,
+        le: false,
+        signed: false,
         count: rt::CountBy::End,
         min: 0,
         max: 60,
@@ -1150,7 +1154,7 @@ pub mod vesc {
             LENGTH.put(out)?;
             out[3] = 0x03;
             out[4..8].copy_from_slice(&v_offset.to_be_bytes());
-            rt::write_elements(v_data.as_slice(), 1, false, &mut out[8..]);
+            REPEAT_WRITE_NEW_APP_DATA.write(v_data.as_slice(), &mut out[8..]);
             rt::Ok(out.len())
         }
         /// Reads this message from a frame whose framing and code are checked.
@@ -1159,8 +1163,7 @@ pub mod vesc {
             let (frame, elements, _) = REPEAT_WRITE_NEW_APP_DATA.split::<8>(frame)?;
             rt::Ok(Self {
                 offset: u32::from_be_bytes([frame[4], frame[5], frame[6], frame[7]]),
-                data: REPEAT_WRITE_NEW_APP_DATA
-                    .elements::<u8, 512>(elements, false, false)?,
+                data: REPEAT_WRITE_NEW_APP_DATA.elements::<u8, 512>(elements)?,
             })
         }
     }
@@ -1362,7 +1365,7 @@ pub mod vesc {
             out[3] = 0x00;
             out[4] = v_fw_major;
             out[5] = v_fw_minor;
-            rt::write_elements(v_rest.as_slice(), 1, false, &mut out[6..]);
+            REPEAT_FW_VERSION_REPLY.write(v_rest.as_slice(), &mut out[6..]);
             rt::Ok(out.len())
         }
         /// Reads this message from a frame whose framing and code are checked.
@@ -1372,7 +1375,7 @@ pub mod vesc {
             rt::Ok(Self {
                 fw_major: frame[4],
                 fw_minor: frame[5],
-                rest: REPEAT_FW_VERSION_REPLY.elements::<u8, 60>(elements, false, false)?,
+                rest: REPEAT_FW_VERSION_REPLY.elements::<u8, 60>(elements)?,
             })
         }
     }
