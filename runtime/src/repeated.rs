@@ -1048,7 +1048,7 @@ impl RepeatAt {
         }
     }
 
-    /// The elements `bytes` holds, in its width, byte order and sign, as [`read_elements`]
+    /// The elements `bytes` holds, in its width, byte order and sign, as `read_elements`
     /// reads them.
     #[inline]
     pub fn elements<T: Wire + Default, const N: usize>(
@@ -1073,7 +1073,7 @@ impl RepeatAt {
     }
 
     /// The elements `bytes` holds, each of 32 or 64 bits whose 16-bit words travel swapped
-    /// (`word_order: swapped`), as [`read_words`] reads them; refuses what [`Self::elements`]
+    /// (`word_order: swapped`), as `read_words` reads them; refuses what [`Self::elements`]
     /// refuses.
     #[inline]
     pub fn words<T: Wire + Default, const N: usize>(
