@@ -28,7 +28,6 @@ fn check(file: &str) -> usize {
         };
         let at = m.layout.payload + f.offset;
         let bytes = &e.wire[at..at + f.elements_len(list.len())];
-        let le = f.byte_order == ByteOrder::Little;
         let mut out = [0xEEu8; 512];
         let n = if f.ty == FieldType::Bit {
             let got = rt::read_bits::<256>(bytes).unwrap();
@@ -37,9 +36,10 @@ fn check(file: &str) -> usize {
             assert_eq!(got.elements().iter().collect::<Vec<_>>(), *list);
             rt::write_bits(&got, &mut out)
         } else {
-            let got = rt::read_elements::<i64, 256>(bytes, f.width, le, f.signed).unwrap();
+            let ra = repeat_at(&p, m);
+            let got = ra.elements::<i64, 256>(bytes).unwrap();
             assert_eq!(got.as_slice(), &list[..], "{file}: {}", m.name);
-            rt::write_elements(&got, f.width, le, &mut out)
+            ra.write(&got, &mut out)
         };
         assert_eq!(&out[..n], bytes, "{file}: {} written back", m.name);
         checked += 1;
@@ -85,6 +85,8 @@ fn repeat_at(p: &ir::Protocol, m: &ir::Message) -> rt::RepeatAt {
         base: m.layout.len,
         at: m.layout.payload + f.offset,
         width: if f.ty == FieldType::Bit { 0 } else { f.width },
+        le: f.byte_order == ByteOrder::Little,
+        signed: f.signed,
         count: match r.count {
             ir::Count::ToEnd => rt::CountBy::End,
             ir::Count::Elements(i) => rt::CountBy::Elements(field(i)),
@@ -177,6 +179,8 @@ fn a_count_that_lies_gives_no_frame_length() {
         base: 5,
         at: 3,
         width: 2,
+        le: false,
+        signed: false,
         count: rt::CountBy::Bytes(rt::CountField {
             name: "byte_count",
             at: 2,

@@ -5,8 +5,10 @@
 //! core's.
 //!
 //! Beside the re-exports are the small checks every message or frame would otherwise repeat
-//! in the generated text. Each is `#[inline]` and takes its constants as arguments, so after
-//! inlining it compiles to what was written out before. Public only for generated code; they
+//! in the generated text. Each is `#[inline]` and takes its constants as arguments or as a
+//! named constant of the generated module (a field's [`FieldCheck`]: its offset, range and
+//! relation; the module's [`Frame`]: its broadcast address and trailer), so after inlining it
+//! compiles to what was written out before. Public only for generated code; they
 //! are not part of the runtime's documented API and may change with the generator.
 
 pub use core::fmt::{Debug, Formatter, Result as FmtResult};
@@ -22,8 +24,8 @@ pub use crate::lists::{Lists, Split};
 pub use crate::optional::{presence, OptionalAt, Optionals, Present, When};
 pub use crate::repeated::{
     encode_packed_in_range, fixed_elements, list, list_bits, list_text, pack, packed_in_range,
-    packed_padding, read_bits, read_elements, read_words, records, unpack, write_bits,
-    write_elements, write_fixed, write_words, CountBy, CountField, Element, RepeatAt, SizedBy,
+    packed_padding, read_bits, records, unpack, write_bits, write_fixed, CountBy, CountField,
+    Element, RepeatAt, SizedBy,
 };
 pub use crate::stream::{Candidate, Candidates, LengthField, VarLen, VarLens};
 pub use crate::Bits;
@@ -66,13 +68,13 @@ pub fn raw<T: Wire>(v: T) -> i64 {
     v.to_i64()
 }
 
-/// The raw value of an `f32` range bound in generated code.
+/// The raw value of an `f32` range bound.
 #[inline(always)]
 pub fn f32_raw(v: f32) -> i64 {
     i64::from(v.to_bits())
 }
 
-/// The raw value of an `f64` range bound in generated code.
+/// The raw value of an `f64` range bound.
 #[inline(always)]
 pub fn f64_raw(v: f64) -> i64 {
     v.to_bits() as i64
@@ -283,6 +285,46 @@ impl Frame {
         }
     }
 
+    /// A refusal of the broadcast address by a command (`message`) that does not accept it,
+    /// in a decoded frame addressed to `address` (`FRAME.no_broadcast(frame[0], &Self::DESC)`).
+    #[inline(always)]
+    pub fn no_broadcast(
+        &self,
+        address: u8,
+        message: &'static MessageDesc,
+    ) -> Result<(), DecodeError> {
+        match self.broadcast {
+            Some(b) if b == address => Err(DecodeError::BroadcastNotAccepted {
+                message,
+                address: b,
+            }),
+            _ => Ok(()),
+        }
+    }
+
+    /// [`Frame::no_broadcast`] for an encoder.
+    #[inline(always)]
+    pub fn encode_broadcast(
+        &self,
+        address: u8,
+        message: &'static MessageDesc,
+    ) -> Result<(), EncodeError> {
+        match self.broadcast {
+            Some(b) if b == address => Err(EncodeError::BroadcastNotAccepted { message, address }),
+            _ => Ok(()),
+        }
+    }
+
+    /// Whether `frame` ends in the checksum (`checksum` of the bytes before it, at least one)
+    /// and the end bytes, and nothing else: `FRAME.checksum_ok(frame, frame_sum)`.
+    #[inline(always)]
+    pub fn checksum_ok(&self, frame: &[u8], checksum: impl FnOnce(&[u8]) -> u32) -> bool {
+        match frame.len().checked_sub(self.checksum_len + self.end.len()) {
+            Some(n) if n > 0 => check_sum(frame, n, self, checksum),
+            _ => false,
+        }
+    }
+
     /// Whether a frame may carry `address`: a device's, the broadcast or the host address.
     #[inline(always)]
     pub const fn address_ok(&self, address: u8) -> bool {
@@ -305,7 +347,7 @@ fn sums<T>(frame: &[u8], at: usize, f: &Frame, checksum: impl FnOnce(&[u8]) -> T
 /// Whether `frame` ends in the checksum of its first `at` bytes and the end bytes, and nothing
 /// else.
 #[inline(always)]
-pub fn check_sum(frame: &[u8], at: usize, f: &Frame, checksum: impl FnOnce(&[u8]) -> u32) -> bool {
+fn check_sum(frame: &[u8], at: usize, f: &Frame, checksum: impl FnOnce(&[u8]) -> u32) -> bool {
     if frame.len() != at + f.checksum_len + f.end.len() {
         return false;
     }
@@ -868,18 +910,6 @@ impl<'f, T> Group<'f, T> {
     }
 }
 
-/// A refusal of the broadcast address `b` by a command (`message`) that does not accept it.
-#[inline(always)]
-pub fn no_broadcast(address: u8, b: u8, message: &'static MessageDesc) -> Result<(), DecodeError> {
-    if address == b {
-        return Err(DecodeError::BroadcastNotAccepted {
-            message,
-            address: b,
-        });
-    }
-    Ok(())
-}
-
 /// The bytes a message fixes at its start, as the stream decoder tells its variable-length
 /// messages apart: its code at `code_at`, and the constants that lead its payload at `lead_at`
 /// (what tells code-less messages apart).
@@ -1004,35 +1034,129 @@ fn first_agreeing<S>(
     }
 }
 
-/// A decoded field checked against its spec range `min..=max`.
-#[inline(always)]
-pub fn in_range<T: Wire>(
-    field: &'static FieldDesc,
-    offset: usize,
-    raw: T,
-    min: i64,
-    max: i64,
-) -> Result<(), DecodeError> {
-    in_range_or(field, offset, raw, min, max, &[])
+/// What a generated message checks of one field, as a named constant beside its
+/// [`FieldDesc`] (`request::ReadCoils::QUANTITY_CHECK`): the field a refusal names, where it
+/// sits, the values its spec admits, and the relation it follows. Built in a `const`
+/// (`rt::check(&Self::QUANTITY_DESC, 4).range(1, 2000)`), handed to [`in_range`],
+/// [`encode_in_range`] and [`following`], whose `#[inline(always)]` bodies read it as the
+/// constants it holds: the check compiles to immediates, and only `field` is left in the
+/// error a refusal returns.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct FieldCheck {
+    /// The field (or sub-field) refusals name.
+    pub field: &'static FieldDesc,
+    /// Its offset in the frame, as refusals give it: a whole field's first byte (a sub-field's
+    /// field's), in a frame whose lists are empty and whose optional fields are all present;
+    /// [`FieldCheck::at`] where a frame's lists or optional fields move it.
+    pub at: usize,
+    /// The spec range its raw values lie in (`range:`); its wire type's limits where it has
+    /// none.
+    pub range: Bounds,
+    /// The `special:` values admitted outside `range`.
+    pub special: &'static [i64],
+    /// `follows:`: the field must be `ceil(base × multiply / divide)`, `base` the field it
+    /// follows.
+    pub multiply: u64,
+    pub divide: u64,
+    /// The relation as refusals word it (`"ceil(quantity / 8)"`).
+    pub rule: &'static str,
 }
 
-/// [`in_range`], where `special` values outside the range are allowed too.
+/// A spec range's bounds as the spec writes them: integers (a `u64`'s as its bits,
+/// [`u64_raw`]) or floats, compared as raw values ([`Wire::within`]).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub enum Bounds {
+    Int(i64, i64),
+    F32(f32, f32),
+    F64(f64, f64),
+}
+
+impl Bounds {
+    /// The bounds as raw values, as refusals give them.
+    #[inline(always)]
+    pub fn raw(self) -> (i64, i64) {
+        match self {
+            Bounds::Int(min, max) => (min, max),
+            Bounds::F32(min, max) => (f32_raw(min), f32_raw(max)),
+            Bounds::F64(min, max) => (f64_raw(min), f64_raw(max)),
+        }
+    }
+}
+
+/// A [`FieldCheck`] of `field` at offset `at` that admits any value, for the builder methods
+/// to fill in.
+pub const fn check(field: &'static FieldDesc, at: usize) -> FieldCheck {
+    FieldCheck {
+        field,
+        at,
+        range: Bounds::Int(i64::MIN, i64::MAX),
+        special: &[],
+        multiply: 1,
+        divide: 1,
+        rule: "",
+    }
+}
+
+impl FieldCheck {
+    /// The field at offset `at`: where a frame's lists or optional fields move it
+    /// (`&Self::FLAGS_CHECK.at(4 + s.shift(1))`).
+    #[inline(always)]
+    pub const fn at(self, at: usize) -> Self {
+        FieldCheck { at, ..self }
+    }
+
+    /// Its spec range `min..=max` (raw values).
+    pub const fn range(self, min: i64, max: i64) -> Self {
+        FieldCheck {
+            range: Bounds::Int(min, max),
+            ..self
+        }
+    }
+
+    /// Its spec range, of an `f32` field.
+    pub const fn range_f32(self, min: f32, max: f32) -> Self {
+        FieldCheck {
+            range: Bounds::F32(min, max),
+            ..self
+        }
+    }
+
+    /// Its spec range, of an `f64` field.
+    pub const fn range_f64(self, min: f64, max: f64) -> Self {
+        FieldCheck {
+            range: Bounds::F64(min, max),
+            ..self
+        }
+    }
+
+    /// The `special` values it admits outside its range.
+    pub const fn or(self, special: &'static [i64]) -> Self {
+        FieldCheck { special, ..self }
+    }
+
+    /// The field must be `ceil(base × multiply / divide)` of the field it follows, the
+    /// relation `rule` words.
+    pub const fn follows(self, multiply: u64, divide: u64, rule: &'static str) -> Self {
+        FieldCheck {
+            multiply,
+            divide,
+            rule,
+            ..self
+        }
+    }
+}
+
+/// A decoded field checked against its spec range and special values (`check`).
 #[inline(always)]
-pub fn in_range_or<T: Wire>(
-    field: &'static FieldDesc,
-    offset: usize,
-    raw: T,
-    min: i64,
-    max: i64,
-    special: &[i64],
-) -> Result<(), DecodeError> {
+pub fn in_range<T: Wire>(check: &FieldCheck, raw: T) -> Result<(), DecodeError> {
     let raw = raw.to_i64();
-    if T::within(raw, min, max) || is_special(raw, special) {
+    let (min, max) = check.range.raw();
+    if T::within(raw, min, max) || is_special(raw, check.special) {
         return Ok(());
     }
     Err(DecodeError::OutOfRange {
-        field,
-        offset,
+        field: check.field,
+        offset: check.at,
         found: raw,
         min,
         max,
@@ -1111,45 +1235,17 @@ pub fn encode_address(address: u8, f: &Frame) -> Result<(), EncodeError> {
     })
 }
 
-/// [`no_broadcast`] for an encoder.
+/// A value to encode checked against its field's spec range and special values (`check`, the
+/// decoder's).
 #[inline(always)]
-pub fn encode_broadcast(
-    address: u8,
-    b: u8,
-    message: &'static MessageDesc,
-) -> Result<(), EncodeError> {
-    if address == b {
-        return Err(EncodeError::BroadcastNotAccepted { message, address });
-    }
-    Ok(())
-}
-
-/// A value to encode checked against its field's spec range `min..=max`.
-#[inline(always)]
-pub fn encode_in_range<T: Wire>(
-    field: &'static str,
-    raw: T,
-    min: i64,
-    max: i64,
-) -> Result<(), EncodeError> {
-    encode_in_range_or(field, raw, min, max, &[])
-}
-
-/// [`encode_in_range`], where `special` values outside the range are allowed too.
-#[inline(always)]
-pub fn encode_in_range_or<T: Wire>(
-    field: &'static str,
-    raw: T,
-    min: i64,
-    max: i64,
-    special: &[i64],
-) -> Result<(), EncodeError> {
+pub fn encode_in_range<T: Wire>(check: &FieldCheck, raw: T) -> Result<(), EncodeError> {
     let raw = raw.to_i64();
-    if T::within(raw, min, max) || is_special(raw, special) {
+    let (min, max) = check.range.raw();
+    if T::within(raw, min, max) || is_special(raw, check.special) {
         return Ok(());
     }
     Err(EncodeError::NotInRange {
-        field,
+        field: check.field.name,
         value: raw,
         min,
         max,
@@ -1478,22 +1574,15 @@ pub fn follows(base: i64, multiply: u64, divide: u64) -> i64 {
 }
 
 /// A decoded field that follows another (of its frame, or of the request a reply answers): it
-/// must be `ceil(base × multiply / divide)`, the relation `rule` describes.
+/// must be `ceil(base × multiply / divide)`, the relation `check` gives.
 #[inline(always)]
-pub fn following<T: Wire>(
-    field: &'static FieldDesc,
-    offset: usize,
-    found: T,
-    base: i64,
-    (multiply, divide): (u64, u64),
-    rule: &'static str,
-) -> Result<(), DecodeError> {
-    let expected = follows(base, multiply, divide);
+pub fn following<T: Wire>(check: &FieldCheck, found: T, base: i64) -> Result<(), DecodeError> {
+    let expected = follows(base, check.multiply, check.divide);
     if found.to_i64() != expected {
         return Err(DecodeError::NotFollowing {
-            field,
-            offset,
-            rule,
+            field: check.field,
+            offset: check.at,
+            rule: check.rule,
             expected,
             found: found.to_i64(),
         });
@@ -1676,8 +1765,9 @@ mod lang_tests {
         assert_eq!(follows(16, 1, 8), 2);
         assert_eq!(follows(i64::MAX, 2, 1), i64::MAX);
         static N: FieldDesc = FieldDesc::new("m", "n");
-        assert_eq!(following(&N, 3, 4u8, 2, (2, 1), "2 × k"), Ok(()));
-        let e = following(&N, 3, 5u8, 2, (2, 1), "2 × k").unwrap_err();
+        const K: FieldCheck = check(&N, 3).follows(2, 1, "2 × k");
+        assert_eq!(following(&K, 4u8, 2), Ok(()));
+        let e = following(&K, 5u8, 2).unwrap_err();
         assert_eq!(
             e,
             DecodeError::NotFollowing {

@@ -66,6 +66,8 @@ const NONE: RepeatAt = RepeatAt {
     base: 0,
     at: 0,
     width: 1,
+    le: false,
+    signed: false,
     count: CountBy::End,
     min: 0,
     max: 0,

@@ -445,6 +445,10 @@ pub struct RepeatAt {
     pub at: usize,
     /// Bytes of one element; 0 for bits, packed eight to a byte.
     pub width: usize,
+    /// Its elements travel least significant byte first (`byte_order: little`).
+    pub le: bool,
+    /// Its elements are signed: sign-extended from their width.
+    pub signed: bool,
     pub count: CountBy,
     /// The fewest and most elements the spec allows (bits: rounded to whole bytes).
     pub min: usize,
@@ -1044,29 +1048,39 @@ impl RepeatAt {
         }
     }
 
-    /// The elements `bytes` holds (`le`: least significant byte first; `signed`: sign-extended),
-    /// as [`read_elements`] reads them.
+    /// The elements `bytes` holds, in its width, byte order and sign, as `read_elements`
+    /// reads them.
     #[inline]
     pub fn elements<T: Wire + Default, const N: usize>(
         &self,
         bytes: &[u8],
-        le: bool,
-        signed: bool,
     ) -> Result<Repeated<T, N>, DecodeError> {
-        read_elements(bytes, self.width, le, signed).map_err(|e| self.bad_count(e.found))
+        read_elements(bytes, self.width, self.le, self.signed).map_err(|e| self.bad_count(e.found))
+    }
+
+    /// Writes `items` as its elements into `out` (which must hold them), in its width and
+    /// byte order; returns the bytes written.
+    #[inline]
+    pub fn write<T: Wire>(&self, items: &[T], out: &mut [u8]) -> usize {
+        write_elements(items, self.width, self.le, out)
+    }
+
+    /// [`Self::write`] of elements of 32 or 64 bits whose 16-bit words travel swapped
+    /// (`word_order: swapped`), as [`Self::words`] reads them.
+    #[inline]
+    pub fn write_words<T: Wire>(&self, items: &[T], out: &mut [u8]) -> usize {
+        write_words(items, self.width, self.le, out)
     }
 
     /// The elements `bytes` holds, each of 32 or 64 bits whose 16-bit words travel swapped
-    /// (`word_order: swapped`), as [`read_words`] reads them; refuses what [`Self::elements`]
+    /// (`word_order: swapped`), as `read_words` reads them; refuses what [`Self::elements`]
     /// refuses.
     #[inline]
     pub fn words<T: Wire + Default, const N: usize>(
         &self,
         bytes: &[u8],
-        le: bool,
-        signed: bool,
     ) -> Result<Repeated<T, N>, DecodeError> {
-        read_words(bytes, self.width, le, signed).map_err(|e| self.bad_count(e.found))
+        read_words(bytes, self.width, self.le, self.signed).map_err(|e| self.bad_count(e.found))
     }
 
     /// The `n` bits `bytes` packs (every bit of every byte where the count is in bytes or to
@@ -1206,7 +1220,7 @@ impl RepeatAt {
 /// at most `N`. Generated decoders call it after checking the count against the frame, so an
 /// error here means a count the frame's length does not give.
 #[inline]
-pub fn read_elements<T: crate::codec::Wire + Default, const N: usize>(
+pub(crate) fn read_elements<T: crate::codec::Wire + Default, const N: usize>(
     bytes: &[u8],
     width: usize,
     le: bool,
@@ -1227,7 +1241,7 @@ pub fn read_elements<T: crate::codec::Wire + Default, const N: usize>(
 /// [`read_elements`] of elements of 32 or 64 bits whose 16-bit words travel swapped
 /// (`word_order: swapped`): each element's bytes put back in its byte order first.
 #[inline]
-pub fn read_words<T: crate::codec::Wire + Default, const N: usize>(
+pub(crate) fn read_words<T: crate::codec::Wire + Default, const N: usize>(
     bytes: &[u8],
     width: usize,
     le: bool,
@@ -1254,7 +1268,7 @@ pub fn read_words<T: crate::codec::Wire + Default, const N: usize>(
 /// [`write_elements`] of elements of 32 or 64 bits whose 16-bit words travel swapped
 /// (`word_order: swapped`), as [`read_words`] reads them; returns the bytes written.
 #[inline]
-pub fn write_words<T: crate::codec::Wire>(
+pub(crate) fn write_words<T: crate::codec::Wire>(
     items: &[T],
     width: usize,
     le: bool,
@@ -1276,7 +1290,7 @@ pub fn write_words<T: crate::codec::Wire>(
 /// Writes `items` as elements of `width` bytes each into `out` (which must hold them), and
 /// returns the bytes written.
 #[inline]
-pub fn write_elements<T: crate::codec::Wire>(
+pub(crate) fn write_elements<T: crate::codec::Wire>(
     items: &[T],
     width: usize,
     le: bool,

@@ -192,8 +192,6 @@ impl RepeatAt {
     pub fn view<'a, T: Wire, const N: usize>(
         &self,
         bytes: &'a [u8],
-        le: bool,
-        signed: bool,
     ) -> Result<ListView<'a, T>, DecodeError> {
         let width = self.width;
         let found = bytes.len() / width.max(1);
@@ -203,8 +201,8 @@ impl RepeatAt {
         Ok(ListView {
             bytes,
             width,
-            le,
-            signed,
+            le: self.le,
+            signed: self.signed,
             swapped: false,
             elem: PhantomData,
         })
@@ -216,10 +214,8 @@ impl RepeatAt {
     pub fn view_words<'a, T: Wire, const N: usize>(
         &self,
         bytes: &'a [u8],
-        le: bool,
-        signed: bool,
     ) -> Result<ListView<'a, T>, DecodeError> {
-        let v = self.view::<T, N>(bytes, le, signed)?;
+        let v = self.view::<T, N>(bytes)?;
         Ok(ListView { swapped: true, ..v })
     }
 

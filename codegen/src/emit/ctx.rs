@@ -113,6 +113,20 @@ pub(super) enum Kind {
     },
 }
 
+/// A field check [`Ctx::field_check`] registered: its message's direction and name, the
+/// field's name, the constant's name and its field descriptor's, the offset, and the range
+/// and relation as builder calls (text, so two checks compare).
+pub(super) struct FieldCheck {
+    pub(super) direction: Direction,
+    pub(super) message: String,
+    pub(super) field: String,
+    pub(super) name: Ident,
+    pub(super) desc: Ident,
+    pub(super) at: usize,
+    pub(super) range: Option<String>,
+    pub(super) follows: Option<String>,
+}
+
 pub(super) struct Ctx<'a> {
     pub(super) p: &'a Protocol,
     pub(super) unit_raw: Vec<Option<IntType>>,
@@ -121,6 +135,9 @@ pub(super) struct Ctx<'a> {
     /// The field descriptors the emitted refusals point at, in the order first named: the
     /// message's direction and name, the field's name, the constant's name.
     pub(super) field_descs: std::cell::RefCell<Vec<(Direction, String, String, Ident)>>,
+    /// The field checks the emitted range and relation checks take (`Ctx::field_check`), in
+    /// the order first named.
+    pub(super) field_checks: std::cell::RefCell<Vec<FieldCheck>>,
     /// Each direction's message structs, emitted in its `request`/`response` module.
     pub(super) structs: std::cell::RefCell<Vec<(Direction, TokenStream)>>,
     /// Each message's `impl` (`messages::message_impl`): its direction and name, the struct's
@@ -228,6 +245,7 @@ impl<'a> Ctx<'a> {
             enum_raw,
             flag_raw,
             field_descs: std::cell::RefCell::new(Vec::new()),
+            field_checks: std::cell::RefCell::new(Vec::new()),
             structs: std::cell::RefCell::new(Vec::new()),
             impls: std::cell::RefCell::new(Vec::new()),
             view: std::cell::Cell::new(false),
@@ -244,18 +262,29 @@ impl<'a> Ctx<'a> {
     /// field's name upper-cased with `_DESC` after it (a record's field `list.field`:
     /// `LIST_FIELD_DESC`), `__DESC` where another of the struct's constants takes that name.
     pub(super) fn field_desc(&self, m: &Message, name: &str) -> TokenStream {
+        let c = self.field_desc_const(m, name);
+        let path = self.path(m, &c);
+        quote!(&#path)
+    }
+
+    /// `Self::C` inside `m`'s own `impl`, `request::ReadCoils::C` elsewhere.
+    fn path(&self, m: &Message, c: &Ident) -> TokenStream {
+        if self.own.get() {
+            return quote!(Self::#c);
+        }
         let dir = direction_module(m.direction);
         let v = variant(m);
+        quote!(#dir::#v::#c)
+    }
+
+    /// The name of [`Ctx::field_desc`]'s constant, registered the first time.
+    fn field_desc_const(&self, m: &Message, name: &str) -> Ident {
         let mut descs = self.field_descs.borrow_mut();
         let found = descs
             .iter()
             .find(|(d, mn, f, _)| *d == m.direction && *mn == m.name && f == name);
         if let Some((.., c)) = found {
-            return if self.own.get() {
-                quote!(&Self::#c)
-            } else {
-                quote!(&#dir::#v::#c)
-            };
+            return c.clone();
         }
         let upper = name.to_uppercase().replace('.', "_");
         let mut c = format!("{upper}_DESC");
@@ -271,10 +300,93 @@ impl<'a> Ctx<'a> {
         }
         let c = ident(&c);
         descs.push((m.direction, m.name.clone(), name.to_owned(), c.clone()));
-        if self.own.get() {
-            return quote!(&Self::#c);
+        c
+    }
+
+    /// `&request::ReadCoils::QUANTITY_CHECK`: the [`FieldCheck`] of field (or sub-field)
+    /// `name` of `m` at offset `at` (a sub-field's field's; where lists or optional fields move
+    /// it, the offset in a frame with its lists empty and its optional fields present), with
+    /// the range (`leaf_range`'s builder calls) and relation (`.follows(..)`) a check names.
+    /// One constant a field gathers what its decoder and encoder check; its name is the
+    /// field's upper-cased with `_CHECK` after it (`__CHECK`, then a number, where another of
+    /// the struct's constants or another check of the field takes it). Where `at_run` (the
+    /// offset as the decoder computes it) is not `at`, the check is moved there:
+    /// `&Self::FLAGS_CHECK.at(4 + s.shift(1))`.
+    pub(super) fn field_check(
+        &self,
+        m: &Message,
+        name: &str,
+        (at, at_run): (usize, &TokenStream),
+        range: Option<TokenStream>,
+        follows: Option<TokenStream>,
+    ) -> TokenStream {
+        let path = self.field_check_const(m, name, at, range, follows);
+        if at_run.to_string() == usize_lit(at).to_string() {
+            quote!(&#path)
+        } else {
+            quote!(&#path.at(#at_run))
         }
-        quote!(&#dir::#v::#c)
+    }
+
+    fn field_check_const(
+        &self,
+        m: &Message,
+        name: &str,
+        at: usize,
+        range: Option<TokenStream>,
+        follows: Option<TokenStream>,
+    ) -> TokenStream {
+        let desc = self.field_desc_const(m, name);
+        let (range, follows) = (range.map(|r| r.to_string()), follows.map(|f| f.to_string()));
+        let mut checks = self.field_checks.borrow_mut();
+        let agrees = |mine: &Option<String>, theirs: &Option<String>| {
+            mine.is_none() || theirs.is_none() || mine == theirs
+        };
+        let found = checks.iter_mut().find(|c| {
+            c.direction == m.direction
+                && c.message == m.name
+                && c.field == name
+                && c.at == at
+                && agrees(&c.range, &range)
+                && agrees(&c.follows, &follows)
+        });
+        if let Some(c) = found {
+            c.range = c.range.take().or(range);
+            c.follows = c.follows.take().or(follows);
+            let c = c.name.clone();
+            drop(checks);
+            return self.path(m, &c);
+        }
+        let upper = name.to_uppercase().replace('.', "_");
+        let consts = struct_consts(m);
+        let taken = |c: &str| {
+            consts.iter().any(|k| k == c)
+                || checks
+                    .iter()
+                    .any(|k| k.direction == m.direction && k.message == m.name && k.name == c)
+        };
+        let mut c = format!("{upper}_CHECK");
+        let mut n = 1;
+        while taken(&c) {
+            c = format!(
+                "{upper}__CHECK{}",
+                if n == 1 { String::new() } else { n.to_string() }
+            );
+            n += 1;
+        }
+        let c = ident(&c);
+        checks.push(FieldCheck {
+            direction: m.direction,
+            message: m.name.clone(),
+            field: name.to_owned(),
+            name: c.clone(),
+            desc,
+            at,
+            range,
+            follows,
+        });
+        drop(checks);
+        self.path(m, &c)
     }
 
     pub(super) fn kind(&self, leaf: &Leaf) -> Kind {
@@ -586,7 +698,8 @@ pub(super) fn to_wire(ctx: &Ctx, l: &Leaf, v: &Ident, as_type: Option<IntType>) 
 }
 
 /// The spec range of a leaf (a whole field or a sub-field) and the special values that may lie
-/// outside it (whole fields only), as the arguments of the runtime's range checks; `None`
+/// outside it (whole fields only), as a field check's builder calls (`.range(1, 2000)`,
+/// `.range(1, 254).or(&[0])`, `.range_f32(0f32, 45f32)`, [`Ctx::field_check`]); `None`
 /// where there is no range, or where range and special values together admit every value of
 /// `limits` (the checked value's type), as SD's temperatures (1..=254, 0 and 255) do: such a
 /// check cannot fail, and at `opt-level = "s"` its special values stayed a loop.
@@ -594,7 +707,7 @@ pub(super) fn leaf_range(
     f: &Field,
     b: Option<&BitField>,
     limits: (i64, i64),
-) -> Option<(Ident, TokenStream)> {
+) -> Option<TokenStream> {
     let (range, special): ((i64, i64), Vec<i64>) = match b {
         Some(b) => (b.range?, Vec::new()),
         None => (f.range?, f.special.iter().map(|s| s.value).collect()),
@@ -611,26 +724,30 @@ pub(super) fn leaf_range(
     }
     if b.is_none() && f.is_wide() {
         // Raw values are bits: no check is left out, and the bounds are written as numbers.
-        let bound = |raw: i64| match f.ty {
+        let (a, b) = range;
+        return Some(match f.ty {
             FieldType::F32 => {
-                let v = Literal::f32_suffixed(f32::from_bits(raw as u32));
-                quote!(rt::f32_raw(#v))
+                let (a, b) = (f32::from_bits(a as u32), f32::from_bits(b as u32));
+                let (a, b) = (Literal::f32_suffixed(a), Literal::f32_suffixed(b));
+                quote!(.range_f32(#a, #b))
             }
             FieldType::F64 => {
-                let v = Literal::f64_suffixed(f64::from_bits(raw as u64));
-                quote!(rt::f64_raw(#v))
+                let (a, b) = (f64::from_bits(a as u64), f64::from_bits(b as u64));
+                let (a, b) = (Literal::f64_suffixed(a), Literal::f64_suffixed(b));
+                quote!(.range_f64(#a, #b))
             }
             FieldType::U64 => {
-                let v = Literal::u64_suffixed(raw as u64);
-                quote!(rt::u64_raw(#v))
+                let (a, b) = (
+                    Literal::u64_suffixed(a as u64),
+                    Literal::u64_suffixed(b as u64),
+                );
+                quote!(.range(rt::u64_raw(#a), rt::u64_raw(#b)))
             }
             _ => {
-                let v = i64_lit(raw);
-                quote!(#v)
+                let (a, b) = (i64_lit(a), i64_lit(b));
+                quote!(.range(#a, #b))
             }
-        };
-        let (lo, hi) = (bound(range.0), bound(range.1));
-        return Some((ident("in_range"), quote!(#lo, #hi)));
+        });
     }
     if lo <= limits.0 && limits.1 <= hi {
         return None;
@@ -638,9 +755,9 @@ pub(super) fn leaf_range(
     let (lo, hi) = (i64_lit(range.0), i64_lit(range.1));
     let sp: Vec<Literal> = sp.iter().map(|v| i64_lit(*v)).collect();
     if sp.is_empty() {
-        return Some((ident("in_range"), quote!(#lo, #hi)));
+        return Some(quote!(.range(#lo, #hi)));
     }
-    Some((ident("in_range_or"), quote!(#lo, #hi, &[#(#sp),*])))
+    Some(quote!(.range(#lo, #hi).or(&[#(#sp),*])))
 }
 
 /// The typed value of leaf `l` from `raw`, an expression of type `wire` (`None`: an `i64`).

@@ -18,10 +18,16 @@ fn decode_optional(
     let (w, k, v) = (wt.ident(), usize_lit(k), local(name));
     let mut inner = Vec::new();
     let wire = match leaf_range(f, None, wt.limits()) {
-        Some((range_fn, range)) => {
+        Some(range) => {
             inner.push(quote!(let #n: #w = #read;));
-            let fd = ctx.field_desc(m, name);
-            inner.push(quote!(rt::#range_fn(#fd, s.at(#k), #n, #range)?;));
+            let c = ctx.field_check(
+                m,
+                name,
+                (f.frame_at(&o), &quote!(s.at(#k))),
+                Some(range),
+                None,
+            );
+            inner.push(quote!(rt::in_range(#c, #n)?;));
             quote!(#n)
         }
         None => read,
@@ -155,9 +161,10 @@ fn decode_bits(
             }
             None => {
                 let limits = raw_limits(u32::from(b.width()), b.signed);
-                if let Some((range_fn, range)) = leaf_range(f, Some(b), limits) {
-                    let fd = ctx.field_desc(m, bname);
-                    stmts.push(quote!(rt::#range_fn(#fd, #at, #extract, #range)?;));
+                if let Some(range) = leaf_range(f, Some(b), limits) {
+                    let c =
+                        ctx.field_check(m, bname, (f.frame_at(&m.layout), at), Some(range), None);
+                    stmts.push(quote!(rt::in_range(#c, #extract)?;));
                 }
                 if let Some(leaf) = ls.iter().find(|l| l.name == b.name) {
                     let value = match ctx.kind(leaf) {
@@ -182,14 +189,14 @@ pub(super) fn decode_body(ctx: &Ctx, m: &Message) -> (Vec<TokenStream>, TokenStr
     let o = m.layout;
     let v = variant(m);
     let mut stmts = Vec::new();
-    if let (Some(b), Some(at)) = (refuses_broadcast(p, m), o.address) {
+    if let (Some(_), Some(at)) = (refuses_broadcast(p, m), o.address) {
         let desc = if ctx.own.get() {
             quote!(&Self::DESC)
         } else {
             message_desc(m)
         };
-        let (at, b) = (usize_lit(at), hex_u8(b));
-        stmts.push(quote!(rt::no_broadcast(frame[#at], #b, #desc)?;));
+        let at = usize_lit(at);
+        stmts.push(quote!(FRAME.no_broadcast(frame[#at], #desc)?;));
     }
     let named = repeated(m);
     // Each leaf's value: an expression over `frame` or over a named wire value.
@@ -246,9 +253,9 @@ pub(super) fn decode_body(ctx: &Ctx, m: &Message) -> (Vec<TokenStream>, TokenStr
             signed: false,
             float: false,
         };
-        let (range_fn, range) = match leaf_range(f, None, wt.limits()) {
-            Some((range_fn, range)) if f.bits.is_empty() => (range_fn, Some(range)),
-            _ => (ident("in_range"), None),
+        let range = match leaf_range(f, None, wt.limits()) {
+            Some(range) if f.bits.is_empty() => Some(range),
+            _ => None,
         };
         // A field read more than once is read into a local (a one-byte read is as short as
         // its name).
@@ -301,12 +308,13 @@ pub(super) fn decode_body(ctx: &Ctx, m: &Message) -> (Vec<TokenStream>, TokenStr
             let on = wires.get(other).cloned().unwrap_or_default();
             let args = relation_args(rel);
             let rule = rel.describe(&rel.field);
-            let fd = ctx.field_desc(m, name);
-            stmts.push(quote!(rt::following(#fd, #at, #wire, #on as i64, (#args), #rule)?;));
+            let rel = quote!(.follows(#args, #rule));
+            let c = ctx.field_check(m, name, (f.frame_at(&o), &at), range.clone(), Some(rel));
+            stmts.push(quote!(rt::following(#c, #wire, #on as i64)?;));
         }
         if let Some(range) = range {
-            let fd = ctx.field_desc(m, name);
-            stmts.push(quote!(rt::#range_fn(#fd, #at, #wire, #range)?;));
+            let c = ctx.field_check(m, name, (f.frame_at(&o), &at), Some(range), None);
+            stmts.push(quote!(rt::in_range(#c, #wire)?;));
         }
         if f.bits.is_empty() {
             if f.constant.is_none() && f.equals.is_none() && follows_field(f).is_none() {

@@ -3,12 +3,15 @@ use super::*;
 /// Each message's `impl` (`messages::message_impl`: `NAME`, `CODE`, the lengths, `DESC`, its
 /// `rt::MessageDesc`, [`message_desc_const`], byte ranges, special values, `visit`, `encode`)
 /// with an `rt::FieldDesc` for each field a refusal names (`request::ReadCoils::QUANTITY_DESC`,
-/// [`Ctx::field_desc`]), which the refusals point at (`rt::fixed`, `rt::in_range`,
-/// `rt::Group::end`, ...) instead of spelling names at every call; then the `request` and
+/// [`Ctx::field_desc`]), which the refusals point at (`rt::fixed`, `rt::equal`,
+/// `rt::Group::end`, ...) instead of spelling names at every call, each followed by the field's
+/// `rt::FieldCheck`s (`QUANTITY_CHECK`, [`Ctx::field_check`]: its offset, range and relation,
+/// which `rt::in_range`, `rt::encode_in_range` and `rt::following` take); then the `request` and
 /// `response` modules with the message structs. Emitted last, once every refusal has named its
 /// fields.
 pub(super) fn emit_descs(ctx: &Ctx) -> TokenStream {
     let fields = ctx.field_descs.borrow();
+    let checks = ctx.field_checks.borrow();
     let impls = ctx.impls.borrow();
     let (readers, writers) = (ctx.readers.borrow(), ctx.writers.borrow());
     let followers = ctx.followers.borrow();
@@ -22,7 +25,20 @@ pub(super) fn emit_descs(ctx: &Ctx) -> TokenStream {
         let descs = fields
             .iter()
             .filter(|(fd, mn, ..)| fd == d && mn == name)
-            .map(|(_, _, f, c)| quote!(pub const #c: rt::FieldDesc = rt::field(Self::NAME, #f);));
+            .map(|(_, _, f, c)| {
+                let checks = checks.iter().filter(|k| k.direction == *d && k.message == *name && k.desc == *c).map(|k| {
+                    let (n, at) = (&k.name, usize_lit(k.at));
+                    let parse = |s: &Option<String>| -> TokenStream {
+                        s.as_deref().map_or_else(TokenStream::new, |s| s.parse().expect("builder calls"))
+                    };
+                    let (range, follows) = (parse(&k.range), parse(&k.follows));
+                    quote!(pub const #n: rt::FieldCheck = rt::check(&Self::#c, #at)#range #follows;)
+                });
+                quote! {
+                    pub const #c: rt::FieldDesc = rt::field(Self::NAME, #f);
+                    #(#checks)*
+                }
+            });
         quote! {
             impl #path {
                 #consts

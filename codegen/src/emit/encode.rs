@@ -28,7 +28,22 @@ pub(super) fn relation_args(rel: &Relation) -> TokenStream {
 
 /// One arm of `encode`'s match; `taken`: the frame was taken from the buffer before the match
 /// (as `out`), the arm writes its known bytes into it.
+/// A message with fields is written by its struct's own `write` (`write_arm`), which names its
+/// constants as `Self::`.
 pub(super) fn emit_encode_arm(
+    ctx: &Ctx,
+    m: &Message,
+    pattern: &TokenStream,
+    ls: &[Leaf],
+    taken: bool,
+) -> TokenStream {
+    ctx.own.set(!ls.is_empty() && !m.unchecked);
+    let arm = encode_arm(ctx, m, pattern, ls, taken);
+    ctx.own.set(false);
+    arm
+}
+
+fn encode_arm(
     ctx: &Ctx,
     m: &Message,
     pattern: &TokenStream,
@@ -39,9 +54,13 @@ pub(super) fn emit_encode_arm(
     let len = usize_lit(p.frame_len(m));
     let o = m.layout;
     let mut stmts = Vec::new();
-    if let Some(b) = refuses_broadcast(p, m) {
-        let (desc, b) = (message_desc(m), hex_u8(b));
-        stmts.push(quote!(rt::encode_broadcast(address, #b, #desc)?;));
+    if refuses_broadcast(p, m).is_some() {
+        let desc = if ctx.own.get() {
+            quote!(&Self::DESC)
+        } else {
+            message_desc(m)
+        };
+        stmts.push(quote!(FRAME.encode_broadcast(address, #desc)?;));
     }
     let repeat = m
         .repeat()
@@ -133,7 +152,7 @@ pub(super) fn emit_encode_arm(
         quote!(rt::frame_mut::<#len>(buf, &[#(#first),*])?)
     };
     if i == known.len() && repeat.is_none() && lists.is_empty() && !m.has_optional() {
-        stmts.extend(range_checks(ctx, ls));
+        stmts.extend(range_checks(ctx, m, ls));
         if checksum_in_arms(p) {
             // The frame taken, then sealed: two short lines rather than one nested call.
             let end = encode_end(p, quote!(out), false, head);
@@ -176,13 +195,13 @@ pub(super) fn emit_encode_arm(
             // Written once the frame is spread around the lists.
             continue;
         }
-        if let (Some(_), Some((_, _, v))) = (&f.repeat, &repeat) {
-            stmts.push(write_list(f, v, quote!(#at)));
+        if let (Some(_), Some((_, c, v))) = (&f.repeat, &repeat) {
+            stmts.push(write_list(f, &quote!(#c), v, quote!(#at)));
             continue;
         }
         // The fields after the lists, in frame order: each its presence (where optional),
         // then its range, then its value.
-        let checks = range_checks(ctx, ls.iter().filter(|l| l.field.name == f.name));
+        let checks = range_checks(ctx, m, ls.iter().filter(|l| l.field.name == f.name));
         if let Some(pk) = &f.packed {
             place(&mut stmts, &mut checked, checks);
             stmts.push(write_packed(f, pk, full));
@@ -262,7 +281,8 @@ pub(super) fn emit_encode_arm(
             let at = usize_lit(m.layout.payload + f.offset);
             let before = &list_bytes[..*k];
             let at = quote!(#at #(+ #before)*);
-            stmts.push(write_list(f, v, at));
+            let k = usize_lit(*k);
+            stmts.push(write_list(f, &quote!(#lc.lists[#k]), v, at));
         }
         stmts.extend(put_lengths(p, m.direction));
     }
@@ -414,7 +434,11 @@ fn presence_check(m: &Message, f: &Field, c: &Presence) -> TokenStream {
 
 /// Each field's value within its range (the spec's, or its wire type's where the Rust type
 /// is wider), a packed list's elements too; an optional field where a value is given.
-fn range_checks<'a>(ctx: &Ctx, ls: impl IntoIterator<Item = &'a Leaf<'a>>) -> Vec<TokenStream> {
+fn range_checks<'a>(
+    ctx: &Ctx,
+    m: &Message,
+    ls: impl IntoIterator<Item = &'a Leaf<'a>>,
+) -> Vec<TokenStream> {
     let mut checks = Vec::new();
     for l in ls {
         if let (Some(pk), Some((lo, hi)), None) = (&l.field.packed, l.field.range, l.bits) {
@@ -427,18 +451,19 @@ fn range_checks<'a>(ctx: &Ctx, ls: impl IntoIterator<Item = &'a Leaf<'a>>) -> Ve
         let Some((raw_t, raw)) = raw_of(ctx, l, &local(l.name)) else {
             continue;
         };
-        let Some((range_fn, range)) = leaf_range(l.field, l.bits, raw_t.limits()) else {
+        let Some(range) = leaf_range(l.field, l.bits, raw_t.limits()) else {
             continue;
         };
-        let name = l.name;
-        let range_fn = format_ident!("encode_{}", range_fn);
+        let at = l.field.frame_at(&m.layout);
+        let at_lit = usize_lit(at).to_token_stream();
+        let c = ctx.field_check(m, l.name, (at, &at_lit), Some(range), None);
         if l.field.present.is_some() && l.bits.is_none() {
             // An optional field, where a value is given.
             let v = local(l.name);
-            checks.push(quote!(if let rt::Some(#v) = #v { rt::#range_fn(#name, #raw, #range)?; }));
+            checks.push(quote!(if let rt::Some(#v) = #v { rt::encode_in_range(#c, #raw)?; }));
             continue;
         }
-        checks.push(quote!(rt::#range_fn(#name, #raw, #range)?;));
+        checks.push(quote!(rt::encode_in_range(#c, #raw)?;));
     }
     checks
 }

@@ -34,6 +34,7 @@ pub(super) fn repeat_at(
     let base = usize_lit(m.layout.len);
     let at = usize_lit(m.layout.payload + f.offset);
     let width = usize_lit(if f.ty == FieldType::Bit { 0 } else { f.width });
+    let (le, signed) = (f.byte_order == ByteOrder::Little, f.signed);
     let counter = |i: usize| {
         let cf = &m.fields[i];
         let (cn, cat, cw) = (
@@ -85,6 +86,8 @@ pub(super) fn repeat_at(
             base: #base,
             at: #at,
             width: #width,
+            le: #le,
+            signed: #signed,
             count: #count,
             min: #min,
             max: #max,
@@ -252,8 +255,9 @@ pub(super) fn sized_local() -> Ident {
     format_ident!("last_width")
 }
 
-/// The statement writing repeated field `f`'s elements (the local `v`) into `out` from `at`.
-pub(super) fn write_list(f: &Field, v: &Ident, at: TokenStream) -> TokenStream {
+/// The statement writing repeated field `f`'s elements (the local `v`) into `out` from `at`,
+/// through its `rt::RepeatAt` `c` (its width and byte order).
+pub(super) fn write_list(f: &Field, c: &TokenStream, v: &Ident, at: TokenStream) -> TokenStream {
     if f.is_record() && f.record_bytes_from().is_some() {
         // Each record into an array of its widest, then as many bytes as it takes here.
         let (w, last) = (usize_lit(f.width), sized_local());
@@ -291,17 +295,17 @@ pub(super) fn write_list(f: &Field, v: &Ident, at: TokenStream) -> TokenStream {
         let t = Literal::u8_unsuffixed(t);
         quote! {{
             let at = #at;
-            rt::write_elements(#v.as_slice(), 1, false, &mut out[at..]);
+            if let rt::Some(to) = out.get_mut(at..at + #v.len()) {
+                to.copy_from_slice(#v.as_slice());
+            }
             if let rt::Some(b) = out.get_mut(at + #v.len()) {
                 *b = #t;
             }
         }}
     } else if words_swapped(f) {
-        let (width, le) = (usize_lit(f.width), f.byte_order == ByteOrder::Little);
-        quote!(rt::write_words(#v.as_slice(), #width, #le, &mut out[#at..]);)
+        quote!(#c.write_words(#v.as_slice(), &mut out[#at..]);)
     } else {
-        let (width, le) = (usize_lit(f.width), f.byte_order == ByteOrder::Little);
-        quote!(rt::write_elements(#v.as_slice(), #width, #le, &mut out[#at..]);)
+        quote!(#c.write(#v.as_slice(), &mut out[#at..]);)
     }
 }
 
@@ -384,14 +388,13 @@ pub(super) fn decode_repeat(
             elem, max, typed, ..
         } => {
             let (e, max) = (typed.unwrap_or_else(|| elem.ident()), usize_lit(max));
-            let (le, signed) = (f.byte_order == ByteOrder::Little, f.signed);
             // 32- and 64-bit elements whose 16-bit words travel swapped (`word_order`).
             let swapped = words_swapped(f);
             match (ctx.view.get(), swapped) {
-                (true, false) => quote!(#c.view::<#e, #max>(#elements, #le, #signed)?),
-                (true, true) => quote!(#c.view_words::<#e, #max>(#elements, #le, #signed)?),
-                (false, false) => quote!(#c.elements::<#e, #max>(#elements, #le, #signed)?),
-                (false, true) => quote!(#c.words::<#e, #max>(#elements, #le, #signed)?),
+                (true, false) => quote!(#c.view::<#e, #max>(#elements)?),
+                (true, true) => quote!(#c.view_words::<#e, #max>(#elements)?),
+                (false, false) => quote!(#c.elements::<#e, #max>(#elements)?),
+                (false, true) => quote!(#c.words::<#e, #max>(#elements)?),
             }
         }
         Kind::BitList { bytes } => {

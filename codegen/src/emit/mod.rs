@@ -19,8 +19,10 @@
 //! - `view`: the borrowed views (`RequestView<'a>`/`ResponseView<'a>`: the decoders again,
 //!   each list lent as `rt::ListView`/`rt::BitsView`), where `view::no_view` finds none missing;
 //! - `desc`: each message struct's `impl` with its descriptors (`DESC`, the `rt::MessageDesc`
-//!   of the message; `QUANTITY_DESC`, the `rt::FieldDesc` of each field a refusal names), which
-//!   the refusals point at, and the `request` and `response` modules with the structs;
+//!   of the message; `QUANTITY_DESC`, the `rt::FieldDesc` of each field a refusal names;
+//!   `QUANTITY_CHECK`, the `rt::FieldCheck` of each field whose range or relation is checked:
+//!   offset, range, rule), which the refusals point at and the checks take, and the `request`
+//!   and `response` modules with the structs;
 //! - `ctx` and `tokens`: what the others share (the IR walked as leaves, typed literals, docs).
 //!
 //! Shape (kept lean so a firmware engineer can read it):
@@ -29,7 +31,9 @@
 //!   module name no spec name can take, since spec names become `CamelCase` types, variants
 //!   or fields (`codegen/tests/fixtures/core_names.yaml` names its types `Option`, `Ok`, ...);
 //! - checks every frame or message shares are small `#[inline]` runtime helpers
-//!   (`rt::FrameChecks`, `rt::in_range`, `rt::frame_mut`, `rt::Group`, ...);
+//!   (`rt::FrameChecks`, `rt::in_range`, `rt::frame_mut`, `rt::Group`, ...), which take what
+//!   they check from named constants (`rt::in_range(&Self::QUANTITY_CHECK, w_quantity)`,
+//!   `FRAME.no_broadcast(frame[0], &Self::DESC)`) rather than positional numbers;
 //! - per-message constants are tables (`MESSAGES`: name, code, length; `COMMANDS`: kind,
 //!   broadcast rule, replies), indexed by one `match` (`index`);
 //! - `dispatch` has one arm per code; a message with anything to check or read is decoded
@@ -100,7 +104,7 @@ use types::*;
 use view::*;
 
 use proc_macro2::{Ident, Literal, Span, TokenStream};
-use quote::{format_ident, quote};
+use quote::{format_ident, quote, ToTokens};
 
 use busspec_model::interp::raw_limits;
 use busspec_model::ir::*;

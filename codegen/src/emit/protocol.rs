@@ -250,11 +250,18 @@ pub(super) fn emit_follows_request(ctx: &Ctx) -> Option<TokenStream> {
                 let ty = ctx.rust_type(l);
                 params.push(quote!(#mine: #ty));
                 values.push(field(l.name));
-                let fd = ctx.field_desc(m, l.name);
-                let at = usize_lit(m.layout.payload + l.field.offset);
+                let at = m.layout.payload + l.field.offset;
                 let args = relation_args(rel);
                 let rule = format!("{} of the request", rel.describe(&rel.field));
-                checks.push(quote!(rt::following(#fd, #at, #a, #b as i64, (#args), #rule)?;));
+                let rel = quote!(.follows(#args, #rule));
+                let c = ctx.field_check(
+                    m,
+                    l.name,
+                    (at, &usize_lit(at).to_token_stream()),
+                    None,
+                    Some(rel),
+                );
+                checks.push(quote!(rt::following(#c, #a, #b as i64)?;));
             }
             if let Some(list) = list {
                 let rc = repeat_const(m);
@@ -273,10 +280,19 @@ pub(super) fn emit_follows_request(ctx: &Ctx) -> Option<TokenStream> {
                     }
                     let args = relation_args(rel);
                     if *is_count {
-                        let fd = ctx.field_desc(m, &f.name);
-                        let at = usize_lit(m.layout.payload + f.offset);
+                        let at = m.layout.payload + f.offset;
                         let rule = format!("{} of the request", rel.describe(&rel.field));
-                        checks.push(quote!(rt::following(#fd, #at, #rc.count_value(#len) as u64, #b as i64, (#args), #rule)?;));
+                        let rel = quote!(.follows(#args, #rule));
+                        let c = ctx.field_check(
+                            m,
+                            &f.name,
+                            (at, &usize_lit(at).to_token_stream()),
+                            None,
+                            Some(rel),
+                        );
+                        checks.push(
+                            quote!(rt::following(#c, #rc.count_value(#len) as u64, #b as i64)?;),
+                        );
                     } else {
                         let rule = rel.describe(&rel.field);
                         checks.push(quote!(#rc.follows_request(#len, #b as i64, (#args), #rule)?;));
@@ -477,13 +493,12 @@ pub(super) fn emit_protocol_impl(p: &Protocol) -> TokenStream {
 /// Where each direction's checksum covers from its own byte (`covers_from: {request,
 /// response}`), a frame passes whose checksum is either direction's.
 pub(super) fn checksum_ok_fn(p: &Protocol) -> TokenStream {
-    let ck_len = usize_lit(p.framing.trailer_len());
     let sum = frame_sum(p, Direction::Request);
     let check = if p.framing.checksum.covers_by_direction() {
         let rs = frame_sum(p, Direction::Response);
-        quote!(rt::check_sum(frame, n, &FRAME, #sum) || rt::check_sum(frame, n, &FRAME, #rs))
+        quote!(FRAME.checksum_ok(frame, #sum) || FRAME.checksum_ok(frame, #rs))
     } else {
-        quote!(rt::check_sum(frame, n, &FRAME, #sum))
+        quote!(FRAME.checksum_ok(frame, #sum))
     };
     let skip_preamble = if p.framing.preamble.is_some() {
         quote!(let frame = PREAMBLE.skip(frame);)
@@ -503,10 +518,7 @@ pub(super) fn checksum_ok_fn(p: &Protocol) -> TokenStream {
                 let rt::Ok((frame, _)) = #lay.lay_out(frame, &mut laid) else {
                     return false;
                 };
-                match frame.len().checked_sub(#ck_len) {
-                    rt::Some(n) if n > 0 => #check,
-                    _ => false,
-                }
+                #check
             }
         }
     } else if p.framing.escaping.is_none() {
@@ -522,10 +534,7 @@ pub(super) fn checksum_ok_fn(p: &Protocol) -> TokenStream {
             fn checksum_ok(frame: &[u8]) -> bool {
                 #skip_preamble
                 #(#unchecked)*
-                match frame.len().checked_sub(#ck_len) {
-                    rt::Some(n) if n > 0 => #check,
-                    _ => false,
-                }
+                #check
             }
         }
     } else {
@@ -539,10 +548,7 @@ pub(super) fn checksum_ok_fn(p: &Protocol) -> TokenStream {
                 let rt::Some(frame) = plain.get(..un.len) else {
                     return false;
                 };
-                match frame.len().checked_sub(#ck_len) {
-                    rt::Some(n) if n > 0 => #check,
-                    _ => false,
-                }
+                #check
             }
         }
     }

@@ -65,7 +65,7 @@ fn emit_record(ctx: &Ctx, m: &Message, f: &Field) -> TokenStream {
             read_wire(g, 0)
         };
         reads.push(quote!(let #v: #w = #read;));
-        if let Some((range_fn, range)) = leaf_range(g, None, wt.limits()) {
+        if let Some(range) = leaf_range(g, None, wt.limits()) {
             let at = match g.offset {
                 0 => quote!(at),
                 o => {
@@ -73,17 +73,18 @@ fn emit_record(ctx: &Ctx, m: &Message, f: &Field) -> TokenStream {
                     quote!(at + #o)
                 }
             };
-            let fd = ctx.field_desc(m, name);
-            reads.push(quote!(rt::#range_fn(#fd, #at, #v, #range)?;));
+            let c = ctx.field_check(m, name, (g.offset, &at), Some(range), None);
+            reads.push(quote!(rt::in_range(#c, #v)?;));
         }
         let typed = from_wire(ctx, l, Some(wt), quote!(#v));
         built.push(quote!(#gn: #typed));
         // Encode: its range, its wire integer in the field's bytes.
         writes.push(quote!(let #v = self.#gn;));
         if let Some((raw_t, raw)) = raw_of(ctx, l, &v) {
-            if let Some((range_fn, range)) = leaf_range(g, None, raw_t.limits()) {
-                let range_fn = format_ident!("encode_{}", range_fn);
-                writes.push(quote!(rt::#range_fn(#name, #raw, #range)?;));
+            if let Some(range) = leaf_range(g, None, raw_t.limits()) {
+                let at = usize_lit(g.offset).to_token_stream();
+                let c = ctx.field_check(m, name, (g.offset, &at), Some(range), None);
+                writes.push(quote!(rt::encode_in_range(#c, #raw)?;));
             }
         }
         let value = paren(to_wire(ctx, l, &v, None));

@@ -44,13 +44,18 @@ fn a_range_check_that_cannot_fail_is_left_out() {
     assert!(leaf_range(&field((0, 255), &[]), None, u8_limits).is_none());
     // A wider typed value is checked, as is a byte that no value admits.
     assert!(leaf_range(&field((0, 255), &[]), None, (0, 65535)).is_some());
-    let (f, args) = leaf_range(&field((1, 254), &[0]), None, u8_limits).unwrap();
-    assert_eq!(f, "in_range_or");
-    assert_eq!(args.to_string(), quote!(1, 254, &[0]).to_string());
-    let (f, _) = leaf_range(&field((1, 100), &[0, 50]), None, u8_limits).unwrap();
-    assert_eq!(f, "in_range_or");
-    let (f, _) = leaf_range(&field((1, 100), &[50]), None, u8_limits).unwrap();
-    assert_eq!(f, "in_range");
+    let range = leaf_range(&field((1, 254), &[0]), None, u8_limits).unwrap();
+    assert_eq!(
+        range.to_string(),
+        quote!(.range(1, 254).or(&[0])).to_string()
+    );
+    let range = leaf_range(&field((1, 100), &[0, 50]), None, u8_limits).unwrap();
+    assert_eq!(
+        range.to_string(),
+        quote!(.range(1, 100).or(&[0])).to_string()
+    );
+    let range = leaf_range(&field((1, 100), &[50]), None, u8_limits).unwrap();
+    assert_eq!(range.to_string(), quote!(.range(1, 100)).to_string());
 }
 
 /// The block-marking `head_cells` gives every cell what the mask of every shape whose code

@@ -550,10 +550,7 @@ pub mod bcd_meter {
             }
         }
         fn checksum_ok(frame: &[u8]) -> bool {
-            match frame.len().checked_sub(2) {
-                rt::Some(n) if n > 0 => rt::check_sum(frame, n, &FRAME, frame_sum),
-                _ => false,
-            }
+            FRAME.checksum_ok(frame, frame_sum)
         }
     }
     /// A streaming decoder for this protocol: see [`busspec_runtime::stream`].
@@ -578,8 +575,14 @@ pub mod bcd_meter {
         pub const MINUTE: rt::Range<usize> = 4..5;
         pub const YEAR: rt::Range<usize> = 5..7;
         pub const HOUR_DESC: rt::FieldDesc = rt::field(Self::NAME, "hour");
+        pub const HOUR_CHECK: rt::FieldCheck = rt::check(&Self::HOUR_DESC, 3)
+            .range(0, 23);
         pub const MINUTE_DESC: rt::FieldDesc = rt::field(Self::NAME, "minute");
+        pub const MINUTE_CHECK: rt::FieldCheck = rt::check(&Self::MINUTE_DESC, 4)
+            .range(0, 59);
         pub const YEAR_DESC: rt::FieldDesc = rt::field(Self::NAME, "year");
+        pub const YEAR_CHECK: rt::FieldCheck = rt::check(&Self::YEAR_DESC, 5)
+            .range(0, 9999);
         pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
             f("hour", rt::Int(self.hour as i64));
             f("minute", rt::Int(self.minute as i64));
@@ -592,9 +595,9 @@ pub mod bcd_meter {
         #[inline(always)]
         fn write(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             let Self { hour: v_hour, minute: v_minute, year: v_year } = *self;
-            rt::encode_in_range("hour", v_hour, 0, 23)?;
-            rt::encode_in_range("minute", v_minute, 0, 59)?;
-            rt::encode_in_range("year", v_year, 0, 9999)?;
+            rt::encode_in_range(&Self::HOUR_CHECK, v_hour)?;
+            rt::encode_in_range(&Self::MINUTE_CHECK, v_minute)?;
+            rt::encode_in_range(&Self::YEAR_CHECK, v_year)?;
             let out = rt::frame_mut::<9>(buf, &[0x68, address, 0x08])?;
             out[3] = rt::to_bcd(v_hour as u64) as u8;
             out[4] = rt::to_bcd(v_minute as u64) as u8;
@@ -606,15 +609,15 @@ pub mod bcd_meter {
         fn from_frame(frame: &[u8]) -> rt::DecodeResult<Self> {
             let frame = rt::fixed::<9>(frame, &Self::DESC)?;
             let w_hour: u8 = rt::bcd(&Self::HOUR_DESC, 3, frame[3] as u64)? as u8;
-            rt::in_range(&Self::HOUR_DESC, 3, w_hour, 0, 23)?;
+            rt::in_range(&Self::HOUR_CHECK, w_hour)?;
             let w_minute: u8 = rt::bcd(&Self::MINUTE_DESC, 4, frame[4] as u64)? as u8;
-            rt::in_range(&Self::MINUTE_DESC, 4, w_minute, 0, 59)?;
+            rt::in_range(&Self::MINUTE_CHECK, w_minute)?;
             let w_year: u16 = rt::bcd(
                 &Self::YEAR_DESC,
                 5,
                 u16::from_le_bytes([frame[5], frame[6]]) as u64,
             )? as u16;
-            rt::in_range(&Self::YEAR_DESC, 5, w_year, 0, 9999)?;
+            rt::in_range(&Self::YEAR_CHECK, w_year)?;
             rt::Ok(Self {
                 hour: w_hour,
                 minute: w_minute,
@@ -630,7 +633,11 @@ pub mod bcd_meter {
         pub const ENERGY: rt::Range<usize> = 3..7;
         pub const TARIFF: rt::Range<usize> = 7..8;
         pub const ENERGY_DESC: rt::FieldDesc = rt::field(Self::NAME, "energy");
+        pub const ENERGY_CHECK: rt::FieldCheck = rt::check(&Self::ENERGY_DESC, 3)
+            .range(0, 99999999);
         pub const TARIFF_DESC: rt::FieldDesc = rt::field(Self::NAME, "tariff");
+        pub const TARIFF_CHECK: rt::FieldCheck = rt::check(&Self::TARIFF_DESC, 7)
+            .range(1, 4);
         pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
             f("energy", rt::Int(self.energy.raw() as i64));
             f("tariff", rt::Int(self.tariff as i64));
@@ -642,8 +649,8 @@ pub mod bcd_meter {
         #[inline(always)]
         fn write(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             let Self { energy: v_energy, tariff: v_tariff } = *self;
-            rt::encode_in_range("energy", v_energy.raw(), 0, 99999999)?;
-            rt::encode_in_range("tariff", v_tariff, 1, 4)?;
+            rt::encode_in_range(&Self::ENERGY_CHECK, v_energy.raw())?;
+            rt::encode_in_range(&Self::TARIFF_CHECK, v_tariff)?;
             let out = rt::frame_mut::<10>(buf, &[0x68, address, 0x91])?;
             out[3..7]
                 .copy_from_slice(
@@ -661,9 +668,9 @@ pub mod bcd_meter {
                 3,
                 u32::from_le_bytes([frame[3], frame[4], frame[5], frame[6]]) as u64,
             )? as u32;
-            rt::in_range(&Self::ENERGY_DESC, 3, w_energy, 0, 99999999)?;
+            rt::in_range(&Self::ENERGY_CHECK, w_energy)?;
             let w_tariff: u8 = rt::bcd(&Self::TARIFF_DESC, 7, frame[7] as u64)? as u8;
-            rt::in_range(&Self::TARIFF_DESC, 7, w_tariff, 1, 4)?;
+            rt::in_range(&Self::TARIFF_CHECK, w_tariff)?;
             rt::Ok(Self {
                 energy: KilowattHours::from_raw(w_energy),
                 tariff: w_tariff,

@@ -330,6 +330,8 @@ pub mod cobs_link {
         base: 4,
         at: 2,
         width: 1,
+        le: true,
+        signed: false,
         count: rt::CountBy::End,
         min: 0,
         max: 254,
@@ -609,10 +611,7 @@ pub mod cobs_link {
             let rt::Some(frame) = plain.get(..un.len) else {
                 return false;
             };
-            match frame.len().checked_sub(2) {
-                rt::Some(n) if n > 0 => rt::check_sum(frame, n, &FRAME, frame_sum),
-                _ => false,
-            }
+            FRAME.checksum_ok(frame, frame_sum)
         }
     }
     /// A streaming decoder for this protocol: see [`busspec_runtime::stream`].
@@ -725,7 +724,7 @@ pub mod cobs_link {
             let out = rt::frame_mut_len(buf, frame_len, &[])?;
             LENGTH.put(out)?;
             out[1] = 0xB0;
-            rt::write_elements(v_entries.as_slice(), 1, true, &mut out[2..]);
+            REPEAT_LOG.write(v_entries.as_slice(), &mut out[2..]);
             rt::Ok(out.len())
         }
         /// Reads this message from a frame whose framing and code are checked.
@@ -733,7 +732,7 @@ pub mod cobs_link {
         fn from_frame(frame: &[u8]) -> rt::DecodeResult<Self> {
             let (_, elements, _) = REPEAT_LOG.split::<2>(frame)?;
             rt::Ok(Self {
-                entries: REPEAT_LOG.elements::<u8, 254>(elements, true, false)?,
+                entries: REPEAT_LOG.elements::<u8, 254>(elements)?,
             })
         }
     }

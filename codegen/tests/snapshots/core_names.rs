@@ -731,10 +731,7 @@ pub mod clash {
             }
         }
         fn checksum_ok(frame: &[u8]) -> bool {
-            match frame.len().checked_sub(1) {
-                rt::Some(n) if n > 0 => rt::check_sum(frame, n, &FRAME, frame_sum),
-                _ => false,
-            }
+            FRAME.checksum_ok(frame, frame_sum)
         }
     }
     /// A streaming decoder for this protocol: see [`busspec_runtime::stream`].
@@ -749,6 +746,8 @@ pub mod clash {
         pub const SOME: rt::Range<usize> = 3..4;
         pub const CORE: rt::Range<usize> = 4..6;
         pub const CORE_DESC: rt::FieldDesc = rt::field(Self::NAME, "core");
+        pub const CORE_CHECK: rt::FieldCheck = rt::check(&Self::CORE_DESC, 4)
+            .range(0, 1000);
         pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
             f("some", rt::Int(self.some.raw() as i64));
             f("core", rt::Int(self.core.raw() as i64));
@@ -760,8 +759,8 @@ pub mod clash {
         #[inline(always)]
         fn write(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             let Self { some: v_some, core: v_core } = *self;
-            rt::encode_broadcast(address, 0x00, &request::Option::DESC)?;
-            rt::encode_in_range("core", v_core.raw(), 0, 1000)?;
+            FRAME.encode_broadcast(address, &Self::DESC)?;
+            rt::encode_in_range(&Self::CORE_CHECK, v_core.raw())?;
             let out = rt::frame_mut::<7>(buf, &[0xAA, address, 0x10])?;
             out[3] = v_some.raw();
             out[4..6].copy_from_slice(&v_core.raw().to_le_bytes());
@@ -771,9 +770,9 @@ pub mod clash {
         #[inline(always)]
         fn from_frame(frame: &[u8]) -> rt::DecodeResult<Self> {
             let frame = rt::fixed::<7>(frame, &Self::DESC)?;
-            rt::no_broadcast(frame[1], 0x00, &Self::DESC)?;
+            FRAME.no_broadcast(frame[1], &Self::DESC)?;
             let w_core: u16 = u16::from_le_bytes([frame[4], frame[5]]);
-            rt::in_range(&Self::CORE_DESC, 4, w_core, 0, 1000)?;
+            rt::in_range(&Self::CORE_CHECK, w_core)?;
             rt::Ok(Self {
                 some: Result::from_raw(frame[3]),
                 core: Option::from_raw(w_core),
@@ -796,7 +795,7 @@ pub mod clash {
         #[inline(always)]
         fn write(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             let Self { frame: v_frame } = *self;
-            rt::encode_broadcast(address, 0x00, &request::U8::DESC)?;
+            FRAME.encode_broadcast(address, &Self::DESC)?;
             let out = rt::frame_mut::<5>(buf, &[0xAA, address, 0x11])?;
             out[3] = rt::fits("frame", v_frame.raw(), 0, 255)? as u8;
             rt::Ok(rt::seal_sum8_head(out, 3, address.wrapping_add(0xBB)))
@@ -805,7 +804,7 @@ pub mod clash {
         #[inline(always)]
         fn from_frame(frame: &[u8]) -> rt::DecodeResult<Self> {
             let frame = rt::fixed::<5>(frame, &Self::DESC)?;
-            rt::no_broadcast(frame[1], 0x00, &Self::DESC)?;
+            FRAME.no_broadcast(frame[1], &Self::DESC)?;
             rt::Ok(Self {
                 frame: Some::from_raw(frame[3] as i16),
             })
@@ -864,7 +863,7 @@ pub mod clash {
         #[inline(always)]
         fn write(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             let Self { f: v_f } = *self;
-            rt::encode_broadcast(address, 0x00, &request::Rt::DESC)?;
+            FRAME.encode_broadcast(address, &Self::DESC)?;
             let out = rt::frame_mut::<6>(buf, &[0xAA, address, 0x13])?;
             let w_f: u8 = v_f;
             out[3] = w_f;
@@ -875,7 +874,7 @@ pub mod clash {
         #[inline(always)]
         fn from_frame(frame: &[u8]) -> rt::DecodeResult<Self> {
             let frame = rt::fixed::<6>(frame, &Self::DESC)?;
-            rt::no_broadcast(frame[1], 0x00, &Self::DESC)?;
+            FRAME.no_broadcast(frame[1], &Self::DESC)?;
             rt::same(&Self::FIELD_DESC, 4, frame[4], "f", frame[3])?;
             rt::Ok(Self { f: frame[3] })
         }

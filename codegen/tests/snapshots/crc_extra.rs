@@ -569,10 +569,7 @@ pub mod crc_extra {
             }
         }
         fn checksum_ok(frame: &[u8]) -> bool {
-            match frame.len().checked_sub(2) {
-                rt::Some(n) if n > 0 => rt::check_sum(frame, n, &FRAME, frame_sum),
-                _ => false,
-            }
+            FRAME.checksum_ok(frame, frame_sum)
         }
     }
     /// A streaming decoder for this protocol: see [`busspec_runtime::stream`].
@@ -645,6 +642,8 @@ pub mod crc_extra {
         pub const REQ_STREAM_ID: rt::Range<usize> = 7..8;
         pub const START_STOP: rt::Range<usize> = 8..9;
         pub const START_STOP_DESC: rt::FieldDesc = rt::field(Self::NAME, "start_stop");
+        pub const START_STOP_CHECK: rt::FieldCheck = rt::check(&Self::START_STOP_DESC, 8)
+            .range(0, 1);
         pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
             f("req_message_rate", rt::Int(self.req_message_rate as i64));
             f("target_system", rt::Int(self.target_system as i64));
@@ -665,7 +664,7 @@ pub mod crc_extra {
                 req_stream_id: v_req_stream_id,
                 start_stop: v_start_stop,
             } = *self;
-            rt::encode_in_range("start_stop", v_start_stop, 0, 1)?;
+            rt::encode_in_range(&Self::START_STOP_CHECK, v_start_stop)?;
             let out = rt::frame_mut::<11>(buf, &[0xFE, 0x06, 0x42])?;
             out[3..5].copy_from_slice(&v_req_message_rate.to_le_bytes());
             out[5] = v_target_system;
@@ -678,7 +677,7 @@ pub mod crc_extra {
         #[inline(always)]
         fn from_frame(frame: &[u8]) -> rt::DecodeResult<Self> {
             let frame = rt::fixed::<11>(frame, &Self::DESC)?;
-            rt::in_range(&Self::START_STOP_DESC, 8, frame[8], 0, 1)?;
+            rt::in_range(&Self::START_STOP_CHECK, frame[8])?;
             rt::Ok(Self {
                 req_message_rate: u16::from_le_bytes([frame[3], frame[4]]),
                 target_system: frame[5],

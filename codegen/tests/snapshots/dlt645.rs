@@ -662,10 +662,7 @@ pub mod dlt645 {
         }
         fn checksum_ok(frame: &[u8]) -> bool {
             let frame = PREAMBLE.skip(frame);
-            match frame.len().checked_sub(2) {
-                rt::Some(n) if n > 0 => rt::check_sum(frame, n, &FRAME, frame_sum),
-                _ => false,
-            }
+            FRAME.checksum_ok(frame, frame_sum)
         }
     }
     /// A streaming decoder for this protocol: see [`busspec_runtime::stream`].
@@ -860,6 +857,8 @@ pub mod dlt645 {
         pub const DATA_ID: rt::Range<usize> = 10..14;
         pub const VALUE: rt::Range<usize> = 14..18;
         pub const VALUE_DESC: rt::FieldDesc = rt::field(Self::NAME, "value");
+        pub const VALUE_CHECK: rt::FieldCheck = rt::check(&Self::VALUE_DESC, 14)
+            .range(0, 99999999);
         pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
             f("address_low", rt::Int(self.address_low as i64));
             f("address_high", rt::Int(self.address_high as i64));
@@ -897,7 +896,7 @@ pub mod dlt645 {
                     ),
                 );
             out[10..14].copy_from_slice(&v_data_id.to_le_bytes());
-            rt::encode_in_range("value", v_value, 0, 99999999)?;
+            rt::encode_in_range(&Self::VALUE_CHECK, v_value)?;
             out[14..18]
                 .copy_from_slice(&(rt::to_bcd(v_value as u64) as u32).to_le_bytes());
             rt::Ok(out.len())
@@ -911,7 +910,7 @@ pub mod dlt645 {
                 14,
                 u32::from_le_bytes([frame[14], frame[15], frame[16], frame[17]]) as u64,
             )? as u32;
-            rt::in_range(&Self::VALUE_DESC, 14, w_value, 0, 99999999)?;
+            rt::in_range(&Self::VALUE_CHECK, w_value)?;
             rt::Ok(Self {
                 address_low: rt::u24([frame[1], frame[2], frame[3]], true),
                 address_high: rt::u24([frame[4], frame[5], frame[6]], true),

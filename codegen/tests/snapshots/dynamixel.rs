@@ -147,6 +147,8 @@ pub mod dynamixel {
         base: 7,
         at: 6,
         width: 1,
+        le: true,
+        signed: false,
         count: rt::CountBy::End,
         min: 1,
         max: 252,
@@ -157,6 +159,8 @@ pub mod dynamixel {
         base: 7,
         at: 6,
         width: 1,
+        le: true,
+        signed: false,
         count: rt::CountBy::End,
         min: 1,
         max: 252,
@@ -167,6 +171,8 @@ pub mod dynamixel {
         base: 8,
         at: 7,
         width: 1,
+        le: true,
+        signed: false,
         count: rt::CountBy::End,
         min: 2,
         max: 251,
@@ -247,7 +253,7 @@ pub mod dynamixel {
             rt::encode_address(address, &FRAME)?;
             let len = match *self {
                 Self::Ping(_) => {
-                    rt::encode_broadcast(address, 0xFE, &request::Ping::DESC)?;
+                    FRAME.encode_broadcast(address, &request::Ping::DESC)?;
                     rt::frame_mut::<6>(buf, &[0xFF, 0xFF, address, 0x02, 0x01])?.len()
                 }
                 Self::Read(ref m) => m.write(address, buf)?,
@@ -400,6 +406,8 @@ pub mod dynamixel {
         base: 6,
         at: 5,
         width: 1,
+        le: true,
+        signed: false,
         count: rt::CountBy::End,
         min: 1,
         max: 253,
@@ -517,8 +525,7 @@ pub mod dynamixel {
                         rt::Ok(
                             Self::ReadStatus(response::ReadStatus {
                                 error: StatusError::from_raw(frame[4]),
-                                data: REPEAT_READ_STATUS
-                                    .elements::<u8, 253>(elements, true, false)?,
+                                data: REPEAT_READ_STATUS.elements::<u8, 253>(elements)?,
                             }),
                         )
                     },
@@ -632,13 +639,13 @@ pub mod dynamixel {
             match frame[4] {
                 0x01 => {
                     let frame = rt::fixed::<6>(frame, &request::Ping::DESC)?;
-                    rt::no_broadcast(frame[2], 0xFE, &request::Ping::DESC)?;
+                    FRAME.no_broadcast(frame[2], &request::Ping::DESC)?;
                     rt::Ok(Self::Ping)
                 }
                 0x02 => {
                     let frame = rt::fixed::<8>(frame, &request::Read::DESC)?;
-                    rt::no_broadcast(frame[2], 0xFE, &request::Read::DESC)?;
-                    rt::in_range(&request::Read::LENGTH_DESC, 6, frame[6], 1, 253)?;
+                    FRAME.no_broadcast(frame[2], &request::Read::DESC)?;
+                    rt::in_range(&request::Read::LENGTH_CHECK, frame[6])?;
                     rt::Ok(Self::Read {
                         address: frame[5],
                         length: frame[6],
@@ -648,14 +655,14 @@ pub mod dynamixel {
                     let (frame, elements, _) = REPEAT_WRITE.split::<6>(frame)?;
                     rt::Ok(Self::Write {
                         address: frame[5],
-                        data: REPEAT_WRITE.view::<u8, 252>(elements, true, false)?,
+                        data: REPEAT_WRITE.view::<u8, 252>(elements)?,
                     })
                 }
                 0x04 => {
                     let (frame, elements, _) = REPEAT_REG_WRITE.split::<6>(frame)?;
                     rt::Ok(Self::RegWrite {
                         address: frame[5],
-                        data: REPEAT_REG_WRITE.view::<u8, 252>(elements, true, false)?,
+                        data: REPEAT_REG_WRITE.view::<u8, 252>(elements)?,
                     })
                 }
                 0x05 => {
@@ -667,7 +674,7 @@ pub mod dynamixel {
                     rt::Ok(Self::SyncWrite {
                         address: frame[5],
                         data_length: frame[6],
-                        blocks: REPEAT_SYNC_WRITE.view::<u8, 251>(elements, true, false)?,
+                        blocks: REPEAT_SYNC_WRITE.view::<u8, 251>(elements)?,
                     })
                 }
                 _ => rt::Err(REQUEST_CODE.unknown(frame)),
@@ -784,8 +791,7 @@ pub mod dynamixel {
                     |frame: &'a [u8; 5], elements: &'a [u8], _: usize| {
                         rt::Ok(Self::ReadStatus {
                             error: StatusError::from_raw(frame[4]),
-                            data: REPEAT_READ_STATUS
-                                .view::<u8, 253>(elements, true, false)?,
+                            data: REPEAT_READ_STATUS.view::<u8, 253>(elements)?,
                         })
                     },
                 );
@@ -1026,10 +1032,7 @@ pub mod dynamixel {
             )
         }
         fn checksum_ok(frame: &[u8]) -> bool {
-            match frame.len().checked_sub(1) {
-                rt::Some(n) if n > 0 => rt::check_sum(frame, n, &FRAME, frame_sum),
-                _ => false,
-            }
+            FRAME.checksum_ok(frame, frame_sum)
         }
     }
     /// A streaming decoder for this protocol: see [`busspec_runtime::stream`].
@@ -1048,7 +1051,7 @@ pub mod dynamixel {
         #[inline(always)]
         fn from_frame(frame: &[u8]) -> rt::DecodeResult<Self> {
             let frame = rt::fixed::<6>(frame, &Self::DESC)?;
-            rt::no_broadcast(frame[2], 0xFE, &Self::DESC)?;
+            FRAME.no_broadcast(frame[2], &Self::DESC)?;
             rt::Ok(Self)
         }
     }
@@ -1060,6 +1063,8 @@ pub mod dynamixel {
         pub const ADDRESS: rt::Range<usize> = 5..6;
         pub const LENGTH: rt::Range<usize> = 6..7;
         pub const LENGTH_DESC: rt::FieldDesc = rt::field(Self::NAME, "length");
+        pub const LENGTH_CHECK: rt::FieldCheck = rt::check(&Self::LENGTH_DESC, 6)
+            .range(1, 253);
         pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
             f("address", rt::Int(self.address as i64));
             f("length", rt::Int(self.length as i64));
@@ -1071,8 +1076,8 @@ pub mod dynamixel {
         #[inline(always)]
         fn write(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             let Self { address: v_address, length: v_length } = *self;
-            rt::encode_broadcast(address, 0xFE, &request::Read::DESC)?;
-            rt::encode_in_range("length", v_length, 1, 253)?;
+            FRAME.encode_broadcast(address, &Self::DESC)?;
+            rt::encode_in_range(&Self::LENGTH_CHECK, v_length)?;
             let out = rt::frame_mut::<8>(buf, &[0xFF, 0xFF, address, 0x04, 0x02])?;
             out[5] = v_address;
             out[6] = v_length;
@@ -1082,8 +1087,8 @@ pub mod dynamixel {
         #[inline(always)]
         fn from_frame(frame: &[u8]) -> rt::DecodeResult<Self> {
             let frame = rt::fixed::<8>(frame, &Self::DESC)?;
-            rt::no_broadcast(frame[2], 0xFE, &Self::DESC)?;
-            rt::in_range(&Self::LENGTH_DESC, 6, frame[6], 1, 253)?;
+            FRAME.no_broadcast(frame[2], &Self::DESC)?;
+            rt::in_range(&Self::LENGTH_CHECK, frame[6])?;
             rt::Ok(Self {
                 address: frame[5],
                 length: frame[6],
@@ -1114,7 +1119,7 @@ pub mod dynamixel {
             LENGTH.put(out)?;
             out[4] = 0x03;
             out[5] = v_address;
-            rt::write_elements(v_data.as_slice(), 1, true, &mut out[6..]);
+            REPEAT_WRITE.write(v_data.as_slice(), &mut out[6..]);
             rt::Ok(out.len())
         }
         /// Reads this message from a frame whose framing and code are checked.
@@ -1123,7 +1128,7 @@ pub mod dynamixel {
             let (frame, elements, _) = REPEAT_WRITE.split::<6>(frame)?;
             rt::Ok(Self {
                 address: frame[5],
-                data: REPEAT_WRITE.elements::<u8, 252>(elements, true, false)?,
+                data: REPEAT_WRITE.elements::<u8, 252>(elements)?,
             })
         }
     }
@@ -1151,7 +1156,7 @@ pub mod dynamixel {
             LENGTH.put(out)?;
             out[4] = 0x04;
             out[5] = v_address;
-            rt::write_elements(v_data.as_slice(), 1, true, &mut out[6..]);
+            REPEAT_REG_WRITE.write(v_data.as_slice(), &mut out[6..]);
             rt::Ok(out.len())
         }
         /// Reads this message from a frame whose framing and code are checked.
@@ -1160,7 +1165,7 @@ pub mod dynamixel {
             let (frame, elements, _) = REPEAT_REG_WRITE.split::<6>(frame)?;
             rt::Ok(Self {
                 address: frame[5],
-                data: REPEAT_REG_WRITE.elements::<u8, 252>(elements, true, false)?,
+                data: REPEAT_REG_WRITE.elements::<u8, 252>(elements)?,
             })
         }
     }
@@ -1213,7 +1218,7 @@ pub mod dynamixel {
             out[4] = 0x83;
             out[5] = v_address;
             out[6] = v_data_length;
-            rt::write_elements(v_blocks.as_slice(), 1, true, &mut out[7..]);
+            REPEAT_SYNC_WRITE.write(v_blocks.as_slice(), &mut out[7..]);
             rt::Ok(out.len())
         }
         /// Reads this message from a frame whose framing and code are checked.
@@ -1223,7 +1228,7 @@ pub mod dynamixel {
             rt::Ok(Self {
                 address: frame[5],
                 data_length: frame[6],
-                blocks: REPEAT_SYNC_WRITE.elements::<u8, 251>(elements, true, false)?,
+                blocks: REPEAT_SYNC_WRITE.elements::<u8, 251>(elements)?,
             })
         }
     }
@@ -1279,7 +1284,7 @@ pub mod dynamixel {
             let out = rt::frame_mut_len(buf, frame_len, &[0xFF, 0xFF, address])?;
             LENGTH.put(out)?;
             out[4] = v_error.raw();
-            rt::write_elements(v_data.as_slice(), 1, true, &mut out[5..]);
+            REPEAT_READ_STATUS.write(v_data.as_slice(), &mut out[5..]);
             rt::Ok(out.len())
         }
         /// Checks the fields this response takes from its request, `read` (`r`).

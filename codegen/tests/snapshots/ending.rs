@@ -109,6 +109,8 @@ pub mod ending {
         base: 7,
         at: 6,
         width: 2,
+        le: false,
+        signed: false,
         count: rt::CountBy::Bytes(rt::CountField {
             name: "byte_count",
             at: 5,
@@ -293,6 +295,8 @@ pub mod ending {
         base: 5,
         at: 4,
         width: 2,
+        le: false,
+        signed: false,
         count: rt::CountBy::End,
         min: 1,
         max: 16,
@@ -508,7 +512,7 @@ pub mod ending {
             match frame[3] {
                 0x01 => {
                     let frame = rt::fixed::<8>(frame, &request::Read::DESC)?;
-                    rt::in_range(&request::Read::QUANTITY_DESC, 6, frame[6], 1, 16)?;
+                    rt::in_range(&request::Read::QUANTITY_CHECK, frame[6])?;
                     rt::Ok(Self::Read {
                         first: u16::from_be_bytes([frame[4], frame[5]]),
                         quantity: frame[6],
@@ -516,18 +520,15 @@ pub mod ending {
                 }
                 0x02 => {
                     let (frame, elements, _) = REPEAT_WRITE.split::<6>(frame)?;
-                    rt::in_range(&request::Write::QUANTITY_DESC, 4, frame[4], 1, 16)?;
+                    rt::in_range(&request::Write::QUANTITY_CHECK, frame[4])?;
                     rt::following(
-                        &request::Write::BYTE_COUNT_DESC,
-                        5,
+                        &request::Write::BYTE_COUNT_CHECK,
                         frame[5],
                         frame[4] as i64,
-                        (2, 1),
-                        "2 × quantity",
                     )?;
                     rt::Ok(Self::Write {
                         quantity: frame[4],
-                        values: REPEAT_WRITE.view::<u16, 16>(elements, false, false)?,
+                        values: REPEAT_WRITE.view::<u16, 16>(elements)?,
                     })
                 }
                 0x03 => {
@@ -621,8 +622,7 @@ pub mod ending {
                 0x01 => {
                     let (_, elements, _) = REPEAT_READ_REPLY.split::<4>(frame)?;
                     rt::Ok(Self::ReadReply {
-                        values: REPEAT_READ_REPLY
-                            .view::<u16, 16>(elements, false, false)?,
+                        values: REPEAT_READ_REPLY.view::<u16, 16>(elements)?,
                     })
                 }
                 0x81 => {
@@ -812,10 +812,7 @@ pub mod ending {
             ResponseView::decode_for(frame, request).map(|_| ())
         }
         fn checksum_ok(frame: &[u8]) -> bool {
-            match frame.len().checked_sub(1) {
-                rt::Some(n) if n > 0 => rt::check_sum(frame, n, &FRAME, frame_sum),
-                _ => false,
-            }
+            FRAME.checksum_ok(frame, frame_sum)
         }
     }
     /// A streaming decoder for this protocol: see [`busspec_runtime::stream`].
@@ -830,6 +827,8 @@ pub mod ending {
         pub const FIRST: rt::Range<usize> = 4..6;
         pub const QUANTITY: rt::Range<usize> = 6..7;
         pub const QUANTITY_DESC: rt::FieldDesc = rt::field(Self::NAME, "quantity");
+        pub const QUANTITY_CHECK: rt::FieldCheck = rt::check(&Self::QUANTITY_DESC, 6)
+            .range(1, 16);
         pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
             f("first", rt::Int(self.first as i64));
             f("quantity", rt::Int(self.quantity as i64));
@@ -841,7 +840,7 @@ pub mod ending {
         #[inline(always)]
         fn write(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             let Self { first: v_first, quantity: v_quantity } = *self;
-            rt::encode_in_range("quantity", v_quantity, 1, 16)?;
+            rt::encode_in_range(&Self::QUANTITY_CHECK, v_quantity)?;
             let out = rt::frame_mut::<8>(buf, &[0xA5, 0x5A, address, 0x01])?;
             out[4..6].copy_from_slice(&v_first.to_be_bytes());
             out[6] = v_quantity;
@@ -851,7 +850,7 @@ pub mod ending {
         #[inline(always)]
         fn from_frame(frame: &[u8]) -> rt::DecodeResult<Self> {
             let frame = rt::fixed::<8>(frame, &Self::DESC)?;
-            rt::in_range(&Self::QUANTITY_DESC, 6, frame[6], 1, 16)?;
+            rt::in_range(&Self::QUANTITY_CHECK, frame[6])?;
             rt::Ok(Self {
                 first: u16::from_be_bytes([frame[4], frame[5]]),
                 quantity: frame[6],
@@ -865,9 +864,13 @@ pub mod ending {
         pub const MAX_LEN: usize = 39;
         pub const DESC: rt::MessageDesc = rt::desc(Self::NAME, 0x02, 1, &[7]);
         pub const QUANTITY: rt::Range<usize> = 4..5;
-        pub const VALUES_DESC: rt::FieldDesc = rt::field(Self::NAME, "values");
         pub const QUANTITY_DESC: rt::FieldDesc = rt::field(Self::NAME, "quantity");
+        pub const QUANTITY_CHECK: rt::FieldCheck = rt::check(&Self::QUANTITY_DESC, 4)
+            .range(1, 16);
+        pub const VALUES_DESC: rt::FieldDesc = rt::field(Self::NAME, "values");
         pub const BYTE_COUNT_DESC: rt::FieldDesc = rt::field(Self::NAME, "byte_count");
+        pub const BYTE_COUNT_CHECK: rt::FieldCheck = rt::check(&Self::BYTE_COUNT_DESC, 5)
+            .follows(2, 1, "2 × quantity");
         pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
             f("quantity", rt::Int(self.quantity as i64));
             f("values", rt::List(self.values.elements()));
@@ -881,7 +884,7 @@ pub mod ending {
             let Self { quantity: v_quantity, values: v_values } = *self;
             let frame_len = REPEAT_WRITE.encode_len(v_values.len())?;
             let out = rt::frame_mut_len(buf, frame_len, &[0xA5, 0x5A, address, 0x02])?;
-            rt::encode_in_range("quantity", v_quantity, 1, 16)?;
+            rt::encode_in_range(&Self::QUANTITY_CHECK, v_quantity)?;
             let w_quantity: u8 = v_quantity;
             out[4] = w_quantity;
             let w_byte_count: u8 = rt::fits(
@@ -892,25 +895,18 @@ pub mod ending {
             )? as u8;
             REPEAT_WRITE.encode_agrees(v_values.len(), w_byte_count as u64)?;
             out[5] = w_byte_count;
-            rt::write_elements(v_values.as_slice(), 2, false, &mut out[6..]);
+            REPEAT_WRITE.write(v_values.as_slice(), &mut out[6..]);
             rt::Ok(out.len())
         }
         /// Reads this message from a frame whose framing and code are checked.
         #[inline(always)]
         fn from_frame(frame: &[u8]) -> rt::DecodeResult<Self> {
             let (frame, elements, _) = REPEAT_WRITE.split::<6>(frame)?;
-            rt::in_range(&Self::QUANTITY_DESC, 4, frame[4], 1, 16)?;
-            rt::following(
-                &Self::BYTE_COUNT_DESC,
-                5,
-                frame[5],
-                frame[4] as i64,
-                (2, 1),
-                "2 × quantity",
-            )?;
+            rt::in_range(&Self::QUANTITY_CHECK, frame[4])?;
+            rt::following(&Self::BYTE_COUNT_CHECK, frame[5], frame[4] as i64)?;
             rt::Ok(Self {
                 quantity: frame[4],
-                values: REPEAT_WRITE.elements::<u16, 16>(elements, false, false)?,
+                values: REPEAT_WRITE.elements::<u16, 16>(elements)?,
             })
         }
     }
@@ -968,7 +964,7 @@ pub mod ending {
             let Self { values: v_values } = *self;
             let frame_len = REPEAT_READ_REPLY.encode_len(v_values.len())?;
             let out = rt::frame_mut_len(buf, frame_len, &[0xA5, 0x5A, address, 0x01])?;
-            rt::write_elements(v_values.as_slice(), 2, false, &mut out[4..]);
+            REPEAT_READ_REPLY.write(v_values.as_slice(), &mut out[4..]);
             rt::Ok(out.len())
         }
         /// Reads this message from a frame whose framing and code are checked.
@@ -976,7 +972,7 @@ pub mod ending {
         fn from_frame(frame: &[u8]) -> rt::DecodeResult<Self> {
             let (_, elements, _) = REPEAT_READ_REPLY.split::<4>(frame)?;
             rt::Ok(Self {
-                values: REPEAT_READ_REPLY.elements::<u16, 16>(elements, false, false)?,
+                values: REPEAT_READ_REPLY.elements::<u16, 16>(elements)?,
             })
         }
         /// Checks the fields this response takes from its request, `read` (`r`).

@@ -168,11 +168,11 @@ pub mod float_lists {
             let len = match *self {
                 Self::ReadFloats(ref m) => m.write(address, buf)?,
                 Self::ReadCounters(_) => {
-                    rt::encode_broadcast(address, 0x00, &request::ReadCounters::DESC)?;
+                    FRAME.encode_broadcast(address, &request::ReadCounters::DESC)?;
                     rt::frame_mut::<4>(buf, &[address, 0x41])?.len()
                 }
                 Self::ReadSamples(_) => {
-                    rt::encode_broadcast(address, 0x00, &request::ReadSamples::DESC)?;
+                    FRAME.encode_broadcast(address, &request::ReadSamples::DESC)?;
                     rt::frame_mut::<4>(buf, &[address, 0x42])?.len()
                 }
             };
@@ -280,6 +280,8 @@ pub mod float_lists {
         base: 5,
         at: 3,
         width: 4,
+        le: false,
+        signed: false,
         count: rt::CountBy::Bytes(rt::CountField {
             name: "byte_count",
             at: 2,
@@ -295,6 +297,8 @@ pub mod float_lists {
         base: 6,
         at: 3,
         width: 8,
+        le: false,
+        signed: false,
         count: rt::CountBy::Elements(rt::CountField {
             name: "num_totals",
             at: 2,
@@ -313,6 +317,8 @@ pub mod float_lists {
                 base: 6,
                 at: 3,
                 width: 8,
+                le: false,
+                signed: false,
                 count: rt::CountBy::Elements(rt::CountField {
                     name: "num_totals",
                     at: 2,
@@ -327,6 +333,8 @@ pub mod float_lists {
                 base: 6,
                 at: 4,
                 width: 8,
+                le: false,
+                signed: true,
                 count: rt::CountBy::Elements(rt::CountField {
                     name: "num_drifts",
                     at: 3,
@@ -344,6 +352,8 @@ pub mod float_lists {
         base: 5,
         at: 3,
         width: 8,
+        le: false,
+        signed: false,
         count: rt::CountBy::Elements(rt::CountField {
             name: "num_samples",
             at: 2,
@@ -610,28 +620,24 @@ pub mod float_lists {
             match frame[1] {
                 0x03 => {
                     let (_, elements, _) = REPEAT_FLOATS.split::<3>(frame)?;
-                    let v_values = REPEAT_FLOATS
-                        .view_words::<f32, 8>(elements, false, false)?;
+                    let v_values = REPEAT_FLOATS.view_words::<f32, 8>(elements)?;
                     REPEAT_FLOATS.view_in_range(&v_values, 3296329728, 1148846080)?;
                     rt::Ok(Self::Floats { values: v_values })
                 }
                 0x41 => {
                     let s = LISTS_COUNTERS.split::<6, 2>(frame)?;
                     let frame = &s.frame;
-                    let v_drifts = s
-                        .lists[1]
-                        .view::<i64, 2>(s.elements(1), false, true)?;
+                    let v_drifts = s.lists[1].view::<i64, 2>(s.elements(1))?;
                     s.lists[1].view_in_range(&v_drifts, -9000000000000, 9000000000000)?;
                     rt::Ok(Self::Counters {
-                        totals: s.lists[0].view::<u64, 4>(s.elements(0), false, false)?,
+                        totals: s.lists[0].view::<u64, 4>(s.elements(0))?,
                         drifts: v_drifts,
                     })
                 }
                 0x42 => {
                     let (_, elements, _) = REPEAT_SAMPLES.split::<3>(frame)?;
                     rt::Ok(Self::Samples {
-                        samples: REPEAT_SAMPLES
-                            .view_words::<f64, 4>(elements, false, false)?,
+                        samples: REPEAT_SAMPLES.view_words::<f64, 4>(elements)?,
                     })
                 }
                 _ => rt::Err(RESPONSE_CODE.unknown(frame)),
@@ -797,10 +803,7 @@ pub mod float_lists {
             ResponseView::decode_for(frame, request).map(|_| ())
         }
         fn checksum_ok(frame: &[u8]) -> bool {
-            match frame.len().checked_sub(2) {
-                rt::Some(n) if n > 0 => rt::check_sum(frame, n, &FRAME, frame_sum),
-                _ => false,
-            }
+            FRAME.checksum_ok(frame, frame_sum)
         }
     }
     /// A streaming decoder for this protocol: see [`busspec_runtime::stream`].
@@ -815,6 +818,8 @@ pub mod float_lists {
         pub const START: rt::Range<usize> = 2..4;
         pub const QUANTITY: rt::Range<usize> = 4..6;
         pub const QUANTITY_DESC: rt::FieldDesc = rt::field(Self::NAME, "quantity");
+        pub const QUANTITY_CHECK: rt::FieldCheck = rt::check(&Self::QUANTITY_DESC, 4)
+            .range(2, 16);
         pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
             f("start", rt::Int(self.start as i64));
             f("quantity", rt::Int(self.quantity as i64));
@@ -826,8 +831,8 @@ pub mod float_lists {
         #[inline(always)]
         fn write(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             let Self { start: v_start, quantity: v_quantity } = *self;
-            rt::encode_broadcast(address, 0x00, &request::ReadFloats::DESC)?;
-            rt::encode_in_range("quantity", v_quantity, 2, 16)?;
+            FRAME.encode_broadcast(address, &Self::DESC)?;
+            rt::encode_in_range(&Self::QUANTITY_CHECK, v_quantity)?;
             let out = rt::frame_mut::<8>(buf, &[address, 0x03])?;
             out[2..4].copy_from_slice(&v_start.to_be_bytes());
             out[4..6].copy_from_slice(&v_quantity.to_be_bytes());
@@ -837,9 +842,9 @@ pub mod float_lists {
         #[inline(always)]
         fn from_frame(frame: &[u8]) -> rt::DecodeResult<Self> {
             let frame = rt::fixed::<8>(frame, &Self::DESC)?;
-            rt::no_broadcast(frame[0], 0x00, &Self::DESC)?;
+            FRAME.no_broadcast(frame[0], &Self::DESC)?;
             let w_quantity: u16 = u16::from_be_bytes([frame[4], frame[5]]);
-            rt::in_range(&Self::QUANTITY_DESC, 4, w_quantity, 2, 16)?;
+            rt::in_range(&Self::QUANTITY_CHECK, w_quantity)?;
             rt::Ok(Self {
                 start: u16::from_be_bytes([frame[2], frame[3]]),
                 quantity: w_quantity,
@@ -858,7 +863,7 @@ pub mod float_lists {
         #[inline(always)]
         fn from_frame(frame: &[u8]) -> rt::DecodeResult<Self> {
             let frame = rt::fixed::<4>(frame, &Self::DESC)?;
-            rt::no_broadcast(frame[0], 0x00, &Self::DESC)?;
+            FRAME.no_broadcast(frame[0], &Self::DESC)?;
             rt::Ok(Self)
         }
     }
@@ -874,7 +879,7 @@ pub mod float_lists {
         #[inline(always)]
         fn from_frame(frame: &[u8]) -> rt::DecodeResult<Self> {
             let frame = rt::fixed::<4>(frame, &Self::DESC)?;
-            rt::no_broadcast(frame[0], 0x00, &Self::DESC)?;
+            FRAME.no_broadcast(frame[0], &Self::DESC)?;
             rt::Ok(Self)
         }
     }
@@ -904,14 +909,14 @@ pub mod float_lists {
                 0,
                 255,
             )? as u8;
-            rt::write_words(v_values.as_slice(), 4, false, &mut out[3..]);
+            REPEAT_FLOATS.write_words(v_values.as_slice(), &mut out[3..]);
             rt::Ok(out.len())
         }
         /// Reads this message from a frame whose framing and code are checked.
         #[inline(always)]
         fn from_frame(frame: &[u8]) -> rt::DecodeResult<Self> {
             let (_, elements, _) = REPEAT_FLOATS.split::<3>(frame)?;
-            let v_values = REPEAT_FLOATS.words::<f32, 8>(elements, false, false)?;
+            let v_values = REPEAT_FLOATS.words::<f32, 8>(elements)?;
             REPEAT_FLOATS.in_range(v_values.as_slice(), 3296329728, 1148846080)?;
             rt::Ok(Self { values: v_values })
         }
@@ -960,8 +965,8 @@ pub mod float_lists {
                 255,
             )? as u8;
             let out = LISTS_COUNTERS.expand(&compact, &[bytes_0, bytes_1], buf)?;
-            rt::write_elements(v_totals.as_slice(), 8, false, &mut out[3..]);
-            rt::write_elements(v_drifts.as_slice(), 8, false, &mut out[4 + bytes_0..]);
+            LISTS_COUNTERS.lists[0].write(v_totals.as_slice(), &mut out[3..]);
+            LISTS_COUNTERS.lists[1].write(v_drifts.as_slice(), &mut out[4 + bytes_0..]);
             rt::Ok(out.len())
         }
         /// Reads this message from a frame whose framing and code are checked.
@@ -969,10 +974,10 @@ pub mod float_lists {
         fn from_frame(frame: &[u8]) -> rt::DecodeResult<Self> {
             let s = LISTS_COUNTERS.split::<6, 2>(frame)?;
             let frame = &s.frame;
-            let v_drifts = s.lists[1].elements::<i64, 2>(s.elements(1), false, true)?;
+            let v_drifts = s.lists[1].elements::<i64, 2>(s.elements(1))?;
             s.lists[1].in_range(v_drifts.as_slice(), -9000000000000, 9000000000000)?;
             rt::Ok(Self {
-                totals: s.lists[0].elements::<u64, 4>(s.elements(0), false, false)?,
+                totals: s.lists[0].elements::<u64, 4>(s.elements(0))?,
                 drifts: v_drifts,
             })
         }
@@ -1002,7 +1007,7 @@ pub mod float_lists {
                 0,
                 255,
             )? as u8;
-            rt::write_words(v_samples.as_slice(), 8, false, &mut out[3..]);
+            REPEAT_SAMPLES.write_words(v_samples.as_slice(), &mut out[3..]);
             rt::Ok(out.len())
         }
         /// Reads this message from a frame whose framing and code are checked.
@@ -1010,7 +1015,7 @@ pub mod float_lists {
         fn from_frame(frame: &[u8]) -> rt::DecodeResult<Self> {
             let (_, elements, _) = REPEAT_SAMPLES.split::<3>(frame)?;
             rt::Ok(Self {
-                samples: REPEAT_SAMPLES.words::<f64, 4>(elements, false, false)?,
+                samples: REPEAT_SAMPLES.words::<f64, 4>(elements)?,
             })
         }
     }

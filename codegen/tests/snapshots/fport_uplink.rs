@@ -595,10 +595,7 @@ pub mod fport_uplink {
             let rt::Some(frame) = plain.get(..un.len) else {
                 return false;
             };
-            match frame.len().checked_sub(1) {
-                rt::Some(n) if n > 0 => rt::check_sum(frame, n, &FRAME, frame_sum),
-                _ => false,
-            }
+            FRAME.checksum_ok(frame, frame_sum)
         }
     }
     /// A streaming decoder for this protocol: see [`busspec_runtime::stream`].

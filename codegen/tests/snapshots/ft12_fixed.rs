@@ -147,23 +147,16 @@ pub mod ft12_fixed {
             let len = match *self {
                 Self::ResetRemoteLink(_) => rt::head(out, &[0x10, 0x40, address]).len(),
                 Self::RequestStatusOfLink(_) => {
-                    rt::encode_broadcast(
-                        address,
-                        0xFF,
-                        &request::RequestStatusOfLink::DESC,
-                    )?;
+                    FRAME
+                        .encode_broadcast(address, &request::RequestStatusOfLink::DESC)?;
                     rt::head(out, &[0x10, 0x49, address]).len()
                 }
                 Self::RequestClass2(_) => {
-                    rt::encode_broadcast(address, 0xFF, &request::RequestClass2::DESC)?;
+                    FRAME.encode_broadcast(address, &request::RequestClass2::DESC)?;
                     rt::head(out, &[0x10, 0x5B, address]).len()
                 }
                 Self::RequestClass2Fcb(_) => {
-                    rt::encode_broadcast(
-                        address,
-                        0xFF,
-                        &request::RequestClass2Fcb::DESC,
-                    )?;
+                    FRAME.encode_broadcast(address, &request::RequestClass2Fcb::DESC)?;
                     rt::head(out, &[0x10, 0x7B, address]).len()
                 }
             };
@@ -525,10 +518,7 @@ pub mod ft12_fixed {
             }
         }
         fn checksum_ok(frame: &[u8]) -> bool {
-            match frame.len().checked_sub(2) {
-                rt::Some(n) if n > 0 => rt::check_sum(frame, n, &FRAME, frame_sum),
-                _ => false,
-            }
+            FRAME.checksum_ok(frame, frame_sum)
         }
     }
     /// A streaming decoder for this protocol: see [`busspec_runtime::stream`].
@@ -556,7 +546,7 @@ pub mod ft12_fixed {
         #[inline(always)]
         fn from_frame(frame: &[u8]) -> rt::DecodeResult<Self> {
             let frame = rt::fixed::<5>(frame, &Self::DESC)?;
-            rt::no_broadcast(frame[2], 0xFF, &Self::DESC)?;
+            FRAME.no_broadcast(frame[2], &Self::DESC)?;
             rt::Ok(Self)
         }
     }
@@ -572,7 +562,7 @@ pub mod ft12_fixed {
         #[inline(always)]
         fn from_frame(frame: &[u8]) -> rt::DecodeResult<Self> {
             let frame = rt::fixed::<5>(frame, &Self::DESC)?;
-            rt::no_broadcast(frame[2], 0xFF, &Self::DESC)?;
+            FRAME.no_broadcast(frame[2], &Self::DESC)?;
             rt::Ok(Self)
         }
     }
@@ -588,7 +578,7 @@ pub mod ft12_fixed {
         #[inline(always)]
         fn from_frame(frame: &[u8]) -> rt::DecodeResult<Self> {
             let frame = rt::fixed::<5>(frame, &Self::DESC)?;
-            rt::no_broadcast(frame[2], 0xFF, &Self::DESC)?;
+            FRAME.no_broadcast(frame[2], &Self::DESC)?;
             rt::Ok(Self)
         }
     }

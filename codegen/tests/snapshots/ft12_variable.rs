@@ -167,7 +167,7 @@ pub mod ft12_variable {
                     rt::head(out, &[0x68, 0x03, 0x03, 0x68, 0x53, address, 0x50]).len()
                 }
                 Self::ReadData(_) => {
-                    rt::encode_broadcast(address, 0xFE, &request::ReadData::DESC)?;
+                    FRAME.encode_broadcast(address, &request::ReadData::DESC)?;
                     rt::head(out, &[0x68, 0x03, 0x03, 0x68, 0x7B, address, 0x5B]).len()
                 }
             };
@@ -520,10 +520,7 @@ pub mod ft12_variable {
             }
         }
         fn checksum_ok(frame: &[u8]) -> bool {
-            match frame.len().checked_sub(2) {
-                rt::Some(n) if n > 0 => rt::check_sum(frame, n, &FRAME, frame_sum),
-                _ => false,
-            }
+            FRAME.checksum_ok(frame, frame_sum)
         }
     }
     /// A streaming decoder for this protocol: see [`busspec_runtime::stream`].
@@ -560,7 +557,7 @@ pub mod ft12_variable {
         #[inline(always)]
         fn from_frame(frame: &[u8]) -> rt::DecodeResult<Self> {
             let frame = rt::fixed::<9>(frame, &Self::DESC)?;
-            rt::no_broadcast(frame[5], 0xFE, &Self::DESC)?;
+            FRAME.no_broadcast(frame[5], &Self::DESC)?;
             rt::equal(&Self::CI_DESC, 6, frame[6], 0x5B)?;
             rt::Ok(Self)
         }
@@ -578,11 +575,16 @@ pub mod ft12_variable {
         pub const STATUS: rt::Range<usize> = 16..17;
         pub const SIGNATURE: rt::Range<usize> = 17..19;
         pub const VOLUME: rt::Range<usize> = 21..25;
-        pub const CI_DESC: rt::FieldDesc = rt::field(Self::NAME, "ci");
         pub const IDENTIFICATION_DESC: rt::FieldDesc = rt::field(
             Self::NAME,
             "identification",
         );
+        pub const IDENTIFICATION_CHECK: rt::FieldCheck = rt::check(
+                &Self::IDENTIFICATION_DESC,
+                7,
+            )
+            .range(0, 99999999);
+        pub const CI_DESC: rt::FieldDesc = rt::field(Self::NAME, "ci");
         pub const DIF_DESC: rt::FieldDesc = rt::field(Self::NAME, "dif");
         pub const VIF_DESC: rt::FieldDesc = rt::field(Self::NAME, "vif");
         pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
@@ -611,7 +613,7 @@ pub mod ft12_variable {
                 signature: v_signature,
                 volume: v_volume,
             } = *self;
-            rt::encode_in_range("identification", v_identification, 0, 99999999)?;
+            rt::encode_in_range(&Self::IDENTIFICATION_CHECK, v_identification)?;
             let out = rt::head(out, &[0x68, 0x15, 0x15, 0x68, 0x08, address, 0x72]);
             out[19..21].copy_from_slice(&[0x04, 0x13]);
             out[7..11]
@@ -637,7 +639,7 @@ pub mod ft12_variable {
                 7,
                 u32::from_le_bytes([frame[7], frame[8], frame[9], frame[10]]) as u64,
             )? as u32;
-            rt::in_range(&Self::IDENTIFICATION_DESC, 7, w_identification, 0, 99999999)?;
+            rt::in_range(&Self::IDENTIFICATION_CHECK, w_identification)?;
             rt::equal(&Self::DIF_DESC, 19, frame[19], 0x4)?;
             rt::equal(&Self::VIF_DESC, 20, frame[20], 0x13)?;
             rt::Ok(Self {

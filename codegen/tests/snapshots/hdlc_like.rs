@@ -195,7 +195,7 @@ pub mod hdlc_like {
             rt::encode_address(address, &FRAME)?;
             let len = match *self {
                 Self::ReadStatus(_) => {
-                    rt::encode_broadcast(address, 0xFF, &request::ReadStatus::DESC)?;
+                    FRAME.encode_broadcast(address, &request::ReadStatus::DESC)?;
                     rt::frame_mut::<6>(buf, &[0x7E, address, 0x10])?.len()
                 }
                 Self::WriteRegister(ref m) => m.write(address, buf)?,
@@ -572,10 +572,7 @@ pub mod hdlc_like {
             let rt::Some(frame) = plain.get(..un.len) else {
                 return false;
             };
-            match frame.len().checked_sub(3) {
-                rt::Some(n) if n > 0 => rt::check_sum(frame, n, &FRAME, frame_sum),
-                _ => false,
-            }
+            FRAME.checksum_ok(frame, frame_sum)
         }
     }
     /// A streaming decoder for this protocol: see [`busspec_runtime::stream`].
@@ -594,7 +591,7 @@ pub mod hdlc_like {
         #[inline(always)]
         fn from_frame(frame: &[u8]) -> rt::DecodeResult<Self> {
             let frame = rt::fixed::<6>(frame, &Self::DESC)?;
-            rt::no_broadcast(frame[1], 0xFF, &Self::DESC)?;
+            FRAME.no_broadcast(frame[1], &Self::DESC)?;
             rt::Ok(Self)
         }
     }

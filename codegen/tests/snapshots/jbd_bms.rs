@@ -550,6 +550,8 @@ pub mod jbd_bms {
         base: 30,
         at: 27,
         width: 2,
+        le: false,
+        signed: false,
         count: rt::CountBy::Elements(rt::CountField {
             name: "ntc_count",
             at: 26,
@@ -565,6 +567,8 @@ pub mod jbd_bms {
         base: 7,
         at: 4,
         width: 2,
+        le: false,
+        signed: false,
         count: rt::CountBy::End,
         min: 1,
         max: 32,
@@ -575,6 +579,8 @@ pub mod jbd_bms {
         base: 7,
         at: 4,
         width: 1,
+        le: false,
+        signed: false,
         count: rt::CountBy::End,
         min: 1,
         max: 32,
@@ -724,13 +730,7 @@ pub mod jbd_bms {
                                 frame[2],
                                 0x0,
                             )?;
-                            rt::in_range(
-                                &response::BasicInfo::SOC_DESC,
-                                23,
-                                frame[23],
-                                0,
-                                100,
-                            )?;
+                            rt::in_range(&response::BasicInfo::SOC_CHECK, frame[23])?;
                             rt::Ok(
                                 Self::BasicInfo(response::BasicInfo {
                                     total_voltage: Centivolts::from_raw(
@@ -755,7 +755,7 @@ pub mod jbd_bms {
                                     fet_control: frame[24],
                                     cells: frame[25],
                                     temperatures: REPEAT_BASIC_INFO
-                                        .elements::<DeciKelvin, 8>(elements, false, false)?,
+                                        .elements::<DeciKelvin, 8>(elements)?,
                                 }),
                             )
                         },
@@ -780,7 +780,7 @@ pub mod jbd_bms {
                             rt::Ok(
                                 Self::CellVoltages(response::CellVoltages {
                                     cell_voltages: REPEAT_CELL_VOLTAGES
-                                        .elements::<u16, 32>(elements, false, false)?,
+                                        .elements::<u16, 32>(elements)?,
                                 }),
                             )
                         },
@@ -804,8 +804,7 @@ pub mod jbd_bms {
                             )?;
                             rt::Ok(
                                 Self::Version(response::Version {
-                                    version: REPEAT_VERSION
-                                        .elements::<u8, 32>(elements, false, false)?,
+                                    version: REPEAT_VERSION.elements::<u8, 32>(elements)?,
                                 }),
                             )
                         },
@@ -997,13 +996,7 @@ pub mod jbd_bms {
                                 frame[2],
                                 0x0,
                             )?;
-                            rt::in_range(
-                                &response::BasicInfo::SOC_DESC,
-                                23,
-                                frame[23],
-                                0,
-                                100,
-                            )?;
+                            rt::in_range(&response::BasicInfo::SOC_CHECK, frame[23])?;
                             rt::Ok(Self::BasicInfo {
                                 total_voltage: Centivolts::from_raw(
                                     u16::from_be_bytes([frame[4], frame[5]]),
@@ -1027,7 +1020,7 @@ pub mod jbd_bms {
                                 fet_control: frame[24],
                                 cells: frame[25],
                                 temperatures: REPEAT_BASIC_INFO
-                                    .view::<DeciKelvin, 8>(elements, false, false)?,
+                                    .view::<DeciKelvin, 8>(elements)?,
                             })
                         },
                     );
@@ -1055,7 +1048,7 @@ pub mod jbd_bms {
                             )?;
                             rt::Ok(Self::CellVoltages {
                                 cell_voltages: REPEAT_CELL_VOLTAGES
-                                    .view::<u16, 32>(elements, false, false)?,
+                                    .view::<u16, 32>(elements)?,
                             })
                         },
                     );
@@ -1082,8 +1075,7 @@ pub mod jbd_bms {
                                 0x0,
                             )?;
                             rt::Ok(Self::Version {
-                                version: REPEAT_VERSION
-                                    .view::<u8, 32>(elements, false, false)?,
+                                version: REPEAT_VERSION.view::<u8, 32>(elements)?,
                             })
                         },
                     );
@@ -1337,10 +1329,7 @@ pub mod jbd_bms {
             ResponseView::decode_for(frame, request).map(|_| ())
         }
         fn checksum_ok(frame: &[u8]) -> bool {
-            match frame.len().checked_sub(3) {
-                rt::Some(n) if n > 0 => rt::check_sum(frame, n, &FRAME, frame_sum),
-                _ => false,
-            }
+            FRAME.checksum_ok(frame, frame_sum)
         }
     }
     /// A streaming decoder for this protocol: see [`busspec_runtime::stream`].
@@ -1417,12 +1406,14 @@ pub mod jbd_bms {
         pub const SOC: rt::Range<usize> = 23..24;
         pub const FET_CONTROL: rt::Range<usize> = 24..25;
         pub const CELLS: rt::Range<usize> = 25..26;
+        pub const SOC_DESC: rt::FieldDesc = rt::field(Self::NAME, "soc");
+        pub const SOC_CHECK: rt::FieldCheck = rt::check(&Self::SOC_DESC, 23)
+            .range(0, 100);
         pub const TEMPERATURES_DESC: rt::FieldDesc = rt::field(
             Self::NAME,
             "temperatures",
         );
         pub const STATUS_DESC: rt::FieldDesc = rt::field(Self::NAME, "status");
-        pub const SOC_DESC: rt::FieldDesc = rt::field(Self::NAME, "soc");
         pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
             f("total_voltage", rt::Int(self.total_voltage.raw() as i64));
             f("current", rt::Int(self.current.raw() as i64));
@@ -1475,7 +1466,7 @@ pub mod jbd_bms {
             out[18..20].copy_from_slice(&v_balance_high.to_be_bytes());
             out[20..22].copy_from_slice(&v_protection.to_be_bytes());
             out[22] = v_software_version;
-            rt::encode_in_range("soc", v_soc, 0, 100)?;
+            rt::encode_in_range(&Self::SOC_CHECK, v_soc)?;
             out[23] = v_soc;
             out[24] = v_fet_control;
             out[25] = v_cells;
@@ -1485,7 +1476,7 @@ pub mod jbd_bms {
                 0,
                 255,
             )? as u8;
-            rt::write_elements(v_temperatures.as_slice(), 2, false, &mut out[27..]);
+            REPEAT_BASIC_INFO.write(v_temperatures.as_slice(), &mut out[27..]);
             rt::Ok(out.len())
         }
     }
@@ -1513,7 +1504,7 @@ pub mod jbd_bms {
             let frame_len = REPEAT_CELL_VOLTAGES.encode_len(v_cell_voltages.len())?;
             let out = rt::frame_mut_len(buf, frame_len, &[0xDD, 0x04, 0x00])?;
             LENGTH.put(out)?;
-            rt::write_elements(v_cell_voltages.as_slice(), 2, false, &mut out[4..]);
+            REPEAT_CELL_VOLTAGES.write(v_cell_voltages.as_slice(), &mut out[4..]);
             rt::Ok(out.len())
         }
     }
@@ -1538,7 +1529,7 @@ pub mod jbd_bms {
             let frame_len = REPEAT_VERSION.encode_len(v_version.len())?;
             let out = rt::frame_mut_len(buf, frame_len, &[0xDD, 0x05, 0x00])?;
             LENGTH.put(out)?;
-            rt::write_elements(v_version.as_slice(), 1, false, &mut out[4..]);
+            REPEAT_VERSION.write(v_version.as_slice(), &mut out[4..]);
             rt::Ok(out.len())
         }
     }

@@ -123,6 +123,8 @@ pub mod kiss {
         base: 3,
         at: 2,
         width: 1,
+        le: false,
+        signed: false,
         count: rt::CountBy::End,
         min: 0,
         max: 1024,
@@ -133,6 +135,8 @@ pub mod kiss {
         base: 3,
         at: 2,
         width: 1,
+        le: false,
+        signed: false,
         count: rt::CountBy::End,
         min: 0,
         max: 1024,
@@ -404,6 +408,8 @@ pub mod kiss {
         base: 3,
         at: 2,
         width: 1,
+        le: false,
+        signed: false,
         count: rt::CountBy::End,
         min: 0,
         max: 1024,
@@ -686,10 +692,7 @@ pub mod kiss {
             let rt::Some(frame) = plain.get(..un.len) else {
                 return false;
             };
-            match frame.len().checked_sub(1) {
-                rt::Some(n) if n > 0 => rt::check_sum(frame, n, &FRAME, frame_sum),
-                _ => false,
-            }
+            FRAME.checksum_ok(frame, frame_sum)
         }
     }
     /// A streaming decoder for this protocol: see [`busspec_runtime::stream`].
@@ -715,7 +718,7 @@ pub mod kiss {
             let Self { frame: v_frame } = *self;
             let frame_len = REPEAT_DATA_FRAME.encode_len(v_frame.len())?;
             let out = rt::frame_mut_len(buf, frame_len, &[0xC0, 0x00])?;
-            rt::write_elements(v_frame.as_slice(), 1, false, &mut out[2..]);
+            REPEAT_DATA_FRAME.write(v_frame.as_slice(), &mut out[2..]);
             rt::Ok(out.len())
         }
         /// Reads this message from a frame whose framing and code are checked.
@@ -723,7 +726,7 @@ pub mod kiss {
         fn from_frame(frame: &[u8]) -> rt::DecodeResult<Self> {
             let (frame, elements, _) = REPEAT_DATA_FRAME.split::<2>(frame)?;
             rt::Ok(Self {
-                frame: REPEAT_DATA_FRAME.elements::<u8, 1024>(elements, false, false)?,
+                frame: REPEAT_DATA_FRAME.elements::<u8, 1024>(elements)?,
             })
         }
     }
@@ -881,7 +884,7 @@ pub mod kiss {
             let Self { data: v_data } = *self;
             let frame_len = REPEAT_SET_HARDWARE.encode_len(v_data.len())?;
             let out = rt::frame_mut_len(buf, frame_len, &[0xC0, 0x06])?;
-            rt::write_elements(v_data.as_slice(), 1, false, &mut out[2..]);
+            REPEAT_SET_HARDWARE.write(v_data.as_slice(), &mut out[2..]);
             rt::Ok(out.len())
         }
         /// Reads this message from a frame whose framing and code are checked.
@@ -889,7 +892,7 @@ pub mod kiss {
         fn from_frame(frame: &[u8]) -> rt::DecodeResult<Self> {
             let (_, elements, _) = REPEAT_SET_HARDWARE.split::<2>(frame)?;
             rt::Ok(Self {
-                data: REPEAT_SET_HARDWARE.elements::<u8, 1024>(elements, false, false)?,
+                data: REPEAT_SET_HARDWARE.elements::<u8, 1024>(elements)?,
             })
         }
     }
@@ -921,7 +924,7 @@ pub mod kiss {
             let Self { frame: v_frame } = *self;
             let frame_len = REPEAT_RECEIVED_FRAME.encode_len(v_frame.len())?;
             let out = rt::frame_mut_len(buf, frame_len, &[0xC0, 0x00])?;
-            rt::write_elements(v_frame.as_slice(), 1, false, &mut out[2..]);
+            REPEAT_RECEIVED_FRAME.write(v_frame.as_slice(), &mut out[2..]);
             rt::Ok(out.len())
         }
         /// Reads this message from a frame whose framing and code are checked.
@@ -929,8 +932,7 @@ pub mod kiss {
         fn from_frame(frame: &[u8]) -> rt::DecodeResult<Self> {
             let (frame, elements, _) = REPEAT_RECEIVED_FRAME.split::<2>(frame)?;
             rt::Ok(Self {
-                frame: REPEAT_RECEIVED_FRAME
-                    .elements::<u8, 1024>(elements, false, false)?,
+                frame: REPEAT_RECEIVED_FRAME.elements::<u8, 1024>(elements)?,
             })
         }
     }

@@ -109,6 +109,8 @@ pub mod lists_after {
         base: 7,
         at: 4,
         width: 2,
+        le: false,
+        signed: false,
         count: rt::CountBy::Elements(rt::CountField {
             name: "n",
             at: 3,
@@ -127,6 +129,8 @@ pub mod lists_after {
                 base: 7,
                 at: 4,
                 width: 2,
+                le: false,
+                signed: false,
                 count: rt::CountBy::Elements(rt::CountField {
                     name: "n",
                     at: 3,
@@ -144,6 +148,8 @@ pub mod lists_after {
         base: 7,
         at: 4,
         width: 1,
+        le: false,
+        signed: false,
         count: rt::CountBy::Elements(rt::CountField {
             name: "na",
             at: 3,
@@ -162,6 +168,8 @@ pub mod lists_after {
                 base: 7,
                 at: 4,
                 width: 1,
+                le: false,
+                signed: false,
                 count: rt::CountBy::Elements(rt::CountField {
                     name: "na",
                     at: 3,
@@ -176,6 +184,8 @@ pub mod lists_after {
                 base: 7,
                 at: 5,
                 width: 2,
+                le: false,
+                signed: false,
                 count: rt::CountBy::Bytes(rt::CountField {
                     name: "nb",
                     at: 4,
@@ -367,6 +377,8 @@ pub mod lists_after {
         base: 6,
         at: 3,
         width: 2,
+        le: false,
+        signed: false,
         count: rt::CountBy::End,
         min: 1,
         max: 8,
@@ -380,6 +392,8 @@ pub mod lists_after {
                 base: 6,
                 at: 3,
                 width: 2,
+                le: false,
+                signed: false,
                 count: rt::CountBy::End,
                 min: 1,
                 max: 8,
@@ -588,7 +602,7 @@ pub mod lists_after {
             match frame[2] {
                 0x10 => {
                     let frame = rt::fixed::<7>(frame, &request::ReadBlock::DESC)?;
-                    rt::in_range(&request::ReadBlock::QUANTITY_DESC, 5, frame[5], 1, 8)?;
+                    rt::in_range(&request::ReadBlock::QUANTITY_CHECK, frame[5])?;
                     rt::Ok(Self::ReadBlock {
                         first: u16::from_be_bytes([frame[3], frame[4]]),
                         quantity: frame[5],
@@ -599,27 +613,22 @@ pub mod lists_after {
                     let frame = &s.frame;
                     let w_flags: u16 = u16::from_be_bytes([frame[4], frame[5]]);
                     rt::in_range(
-                        &request::WriteBlock::FLAGS_DESC,
-                        4 + s.shift(1),
+                        &request::WriteBlock::FLAGS_CHECK.at(4 + s.shift(1)),
                         w_flags,
-                        0,
-                        255,
                     )?;
                     rt::Ok(Self::WriteBlock {
-                        values: s.lists[0].view::<u16, 8>(s.elements(0), false, false)?,
+                        values: s.lists[0].view::<u16, 8>(s.elements(0))?,
                         flags: w_flags,
                     })
                 }
                 0x12 => {
                     let s = LISTS_COPY.split::<7, 2>(frame)?;
                     let frame = &s.frame;
-                    let v_targets = s
-                        .lists[1]
-                        .view::<u16, 4>(s.elements(1), false, false)?;
+                    let v_targets = s.lists[1].view::<u16, 4>(s.elements(1))?;
                     s.lists[1].view_in_range(&v_targets, 1, 1000)?;
                     rt::equal(&request::Copy::MODE_DESC, 5 + s.shift(2), frame[5], 0x1)?;
                     rt::Ok(Self::Copy {
-                        sources: s.lists[0].view::<u8, 4>(s.elements(0), false, false)?,
+                        sources: s.lists[0].view::<u8, 4>(s.elements(0))?,
                         targets: v_targets,
                     })
                 }
@@ -715,7 +724,7 @@ pub mod lists_after {
                     let s = LISTS_BLOCK_REPLY.split::<6, 1>(frame)?;
                     let frame = &s.frame;
                     rt::Ok(Self::BlockReply {
-                        values: s.lists[0].view::<u16, 8>(s.elements(0), false, false)?,
+                        values: s.lists[0].view::<u16, 8>(s.elements(0))?,
                         status: u16::from_be_bytes([frame[3], frame[4]]),
                     })
                 }
@@ -897,10 +906,7 @@ pub mod lists_after {
             !(7..=23).contains(&frame.len()) || RequestView::dispatch(frame).is_ok()
         }
         fn checksum_ok(frame: &[u8]) -> bool {
-            match frame.len().checked_sub(1) {
-                rt::Some(n) if n > 0 => rt::check_sum(frame, n, &FRAME, frame_sum),
-                _ => false,
-            }
+            FRAME.checksum_ok(frame, frame_sum)
         }
     }
     /// A streaming decoder for this protocol: see [`busspec_runtime::stream`].
@@ -915,6 +921,8 @@ pub mod lists_after {
         pub const FIRST: rt::Range<usize> = 3..5;
         pub const QUANTITY: rt::Range<usize> = 5..6;
         pub const QUANTITY_DESC: rt::FieldDesc = rt::field(Self::NAME, "quantity");
+        pub const QUANTITY_CHECK: rt::FieldCheck = rt::check(&Self::QUANTITY_DESC, 5)
+            .range(1, 8);
         pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
             f("first", rt::Int(self.first as i64));
             f("quantity", rt::Int(self.quantity as i64));
@@ -926,7 +934,7 @@ pub mod lists_after {
         #[inline(always)]
         fn write(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             let Self { first: v_first, quantity: v_quantity } = *self;
-            rt::encode_in_range("quantity", v_quantity, 1, 8)?;
+            rt::encode_in_range(&Self::QUANTITY_CHECK, v_quantity)?;
             let out = rt::frame_mut::<7>(buf, &[0x7E, address, 0x10])?;
             out[3..5].copy_from_slice(&v_first.to_be_bytes());
             out[5] = v_quantity;
@@ -936,7 +944,7 @@ pub mod lists_after {
         #[inline(always)]
         fn from_frame(frame: &[u8]) -> rt::DecodeResult<Self> {
             let frame = rt::fixed::<7>(frame, &Self::DESC)?;
-            rt::in_range(&Self::QUANTITY_DESC, 5, frame[5], 1, 8)?;
+            rt::in_range(&Self::QUANTITY_CHECK, frame[5])?;
             rt::Ok(Self {
                 first: u16::from_be_bytes([frame[3], frame[4]]),
                 quantity: frame[5],
@@ -949,8 +957,10 @@ pub mod lists_after {
         pub const MIN_LEN: usize = 9;
         pub const MAX_LEN: usize = 23;
         pub const DESC: rt::MessageDesc = rt::desc(Self::NAME, 0x11, 1, &[7]);
-        pub const VALUES_DESC: rt::FieldDesc = rt::field(Self::NAME, "values");
         pub const FLAGS_DESC: rt::FieldDesc = rt::field(Self::NAME, "flags");
+        pub const FLAGS_CHECK: rt::FieldCheck = rt::check(&Self::FLAGS_DESC, 4)
+            .range(0, 255);
+        pub const VALUES_DESC: rt::FieldDesc = rt::field(Self::NAME, "values");
         pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
             f("values", rt::List(self.values.elements()));
             f("flags", rt::Int(self.flags as i64));
@@ -975,10 +985,10 @@ pub mod lists_after {
                 0,
                 255,
             )? as u8;
-            rt::encode_in_range("flags", v_flags, 0, 255)?;
+            rt::encode_in_range(&Self::FLAGS_CHECK, v_flags)?;
             out[4..6].copy_from_slice(&v_flags.to_be_bytes());
             let out = LISTS_WRITE_BLOCK.expand(&compact, &[bytes_0], buf)?;
-            rt::write_elements(v_values.as_slice(), 2, false, &mut out[4..]);
+            LISTS_WRITE_BLOCK.lists[0].write(v_values.as_slice(), &mut out[4..]);
             rt::Ok(out.len())
         }
         /// Reads this message from a frame whose framing and code are checked.
@@ -987,9 +997,9 @@ pub mod lists_after {
             let s = LISTS_WRITE_BLOCK.split::<7, 1>(frame)?;
             let frame = &s.frame;
             let w_flags: u16 = u16::from_be_bytes([frame[4], frame[5]]);
-            rt::in_range(&Self::FLAGS_DESC, 4 + s.shift(1), w_flags, 0, 255)?;
+            rt::in_range(&Self::FLAGS_CHECK.at(4 + s.shift(1)), w_flags)?;
             rt::Ok(Self {
-                values: s.lists[0].elements::<u16, 8>(s.elements(0), false, false)?,
+                values: s.lists[0].elements::<u16, 8>(s.elements(0))?,
                 flags: w_flags,
             })
         }
@@ -1038,8 +1048,8 @@ pub mod lists_after {
                 255,
             )? as u8;
             let out = LISTS_COPY.expand(&compact, &[bytes_0, bytes_1], buf)?;
-            rt::write_elements(v_sources.as_slice(), 1, false, &mut out[4..]);
-            rt::write_elements(v_targets.as_slice(), 2, false, &mut out[5 + bytes_0..]);
+            LISTS_COPY.lists[0].write(v_sources.as_slice(), &mut out[4..]);
+            LISTS_COPY.lists[1].write(v_targets.as_slice(), &mut out[5 + bytes_0..]);
             rt::Ok(out.len())
         }
         /// Reads this message from a frame whose framing and code are checked.
@@ -1047,11 +1057,11 @@ pub mod lists_after {
         fn from_frame(frame: &[u8]) -> rt::DecodeResult<Self> {
             let s = LISTS_COPY.split::<7, 2>(frame)?;
             let frame = &s.frame;
-            let v_targets = s.lists[1].elements::<u16, 4>(s.elements(1), false, false)?;
+            let v_targets = s.lists[1].elements::<u16, 4>(s.elements(1))?;
             s.lists[1].in_range(v_targets.as_slice(), 1, 1000)?;
             rt::equal(&Self::MODE_DESC, 5 + s.shift(2), frame[5], 0x1)?;
             rt::Ok(Self {
-                sources: s.lists[0].elements::<u8, 4>(s.elements(0), false, false)?,
+                sources: s.lists[0].elements::<u8, 4>(s.elements(0))?,
                 targets: v_targets,
             })
         }
@@ -1083,7 +1093,7 @@ pub mod lists_after {
             };
             out[3..5].copy_from_slice(&v_status.to_be_bytes());
             let out = LISTS_BLOCK_REPLY.expand(&compact, &[bytes_0], buf)?;
-            rt::write_elements(v_values.as_slice(), 2, false, &mut out[3..]);
+            LISTS_BLOCK_REPLY.lists[0].write(v_values.as_slice(), &mut out[3..]);
             rt::Ok(out.len())
         }
         /// Reads this message from a frame whose framing and code are checked.
@@ -1092,7 +1102,7 @@ pub mod lists_after {
             let s = LISTS_BLOCK_REPLY.split::<6, 1>(frame)?;
             let frame = &s.frame;
             rt::Ok(Self {
-                values: s.lists[0].elements::<u16, 8>(s.elements(0), false, false)?,
+                values: s.lists[0].elements::<u16, 8>(s.elements(0))?,
                 status: u16::from_be_bytes([frame[3], frame[4]]),
             })
         }

@@ -174,6 +174,8 @@ pub mod lists_length {
         base: 7,
         at: 4,
         width: 1,
+        le: true,
+        signed: false,
         count: rt::CountBy::Elements(rt::CountField {
             name: "n",
             at: 3,
@@ -192,6 +194,8 @@ pub mod lists_length {
                 base: 7,
                 at: 4,
                 width: 1,
+                le: true,
+                signed: false,
                 count: rt::CountBy::Elements(rt::CountField {
                     name: "n",
                     at: 3,
@@ -206,6 +210,8 @@ pub mod lists_length {
                 base: 7,
                 at: 4,
                 width: 2,
+                le: true,
+                signed: true,
                 count: rt::CountBy::End,
                 min: 1,
                 max: 6,
@@ -218,6 +224,8 @@ pub mod lists_length {
         base: 7,
         at: 4,
         width: 0,
+        le: true,
+        signed: false,
         count: rt::CountBy::Bytes(rt::CountField {
             name: "bytes",
             at: 3,
@@ -236,6 +244,8 @@ pub mod lists_length {
                 base: 7,
                 at: 4,
                 width: 0,
+                le: true,
+                signed: false,
                 count: rt::CountBy::Bytes(rt::CountField {
                     name: "bytes",
                     at: 3,
@@ -589,15 +599,11 @@ pub mod lists_length {
                 0x20 => {
                     let s = LISTS_LOG.split::<7, 2>(frame)?;
                     let frame = &s.frame;
-                    let v_channels = s
-                        .lists[0]
-                        .view::<u8, 6>(s.elements(0), true, false)?;
+                    let v_channels = s.lists[0].view::<u8, 6>(s.elements(0))?;
                     s.lists[0].view_in_range(&v_channels, 0, 15)?;
                     rt::Ok(Self::Log {
                         channels: v_channels,
-                        samples: s
-                            .lists[1]
-                            .view::<Millivolts, 6>(s.elements(1), true, true)?,
+                        samples: s.lists[1].view::<Millivolts, 6>(s.elements(1))?,
                         seq: u16::from_le_bytes([frame[4], frame[5]]),
                     })
                 }
@@ -774,10 +780,7 @@ pub mod lists_length {
             RequestView::decode(frame).map(|_| ())
         }
         fn checksum_ok(frame: &[u8]) -> bool {
-            match frame.len().checked_sub(1) {
-                rt::Some(n) if n > 0 => rt::check_sum(frame, n, &FRAME, frame_sum),
-                _ => false,
-            }
+            FRAME.checksum_ok(frame, frame_sum)
         }
     }
     /// A streaming decoder for this protocol: see [`busspec_runtime::stream`].
@@ -824,8 +827,8 @@ pub mod lists_length {
             )? as u8;
             out[4..6].copy_from_slice(&v_seq.to_le_bytes());
             let out = LISTS_LOG.expand(&compact, &[bytes_0, bytes_1], buf)?;
-            rt::write_elements(v_channels.as_slice(), 1, true, &mut out[4..]);
-            rt::write_elements(v_samples.as_slice(), 2, true, &mut out[4 + bytes_0..]);
+            LISTS_LOG.lists[0].write(v_channels.as_slice(), &mut out[4..]);
+            LISTS_LOG.lists[1].write(v_samples.as_slice(), &mut out[4 + bytes_0..]);
             LENGTH.put(out)?;
             rt::Ok(out.len())
         }
@@ -834,13 +837,11 @@ pub mod lists_length {
         fn from_frame(frame: &[u8]) -> rt::DecodeResult<Self> {
             let s = LISTS_LOG.split::<7, 2>(frame)?;
             let frame = &s.frame;
-            let v_channels = s.lists[0].elements::<u8, 6>(s.elements(0), true, false)?;
+            let v_channels = s.lists[0].elements::<u8, 6>(s.elements(0))?;
             s.lists[0].in_range(v_channels.as_slice(), 0, 15)?;
             rt::Ok(Self {
                 channels: v_channels,
-                samples: s
-                    .lists[1]
-                    .elements::<Millivolts, 6>(s.elements(1), true, true)?,
+                samples: s.lists[1].elements::<Millivolts, 6>(s.elements(1))?,
                 seq: u16::from_le_bytes([frame[4], frame[5]]),
             })
         }

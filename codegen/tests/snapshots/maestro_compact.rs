@@ -531,10 +531,7 @@ pub mod maestro_compact {
             }
         }
         fn checksum_ok(frame: &[u8]) -> bool {
-            match frame.len().checked_sub(0) {
-                rt::Some(n) if n > 0 => rt::check_sum(frame, n, &FRAME, frame_sum),
-                _ => false,
-            }
+            FRAME.checksum_ok(frame, frame_sum)
         }
     }
     /// A streaming decoder for this protocol: see [`busspec_runtime::stream`].
@@ -548,6 +545,8 @@ pub mod maestro_compact {
         pub const DESC: rt::MessageDesc = rt::desc(Self::NAME, 0x84, 1, &[4]);
         pub const CHANNEL: rt::Range<usize> = 1..2;
         pub const CHANNEL_DESC: rt::FieldDesc = rt::field(Self::NAME, "channel");
+        pub const CHANNEL_CHECK: rt::FieldCheck = rt::check(&Self::CHANNEL_DESC, 1)
+            .range(0, 23);
         pub const ZERO_HIGH_DESC: rt::FieldDesc = rt::field(Self::NAME, "zero_high");
         pub const ZERO_LOW_DESC: rt::FieldDesc = rt::field(Self::NAME, "zero_low");
         pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
@@ -567,7 +566,7 @@ pub mod maestro_compact {
                 target_low: v_target_low,
             } = *self;
             let out = rt::frame_mut::<4>(buf, &[0x84])?;
-            rt::encode_in_range("channel", v_channel, 0, 23)?;
+            rt::encode_in_range(&Self::CHANNEL_CHECK, v_channel)?;
             out[1] = v_channel;
             let w_target: u16 = (((rt::fits("target_high", v_target_high.raw(), 0, 127)?
                 as u16) & 0x7F) << 8)
@@ -579,7 +578,7 @@ pub mod maestro_compact {
         #[inline(always)]
         fn from_frame(frame: &[u8]) -> rt::DecodeResult<Self> {
             let frame = rt::fixed::<4>(frame, &Self::DESC)?;
-            rt::in_range(&Self::CHANNEL_DESC, 1, frame[1], 0, 23)?;
+            rt::in_range(&Self::CHANNEL_CHECK, frame[1])?;
             let w_target: u16 = u16::from_le_bytes([frame[2], frame[3]]);
             rt::equal(&Self::ZERO_HIGH_DESC, 2, w_target >> 15, 0x0)?;
             rt::equal(&Self::ZERO_LOW_DESC, 2, (w_target >> 7) & 0x1, 0x0)?;
@@ -601,6 +600,8 @@ pub mod maestro_compact {
         pub const DESC: rt::MessageDesc = rt::desc(Self::NAME, 0x90, 1, &[2]);
         pub const CHANNEL: rt::Range<usize> = 1..2;
         pub const CHANNEL_DESC: rt::FieldDesc = rt::field(Self::NAME, "channel");
+        pub const CHANNEL_CHECK: rt::FieldCheck = rt::check(&Self::CHANNEL_DESC, 1)
+            .range(0, 23);
         pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
             f("channel", rt::Int(self.channel as i64));
         }
@@ -611,7 +612,7 @@ pub mod maestro_compact {
         #[inline(always)]
         fn write(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             let Self { channel: v_channel } = *self;
-            rt::encode_in_range("channel", v_channel, 0, 23)?;
+            rt::encode_in_range(&Self::CHANNEL_CHECK, v_channel)?;
             let out = rt::frame_mut::<2>(buf, &[0x90])?;
             out[1] = v_channel;
             rt::Ok(out.len())
@@ -620,7 +621,7 @@ pub mod maestro_compact {
         #[inline(always)]
         fn from_frame(frame: &[u8]) -> rt::DecodeResult<Self> {
             let frame = rt::fixed::<2>(frame, &Self::DESC)?;
-            rt::in_range(&Self::CHANNEL_DESC, 1, frame[1], 0, 23)?;
+            rt::in_range(&Self::CHANNEL_CHECK, frame[1])?;
             rt::Ok(Self { channel: frame[1] })
         }
     }

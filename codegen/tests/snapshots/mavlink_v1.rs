@@ -638,10 +638,7 @@ pub mod mavlink_v1 {
             }
         }
         fn checksum_ok(frame: &[u8]) -> bool {
-            match frame.len().checked_sub(2) {
-                rt::Some(n) if n > 0 => rt::check_sum(frame, n, &FRAME, frame_sum),
-                _ => false,
-            }
+            FRAME.checksum_ok(frame, frame_sum)
         }
     }
     /// A streaming decoder for this protocol: see [`busspec_runtime::stream`].
@@ -733,6 +730,11 @@ pub mod mavlink_v1 {
         pub const REQ_STREAM_ID: rt::Range<usize> = 10..11;
         pub const START_STOP: rt::Range<usize> = 11..12;
         pub const START_STOP_DESC: rt::FieldDesc = rt::field(Self::NAME, "start_stop");
+        pub const START_STOP_CHECK: rt::FieldCheck = rt::check(
+                &Self::START_STOP_DESC,
+                11,
+            )
+            .range(0, 1);
         pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
             f("sequence", rt::Int(self.sequence as i64));
             f("sysid", rt::Int(self.sysid as i64));
@@ -759,7 +761,7 @@ pub mod mavlink_v1 {
                 req_stream_id: v_req_stream_id,
                 start_stop: v_start_stop,
             } = *self;
-            rt::encode_in_range("start_stop", v_start_stop, 0, 1)?;
+            rt::encode_in_range(&Self::START_STOP_CHECK, v_start_stop)?;
             let out = rt::frame_mut::<14>(buf, &[0xFE, 0x06])?;
             out[5] = 0x42;
             out[2] = v_sequence;
@@ -776,7 +778,7 @@ pub mod mavlink_v1 {
         #[inline(always)]
         fn from_frame(frame: &[u8]) -> rt::DecodeResult<Self> {
             let frame = rt::fixed::<14>(frame, &Self::DESC)?;
-            rt::in_range(&Self::START_STOP_DESC, 11, frame[11], 0, 1)?;
+            rt::in_range(&Self::START_STOP_CHECK, frame[11])?;
             rt::Ok(Self {
                 sequence: frame[2],
                 sysid: frame[3],

@@ -742,10 +742,7 @@ pub mod mavlink_v2 {
             TRUNCATION.frame_lens(head, 2)
         }
         fn checksum_ok(frame: &[u8]) -> bool {
-            match frame.len().checked_sub(2) {
-                rt::Some(n) if n > 0 => rt::check_sum(frame, n, &FRAME, frame_sum),
-                _ => false,
-            }
+            FRAME.checksum_ok(frame, frame_sum)
         }
     }
     /// A streaming decoder for this protocol: see [`busspec_runtime::stream`].
@@ -770,6 +767,11 @@ pub mod mavlink_v2 {
             Self::NAME,
             "incompat_flags",
         );
+        pub const INCOMPAT_FLAGS_CHECK: rt::FieldCheck = rt::check(
+                &Self::INCOMPAT_FLAGS_DESC,
+                2,
+            )
+            .range(0, 0);
         pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
             f("incompat_flags", rt::Int(self.incompat_flags as i64));
             f("compat_flags", rt::Int(self.compat_flags as i64));
@@ -798,7 +800,7 @@ pub mod mavlink_v2 {
                 target_system: v_target_system,
                 target_component: v_target_component,
             } = *self;
-            rt::encode_in_range("incompat_flags", v_incompat_flags, 0, 0)?;
+            rt::encode_in_range(&Self::INCOMPAT_FLAGS_CHECK, v_incompat_flags)?;
             let out = rt::frame_mut::<26>(buf, &[0xFD, 0x0E])?;
             out[7..10].copy_from_slice(&[0x04, 0x00, 0x00]);
             out[2] = v_incompat_flags;
@@ -816,7 +818,7 @@ pub mod mavlink_v2 {
         #[inline(always)]
         fn from_frame(frame: &[u8]) -> rt::DecodeResult<Self> {
             let frame = rt::fixed::<26>(frame, &Self::DESC)?;
-            rt::in_range(&Self::INCOMPAT_FLAGS_DESC, 2, frame[2], 0, 0)?;
+            rt::in_range(&Self::INCOMPAT_FLAGS_CHECK, frame[2])?;
             rt::Ok(Self {
                 incompat_flags: frame[2],
                 compat_flags: frame[3],
@@ -858,7 +860,17 @@ pub mod mavlink_v2 {
             Self::NAME,
             "incompat_flags",
         );
+        pub const INCOMPAT_FLAGS_CHECK: rt::FieldCheck = rt::check(
+                &Self::INCOMPAT_FLAGS_DESC,
+                2,
+            )
+            .range(0, 0);
         pub const START_STOP_DESC: rt::FieldDesc = rt::field(Self::NAME, "start_stop");
+        pub const START_STOP_CHECK: rt::FieldCheck = rt::check(
+                &Self::START_STOP_DESC,
+                15,
+            )
+            .range(0, 1);
         pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
             f("incompat_flags", rt::Int(self.incompat_flags as i64));
             f("compat_flags", rt::Int(self.compat_flags as i64));
@@ -889,8 +901,8 @@ pub mod mavlink_v2 {
                 req_stream_id: v_req_stream_id,
                 start_stop: v_start_stop,
             } = *self;
-            rt::encode_in_range("incompat_flags", v_incompat_flags, 0, 0)?;
-            rt::encode_in_range("start_stop", v_start_stop, 0, 1)?;
+            rt::encode_in_range(&Self::INCOMPAT_FLAGS_CHECK, v_incompat_flags)?;
+            rt::encode_in_range(&Self::START_STOP_CHECK, v_start_stop)?;
             let out = rt::frame_mut::<18>(buf, &[0xFD, 0x06])?;
             out[7..10].copy_from_slice(&[0x42, 0x00, 0x00]);
             out[2] = v_incompat_flags;
@@ -909,8 +921,8 @@ pub mod mavlink_v2 {
         #[inline(always)]
         fn from_frame(frame: &[u8]) -> rt::DecodeResult<Self> {
             let frame = rt::fixed::<18>(frame, &Self::DESC)?;
-            rt::in_range(&Self::INCOMPAT_FLAGS_DESC, 2, frame[2], 0, 0)?;
-            rt::in_range(&Self::START_STOP_DESC, 15, frame[15], 0, 1)?;
+            rt::in_range(&Self::INCOMPAT_FLAGS_CHECK, frame[2])?;
+            rt::in_range(&Self::START_STOP_CHECK, frame[15])?;
             rt::Ok(Self {
                 incompat_flags: frame[2],
                 compat_flags: frame[3],
@@ -943,6 +955,11 @@ pub mod mavlink_v2 {
             Self::NAME,
             "incompat_flags",
         );
+        pub const INCOMPAT_FLAGS_CHECK: rt::FieldCheck = rt::check(
+                &Self::INCOMPAT_FLAGS_DESC,
+                2,
+            )
+            .range(0, 0);
         pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
             f("incompat_flags", rt::Int(self.incompat_flags as i64));
             f("compat_flags", rt::Int(self.compat_flags as i64));
@@ -971,7 +988,7 @@ pub mod mavlink_v2 {
                 target_system: v_target_system,
                 target_component: v_target_component,
             } = *self;
-            rt::encode_in_range("incompat_flags", v_incompat_flags, 0, 0)?;
+            rt::encode_in_range(&Self::INCOMPAT_FLAGS_CHECK, v_incompat_flags)?;
             let out = rt::frame_mut::<26>(buf, &[0xFD, 0x0E])?;
             out[7..10].copy_from_slice(&[0x04, 0x00, 0x00]);
             out[2] = v_incompat_flags;
@@ -989,7 +1006,7 @@ pub mod mavlink_v2 {
         #[inline(always)]
         fn from_frame(frame: &[u8]) -> rt::DecodeResult<Self> {
             let frame = rt::fixed::<26>(frame, &Self::DESC)?;
-            rt::in_range(&Self::INCOMPAT_FLAGS_DESC, 2, frame[2], 0, 0)?;
+            rt::in_range(&Self::INCOMPAT_FLAGS_CHECK, frame[2])?;
             rt::Ok(Self {
                 incompat_flags: frame[2],
                 compat_flags: frame[3],
@@ -1032,6 +1049,11 @@ pub mod mavlink_v2 {
             Self::NAME,
             "incompat_flags",
         );
+        pub const INCOMPAT_FLAGS_CHECK: rt::FieldCheck = rt::check(
+                &Self::INCOMPAT_FLAGS_DESC,
+                2,
+            )
+            .range(0, 0);
         pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
             f("incompat_flags", rt::Int(self.incompat_flags as i64));
             f("compat_flags", rt::Int(self.compat_flags as i64));
@@ -1064,7 +1086,7 @@ pub mod mavlink_v2 {
                 system_status: v_system_status,
                 mavlink_version: v_mavlink_version,
             } = *self;
-            rt::encode_in_range("incompat_flags", v_incompat_flags, 0, 0)?;
+            rt::encode_in_range(&Self::INCOMPAT_FLAGS_CHECK, v_incompat_flags)?;
             let out = rt::frame_mut::<21>(buf, &[0xFD, 0x09])?;
             out[7..10].copy_from_slice(&[0x00, 0x00, 0x00]);
             out[2] = v_incompat_flags;
@@ -1084,7 +1106,7 @@ pub mod mavlink_v2 {
         #[inline(always)]
         fn from_frame(frame: &[u8]) -> rt::DecodeResult<Self> {
             let frame = rt::fixed::<21>(frame, &Self::DESC)?;
-            rt::in_range(&Self::INCOMPAT_FLAGS_DESC, 2, frame[2], 0, 0)?;
+            rt::in_range(&Self::INCOMPAT_FLAGS_CHECK, frame[2])?;
             rt::Ok(Self {
                 incompat_flags: frame[2],
                 compat_flags: frame[3],
@@ -1135,6 +1157,11 @@ pub mod mavlink_v2 {
             Self::NAME,
             "incompat_flags",
         );
+        pub const INCOMPAT_FLAGS_CHECK: rt::FieldCheck = rt::check(
+                &Self::INCOMPAT_FLAGS_DESC,
+                2,
+            )
+            .range(0, 0);
         pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
             f("incompat_flags", rt::Int(self.incompat_flags as i64));
             f("compat_flags", rt::Int(self.compat_flags as i64));
@@ -1205,7 +1232,7 @@ pub mod mavlink_v2 {
                 onboard_control_sensors_enabled_extended: v_onboard_control_sensors_enabled_extended,
                 onboard_control_sensors_health_extended: v_onboard_control_sensors_health_extended,
             } = *self;
-            rt::encode_in_range("incompat_flags", v_incompat_flags, 0, 0)?;
+            rt::encode_in_range(&Self::INCOMPAT_FLAGS_CHECK, v_incompat_flags)?;
             let out = rt::frame_mut::<55>(buf, &[0xFD, 0x2B])?;
             out[7..10].copy_from_slice(&[0x01, 0x00, 0x00]);
             out[2] = v_incompat_flags;
@@ -1246,7 +1273,7 @@ pub mod mavlink_v2 {
         #[inline(always)]
         fn from_frame(frame: &[u8]) -> rt::DecodeResult<Self> {
             let frame = rt::fixed::<55>(frame, &Self::DESC)?;
-            rt::in_range(&Self::INCOMPAT_FLAGS_DESC, 2, frame[2], 0, 0)?;
+            rt::in_range(&Self::INCOMPAT_FLAGS_CHECK, frame[2])?;
             rt::Ok(Self {
                 incompat_flags: frame[2],
                 compat_flags: frame[3],
@@ -1323,6 +1350,11 @@ pub mod mavlink_v2 {
             Self::NAME,
             "incompat_flags",
         );
+        pub const INCOMPAT_FLAGS_CHECK: rt::FieldCheck = rt::check(
+                &Self::INCOMPAT_FLAGS_DESC,
+                2,
+            )
+            .range(0, 0);
         pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
             f("incompat_flags", rt::Int(self.incompat_flags as i64));
             f("compat_flags", rt::Int(self.compat_flags as i64));
@@ -1357,7 +1389,7 @@ pub mod mavlink_v2 {
                 pitchspeed: v_pitchspeed,
                 yawspeed: v_yawspeed,
             } = *self;
-            rt::encode_in_range("incompat_flags", v_incompat_flags, 0, 0)?;
+            rt::encode_in_range(&Self::INCOMPAT_FLAGS_CHECK, v_incompat_flags)?;
             let out = rt::frame_mut::<40>(buf, &[0xFD, 0x1C])?;
             out[7..10].copy_from_slice(&[0x1E, 0x00, 0x00]);
             out[2] = v_incompat_flags;
@@ -1378,7 +1410,7 @@ pub mod mavlink_v2 {
         #[inline(always)]
         fn from_frame(frame: &[u8]) -> rt::DecodeResult<Self> {
             let frame = rt::fixed::<40>(frame, &Self::DESC)?;
-            rt::in_range(&Self::INCOMPAT_FLAGS_DESC, 2, frame[2], 0, 0)?;
+            rt::in_range(&Self::INCOMPAT_FLAGS_CHECK, frame[2])?;
             rt::Ok(Self {
                 incompat_flags: frame[2],
                 compat_flags: frame[3],
@@ -1438,6 +1470,11 @@ pub mod mavlink_v2 {
             Self::NAME,
             "incompat_flags",
         );
+        pub const INCOMPAT_FLAGS_CHECK: rt::FieldCheck = rt::check(
+                &Self::INCOMPAT_FLAGS_DESC,
+                2,
+            )
+            .range(0, 0);
         pub const REPR_OFFSET_Q_DESC: rt::FieldDesc = rt::field(
             Self::NAME,
             "repr_offset_q",
@@ -1482,7 +1519,7 @@ pub mod mavlink_v2 {
             } = *self;
             let out = rt::frame_mut::<60>(buf, &[0xFD, 0x30])?;
             out[7..10].copy_from_slice(&[0x1F, 0x00, 0x00]);
-            rt::encode_in_range("incompat_flags", v_incompat_flags, 0, 0)?;
+            rt::encode_in_range(&Self::INCOMPAT_FLAGS_CHECK, v_incompat_flags)?;
             out[2] = v_incompat_flags;
             out[3] = v_compat_flags;
             out[4] = v_sequence;
@@ -1511,7 +1548,7 @@ pub mod mavlink_v2 {
         #[inline(always)]
         fn from_frame(frame: &[u8]) -> rt::DecodeResult<Self> {
             let frame = rt::fixed::<60>(frame, &Self::DESC)?;
-            rt::in_range(&Self::INCOMPAT_FLAGS_DESC, 2, frame[2], 0, 0)?;
+            rt::in_range(&Self::INCOMPAT_FLAGS_CHECK, frame[2])?;
             rt::equal(
                 &Self::REPR_OFFSET_Q_DESC,
                 42 + 15,
@@ -1576,6 +1613,11 @@ pub mod mavlink_v2 {
             Self::NAME,
             "incompat_flags",
         );
+        pub const INCOMPAT_FLAGS_CHECK: rt::FieldCheck = rt::check(
+                &Self::INCOMPAT_FLAGS_DESC,
+                2,
+            )
+            .range(0, 0);
         pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
             f("incompat_flags", rt::Int(self.incompat_flags as i64));
             f("compat_flags", rt::Int(self.compat_flags as i64));
@@ -1600,7 +1642,7 @@ pub mod mavlink_v2 {
                 frequency: v_frequency,
                 index: v_index,
             } = *self;
-            rt::encode_in_range("incompat_flags", v_incompat_flags, 0, 0)?;
+            rt::encode_in_range(&Self::INCOMPAT_FLAGS_CHECK, v_incompat_flags)?;
             let out = rt::frame_mut::<17>(buf, &[0xFD, 0x05])?;
             out[7..10].copy_from_slice(&[0x53, 0x01, 0x00]);
             out[2] = v_incompat_flags;
@@ -1616,7 +1658,7 @@ pub mod mavlink_v2 {
         #[inline(always)]
         fn from_frame(frame: &[u8]) -> rt::DecodeResult<Self> {
             let frame = rt::fixed::<17>(frame, &Self::DESC)?;
-            rt::in_range(&Self::INCOMPAT_FLAGS_DESC, 2, frame[2], 0, 0)?;
+            rt::in_range(&Self::INCOMPAT_FLAGS_CHECK, frame[2])?;
             rt::Ok(Self {
                 incompat_flags: frame[2],
                 compat_flags: frame[3],

@@ -141,7 +141,7 @@ pub mod mbus_short {
             let len = match *self {
                 Self::SndNke(_) => rt::head(out, &[0x10, 0x40, address]).len(),
                 Self::ReqSke(_) => {
-                    rt::encode_broadcast(address, 0xFF, &request::ReqSke::DESC)?;
+                    FRAME.encode_broadcast(address, &request::ReqSke::DESC)?;
                     rt::head(out, &[0x10, 0x49, address]).len()
                 }
             };
@@ -523,10 +523,7 @@ pub mod mbus_short {
             }
         }
         fn checksum_ok(frame: &[u8]) -> bool {
-            match frame.len().checked_sub(2) {
-                rt::Some(n) if n > 0 => rt::check_sum(frame, n, &FRAME, frame_sum),
-                _ => false,
-            }
+            FRAME.checksum_ok(frame, frame_sum)
         }
     }
     /// A streaming decoder for this protocol: see [`busspec_runtime::stream`].
@@ -554,7 +551,7 @@ pub mod mbus_short {
         #[inline(always)]
         fn from_frame(frame: &[u8]) -> rt::DecodeResult<Self> {
             let frame = rt::fixed::<5>(frame, &Self::DESC)?;
-            rt::no_broadcast(frame[2], 0xFF, &Self::DESC)?;
+            FRAME.no_broadcast(frame[2], &Self::DESC)?;
             rt::Ok(Self)
         }
     }

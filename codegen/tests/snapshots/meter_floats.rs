@@ -164,7 +164,7 @@ pub mod meter_floats {
             rt::encode_address(address, &FRAME)?;
             let len = match *self {
                 Self::ReadReadings(_) => {
-                    rt::encode_broadcast(address, 0x00, &request::ReadReadings::DESC)?;
+                    FRAME.encode_broadcast(address, &request::ReadReadings::DESC)?;
                     rt::frame_mut::<4>(buf, &[address, 0x04])?.len()
                 }
                 Self::SetLimits(ref m) => m.write(address, buf)?,
@@ -517,10 +517,7 @@ pub mod meter_floats {
             }
         }
         fn checksum_ok(frame: &[u8]) -> bool {
-            match frame.len().checked_sub(2) {
-                rt::Some(n) if n > 0 => rt::check_sum(frame, n, &FRAME, frame_sum),
-                _ => false,
-            }
+            FRAME.checksum_ok(frame, frame_sum)
         }
     }
     /// A streaming decoder for this protocol: see [`busspec_runtime::stream`].
@@ -539,7 +536,7 @@ pub mod meter_floats {
         #[inline(always)]
         fn from_frame(frame: &[u8]) -> rt::DecodeResult<Self> {
             let frame = rt::fixed::<4>(frame, &Self::DESC)?;
-            rt::no_broadcast(frame[0], 0x00, &Self::DESC)?;
+            FRAME.no_broadcast(frame[0], &Self::DESC)?;
             rt::Ok(Self)
         }
     }
@@ -554,6 +551,11 @@ pub mod meter_floats {
             Self::NAME,
             "voltage_limit",
         );
+        pub const VOLTAGE_LIMIT_CHECK: rt::FieldCheck = rt::check(
+                &Self::VOLTAGE_LIMIT_DESC,
+                2,
+            )
+            .range_f32(0f32, 300.5f32);
         pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
             f("voltage_limit", rt::Int(rt::raw(self.voltage_limit)));
             f("serial", rt::Int(self.serial as i64));
@@ -565,13 +567,8 @@ pub mod meter_floats {
         #[inline(always)]
         fn write(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             let Self { voltage_limit: v_voltage_limit, serial: v_serial } = *self;
-            rt::encode_broadcast(address, 0x00, &request::SetLimits::DESC)?;
-            rt::encode_in_range(
-                "voltage_limit",
-                v_voltage_limit,
-                rt::f32_raw(0f32),
-                rt::f32_raw(300.5f32),
-            )?;
+            FRAME.encode_broadcast(address, &Self::DESC)?;
+            rt::encode_in_range(&Self::VOLTAGE_LIMIT_CHECK, v_voltage_limit)?;
             let out = rt::frame_mut::<16>(buf, &[address, 0x10])?;
             out[2..6].copy_from_slice(&v_voltage_limit.to_be_bytes());
             out[6..14].copy_from_slice(&v_serial.to_be_bytes());
@@ -581,20 +578,14 @@ pub mod meter_floats {
         #[inline(always)]
         fn from_frame(frame: &[u8]) -> rt::DecodeResult<Self> {
             let frame = rt::fixed::<16>(frame, &Self::DESC)?;
-            rt::no_broadcast(frame[0], 0x00, &Self::DESC)?;
+            FRAME.no_broadcast(frame[0], &Self::DESC)?;
             let w_voltage_limit: f32 = f32::from_be_bytes([
                 frame[2],
                 frame[3],
                 frame[4],
                 frame[5],
             ]);
-            rt::in_range(
-                &Self::VOLTAGE_LIMIT_DESC,
-                2,
-                w_voltage_limit,
-                rt::f32_raw(0f32),
-                rt::f32_raw(300.5f32),
-            )?;
+            rt::in_range(&Self::VOLTAGE_LIMIT_CHECK, w_voltage_limit)?;
             rt::Ok(Self {
                 voltage_limit: w_voltage_limit,
                 serial: u64::from_be_bytes([
@@ -624,7 +615,11 @@ pub mod meter_floats {
         pub const COUNTER: rt::Range<usize> = 42..46;
         pub const TEMPERATURE: rt::Range<usize> = 46..50;
         pub const FREQUENCY_DESC: rt::FieldDesc = rt::field(Self::NAME, "frequency");
+        pub const FREQUENCY_CHECK: rt::FieldCheck = rt::check(&Self::FREQUENCY_DESC, 6)
+            .range_f32(45f32, 65f32);
         pub const DRIFT_DESC: rt::FieldDesc = rt::field(Self::NAME, "drift");
+        pub const DRIFT_CHECK: rt::FieldCheck = rt::check(&Self::DRIFT_DESC, 34)
+            .range(-9000000000000, 9000000000000);
         pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
             f("voltage", rt::Int(rt::raw(self.voltage)));
             f("frequency", rt::Int(rt::raw(self.frequency)));
@@ -651,13 +646,8 @@ pub mod meter_floats {
                 counter: v_counter,
                 temperature: v_temperature,
             } = *self;
-            rt::encode_in_range(
-                "frequency",
-                v_frequency,
-                rt::f32_raw(45f32),
-                rt::f32_raw(65f32),
-            )?;
-            rt::encode_in_range("drift", v_drift, -9000000000000, 9000000000000)?;
+            rt::encode_in_range(&Self::FREQUENCY_CHECK, v_frequency)?;
+            rt::encode_in_range(&Self::DRIFT_CHECK, v_drift)?;
             let out = rt::frame_mut::<52>(buf, &[address, 0x04])?;
             {
                 let b = v_voltage.to_be_bytes();
@@ -692,13 +682,7 @@ pub mod meter_floats {
                 frame[8],
                 frame[9],
             ]);
-            rt::in_range(
-                &Self::FREQUENCY_DESC,
-                6,
-                w_frequency,
-                rt::f32_raw(45f32),
-                rt::f32_raw(65f32),
-            )?;
+            rt::in_range(&Self::FREQUENCY_CHECK, w_frequency)?;
             let w_drift: i64 = i64::from_be_bytes([
                 frame[34],
                 frame[35],
@@ -709,7 +693,7 @@ pub mod meter_floats {
                 frame[40],
                 frame[41],
             ]);
-            rt::in_range(&Self::DRIFT_DESC, 34, w_drift, -9000000000000, 9000000000000)?;
+            rt::in_range(&Self::DRIFT_CHECK, w_drift)?;
             rt::Ok(Self {
                 voltage: f32::from_be_bytes([frame[4], frame[5], frame[2], frame[3]]),
                 frequency: w_frequency,
@@ -766,6 +750,8 @@ pub mod meter_floats {
         pub const DESC: rt::MessageDesc = rt::desc(Self::NAME, 0x10, 1, &[12]);
         pub const SERIAL: rt::Range<usize> = 2..10;
         pub const SERIAL_DESC: rt::FieldDesc = rt::field(Self::NAME, "serial");
+        pub const SERIAL_CHECK: rt::FieldCheck = rt::check(&Self::SERIAL_DESC, 2)
+            .range(rt::u64_raw(1u64), rt::u64_raw(18446744073709551615u64));
         pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
             f("serial", rt::Int(self.serial as i64));
         }
@@ -776,12 +762,7 @@ pub mod meter_floats {
         #[inline(always)]
         fn write(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             let Self { serial: v_serial } = *self;
-            rt::encode_in_range(
-                "serial",
-                v_serial,
-                rt::u64_raw(1u64),
-                rt::u64_raw(18446744073709551615u64),
-            )?;
+            rt::encode_in_range(&Self::SERIAL_CHECK, v_serial)?;
             let out = rt::frame_mut::<12>(buf, &[address, 0x10])?;
             out[2..10].copy_from_slice(&v_serial.to_be_bytes());
             rt::Ok(out.len())
@@ -800,13 +781,7 @@ pub mod meter_floats {
                 frame[8],
                 frame[9],
             ]);
-            rt::in_range(
-                &Self::SERIAL_DESC,
-                2,
-                w_serial,
-                rt::u64_raw(1u64),
-                rt::u64_raw(18446744073709551615u64),
-            )?;
+            rt::in_range(&Self::SERIAL_CHECK, w_serial)?;
             rt::Ok(Self { serial: w_serial })
         }
     }

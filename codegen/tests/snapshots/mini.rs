@@ -780,10 +780,7 @@ pub mod mini {
             }
         }
         fn checksum_ok(frame: &[u8]) -> bool {
-            match frame.len().checked_sub(1) {
-                rt::Some(n) if n > 0 => rt::check_sum(frame, n, &FRAME, frame_sum),
-                _ => false,
-            }
+            FRAME.checksum_ok(frame, frame_sum)
         }
     }
     /// A streaming decoder for this protocol: see [`busspec_runtime::stream`].
@@ -797,6 +794,8 @@ pub mod mini {
         pub const DESC: rt::MessageDesc = rt::desc(Self::NAME, 0x2000, 2, &[9]);
         pub const TARGET: rt::Range<usize> = 4..8;
         pub const TARGET_DESC: rt::FieldDesc = rt::field(Self::NAME, "target");
+        pub const TARGET_CHECK: rt::FieldCheck = rt::check(&Self::TARGET_DESC, 4)
+            .range(0, 100000);
         pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
             f("target", rt::Int(self.target.raw() as i64));
         }
@@ -807,7 +806,7 @@ pub mod mini {
         #[inline(always)]
         fn write(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             let Self { target: v_target } = *self;
-            rt::encode_in_range("target", v_target.raw(), 0, 100000)?;
+            rt::encode_in_range(&Self::TARGET_CHECK, v_target.raw())?;
             let out = rt::frame_mut::<9>(buf, &[0xAA, address, 0x20, 0x00])?;
             out[4..8].copy_from_slice(&v_target.raw().to_le_bytes());
             rt::Ok(rt::seal_sum8_head(out, 4, address.wrapping_add(0xCA)))
@@ -822,7 +821,7 @@ pub mod mini {
                 frame[6],
                 frame[7],
             ]);
-            rt::in_range(&Self::TARGET_DESC, 4, w_target, 0, 100000)?;
+            rt::in_range(&Self::TARGET_CHECK, w_target)?;
             rt::Ok(Self {
                 target: Capacitance::from_raw(w_target),
             })
@@ -864,6 +863,8 @@ pub mod mini {
         pub const DESC: rt::MessageDesc = rt::desc(Self::NAME, 0x4000, 2, &[6]);
         pub const CHANNEL: rt::Range<usize> = 4..5;
         pub const CHANNEL_DESC: rt::FieldDesc = rt::field(Self::NAME, "channel");
+        pub const CHANNEL_CHECK: rt::FieldCheck = rt::check(&Self::CHANNEL_DESC, 4)
+            .range(0, 3);
         pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
             f("channel", rt::Int(self.channel as i64));
         }
@@ -874,7 +875,7 @@ pub mod mini {
         #[inline(always)]
         fn write(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             let Self { channel: v_channel } = *self;
-            rt::encode_in_range("channel", v_channel, 0, 3)?;
+            rt::encode_in_range(&Self::CHANNEL_CHECK, v_channel)?;
             let out = rt::frame_mut::<6>(buf, &[0xAA, address, 0x40, 0x00])?;
             out[4] = v_channel;
             rt::Ok(rt::seal_sum8_head(out, 4, address.wrapping_add(0xEA)))
@@ -883,7 +884,7 @@ pub mod mini {
         #[inline(always)]
         fn from_frame(frame: &[u8]) -> rt::DecodeResult<Self> {
             let frame = rt::fixed::<6>(frame, &Self::DESC)?;
-            rt::in_range(&Self::CHANNEL_DESC, 4, frame[4], 0, 3)?;
+            rt::in_range(&Self::CHANNEL_CHECK, frame[4])?;
             rt::Ok(Self { channel: frame[4] })
         }
     }

@@ -160,19 +160,11 @@ pub mod mini_crc {
             let out = rt::frame_mut::<6>(buf, &[])?;
             let len = match *self {
                 Self::ReadRuntimeHours(_) => {
-                    rt::encode_broadcast(
-                        address,
-                        0x1F,
-                        &request::ReadRuntimeHours::DESC,
-                    )?;
+                    FRAME.encode_broadcast(address, &request::ReadRuntimeHours::DESC)?;
                     rt::head(out, &[0x69, address, 0x01, 0x00]).len()
                 }
                 Self::ReadRuntimeMinSec(_) => {
-                    rt::encode_broadcast(
-                        address,
-                        0x1F,
-                        &request::ReadRuntimeMinSec::DESC,
-                    )?;
+                    FRAME.encode_broadcast(address, &request::ReadRuntimeMinSec::DESC)?;
                     rt::head(out, &[0x69, address, 0x02, 0x00]).len()
                 }
                 Self::SetCounter(ref m) => m.write(address, out)?,
@@ -555,10 +547,7 @@ pub mod mini_crc {
             }
         }
         fn checksum_ok(frame: &[u8]) -> bool {
-            match frame.len().checked_sub(2) {
-                rt::Some(n) if n > 0 => rt::check_sum(frame, n, &FRAME, frame_sum),
-                _ => false,
-            }
+            FRAME.checksum_ok(frame, frame_sum)
         }
     }
     /// A streaming decoder for this protocol: see [`busspec_runtime::stream`].
@@ -579,7 +568,7 @@ pub mod mini_crc {
         #[inline(always)]
         fn from_frame(frame: &[u8]) -> rt::DecodeResult<Self> {
             let frame = rt::fixed::<6>(frame, &Self::DESC)?;
-            rt::no_broadcast(frame[1], 0x1F, &Self::DESC)?;
+            FRAME.no_broadcast(frame[1], &Self::DESC)?;
             rt::equal(&Self::SELECTOR_DESC, 2, frame[2], 0x1)?;
             rt::equal(&Self::ARG2_DESC, 3, frame[3], 0x0)?;
             rt::Ok(Self)
@@ -599,7 +588,7 @@ pub mod mini_crc {
         #[inline(always)]
         fn from_frame(frame: &[u8]) -> rt::DecodeResult<Self> {
             let frame = rt::fixed::<6>(frame, &Self::DESC)?;
-            rt::no_broadcast(frame[1], 0x1F, &Self::DESC)?;
+            FRAME.no_broadcast(frame[1], &Self::DESC)?;
             rt::equal(&Self::SELECTOR_DESC, 2, frame[2], 0x2)?;
             rt::equal(&Self::ARG2_DESC, 3, frame[3], 0x0)?;
             rt::Ok(Self)
@@ -671,7 +660,11 @@ pub mod mini_crc {
         pub const MINUTES: rt::Range<usize> = 2..3;
         pub const SECONDS: rt::Range<usize> = 3..4;
         pub const MINUTES_DESC: rt::FieldDesc = rt::field(Self::NAME, "minutes");
+        pub const MINUTES_CHECK: rt::FieldCheck = rt::check(&Self::MINUTES_DESC, 2)
+            .range(0, 59);
         pub const SECONDS_DESC: rt::FieldDesc = rt::field(Self::NAME, "seconds");
+        pub const SECONDS_CHECK: rt::FieldCheck = rt::check(&Self::SECONDS_DESC, 3)
+            .range(0, 59);
         pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
             f("minutes", rt::Int(self.minutes as i64));
             f("seconds", rt::Int(self.seconds as i64));
@@ -683,8 +676,8 @@ pub mod mini_crc {
         #[inline(always)]
         fn write(&self, address: u8, out: &mut [u8; 6]) -> rt::EncodeResult {
             let Self { minutes: v_minutes, seconds: v_seconds } = *self;
-            rt::encode_in_range("minutes", v_minutes, 0, 59)?;
-            rt::encode_in_range("seconds", v_seconds, 0, 59)?;
+            rt::encode_in_range(&Self::MINUTES_CHECK, v_minutes)?;
+            rt::encode_in_range(&Self::SECONDS_CHECK, v_seconds)?;
             let out = rt::head(out, &[0x22, address]);
             out[2] = v_minutes;
             out[3] = v_seconds;
@@ -694,8 +687,8 @@ pub mod mini_crc {
         #[inline(always)]
         fn from_frame(frame: &[u8]) -> rt::DecodeResult<Self> {
             let frame = rt::fixed::<6>(frame, &Self::DESC)?;
-            rt::in_range(&Self::MINUTES_DESC, 2, frame[2], 0, 59)?;
-            rt::in_range(&Self::SECONDS_DESC, 3, frame[3], 0, 59)?;
+            rt::in_range(&Self::MINUTES_CHECK, frame[2])?;
+            rt::in_range(&Self::SECONDS_CHECK, frame[3])?;
             rt::Ok(Self {
                 minutes: frame[2],
                 seconds: frame[3],

@@ -260,6 +260,8 @@ pub mod modbus {
         base: 9,
         at: 7,
         width: 0,
+        le: false,
+        signed: false,
         count: rt::CountBy::Bytes(rt::CountField {
             name: "byte_count",
             at: 6,
@@ -275,6 +277,8 @@ pub mod modbus {
         base: 9,
         at: 7,
         width: 2,
+        le: false,
+        signed: false,
         count: rt::CountBy::Bytes(rt::CountField {
             name: "byte_count",
             at: 6,
@@ -557,6 +561,8 @@ pub mod modbus {
         base: 5,
         at: 3,
         width: 0,
+        le: false,
+        signed: false,
         count: rt::CountBy::Bytes(rt::CountField {
             name: "byte_count",
             at: 2,
@@ -572,6 +578,8 @@ pub mod modbus {
         base: 5,
         at: 3,
         width: 0,
+        le: false,
+        signed: false,
         count: rt::CountBy::Bytes(rt::CountField {
             name: "byte_count",
             at: 2,
@@ -587,6 +595,8 @@ pub mod modbus {
         base: 5,
         at: 3,
         width: 2,
+        le: false,
+        signed: false,
         count: rt::CountBy::Bytes(rt::CountField {
             name: "byte_count",
             at: 2,
@@ -602,6 +612,8 @@ pub mod modbus {
         base: 5,
         at: 3,
         width: 2,
+        le: false,
+        signed: false,
         count: rt::CountBy::Bytes(rt::CountField {
             name: "byte_count",
             at: 2,
@@ -1123,15 +1135,9 @@ pub mod modbus {
             match frame[1] {
                 0x01 => {
                     let frame = rt::fixed::<8>(frame, &request::ReadCoils::DESC)?;
-                    rt::no_broadcast(frame[0], 0x00, &request::ReadCoils::DESC)?;
+                    FRAME.no_broadcast(frame[0], &request::ReadCoils::DESC)?;
                     let w_quantity: u16 = u16::from_be_bytes([frame[4], frame[5]]);
-                    rt::in_range(
-                        &request::ReadCoils::QUANTITY_DESC,
-                        4,
-                        w_quantity,
-                        1,
-                        2000,
-                    )?;
+                    rt::in_range(&request::ReadCoils::QUANTITY_CHECK, w_quantity)?;
                     rt::Ok(Self::ReadCoils {
                         starting_address: u16::from_be_bytes([frame[2], frame[3]]),
                         quantity: w_quantity,
@@ -1141,18 +1147,11 @@ pub mod modbus {
                     let frame = rt::fixed::<
                         8,
                     >(frame, &request::ReadDiscreteInputs::DESC)?;
-                    rt::no_broadcast(
-                        frame[0],
-                        0x00,
-                        &request::ReadDiscreteInputs::DESC,
-                    )?;
+                    FRAME.no_broadcast(frame[0], &request::ReadDiscreteInputs::DESC)?;
                     let w_quantity: u16 = u16::from_be_bytes([frame[4], frame[5]]);
                     rt::in_range(
-                        &request::ReadDiscreteInputs::QUANTITY_DESC,
-                        4,
+                        &request::ReadDiscreteInputs::QUANTITY_CHECK,
                         w_quantity,
-                        1,
-                        2000,
                     )?;
                     rt::Ok(Self::ReadDiscreteInputs {
                         starting_address: u16::from_be_bytes([frame[2], frame[3]]),
@@ -1163,18 +1162,11 @@ pub mod modbus {
                     let frame = rt::fixed::<
                         8,
                     >(frame, &request::ReadHoldingRegisters::DESC)?;
-                    rt::no_broadcast(
-                        frame[0],
-                        0x00,
-                        &request::ReadHoldingRegisters::DESC,
-                    )?;
+                    FRAME.no_broadcast(frame[0], &request::ReadHoldingRegisters::DESC)?;
                     let w_quantity: u16 = u16::from_be_bytes([frame[4], frame[5]]);
                     rt::in_range(
-                        &request::ReadHoldingRegisters::QUANTITY_DESC,
-                        4,
+                        &request::ReadHoldingRegisters::QUANTITY_CHECK,
                         w_quantity,
-                        1,
-                        125,
                     )?;
                     rt::Ok(Self::ReadHoldingRegisters {
                         starting_address: u16::from_be_bytes([frame[2], frame[3]]),
@@ -1185,18 +1177,11 @@ pub mod modbus {
                     let frame = rt::fixed::<
                         8,
                     >(frame, &request::ReadInputRegisters::DESC)?;
-                    rt::no_broadcast(
-                        frame[0],
-                        0x00,
-                        &request::ReadInputRegisters::DESC,
-                    )?;
+                    FRAME.no_broadcast(frame[0], &request::ReadInputRegisters::DESC)?;
                     let w_quantity: u16 = u16::from_be_bytes([frame[4], frame[5]]);
                     rt::in_range(
-                        &request::ReadInputRegisters::QUANTITY_DESC,
-                        4,
+                        &request::ReadInputRegisters::QUANTITY_CHECK,
                         w_quantity,
-                        1,
-                        125,
                     )?;
                     rt::Ok(Self::ReadInputRegisters {
                         starting_address: u16::from_be_bytes([frame[2], frame[3]]),
@@ -1226,19 +1211,13 @@ pub mod modbus {
                         .split::<7>(frame)?;
                     let w_quantity: u16 = u16::from_be_bytes([frame[4], frame[5]]);
                     rt::in_range(
-                        &request::WriteMultipleCoils::QUANTITY_DESC,
-                        4,
+                        &request::WriteMultipleCoils::QUANTITY_CHECK,
                         w_quantity,
-                        1,
-                        1968,
                     )?;
                     rt::following(
-                        &request::WriteMultipleCoils::BYTE_COUNT_DESC,
-                        6,
+                        &request::WriteMultipleCoils::BYTE_COUNT_CHECK,
                         frame[6],
                         w_quantity as i64,
-                        (1, 8),
-                        "ceil(quantity / 8)",
                     )?;
                     rt::Ok(Self::WriteMultipleCoils {
                         starting_address: u16::from_be_bytes([frame[2], frame[3]]),
@@ -1252,25 +1231,19 @@ pub mod modbus {
                         .split::<7>(frame)?;
                     let w_quantity: u16 = u16::from_be_bytes([frame[4], frame[5]]);
                     rt::in_range(
-                        &request::WriteMultipleRegisters::QUANTITY_DESC,
-                        4,
+                        &request::WriteMultipleRegisters::QUANTITY_CHECK,
                         w_quantity,
-                        1,
-                        123,
                     )?;
                     rt::following(
-                        &request::WriteMultipleRegisters::BYTE_COUNT_DESC,
-                        6,
+                        &request::WriteMultipleRegisters::BYTE_COUNT_CHECK,
                         frame[6],
                         w_quantity as i64,
-                        (2, 1),
-                        "2 × quantity",
                     )?;
                     rt::Ok(Self::WriteMultipleRegisters {
                         starting_address: u16::from_be_bytes([frame[2], frame[3]]),
                         quantity: w_quantity,
                         values: REPEAT_WRITE_MULTIPLE_REGISTERS
-                            .view::<u16, 123>(elements, false, false)?,
+                            .view::<u16, 123>(elements)?,
                     })
                 }
                 _ => rt::Err(REQUEST_CODE.unknown(frame)),
@@ -1462,7 +1435,7 @@ pub mod modbus {
                         .split::<3>(frame)?;
                     rt::Ok(Self::ReadHoldingRegistersReply {
                         registers: REPEAT_READ_HOLDING_REGISTERS_REPLY
-                            .view::<u16, 125>(elements, false, false)?,
+                            .view::<u16, 125>(elements)?,
                     })
                 }
                 0x83 => {
@@ -1478,7 +1451,7 @@ pub mod modbus {
                         .split::<3>(frame)?;
                     rt::Ok(Self::ReadInputRegistersReply {
                         registers: REPEAT_READ_INPUT_REGISTERS_REPLY
-                            .view::<u16, 125>(elements, false, false)?,
+                            .view::<u16, 125>(elements)?,
                     })
                 }
                 0x84 => {
@@ -1993,10 +1966,7 @@ pub mod modbus {
             !(8..=255).contains(&frame.len()) || RequestView::dispatch(frame).is_ok()
         }
         fn checksum_ok(frame: &[u8]) -> bool {
-            match frame.len().checked_sub(2) {
-                rt::Some(n) if n > 0 => rt::check_sum(frame, n, &FRAME, frame_sum),
-                _ => false,
-            }
+            FRAME.checksum_ok(frame, frame_sum)
         }
     }
     /// A streaming decoder for this protocol: see [`busspec_runtime::stream`].
@@ -2011,6 +1981,8 @@ pub mod modbus {
         pub const STARTING_ADDRESS: rt::Range<usize> = 2..4;
         pub const QUANTITY: rt::Range<usize> = 4..6;
         pub const QUANTITY_DESC: rt::FieldDesc = rt::field(Self::NAME, "quantity");
+        pub const QUANTITY_CHECK: rt::FieldCheck = rt::check(&Self::QUANTITY_DESC, 4)
+            .range(1, 2000);
         pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
             f("starting_address", rt::Int(self.starting_address as i64));
             f("quantity", rt::Int(self.quantity as i64));
@@ -2022,8 +1994,8 @@ pub mod modbus {
         #[inline(always)]
         fn write(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             let Self { starting_address: v_starting_address, quantity: v_quantity } = *self;
-            rt::encode_broadcast(address, 0x00, &request::ReadCoils::DESC)?;
-            rt::encode_in_range("quantity", v_quantity, 1, 2000)?;
+            FRAME.encode_broadcast(address, &Self::DESC)?;
+            rt::encode_in_range(&Self::QUANTITY_CHECK, v_quantity)?;
             let out = rt::frame_mut::<8>(buf, &[address, 0x01])?;
             out[2..4].copy_from_slice(&v_starting_address.to_be_bytes());
             out[4..6].copy_from_slice(&v_quantity.to_be_bytes());
@@ -2033,9 +2005,9 @@ pub mod modbus {
         #[inline(always)]
         fn from_frame(frame: &[u8]) -> rt::DecodeResult<Self> {
             let frame = rt::fixed::<8>(frame, &Self::DESC)?;
-            rt::no_broadcast(frame[0], 0x00, &Self::DESC)?;
+            FRAME.no_broadcast(frame[0], &Self::DESC)?;
             let w_quantity: u16 = u16::from_be_bytes([frame[4], frame[5]]);
-            rt::in_range(&Self::QUANTITY_DESC, 4, w_quantity, 1, 2000)?;
+            rt::in_range(&Self::QUANTITY_CHECK, w_quantity)?;
             rt::Ok(Self {
                 starting_address: u16::from_be_bytes([frame[2], frame[3]]),
                 quantity: w_quantity,
@@ -2050,6 +2022,8 @@ pub mod modbus {
         pub const STARTING_ADDRESS: rt::Range<usize> = 2..4;
         pub const QUANTITY: rt::Range<usize> = 4..6;
         pub const QUANTITY_DESC: rt::FieldDesc = rt::field(Self::NAME, "quantity");
+        pub const QUANTITY_CHECK: rt::FieldCheck = rt::check(&Self::QUANTITY_DESC, 4)
+            .range(1, 2000);
         pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
             f("starting_address", rt::Int(self.starting_address as i64));
             f("quantity", rt::Int(self.quantity as i64));
@@ -2061,8 +2035,8 @@ pub mod modbus {
         #[inline(always)]
         fn write(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             let Self { starting_address: v_starting_address, quantity: v_quantity } = *self;
-            rt::encode_broadcast(address, 0x00, &request::ReadDiscreteInputs::DESC)?;
-            rt::encode_in_range("quantity", v_quantity, 1, 2000)?;
+            FRAME.encode_broadcast(address, &Self::DESC)?;
+            rt::encode_in_range(&Self::QUANTITY_CHECK, v_quantity)?;
             let out = rt::frame_mut::<8>(buf, &[address, 0x02])?;
             out[2..4].copy_from_slice(&v_starting_address.to_be_bytes());
             out[4..6].copy_from_slice(&v_quantity.to_be_bytes());
@@ -2072,9 +2046,9 @@ pub mod modbus {
         #[inline(always)]
         fn from_frame(frame: &[u8]) -> rt::DecodeResult<Self> {
             let frame = rt::fixed::<8>(frame, &Self::DESC)?;
-            rt::no_broadcast(frame[0], 0x00, &Self::DESC)?;
+            FRAME.no_broadcast(frame[0], &Self::DESC)?;
             let w_quantity: u16 = u16::from_be_bytes([frame[4], frame[5]]);
-            rt::in_range(&Self::QUANTITY_DESC, 4, w_quantity, 1, 2000)?;
+            rt::in_range(&Self::QUANTITY_CHECK, w_quantity)?;
             rt::Ok(Self {
                 starting_address: u16::from_be_bytes([frame[2], frame[3]]),
                 quantity: w_quantity,
@@ -2089,6 +2063,8 @@ pub mod modbus {
         pub const STARTING_ADDRESS: rt::Range<usize> = 2..4;
         pub const QUANTITY: rt::Range<usize> = 4..6;
         pub const QUANTITY_DESC: rt::FieldDesc = rt::field(Self::NAME, "quantity");
+        pub const QUANTITY_CHECK: rt::FieldCheck = rt::check(&Self::QUANTITY_DESC, 4)
+            .range(1, 125);
         pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
             f("starting_address", rt::Int(self.starting_address as i64));
             f("quantity", rt::Int(self.quantity as i64));
@@ -2100,8 +2076,8 @@ pub mod modbus {
         #[inline(always)]
         fn write(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             let Self { starting_address: v_starting_address, quantity: v_quantity } = *self;
-            rt::encode_broadcast(address, 0x00, &request::ReadHoldingRegisters::DESC)?;
-            rt::encode_in_range("quantity", v_quantity, 1, 125)?;
+            FRAME.encode_broadcast(address, &Self::DESC)?;
+            rt::encode_in_range(&Self::QUANTITY_CHECK, v_quantity)?;
             let out = rt::frame_mut::<8>(buf, &[address, 0x03])?;
             out[2..4].copy_from_slice(&v_starting_address.to_be_bytes());
             out[4..6].copy_from_slice(&v_quantity.to_be_bytes());
@@ -2111,9 +2087,9 @@ pub mod modbus {
         #[inline(always)]
         fn from_frame(frame: &[u8]) -> rt::DecodeResult<Self> {
             let frame = rt::fixed::<8>(frame, &Self::DESC)?;
-            rt::no_broadcast(frame[0], 0x00, &Self::DESC)?;
+            FRAME.no_broadcast(frame[0], &Self::DESC)?;
             let w_quantity: u16 = u16::from_be_bytes([frame[4], frame[5]]);
-            rt::in_range(&Self::QUANTITY_DESC, 4, w_quantity, 1, 125)?;
+            rt::in_range(&Self::QUANTITY_CHECK, w_quantity)?;
             rt::Ok(Self {
                 starting_address: u16::from_be_bytes([frame[2], frame[3]]),
                 quantity: w_quantity,
@@ -2128,6 +2104,8 @@ pub mod modbus {
         pub const STARTING_ADDRESS: rt::Range<usize> = 2..4;
         pub const QUANTITY: rt::Range<usize> = 4..6;
         pub const QUANTITY_DESC: rt::FieldDesc = rt::field(Self::NAME, "quantity");
+        pub const QUANTITY_CHECK: rt::FieldCheck = rt::check(&Self::QUANTITY_DESC, 4)
+            .range(1, 125);
         pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
             f("starting_address", rt::Int(self.starting_address as i64));
             f("quantity", rt::Int(self.quantity as i64));
@@ -2139,8 +2117,8 @@ pub mod modbus {
         #[inline(always)]
         fn write(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             let Self { starting_address: v_starting_address, quantity: v_quantity } = *self;
-            rt::encode_broadcast(address, 0x00, &request::ReadInputRegisters::DESC)?;
-            rt::encode_in_range("quantity", v_quantity, 1, 125)?;
+            FRAME.encode_broadcast(address, &Self::DESC)?;
+            rt::encode_in_range(&Self::QUANTITY_CHECK, v_quantity)?;
             let out = rt::frame_mut::<8>(buf, &[address, 0x04])?;
             out[2..4].copy_from_slice(&v_starting_address.to_be_bytes());
             out[4..6].copy_from_slice(&v_quantity.to_be_bytes());
@@ -2150,9 +2128,9 @@ pub mod modbus {
         #[inline(always)]
         fn from_frame(frame: &[u8]) -> rt::DecodeResult<Self> {
             let frame = rt::fixed::<8>(frame, &Self::DESC)?;
-            rt::no_broadcast(frame[0], 0x00, &Self::DESC)?;
+            FRAME.no_broadcast(frame[0], &Self::DESC)?;
             let w_quantity: u16 = u16::from_be_bytes([frame[4], frame[5]]);
-            rt::in_range(&Self::QUANTITY_DESC, 4, w_quantity, 1, 125)?;
+            rt::in_range(&Self::QUANTITY_CHECK, w_quantity)?;
             rt::Ok(Self {
                 starting_address: u16::from_be_bytes([frame[2], frame[3]]),
                 quantity: w_quantity,
@@ -2241,9 +2219,13 @@ pub mod modbus {
         pub const DESC: rt::MessageDesc = rt::desc(Self::NAME, 0x0F, 1, &[9]);
         pub const STARTING_ADDRESS: rt::Range<usize> = 2..4;
         pub const QUANTITY: rt::Range<usize> = 4..6;
-        pub const OUTPUTS_DESC: rt::FieldDesc = rt::field(Self::NAME, "outputs");
         pub const QUANTITY_DESC: rt::FieldDesc = rt::field(Self::NAME, "quantity");
+        pub const QUANTITY_CHECK: rt::FieldCheck = rt::check(&Self::QUANTITY_DESC, 4)
+            .range(1, 1968);
+        pub const OUTPUTS_DESC: rt::FieldDesc = rt::field(Self::NAME, "outputs");
         pub const BYTE_COUNT_DESC: rt::FieldDesc = rt::field(Self::NAME, "byte_count");
+        pub const BYTE_COUNT_CHECK: rt::FieldCheck = rt::check(&Self::BYTE_COUNT_DESC, 6)
+            .follows(1, 8, "ceil(quantity / 8)");
         pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
             f("starting_address", rt::Int(self.starting_address as i64));
             f("quantity", rt::Int(self.quantity as i64));
@@ -2263,7 +2245,7 @@ pub mod modbus {
             let frame_len = REPEAT_WRITE_MULTIPLE_COILS.encode_len(v_outputs.len())?;
             let out = rt::frame_mut_len(buf, frame_len, &[address, 0x0F])?;
             out[2..4].copy_from_slice(&v_starting_address.to_be_bytes());
-            rt::encode_in_range("quantity", v_quantity, 1, 1968)?;
+            rt::encode_in_range(&Self::QUANTITY_CHECK, v_quantity)?;
             let w_quantity: u16 = v_quantity;
             out[4..6].copy_from_slice(&w_quantity.to_be_bytes());
             let w_byte_count: u8 = rt::fits(
@@ -2284,15 +2266,8 @@ pub mod modbus {
             let (frame, elements, count) = REPEAT_WRITE_MULTIPLE_COILS
                 .split::<7>(frame)?;
             let w_quantity: u16 = u16::from_be_bytes([frame[4], frame[5]]);
-            rt::in_range(&Self::QUANTITY_DESC, 4, w_quantity, 1, 1968)?;
-            rt::following(
-                &Self::BYTE_COUNT_DESC,
-                6,
-                frame[6],
-                w_quantity as i64,
-                (1, 8),
-                "ceil(quantity / 8)",
-            )?;
+            rt::in_range(&Self::QUANTITY_CHECK, w_quantity)?;
+            rt::following(&Self::BYTE_COUNT_CHECK, frame[6], w_quantity as i64)?;
             rt::Ok(Self {
                 starting_address: u16::from_be_bytes([frame[2], frame[3]]),
                 quantity: w_quantity,
@@ -2308,9 +2283,13 @@ pub mod modbus {
         pub const DESC: rt::MessageDesc = rt::desc(Self::NAME, 0x10, 1, &[9]);
         pub const STARTING_ADDRESS: rt::Range<usize> = 2..4;
         pub const QUANTITY: rt::Range<usize> = 4..6;
-        pub const VALUES_DESC: rt::FieldDesc = rt::field(Self::NAME, "values");
         pub const QUANTITY_DESC: rt::FieldDesc = rt::field(Self::NAME, "quantity");
+        pub const QUANTITY_CHECK: rt::FieldCheck = rt::check(&Self::QUANTITY_DESC, 4)
+            .range(1, 123);
+        pub const VALUES_DESC: rt::FieldDesc = rt::field(Self::NAME, "values");
         pub const BYTE_COUNT_DESC: rt::FieldDesc = rt::field(Self::NAME, "byte_count");
+        pub const BYTE_COUNT_CHECK: rt::FieldCheck = rt::check(&Self::BYTE_COUNT_DESC, 6)
+            .follows(2, 1, "2 × quantity");
         pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
             f("starting_address", rt::Int(self.starting_address as i64));
             f("quantity", rt::Int(self.quantity as i64));
@@ -2330,7 +2309,7 @@ pub mod modbus {
             let frame_len = REPEAT_WRITE_MULTIPLE_REGISTERS.encode_len(v_values.len())?;
             let out = rt::frame_mut_len(buf, frame_len, &[address, 0x10])?;
             out[2..4].copy_from_slice(&v_starting_address.to_be_bytes());
-            rt::encode_in_range("quantity", v_quantity, 1, 123)?;
+            rt::encode_in_range(&Self::QUANTITY_CHECK, v_quantity)?;
             let w_quantity: u16 = v_quantity;
             out[4..6].copy_from_slice(&w_quantity.to_be_bytes());
             let w_byte_count: u8 = rt::fits(
@@ -2342,7 +2321,7 @@ pub mod modbus {
             REPEAT_WRITE_MULTIPLE_REGISTERS
                 .encode_agrees(v_values.len(), w_byte_count as u64)?;
             out[6] = w_byte_count;
-            rt::write_elements(v_values.as_slice(), 2, false, &mut out[7..]);
+            REPEAT_WRITE_MULTIPLE_REGISTERS.write(v_values.as_slice(), &mut out[7..]);
             rt::Ok(out.len())
         }
         /// Reads this message from a frame whose framing and code are checked.
@@ -2351,20 +2330,12 @@ pub mod modbus {
             let (frame, elements, _) = REPEAT_WRITE_MULTIPLE_REGISTERS
                 .split::<7>(frame)?;
             let w_quantity: u16 = u16::from_be_bytes([frame[4], frame[5]]);
-            rt::in_range(&Self::QUANTITY_DESC, 4, w_quantity, 1, 123)?;
-            rt::following(
-                &Self::BYTE_COUNT_DESC,
-                6,
-                frame[6],
-                w_quantity as i64,
-                (2, 1),
-                "2 × quantity",
-            )?;
+            rt::in_range(&Self::QUANTITY_CHECK, w_quantity)?;
+            rt::following(&Self::BYTE_COUNT_CHECK, frame[6], w_quantity as i64)?;
             rt::Ok(Self {
                 starting_address: u16::from_be_bytes([frame[2], frame[3]]),
                 quantity: w_quantity,
-                values: REPEAT_WRITE_MULTIPLE_REGISTERS
-                    .elements::<u16, 123>(elements, false, false)?,
+                values: REPEAT_WRITE_MULTIPLE_REGISTERS.elements::<u16, 123>(elements)?,
             })
         }
     }
@@ -2376,6 +2347,8 @@ pub mod modbus {
         pub const DESC: rt::MessageDesc = rt::desc(Self::NAME, 0x01, 1, &[5]);
         pub const COILS_DESC: rt::FieldDesc = rt::field(Self::NAME, "coils");
         pub const BYTE_COUNT_DESC: rt::FieldDesc = rt::field(Self::NAME, "byte_count");
+        pub const BYTE_COUNT_CHECK: rt::FieldCheck = rt::check(&Self::BYTE_COUNT_DESC, 2)
+            .follows(1, 8, "ceil(quantity / 8) of the request");
         pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
             f("coils", rt::List(self.coils.elements()));
         }
@@ -2412,12 +2385,9 @@ pub mod modbus {
             r: &request::ReadCoils,
         ) -> rt::DecodeResult<()> {
             rt::following(
-                &Self::BYTE_COUNT_DESC,
-                2,
+                &Self::BYTE_COUNT_CHECK,
                 REPEAT_READ_COILS_REPLY.count_value(n_coils) as u64,
                 r.quantity as i64,
-                (1, 8),
-                "ceil(quantity / 8) of the request",
             )?;
             REPEAT_READ_COILS_REPLY
                 .follows_request(n_coils, r.quantity as i64, (1, 1), "quantity")?;
@@ -2461,6 +2431,8 @@ pub mod modbus {
         pub const DESC: rt::MessageDesc = rt::desc(Self::NAME, 0x02, 1, &[5]);
         pub const INPUTS_DESC: rt::FieldDesc = rt::field(Self::NAME, "inputs");
         pub const BYTE_COUNT_DESC: rt::FieldDesc = rt::field(Self::NAME, "byte_count");
+        pub const BYTE_COUNT_CHECK: rt::FieldCheck = rt::check(&Self::BYTE_COUNT_DESC, 2)
+            .follows(1, 8, "ceil(quantity / 8) of the request");
         pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
             f("inputs", rt::List(self.inputs.elements()));
         }
@@ -2499,12 +2471,9 @@ pub mod modbus {
             r: &request::ReadDiscreteInputs,
         ) -> rt::DecodeResult<()> {
             rt::following(
-                &Self::BYTE_COUNT_DESC,
-                2,
+                &Self::BYTE_COUNT_CHECK,
                 REPEAT_READ_DISCRETE_INPUTS_REPLY.count_value(n_inputs) as u64,
                 r.quantity as i64,
-                (1, 8),
-                "ceil(quantity / 8) of the request",
             )?;
             REPEAT_READ_DISCRETE_INPUTS_REPLY
                 .follows_request(n_inputs, r.quantity as i64, (1, 1), "quantity")?;
@@ -2548,6 +2517,8 @@ pub mod modbus {
         pub const DESC: rt::MessageDesc = rt::desc(Self::NAME, 0x03, 1, &[5]);
         pub const REGISTERS_DESC: rt::FieldDesc = rt::field(Self::NAME, "registers");
         pub const BYTE_COUNT_DESC: rt::FieldDesc = rt::field(Self::NAME, "byte_count");
+        pub const BYTE_COUNT_CHECK: rt::FieldCheck = rt::check(&Self::BYTE_COUNT_DESC, 2)
+            .follows(2, 1, "2 × quantity of the request");
         pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
             f("registers", rt::List(self.registers.elements()));
         }
@@ -2568,7 +2539,8 @@ pub mod modbus {
                 0,
                 255,
             )? as u8;
-            rt::write_elements(v_registers.as_slice(), 2, false, &mut out[3..]);
+            REPEAT_READ_HOLDING_REGISTERS_REPLY
+                .write(v_registers.as_slice(), &mut out[3..]);
             rt::Ok(out.len())
         }
         /// Reads this message from a frame whose framing and code are checked.
@@ -2578,7 +2550,7 @@ pub mod modbus {
                 .split::<3>(frame)?;
             rt::Ok(Self {
                 registers: REPEAT_READ_HOLDING_REGISTERS_REPLY
-                    .elements::<u16, 125>(elements, false, false)?,
+                    .elements::<u16, 125>(elements)?,
             })
         }
         /// Checks the fields this response takes from its request, `read_holding_registers` (`r`).
@@ -2588,12 +2560,9 @@ pub mod modbus {
             r: &request::ReadHoldingRegisters,
         ) -> rt::DecodeResult<()> {
             rt::following(
-                &Self::BYTE_COUNT_DESC,
-                2,
+                &Self::BYTE_COUNT_CHECK,
                 REPEAT_READ_HOLDING_REGISTERS_REPLY.count_value(n_registers) as u64,
                 r.quantity as i64,
-                (2, 1),
-                "2 × quantity of the request",
             )?;
             REPEAT_READ_HOLDING_REGISTERS_REPLY
                 .follows_request(n_registers, r.quantity as i64, (1, 1), "quantity")?;
@@ -2637,6 +2606,8 @@ pub mod modbus {
         pub const DESC: rt::MessageDesc = rt::desc(Self::NAME, 0x04, 1, &[5]);
         pub const REGISTERS_DESC: rt::FieldDesc = rt::field(Self::NAME, "registers");
         pub const BYTE_COUNT_DESC: rt::FieldDesc = rt::field(Self::NAME, "byte_count");
+        pub const BYTE_COUNT_CHECK: rt::FieldCheck = rt::check(&Self::BYTE_COUNT_DESC, 2)
+            .follows(2, 1, "2 × quantity of the request");
         pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
             f("registers", rt::List(self.registers.elements()));
         }
@@ -2656,7 +2627,8 @@ pub mod modbus {
                 0,
                 255,
             )? as u8;
-            rt::write_elements(v_registers.as_slice(), 2, false, &mut out[3..]);
+            REPEAT_READ_INPUT_REGISTERS_REPLY
+                .write(v_registers.as_slice(), &mut out[3..]);
             rt::Ok(out.len())
         }
         /// Reads this message from a frame whose framing and code are checked.
@@ -2665,7 +2637,7 @@ pub mod modbus {
             let (_, elements, _) = REPEAT_READ_INPUT_REGISTERS_REPLY.split::<3>(frame)?;
             rt::Ok(Self {
                 registers: REPEAT_READ_INPUT_REGISTERS_REPLY
-                    .elements::<u16, 125>(elements, false, false)?,
+                    .elements::<u16, 125>(elements)?,
             })
         }
         /// Checks the fields this response takes from its request, `read_input_registers` (`r`).
@@ -2675,12 +2647,9 @@ pub mod modbus {
             r: &request::ReadInputRegisters,
         ) -> rt::DecodeResult<()> {
             rt::following(
-                &Self::BYTE_COUNT_DESC,
-                2,
+                &Self::BYTE_COUNT_CHECK,
                 REPEAT_READ_INPUT_REGISTERS_REPLY.count_value(n_registers) as u64,
                 r.quantity as i64,
-                (2, 1),
-                "2 × quantity of the request",
             )?;
             REPEAT_READ_INPUT_REGISTERS_REPLY
                 .follows_request(n_registers, r.quantity as i64, (1, 1), "quantity")?;
@@ -2727,10 +2696,20 @@ pub mod modbus {
             Self::NAME,
             "output_address",
         );
+        pub const OUTPUT_ADDRESS_CHECK: rt::FieldCheck = rt::check(
+                &Self::OUTPUT_ADDRESS_DESC,
+                2,
+            )
+            .follows(1, 1, "output_address of the request");
         pub const OUTPUT_VALUE_DESC: rt::FieldDesc = rt::field(
             Self::NAME,
             "output_value",
         );
+        pub const OUTPUT_VALUE_CHECK: rt::FieldCheck = rt::check(
+                &Self::OUTPUT_VALUE_DESC,
+                4,
+            )
+            .follows(1, 1, "output_value of the request");
         pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
             f("output_address", rt::Int(self.output_address as i64));
             f("output_value", rt::Int(self.output_value.raw() as i64));
@@ -2769,20 +2748,14 @@ pub mod modbus {
             r: &request::WriteSingleCoil,
         ) -> rt::DecodeResult<()> {
             rt::following(
-                &Self::OUTPUT_ADDRESS_DESC,
-                2,
+                &Self::OUTPUT_ADDRESS_CHECK,
                 v_output_address,
                 r.output_address as i64,
-                (1, 1),
-                "output_address of the request",
             )?;
             rt::following(
-                &Self::OUTPUT_VALUE_DESC,
-                4,
+                &Self::OUTPUT_VALUE_CHECK,
                 v_output_value.raw(),
                 r.output_value.raw() as i64,
-                (1, 1),
-                "output_value of the request",
             )?;
             rt::Ok(())
         }
@@ -2827,10 +2800,20 @@ pub mod modbus {
             Self::NAME,
             "register_address",
         );
+        pub const REGISTER_ADDRESS_CHECK: rt::FieldCheck = rt::check(
+                &Self::REGISTER_ADDRESS_DESC,
+                2,
+            )
+            .follows(1, 1, "register_address of the request");
         pub const REGISTER_VALUE_DESC: rt::FieldDesc = rt::field(
             Self::NAME,
             "register_value",
         );
+        pub const REGISTER_VALUE_CHECK: rt::FieldCheck = rt::check(
+                &Self::REGISTER_VALUE_DESC,
+                4,
+            )
+            .follows(1, 1, "register_value of the request");
         pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
             f("register_address", rt::Int(self.register_address as i64));
             f("register_value", rt::Int(self.register_value as i64));
@@ -2869,20 +2852,14 @@ pub mod modbus {
             r: &request::WriteSingleRegister,
         ) -> rt::DecodeResult<()> {
             rt::following(
-                &Self::REGISTER_ADDRESS_DESC,
-                2,
+                &Self::REGISTER_ADDRESS_CHECK,
                 v_register_address,
                 r.register_address as i64,
-                (1, 1),
-                "register_address of the request",
             )?;
             rt::following(
-                &Self::REGISTER_VALUE_DESC,
-                4,
+                &Self::REGISTER_VALUE_CHECK,
                 v_register_value,
                 r.register_value as i64,
-                (1, 1),
-                "register_value of the request",
             )?;
             rt::Ok(())
         }
@@ -2927,7 +2904,14 @@ pub mod modbus {
             Self::NAME,
             "starting_address",
         );
+        pub const STARTING_ADDRESS_CHECK: rt::FieldCheck = rt::check(
+                &Self::STARTING_ADDRESS_DESC,
+                2,
+            )
+            .follows(1, 1, "starting_address of the request");
         pub const QUANTITY_DESC: rt::FieldDesc = rt::field(Self::NAME, "quantity");
+        pub const QUANTITY_CHECK: rt::FieldCheck = rt::check(&Self::QUANTITY_DESC, 4)
+            .follows(1, 1, "quantity of the request");
         pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
             f("starting_address", rt::Int(self.starting_address as i64));
             f("quantity", rt::Int(self.quantity as i64));
@@ -2963,21 +2947,11 @@ pub mod modbus {
             r: &request::WriteMultipleCoils,
         ) -> rt::DecodeResult<()> {
             rt::following(
-                &Self::STARTING_ADDRESS_DESC,
-                2,
+                &Self::STARTING_ADDRESS_CHECK,
                 v_starting_address,
                 r.starting_address as i64,
-                (1, 1),
-                "starting_address of the request",
             )?;
-            rt::following(
-                &Self::QUANTITY_DESC,
-                4,
-                v_quantity,
-                r.quantity as i64,
-                (1, 1),
-                "quantity of the request",
-            )?;
+            rt::following(&Self::QUANTITY_CHECK, v_quantity, r.quantity as i64)?;
             rt::Ok(())
         }
     }
@@ -3021,7 +2995,14 @@ pub mod modbus {
             Self::NAME,
             "starting_address",
         );
+        pub const STARTING_ADDRESS_CHECK: rt::FieldCheck = rt::check(
+                &Self::STARTING_ADDRESS_DESC,
+                2,
+            )
+            .follows(1, 1, "starting_address of the request");
         pub const QUANTITY_DESC: rt::FieldDesc = rt::field(Self::NAME, "quantity");
+        pub const QUANTITY_CHECK: rt::FieldCheck = rt::check(&Self::QUANTITY_DESC, 4)
+            .follows(1, 1, "quantity of the request");
         pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
             f("starting_address", rt::Int(self.starting_address as i64));
             f("quantity", rt::Int(self.quantity as i64));
@@ -3057,21 +3038,11 @@ pub mod modbus {
             r: &request::WriteMultipleRegisters,
         ) -> rt::DecodeResult<()> {
             rt::following(
-                &Self::STARTING_ADDRESS_DESC,
-                2,
+                &Self::STARTING_ADDRESS_CHECK,
                 v_starting_address,
                 r.starting_address as i64,
-                (1, 1),
-                "starting_address of the request",
             )?;
-            rt::following(
-                &Self::QUANTITY_DESC,
-                4,
-                v_quantity,
-                r.quantity as i64,
-                (1, 1),
-                "quantity of the request",
-            )?;
+            rt::following(&Self::QUANTITY_CHECK, v_quantity, r.quantity as i64)?;
             rt::Ok(())
         }
     }

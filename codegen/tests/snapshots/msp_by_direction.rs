@@ -313,6 +313,8 @@ pub mod msp_by_direction {
         base: 6,
         at: 5,
         width: 2,
+        le: true,
+        signed: false,
         count: rt::CountBy::End,
         min: 0,
         max: 18,
@@ -561,7 +563,7 @@ pub mod msp_by_direction {
                 0x69 => {
                     let (_, elements, _) = REPEAT_RC_REPLY.split::<5>(frame)?;
                     rt::Ok(Self::RcReply {
-                        channels: REPEAT_RC_REPLY.view::<u16, 18>(elements, true, false)?,
+                        channels: REPEAT_RC_REPLY.view::<u16, 18>(elements)?,
                     })
                 }
                 0x6C => {
@@ -761,10 +763,7 @@ pub mod msp_by_direction {
             ResponseView::decode_for(frame, request).map(|_| ())
         }
         fn checksum_ok(frame: &[u8]) -> bool {
-            match frame.len().checked_sub(1) {
-                rt::Some(n) if n > 0 => rt::check_sum(frame, n, &FRAME, frame_sum),
-                _ => false,
-            }
+            FRAME.checksum_ok(frame, frame_sum)
         }
     }
     /// A streaming decoder for this protocol: see [`busspec_runtime::stream`].
@@ -860,7 +859,7 @@ pub mod msp_by_direction {
             let out = rt::frame_mut_len(buf, frame_len, &[0x24, 0x4D, 0x3E])?;
             LENGTH.put(out)?;
             out[4] = 0x69;
-            rt::write_elements(v_channels.as_slice(), 2, true, &mut out[5..]);
+            REPEAT_RC_REPLY.write(v_channels.as_slice(), &mut out[5..]);
             rt::Ok(out.len())
         }
         /// Reads this message from a frame whose framing and code are checked.
@@ -868,7 +867,7 @@ pub mod msp_by_direction {
         fn from_frame(frame: &[u8]) -> rt::DecodeResult<Self> {
             let (_, elements, _) = REPEAT_RC_REPLY.split::<5>(frame)?;
             rt::Ok(Self {
-                channels: REPEAT_RC_REPLY.elements::<u16, 18>(elements, true, false)?,
+                channels: REPEAT_RC_REPLY.elements::<u16, 18>(elements)?,
             })
         }
     }

@@ -609,10 +609,7 @@ pub mod msp_v1 {
             }
         }
         fn checksum_ok(frame: &[u8]) -> bool {
-            match frame.len().checked_sub(1) {
-                rt::Some(n) if n > 0 => rt::check_sum(frame, n, &FRAME, frame_sum),
-                _ => false,
-            }
+            FRAME.checksum_ok(frame, frame_sum)
         }
     }
     /// A streaming decoder for this protocol: see [`busspec_runtime::stream`].
@@ -742,6 +739,8 @@ pub mod msp_v1 {
         pub const DESC: rt::MessageDesc = rt::desc(Self::NAME, 0x21, 1, &[6]);
         pub const CMD: rt::Range<usize> = 4..5;
         pub const CMD_DESC: rt::FieldDesc = rt::field(Self::NAME, "cmd");
+        pub const CMD_CHECK: rt::FieldCheck = rt::check(&Self::CMD_DESC, 4)
+            .follows(1, 1, "cmd of the request");
         pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
             f("cmd", rt::Int(self.cmd as i64));
         }
@@ -768,27 +767,13 @@ pub mod msp_v1 {
             v_cmd: u8,
             _: &request::ApiVersion,
         ) -> rt::DecodeResult<()> {
-            rt::following(
-                &Self::CMD_DESC,
-                4,
-                v_cmd,
-                1 as i64,
-                (1, 1),
-                "cmd of the request",
-            )?;
+            rt::following(&Self::CMD_CHECK, v_cmd, 1 as i64)?;
             rt::Ok(())
         }
         /// Checks the fields this response takes from its request, `attitude` (`r`).
         #[inline(always)]
         fn follows_attitude(v_cmd: u8, _: &request::Attitude) -> rt::DecodeResult<()> {
-            rt::following(
-                &Self::CMD_DESC,
-                4,
-                v_cmd,
-                108 as i64,
-                (1, 1),
-                "cmd of the request",
-            )?;
+            rt::following(&Self::CMD_CHECK, v_cmd, 108 as i64)?;
             rt::Ok(())
         }
     }

@@ -154,6 +154,8 @@ pub mod nextion {
         base: 3,
         at: 0,
         width: 1,
+        le: true,
+        signed: false,
         count: rt::CountBy::Delimited(&[0xFF, 0xFF, 0xFF]),
         min: 1,
         max: 200,
@@ -306,6 +308,8 @@ pub mod nextion {
         base: 4,
         at: 1,
         width: 1,
+        le: true,
+        signed: false,
         count: rt::CountBy::Delimited(&[0xFF, 0xFF, 0xFF]),
         min: 0,
         max: 100,
@@ -564,7 +568,7 @@ pub mod nextion {
             {
                 let (_, elements, _) = REPEAT_INSTRUCTION.split::<0>(frame)?;
                 rt::Ok(Self::Instruction {
-                    text: REPEAT_INSTRUCTION.view::<u8, 200>(elements, true, false)?,
+                    text: REPEAT_INSTRUCTION.view::<u8, 200>(elements)?,
                 })
             }
         }
@@ -688,7 +692,7 @@ pub mod nextion {
                 0x70 => {
                     let (_, elements, _) = REPEAT_STRING.split::<1>(frame)?;
                     rt::Ok(Self::String {
-                        text: REPEAT_STRING.view::<u8, 100>(elements, true, false)?,
+                        text: REPEAT_STRING.view::<u8, 100>(elements)?,
                     })
                 }
                 0x71 => {
@@ -888,10 +892,7 @@ pub mod nextion {
             !(4..=203).contains(&frame.len()) || RequestView::dispatch(frame).is_ok()
         }
         fn checksum_ok(frame: &[u8]) -> bool {
-            match frame.len().checked_sub(3) {
-                rt::Some(n) if n > 0 => rt::check_sum(frame, n, &FRAME, frame_sum),
-                _ => false,
-            }
+            FRAME.checksum_ok(frame, frame_sum)
         }
     }
     /// A streaming decoder for this protocol: see [`busspec_runtime::stream`].
@@ -917,7 +918,7 @@ pub mod nextion {
             let Self { text: v_text } = *self;
             let frame_len = REPEAT_INSTRUCTION.encode_len(v_text.len())?;
             let out = rt::frame_mut_len(buf, frame_len, &[])?;
-            rt::write_elements(v_text.as_slice(), 1, true, &mut out[0..]);
+            REPEAT_INSTRUCTION.write(v_text.as_slice(), &mut out[0..]);
             REPEAT_INSTRUCTION.encode_delimited(out)?;
             rt::Ok(out.len())
         }
@@ -926,7 +927,7 @@ pub mod nextion {
         fn from_frame(frame: &[u8]) -> rt::DecodeResult<Self> {
             let (_, elements, _) = REPEAT_INSTRUCTION.split::<0>(frame)?;
             rt::Ok(Self {
-                text: REPEAT_INSTRUCTION.elements::<u8, 200>(elements, true, false)?,
+                text: REPEAT_INSTRUCTION.elements::<u8, 200>(elements)?,
             })
         }
     }
@@ -1058,7 +1059,7 @@ pub mod nextion {
             let Self { text: v_text } = *self;
             let frame_len = REPEAT_STRING.encode_len(v_text.len())?;
             let out = rt::frame_mut_len(buf, frame_len, &[0x70])?;
-            rt::write_elements(v_text.as_slice(), 1, true, &mut out[1..]);
+            REPEAT_STRING.write(v_text.as_slice(), &mut out[1..]);
             REPEAT_STRING.encode_delimited(out)?;
             rt::Ok(out.len())
         }
@@ -1067,7 +1068,7 @@ pub mod nextion {
         fn from_frame(frame: &[u8]) -> rt::DecodeResult<Self> {
             let (_, elements, _) = REPEAT_STRING.split::<1>(frame)?;
             rt::Ok(Self {
-                text: REPEAT_STRING.elements::<u8, 100>(elements, true, false)?,
+                text: REPEAT_STRING.elements::<u8, 100>(elements)?,
             })
         }
     }

@@ -781,10 +781,7 @@ pub mod optional_sensor {
             }
         }
         fn checksum_ok(frame: &[u8]) -> bool {
-            match frame.len().checked_sub(1) {
-                rt::Some(n) if n > 0 => rt::check_sum(frame, n, &FRAME, frame_sum),
-                _ => false,
-            }
+            FRAME.checksum_ok(frame, frame_sum)
         }
     }
     /// A streaming decoder for this protocol: see [`busspec_runtime::stream`].
@@ -818,6 +815,8 @@ pub mod optional_sensor {
         pub const STATUS: rt::Range<usize> = 4..5;
         pub const TEMPERATURE: rt::Range<usize> = 5..7;
         pub const HUMIDITY_DESC: rt::FieldDesc = rt::field(Self::NAME, "humidity");
+        pub const HUMIDITY_CHECK: rt::FieldCheck = rt::check(&Self::HUMIDITY_DESC, 7)
+            .range(0, 1000);
         pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
             f("status", rt::Int(self.status.raw() as i64));
             f("temperature", rt::Int(self.temperature.raw() as i64));
@@ -856,7 +855,7 @@ pub mod optional_sensor {
                 "bit 0 of `status` is set",
             )?;
             if let rt::Some(v_humidity) = v_humidity {
-                rt::encode_in_range("humidity", v_humidity.raw(), 0, 1000)?;
+                rt::encode_in_range(&Self::HUMIDITY_CHECK, v_humidity.raw())?;
             }
             if let rt::Some(v_humidity) = v_humidity {
                 out[7..9].copy_from_slice(&v_humidity.raw().to_be_bytes());
@@ -882,7 +881,7 @@ pub mod optional_sensor {
             let frame = &s.frame;
             let v_humidity = if s.has(0) {
                 let w_humidity: u16 = u16::from_be_bytes([frame[7], frame[8]]);
-                rt::in_range(&Self::HUMIDITY_DESC, s.at(0), w_humidity, 0, 1000)?;
+                rt::in_range(&Self::HUMIDITY_CHECK.at(s.at(0)), w_humidity)?;
                 rt::Some(Permille::from_raw(w_humidity))
             } else {
                 rt::None

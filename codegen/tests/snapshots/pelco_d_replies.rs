@@ -345,8 +345,8 @@ pub mod pelco_d_replies {
             let w_command: u16 = u16::from_be_bytes([frame[2], frame[3]]);
             rt::equal(&request::Ptz::RESERVED_DESC, 2, (w_command >> 13) & 0x3, 0x0)?;
             rt::equal(&request::Ptz::EXTENDED_DESC, 2, w_command & 0x1, 0x0)?;
-            rt::in_range_or(&request::Ptz::PAN_SPEED_DESC, 4, frame[4], 0, 63, &[255])?;
-            rt::in_range(&request::Ptz::TILT_SPEED_DESC, 5, frame[5], 0, 63)?;
+            rt::in_range(&request::Ptz::PAN_SPEED_CHECK, frame[4])?;
+            rt::in_range(&request::Ptz::TILT_SPEED_CHECK, frame[5])?;
             rt::Ok(
                 Self::Ptz(request::Ptz {
                     sense: (w_command >> 15) != 0,
@@ -862,10 +862,7 @@ pub mod pelco_d_replies {
             }
         }
         fn checksum_ok(frame: &[u8]) -> bool {
-            match frame.len().checked_sub(1) {
-                rt::Some(n) if n > 0 => rt::check_sum(frame, n, &FRAME, frame_sum),
-                _ => false,
-            }
+            FRAME.checksum_ok(frame, frame_sum)
         }
     }
     /// A streaming decoder for this protocol: see [`busspec_runtime::stream`].
@@ -881,10 +878,15 @@ pub mod pelco_d_replies {
         pub const TILT_SPEED: rt::Range<usize> = 5..6;
         /// `pan_speed`'s special value `turbo`.
         pub const PAN_SPEED_TURBO: u8 = 0xFF;
+        pub const PAN_SPEED_DESC: rt::FieldDesc = rt::field(Self::NAME, "pan_speed");
+        pub const PAN_SPEED_CHECK: rt::FieldCheck = rt::check(&Self::PAN_SPEED_DESC, 4)
+            .range(0, 63)
+            .or(&[255]);
+        pub const TILT_SPEED_DESC: rt::FieldDesc = rt::field(Self::NAME, "tilt_speed");
+        pub const TILT_SPEED_CHECK: rt::FieldCheck = rt::check(&Self::TILT_SPEED_DESC, 5)
+            .range(0, 63);
         pub const RESERVED_DESC: rt::FieldDesc = rt::field(Self::NAME, "reserved");
         pub const EXTENDED_DESC: rt::FieldDesc = rt::field(Self::NAME, "extended");
-        pub const PAN_SPEED_DESC: rt::FieldDesc = rt::field(Self::NAME, "pan_speed");
-        pub const TILT_SPEED_DESC: rt::FieldDesc = rt::field(Self::NAME, "tilt_speed");
         pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
             f("sense", rt::Int(self.sense as i64));
             f("auto_scan", rt::Int(self.auto_scan as i64));
@@ -925,8 +927,8 @@ pub mod pelco_d_replies {
                 pan_speed: v_pan_speed,
                 tilt_speed: v_tilt_speed,
             } = *self;
-            rt::encode_in_range_or("pan_speed", v_pan_speed, 0, 63, &[255])?;
-            rt::encode_in_range("tilt_speed", v_tilt_speed, 0, 63)?;
+            rt::encode_in_range(&Self::PAN_SPEED_CHECK, v_pan_speed)?;
+            rt::encode_in_range(&Self::TILT_SPEED_CHECK, v_tilt_speed)?;
             let out = rt::head(out, &[0xFF, address]);
             let w_command: u16 = ((v_sense as u16) << 15) | ((v_auto_scan as u16) << 12)
                 | ((v_camera_on as u16) << 11) | ((v_iris_close as u16) << 10)
@@ -947,8 +949,10 @@ pub mod pelco_d_replies {
         pub const LEN: usize = 7;
         pub const DESC: rt::MessageDesc = rt::desc(Self::NAME, 0x0009, 2, &[7]);
         pub const AUXILIARY: rt::Range<usize> = 5..6;
-        pub const DATA1_DESC: rt::FieldDesc = rt::field(Self::NAME, "data1");
         pub const AUXILIARY_DESC: rt::FieldDesc = rt::field(Self::NAME, "auxiliary");
+        pub const AUXILIARY_CHECK: rt::FieldCheck = rt::check(&Self::AUXILIARY_DESC, 5)
+            .range(1, 8);
+        pub const DATA1_DESC: rt::FieldDesc = rt::field(Self::NAME, "data1");
         pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
             f("auxiliary", rt::Int(self.auxiliary as i64));
         }
@@ -959,7 +963,7 @@ pub mod pelco_d_replies {
         #[inline(always)]
         fn write(&self, address: u8, out: &mut [u8; 7]) -> rt::EncodeResult {
             let Self { auxiliary: v_auxiliary } = *self;
-            rt::encode_in_range("auxiliary", v_auxiliary, 1, 8)?;
+            rt::encode_in_range(&Self::AUXILIARY_CHECK, v_auxiliary)?;
             let out = rt::head(out, &[0xFF, address, 0x00, 0x09, 0x00]);
             out[5] = v_auxiliary;
             rt::Ok(out.len())
@@ -969,7 +973,7 @@ pub mod pelco_d_replies {
         fn from_frame(frame: &[u8]) -> rt::DecodeResult<Self> {
             let frame = rt::fixed::<7>(frame, &Self::DESC)?;
             rt::equal(&Self::DATA1_DESC, 4, frame[4], 0x0)?;
-            rt::in_range(&Self::AUXILIARY_DESC, 5, frame[5], 1, 8)?;
+            rt::in_range(&Self::AUXILIARY_CHECK, frame[5])?;
             rt::Ok(Self { auxiliary: frame[5] })
         }
     }
@@ -1001,8 +1005,10 @@ pub mod pelco_d_replies {
         pub const LEN: usize = 7;
         pub const DESC: rt::MessageDesc = rt::desc(Self::NAME, 0x0007, 2, &[7]);
         pub const PRESET: rt::Range<usize> = 5..6;
-        pub const DATA1_DESC: rt::FieldDesc = rt::field(Self::NAME, "data1");
         pub const PRESET_DESC: rt::FieldDesc = rt::field(Self::NAME, "preset");
+        pub const PRESET_CHECK: rt::FieldCheck = rt::check(&Self::PRESET_DESC, 5)
+            .range(1, 255);
+        pub const DATA1_DESC: rt::FieldDesc = rt::field(Self::NAME, "data1");
         pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
             f("preset", rt::Int(self.preset as i64));
         }
@@ -1013,7 +1019,7 @@ pub mod pelco_d_replies {
         #[inline(always)]
         fn write(&self, address: u8, out: &mut [u8; 7]) -> rt::EncodeResult {
             let Self { preset: v_preset } = *self;
-            rt::encode_in_range("preset", v_preset, 1, 255)?;
+            rt::encode_in_range(&Self::PRESET_CHECK, v_preset)?;
             let out = rt::head(out, &[0xFF, address, 0x00, 0x07, 0x00]);
             out[5] = v_preset;
             rt::Ok(out.len())
@@ -1023,7 +1029,7 @@ pub mod pelco_d_replies {
         fn from_frame(frame: &[u8]) -> rt::DecodeResult<Self> {
             let frame = rt::fixed::<7>(frame, &Self::DESC)?;
             rt::equal(&Self::DATA1_DESC, 4, frame[4], 0x0)?;
-            rt::in_range(&Self::PRESET_DESC, 5, frame[5], 1, 255)?;
+            rt::in_range(&Self::PRESET_CHECK, frame[5])?;
             rt::Ok(Self { preset: frame[5] })
         }
     }

@@ -201,8 +201,8 @@ pub mod pelco_p {
             rt::equal(&request::Ptz::FIXED_ZERO_DESC, 2, w_command >> 15, 0x0)?;
             rt::equal(&request::Ptz::FIXED_ZERO_2_DESC, 2, (w_command >> 7) & 0x1, 0x0)?;
             rt::equal(&request::Ptz::FIXED_ZERO_3_DESC, 2, w_command & 0x1, 0x0)?;
-            rt::in_range(&request::Ptz::PAN_SPEED_DESC, 4, frame[4], 0, 64)?;
-            rt::in_range(&request::Ptz::TILT_SPEED_DESC, 5, frame[5], 0, 63)?;
+            rt::in_range(&request::Ptz::PAN_SPEED_CHECK, frame[4])?;
+            rt::in_range(&request::Ptz::TILT_SPEED_CHECK, frame[5])?;
             rt::Ok(
                 Self::Ptz(request::Ptz {
                     camera_on: ((w_command >> 14) & 0x1) != 0,
@@ -565,10 +565,7 @@ pub mod pelco_p {
             }
         }
         fn checksum_ok(frame: &[u8]) -> bool {
-            match frame.len().checked_sub(2) {
-                rt::Some(n) if n > 0 => rt::check_sum(frame, n, &FRAME, frame_sum),
-                _ => false,
-            }
+            FRAME.checksum_ok(frame, frame_sum)
         }
     }
     /// A streaming decoder for this protocol: see [`busspec_runtime::stream`].
@@ -582,6 +579,12 @@ pub mod pelco_p {
         pub const DESC: rt::MessageDesc = rt::desc(Self::NAME, 0, 0, &[8]);
         pub const PAN_SPEED: rt::Range<usize> = 4..5;
         pub const TILT_SPEED: rt::Range<usize> = 5..6;
+        pub const PAN_SPEED_DESC: rt::FieldDesc = rt::field(Self::NAME, "pan_speed");
+        pub const PAN_SPEED_CHECK: rt::FieldCheck = rt::check(&Self::PAN_SPEED_DESC, 4)
+            .range(0, 64);
+        pub const TILT_SPEED_DESC: rt::FieldDesc = rt::field(Self::NAME, "tilt_speed");
+        pub const TILT_SPEED_CHECK: rt::FieldCheck = rt::check(&Self::TILT_SPEED_DESC, 5)
+            .range(0, 63);
         pub const FIXED_ZERO_DESC: rt::FieldDesc = rt::field(Self::NAME, "fixed_zero");
         pub const FIXED_ZERO_2_DESC: rt::FieldDesc = rt::field(
             Self::NAME,
@@ -591,8 +594,6 @@ pub mod pelco_p {
             Self::NAME,
             "fixed_zero_3",
         );
-        pub const PAN_SPEED_DESC: rt::FieldDesc = rt::field(Self::NAME, "pan_speed");
-        pub const TILT_SPEED_DESC: rt::FieldDesc = rt::field(Self::NAME, "tilt_speed");
         pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
             f("camera_on", rt::Int(self.camera_on as i64));
             f("auto_scan", rt::Int(self.auto_scan as i64));
@@ -633,8 +634,8 @@ pub mod pelco_p {
                 pan_speed: v_pan_speed,
                 tilt_speed: v_tilt_speed,
             } = *self;
-            rt::encode_in_range("pan_speed", v_pan_speed, 0, 64)?;
-            rt::encode_in_range("tilt_speed", v_tilt_speed, 0, 63)?;
+            rt::encode_in_range(&Self::PAN_SPEED_CHECK, v_pan_speed)?;
+            rt::encode_in_range(&Self::TILT_SPEED_CHECK, v_tilt_speed)?;
             let out = rt::head(out, &[0xA0, address]);
             let w_command: u16 = ((v_camera_on as u16) << 14)
                 | ((v_auto_scan as u16) << 13) | ((v_camera_on_off as u16) << 12)
@@ -655,8 +656,10 @@ pub mod pelco_p {
         pub const LEN: usize = 8;
         pub const DESC: rt::MessageDesc = rt::desc(Self::NAME, 0x0003, 2, &[8]);
         pub const PRESET: rt::Range<usize> = 5..6;
-        pub const DATA3_DESC: rt::FieldDesc = rt::field(Self::NAME, "data3");
         pub const PRESET_DESC: rt::FieldDesc = rt::field(Self::NAME, "preset");
+        pub const PRESET_CHECK: rt::FieldCheck = rt::check(&Self::PRESET_DESC, 5)
+            .range(1, 255);
+        pub const DATA3_DESC: rt::FieldDesc = rt::field(Self::NAME, "data3");
         pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
             f("preset", rt::Int(self.preset as i64));
         }
@@ -667,7 +670,7 @@ pub mod pelco_p {
         #[inline(always)]
         fn write(&self, address: u8, out: &mut [u8; 8]) -> rt::EncodeResult {
             let Self { preset: v_preset } = *self;
-            rt::encode_in_range("preset", v_preset, 1, 255)?;
+            rt::encode_in_range(&Self::PRESET_CHECK, v_preset)?;
             let out = rt::head(out, &[0xA0, address, 0x00, 0x03, 0x00]);
             out[5] = v_preset;
             rt::Ok(out.len())
@@ -677,7 +680,7 @@ pub mod pelco_p {
         fn from_frame(frame: &[u8]) -> rt::DecodeResult<Self> {
             let frame = rt::fixed::<8>(frame, &Self::DESC)?;
             rt::equal(&Self::DATA3_DESC, 4, frame[4], 0x0)?;
-            rt::in_range(&Self::PRESET_DESC, 5, frame[5], 1, 255)?;
+            rt::in_range(&Self::PRESET_CHECK, frame[5])?;
             rt::Ok(Self { preset: frame[5] })
         }
     }
@@ -687,8 +690,10 @@ pub mod pelco_p {
         pub const LEN: usize = 8;
         pub const DESC: rt::MessageDesc = rt::desc(Self::NAME, 0x0007, 2, &[8]);
         pub const PRESET: rt::Range<usize> = 5..6;
-        pub const DATA3_DESC: rt::FieldDesc = rt::field(Self::NAME, "data3");
         pub const PRESET_DESC: rt::FieldDesc = rt::field(Self::NAME, "preset");
+        pub const PRESET_CHECK: rt::FieldCheck = rt::check(&Self::PRESET_DESC, 5)
+            .range(1, 255);
+        pub const DATA3_DESC: rt::FieldDesc = rt::field(Self::NAME, "data3");
         pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
             f("preset", rt::Int(self.preset as i64));
         }
@@ -699,7 +704,7 @@ pub mod pelco_p {
         #[inline(always)]
         fn write(&self, address: u8, out: &mut [u8; 8]) -> rt::EncodeResult {
             let Self { preset: v_preset } = *self;
-            rt::encode_in_range("preset", v_preset, 1, 255)?;
+            rt::encode_in_range(&Self::PRESET_CHECK, v_preset)?;
             let out = rt::head(out, &[0xA0, address, 0x00, 0x07, 0x00]);
             out[5] = v_preset;
             rt::Ok(out.len())
@@ -709,7 +714,7 @@ pub mod pelco_p {
         fn from_frame(frame: &[u8]) -> rt::DecodeResult<Self> {
             let frame = rt::fixed::<8>(frame, &Self::DESC)?;
             rt::equal(&Self::DATA3_DESC, 4, frame[4], 0x0)?;
-            rt::in_range(&Self::PRESET_DESC, 5, frame[5], 1, 255)?;
+            rt::in_range(&Self::PRESET_CHECK, frame[5])?;
             rt::Ok(Self { preset: frame[5] })
         }
     }

@@ -241,6 +241,8 @@ pub mod records {
         base: 6,
         at: 4,
         width: 4,
+        le: true,
+        signed: false,
         count: rt::CountBy::Elements(rt::CountField {
             name: "n",
             at: 3,
@@ -259,6 +261,8 @@ pub mod records {
                 base: 6,
                 at: 4,
                 width: 4,
+                le: true,
+                signed: false,
                 count: rt::CountBy::Elements(rt::CountField {
                     name: "n",
                     at: 3,
@@ -276,6 +280,8 @@ pub mod records {
         base: 5,
         at: 4,
         width: 5,
+        le: true,
+        signed: false,
         count: rt::CountBy::Bytes(rt::CountField {
             name: "byte_count",
             at: 3,
@@ -302,14 +308,11 @@ pub mod records {
         /// Reads a record from its bytes, at frame offset `at` (for errors), each field's range checked as the spec says.
         pub fn read(frame: &[u8; 4], at: usize) -> rt::DecodeResult<Self> {
             let v_id: u8 = frame[0];
-            rt::in_range(&request::SyncWrite::BLOCKS_ID_DESC, at, v_id, 1, 252)?;
+            rt::in_range(&request::SyncWrite::BLOCKS_ID_CHECK.at(at), v_id)?;
             let v_position: u16 = u16::from_le_bytes([frame[1], frame[2]]);
             rt::in_range(
-                &request::SyncWrite::BLOCKS_POSITION_DESC,
-                at + 1,
+                &request::SyncWrite::BLOCKS_POSITION_CHECK.at(at + 1),
                 v_position,
-                0,
-                3600,
             )?;
             let v_mode: u8 = frame[3];
             rt::Ok(Self {
@@ -321,10 +324,13 @@ pub mod records {
         /// Writes the record into its bytes, each field's range checked as the spec says.
         pub fn write(&self, out: &mut [u8; 4]) -> rt::Result<(), rt::EncodeError> {
             let v_id = self.id;
-            rt::encode_in_range("blocks.id", v_id, 1, 252)?;
+            rt::encode_in_range(&request::SyncWrite::BLOCKS_ID_CHECK, v_id)?;
             out[0] = v_id;
             let v_position = self.position;
-            rt::encode_in_range("blocks.position", v_position.raw(), 0, 3600)?;
+            rt::encode_in_range(
+                &request::SyncWrite::BLOCKS_POSITION_CHECK,
+                v_position.raw(),
+            )?;
             out[1..3].copy_from_slice(&v_position.raw().to_le_bytes());
             let v_mode = self.mode;
             out[3] = v_mode.raw();
@@ -398,7 +404,7 @@ pub mod records {
             let v_register: u16 = u16::from_le_bytes([frame[0], frame[1]]);
             let v_value: i16 = i16::from_le_bytes([frame[2], frame[3]]);
             let v_bank: u8 = frame[4];
-            rt::in_range(&request::WritePairs::PAIRS_BANK_DESC, at + 4, v_bank, 1, 4)?;
+            rt::in_range(&request::WritePairs::PAIRS_BANK_CHECK.at(at + 4), v_bank)?;
             rt::Ok(Self {
                 register: v_register,
                 value: v_value,
@@ -412,7 +418,7 @@ pub mod records {
             let v_value = self.value;
             out[2..4].copy_from_slice(&v_value.to_le_bytes());
             let v_bank = self.bank;
-            rt::encode_in_range("pairs.bank", v_bank, 1, 4)?;
+            rt::encode_in_range(&request::WritePairs::PAIRS_BANK_CHECK, v_bank)?;
             out[4] = v_bank;
             rt::Ok(())
         }
@@ -630,6 +636,8 @@ pub mod records {
         base: 4,
         at: 3,
         width: 4,
+        le: true,
+        signed: false,
         count: rt::CountBy::End,
         min: 1,
         max: 6,
@@ -1006,10 +1014,7 @@ pub mod records {
             }
         }
         fn checksum_ok(frame: &[u8]) -> bool {
-            match frame.len().checked_sub(1) {
-                rt::Some(n) if n > 0 => rt::check_sum(frame, n, &FRAME, frame_sum),
-                _ => false,
-            }
+            FRAME.checksum_ok(frame, frame_sum)
         }
     }
     /// A streaming decoder for this protocol: see [`busspec_runtime::stream`].
@@ -1024,10 +1029,17 @@ pub mod records {
         pub const DESC: rt::MessageDesc = rt::desc(Self::NAME, 0x83, 1, &[6]);
         pub const BLOCKS_DESC: rt::FieldDesc = rt::field(Self::NAME, "blocks");
         pub const BLOCKS_ID_DESC: rt::FieldDesc = rt::field(Self::NAME, "blocks.id");
+        pub const BLOCKS_ID_CHECK: rt::FieldCheck = rt::check(&Self::BLOCKS_ID_DESC, 0)
+            .range(1, 252);
         pub const BLOCKS_POSITION_DESC: rt::FieldDesc = rt::field(
             Self::NAME,
             "blocks.position",
         );
+        pub const BLOCKS_POSITION_CHECK: rt::FieldCheck = rt::check(
+                &Self::BLOCKS_POSITION_DESC,
+                1,
+            )
+            .range(0, 3600);
         pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
             f("blocks", rt::Records(self.blocks.records()));
             f("flags", rt::Int(self.flags as i64));
@@ -1088,6 +1100,8 @@ pub mod records {
         pub const DESC: rt::MessageDesc = rt::desc(Self::NAME, 0x84, 1, &[5]);
         pub const PAIRS_DESC: rt::FieldDesc = rt::field(Self::NAME, "pairs");
         pub const PAIRS_BANK_DESC: rt::FieldDesc = rt::field(Self::NAME, "pairs.bank");
+        pub const PAIRS_BANK_CHECK: rt::FieldCheck = rt::check(&Self::PAIRS_BANK_DESC, 4)
+            .range(1, 4);
         pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
             f("pairs", rt::Records(self.pairs.records()));
         }
@@ -1135,6 +1149,8 @@ pub mod records {
         pub const DESC: rt::MessageDesc = rt::desc(Self::NAME, 0x85, 1, &[5]);
         pub const QUANTITY: rt::Range<usize> = 3..4;
         pub const QUANTITY_DESC: rt::FieldDesc = rt::field(Self::NAME, "quantity");
+        pub const QUANTITY_CHECK: rt::FieldCheck = rt::check(&Self::QUANTITY_DESC, 3)
+            .range(1, 6);
         pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
             f("quantity", rt::Int(self.quantity as i64));
         }
@@ -1145,7 +1161,7 @@ pub mod records {
         #[inline(always)]
         fn write(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             let Self { quantity: v_quantity } = *self;
-            rt::encode_in_range("quantity", v_quantity, 1, 6)?;
+            rt::encode_in_range(&Self::QUANTITY_CHECK, v_quantity)?;
             let out = rt::frame_mut::<5>(buf, &[0x7E, address, 0x85])?;
             out[3] = v_quantity;
             rt::Ok(out.len())
@@ -1154,7 +1170,7 @@ pub mod records {
         #[inline(always)]
         fn from_frame(frame: &[u8]) -> rt::DecodeResult<Self> {
             let frame = rt::fixed::<5>(frame, &Self::DESC)?;
-            rt::in_range(&Self::QUANTITY_DESC, 3, frame[3], 1, 6)?;
+            rt::in_range(&Self::QUANTITY_CHECK, frame[3])?;
             rt::Ok(Self { quantity: frame[3] })
         }
     }

@@ -157,6 +157,8 @@ pub mod records_sized {
         base: 9,
         at: 8,
         width: 5,
+        le: true,
+        signed: false,
         count: rt::CountBy::EndSized(rt::SizedBy {
             field: rt::CountField {
                 name: "data_length",
@@ -176,6 +178,8 @@ pub mod records_sized {
         base: 6,
         at: 5,
         width: 3,
+        le: true,
+        signed: false,
         count: rt::CountBy::EndSized(rt::SizedBy {
             field: rt::CountField {
                 name: "width",
@@ -205,7 +209,7 @@ pub mod records_sized {
         /// Its last field takes `last` bytes (the frame's width field says how many; the array holds a record at its widest).
         pub fn read(frame: &[u8; 5], at: usize, last: usize) -> rt::DecodeResult<Self> {
             let v_id: u8 = frame[0];
-            rt::in_range(&request::SyncWrite::BLOCKS_ID_DESC, at, v_id, 0, 252)?;
+            rt::in_range(&request::SyncWrite::BLOCKS_ID_CHECK.at(at), v_id)?;
             let v_data: u32 = rt::sized_int(
                 frame.get(1..1 + last).unwrap_or(&[]),
                 true,
@@ -221,7 +225,7 @@ pub mod records_sized {
             last: usize,
         ) -> rt::Result<(), rt::EncodeError> {
             let v_id = self.id;
-            rt::encode_in_range("blocks.id", v_id, 0, 252)?;
+            rt::encode_in_range(&request::SyncWrite::BLOCKS_ID_CHECK, v_id)?;
             out[0] = v_id;
             let v_data = self.data;
             rt::write_sized(
@@ -284,13 +288,7 @@ pub mod records_sized {
                 true,
                 true,
             ) as i16;
-            rt::in_range(
-                &request::Trim::OFFSETS_OFFSET_DESC,
-                at + 1,
-                v_offset,
-                -900,
-                900,
-            )?;
+            rt::in_range(&request::Trim::OFFSETS_OFFSET_CHECK.at(at + 1), v_offset)?;
             rt::Ok(Self {
                 channel: v_channel,
                 offset: TenthDegree::from_raw(v_offset),
@@ -306,7 +304,7 @@ pub mod records_sized {
             let v_channel = self.channel;
             out[0] = v_channel;
             let v_offset = self.offset;
-            rt::encode_in_range("offsets.offset", v_offset.raw(), -900, 900)?;
+            rt::encode_in_range(&request::Trim::OFFSETS_OFFSET_CHECK, v_offset.raw())?;
             rt::write_sized(
                 "offsets.offset",
                 v_offset.raw() as i64,
@@ -792,10 +790,7 @@ pub mod records_sized {
             }
         }
         fn checksum_ok(frame: &[u8]) -> bool {
-            match frame.len().checked_sub(1) {
-                rt::Some(n) if n > 0 => rt::check_sum(frame, n, &FRAME, frame_sum),
-                _ => false,
-            }
+            FRAME.checksum_ok(frame, frame_sum)
         }
     }
     /// A streaming decoder for this protocol: see [`busspec_runtime::stream`].
@@ -812,6 +807,8 @@ pub mod records_sized {
         pub const DATA_LENGTH: rt::Range<usize> = 6..8;
         pub const BLOCKS_DESC: rt::FieldDesc = rt::field(Self::NAME, "blocks");
         pub const BLOCKS_ID_DESC: rt::FieldDesc = rt::field(Self::NAME, "blocks.id");
+        pub const BLOCKS_ID_CHECK: rt::FieldCheck = rt::check(&Self::BLOCKS_ID_DESC, 0)
+            .range(0, 252);
         pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
             f("start_address", rt::Int(self.start_address as i64));
             f("data_length", rt::Int(self.data_length as i64));
@@ -885,6 +882,11 @@ pub mod records_sized {
             Self::NAME,
             "offsets.offset",
         );
+        pub const OFFSETS_OFFSET_CHECK: rt::FieldCheck = rt::check(
+                &Self::OFFSETS_OFFSET_DESC,
+                1,
+            )
+            .range(-900, 900);
         pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
             f("width", rt::Int(self.width as i64));
             f("offsets", rt::Records(self.offsets.records()));
@@ -896,7 +898,7 @@ pub mod records_sized {
         #[inline(always)]
         fn write(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             let Self { width: v_width, offsets: v_offsets } = *self;
-            rt::encode_broadcast(address, 0xFE, &request::Trim::DESC)?;
+            FRAME.encode_broadcast(address, &Self::DESC)?;
             let frame_len = REPEAT_TRIM
                 .encode_len_sized(v_offsets.len(), (v_width) as u64)?;
             let last_width = (v_width) as usize;
@@ -922,7 +924,7 @@ pub mod records_sized {
         #[inline(always)]
         fn from_frame(frame: &[u8]) -> rt::DecodeResult<Self> {
             let (frame, elements, _) = REPEAT_TRIM.split::<5>(frame)?;
-            rt::no_broadcast(frame[1], 0xFE, &Self::DESC)?;
+            FRAME.no_broadcast(frame[1], &Self::DESC)?;
             let rec_width = REPEAT_TRIM.element_width(frame);
             let mut v_offsets = rt::Repeated::<TrimOffsets, 4>::new();
             for (k, chunk) in elements.chunks_exact(rec_width).enumerate() {

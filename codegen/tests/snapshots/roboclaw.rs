@@ -804,6 +804,8 @@ pub mod roboclaw {
         base: 2,
         at: 0,
         width: 1,
+        le: false,
+        signed: false,
         count: rt::CountBy::Until(0),
         min: 0,
         max: 47,
@@ -817,6 +819,8 @@ pub mod roboclaw {
                 base: 2,
                 at: 0,
                 width: 1,
+                le: false,
+                signed: false,
                 count: rt::CountBy::Until(0),
                 min: 0,
                 max: 47,
@@ -1071,9 +1075,7 @@ pub mod roboclaw {
                         let frame = &s.frame;
                         rt::Ok(
                             Self::FirmwareVersion(response::FirmwareVersion {
-                                version: s
-                                    .lists[0]
-                                    .elements::<u8, 47>(s.elements(0), false, false)?,
+                                version: s.lists[0].elements::<u8, 47>(s.elements(0))?,
                             }),
                         )
                     },
@@ -1348,9 +1350,7 @@ pub mod roboclaw {
                     |s: &rt::Split<'a, 2, 1>| {
                         let frame = &s.frame;
                         rt::Ok(Self::FirmwareVersion {
-                            version: s
-                                .lists[0]
-                                .view::<u8, 47>(s.elements(0), false, false)?,
+                            version: s.lists[0].view::<u8, 47>(s.elements(0))?,
                         })
                     },
                 );
@@ -1626,10 +1626,7 @@ pub mod roboclaw {
             if unchecked_response(frame) {
                 return true;
             }
-            match frame.len().checked_sub(2) {
-                rt::Some(n) if n > 0 => rt::check_sum(frame, n, &FRAME, frame_sum),
-                _ => false,
-            }
+            FRAME.checksum_ok(frame, frame_sum)
         }
     }
     /// A streaming decoder for this protocol: see [`busspec_runtime::stream`].
@@ -1643,6 +1640,8 @@ pub mod roboclaw {
         pub const DESC: rt::MessageDesc = rt::desc(Self::NAME, 0x00, 1, &[5]);
         pub const SPEED: rt::Range<usize> = 2..3;
         pub const SPEED_DESC: rt::FieldDesc = rt::field(Self::NAME, "speed");
+        pub const SPEED_CHECK: rt::FieldCheck = rt::check(&Self::SPEED_DESC, 2)
+            .range(0, 127);
         pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
             f("speed", rt::Int(self.speed as i64));
         }
@@ -1653,7 +1652,7 @@ pub mod roboclaw {
         #[inline(always)]
         fn write(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             let Self { speed: v_speed } = *self;
-            rt::encode_in_range("speed", v_speed, 0, 127)?;
+            rt::encode_in_range(&Self::SPEED_CHECK, v_speed)?;
             let out = rt::frame_mut::<5>(buf, &[address, 0x00])?;
             out[2] = v_speed;
             rt::Ok(out.len())
@@ -1662,7 +1661,7 @@ pub mod roboclaw {
         #[inline(always)]
         fn from_frame(frame: &[u8]) -> rt::DecodeResult<Self> {
             let frame = rt::fixed::<5>(frame, &Self::DESC)?;
-            rt::in_range(&Self::SPEED_DESC, 2, frame[2], 0, 127)?;
+            rt::in_range(&Self::SPEED_CHECK, frame[2])?;
             rt::Ok(Self { speed: frame[2] })
         }
     }
@@ -1673,6 +1672,8 @@ pub mod roboclaw {
         pub const DESC: rt::MessageDesc = rt::desc(Self::NAME, 0x01, 1, &[5]);
         pub const SPEED: rt::Range<usize> = 2..3;
         pub const SPEED_DESC: rt::FieldDesc = rt::field(Self::NAME, "speed");
+        pub const SPEED_CHECK: rt::FieldCheck = rt::check(&Self::SPEED_DESC, 2)
+            .range(0, 127);
         pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
             f("speed", rt::Int(self.speed as i64));
         }
@@ -1683,7 +1684,7 @@ pub mod roboclaw {
         #[inline(always)]
         fn write(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             let Self { speed: v_speed } = *self;
-            rt::encode_in_range("speed", v_speed, 0, 127)?;
+            rt::encode_in_range(&Self::SPEED_CHECK, v_speed)?;
             let out = rt::frame_mut::<5>(buf, &[address, 0x01])?;
             out[2] = v_speed;
             rt::Ok(out.len())
@@ -1692,7 +1693,7 @@ pub mod roboclaw {
         #[inline(always)]
         fn from_frame(frame: &[u8]) -> rt::DecodeResult<Self> {
             let frame = rt::fixed::<5>(frame, &Self::DESC)?;
-            rt::in_range(&Self::SPEED_DESC, 2, frame[2], 0, 127)?;
+            rt::in_range(&Self::SPEED_CHECK, frame[2])?;
             rt::Ok(Self { speed: frame[2] })
         }
     }
@@ -1757,6 +1758,8 @@ pub mod roboclaw {
         pub const DESC: rt::MessageDesc = rt::desc(Self::NAME, 0x20, 1, &[6]);
         pub const DUTY: rt::Range<usize> = 2..4;
         pub const DUTY_DESC: rt::FieldDesc = rt::field(Self::NAME, "duty");
+        pub const DUTY_CHECK: rt::FieldCheck = rt::check(&Self::DUTY_DESC, 2)
+            .range(-32767, 32767);
         pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
             f("duty", rt::Int(self.duty as i64));
         }
@@ -1767,7 +1770,7 @@ pub mod roboclaw {
         #[inline(always)]
         fn write(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             let Self { duty: v_duty } = *self;
-            rt::encode_in_range("duty", v_duty, -32767, 32767)?;
+            rt::encode_in_range(&Self::DUTY_CHECK, v_duty)?;
             let out = rt::frame_mut::<6>(buf, &[address, 0x20])?;
             out[2..4].copy_from_slice(&v_duty.to_be_bytes());
             rt::Ok(out.len())
@@ -1777,7 +1780,7 @@ pub mod roboclaw {
         fn from_frame(frame: &[u8]) -> rt::DecodeResult<Self> {
             let frame = rt::fixed::<6>(frame, &Self::DESC)?;
             let w_duty: i16 = i16::from_be_bytes([frame[2], frame[3]]);
-            rt::in_range(&Self::DUTY_DESC, 2, w_duty, -32767, 32767)?;
+            rt::in_range(&Self::DUTY_CHECK, w_duty)?;
             rt::Ok(Self { duty: w_duty })
         }
     }
@@ -1949,7 +1952,9 @@ pub mod roboclaw {
             let out = LISTS_FIRMWARE_VERSION.expand(&compact, &[bytes_0], buf)?;
             {
                 let at = 0;
-                rt::write_elements(v_version.as_slice(), 1, false, &mut out[at..]);
+                if let rt::Some(to) = out.get_mut(at..at + v_version.len()) {
+                    to.copy_from_slice(v_version.as_slice());
+                }
                 if let rt::Some(b) = out.get_mut(at + v_version.len()) {
                     *b = 0;
                 }

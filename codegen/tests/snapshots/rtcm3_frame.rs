@@ -122,6 +122,8 @@ pub mod rtcm3_frame {
         base: 8,
         at: 5,
         width: 1,
+        le: false,
+        signed: false,
         count: rt::CountBy::End,
         min: 17,
         max: 17,
@@ -132,6 +134,8 @@ pub mod rtcm3_frame {
         base: 8,
         at: 5,
         width: 1,
+        le: false,
+        signed: false,
         count: rt::CountBy::End,
         min: 2,
         max: 34,
@@ -225,8 +229,7 @@ pub mod rtcm3_frame {
                         rt::Ok(
                             Self::StationArp(request::StationArp {
                                 station_high: (w_head & 0xF) as u8,
-                                rest: REPEAT_STATION_ARP
-                                    .elements::<u8, 17>(elements, false, false)?,
+                                rest: REPEAT_STATION_ARP.elements::<u8, 17>(elements)?,
                             }),
                         )
                     },
@@ -244,8 +247,7 @@ pub mod rtcm3_frame {
                         rt::Ok(
                             Self::Antenna(request::Antenna {
                                 station_high: (w_head & 0xF) as u8,
-                                rest: REPEAT_ANTENNA
-                                    .elements::<u8, 34>(elements, false, false)?,
+                                rest: REPEAT_ANTENNA.elements::<u8, 34>(elements)?,
                             }),
                         )
                     },
@@ -515,8 +517,7 @@ pub mod rtcm3_frame {
                         )?;
                         rt::Ok(Self::StationArp {
                             station_high: (w_head & 0xF) as u8,
-                            rest: REPEAT_STATION_ARP
-                                .view::<u8, 17>(elements, false, false)?,
+                            rest: REPEAT_STATION_ARP.view::<u8, 17>(elements)?,
                         })
                     },
                 );
@@ -532,7 +533,7 @@ pub mod rtcm3_frame {
                         )?;
                         rt::Ok(Self::Antenna {
                             station_high: (w_head & 0xF) as u8,
-                            rest: REPEAT_ANTENNA.view::<u8, 34>(elements, false, false)?,
+                            rest: REPEAT_ANTENNA.view::<u8, 34>(elements)?,
                         })
                     },
                 );
@@ -700,10 +701,7 @@ pub mod rtcm3_frame {
             RequestView::decode(frame).map(|_| ())
         }
         fn checksum_ok(frame: &[u8]) -> bool {
-            match frame.len().checked_sub(3) {
-                rt::Some(n) if n > 0 => rt::check_sum(frame, n, &FRAME, frame_sum),
-                _ => false,
-            }
+            FRAME.checksum_ok(frame, frame_sum)
         }
     }
     /// A streaming decoder for this protocol: see [`busspec_runtime::stream`].
@@ -734,7 +732,7 @@ pub mod rtcm3_frame {
             let w_head: u16 = (0x3ED << 4)
                 | ((rt::fits("station_high", v_station_high, 0, 15)? as u16) & 0xF);
             out[3..5].copy_from_slice(&w_head.to_be_bytes());
-            rt::write_elements(v_rest.as_slice(), 1, false, &mut out[5..]);
+            REPEAT_STATION_ARP.write(v_rest.as_slice(), &mut out[5..]);
             rt::Ok(out.len())
         }
     }
@@ -763,7 +761,7 @@ pub mod rtcm3_frame {
             let w_head: u16 = (0x3EF << 4)
                 | ((rt::fits("station_high", v_station_high, 0, 15)? as u16) & 0xF);
             out[3..5].copy_from_slice(&w_head.to_be_bytes());
-            rt::write_elements(v_rest.as_slice(), 1, false, &mut out[5..]);
+            REPEAT_ANTENNA.write(v_rest.as_slice(), &mut out[5..]);
             rt::Ok(out.len())
         }
     }

@@ -541,103 +541,91 @@ pub mod sd {
                 Self::SetServoId(ref m) => m.write(address, out)?,
                 Self::ReadServoId(_) => rt::head(out, &[0xDA, address, 0x00, 0x00]).len(),
                 Self::ReadCurrentConsumption(_) => {
-                    rt::encode_broadcast(
-                        address,
-                        0x1F,
-                        &request::ReadCurrentConsumption::DESC,
-                    )?;
+                    FRAME
+                        .encode_broadcast(
+                            address,
+                            &request::ReadCurrentConsumption::DESC,
+                        )?;
                     rt::head(out, &[0xB0, address, 0x00, 0x00]).len()
                 }
                 Self::ReadBusVoltages(_) => {
-                    rt::encode_broadcast(
-                        address,
-                        0x1F,
-                        &request::ReadBusVoltages::DESC,
-                    )?;
+                    FRAME.encode_broadcast(address, &request::ReadBusVoltages::DESC)?;
                     rt::head(out, &[0xB1, address, 0x00, 0x00]).len()
                 }
                 Self::ReadExtendedCurrentConsumption(_) => {
-                    rt::encode_broadcast(
-                        address,
-                        0x1F,
-                        &request::ReadExtendedCurrentConsumption::DESC,
-                    )?;
+                    FRAME
+                        .encode_broadcast(
+                            address,
+                            &request::ReadExtendedCurrentConsumption::DESC,
+                        )?;
                     rt::head(out, &[0xB2, address, 0x00, 0x00]).len()
                 }
                 Self::ReadTemperatures(_) => {
-                    rt::encode_broadcast(
-                        address,
-                        0x1F,
-                        &request::ReadTemperatures::DESC,
-                    )?;
+                    FRAME.encode_broadcast(address, &request::ReadTemperatures::DESC)?;
                     rt::head(out, &[0xA0, address, 0x00, 0x00]).len()
                 }
                 Self::ReadHumidity(_) => {
-                    rt::encode_broadcast(address, 0x1F, &request::ReadHumidity::DESC)?;
+                    FRAME.encode_broadcast(address, &request::ReadHumidity::DESC)?;
                     rt::head(out, &[0xA1, address, 0x00, 0x00]).len()
                 }
                 Self::ReadSkippedFramesCounter(_) => {
-                    rt::encode_broadcast(
-                        address,
-                        0x1F,
-                        &request::ReadSkippedFramesCounter::DESC,
-                    )?;
+                    FRAME
+                        .encode_broadcast(
+                            address,
+                            &request::ReadSkippedFramesCounter::DESC,
+                        )?;
                     rt::head(out, &[0x37, address, 0x00, 0x01]).len()
                 }
                 Self::ResetDroppedFramesCounter(_) => {
-                    rt::encode_broadcast(
-                        address,
-                        0x1F,
-                        &request::ResetDroppedFramesCounter::DESC,
-                    )?;
+                    FRAME
+                        .encode_broadcast(
+                            address,
+                            &request::ResetDroppedFramesCounter::DESC,
+                        )?;
                     rt::head(out, &[0x37, address, 0x00, 0x02]).len()
                 }
                 Self::ReadActuatorStatusWord(_) => {
-                    rt::encode_broadcast(
-                        address,
-                        0x1F,
-                        &request::ReadActuatorStatusWord::DESC,
-                    )?;
+                    FRAME
+                        .encode_broadcast(
+                            address,
+                            &request::ReadActuatorStatusWord::DESC,
+                        )?;
                     rt::head(out, &[0x40, address, 0xAA, 0x02]).len()
                 }
                 Self::ResetActuatorStatusWord(_) => {
-                    rt::encode_broadcast(
-                        address,
-                        0x1F,
-                        &request::ResetActuatorStatusWord::DESC,
-                    )?;
+                    FRAME
+                        .encode_broadcast(
+                            address,
+                            &request::ResetActuatorStatusWord::DESC,
+                        )?;
                     rt::head(out, &[0x40, address, 0xAA, 0x52]).len()
                 }
                 Self::ResetDefaultRoleAndErrorFlags(_) => {
-                    rt::encode_broadcast(
-                        address,
-                        0x1F,
-                        &request::ResetDefaultRoleAndErrorFlags::DESC,
-                    )?;
+                    FRAME
+                        .encode_broadcast(
+                            address,
+                            &request::ResetDefaultRoleAndErrorFlags::DESC,
+                        )?;
                     rt::head(out, &[0xB4, address, 0x41, 0x53]).len()
                 }
                 Self::SetCurrentPositionAsZero(_) => {
-                    rt::encode_broadcast(
-                        address,
-                        0x1F,
-                        &request::SetCurrentPositionAsZero::DESC,
-                    )?;
+                    FRAME
+                        .encode_broadcast(
+                            address,
+                            &request::SetCurrentPositionAsZero::DESC,
+                        )?;
                     rt::head(out, &[0x99, address, 0x00, 0x00]).len()
                 }
                 Self::ReadCurrentZeroOffset(_) => {
-                    rt::encode_broadcast(
-                        address,
-                        0x1F,
-                        &request::ReadCurrentZeroOffset::DESC,
-                    )?;
+                    FRAME
+                        .encode_broadcast(
+                            address,
+                            &request::ReadCurrentZeroOffset::DESC,
+                        )?;
                     rt::head(out, &[0x95, address, 0x00, 0x00]).len()
                 }
                 Self::ResetZeroOffset(_) => {
-                    rt::encode_broadcast(
-                        address,
-                        0x1F,
-                        &request::ResetZeroOffset::DESC,
-                    )?;
+                    FRAME.encode_broadcast(address, &request::ResetZeroOffset::DESC)?;
                     rt::head(out, &[0x98, address, 0x00, 0x00]).len()
                 }
                 Self::ReadElectronicSerialNumber(ref m) => m.write(address, out)?,
@@ -645,163 +633,153 @@ pub mod sd {
                 Self::ReadSoftwareRevision(ref m) => m.write(address, out)?,
                 Self::ReadHardwareRevision(ref m) => m.write(address, out)?,
                 Self::ReadTotalRuntimeHours(_) => {
-                    rt::encode_broadcast(
-                        address,
-                        0x1F,
-                        &request::ReadTotalRuntimeHours::DESC,
-                    )?;
+                    FRAME
+                        .encode_broadcast(
+                            address,
+                            &request::ReadTotalRuntimeHours::DESC,
+                        )?;
                     rt::head(out, &[0xA2, address, 0x00, 0x00]).len()
                 }
                 Self::ReadTotalRuntimeMinSec(_) => {
-                    rt::encode_broadcast(
-                        address,
-                        0x1F,
-                        &request::ReadTotalRuntimeMinSec::DESC,
-                    )?;
+                    FRAME
+                        .encode_broadcast(
+                            address,
+                            &request::ReadTotalRuntimeMinSec::DESC,
+                        )?;
                     rt::head(out, &[0xA2, address, 0x00, 0x01]).len()
                 }
                 Self::ReadLoadRuntime024Hours(_) => {
-                    rt::encode_broadcast(
-                        address,
-                        0x1F,
-                        &request::ReadLoadRuntime024Hours::DESC,
-                    )?;
+                    FRAME
+                        .encode_broadcast(
+                            address,
+                            &request::ReadLoadRuntime024Hours::DESC,
+                        )?;
                     rt::head(out, &[0xA3, address, 0x00, 0x00]).len()
                 }
                 Self::ReadLoadRuntime024MinSec(_) => {
-                    rt::encode_broadcast(
-                        address,
-                        0x1F,
-                        &request::ReadLoadRuntime024MinSec::DESC,
-                    )?;
+                    FRAME
+                        .encode_broadcast(
+                            address,
+                            &request::ReadLoadRuntime024MinSec::DESC,
+                        )?;
                     rt::head(out, &[0xA3, address, 0x00, 0x01]).len()
                 }
                 Self::ResetLoadRuntime024(_) => {
-                    rt::encode_broadcast(
-                        address,
-                        0x1F,
-                        &request::ResetLoadRuntime024::DESC,
-                    )?;
+                    FRAME
+                        .encode_broadcast(address, &request::ResetLoadRuntime024::DESC)?;
                     rt::head(out, &[0xA3, address, 0xAA, 0x55]).len()
                 }
                 Self::ReadLoadRuntime2549Hours(_) => {
-                    rt::encode_broadcast(
-                        address,
-                        0x1F,
-                        &request::ReadLoadRuntime2549Hours::DESC,
-                    )?;
+                    FRAME
+                        .encode_broadcast(
+                            address,
+                            &request::ReadLoadRuntime2549Hours::DESC,
+                        )?;
                     rt::head(out, &[0xA4, address, 0x00, 0x00]).len()
                 }
                 Self::ReadLoadRuntime2549MinSec(_) => {
-                    rt::encode_broadcast(
-                        address,
-                        0x1F,
-                        &request::ReadLoadRuntime2549MinSec::DESC,
-                    )?;
+                    FRAME
+                        .encode_broadcast(
+                            address,
+                            &request::ReadLoadRuntime2549MinSec::DESC,
+                        )?;
                     rt::head(out, &[0xA4, address, 0x00, 0x01]).len()
                 }
                 Self::ResetLoadRuntime2549(_) => {
-                    rt::encode_broadcast(
-                        address,
-                        0x1F,
-                        &request::ResetLoadRuntime2549::DESC,
-                    )?;
+                    FRAME
+                        .encode_broadcast(
+                            address,
+                            &request::ResetLoadRuntime2549::DESC,
+                        )?;
                     rt::head(out, &[0xA4, address, 0xAA, 0x55]).len()
                 }
                 Self::ReadLoadRuntime5074Hours(_) => {
-                    rt::encode_broadcast(
-                        address,
-                        0x1F,
-                        &request::ReadLoadRuntime5074Hours::DESC,
-                    )?;
+                    FRAME
+                        .encode_broadcast(
+                            address,
+                            &request::ReadLoadRuntime5074Hours::DESC,
+                        )?;
                     rt::head(out, &[0xA5, address, 0x00, 0x00]).len()
                 }
                 Self::ReadLoadRuntime5074MinSec(_) => {
-                    rt::encode_broadcast(
-                        address,
-                        0x1F,
-                        &request::ReadLoadRuntime5074MinSec::DESC,
-                    )?;
+                    FRAME
+                        .encode_broadcast(
+                            address,
+                            &request::ReadLoadRuntime5074MinSec::DESC,
+                        )?;
                     rt::head(out, &[0xA5, address, 0x00, 0x01]).len()
                 }
                 Self::ResetLoadRuntime5074(_) => {
-                    rt::encode_broadcast(
-                        address,
-                        0x1F,
-                        &request::ResetLoadRuntime5074::DESC,
-                    )?;
+                    FRAME
+                        .encode_broadcast(
+                            address,
+                            &request::ResetLoadRuntime5074::DESC,
+                        )?;
                     rt::head(out, &[0xA5, address, 0xAA, 0x55]).len()
                 }
                 Self::ReadLoadRuntime7599Hours(_) => {
-                    rt::encode_broadcast(
-                        address,
-                        0x1F,
-                        &request::ReadLoadRuntime7599Hours::DESC,
-                    )?;
+                    FRAME
+                        .encode_broadcast(
+                            address,
+                            &request::ReadLoadRuntime7599Hours::DESC,
+                        )?;
                     rt::head(out, &[0xA6, address, 0x00, 0x00]).len()
                 }
                 Self::ReadLoadRuntime7599MinSec(_) => {
-                    rt::encode_broadcast(
-                        address,
-                        0x1F,
-                        &request::ReadLoadRuntime7599MinSec::DESC,
-                    )?;
+                    FRAME
+                        .encode_broadcast(
+                            address,
+                            &request::ReadLoadRuntime7599MinSec::DESC,
+                        )?;
                     rt::head(out, &[0xA6, address, 0x00, 0x01]).len()
                 }
                 Self::ResetLoadRuntime7599(_) => {
-                    rt::encode_broadcast(
-                        address,
-                        0x1F,
-                        &request::ResetLoadRuntime7599::DESC,
-                    )?;
+                    FRAME
+                        .encode_broadcast(
+                            address,
+                            &request::ResetLoadRuntime7599::DESC,
+                        )?;
                     rt::head(out, &[0xA6, address, 0xAA, 0x55]).len()
                 }
                 Self::ReadLoadRuntime100Hours(_) => {
-                    rt::encode_broadcast(
-                        address,
-                        0x1F,
-                        &request::ReadLoadRuntime100Hours::DESC,
-                    )?;
+                    FRAME
+                        .encode_broadcast(
+                            address,
+                            &request::ReadLoadRuntime100Hours::DESC,
+                        )?;
                     rt::head(out, &[0xA7, address, 0x00, 0x00]).len()
                 }
                 Self::ReadLoadRuntime100MinSec(_) => {
-                    rt::encode_broadcast(
-                        address,
-                        0x1F,
-                        &request::ReadLoadRuntime100MinSec::DESC,
-                    )?;
+                    FRAME
+                        .encode_broadcast(
+                            address,
+                            &request::ReadLoadRuntime100MinSec::DESC,
+                        )?;
                     rt::head(out, &[0xA7, address, 0x00, 0x01]).len()
                 }
                 Self::ResetLoadRuntime100(_) => {
-                    rt::encode_broadcast(
-                        address,
-                        0x1F,
-                        &request::ResetLoadRuntime100::DESC,
-                    )?;
+                    FRAME
+                        .encode_broadcast(address, &request::ResetLoadRuntime100::DESC)?;
                     rt::head(out, &[0xA7, address, 0xAA, 0x55]).len()
                 }
                 Self::ReadStallEventCounter(_) => {
-                    rt::encode_broadcast(
-                        address,
-                        0x1F,
-                        &request::ReadStallEventCounter::DESC,
-                    )?;
+                    FRAME
+                        .encode_broadcast(
+                            address,
+                            &request::ReadStallEventCounter::DESC,
+                        )?;
                     rt::head(out, &[0xA8, address, 0x00, 0x00]).len()
                 }
                 Self::ResetStallEventCounter(_) => {
-                    rt::encode_broadcast(
-                        address,
-                        0x1F,
-                        &request::ResetStallEventCounter::DESC,
-                    )?;
+                    FRAME
+                        .encode_broadcast(
+                            address,
+                            &request::ResetStallEventCounter::DESC,
+                        )?;
                     rt::head(out, &[0xA8, address, 0xAA, 0x55]).len()
                 }
                 Self::ReadPowerUpCycles(_) => {
-                    rt::encode_broadcast(
-                        address,
-                        0x1F,
-                        &request::ReadPowerUpCycles::DESC,
-                    )?;
+                    FRAME.encode_broadcast(address, &request::ReadPowerUpCycles::DESC)?;
                     rt::head(out, &[0xA9, address, 0x00, 0x00]).len()
                 }
             };
@@ -2282,10 +2260,7 @@ pub mod sd {
             }
         }
         fn checksum_ok(frame: &[u8]) -> bool {
-            match frame.len().checked_sub(2) {
-                rt::Some(n) if n > 0 => rt::check_sum(frame, n, &FRAME, frame_sum),
-                _ => false,
-            }
+            FRAME.checksum_ok(frame, frame_sum)
         }
     }
     /// A streaming decoder for this protocol: see [`busspec_runtime::stream`].
@@ -2405,6 +2380,8 @@ pub mod sd {
         pub const DESC: rt::MessageDesc = rt::desc(Self::NAME, 0xAA, 1, &[6]);
         pub const NEW_ID: rt::Range<usize> = 2..3;
         pub const NEW_ID_DESC: rt::FieldDesc = rt::field(Self::NAME, "new_id");
+        pub const NEW_ID_CHECK: rt::FieldCheck = rt::check(&Self::NEW_ID_DESC, 2)
+            .range(1, 30);
         pub const NEW_ID_REPEAT_DESC: rt::FieldDesc = rt::field(
             Self::NAME,
             "new_id_repeat",
@@ -2419,7 +2396,7 @@ pub mod sd {
         #[inline(always)]
         fn write(&self, address: u8, out: &mut [u8; 6]) -> rt::EncodeResult {
             let Self { new_id: v_new_id } = *self;
-            rt::encode_in_range("new_id", v_new_id, 1, 30)?;
+            rt::encode_in_range(&Self::NEW_ID_CHECK, v_new_id)?;
             let out = rt::head(out, &[0xAA, address]);
             let w_new_id: u8 = v_new_id;
             out[2] = w_new_id;
@@ -2430,7 +2407,7 @@ pub mod sd {
         #[inline(always)]
         fn from_frame(frame: &[u8]) -> rt::DecodeResult<Self> {
             let frame = rt::fixed::<6>(frame, &Self::DESC)?;
-            rt::in_range(&Self::NEW_ID_DESC, 2, frame[2], 1, 30)?;
+            rt::in_range(&Self::NEW_ID_CHECK, frame[2])?;
             rt::same(&Self::NEW_ID_REPEAT_DESC, 3, frame[3], "new_id", frame[2])?;
             rt::Ok(Self { new_id: frame[2] })
         }
@@ -2468,7 +2445,7 @@ pub mod sd {
         #[inline(always)]
         fn from_frame(frame: &[u8]) -> rt::DecodeResult<Self> {
             let frame = rt::fixed::<6>(frame, &Self::DESC)?;
-            rt::no_broadcast(frame[1], 0x1F, &Self::DESC)?;
+            FRAME.no_broadcast(frame[1], &Self::DESC)?;
             rt::equal(&Self::ARG1_DESC, 2, frame[2], 0x0)?;
             rt::equal(&Self::ARG2_DESC, 3, frame[3], 0x0)?;
             rt::Ok(Self)
@@ -2488,7 +2465,7 @@ pub mod sd {
         #[inline(always)]
         fn from_frame(frame: &[u8]) -> rt::DecodeResult<Self> {
             let frame = rt::fixed::<6>(frame, &Self::DESC)?;
-            rt::no_broadcast(frame[1], 0x1F, &Self::DESC)?;
+            FRAME.no_broadcast(frame[1], &Self::DESC)?;
             rt::equal(&Self::ARG1_DESC, 2, frame[2], 0x0)?;
             rt::equal(&Self::ARG2_DESC, 3, frame[3], 0x0)?;
             rt::Ok(Self)
@@ -2508,7 +2485,7 @@ pub mod sd {
         #[inline(always)]
         fn from_frame(frame: &[u8]) -> rt::DecodeResult<Self> {
             let frame = rt::fixed::<6>(frame, &Self::DESC)?;
-            rt::no_broadcast(frame[1], 0x1F, &Self::DESC)?;
+            FRAME.no_broadcast(frame[1], &Self::DESC)?;
             rt::equal(&Self::ARG1_DESC, 2, frame[2], 0x0)?;
             rt::equal(&Self::ARG2_DESC, 3, frame[3], 0x0)?;
             rt::Ok(Self)
@@ -2528,7 +2505,7 @@ pub mod sd {
         #[inline(always)]
         fn from_frame(frame: &[u8]) -> rt::DecodeResult<Self> {
             let frame = rt::fixed::<6>(frame, &Self::DESC)?;
-            rt::no_broadcast(frame[1], 0x1F, &Self::DESC)?;
+            FRAME.no_broadcast(frame[1], &Self::DESC)?;
             rt::equal(&Self::ARG1_DESC, 2, frame[2], 0x0)?;
             rt::equal(&Self::ARG2_DESC, 3, frame[3], 0x0)?;
             rt::Ok(Self)
@@ -2548,7 +2525,7 @@ pub mod sd {
         #[inline(always)]
         fn from_frame(frame: &[u8]) -> rt::DecodeResult<Self> {
             let frame = rt::fixed::<6>(frame, &Self::DESC)?;
-            rt::no_broadcast(frame[1], 0x1F, &Self::DESC)?;
+            FRAME.no_broadcast(frame[1], &Self::DESC)?;
             rt::equal(&Self::ARG1_DESC, 2, frame[2], 0x0)?;
             rt::equal(&Self::ARG2_DESC, 3, frame[3], 0x0)?;
             rt::Ok(Self)
@@ -2568,7 +2545,7 @@ pub mod sd {
         #[inline(always)]
         fn from_frame(frame: &[u8]) -> rt::DecodeResult<Self> {
             let frame = rt::fixed::<6>(frame, &Self::DESC)?;
-            rt::no_broadcast(frame[1], 0x1F, &Self::DESC)?;
+            FRAME.no_broadcast(frame[1], &Self::DESC)?;
             rt::equal(&Self::ARG1_DESC, 2, frame[2], 0x0)?;
             rt::equal(&Self::ARG2_DESC, 3, frame[3], 0x1)?;
             rt::Ok(Self)
@@ -2588,7 +2565,7 @@ pub mod sd {
         #[inline(always)]
         fn from_frame(frame: &[u8]) -> rt::DecodeResult<Self> {
             let frame = rt::fixed::<6>(frame, &Self::DESC)?;
-            rt::no_broadcast(frame[1], 0x1F, &Self::DESC)?;
+            FRAME.no_broadcast(frame[1], &Self::DESC)?;
             rt::equal(&Self::ARG1_DESC, 2, frame[2], 0x0)?;
             rt::equal(&Self::ARG2_DESC, 3, frame[3], 0x2)?;
             rt::Ok(Self)
@@ -2608,7 +2585,7 @@ pub mod sd {
         #[inline(always)]
         fn from_frame(frame: &[u8]) -> rt::DecodeResult<Self> {
             let frame = rt::fixed::<6>(frame, &Self::DESC)?;
-            rt::no_broadcast(frame[1], 0x1F, &Self::DESC)?;
+            FRAME.no_broadcast(frame[1], &Self::DESC)?;
             rt::equal(&Self::ARG1_DESC, 2, frame[2], 0xAA)?;
             rt::equal(&Self::ARG2_DESC, 3, frame[3], 0x2)?;
             rt::Ok(Self)
@@ -2628,7 +2605,7 @@ pub mod sd {
         #[inline(always)]
         fn from_frame(frame: &[u8]) -> rt::DecodeResult<Self> {
             let frame = rt::fixed::<6>(frame, &Self::DESC)?;
-            rt::no_broadcast(frame[1], 0x1F, &Self::DESC)?;
+            FRAME.no_broadcast(frame[1], &Self::DESC)?;
             rt::equal(&Self::ARG1_DESC, 2, frame[2], 0xAA)?;
             rt::equal(&Self::ARG2_DESC, 3, frame[3], 0x52)?;
             rt::Ok(Self)
@@ -2648,7 +2625,7 @@ pub mod sd {
         #[inline(always)]
         fn from_frame(frame: &[u8]) -> rt::DecodeResult<Self> {
             let frame = rt::fixed::<6>(frame, &Self::DESC)?;
-            rt::no_broadcast(frame[1], 0x1F, &Self::DESC)?;
+            FRAME.no_broadcast(frame[1], &Self::DESC)?;
             rt::equal(&Self::ARG1_DESC, 2, frame[2], 0x41)?;
             rt::equal(&Self::ARG2_DESC, 3, frame[3], 0x53)?;
             rt::Ok(Self)
@@ -2668,7 +2645,7 @@ pub mod sd {
         #[inline(always)]
         fn from_frame(frame: &[u8]) -> rt::DecodeResult<Self> {
             let frame = rt::fixed::<6>(frame, &Self::DESC)?;
-            rt::no_broadcast(frame[1], 0x1F, &Self::DESC)?;
+            FRAME.no_broadcast(frame[1], &Self::DESC)?;
             rt::equal(&Self::ARG1_DESC, 2, frame[2], 0x0)?;
             rt::equal(&Self::ARG2_DESC, 3, frame[3], 0x0)?;
             rt::Ok(Self)
@@ -2688,7 +2665,7 @@ pub mod sd {
         #[inline(always)]
         fn from_frame(frame: &[u8]) -> rt::DecodeResult<Self> {
             let frame = rt::fixed::<6>(frame, &Self::DESC)?;
-            rt::no_broadcast(frame[1], 0x1F, &Self::DESC)?;
+            FRAME.no_broadcast(frame[1], &Self::DESC)?;
             rt::equal(&Self::ARG1_DESC, 2, frame[2], 0x0)?;
             rt::equal(&Self::ARG2_DESC, 3, frame[3], 0x0)?;
             rt::Ok(Self)
@@ -2708,7 +2685,7 @@ pub mod sd {
         #[inline(always)]
         fn from_frame(frame: &[u8]) -> rt::DecodeResult<Self> {
             let frame = rt::fixed::<6>(frame, &Self::DESC)?;
-            rt::no_broadcast(frame[1], 0x1F, &Self::DESC)?;
+            FRAME.no_broadcast(frame[1], &Self::DESC)?;
             rt::equal(&Self::ARG1_DESC, 2, frame[2], 0x0)?;
             rt::equal(&Self::ARG2_DESC, 3, frame[3], 0x0)?;
             rt::Ok(Self)
@@ -2720,8 +2697,13 @@ pub mod sd {
         pub const LEN: usize = 6;
         pub const DESC: rt::MessageDesc = rt::desc(Self::NAME, 0xF0, 1, &[6]);
         pub const BYTE_NUMBER: rt::Range<usize> = 3..4;
-        pub const ARG1_DESC: rt::FieldDesc = rt::field(Self::NAME, "arg1");
         pub const BYTE_NUMBER_DESC: rt::FieldDesc = rt::field(Self::NAME, "byte_number");
+        pub const BYTE_NUMBER_CHECK: rt::FieldCheck = rt::check(
+                &Self::BYTE_NUMBER_DESC,
+                3,
+            )
+            .range(0, 31);
+        pub const ARG1_DESC: rt::FieldDesc = rt::field(Self::NAME, "arg1");
         pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
             f("byte_number", rt::Int(self.byte_number as i64));
         }
@@ -2732,12 +2714,8 @@ pub mod sd {
         #[inline(always)]
         fn write(&self, address: u8, out: &mut [u8; 6]) -> rt::EncodeResult {
             let Self { byte_number: v_byte_number } = *self;
-            rt::encode_broadcast(
-                address,
-                0x1F,
-                &request::ReadElectronicSerialNumber::DESC,
-            )?;
-            rt::encode_in_range("byte_number", v_byte_number, 0, 31)?;
+            FRAME.encode_broadcast(address, &Self::DESC)?;
+            rt::encode_in_range(&Self::BYTE_NUMBER_CHECK, v_byte_number)?;
             let out = rt::head(out, &[0xF0, address, 0x00]);
             out[3] = v_byte_number;
             rt::Ok(out.len())
@@ -2746,9 +2724,9 @@ pub mod sd {
         #[inline(always)]
         fn from_frame(frame: &[u8]) -> rt::DecodeResult<Self> {
             let frame = rt::fixed::<6>(frame, &Self::DESC)?;
-            rt::no_broadcast(frame[1], 0x1F, &Self::DESC)?;
+            FRAME.no_broadcast(frame[1], &Self::DESC)?;
             rt::equal(&Self::ARG1_DESC, 2, frame[2], 0x0)?;
-            rt::in_range(&Self::BYTE_NUMBER_DESC, 3, frame[3], 0, 31)?;
+            rt::in_range(&Self::BYTE_NUMBER_CHECK, frame[3])?;
             rt::Ok(Self { byte_number: frame[3] })
         }
     }
@@ -2758,8 +2736,13 @@ pub mod sd {
         pub const LEN: usize = 6;
         pub const DESC: rt::MessageDesc = rt::desc(Self::NAME, 0xF1, 1, &[6]);
         pub const BYTE_NUMBER: rt::Range<usize> = 3..4;
-        pub const ARG1_DESC: rt::FieldDesc = rt::field(Self::NAME, "arg1");
         pub const BYTE_NUMBER_DESC: rt::FieldDesc = rt::field(Self::NAME, "byte_number");
+        pub const BYTE_NUMBER_CHECK: rt::FieldCheck = rt::check(
+                &Self::BYTE_NUMBER_DESC,
+                3,
+            )
+            .range(0, 31);
+        pub const ARG1_DESC: rt::FieldDesc = rt::field(Self::NAME, "arg1");
         pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
             f("byte_number", rt::Int(self.byte_number as i64));
         }
@@ -2770,8 +2753,8 @@ pub mod sd {
         #[inline(always)]
         fn write(&self, address: u8, out: &mut [u8; 6]) -> rt::EncodeResult {
             let Self { byte_number: v_byte_number } = *self;
-            rt::encode_broadcast(address, 0x1F, &request::ReadProductDescription::DESC)?;
-            rt::encode_in_range("byte_number", v_byte_number, 0, 31)?;
+            FRAME.encode_broadcast(address, &Self::DESC)?;
+            rt::encode_in_range(&Self::BYTE_NUMBER_CHECK, v_byte_number)?;
             let out = rt::head(out, &[0xF1, address, 0x00]);
             out[3] = v_byte_number;
             rt::Ok(out.len())
@@ -2780,9 +2763,9 @@ pub mod sd {
         #[inline(always)]
         fn from_frame(frame: &[u8]) -> rt::DecodeResult<Self> {
             let frame = rt::fixed::<6>(frame, &Self::DESC)?;
-            rt::no_broadcast(frame[1], 0x1F, &Self::DESC)?;
+            FRAME.no_broadcast(frame[1], &Self::DESC)?;
             rt::equal(&Self::ARG1_DESC, 2, frame[2], 0x0)?;
-            rt::in_range(&Self::BYTE_NUMBER_DESC, 3, frame[3], 0, 31)?;
+            rt::in_range(&Self::BYTE_NUMBER_CHECK, frame[3])?;
             rt::Ok(Self { byte_number: frame[3] })
         }
     }
@@ -2792,8 +2775,13 @@ pub mod sd {
         pub const LEN: usize = 6;
         pub const DESC: rt::MessageDesc = rt::desc(Self::NAME, 0xF2, 1, &[6]);
         pub const BYTE_NUMBER: rt::Range<usize> = 3..4;
-        pub const ARG1_DESC: rt::FieldDesc = rt::field(Self::NAME, "arg1");
         pub const BYTE_NUMBER_DESC: rt::FieldDesc = rt::field(Self::NAME, "byte_number");
+        pub const BYTE_NUMBER_CHECK: rt::FieldCheck = rt::check(
+                &Self::BYTE_NUMBER_DESC,
+                3,
+            )
+            .range(0, 31);
+        pub const ARG1_DESC: rt::FieldDesc = rt::field(Self::NAME, "arg1");
         pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
             f("byte_number", rt::Int(self.byte_number as i64));
         }
@@ -2804,8 +2792,8 @@ pub mod sd {
         #[inline(always)]
         fn write(&self, address: u8, out: &mut [u8; 6]) -> rt::EncodeResult {
             let Self { byte_number: v_byte_number } = *self;
-            rt::encode_broadcast(address, 0x1F, &request::ReadSoftwareRevision::DESC)?;
-            rt::encode_in_range("byte_number", v_byte_number, 0, 31)?;
+            FRAME.encode_broadcast(address, &Self::DESC)?;
+            rt::encode_in_range(&Self::BYTE_NUMBER_CHECK, v_byte_number)?;
             let out = rt::head(out, &[0xF2, address, 0x00]);
             out[3] = v_byte_number;
             rt::Ok(out.len())
@@ -2814,9 +2802,9 @@ pub mod sd {
         #[inline(always)]
         fn from_frame(frame: &[u8]) -> rt::DecodeResult<Self> {
             let frame = rt::fixed::<6>(frame, &Self::DESC)?;
-            rt::no_broadcast(frame[1], 0x1F, &Self::DESC)?;
+            FRAME.no_broadcast(frame[1], &Self::DESC)?;
             rt::equal(&Self::ARG1_DESC, 2, frame[2], 0x0)?;
-            rt::in_range(&Self::BYTE_NUMBER_DESC, 3, frame[3], 0, 31)?;
+            rt::in_range(&Self::BYTE_NUMBER_CHECK, frame[3])?;
             rt::Ok(Self { byte_number: frame[3] })
         }
     }
@@ -2826,8 +2814,13 @@ pub mod sd {
         pub const LEN: usize = 6;
         pub const DESC: rt::MessageDesc = rt::desc(Self::NAME, 0xF3, 1, &[6]);
         pub const BYTE_NUMBER: rt::Range<usize> = 3..4;
-        pub const ARG1_DESC: rt::FieldDesc = rt::field(Self::NAME, "arg1");
         pub const BYTE_NUMBER_DESC: rt::FieldDesc = rt::field(Self::NAME, "byte_number");
+        pub const BYTE_NUMBER_CHECK: rt::FieldCheck = rt::check(
+                &Self::BYTE_NUMBER_DESC,
+                3,
+            )
+            .range(0, 31);
+        pub const ARG1_DESC: rt::FieldDesc = rt::field(Self::NAME, "arg1");
         pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
             f("byte_number", rt::Int(self.byte_number as i64));
         }
@@ -2838,8 +2831,8 @@ pub mod sd {
         #[inline(always)]
         fn write(&self, address: u8, out: &mut [u8; 6]) -> rt::EncodeResult {
             let Self { byte_number: v_byte_number } = *self;
-            rt::encode_broadcast(address, 0x1F, &request::ReadHardwareRevision::DESC)?;
-            rt::encode_in_range("byte_number", v_byte_number, 0, 31)?;
+            FRAME.encode_broadcast(address, &Self::DESC)?;
+            rt::encode_in_range(&Self::BYTE_NUMBER_CHECK, v_byte_number)?;
             let out = rt::head(out, &[0xF3, address, 0x00]);
             out[3] = v_byte_number;
             rt::Ok(out.len())
@@ -2848,9 +2841,9 @@ pub mod sd {
         #[inline(always)]
         fn from_frame(frame: &[u8]) -> rt::DecodeResult<Self> {
             let frame = rt::fixed::<6>(frame, &Self::DESC)?;
-            rt::no_broadcast(frame[1], 0x1F, &Self::DESC)?;
+            FRAME.no_broadcast(frame[1], &Self::DESC)?;
             rt::equal(&Self::ARG1_DESC, 2, frame[2], 0x0)?;
-            rt::in_range(&Self::BYTE_NUMBER_DESC, 3, frame[3], 0, 31)?;
+            rt::in_range(&Self::BYTE_NUMBER_CHECK, frame[3])?;
             rt::Ok(Self { byte_number: frame[3] })
         }
     }
@@ -2868,7 +2861,7 @@ pub mod sd {
         #[inline(always)]
         fn from_frame(frame: &[u8]) -> rt::DecodeResult<Self> {
             let frame = rt::fixed::<6>(frame, &Self::DESC)?;
-            rt::no_broadcast(frame[1], 0x1F, &Self::DESC)?;
+            FRAME.no_broadcast(frame[1], &Self::DESC)?;
             rt::equal(&Self::ARG1_DESC, 2, frame[2], 0x0)?;
             rt::equal(&Self::ARG2_DESC, 3, frame[3], 0x0)?;
             rt::Ok(Self)
@@ -2888,7 +2881,7 @@ pub mod sd {
         #[inline(always)]
         fn from_frame(frame: &[u8]) -> rt::DecodeResult<Self> {
             let frame = rt::fixed::<6>(frame, &Self::DESC)?;
-            rt::no_broadcast(frame[1], 0x1F, &Self::DESC)?;
+            FRAME.no_broadcast(frame[1], &Self::DESC)?;
             rt::equal(&Self::ARG1_DESC, 2, frame[2], 0x0)?;
             rt::equal(&Self::ARG2_DESC, 3, frame[3], 0x1)?;
             rt::Ok(Self)
@@ -2908,7 +2901,7 @@ pub mod sd {
         #[inline(always)]
         fn from_frame(frame: &[u8]) -> rt::DecodeResult<Self> {
             let frame = rt::fixed::<6>(frame, &Self::DESC)?;
-            rt::no_broadcast(frame[1], 0x1F, &Self::DESC)?;
+            FRAME.no_broadcast(frame[1], &Self::DESC)?;
             rt::equal(&Self::ARG1_DESC, 2, frame[2], 0x0)?;
             rt::equal(&Self::ARG2_DESC, 3, frame[3], 0x0)?;
             rt::Ok(Self)
@@ -2928,7 +2921,7 @@ pub mod sd {
         #[inline(always)]
         fn from_frame(frame: &[u8]) -> rt::DecodeResult<Self> {
             let frame = rt::fixed::<6>(frame, &Self::DESC)?;
-            rt::no_broadcast(frame[1], 0x1F, &Self::DESC)?;
+            FRAME.no_broadcast(frame[1], &Self::DESC)?;
             rt::equal(&Self::ARG1_DESC, 2, frame[2], 0x0)?;
             rt::equal(&Self::ARG2_DESC, 3, frame[3], 0x1)?;
             rt::Ok(Self)
@@ -2948,7 +2941,7 @@ pub mod sd {
         #[inline(always)]
         fn from_frame(frame: &[u8]) -> rt::DecodeResult<Self> {
             let frame = rt::fixed::<6>(frame, &Self::DESC)?;
-            rt::no_broadcast(frame[1], 0x1F, &Self::DESC)?;
+            FRAME.no_broadcast(frame[1], &Self::DESC)?;
             rt::equal(&Self::ARG1_DESC, 2, frame[2], 0xAA)?;
             rt::equal(&Self::ARG2_DESC, 3, frame[3], 0x55)?;
             rt::Ok(Self)
@@ -2968,7 +2961,7 @@ pub mod sd {
         #[inline(always)]
         fn from_frame(frame: &[u8]) -> rt::DecodeResult<Self> {
             let frame = rt::fixed::<6>(frame, &Self::DESC)?;
-            rt::no_broadcast(frame[1], 0x1F, &Self::DESC)?;
+            FRAME.no_broadcast(frame[1], &Self::DESC)?;
             rt::equal(&Self::ARG1_DESC, 2, frame[2], 0x0)?;
             rt::equal(&Self::ARG2_DESC, 3, frame[3], 0x0)?;
             rt::Ok(Self)
@@ -2988,7 +2981,7 @@ pub mod sd {
         #[inline(always)]
         fn from_frame(frame: &[u8]) -> rt::DecodeResult<Self> {
             let frame = rt::fixed::<6>(frame, &Self::DESC)?;
-            rt::no_broadcast(frame[1], 0x1F, &Self::DESC)?;
+            FRAME.no_broadcast(frame[1], &Self::DESC)?;
             rt::equal(&Self::ARG1_DESC, 2, frame[2], 0x0)?;
             rt::equal(&Self::ARG2_DESC, 3, frame[3], 0x1)?;
             rt::Ok(Self)
@@ -3008,7 +3001,7 @@ pub mod sd {
         #[inline(always)]
         fn from_frame(frame: &[u8]) -> rt::DecodeResult<Self> {
             let frame = rt::fixed::<6>(frame, &Self::DESC)?;
-            rt::no_broadcast(frame[1], 0x1F, &Self::DESC)?;
+            FRAME.no_broadcast(frame[1], &Self::DESC)?;
             rt::equal(&Self::ARG1_DESC, 2, frame[2], 0xAA)?;
             rt::equal(&Self::ARG2_DESC, 3, frame[3], 0x55)?;
             rt::Ok(Self)
@@ -3028,7 +3021,7 @@ pub mod sd {
         #[inline(always)]
         fn from_frame(frame: &[u8]) -> rt::DecodeResult<Self> {
             let frame = rt::fixed::<6>(frame, &Self::DESC)?;
-            rt::no_broadcast(frame[1], 0x1F, &Self::DESC)?;
+            FRAME.no_broadcast(frame[1], &Self::DESC)?;
             rt::equal(&Self::ARG1_DESC, 2, frame[2], 0x0)?;
             rt::equal(&Self::ARG2_DESC, 3, frame[3], 0x0)?;
             rt::Ok(Self)
@@ -3048,7 +3041,7 @@ pub mod sd {
         #[inline(always)]
         fn from_frame(frame: &[u8]) -> rt::DecodeResult<Self> {
             let frame = rt::fixed::<6>(frame, &Self::DESC)?;
-            rt::no_broadcast(frame[1], 0x1F, &Self::DESC)?;
+            FRAME.no_broadcast(frame[1], &Self::DESC)?;
             rt::equal(&Self::ARG1_DESC, 2, frame[2], 0x0)?;
             rt::equal(&Self::ARG2_DESC, 3, frame[3], 0x1)?;
             rt::Ok(Self)
@@ -3068,7 +3061,7 @@ pub mod sd {
         #[inline(always)]
         fn from_frame(frame: &[u8]) -> rt::DecodeResult<Self> {
             let frame = rt::fixed::<6>(frame, &Self::DESC)?;
-            rt::no_broadcast(frame[1], 0x1F, &Self::DESC)?;
+            FRAME.no_broadcast(frame[1], &Self::DESC)?;
             rt::equal(&Self::ARG1_DESC, 2, frame[2], 0xAA)?;
             rt::equal(&Self::ARG2_DESC, 3, frame[3], 0x55)?;
             rt::Ok(Self)
@@ -3088,7 +3081,7 @@ pub mod sd {
         #[inline(always)]
         fn from_frame(frame: &[u8]) -> rt::DecodeResult<Self> {
             let frame = rt::fixed::<6>(frame, &Self::DESC)?;
-            rt::no_broadcast(frame[1], 0x1F, &Self::DESC)?;
+            FRAME.no_broadcast(frame[1], &Self::DESC)?;
             rt::equal(&Self::ARG1_DESC, 2, frame[2], 0x0)?;
             rt::equal(&Self::ARG2_DESC, 3, frame[3], 0x0)?;
             rt::Ok(Self)
@@ -3108,7 +3101,7 @@ pub mod sd {
         #[inline(always)]
         fn from_frame(frame: &[u8]) -> rt::DecodeResult<Self> {
             let frame = rt::fixed::<6>(frame, &Self::DESC)?;
-            rt::no_broadcast(frame[1], 0x1F, &Self::DESC)?;
+            FRAME.no_broadcast(frame[1], &Self::DESC)?;
             rt::equal(&Self::ARG1_DESC, 2, frame[2], 0x0)?;
             rt::equal(&Self::ARG2_DESC, 3, frame[3], 0x1)?;
             rt::Ok(Self)
@@ -3128,7 +3121,7 @@ pub mod sd {
         #[inline(always)]
         fn from_frame(frame: &[u8]) -> rt::DecodeResult<Self> {
             let frame = rt::fixed::<6>(frame, &Self::DESC)?;
-            rt::no_broadcast(frame[1], 0x1F, &Self::DESC)?;
+            FRAME.no_broadcast(frame[1], &Self::DESC)?;
             rt::equal(&Self::ARG1_DESC, 2, frame[2], 0xAA)?;
             rt::equal(&Self::ARG2_DESC, 3, frame[3], 0x55)?;
             rt::Ok(Self)
@@ -3148,7 +3141,7 @@ pub mod sd {
         #[inline(always)]
         fn from_frame(frame: &[u8]) -> rt::DecodeResult<Self> {
             let frame = rt::fixed::<6>(frame, &Self::DESC)?;
-            rt::no_broadcast(frame[1], 0x1F, &Self::DESC)?;
+            FRAME.no_broadcast(frame[1], &Self::DESC)?;
             rt::equal(&Self::ARG1_DESC, 2, frame[2], 0x0)?;
             rt::equal(&Self::ARG2_DESC, 3, frame[3], 0x0)?;
             rt::Ok(Self)
@@ -3168,7 +3161,7 @@ pub mod sd {
         #[inline(always)]
         fn from_frame(frame: &[u8]) -> rt::DecodeResult<Self> {
             let frame = rt::fixed::<6>(frame, &Self::DESC)?;
-            rt::no_broadcast(frame[1], 0x1F, &Self::DESC)?;
+            FRAME.no_broadcast(frame[1], &Self::DESC)?;
             rt::equal(&Self::ARG1_DESC, 2, frame[2], 0x0)?;
             rt::equal(&Self::ARG2_DESC, 3, frame[3], 0x1)?;
             rt::Ok(Self)
@@ -3188,7 +3181,7 @@ pub mod sd {
         #[inline(always)]
         fn from_frame(frame: &[u8]) -> rt::DecodeResult<Self> {
             let frame = rt::fixed::<6>(frame, &Self::DESC)?;
-            rt::no_broadcast(frame[1], 0x1F, &Self::DESC)?;
+            FRAME.no_broadcast(frame[1], &Self::DESC)?;
             rt::equal(&Self::ARG1_DESC, 2, frame[2], 0xAA)?;
             rt::equal(&Self::ARG2_DESC, 3, frame[3], 0x55)?;
             rt::Ok(Self)
@@ -3208,7 +3201,7 @@ pub mod sd {
         #[inline(always)]
         fn from_frame(frame: &[u8]) -> rt::DecodeResult<Self> {
             let frame = rt::fixed::<6>(frame, &Self::DESC)?;
-            rt::no_broadcast(frame[1], 0x1F, &Self::DESC)?;
+            FRAME.no_broadcast(frame[1], &Self::DESC)?;
             rt::equal(&Self::ARG1_DESC, 2, frame[2], 0x0)?;
             rt::equal(&Self::ARG2_DESC, 3, frame[3], 0x0)?;
             rt::Ok(Self)
@@ -3228,7 +3221,7 @@ pub mod sd {
         #[inline(always)]
         fn from_frame(frame: &[u8]) -> rt::DecodeResult<Self> {
             let frame = rt::fixed::<6>(frame, &Self::DESC)?;
-            rt::no_broadcast(frame[1], 0x1F, &Self::DESC)?;
+            FRAME.no_broadcast(frame[1], &Self::DESC)?;
             rt::equal(&Self::ARG1_DESC, 2, frame[2], 0xAA)?;
             rt::equal(&Self::ARG2_DESC, 3, frame[3], 0x55)?;
             rt::Ok(Self)
@@ -3248,7 +3241,7 @@ pub mod sd {
         #[inline(always)]
         fn from_frame(frame: &[u8]) -> rt::DecodeResult<Self> {
             let frame = rt::fixed::<6>(frame, &Self::DESC)?;
-            rt::no_broadcast(frame[1], 0x1F, &Self::DESC)?;
+            FRAME.no_broadcast(frame[1], &Self::DESC)?;
             rt::equal(&Self::ARG1_DESC, 2, frame[2], 0x0)?;
             rt::equal(&Self::ARG2_DESC, 3, frame[3], 0x0)?;
             rt::Ok(Self)
@@ -3399,6 +3392,8 @@ pub mod sd {
         pub const DESC: rt::MessageDesc = rt::desc(Self::NAME, 0x55, 1, &[6]);
         pub const NEW_ID: rt::Range<usize> = 2..3;
         pub const NEW_ID_DESC: rt::FieldDesc = rt::field(Self::NAME, "new_id");
+        pub const NEW_ID_CHECK: rt::FieldCheck = rt::check(&Self::NEW_ID_DESC, 2)
+            .range(1, 30);
         pub const NEW_ID_REPEAT_DESC: rt::FieldDesc = rt::field(
             Self::NAME,
             "new_id_repeat",
@@ -3413,7 +3408,7 @@ pub mod sd {
         #[inline(always)]
         fn write(&self, address: u8, out: &mut [u8; 6]) -> rt::EncodeResult {
             let Self { new_id: v_new_id } = *self;
-            rt::encode_in_range("new_id", v_new_id, 1, 30)?;
+            rt::encode_in_range(&Self::NEW_ID_CHECK, v_new_id)?;
             let out = rt::head(out, &[0x55, address]);
             let w_new_id: u8 = v_new_id;
             out[2] = w_new_id;
@@ -3424,7 +3419,7 @@ pub mod sd {
         #[inline(always)]
         fn from_frame(frame: &[u8]) -> rt::DecodeResult<Self> {
             let frame = rt::fixed::<6>(frame, &Self::DESC)?;
-            rt::in_range(&Self::NEW_ID_DESC, 2, frame[2], 1, 30)?;
+            rt::in_range(&Self::NEW_ID_CHECK, frame[2])?;
             rt::same(&Self::NEW_ID_REPEAT_DESC, 3, frame[3], "new_id", frame[2])?;
             rt::Ok(Self { new_id: frame[2] })
         }
@@ -3436,6 +3431,7 @@ pub mod sd {
         pub const DESC: rt::MessageDesc = rt::desc(Self::NAME, 0x6D, 1, &[6]);
         pub const ID: rt::Range<usize> = 2..3;
         pub const ID_DESC: rt::FieldDesc = rt::field(Self::NAME, "id");
+        pub const ID_CHECK: rt::FieldCheck = rt::check(&Self::ID_DESC, 2).range(1, 30);
         pub const ID_REPEAT_DESC: rt::FieldDesc = rt::field(Self::NAME, "id_repeat");
         pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
             f("id", rt::Int(self.id as i64));
@@ -3447,7 +3443,7 @@ pub mod sd {
         #[inline(always)]
         fn write(&self, address: u8, out: &mut [u8; 6]) -> rt::EncodeResult {
             let Self { id: v_id } = *self;
-            rt::encode_in_range("id", v_id, 1, 30)?;
+            rt::encode_in_range(&Self::ID_CHECK, v_id)?;
             let out = rt::head(out, &[0x6D, address]);
             let w_id: u8 = v_id;
             out[2] = w_id;
@@ -3458,7 +3454,7 @@ pub mod sd {
         #[inline(always)]
         fn from_frame(frame: &[u8]) -> rt::DecodeResult<Self> {
             let frame = rt::fixed::<6>(frame, &Self::DESC)?;
-            rt::in_range(&Self::ID_DESC, 2, frame[2], 1, 30)?;
+            rt::in_range(&Self::ID_CHECK, frame[2])?;
             rt::same(&Self::ID_REPEAT_DESC, 3, frame[3], "id", frame[2])?;
             rt::Ok(Self { id: frame[2] })
         }
@@ -3617,6 +3613,9 @@ pub mod sd {
         /// `humidity`'s special value `no_sensor`: no sensor available
         pub const HUMIDITY_NO_SENSOR: u8 = 0x00;
         pub const HUMIDITY_DESC: rt::FieldDesc = rt::field(Self::NAME, "humidity");
+        pub const HUMIDITY_CHECK: rt::FieldCheck = rt::check(&Self::HUMIDITY_DESC, 2)
+            .range(1, 100)
+            .or(&[0]);
         pub const HUMIDITY_REPEAT_DESC: rt::FieldDesc = rt::field(
             Self::NAME,
             "humidity_repeat",
@@ -3631,7 +3630,7 @@ pub mod sd {
         #[inline(always)]
         fn write(&self, address: u8, out: &mut [u8; 6]) -> rt::EncodeResult {
             let Self { humidity: v_humidity } = *self;
-            rt::encode_in_range_or("humidity", v_humidity, 1, 100, &[0])?;
+            rt::encode_in_range(&Self::HUMIDITY_CHECK, v_humidity)?;
             let out = rt::head(out, &[0x21, address]);
             let w_humidity: u8 = v_humidity;
             out[2] = w_humidity;
@@ -3642,7 +3641,7 @@ pub mod sd {
         #[inline(always)]
         fn from_frame(frame: &[u8]) -> rt::DecodeResult<Self> {
             let frame = rt::fixed::<6>(frame, &Self::DESC)?;
-            rt::in_range_or(&Self::HUMIDITY_DESC, 2, frame[2], 1, 100, &[0])?;
+            rt::in_range(&Self::HUMIDITY_CHECK, frame[2])?;
             rt::same(&Self::HUMIDITY_REPEAT_DESC, 3, frame[3], "humidity", frame[2])?;
             rt::Ok(Self { humidity: frame[2] })
         }
@@ -3875,6 +3874,11 @@ pub mod sd {
             Self::NAME,
             "string_length",
         );
+        pub const STRING_LENGTH_CHECK: rt::FieldCheck = rt::check(
+                &Self::STRING_LENGTH_DESC,
+                3,
+            )
+            .range(0, 32);
         pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
             f("character", rt::Int(self.character as i64));
             f("string_length", rt::Int(self.string_length as i64));
@@ -3886,7 +3890,7 @@ pub mod sd {
         #[inline(always)]
         fn write(&self, address: u8, out: &mut [u8; 6]) -> rt::EncodeResult {
             let Self { character: v_character, string_length: v_string_length } = *self;
-            rt::encode_in_range("string_length", v_string_length, 0, 32)?;
+            rt::encode_in_range(&Self::STRING_LENGTH_CHECK, v_string_length)?;
             let out = rt::head(out, &[0x10, address]);
             out[2] = v_character;
             out[3] = v_string_length;
@@ -3896,7 +3900,7 @@ pub mod sd {
         #[inline(always)]
         fn from_frame(frame: &[u8]) -> rt::DecodeResult<Self> {
             let frame = rt::fixed::<6>(frame, &Self::DESC)?;
-            rt::in_range(&Self::STRING_LENGTH_DESC, 3, frame[3], 0, 32)?;
+            rt::in_range(&Self::STRING_LENGTH_CHECK, frame[3])?;
             rt::Ok(Self {
                 character: frame[2],
                 string_length: frame[3],
@@ -3914,6 +3918,11 @@ pub mod sd {
             Self::NAME,
             "string_length",
         );
+        pub const STRING_LENGTH_CHECK: rt::FieldCheck = rt::check(
+                &Self::STRING_LENGTH_DESC,
+                3,
+            )
+            .range(0, 32);
         pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
             f("character", rt::Int(self.character as i64));
             f("string_length", rt::Int(self.string_length as i64));
@@ -3925,7 +3934,7 @@ pub mod sd {
         #[inline(always)]
         fn write(&self, address: u8, out: &mut [u8; 6]) -> rt::EncodeResult {
             let Self { character: v_character, string_length: v_string_length } = *self;
-            rt::encode_in_range("string_length", v_string_length, 0, 32)?;
+            rt::encode_in_range(&Self::STRING_LENGTH_CHECK, v_string_length)?;
             let out = rt::head(out, &[0x11, address]);
             out[2] = v_character;
             out[3] = v_string_length;
@@ -3935,7 +3944,7 @@ pub mod sd {
         #[inline(always)]
         fn from_frame(frame: &[u8]) -> rt::DecodeResult<Self> {
             let frame = rt::fixed::<6>(frame, &Self::DESC)?;
-            rt::in_range(&Self::STRING_LENGTH_DESC, 3, frame[3], 0, 32)?;
+            rt::in_range(&Self::STRING_LENGTH_CHECK, frame[3])?;
             rt::Ok(Self {
                 character: frame[2],
                 string_length: frame[3],
@@ -3953,6 +3962,11 @@ pub mod sd {
             Self::NAME,
             "string_length",
         );
+        pub const STRING_LENGTH_CHECK: rt::FieldCheck = rt::check(
+                &Self::STRING_LENGTH_DESC,
+                3,
+            )
+            .range(0, 32);
         pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
             f("character", rt::Int(self.character as i64));
             f("string_length", rt::Int(self.string_length as i64));
@@ -3964,7 +3978,7 @@ pub mod sd {
         #[inline(always)]
         fn write(&self, address: u8, out: &mut [u8; 6]) -> rt::EncodeResult {
             let Self { character: v_character, string_length: v_string_length } = *self;
-            rt::encode_in_range("string_length", v_string_length, 0, 32)?;
+            rt::encode_in_range(&Self::STRING_LENGTH_CHECK, v_string_length)?;
             let out = rt::head(out, &[0x12, address]);
             out[2] = v_character;
             out[3] = v_string_length;
@@ -3974,7 +3988,7 @@ pub mod sd {
         #[inline(always)]
         fn from_frame(frame: &[u8]) -> rt::DecodeResult<Self> {
             let frame = rt::fixed::<6>(frame, &Self::DESC)?;
-            rt::in_range(&Self::STRING_LENGTH_DESC, 3, frame[3], 0, 32)?;
+            rt::in_range(&Self::STRING_LENGTH_CHECK, frame[3])?;
             rt::Ok(Self {
                 character: frame[2],
                 string_length: frame[3],
@@ -3992,6 +4006,11 @@ pub mod sd {
             Self::NAME,
             "string_length",
         );
+        pub const STRING_LENGTH_CHECK: rt::FieldCheck = rt::check(
+                &Self::STRING_LENGTH_DESC,
+                3,
+            )
+            .range(0, 32);
         pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
             f("character", rt::Int(self.character as i64));
             f("string_length", rt::Int(self.string_length as i64));
@@ -4003,7 +4022,7 @@ pub mod sd {
         #[inline(always)]
         fn write(&self, address: u8, out: &mut [u8; 6]) -> rt::EncodeResult {
             let Self { character: v_character, string_length: v_string_length } = *self;
-            rt::encode_in_range("string_length", v_string_length, 0, 32)?;
+            rt::encode_in_range(&Self::STRING_LENGTH_CHECK, v_string_length)?;
             let out = rt::head(out, &[0x13, address]);
             out[2] = v_character;
             out[3] = v_string_length;
@@ -4013,7 +4032,7 @@ pub mod sd {
         #[inline(always)]
         fn from_frame(frame: &[u8]) -> rt::DecodeResult<Self> {
             let frame = rt::fixed::<6>(frame, &Self::DESC)?;
-            rt::in_range(&Self::STRING_LENGTH_DESC, 3, frame[3], 0, 32)?;
+            rt::in_range(&Self::STRING_LENGTH_CHECK, frame[3])?;
             rt::Ok(Self {
                 character: frame[2],
                 string_length: frame[3],
@@ -4060,10 +4079,20 @@ pub mod sd {
             Self::NAME,
             "runtime_minutes",
         );
+        pub const RUNTIME_MINUTES_CHECK: rt::FieldCheck = rt::check(
+                &Self::RUNTIME_MINUTES_DESC,
+                2,
+            )
+            .range(0, 59);
         pub const RUNTIME_SECONDS_DESC: rt::FieldDesc = rt::field(
             Self::NAME,
             "runtime_seconds",
         );
+        pub const RUNTIME_SECONDS_CHECK: rt::FieldCheck = rt::check(
+                &Self::RUNTIME_SECONDS_DESC,
+                3,
+            )
+            .range(0, 59);
         pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
             f("runtime_minutes", rt::Int(self.runtime_minutes as i64));
             f("runtime_seconds", rt::Int(self.runtime_seconds as i64));
@@ -4078,8 +4107,8 @@ pub mod sd {
                 runtime_minutes: v_runtime_minutes,
                 runtime_seconds: v_runtime_seconds,
             } = *self;
-            rt::encode_in_range("runtime_minutes", v_runtime_minutes, 0, 59)?;
-            rt::encode_in_range("runtime_seconds", v_runtime_seconds, 0, 59)?;
+            rt::encode_in_range(&Self::RUNTIME_MINUTES_CHECK, v_runtime_minutes)?;
+            rt::encode_in_range(&Self::RUNTIME_SECONDS_CHECK, v_runtime_seconds)?;
             let out = rt::head(out, &[0x22, address]);
             out[2] = v_runtime_minutes;
             out[3] = v_runtime_seconds;
@@ -4089,8 +4118,8 @@ pub mod sd {
         #[inline(always)]
         fn from_frame(frame: &[u8]) -> rt::DecodeResult<Self> {
             let frame = rt::fixed::<6>(frame, &Self::DESC)?;
-            rt::in_range(&Self::RUNTIME_MINUTES_DESC, 2, frame[2], 0, 59)?;
-            rt::in_range(&Self::RUNTIME_SECONDS_DESC, 3, frame[3], 0, 59)?;
+            rt::in_range(&Self::RUNTIME_MINUTES_CHECK, frame[2])?;
+            rt::in_range(&Self::RUNTIME_SECONDS_CHECK, frame[3])?;
             rt::Ok(Self {
                 runtime_minutes: frame[2],
                 runtime_seconds: frame[3],
@@ -4137,10 +4166,20 @@ pub mod sd {
             Self::NAME,
             "runtime_minutes",
         );
+        pub const RUNTIME_MINUTES_CHECK: rt::FieldCheck = rt::check(
+                &Self::RUNTIME_MINUTES_DESC,
+                2,
+            )
+            .range(0, 59);
         pub const RUNTIME_SECONDS_DESC: rt::FieldDesc = rt::field(
             Self::NAME,
             "runtime_seconds",
         );
+        pub const RUNTIME_SECONDS_CHECK: rt::FieldCheck = rt::check(
+                &Self::RUNTIME_SECONDS_DESC,
+                3,
+            )
+            .range(0, 59);
         pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
             f("runtime_minutes", rt::Int(self.runtime_minutes as i64));
             f("runtime_seconds", rt::Int(self.runtime_seconds as i64));
@@ -4155,8 +4194,8 @@ pub mod sd {
                 runtime_minutes: v_runtime_minutes,
                 runtime_seconds: v_runtime_seconds,
             } = *self;
-            rt::encode_in_range("runtime_minutes", v_runtime_minutes, 0, 59)?;
-            rt::encode_in_range("runtime_seconds", v_runtime_seconds, 0, 59)?;
+            rt::encode_in_range(&Self::RUNTIME_MINUTES_CHECK, v_runtime_minutes)?;
+            rt::encode_in_range(&Self::RUNTIME_SECONDS_CHECK, v_runtime_seconds)?;
             let out = rt::head(out, &[0x23, address]);
             out[2] = v_runtime_minutes;
             out[3] = v_runtime_seconds;
@@ -4166,8 +4205,8 @@ pub mod sd {
         #[inline(always)]
         fn from_frame(frame: &[u8]) -> rt::DecodeResult<Self> {
             let frame = rt::fixed::<6>(frame, &Self::DESC)?;
-            rt::in_range(&Self::RUNTIME_MINUTES_DESC, 2, frame[2], 0, 59)?;
-            rt::in_range(&Self::RUNTIME_SECONDS_DESC, 3, frame[3], 0, 59)?;
+            rt::in_range(&Self::RUNTIME_MINUTES_CHECK, frame[2])?;
+            rt::in_range(&Self::RUNTIME_SECONDS_CHECK, frame[3])?;
             rt::Ok(Self {
                 runtime_minutes: frame[2],
                 runtime_seconds: frame[3],
@@ -4246,10 +4285,20 @@ pub mod sd {
             Self::NAME,
             "runtime_minutes",
         );
+        pub const RUNTIME_MINUTES_CHECK: rt::FieldCheck = rt::check(
+                &Self::RUNTIME_MINUTES_DESC,
+                2,
+            )
+            .range(0, 59);
         pub const RUNTIME_SECONDS_DESC: rt::FieldDesc = rt::field(
             Self::NAME,
             "runtime_seconds",
         );
+        pub const RUNTIME_SECONDS_CHECK: rt::FieldCheck = rt::check(
+                &Self::RUNTIME_SECONDS_DESC,
+                3,
+            )
+            .range(0, 59);
         pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
             f("runtime_minutes", rt::Int(self.runtime_minutes as i64));
             f("runtime_seconds", rt::Int(self.runtime_seconds as i64));
@@ -4264,8 +4313,8 @@ pub mod sd {
                 runtime_minutes: v_runtime_minutes,
                 runtime_seconds: v_runtime_seconds,
             } = *self;
-            rt::encode_in_range("runtime_minutes", v_runtime_minutes, 0, 59)?;
-            rt::encode_in_range("runtime_seconds", v_runtime_seconds, 0, 59)?;
+            rt::encode_in_range(&Self::RUNTIME_MINUTES_CHECK, v_runtime_minutes)?;
+            rt::encode_in_range(&Self::RUNTIME_SECONDS_CHECK, v_runtime_seconds)?;
             let out = rt::head(out, &[0x24, address]);
             out[2] = v_runtime_minutes;
             out[3] = v_runtime_seconds;
@@ -4275,8 +4324,8 @@ pub mod sd {
         #[inline(always)]
         fn from_frame(frame: &[u8]) -> rt::DecodeResult<Self> {
             let frame = rt::fixed::<6>(frame, &Self::DESC)?;
-            rt::in_range(&Self::RUNTIME_MINUTES_DESC, 2, frame[2], 0, 59)?;
-            rt::in_range(&Self::RUNTIME_SECONDS_DESC, 3, frame[3], 0, 59)?;
+            rt::in_range(&Self::RUNTIME_MINUTES_CHECK, frame[2])?;
+            rt::in_range(&Self::RUNTIME_SECONDS_CHECK, frame[3])?;
             rt::Ok(Self {
                 runtime_minutes: frame[2],
                 runtime_seconds: frame[3],
@@ -4355,10 +4404,20 @@ pub mod sd {
             Self::NAME,
             "runtime_minutes",
         );
+        pub const RUNTIME_MINUTES_CHECK: rt::FieldCheck = rt::check(
+                &Self::RUNTIME_MINUTES_DESC,
+                2,
+            )
+            .range(0, 59);
         pub const RUNTIME_SECONDS_DESC: rt::FieldDesc = rt::field(
             Self::NAME,
             "runtime_seconds",
         );
+        pub const RUNTIME_SECONDS_CHECK: rt::FieldCheck = rt::check(
+                &Self::RUNTIME_SECONDS_DESC,
+                3,
+            )
+            .range(0, 59);
         pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
             f("runtime_minutes", rt::Int(self.runtime_minutes as i64));
             f("runtime_seconds", rt::Int(self.runtime_seconds as i64));
@@ -4373,8 +4432,8 @@ pub mod sd {
                 runtime_minutes: v_runtime_minutes,
                 runtime_seconds: v_runtime_seconds,
             } = *self;
-            rt::encode_in_range("runtime_minutes", v_runtime_minutes, 0, 59)?;
-            rt::encode_in_range("runtime_seconds", v_runtime_seconds, 0, 59)?;
+            rt::encode_in_range(&Self::RUNTIME_MINUTES_CHECK, v_runtime_minutes)?;
+            rt::encode_in_range(&Self::RUNTIME_SECONDS_CHECK, v_runtime_seconds)?;
             let out = rt::head(out, &[0x25, address]);
             out[2] = v_runtime_minutes;
             out[3] = v_runtime_seconds;
@@ -4384,8 +4443,8 @@ pub mod sd {
         #[inline(always)]
         fn from_frame(frame: &[u8]) -> rt::DecodeResult<Self> {
             let frame = rt::fixed::<6>(frame, &Self::DESC)?;
-            rt::in_range(&Self::RUNTIME_MINUTES_DESC, 2, frame[2], 0, 59)?;
-            rt::in_range(&Self::RUNTIME_SECONDS_DESC, 3, frame[3], 0, 59)?;
+            rt::in_range(&Self::RUNTIME_MINUTES_CHECK, frame[2])?;
+            rt::in_range(&Self::RUNTIME_SECONDS_CHECK, frame[3])?;
             rt::Ok(Self {
                 runtime_minutes: frame[2],
                 runtime_seconds: frame[3],
@@ -4464,10 +4523,20 @@ pub mod sd {
             Self::NAME,
             "runtime_minutes",
         );
+        pub const RUNTIME_MINUTES_CHECK: rt::FieldCheck = rt::check(
+                &Self::RUNTIME_MINUTES_DESC,
+                2,
+            )
+            .range(0, 59);
         pub const RUNTIME_SECONDS_DESC: rt::FieldDesc = rt::field(
             Self::NAME,
             "runtime_seconds",
         );
+        pub const RUNTIME_SECONDS_CHECK: rt::FieldCheck = rt::check(
+                &Self::RUNTIME_SECONDS_DESC,
+                3,
+            )
+            .range(0, 59);
         pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
             f("runtime_minutes", rt::Int(self.runtime_minutes as i64));
             f("runtime_seconds", rt::Int(self.runtime_seconds as i64));
@@ -4482,8 +4551,8 @@ pub mod sd {
                 runtime_minutes: v_runtime_minutes,
                 runtime_seconds: v_runtime_seconds,
             } = *self;
-            rt::encode_in_range("runtime_minutes", v_runtime_minutes, 0, 59)?;
-            rt::encode_in_range("runtime_seconds", v_runtime_seconds, 0, 59)?;
+            rt::encode_in_range(&Self::RUNTIME_MINUTES_CHECK, v_runtime_minutes)?;
+            rt::encode_in_range(&Self::RUNTIME_SECONDS_CHECK, v_runtime_seconds)?;
             let out = rt::head(out, &[0x26, address]);
             out[2] = v_runtime_minutes;
             out[3] = v_runtime_seconds;
@@ -4493,8 +4562,8 @@ pub mod sd {
         #[inline(always)]
         fn from_frame(frame: &[u8]) -> rt::DecodeResult<Self> {
             let frame = rt::fixed::<6>(frame, &Self::DESC)?;
-            rt::in_range(&Self::RUNTIME_MINUTES_DESC, 2, frame[2], 0, 59)?;
-            rt::in_range(&Self::RUNTIME_SECONDS_DESC, 3, frame[3], 0, 59)?;
+            rt::in_range(&Self::RUNTIME_MINUTES_CHECK, frame[2])?;
+            rt::in_range(&Self::RUNTIME_SECONDS_CHECK, frame[3])?;
             rt::Ok(Self {
                 runtime_minutes: frame[2],
                 runtime_seconds: frame[3],
@@ -4573,10 +4642,20 @@ pub mod sd {
             Self::NAME,
             "runtime_minutes",
         );
+        pub const RUNTIME_MINUTES_CHECK: rt::FieldCheck = rt::check(
+                &Self::RUNTIME_MINUTES_DESC,
+                2,
+            )
+            .range(0, 59);
         pub const RUNTIME_SECONDS_DESC: rt::FieldDesc = rt::field(
             Self::NAME,
             "runtime_seconds",
         );
+        pub const RUNTIME_SECONDS_CHECK: rt::FieldCheck = rt::check(
+                &Self::RUNTIME_SECONDS_DESC,
+                3,
+            )
+            .range(0, 59);
         pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
             f("runtime_minutes", rt::Int(self.runtime_minutes as i64));
             f("runtime_seconds", rt::Int(self.runtime_seconds as i64));
@@ -4591,8 +4670,8 @@ pub mod sd {
                 runtime_minutes: v_runtime_minutes,
                 runtime_seconds: v_runtime_seconds,
             } = *self;
-            rt::encode_in_range("runtime_minutes", v_runtime_minutes, 0, 59)?;
-            rt::encode_in_range("runtime_seconds", v_runtime_seconds, 0, 59)?;
+            rt::encode_in_range(&Self::RUNTIME_MINUTES_CHECK, v_runtime_minutes)?;
+            rt::encode_in_range(&Self::RUNTIME_SECONDS_CHECK, v_runtime_seconds)?;
             let out = rt::head(out, &[0x27, address]);
             out[2] = v_runtime_minutes;
             out[3] = v_runtime_seconds;
@@ -4602,8 +4681,8 @@ pub mod sd {
         #[inline(always)]
         fn from_frame(frame: &[u8]) -> rt::DecodeResult<Self> {
             let frame = rt::fixed::<6>(frame, &Self::DESC)?;
-            rt::in_range(&Self::RUNTIME_MINUTES_DESC, 2, frame[2], 0, 59)?;
-            rt::in_range(&Self::RUNTIME_SECONDS_DESC, 3, frame[3], 0, 59)?;
+            rt::in_range(&Self::RUNTIME_MINUTES_CHECK, frame[2])?;
+            rt::in_range(&Self::RUNTIME_SECONDS_CHECK, frame[3])?;
             rt::Ok(Self {
                 runtime_minutes: frame[2],
                 runtime_seconds: frame[3],

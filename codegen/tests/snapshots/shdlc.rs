@@ -574,6 +574,8 @@ pub mod shdlc {
         base: 7,
         at: 5,
         width: 1,
+        le: false,
+        signed: false,
         count: rt::CountBy::Until(0),
         min: 0,
         max: 32,
@@ -587,6 +589,8 @@ pub mod shdlc {
                 base: 7,
                 at: 5,
                 width: 1,
+                le: false,
+                signed: false,
                 count: rt::CountBy::Until(0),
                 min: 0,
                 max: 32,
@@ -984,10 +988,7 @@ pub mod shdlc {
             let rt::Some(frame) = plain.get(..un.len) else {
                 return false;
             };
-            match frame.len().checked_sub(2) {
-                rt::Some(n) if n > 0 => rt::check_sum(frame, n, &FRAME, frame_sum),
-                _ => false,
-            }
+            FRAME.checksum_ok(frame, frame_sum)
         }
     }
     /// A streaming decoder for this protocol: see [`busspec_runtime::stream`].
@@ -1490,7 +1491,9 @@ pub mod shdlc {
             let out = LISTS_INFORMATION_TEXT.expand(&compact, &[bytes_0], buf)?;
             {
                 let at = 5;
-                rt::write_elements(v_text.as_slice(), 1, false, &mut out[at..]);
+                if let rt::Some(to) = out.get_mut(at..at + v_text.len()) {
+                    to.copy_from_slice(v_text.as_slice());
+                }
                 if let rt::Some(b) = out.get_mut(at + v_text.len()) {
                     *b = 0;
                 }
@@ -1505,7 +1508,7 @@ pub mod shdlc {
             let frame = &s.frame;
             rt::Ok(Self {
                 state: State::from_raw(frame[3]),
-                text: s.lists[0].elements::<u8, 32>(s.elements(0), false, false)?,
+                text: s.lists[0].elements::<u8, 32>(s.elements(0))?,
             })
         }
     }

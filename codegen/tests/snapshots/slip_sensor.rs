@@ -364,6 +364,8 @@ pub mod slip_sensor {
         base: 4,
         at: 1,
         width: 1,
+        le: false,
+        signed: false,
         count: rt::CountBy::End,
         min: 0,
         max: 8,
@@ -646,10 +648,7 @@ pub mod slip_sensor {
             let rt::Some(frame) = plain.get(..un.len) else {
                 return false;
             };
-            match frame.len().checked_sub(3) {
-                rt::Some(n) if n > 0 => rt::check_sum(frame, n, &FRAME, frame_sum),
-                _ => false,
-            }
+            FRAME.checksum_ok(frame, frame_sum)
         }
     }
     /// A streaming decoder for this protocol: see [`busspec_runtime::stream`].
@@ -762,7 +761,7 @@ pub mod slip_sensor {
             let Self { samples: v_samples } = *self;
             let frame_len = REPEAT_SAMPLES.encode_len(v_samples.len())?;
             let out = rt::frame_mut_len(buf, frame_len, &[0x83])?;
-            rt::write_elements(v_samples.as_slice(), 1, false, &mut out[1..]);
+            REPEAT_SAMPLES.write(v_samples.as_slice(), &mut out[1..]);
             rt::Ok(out.len())
         }
         /// Reads this message from a frame whose framing and code are checked.
@@ -770,7 +769,7 @@ pub mod slip_sensor {
         fn from_frame(frame: &[u8]) -> rt::DecodeResult<Self> {
             let (_, elements, _) = REPEAT_SAMPLES.split::<1>(frame)?;
             rt::Ok(Self {
-                samples: REPEAT_SAMPLES.elements::<u8, 8>(elements, false, false)?,
+                samples: REPEAT_SAMPLES.elements::<u8, 8>(elements)?,
             })
         }
     }

@@ -205,7 +205,7 @@ pub mod syncy {
             let len = match *self {
                 Self::MoveTo(ref m) => m.write(address, buf)?,
                 Self::GetCounter(_) => {
-                    rt::encode_broadcast(address, 0xFE, &request::GetCounter::DESC)?;
+                    FRAME.encode_broadcast(address, &request::GetCounter::DESC)?;
                     rt::frame_mut::<6>(buf, &[0xFF, 0xFF, address, 0x02, 0x04])?.len()
                 }
                 Self::SetPair(ref m) => m.write(address, buf)?,
@@ -627,10 +627,7 @@ pub mod syncy {
             }
         }
         fn checksum_ok(frame: &[u8]) -> bool {
-            match frame.len().checked_sub(1) {
-                rt::Some(n) if n > 0 => rt::check_sum(frame, n, &FRAME, frame_sum),
-                _ => false,
-            }
+            FRAME.checksum_ok(frame, frame_sum)
         }
     }
     /// A streaming decoder for this protocol: see [`busspec_runtime::stream`].
@@ -644,6 +641,8 @@ pub mod syncy {
         pub const DESC: rt::MessageDesc = rt::desc(Self::NAME, 0x03, 1, &[9]);
         pub const TARGET: rt::Range<usize> = 5..8;
         pub const TARGET_DESC: rt::FieldDesc = rt::field(Self::NAME, "target");
+        pub const TARGET_CHECK: rt::FieldCheck = rt::check(&Self::TARGET_DESC, 5)
+            .range(-1000000, 1000000);
         pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
             f("target", rt::Int(self.target.raw() as i64));
         }
@@ -654,9 +653,9 @@ pub mod syncy {
         #[inline(always)]
         fn write(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             let Self { target: v_target } = *self;
-            rt::encode_broadcast(address, 0xFE, &request::MoveTo::DESC)?;
+            FRAME.encode_broadcast(address, &Self::DESC)?;
             let out = rt::frame_mut::<9>(buf, &[0xFF, 0xFF, address, 0x05, 0x03])?;
-            rt::encode_in_range("target", v_target.raw(), -1000000, 1000000)?;
+            rt::encode_in_range(&Self::TARGET_CHECK, v_target.raw())?;
             out[5..8]
                 .copy_from_slice(
                     &rt::bytes24(
@@ -671,9 +670,9 @@ pub mod syncy {
         #[inline(always)]
         fn from_frame(frame: &[u8]) -> rt::DecodeResult<Self> {
             let frame = rt::fixed::<9>(frame, &Self::DESC)?;
-            rt::no_broadcast(frame[2], 0xFE, &Self::DESC)?;
+            FRAME.no_broadcast(frame[2], &Self::DESC)?;
             let w_target: i32 = rt::i24([frame[5], frame[6], frame[7]], false);
-            rt::in_range(&Self::TARGET_DESC, 5, w_target, -1000000, 1000000)?;
+            rt::in_range(&Self::TARGET_CHECK, w_target)?;
             rt::Ok(Self {
                 target: Millimetre::from_raw(w_target as i32),
             })
@@ -691,7 +690,7 @@ pub mod syncy {
         #[inline(always)]
         fn from_frame(frame: &[u8]) -> rt::DecodeResult<Self> {
             let frame = rt::fixed::<6>(frame, &Self::DESC)?;
-            rt::no_broadcast(frame[2], 0xFE, &Self::DESC)?;
+            FRAME.no_broadcast(frame[2], &Self::DESC)?;
             rt::Ok(Self)
         }
     }
@@ -703,7 +702,11 @@ pub mod syncy {
         pub const QUANTITY: rt::Range<usize> = 5..6;
         pub const LEVEL: rt::Range<usize> = 7..9;
         pub const QUANTITY_DESC: rt::FieldDesc = rt::field(Self::NAME, "quantity");
+        pub const QUANTITY_CHECK: rt::FieldCheck = rt::check(&Self::QUANTITY_DESC, 5)
+            .range(1, 100);
         pub const DOUBLED_DESC: rt::FieldDesc = rt::field(Self::NAME, "doubled");
+        pub const DOUBLED_CHECK: rt::FieldCheck = rt::check(&Self::DOUBLED_DESC, 6)
+            .follows(2, 1, "2 × quantity");
         pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
             f("quantity", rt::Int(self.quantity as i64));
             f("level", rt::Int(self.level as i64));
@@ -715,9 +718,9 @@ pub mod syncy {
         #[inline(always)]
         fn write(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             let Self { quantity: v_quantity, level: v_level } = *self;
-            rt::encode_broadcast(address, 0xFE, &request::SetPair::DESC)?;
+            FRAME.encode_broadcast(address, &Self::DESC)?;
             let out = rt::frame_mut::<10>(buf, &[0xFF, 0xFF, address, 0x06, 0x05])?;
-            rt::encode_in_range("quantity", v_quantity, 1, 100)?;
+            rt::encode_in_range(&Self::QUANTITY_CHECK, v_quantity)?;
             let w_quantity: u8 = v_quantity;
             out[5] = w_quantity;
             out[6] = rt::fits("doubled", rt::follows(w_quantity as i64, 2, 1), 0, 255)?
@@ -729,16 +732,9 @@ pub mod syncy {
         #[inline(always)]
         fn from_frame(frame: &[u8]) -> rt::DecodeResult<Self> {
             let frame = rt::fixed::<10>(frame, &Self::DESC)?;
-            rt::no_broadcast(frame[2], 0xFE, &Self::DESC)?;
-            rt::in_range(&Self::QUANTITY_DESC, 5, frame[5], 1, 100)?;
-            rt::following(
-                &Self::DOUBLED_DESC,
-                6,
-                frame[6],
-                frame[5] as i64,
-                (2, 1),
-                "2 × quantity",
-            )?;
+            FRAME.no_broadcast(frame[2], &Self::DESC)?;
+            rt::in_range(&Self::QUANTITY_CHECK, frame[5])?;
+            rt::following(&Self::DOUBLED_CHECK, frame[6], frame[5] as i64)?;
             rt::Ok(Self {
                 quantity: frame[5],
                 level: u16::from_be_bytes([frame[7], frame[8]]),
@@ -805,7 +801,11 @@ pub mod syncy {
         pub const QUANTITY: rt::Range<usize> = 5..6;
         pub const GROUPS: rt::Range<usize> = 6..7;
         pub const QUANTITY_DESC: rt::FieldDesc = rt::field(Self::NAME, "quantity");
+        pub const QUANTITY_CHECK: rt::FieldCheck = rt::check(&Self::QUANTITY_DESC, 5)
+            .follows(1, 1, "quantity of the request");
         pub const GROUPS_DESC: rt::FieldDesc = rt::field(Self::NAME, "groups");
+        pub const GROUPS_CHECK: rt::FieldCheck = rt::check(&Self::GROUPS_DESC, 6)
+            .follows(1, 8, "ceil(quantity / 8) of the request");
         pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
             f("quantity", rt::Int(self.quantity as i64));
             f("groups", rt::Int(self.groups as i64));
@@ -838,22 +838,8 @@ pub mod syncy {
             v_groups: u8,
             r: &request::SetPair,
         ) -> rt::DecodeResult<()> {
-            rt::following(
-                &Self::QUANTITY_DESC,
-                5,
-                v_quantity,
-                r.quantity as i64,
-                (1, 1),
-                "quantity of the request",
-            )?;
-            rt::following(
-                &Self::GROUPS_DESC,
-                6,
-                v_groups,
-                r.quantity as i64,
-                (1, 8),
-                "ceil(quantity / 8) of the request",
-            )?;
+            rt::following(&Self::QUANTITY_CHECK, v_quantity, r.quantity as i64)?;
+            rt::following(&Self::GROUPS_CHECK, v_groups, r.quantity as i64)?;
             rt::Ok(())
         }
     }

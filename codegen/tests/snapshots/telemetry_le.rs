@@ -532,10 +532,7 @@ pub mod telemetry_le {
             }
         }
         fn checksum_ok(frame: &[u8]) -> bool {
-            match frame.len().checked_sub(1) {
-                rt::Some(n) if n > 0 => rt::check_sum(frame, n, &FRAME, frame_sum),
-                _ => false,
-            }
+            FRAME.checksum_ok(frame, frame_sum)
         }
     }
     /// A streaming decoder for this protocol: see [`busspec_runtime::stream`].
@@ -559,7 +556,11 @@ pub mod telemetry_le {
         pub const LAT: rt::Range<usize> = 4..12;
         pub const LON: rt::Range<usize> = 12..20;
         pub const LAT_DESC: rt::FieldDesc = rt::field(Self::NAME, "lat");
+        pub const LAT_CHECK: rt::FieldCheck = rt::check(&Self::LAT_DESC, 4)
+            .range_f64(-90f64, 90f64);
         pub const LON_DESC: rt::FieldDesc = rt::field(Self::NAME, "lon");
+        pub const LON_CHECK: rt::FieldCheck = rt::check(&Self::LON_DESC, 12)
+            .range_f64(-180f64, 180f64);
         pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
             f("lat", rt::Int(rt::raw(self.lat)));
             f("lon", rt::Int(rt::raw(self.lon)));
@@ -571,13 +572,8 @@ pub mod telemetry_le {
         #[inline(always)]
         fn write(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             let Self { lat: v_lat, lon: v_lon } = *self;
-            rt::encode_in_range("lat", v_lat, rt::f64_raw(-90f64), rt::f64_raw(90f64))?;
-            rt::encode_in_range(
-                "lon",
-                v_lon,
-                rt::f64_raw(-180f64),
-                rt::f64_raw(180f64),
-            )?;
+            rt::encode_in_range(&Self::LAT_CHECK, v_lat)?;
+            rt::encode_in_range(&Self::LON_CHECK, v_lon)?;
             let out = rt::frame_mut::<21>(buf, &[0xA5, 0x5A, 0x11, 0x02])?;
             out[4..12].copy_from_slice(&v_lat.to_le_bytes());
             out[12..20].copy_from_slice(&v_lon.to_le_bytes());
@@ -597,13 +593,7 @@ pub mod telemetry_le {
                 frame[10],
                 frame[11],
             ]);
-            rt::in_range(
-                &Self::LAT_DESC,
-                4,
-                w_lat,
-                rt::f64_raw(-90f64),
-                rt::f64_raw(90f64),
-            )?;
+            rt::in_range(&Self::LAT_CHECK, w_lat)?;
             let w_lon: f64 = f64::from_le_bytes([
                 frame[12],
                 frame[13],
@@ -614,13 +604,7 @@ pub mod telemetry_le {
                 frame[18],
                 frame[19],
             ]);
-            rt::in_range(
-                &Self::LON_DESC,
-                12,
-                w_lon,
-                rt::f64_raw(-180f64),
-                rt::f64_raw(180f64),
-            )?;
+            rt::in_range(&Self::LON_CHECK, w_lon)?;
             rt::Ok(Self { lat: w_lat, lon: w_lon })
         }
     }
@@ -636,6 +620,8 @@ pub mod telemetry_le {
         pub const PRESSURE: rt::Range<usize> = 32..36;
         pub const TOTAL: rt::Range<usize> = 36..40;
         pub const PRESSURE_DESC: rt::FieldDesc = rt::field(Self::NAME, "pressure");
+        pub const PRESSURE_CHECK: rt::FieldCheck = rt::check(&Self::PRESSURE_DESC, 32)
+            .range_f32(300f32, 1100.5f32);
         pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
             f("time_us", rt::Int(self.time_us as i64));
             f("altitude", rt::Int(rt::raw(self.altitude)));
@@ -658,12 +644,7 @@ pub mod telemetry_le {
                 pressure: v_pressure,
                 total: v_total,
             } = *self;
-            rt::encode_in_range(
-                "pressure",
-                v_pressure,
-                rt::f32_raw(300f32),
-                rt::f32_raw(1100.5f32),
-            )?;
+            rt::encode_in_range(&Self::PRESSURE_CHECK, v_pressure)?;
             let out = rt::frame_mut::<41>(buf, &[0xA5, 0x5A, 0x25, 0x81])?;
             out[4..12].copy_from_slice(&v_time_us.to_le_bytes());
             out[12..16].copy_from_slice(&v_altitude.to_le_bytes());
@@ -689,13 +670,7 @@ pub mod telemetry_le {
                 frame[32],
                 frame[33],
             ]);
-            rt::in_range(
-                &Self::PRESSURE_DESC,
-                32,
-                w_pressure,
-                rt::f32_raw(300f32),
-                rt::f32_raw(1100.5f32),
-            )?;
+            rt::in_range(&Self::PRESSURE_CHECK, w_pressure)?;
             rt::Ok(Self {
                 time_us: u64::from_le_bytes([
                     frame[4],

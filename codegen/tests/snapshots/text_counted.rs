@@ -109,6 +109,8 @@ pub mod text_counted {
         base: 6,
         at: 4,
         width: 1,
+        le: false,
+        signed: false,
         count: rt::CountBy::Elements(rt::CountField {
             name: "name_len",
             at: 3,
@@ -127,6 +129,8 @@ pub mod text_counted {
                 base: 6,
                 at: 4,
                 width: 1,
+                le: false,
+                signed: false,
                 count: rt::CountBy::Elements(rt::CountField {
                     name: "name_len",
                     at: 3,
@@ -300,6 +304,8 @@ pub mod text_counted {
         base: 10,
         at: 4,
         width: 1,
+        le: false,
+        signed: false,
         count: rt::CountBy::Elements(rt::CountField {
             name: "name_len",
             at: 3,
@@ -318,6 +324,8 @@ pub mod text_counted {
                 base: 10,
                 at: 4,
                 width: 1,
+                le: false,
+                signed: false,
                 count: rt::CountBy::Elements(rt::CountField {
                     name: "name_len",
                     at: 3,
@@ -518,14 +526,11 @@ pub mod text_counted {
                     let s = LISTS_SET_NAME.split::<6, 1>(frame)?;
                     let frame = &s.frame;
                     rt::in_range(
-                        &request::SetName::CHANNEL_DESC,
-                        4 + s.shift(1),
+                        &request::SetName::CHANNEL_CHECK.at(4 + s.shift(1)),
                         frame[4],
-                        0,
-                        7,
                     )?;
                     rt::Ok(Self::SetName {
-                        name: s.lists[0].view::<u8, 16>(s.elements(0), false, false)?,
+                        name: s.lists[0].view::<u8, 16>(s.elements(0))?,
                         channel: frame[4],
                     })
                 }
@@ -615,7 +620,7 @@ pub mod text_counted {
                     let s = LISTS_DEVICE_INFO.split::<10, 1>(frame)?;
                     let frame = &s.frame;
                     rt::Ok(Self::DeviceInfo {
-                        name: s.lists[0].view::<u8, 16>(s.elements(0), false, false)?,
+                        name: s.lists[0].view::<u8, 16>(s.elements(0))?,
                         serial: u32::from_be_bytes([
                             frame[4],
                             frame[5],
@@ -791,10 +796,7 @@ pub mod text_counted {
             !(4..=22).contains(&frame.len()) || RequestView::dispatch(frame).is_ok()
         }
         fn checksum_ok(frame: &[u8]) -> bool {
-            match frame.len().checked_sub(1) {
-                rt::Some(n) if n > 0 => rt::check_sum(frame, n, &FRAME, frame_sum),
-                _ => false,
-            }
+            FRAME.checksum_ok(frame, frame_sum)
         }
     }
     /// A streaming decoder for this protocol: see [`busspec_runtime::stream`].
@@ -807,8 +809,10 @@ pub mod text_counted {
         pub const MIN_LEN: usize = 6;
         pub const MAX_LEN: usize = 22;
         pub const DESC: rt::MessageDesc = rt::desc(Self::NAME, 0x20, 1, &[6]);
-        pub const NAME_DESC: rt::FieldDesc = rt::field(Self::NAME, "name");
         pub const CHANNEL_DESC: rt::FieldDesc = rt::field(Self::NAME, "channel");
+        pub const CHANNEL_CHECK: rt::FieldCheck = rt::check(&Self::CHANNEL_DESC, 4)
+            .range(0, 7);
+        pub const NAME_DESC: rt::FieldDesc = rt::field(Self::NAME, "name");
         pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
             f("name", rt::Text(self.name.as_slice()));
             f("channel", rt::Int(self.channel as i64));
@@ -833,10 +837,10 @@ pub mod text_counted {
                 0,
                 255,
             )? as u8;
-            rt::encode_in_range("channel", v_channel, 0, 7)?;
+            rt::encode_in_range(&Self::CHANNEL_CHECK, v_channel)?;
             out[4] = v_channel;
             let out = LISTS_SET_NAME.expand(&compact, &[bytes_0], buf)?;
-            rt::write_elements(v_name.as_slice(), 1, false, &mut out[4..]);
+            LISTS_SET_NAME.lists[0].write(v_name.as_slice(), &mut out[4..]);
             rt::Ok(out.len())
         }
         /// Reads this message from a frame whose framing and code are checked.
@@ -844,9 +848,9 @@ pub mod text_counted {
         fn from_frame(frame: &[u8]) -> rt::DecodeResult<Self> {
             let s = LISTS_SET_NAME.split::<6, 1>(frame)?;
             let frame = &s.frame;
-            rt::in_range(&Self::CHANNEL_DESC, 4 + s.shift(1), frame[4], 0, 7)?;
+            rt::in_range(&Self::CHANNEL_CHECK.at(4 + s.shift(1)), frame[4])?;
             rt::Ok(Self {
-                name: s.lists[0].elements::<u8, 16>(s.elements(0), false, false)?,
+                name: s.lists[0].elements::<u8, 16>(s.elements(0))?,
                 channel: frame[4],
             })
         }
@@ -922,7 +926,7 @@ pub mod text_counted {
             out[4..8].copy_from_slice(&v_serial.to_be_bytes());
             out[8] = v_version;
             let out = LISTS_DEVICE_INFO.expand(&compact, &[bytes_0], buf)?;
-            rt::write_elements(v_name.as_slice(), 1, false, &mut out[4..]);
+            LISTS_DEVICE_INFO.lists[0].write(v_name.as_slice(), &mut out[4..]);
             rt::Ok(out.len())
         }
         /// Reads this message from a frame whose framing and code are checked.
@@ -931,7 +935,7 @@ pub mod text_counted {
             let s = LISTS_DEVICE_INFO.split::<10, 1>(frame)?;
             let frame = &s.frame;
             rt::Ok(Self {
-                name: s.lists[0].elements::<u8, 16>(s.elements(0), false, false)?,
+                name: s.lists[0].elements::<u8, 16>(s.elements(0))?,
                 serial: u32::from_be_bytes([frame[4], frame[5], frame[6], frame[7]]),
                 version: frame[8],
             })

@@ -117,6 +117,8 @@ pub mod text_terminated {
         base: 5,
         at: 3,
         width: 1,
+        le: false,
+        signed: false,
         count: rt::CountBy::Until(0),
         min: 0,
         max: 16,
@@ -130,6 +132,8 @@ pub mod text_terminated {
                 base: 5,
                 at: 3,
                 width: 1,
+                le: false,
+                signed: false,
                 count: rt::CountBy::Until(0),
                 min: 0,
                 max: 16,
@@ -311,6 +315,8 @@ pub mod text_terminated {
         base: 18,
         at: 3,
         width: 1,
+        le: false,
+        signed: false,
         count: rt::CountBy::Until(0),
         min: 1,
         max: 24,
@@ -324,6 +330,8 @@ pub mod text_terminated {
                 base: 18,
                 at: 3,
                 width: 1,
+                le: false,
+                signed: false,
                 count: rt::CountBy::Until(0),
                 min: 1,
                 max: 24,
@@ -336,6 +344,8 @@ pub mod text_terminated {
         base: 7,
         at: 4,
         width: 1,
+        le: false,
+        signed: false,
         count: rt::CountBy::Until(0),
         min: 0,
         max: 16,
@@ -349,6 +359,8 @@ pub mod text_terminated {
                 base: 7,
                 at: 4,
                 width: 1,
+                le: false,
+                signed: false,
                 count: rt::CountBy::Until(0),
                 min: 0,
                 max: 16,
@@ -358,6 +370,8 @@ pub mod text_terminated {
                 base: 7,
                 at: 4,
                 width: 1,
+                le: false,
+                signed: false,
                 count: rt::CountBy::Until(0),
                 min: 0,
                 max: 8,
@@ -580,14 +594,11 @@ pub mod text_terminated {
                     let s = LISTS_SET_NAME.split::<5, 1>(frame)?;
                     let frame = &s.frame;
                     rt::in_range(
-                        &request::SetName::CHANNEL_DESC,
-                        3 + s.shift(1),
+                        &request::SetName::CHANNEL_CHECK.at(3 + s.shift(1)),
                         frame[3],
-                        0,
-                        7,
                     )?;
                     rt::Ok(Self::SetName {
-                        name: s.lists[0].view::<u8, 16>(s.elements(0), false, false)?,
+                        name: s.lists[0].view::<u8, 16>(s.elements(0))?,
                         channel: frame[3],
                     })
                 }
@@ -695,7 +706,7 @@ pub mod text_terminated {
                     let s = LISTS_DEVICE_INFO.split::<18, 1>(frame)?;
                     let frame = &s.frame;
                     rt::Ok(Self::DeviceInfo {
-                        name: s.lists[0].view::<u8, 24>(s.elements(0), false, false)?,
+                        name: s.lists[0].view::<u8, 24>(s.elements(0))?,
                         serial: u32::from_be_bytes([
                             frame[3],
                             frame[4],
@@ -727,8 +738,8 @@ pub mod text_terminated {
                     let frame = &s.frame;
                     rt::Ok(Self::Parameter {
                         index: frame[3],
-                        label: s.lists[0].view::<u8, 16>(s.elements(0), false, false)?,
-                        unit: s.lists[1].view::<u8, 8>(s.elements(1), false, false)?,
+                        label: s.lists[0].view::<u8, 16>(s.elements(0))?,
+                        unit: s.lists[1].view::<u8, 8>(s.elements(1))?,
                         value: i16::from_be_bytes([frame[4], frame[5]]),
                     })
                 }
@@ -941,10 +952,7 @@ pub mod text_terminated {
             ResponseView::decode_for(frame, request).map(|_| ())
         }
         fn checksum_ok(frame: &[u8]) -> bool {
-            match frame.len().checked_sub(1) {
-                rt::Some(n) if n > 0 => rt::check_sum(frame, n, &FRAME, frame_sum),
-                _ => false,
-            }
+            FRAME.checksum_ok(frame, frame_sum)
         }
     }
     /// A streaming decoder for this protocol: see [`busspec_runtime::stream`].
@@ -966,8 +974,10 @@ pub mod text_terminated {
         pub const MIN_LEN: usize = 6;
         pub const MAX_LEN: usize = 22;
         pub const DESC: rt::MessageDesc = rt::desc(Self::NAME, 0x2A, 1, &[5]);
-        pub const NAME_DESC: rt::FieldDesc = rt::field(Self::NAME, "name");
         pub const CHANNEL_DESC: rt::FieldDesc = rt::field(Self::NAME, "channel");
+        pub const CHANNEL_CHECK: rt::FieldCheck = rt::check(&Self::CHANNEL_DESC, 3)
+            .range(0, 7);
+        pub const NAME_DESC: rt::FieldDesc = rt::field(Self::NAME, "name");
         pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
             f("name", rt::Text(self.name.as_slice()));
             f("channel", rt::Int(self.channel as i64));
@@ -983,7 +993,7 @@ pub mod text_terminated {
             let bytes_0: usize = LISTS_SET_NAME.lists[0].encode_len(v_name.len())?
                 - LISTS_SET_NAME.base;
             let mut compact = [0u8; 5];
-            rt::encode_in_range("channel", v_channel, 0, 7)?;
+            rt::encode_in_range(&Self::CHANNEL_CHECK, v_channel)?;
             let out = {
                 compact[..1].copy_from_slice(&[0xC8]);
                 &mut compact
@@ -993,7 +1003,9 @@ pub mod text_terminated {
             let out = LISTS_SET_NAME.expand(&compact, &[bytes_0], buf)?;
             {
                 let at = 3;
-                rt::write_elements(v_name.as_slice(), 1, false, &mut out[at..]);
+                if let rt::Some(to) = out.get_mut(at..at + v_name.len()) {
+                    to.copy_from_slice(v_name.as_slice());
+                }
                 if let rt::Some(b) = out.get_mut(at + v_name.len()) {
                     *b = 0;
                 }
@@ -1006,9 +1018,9 @@ pub mod text_terminated {
         fn from_frame(frame: &[u8]) -> rt::DecodeResult<Self> {
             let s = LISTS_SET_NAME.split::<5, 1>(frame)?;
             let frame = &s.frame;
-            rt::in_range(&Self::CHANNEL_DESC, 3 + s.shift(1), frame[3], 0, 7)?;
+            rt::in_range(&Self::CHANNEL_CHECK.at(3 + s.shift(1)), frame[3])?;
             rt::Ok(Self {
-                name: s.lists[0].elements::<u8, 16>(s.elements(0), false, false)?,
+                name: s.lists[0].elements::<u8, 16>(s.elements(0))?,
                 channel: frame[3],
             })
         }
@@ -1086,7 +1098,9 @@ pub mod text_terminated {
             let out = LISTS_DEVICE_INFO.expand(&compact, &[bytes_0], buf)?;
             {
                 let at = 3;
-                rt::write_elements(v_name.as_slice(), 1, false, &mut out[at..]);
+                if let rt::Some(to) = out.get_mut(at..at + v_name.len()) {
+                    to.copy_from_slice(v_name.as_slice());
+                }
                 if let rt::Some(b) = out.get_mut(at + v_name.len()) {
                     *b = 0;
                 }
@@ -1100,7 +1114,7 @@ pub mod text_terminated {
             let s = LISTS_DEVICE_INFO.split::<18, 1>(frame)?;
             let frame = &s.frame;
             rt::Ok(Self {
-                name: s.lists[0].elements::<u8, 24>(s.elements(0), false, false)?,
+                name: s.lists[0].elements::<u8, 24>(s.elements(0))?,
                 serial: u32::from_be_bytes([frame[3], frame[4], frame[5], frame[6]]),
                 hardware: u32::from_be_bytes([frame[7], frame[8], frame[9], frame[10]]),
                 firmware: u32::from_be_bytes([
@@ -1180,14 +1194,18 @@ pub mod text_terminated {
             let out = LISTS_PARAMETER.expand(&compact, &[bytes_0, bytes_1], buf)?;
             {
                 let at = 4;
-                rt::write_elements(v_label.as_slice(), 1, false, &mut out[at..]);
+                if let rt::Some(to) = out.get_mut(at..at + v_label.len()) {
+                    to.copy_from_slice(v_label.as_slice());
+                }
                 if let rt::Some(b) = out.get_mut(at + v_label.len()) {
                     *b = 0;
                 }
             }
             {
                 let at = 4 + bytes_0;
-                rt::write_elements(v_unit.as_slice(), 1, false, &mut out[at..]);
+                if let rt::Some(to) = out.get_mut(at..at + v_unit.len()) {
+                    to.copy_from_slice(v_unit.as_slice());
+                }
                 if let rt::Some(b) = out.get_mut(at + v_unit.len()) {
                     *b = 0;
                 }
@@ -1202,8 +1220,8 @@ pub mod text_terminated {
             let frame = &s.frame;
             rt::Ok(Self {
                 index: frame[3],
-                label: s.lists[0].elements::<u8, 16>(s.elements(0), false, false)?,
-                unit: s.lists[1].elements::<u8, 8>(s.elements(1), false, false)?,
+                label: s.lists[0].elements::<u8, 16>(s.elements(0))?,
+                unit: s.lists[1].elements::<u8, 8>(s.elements(1))?,
                 value: i16::from_be_bytes([frame[4], frame[5]]),
             })
         }

@@ -2148,10 +2148,7 @@ pub mod ub2 {
             }
         }
         fn checksum_ok(frame: &[u8]) -> bool {
-            match frame.len().checked_sub(1) {
-                rt::Some(n) if n > 0 => rt::check_sum(frame, n, &FRAME, frame_sum),
-                _ => false,
-            }
+            FRAME.checksum_ok(frame, frame_sum)
         }
     }
     /// A streaming decoder for this protocol: see [`busspec_runtime::stream`].
@@ -2411,6 +2408,8 @@ pub mod ub2 {
         pub const DESC: rt::MessageDesc = rt::desc(Self::NAME, 0x2700, 2, &[6]);
         pub const INDEX: rt::Range<usize> = 4..5;
         pub const INDEX_DESC: rt::FieldDesc = rt::field(Self::NAME, "index");
+        pub const INDEX_CHECK: rt::FieldCheck = rt::check(&Self::INDEX_DESC, 4)
+            .range(0, 9);
         pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
             f("index", rt::Int(self.index as i64));
         }
@@ -2421,7 +2420,7 @@ pub mod ub2 {
         #[inline(always)]
         fn write(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             let Self { index: v_index } = *self;
-            rt::encode_in_range("index", v_index, 0, 9)?;
+            rt::encode_in_range(&Self::INDEX_CHECK, v_index)?;
             let out = rt::frame_mut::<6>(buf, &[0xAA, address, 0x27, 0x00])?;
             out[4] = v_index;
             rt::Ok(rt::seal_sum8_head(out, 4, address.wrapping_add(0xD1)))
@@ -2430,7 +2429,7 @@ pub mod ub2 {
         #[inline(always)]
         fn from_frame(frame: &[u8]) -> rt::DecodeResult<Self> {
             let frame = rt::fixed::<6>(frame, &Self::DESC)?;
-            rt::in_range(&Self::INDEX_DESC, 4, frame[4], 0, 9)?;
+            rt::in_range(&Self::INDEX_CHECK, frame[4])?;
             rt::Ok(Self { index: frame[4] })
         }
     }
@@ -2454,7 +2453,17 @@ pub mod ub2 {
             Self::NAME,
             "acceleration_index",
         );
+        pub const ACCELERATION_INDEX_CHECK: rt::FieldCheck = rt::check(
+                &Self::ACCELERATION_INDEX_DESC,
+                4,
+            )
+            .range(0, 18);
         pub const SPEED_INDEX_DESC: rt::FieldDesc = rt::field(Self::NAME, "speed_index");
+        pub const SPEED_INDEX_CHECK: rt::FieldCheck = rt::check(
+                &Self::SPEED_INDEX_DESC,
+                5,
+            )
+            .range(0, 18);
         pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
             f("acceleration_index", rt::Int(self.acceleration_index as i64));
             f("speed_index", rt::Int(self.speed_index as i64));
@@ -2469,8 +2478,8 @@ pub mod ub2 {
                 acceleration_index: v_acceleration_index,
                 speed_index: v_speed_index,
             } = *self;
-            rt::encode_in_range("acceleration_index", v_acceleration_index, 0, 18)?;
-            rt::encode_in_range("speed_index", v_speed_index, 0, 18)?;
+            rt::encode_in_range(&Self::ACCELERATION_INDEX_CHECK, v_acceleration_index)?;
+            rt::encode_in_range(&Self::SPEED_INDEX_CHECK, v_speed_index)?;
             let out = rt::frame_mut::<7>(buf, &[0xAA, address, 0x43, 0x00])?;
             out[4] = v_acceleration_index;
             out[5] = v_speed_index;
@@ -2480,8 +2489,8 @@ pub mod ub2 {
         #[inline(always)]
         fn from_frame(frame: &[u8]) -> rt::DecodeResult<Self> {
             let frame = rt::fixed::<7>(frame, &Self::DESC)?;
-            rt::in_range(&Self::ACCELERATION_INDEX_DESC, 4, frame[4], 0, 18)?;
-            rt::in_range(&Self::SPEED_INDEX_DESC, 5, frame[5], 0, 18)?;
+            rt::in_range(&Self::ACCELERATION_INDEX_CHECK, frame[4])?;
+            rt::in_range(&Self::SPEED_INDEX_CHECK, frame[5])?;
             rt::Ok(Self {
                 acceleration_index: frame[4],
                 speed_index: frame[5],
@@ -2528,6 +2537,8 @@ pub mod ub2 {
         pub const DESC: rt::MessageDesc = rt::desc(Self::NAME, 0x6000, 2, &[6]);
         pub const ADDRESS: rt::Range<usize> = 4..5;
         pub const ADDRESS_DESC: rt::FieldDesc = rt::field(Self::NAME, "address");
+        pub const ADDRESS_CHECK: rt::FieldCheck = rt::check(&Self::ADDRESS_DESC, 4)
+            .range(33, 64);
         pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
             f("address", rt::Int(self.address as i64));
         }
@@ -2538,7 +2549,7 @@ pub mod ub2 {
         #[inline(always)]
         fn write(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             let Self { address: v_address } = *self;
-            rt::encode_in_range("address", v_address, 33, 64)?;
+            rt::encode_in_range(&Self::ADDRESS_CHECK, v_address)?;
             let out = rt::frame_mut::<6>(buf, &[0xAA, address, 0x60, 0x00])?;
             out[4] = v_address;
             rt::Ok(rt::seal_sum8_head(out, 4, address.wrapping_add(0x0A)))
@@ -2547,7 +2558,7 @@ pub mod ub2 {
         #[inline(always)]
         fn from_frame(frame: &[u8]) -> rt::DecodeResult<Self> {
             let frame = rt::fixed::<6>(frame, &Self::DESC)?;
-            rt::in_range(&Self::ADDRESS_DESC, 4, frame[4], 33, 64)?;
+            rt::in_range(&Self::ADDRESS_CHECK, frame[4])?;
             rt::Ok(Self { address: frame[4] })
         }
     }
@@ -2650,6 +2661,8 @@ pub mod ub2 {
         pub const INDEX: rt::Range<usize> = 4..5;
         pub const POSITION: rt::Range<usize> = 5..7;
         pub const INDEX_DESC: rt::FieldDesc = rt::field(Self::NAME, "index");
+        pub const INDEX_CHECK: rt::FieldCheck = rt::check(&Self::INDEX_DESC, 4)
+            .range(0, 9);
         pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
             f("index", rt::Int(self.index as i64));
             f("position", rt::Int(self.position as i64));
@@ -2661,7 +2674,7 @@ pub mod ub2 {
         #[inline(always)]
         fn write(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             let Self { index: v_index, position: v_position } = *self;
-            rt::encode_in_range("index", v_index, 0, 9)?;
+            rt::encode_in_range(&Self::INDEX_CHECK, v_index)?;
             let out = rt::frame_mut::<8>(buf, &[0xAA, address, 0x75, 0x00])?;
             out[4] = v_index;
             out[5..7].copy_from_slice(&v_position.to_le_bytes());
@@ -2671,7 +2684,7 @@ pub mod ub2 {
         #[inline(always)]
         fn from_frame(frame: &[u8]) -> rt::DecodeResult<Self> {
             let frame = rt::fixed::<8>(frame, &Self::DESC)?;
-            rt::in_range(&Self::INDEX_DESC, 4, frame[4], 0, 9)?;
+            rt::in_range(&Self::INDEX_CHECK, frame[4])?;
             rt::Ok(Self {
                 index: frame[4],
                 position: u16::from_le_bytes([frame[5], frame[6]]),
@@ -2768,6 +2781,8 @@ pub mod ub2 {
         pub const DESC: rt::MessageDesc = rt::desc(Self::NAME, 0x4030, 2, &[7]);
         pub const INDEX: rt::Range<usize> = 4..6;
         pub const INDEX_DESC: rt::FieldDesc = rt::field(Self::NAME, "index");
+        pub const INDEX_CHECK: rt::FieldCheck = rt::check(&Self::INDEX_DESC, 4)
+            .range(0, 499);
         pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
             f("index", rt::Int(self.index as i64));
         }
@@ -2778,7 +2793,7 @@ pub mod ub2 {
         #[inline(always)]
         fn write(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             let Self { index: v_index } = *self;
-            rt::encode_in_range("index", v_index, 0, 499)?;
+            rt::encode_in_range(&Self::INDEX_CHECK, v_index)?;
             let out = rt::frame_mut::<7>(buf, &[0xAA, address, 0x40, 0x30])?;
             out[4..6].copy_from_slice(&v_index.to_le_bytes());
             rt::Ok(rt::seal_sum8_head(out, 4, address.wrapping_add(0x1A)))
@@ -2788,7 +2803,7 @@ pub mod ub2 {
         fn from_frame(frame: &[u8]) -> rt::DecodeResult<Self> {
             let frame = rt::fixed::<7>(frame, &Self::DESC)?;
             let w_index: u16 = u16::from_le_bytes([frame[4], frame[5]]);
-            rt::in_range(&Self::INDEX_DESC, 4, w_index, 0, 499)?;
+            rt::in_range(&Self::INDEX_CHECK, w_index)?;
             rt::Ok(Self { index: w_index })
         }
     }
@@ -2955,6 +2970,8 @@ pub mod ub2 {
         pub const DESC: rt::MessageDesc = rt::desc(Self::NAME, 0x4075, 2, &[6]);
         pub const INDEX: rt::Range<usize> = 4..5;
         pub const INDEX_DESC: rt::FieldDesc = rt::field(Self::NAME, "index");
+        pub const INDEX_CHECK: rt::FieldCheck = rt::check(&Self::INDEX_DESC, 4)
+            .range(0, 9);
         pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
             f("index", rt::Int(self.index as i64));
         }
@@ -2965,7 +2982,7 @@ pub mod ub2 {
         #[inline(always)]
         fn write(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             let Self { index: v_index } = *self;
-            rt::encode_in_range("index", v_index, 0, 9)?;
+            rt::encode_in_range(&Self::INDEX_CHECK, v_index)?;
             let out = rt::frame_mut::<6>(buf, &[0xAA, address, 0x40, 0x75])?;
             out[4] = v_index;
             rt::Ok(rt::seal_sum8_head(out, 4, address.wrapping_add(0x5F)))
@@ -2974,7 +2991,7 @@ pub mod ub2 {
         #[inline(always)]
         fn from_frame(frame: &[u8]) -> rt::DecodeResult<Self> {
             let frame = rt::fixed::<6>(frame, &Self::DESC)?;
-            rt::in_range(&Self::INDEX_DESC, 4, frame[4], 0, 9)?;
+            rt::in_range(&Self::INDEX_CHECK, frame[4])?;
             rt::Ok(Self { index: frame[4] })
         }
     }
@@ -3307,7 +3324,17 @@ pub mod ub2 {
             Self::NAME,
             "acceleration_index",
         );
+        pub const ACCELERATION_INDEX_CHECK: rt::FieldCheck = rt::check(
+                &Self::ACCELERATION_INDEX_DESC,
+                4,
+            )
+            .range(0, 18);
         pub const SPEED_INDEX_DESC: rt::FieldDesc = rt::field(Self::NAME, "speed_index");
+        pub const SPEED_INDEX_CHECK: rt::FieldCheck = rt::check(
+                &Self::SPEED_INDEX_DESC,
+                5,
+            )
+            .range(0, 18);
         pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
             f("acceleration_index", rt::Int(self.acceleration_index as i64));
             f("speed_index", rt::Int(self.speed_index as i64));
@@ -3322,8 +3349,8 @@ pub mod ub2 {
                 acceleration_index: v_acceleration_index,
                 speed_index: v_speed_index,
             } = *self;
-            rt::encode_in_range("acceleration_index", v_acceleration_index, 0, 18)?;
-            rt::encode_in_range("speed_index", v_speed_index, 0, 18)?;
+            rt::encode_in_range(&Self::ACCELERATION_INDEX_CHECK, v_acceleration_index)?;
+            rt::encode_in_range(&Self::SPEED_INDEX_CHECK, v_speed_index)?;
             let out = rt::frame_mut::<7>(buf, &[0xAA, address, 0x41, 0x21])?;
             out[4] = v_acceleration_index;
             out[5] = v_speed_index;
@@ -3333,8 +3360,8 @@ pub mod ub2 {
         #[inline(always)]
         fn from_frame(frame: &[u8]) -> rt::DecodeResult<Self> {
             let frame = rt::fixed::<7>(frame, &Self::DESC)?;
-            rt::in_range(&Self::ACCELERATION_INDEX_DESC, 4, frame[4], 0, 18)?;
-            rt::in_range(&Self::SPEED_INDEX_DESC, 5, frame[5], 0, 18)?;
+            rt::in_range(&Self::ACCELERATION_INDEX_CHECK, frame[4])?;
+            rt::in_range(&Self::SPEED_INDEX_CHECK, frame[5])?;
             rt::Ok(Self {
                 acceleration_index: frame[4],
                 speed_index: frame[5],
@@ -3383,6 +3410,8 @@ pub mod ub2 {
         pub const FULL_STEPS: rt::Range<usize> = 6..8;
         pub const CAPACITANCE: rt::Range<usize> = 8..12;
         pub const INDEX_DESC: rt::FieldDesc = rt::field(Self::NAME, "index");
+        pub const INDEX_CHECK: rt::FieldCheck = rt::check(&Self::INDEX_DESC, 4)
+            .range(0, 499);
         pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
             f("index", rt::Int(self.index as i64));
             f("full_steps", rt::Int(self.full_steps as i64));
@@ -3399,7 +3428,7 @@ pub mod ub2 {
                 full_steps: v_full_steps,
                 capacitance: v_capacitance,
             } = *self;
-            rt::encode_in_range("index", v_index, 0, 499)?;
+            rt::encode_in_range(&Self::INDEX_CHECK, v_index)?;
             let out = rt::frame_mut::<13>(buf, &[0xAA, address, 0x41, 0x30])?;
             out[4..6].copy_from_slice(&v_index.to_le_bytes());
             out[6..8].copy_from_slice(&v_full_steps.to_le_bytes());
@@ -3411,7 +3440,7 @@ pub mod ub2 {
         fn from_frame(frame: &[u8]) -> rt::DecodeResult<Self> {
             let frame = rt::fixed::<13>(frame, &Self::DESC)?;
             let w_index: u16 = u16::from_le_bytes([frame[4], frame[5]]);
-            rt::in_range(&Self::INDEX_DESC, 4, w_index, 0, 499)?;
+            rt::in_range(&Self::INDEX_CHECK, w_index)?;
             rt::Ok(Self {
                 index: w_index,
                 full_steps: u16::from_le_bytes([frame[6], frame[7]]),
@@ -3801,6 +3830,8 @@ pub mod ub2 {
         pub const INDEX: rt::Range<usize> = 4..5;
         pub const FULL_STEPS: rt::Range<usize> = 5..7;
         pub const INDEX_DESC: rt::FieldDesc = rt::field(Self::NAME, "index");
+        pub const INDEX_CHECK: rt::FieldCheck = rt::check(&Self::INDEX_DESC, 4)
+            .range(0, 9);
         pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
             f("index", rt::Int(self.index as i64));
             f("full_steps", rt::Int(self.full_steps as i64));
@@ -3812,7 +3843,7 @@ pub mod ub2 {
         #[inline(always)]
         fn write(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             let Self { index: v_index, full_steps: v_full_steps } = *self;
-            rt::encode_in_range("index", v_index, 0, 9)?;
+            rt::encode_in_range(&Self::INDEX_CHECK, v_index)?;
             let out = rt::frame_mut::<8>(buf, &[0xAA, address, 0x41, 0x75])?;
             out[4] = v_index;
             out[5..7].copy_from_slice(&v_full_steps.to_le_bytes());
@@ -3822,7 +3853,7 @@ pub mod ub2 {
         #[inline(always)]
         fn from_frame(frame: &[u8]) -> rt::DecodeResult<Self> {
             let frame = rt::fixed::<8>(frame, &Self::DESC)?;
-            rt::in_range(&Self::INDEX_DESC, 4, frame[4], 0, 9)?;
+            rt::in_range(&Self::INDEX_CHECK, frame[4])?;
             rt::Ok(Self {
                 index: frame[4],
                 full_steps: u16::from_le_bytes([frame[5], frame[6]]),

@@ -214,6 +214,8 @@ pub mod ubx_fixed_blocks {
         base: 9,
         at: 6,
         width: 3,
+        le: true,
+        signed: false,
         count: rt::CountBy::Fixed(2),
         min: 2,
         max: 2,
@@ -227,6 +229,8 @@ pub mod ubx_fixed_blocks {
                 base: 9,
                 at: 6,
                 width: 3,
+                le: true,
+                signed: false,
                 count: rt::CountBy::Fixed(2),
                 min: 2,
                 max: 2,
@@ -236,6 +240,8 @@ pub mod ubx_fixed_blocks {
                 base: 9,
                 at: 7,
                 width: 1,
+                le: true,
+                signed: false,
                 count: rt::CountBy::Elements(rt::CountField {
                     name: "num_pins",
                     at: 6,
@@ -263,15 +269,9 @@ pub mod ubx_fixed_blocks {
         /// Reads a record from its bytes, at frame offset `at` (for errors), each field's range checked as the spec says.
         pub fn read(frame: &[u8; 3], at: usize) -> rt::DecodeResult<Self> {
             let v_port: u8 = frame[0];
-            rt::in_range(&request::SetPorts::PORTS_PORT_DESC, at, v_port, 1, 2)?;
+            rt::in_range(&request::SetPorts::PORTS_PORT_CHECK.at(at), v_port)?;
             let v_voltage: u16 = u16::from_le_bytes([frame[1], frame[2]]);
-            rt::in_range(
-                &request::SetPorts::PORTS_VOLTAGE_DESC,
-                at + 1,
-                v_voltage,
-                0,
-                5000,
-            )?;
+            rt::in_range(&request::SetPorts::PORTS_VOLTAGE_CHECK.at(at + 1), v_voltage)?;
             rt::Ok(Self {
                 port: v_port,
                 voltage: Volts::from_raw(v_voltage),
@@ -280,10 +280,13 @@ pub mod ubx_fixed_blocks {
         /// Writes the record into its bytes, each field's range checked as the spec says.
         pub fn write(&self, out: &mut [u8; 3]) -> rt::Result<(), rt::EncodeError> {
             let v_port = self.port;
-            rt::encode_in_range("ports.port", v_port, 1, 2)?;
+            rt::encode_in_range(&request::SetPorts::PORTS_PORT_CHECK, v_port)?;
             out[0] = v_port;
             let v_voltage = self.voltage;
-            rt::encode_in_range("ports.voltage", v_voltage.raw(), 0, 5000)?;
+            rt::encode_in_range(
+                &request::SetPorts::PORTS_VOLTAGE_CHECK,
+                v_voltage.raw(),
+            )?;
             out[1..3].copy_from_slice(&v_voltage.raw().to_le_bytes());
             rt::Ok(())
         }
@@ -492,6 +495,8 @@ pub mod ubx_fixed_blocks {
         base: 13,
         at: 10,
         width: 6,
+        le: true,
+        signed: false,
         count: rt::CountBy::Fixed(3),
         min: 3,
         max: 3,
@@ -505,6 +510,8 @@ pub mod ubx_fixed_blocks {
                 base: 13,
                 at: 10,
                 width: 6,
+                le: true,
+                signed: false,
                 count: rt::CountBy::Fixed(3),
                 min: 3,
                 max: 3,
@@ -533,23 +540,11 @@ pub mod ubx_fixed_blocks {
             let v_gnss_id: u8 = frame[0];
             let v_sv_id: u8 = frame[1];
             let v_cno: u8 = frame[2];
-            rt::in_range(&response::SatBlocks::BLOCKS_CNO_DESC, at + 2, v_cno, 0, 63)?;
+            rt::in_range(&response::SatBlocks::BLOCKS_CNO_CHECK.at(at + 2), v_cno)?;
             let v_elev: i8 = frame[3] as i8;
-            rt::in_range(
-                &response::SatBlocks::BLOCKS_ELEV_DESC,
-                at + 3,
-                v_elev,
-                -90,
-                90,
-            )?;
+            rt::in_range(&response::SatBlocks::BLOCKS_ELEV_CHECK.at(at + 3), v_elev)?;
             let v_azim: i16 = i16::from_le_bytes([frame[4], frame[5]]);
-            rt::in_range(
-                &response::SatBlocks::BLOCKS_AZIM_DESC,
-                at + 4,
-                v_azim,
-                0,
-                359,
-            )?;
+            rt::in_range(&response::SatBlocks::BLOCKS_AZIM_CHECK.at(at + 4), v_azim)?;
             rt::Ok(Self {
                 gnss_id: Gnss::from_raw(v_gnss_id),
                 sv_id: v_sv_id,
@@ -565,13 +560,13 @@ pub mod ubx_fixed_blocks {
             let v_sv_id = self.sv_id;
             out[1] = v_sv_id;
             let v_cno = self.cno;
-            rt::encode_in_range("blocks.cno", v_cno, 0, 63)?;
+            rt::encode_in_range(&response::SatBlocks::BLOCKS_CNO_CHECK, v_cno)?;
             out[2] = v_cno;
             let v_elev = self.elev;
-            rt::encode_in_range("blocks.elev", v_elev, -90, 90)?;
+            rt::encode_in_range(&response::SatBlocks::BLOCKS_ELEV_CHECK, v_elev)?;
             out[3..4].copy_from_slice(&v_elev.to_le_bytes());
             let v_azim = self.azim;
-            rt::encode_in_range("blocks.azim", v_azim, 0, 359)?;
+            rt::encode_in_range(&response::SatBlocks::BLOCKS_AZIM_CHECK, v_azim)?;
             out[4..6].copy_from_slice(&v_azim.to_le_bytes());
             rt::Ok(())
         }
@@ -841,7 +836,7 @@ pub mod ubx_fixed_blocks {
                     }
                     rt::Ok(Self::SetPorts {
                         ports: v_ports,
-                        pins: s.lists[1].view::<u8, 8>(s.elements(1), true, false)?,
+                        pins: s.lists[1].view::<u8, 8>(s.elements(1))?,
                     })
                 }
                 _ => rt::Err(REQUEST_CODE.unknown(frame)),
@@ -1022,10 +1017,7 @@ pub mod ubx_fixed_blocks {
             RequestView::decode(frame).map(|_| ())
         }
         fn checksum_ok(frame: &[u8]) -> bool {
-            match frame.len().checked_sub(2) {
-                rt::Some(n) if n > 0 => rt::check_sum(frame, n, &FRAME, frame_sum),
-                _ => false,
-            }
+            FRAME.checksum_ok(frame, frame_sum)
         }
     }
     /// A streaming decoder for this protocol: see [`busspec_runtime::stream`].
@@ -1050,10 +1042,17 @@ pub mod ubx_fixed_blocks {
         pub const PORTS_DESC: rt::FieldDesc = rt::field(Self::NAME, "ports");
         pub const PINS_DESC: rt::FieldDesc = rt::field(Self::NAME, "pins");
         pub const PORTS_PORT_DESC: rt::FieldDesc = rt::field(Self::NAME, "ports.port");
+        pub const PORTS_PORT_CHECK: rt::FieldCheck = rt::check(&Self::PORTS_PORT_DESC, 0)
+            .range(1, 2);
         pub const PORTS_VOLTAGE_DESC: rt::FieldDesc = rt::field(
             Self::NAME,
             "ports.voltage",
         );
+        pub const PORTS_VOLTAGE_CHECK: rt::FieldCheck = rt::check(
+                &Self::PORTS_VOLTAGE_DESC,
+                1,
+            )
+            .range(0, 5000);
         pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
             f("ports", rt::Records(self.ports.records()));
             f("pins", rt::List(self.pins.elements()));
@@ -1089,7 +1088,7 @@ pub mod ubx_fixed_blocks {
                     to.copy_from_slice(&bytes);
                 }
             }
-            rt::write_elements(v_pins.as_slice(), 1, true, &mut out[7 + bytes_0..]);
+            LISTS_SET_PORTS.lists[1].write(v_pins.as_slice(), &mut out[7 + bytes_0..]);
             LENGTH.put(out)?;
             rt::Ok(out.len())
         }
@@ -1105,7 +1104,7 @@ pub mod ubx_fixed_blocks {
             }
             rt::Ok(Self {
                 ports: v_ports,
-                pins: s.lists[1].elements::<u8, 8>(s.elements(1), true, false)?,
+                pins: s.lists[1].elements::<u8, 8>(s.elements(1))?,
             })
         }
     }
@@ -1117,8 +1116,20 @@ pub mod ubx_fixed_blocks {
         pub const ITOW: rt::Range<usize> = 6..10;
         pub const BLOCKS_DESC: rt::FieldDesc = rt::field(Self::NAME, "blocks");
         pub const BLOCKS_CNO_DESC: rt::FieldDesc = rt::field(Self::NAME, "blocks.cno");
+        pub const BLOCKS_CNO_CHECK: rt::FieldCheck = rt::check(&Self::BLOCKS_CNO_DESC, 2)
+            .range(0, 63);
         pub const BLOCKS_ELEV_DESC: rt::FieldDesc = rt::field(Self::NAME, "blocks.elev");
+        pub const BLOCKS_ELEV_CHECK: rt::FieldCheck = rt::check(
+                &Self::BLOCKS_ELEV_DESC,
+                3,
+            )
+            .range(-90, 90);
         pub const BLOCKS_AZIM_DESC: rt::FieldDesc = rt::field(Self::NAME, "blocks.azim");
+        pub const BLOCKS_AZIM_CHECK: rt::FieldCheck = rt::check(
+                &Self::BLOCKS_AZIM_DESC,
+                4,
+            )
+            .range(0, 359);
         pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
             f("itow", rt::Int(self.itow as i64));
             f("blocks", rt::Records(self.blocks.records()));

@@ -377,6 +377,8 @@ pub mod ubx_like {
         base: 16,
         at: 14,
         width: 12,
+        le: true,
+        signed: false,
         count: rt::CountBy::Elements(rt::CountField {
             name: "num_svs",
             at: 11,
@@ -848,10 +850,7 @@ pub mod ubx_like {
             }
         }
         fn checksum_ok(frame: &[u8]) -> bool {
-            match frame.len().checked_sub(2) {
-                rt::Some(n) if n > 0 => rt::check_sum(frame, n, &FRAME, frame_sum),
-                _ => false,
-            }
+            FRAME.checksum_ok(frame, frame_sum)
         }
     }
     /// A streaming decoder for this protocol: see [`busspec_runtime::stream`].
@@ -876,7 +875,11 @@ pub mod ubx_like {
         pub const NAV_RATE: rt::Range<usize> = 8..10;
         pub const TIME_REF: rt::Range<usize> = 10..12;
         pub const MEAS_RATE_DESC: rt::FieldDesc = rt::field(Self::NAME, "meas_rate");
+        pub const MEAS_RATE_CHECK: rt::FieldCheck = rt::check(&Self::MEAS_RATE_DESC, 6)
+            .range(25, 65535);
         pub const NAV_RATE_DESC: rt::FieldDesc = rt::field(Self::NAME, "nav_rate");
+        pub const NAV_RATE_CHECK: rt::FieldCheck = rt::check(&Self::NAV_RATE_DESC, 8)
+            .range(1, 127);
         pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
             f("meas_rate", rt::Int(self.meas_rate as i64));
             f("nav_rate", rt::Int(self.nav_rate as i64));
@@ -893,8 +896,8 @@ pub mod ubx_like {
                 nav_rate: v_nav_rate,
                 time_ref: v_time_ref,
             } = *self;
-            rt::encode_in_range("meas_rate", v_meas_rate, 25, 65535)?;
-            rt::encode_in_range("nav_rate", v_nav_rate, 1, 127)?;
+            rt::encode_in_range(&Self::MEAS_RATE_CHECK, v_meas_rate)?;
+            rt::encode_in_range(&Self::NAV_RATE_CHECK, v_nav_rate)?;
             let out = rt::frame_mut::<14>(buf, &[0xB5, 0x62, 0x06, 0x08, 0x06, 0x00])?;
             out[6..8].copy_from_slice(&v_meas_rate.to_le_bytes());
             out[8..10].copy_from_slice(&v_nav_rate.to_le_bytes());
@@ -906,9 +909,9 @@ pub mod ubx_like {
         fn from_frame(frame: &[u8]) -> rt::DecodeResult<Self> {
             let frame = rt::fixed::<14>(frame, &Self::DESC)?;
             let w_meas_rate: u16 = u16::from_le_bytes([frame[6], frame[7]]);
-            rt::in_range(&Self::MEAS_RATE_DESC, 6, w_meas_rate, 25, 65535)?;
+            rt::in_range(&Self::MEAS_RATE_CHECK, w_meas_rate)?;
             let w_nav_rate: u16 = u16::from_le_bytes([frame[8], frame[9]]);
-            rt::in_range(&Self::NAV_RATE_DESC, 8, w_nav_rate, 1, 127)?;
+            rt::in_range(&Self::NAV_RATE_CHECK, w_nav_rate)?;
             rt::Ok(Self {
                 meas_rate: w_meas_rate,
                 nav_rate: w_nav_rate,

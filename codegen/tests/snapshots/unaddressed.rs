@@ -591,10 +591,7 @@ pub mod unaddressed {
             }
         }
         fn checksum_ok(frame: &[u8]) -> bool {
-            match frame.len().checked_sub(1) {
-                rt::Some(n) if n > 0 => rt::check_sum(frame, n, &FRAME, frame_sum),
-                _ => false,
-            }
+            FRAME.checksum_ok(frame, frame_sum)
         }
     }
     /// A streaming decoder for this protocol: see [`busspec_runtime::stream`].
@@ -617,6 +614,8 @@ pub mod unaddressed {
         pub const DESC: rt::MessageDesc = rt::desc(Self::NAME, 0x20, 1, &[7]);
         pub const RATE: rt::Range<usize> = 4..6;
         pub const RATE_DESC: rt::FieldDesc = rt::field(Self::NAME, "rate");
+        pub const RATE_CHECK: rt::FieldCheck = rt::check(&Self::RATE_DESC, 4)
+            .range(1, 1000);
         pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
             f("rate", rt::Int(self.rate as i64));
         }
@@ -627,7 +626,7 @@ pub mod unaddressed {
         #[inline(always)]
         fn write(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             let Self { rate: v_rate } = *self;
-            rt::encode_in_range("rate", v_rate, 1, 1000)?;
+            rt::encode_in_range(&Self::RATE_CHECK, v_rate)?;
             let out = rt::frame_mut::<7>(buf, &[0xA5, 0x5A, 0x03, 0x20])?;
             out[4..6].copy_from_slice(&v_rate.to_le_bytes());
             rt::Ok(out.len())
@@ -637,7 +636,7 @@ pub mod unaddressed {
         fn from_frame(frame: &[u8]) -> rt::DecodeResult<Self> {
             let frame = rt::fixed::<7>(frame, &Self::DESC)?;
             let w_rate: u16 = u16::from_le_bytes([frame[4], frame[5]]);
-            rt::in_range(&Self::RATE_DESC, 4, w_rate, 1, 1000)?;
+            rt::in_range(&Self::RATE_CHECK, w_rate)?;
             rt::Ok(Self { rate: w_rate })
         }
     }
@@ -657,6 +656,11 @@ pub mod unaddressed {
         pub const DESC: rt::MessageDesc = rt::desc(Self::NAME, 0x90, 1, &[7]);
         pub const TEMPERATURE: rt::Range<usize> = 4..6;
         pub const TEMPERATURE_DESC: rt::FieldDesc = rt::field(Self::NAME, "temperature");
+        pub const TEMPERATURE_CHECK: rt::FieldCheck = rt::check(
+                &Self::TEMPERATURE_DESC,
+                4,
+            )
+            .range(-4000, 12500);
         pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
             f("temperature", rt::Int(self.temperature.raw() as i64));
         }
@@ -667,7 +671,7 @@ pub mod unaddressed {
         #[inline(always)]
         fn write(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             let Self { temperature: v_temperature } = *self;
-            rt::encode_in_range("temperature", v_temperature.raw(), -4000, 12500)?;
+            rt::encode_in_range(&Self::TEMPERATURE_CHECK, v_temperature.raw())?;
             let out = rt::frame_mut::<7>(buf, &[0xA5, 0x5A, 0x03, 0x90])?;
             out[4..6].copy_from_slice(&v_temperature.raw().to_le_bytes());
             rt::Ok(out.len())
@@ -677,7 +681,7 @@ pub mod unaddressed {
         fn from_frame(frame: &[u8]) -> rt::DecodeResult<Self> {
             let frame = rt::fixed::<7>(frame, &Self::DESC)?;
             let w_temperature: i16 = i16::from_le_bytes([frame[4], frame[5]]);
-            rt::in_range(&Self::TEMPERATURE_DESC, 4, w_temperature, -4000, 12500)?;
+            rt::in_range(&Self::TEMPERATURE_CHECK, w_temperature)?;
             rt::Ok(Self {
                 temperature: Centidegrees::from_raw(w_temperature),
             })

@@ -633,10 +633,7 @@ pub mod unasked {
             }
         }
         fn checksum_ok(frame: &[u8]) -> bool {
-            match frame.len().checked_sub(1) {
-                rt::Some(n) if n > 0 => rt::check_sum(frame, n, &FRAME, frame_sum),
-                _ => false,
-            }
+            FRAME.checksum_ok(frame, frame_sum)
         }
     }
     /// A streaming decoder for this protocol: see [`busspec_runtime::stream`].
@@ -679,6 +676,8 @@ pub mod unasked {
         pub const DESC: rt::MessageDesc = rt::desc(Self::NAME, 0x40, 1, &[5]);
         pub const CHANNEL: rt::Range<usize> = 3..4;
         pub const CHANNEL_DESC: rt::FieldDesc = rt::field(Self::NAME, "channel");
+        pub const CHANNEL_CHECK: rt::FieldCheck = rt::check(&Self::CHANNEL_DESC, 3)
+            .range(0, 3);
         pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
             f("channel", rt::Int(self.channel as i64));
         }
@@ -689,7 +688,7 @@ pub mod unasked {
         #[inline(always)]
         fn write(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             let Self { channel: v_channel } = *self;
-            rt::encode_in_range("channel", v_channel, 0, 3)?;
+            rt::encode_in_range(&Self::CHANNEL_CHECK, v_channel)?;
             let out = rt::frame_mut::<5>(buf, &[0xAA, address, 0x40])?;
             out[3] = v_channel;
             rt::Ok(rt::seal_sum8_head(out, 3, address.wrapping_add(0xEA)))
@@ -698,7 +697,7 @@ pub mod unasked {
         #[inline(always)]
         fn from_frame(frame: &[u8]) -> rt::DecodeResult<Self> {
             let frame = rt::fixed::<5>(frame, &Self::DESC)?;
-            rt::in_range(&Self::CHANNEL_DESC, 3, frame[3], 0, 3)?;
+            rt::in_range(&Self::CHANNEL_CHECK, frame[3])?;
             rt::Ok(Self { channel: frame[3] })
         }
     }
@@ -737,6 +736,8 @@ pub mod unasked {
         pub const CHANNEL: rt::Range<usize> = 3..4;
         pub const VALUE: rt::Range<usize> = 4..6;
         pub const CHANNEL_DESC: rt::FieldDesc = rt::field(Self::NAME, "channel");
+        pub const CHANNEL_CHECK: rt::FieldCheck = rt::check(&Self::CHANNEL_DESC, 3)
+            .follows(1, 1, "channel of the request");
         pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
             f("channel", rt::Int(self.channel as i64));
             f("value", rt::Int(self.value as i64));
@@ -768,14 +769,7 @@ pub mod unasked {
             v_channel: u8,
             r: &request::GetStatus,
         ) -> rt::DecodeResult<()> {
-            rt::following(
-                &Self::CHANNEL_DESC,
-                3,
-                v_channel,
-                r.channel as i64,
-                (1, 1),
-                "channel of the request",
-            )?;
+            rt::following(&Self::CHANNEL_CHECK, v_channel, r.channel as i64)?;
             rt::Ok(())
         }
     }

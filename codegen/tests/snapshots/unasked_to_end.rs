@@ -246,6 +246,8 @@ pub mod unasked_to_end {
         base: 4,
         at: 3,
         width: 1,
+        le: false,
+        signed: false,
         count: rt::CountBy::End,
         min: 0,
         max: 16,
@@ -485,7 +487,7 @@ pub mod unasked_to_end {
                 0x72 => {
                     let (_, elements, _) = REPEAT_LOG.split::<3>(frame)?;
                     rt::Ok(Self::Log {
-                        text: REPEAT_LOG.view::<u8, 16>(elements, false, false)?,
+                        text: REPEAT_LOG.view::<u8, 16>(elements)?,
                     })
                 }
                 _ => rt::Err(RESPONSE_CODE.unknown(frame)),
@@ -629,10 +631,7 @@ pub mod unasked_to_end {
             ResponseView::decode_for(frame, request).map(|_| ())
         }
         fn checksum_ok(frame: &[u8]) -> bool {
-            match frame.len().checked_sub(1) {
-                rt::Some(n) if n > 0 => rt::check_sum(frame, n, &FRAME, frame_sum),
-                _ => false,
-            }
+            FRAME.checksum_ok(frame, frame_sum)
         }
     }
     /// A streaming decoder for this protocol: see [`busspec_runtime::stream`].
@@ -646,6 +645,8 @@ pub mod unasked_to_end {
         pub const DESC: rt::MessageDesc = rt::desc(Self::NAME, 0x40, 1, &[5]);
         pub const CHANNEL: rt::Range<usize> = 3..4;
         pub const CHANNEL_DESC: rt::FieldDesc = rt::field(Self::NAME, "channel");
+        pub const CHANNEL_CHECK: rt::FieldCheck = rt::check(&Self::CHANNEL_DESC, 3)
+            .range(0, 3);
         pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
             f("channel", rt::Int(self.channel as i64));
         }
@@ -656,7 +657,7 @@ pub mod unasked_to_end {
         #[inline(always)]
         fn write(&self, address: u8, out: &mut [u8; 5]) -> rt::EncodeResult {
             let Self { channel: v_channel } = *self;
-            rt::encode_in_range("channel", v_channel, 0, 3)?;
+            rt::encode_in_range(&Self::CHANNEL_CHECK, v_channel)?;
             let out = rt::head(out, &[0xAA, address, 0x40]);
             out[3] = v_channel;
             rt::Ok(rt::seal_sum8_head(out, 3, address.wrapping_add(0xEA)))
@@ -665,7 +666,7 @@ pub mod unasked_to_end {
         #[inline(always)]
         fn from_frame(frame: &[u8]) -> rt::DecodeResult<Self> {
             let frame = rt::fixed::<5>(frame, &Self::DESC)?;
-            rt::in_range(&Self::CHANNEL_DESC, 3, frame[3], 0, 3)?;
+            rt::in_range(&Self::CHANNEL_CHECK, frame[3])?;
             rt::Ok(Self { channel: frame[3] })
         }
     }
@@ -717,7 +718,7 @@ pub mod unasked_to_end {
             let Self { text: v_text } = *self;
             let frame_len = REPEAT_LOG.encode_len(v_text.len())?;
             let out = rt::frame_mut_len(buf, frame_len, &[0xAA, address, 0x72])?;
-            rt::write_elements(v_text.as_slice(), 1, false, &mut out[3..]);
+            REPEAT_LOG.write(v_text.as_slice(), &mut out[3..]);
             rt::Ok(rt::seal_sum8_len(out))
         }
         /// Reads this message from a frame whose framing and code are checked.
@@ -725,7 +726,7 @@ pub mod unasked_to_end {
         fn from_frame(frame: &[u8]) -> rt::DecodeResult<Self> {
             let (_, elements, _) = REPEAT_LOG.split::<3>(frame)?;
             rt::Ok(Self {
-                text: REPEAT_LOG.elements::<u8, 16>(elements, false, false)?,
+                text: REPEAT_LOG.elements::<u8, 16>(elements)?,
             })
         }
     }

@@ -117,6 +117,8 @@ pub mod vario {
         base: 8,
         at: 7,
         width: 2,
+        le: false,
+        signed: false,
         count: rt::CountBy::Bytes(rt::CountField {
             name: "byte_count",
             at: 6,
@@ -302,6 +304,8 @@ pub mod vario {
         base: 6,
         at: 5,
         width: 2,
+        le: false,
+        signed: false,
         count: rt::CountBy::End,
         min: 1,
         max: 16,
@@ -519,7 +523,7 @@ pub mod vario {
             match frame[4] {
                 0x01 => {
                     let frame = rt::fixed::<9>(frame, &request::Read::DESC)?;
-                    rt::in_range(&request::Read::QUANTITY_DESC, 7, frame[7], 1, 16)?;
+                    rt::in_range(&request::Read::QUANTITY_CHECK, frame[7])?;
                     rt::Ok(Self::Read {
                         first: u16::from_be_bytes([frame[5], frame[6]]),
                         quantity: frame[7],
@@ -527,18 +531,15 @@ pub mod vario {
                 }
                 0x02 => {
                     let (frame, elements, _) = REPEAT_WRITE.split::<7>(frame)?;
-                    rt::in_range(&request::Write::QUANTITY_DESC, 5, frame[5], 1, 16)?;
+                    rt::in_range(&request::Write::QUANTITY_CHECK, frame[5])?;
                     rt::following(
-                        &request::Write::BYTE_COUNT_DESC,
-                        6,
+                        &request::Write::BYTE_COUNT_CHECK,
                         frame[6],
                         frame[5] as i64,
-                        (2, 1),
-                        "2 × quantity",
                     )?;
                     rt::Ok(Self::Write {
                         quantity: frame[5],
-                        values: REPEAT_WRITE.view::<u16, 16>(elements, false, false)?,
+                        values: REPEAT_WRITE.view::<u16, 16>(elements)?,
                     })
                 }
                 0x03 => {
@@ -633,8 +634,7 @@ pub mod vario {
                 0x01 => {
                     let (_, elements, _) = REPEAT_READ_REPLY.split::<5>(frame)?;
                     rt::Ok(Self::ReadReply {
-                        values: REPEAT_READ_REPLY
-                            .view::<u16, 16>(elements, false, false)?,
+                        values: REPEAT_READ_REPLY.view::<u16, 16>(elements)?,
                     })
                 }
                 0x81 => {
@@ -853,10 +853,7 @@ pub mod vario {
             ResponseView::decode_for(frame, request).map(|_| ())
         }
         fn checksum_ok(frame: &[u8]) -> bool {
-            match frame.len().checked_sub(1) {
-                rt::Some(n) if n > 0 => rt::check_sum(frame, n, &FRAME, frame_sum),
-                _ => false,
-            }
+            FRAME.checksum_ok(frame, frame_sum)
         }
     }
     /// A streaming decoder for this protocol: see [`busspec_runtime::stream`].
@@ -871,6 +868,8 @@ pub mod vario {
         pub const FIRST: rt::Range<usize> = 5..7;
         pub const QUANTITY: rt::Range<usize> = 7..8;
         pub const QUANTITY_DESC: rt::FieldDesc = rt::field(Self::NAME, "quantity");
+        pub const QUANTITY_CHECK: rt::FieldCheck = rt::check(&Self::QUANTITY_DESC, 7)
+            .range(1, 16);
         pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
             f("first", rt::Int(self.first as i64));
             f("quantity", rt::Int(self.quantity as i64));
@@ -882,7 +881,7 @@ pub mod vario {
         #[inline(always)]
         fn write(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             let Self { first: v_first, quantity: v_quantity } = *self;
-            rt::encode_in_range("quantity", v_quantity, 1, 16)?;
+            rt::encode_in_range(&Self::QUANTITY_CHECK, v_quantity)?;
             let out = rt::frame_mut::<9>(buf, &[0xA5, 0x5A, address, 0x05, 0x01])?;
             out[5..7].copy_from_slice(&v_first.to_be_bytes());
             out[7] = v_quantity;
@@ -892,7 +891,7 @@ pub mod vario {
         #[inline(always)]
         fn from_frame(frame: &[u8]) -> rt::DecodeResult<Self> {
             let frame = rt::fixed::<9>(frame, &Self::DESC)?;
-            rt::in_range(&Self::QUANTITY_DESC, 7, frame[7], 1, 16)?;
+            rt::in_range(&Self::QUANTITY_CHECK, frame[7])?;
             rt::Ok(Self {
                 first: u16::from_be_bytes([frame[5], frame[6]]),
                 quantity: frame[7],
@@ -906,9 +905,13 @@ pub mod vario {
         pub const MAX_LEN: usize = 40;
         pub const DESC: rt::MessageDesc = rt::desc(Self::NAME, 0x02, 1, &[8]);
         pub const QUANTITY: rt::Range<usize> = 5..6;
-        pub const VALUES_DESC: rt::FieldDesc = rt::field(Self::NAME, "values");
         pub const QUANTITY_DESC: rt::FieldDesc = rt::field(Self::NAME, "quantity");
+        pub const QUANTITY_CHECK: rt::FieldCheck = rt::check(&Self::QUANTITY_DESC, 5)
+            .range(1, 16);
+        pub const VALUES_DESC: rt::FieldDesc = rt::field(Self::NAME, "values");
         pub const BYTE_COUNT_DESC: rt::FieldDesc = rt::field(Self::NAME, "byte_count");
+        pub const BYTE_COUNT_CHECK: rt::FieldCheck = rt::check(&Self::BYTE_COUNT_DESC, 6)
+            .follows(2, 1, "2 × quantity");
         pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
             f("quantity", rt::Int(self.quantity as i64));
             f("values", rt::List(self.values.elements()));
@@ -924,7 +927,7 @@ pub mod vario {
             let out = rt::frame_mut_len(buf, frame_len, &[0xA5, 0x5A, address])?;
             LENGTH.put(out)?;
             out[4] = 0x02;
-            rt::encode_in_range("quantity", v_quantity, 1, 16)?;
+            rt::encode_in_range(&Self::QUANTITY_CHECK, v_quantity)?;
             let w_quantity: u8 = v_quantity;
             out[5] = w_quantity;
             let w_byte_count: u8 = rt::fits(
@@ -935,25 +938,18 @@ pub mod vario {
             )? as u8;
             REPEAT_WRITE.encode_agrees(v_values.len(), w_byte_count as u64)?;
             out[6] = w_byte_count;
-            rt::write_elements(v_values.as_slice(), 2, false, &mut out[7..]);
+            REPEAT_WRITE.write(v_values.as_slice(), &mut out[7..]);
             rt::Ok(out.len())
         }
         /// Reads this message from a frame whose framing and code are checked.
         #[inline(always)]
         fn from_frame(frame: &[u8]) -> rt::DecodeResult<Self> {
             let (frame, elements, _) = REPEAT_WRITE.split::<7>(frame)?;
-            rt::in_range(&Self::QUANTITY_DESC, 5, frame[5], 1, 16)?;
-            rt::following(
-                &Self::BYTE_COUNT_DESC,
-                6,
-                frame[6],
-                frame[5] as i64,
-                (2, 1),
-                "2 × quantity",
-            )?;
+            rt::in_range(&Self::QUANTITY_CHECK, frame[5])?;
+            rt::following(&Self::BYTE_COUNT_CHECK, frame[6], frame[5] as i64)?;
             rt::Ok(Self {
                 quantity: frame[5],
-                values: REPEAT_WRITE.elements::<u16, 16>(elements, false, false)?,
+                values: REPEAT_WRITE.elements::<u16, 16>(elements)?,
             })
         }
     }
@@ -1013,7 +1009,7 @@ pub mod vario {
             let out = rt::frame_mut_len(buf, frame_len, &[0xA5, 0x5A, address])?;
             LENGTH.put(out)?;
             out[4] = 0x01;
-            rt::write_elements(v_values.as_slice(), 2, false, &mut out[5..]);
+            REPEAT_READ_REPLY.write(v_values.as_slice(), &mut out[5..]);
             rt::Ok(out.len())
         }
         /// Reads this message from a frame whose framing and code are checked.
@@ -1021,7 +1017,7 @@ pub mod vario {
         fn from_frame(frame: &[u8]) -> rt::DecodeResult<Self> {
             let (_, elements, _) = REPEAT_READ_REPLY.split::<5>(frame)?;
             rt::Ok(Self {
-                values: REPEAT_READ_REPLY.elements::<u16, 16>(elements, false, false)?,
+                values: REPEAT_READ_REPLY.elements::<u16, 16>(elements)?,
             })
         }
         /// Checks the fields this response takes from its request, `read` (`r`).

@@ -503,6 +503,8 @@ pub mod vesc {
         base: 11,
         at: 8,
         width: 1,
+        le: false,
+        signed: false,
         count: rt::CountBy::End,
         min: 0,
         max: 512,
@@ -785,6 +787,8 @@ pub mod vesc {
         base: 9,
         at: 6,
         width: 1,
+        le: false,
+        signed: false,
         count: rt::CountBy::End,
         min: 0,
         max: 60,
@@ -1110,10 +1114,7 @@ pub mod vesc {
             let rt::Ok((frame, _)) = LONG.lay_out(frame, &mut laid) else {
                 return false;
             };
-            match frame.len().checked_sub(3) {
-                rt::Some(n) if n > 0 => rt::check_sum(frame, n, &FRAME, frame_sum),
-                _ => false,
-            }
+            FRAME.checksum_ok(frame, frame_sum)
         }
     }
     /// A streaming decoder for this protocol: see [`busspec_runtime::stream`].
@@ -1153,7 +1154,7 @@ pub mod vesc {
             LENGTH.put(out)?;
             out[3] = 0x03;
             out[4..8].copy_from_slice(&v_offset.to_be_bytes());
-            rt::write_elements(v_data.as_slice(), 1, false, &mut out[8..]);
+            REPEAT_WRITE_NEW_APP_DATA.write(v_data.as_slice(), &mut out[8..]);
             rt::Ok(out.len())
         }
         /// Reads this message from a frame whose framing and code are checked.
@@ -1162,8 +1163,7 @@ pub mod vesc {
             let (frame, elements, _) = REPEAT_WRITE_NEW_APP_DATA.split::<8>(frame)?;
             rt::Ok(Self {
                 offset: u32::from_be_bytes([frame[4], frame[5], frame[6], frame[7]]),
-                data: REPEAT_WRITE_NEW_APP_DATA
-                    .elements::<u8, 512>(elements, false, false)?,
+                data: REPEAT_WRITE_NEW_APP_DATA.elements::<u8, 512>(elements)?,
             })
         }
     }
@@ -1365,7 +1365,7 @@ pub mod vesc {
             out[3] = 0x00;
             out[4] = v_fw_major;
             out[5] = v_fw_minor;
-            rt::write_elements(v_rest.as_slice(), 1, false, &mut out[6..]);
+            REPEAT_FW_VERSION_REPLY.write(v_rest.as_slice(), &mut out[6..]);
             rt::Ok(out.len())
         }
         /// Reads this message from a frame whose framing and code are checked.
@@ -1375,7 +1375,7 @@ pub mod vesc {
             rt::Ok(Self {
                 fw_major: frame[4],
                 fw_minor: frame[5],
-                rest: REPEAT_FW_VERSION_REPLY.elements::<u8, 60>(elements, false, false)?,
+                rest: REPEAT_FW_VERSION_REPLY.elements::<u8, 60>(elements)?,
             })
         }
     }
@@ -1387,6 +1387,7 @@ pub mod vesc {
         pub const OK: rt::Range<usize> = 4..5;
         pub const OFFSET: rt::Range<usize> = 5..9;
         pub const OK_DESC: rt::FieldDesc = rt::field(Self::NAME, "ok");
+        pub const OK_CHECK: rt::FieldCheck = rt::check(&Self::OK_DESC, 4).range(0, 1);
         pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
             f("ok", rt::Int(self.ok as i64));
             f("offset", rt::Int(self.offset as i64));
@@ -1398,7 +1399,7 @@ pub mod vesc {
         #[inline(always)]
         fn write(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             let Self { ok: v_ok, offset: v_offset } = *self;
-            rt::encode_in_range("ok", v_ok, 0, 1)?;
+            rt::encode_in_range(&Self::OK_CHECK, v_ok)?;
             let out = rt::frame_mut::<12>(buf, &[0x02, 0x00, 0x06, 0x03])?;
             out[4] = v_ok;
             out[5..9].copy_from_slice(&v_offset.to_be_bytes());
@@ -1408,7 +1409,7 @@ pub mod vesc {
         #[inline(always)]
         fn from_frame(frame: &[u8]) -> rt::DecodeResult<Self> {
             let frame = rt::fixed::<12>(frame, &Self::DESC)?;
-            rt::in_range(&Self::OK_DESC, 4, frame[4], 0, 1)?;
+            rt::in_range(&Self::OK_CHECK, frame[4])?;
             rt::Ok(Self {
                 ok: frame[4],
                 offset: u32::from_be_bytes([frame[5], frame[6], frame[7], frame[8]]),

@@ -330,6 +330,8 @@ pub mod xbee_api2 {
         base: 8,
         at: 7,
         width: 1,
+        le: false,
+        signed: false,
         count: rt::CountBy::End,
         min: 0,
         max: 20,
@@ -340,6 +342,8 @@ pub mod xbee_api2 {
         base: 18,
         at: 17,
         width: 1,
+        le: false,
+        signed: false,
         count: rt::CountBy::End,
         min: 0,
         max: 72,
@@ -547,6 +551,8 @@ pub mod xbee_api2 {
         base: 9,
         at: 8,
         width: 1,
+        le: false,
+        signed: false,
         count: rt::CountBy::End,
         min: 0,
         max: 20,
@@ -557,6 +563,8 @@ pub mod xbee_api2 {
         base: 16,
         at: 15,
         width: 1,
+        le: false,
+        signed: false,
         count: rt::CountBy::End,
         min: 0,
         max: 72,
@@ -870,10 +878,7 @@ pub mod xbee_api2 {
             let rt::Some(frame) = plain.get(..un.len) else {
                 return false;
             };
-            match frame.len().checked_sub(1) {
-                rt::Some(n) if n > 0 => rt::check_sum(frame, n, &FRAME, frame_sum),
-                _ => false,
-            }
+            FRAME.checksum_ok(frame, frame_sum)
         }
     }
     /// A streaming decoder for this protocol: see [`busspec_runtime::stream`].
@@ -911,7 +916,7 @@ pub mod xbee_api2 {
             out[3] = 0x08;
             out[4] = v_frame_id;
             out[5..7].copy_from_slice(&v_command.0);
-            rt::write_elements(v_parameter.as_slice(), 1, false, &mut out[7..]);
+            REPEAT_AT_COMMAND.write(v_parameter.as_slice(), &mut out[7..]);
             rt::Ok(out.len())
         }
         /// Reads this message from a frame whose framing and code are checked.
@@ -921,7 +926,7 @@ pub mod xbee_api2 {
             rt::Ok(Self {
                 frame_id: frame[4],
                 command: rt::Ascii(frame[5..7].try_into().unwrap_or([0; 2])),
-                parameter: REPEAT_AT_COMMAND.elements::<u8, 20>(elements, false, false)?,
+                parameter: REPEAT_AT_COMMAND.elements::<u8, 20>(elements)?,
             })
         }
     }
@@ -968,7 +973,7 @@ pub mod xbee_api2 {
             out[13..15].copy_from_slice(&v_destination16.to_be_bytes());
             out[15] = v_radius;
             out[16] = v_options;
-            rt::write_elements(v_data.as_slice(), 1, false, &mut out[17..]);
+            REPEAT_TRANSMIT_REQUEST.write(v_data.as_slice(), &mut out[17..]);
             rt::Ok(out.len())
         }
         /// Reads this message from a frame whose framing and code are checked.
@@ -990,7 +995,7 @@ pub mod xbee_api2 {
                 destination16: u16::from_be_bytes([frame[13], frame[14]]),
                 radius: frame[15],
                 options: frame[16],
-                data: REPEAT_TRANSMIT_REQUEST.elements::<u8, 72>(elements, false, false)?,
+                data: REPEAT_TRANSMIT_REQUEST.elements::<u8, 72>(elements)?,
             })
         }
     }
@@ -1029,7 +1034,7 @@ pub mod xbee_api2 {
             out[4] = v_frame_id;
             out[5..7].copy_from_slice(&v_command.0);
             out[7] = v_status.raw();
-            rt::write_elements(v_data.as_slice(), 1, false, &mut out[8..]);
+            REPEAT_AT_RESPONSE.write(v_data.as_slice(), &mut out[8..]);
             rt::Ok(out.len())
         }
         /// Reads this message from a frame whose framing and code are checked.
@@ -1040,7 +1045,7 @@ pub mod xbee_api2 {
                 frame_id: frame[4],
                 command: rt::Ascii(frame[5..7].try_into().unwrap_or([0; 2])),
                 status: AtStatus::from_raw(frame[7]),
-                data: REPEAT_AT_RESPONSE.elements::<u8, 20>(elements, false, false)?,
+                data: REPEAT_AT_RESPONSE.elements::<u8, 20>(elements)?,
             })
         }
     }
@@ -1159,7 +1164,7 @@ pub mod xbee_api2 {
             out[4..12].copy_from_slice(&v_source64.to_be_bytes());
             out[12..14].copy_from_slice(&v_source16.to_be_bytes());
             out[14] = v_options;
-            rt::write_elements(v_data.as_slice(), 1, false, &mut out[15..]);
+            REPEAT_RECEIVE_PACKET.write(v_data.as_slice(), &mut out[15..]);
             rt::Ok(out.len())
         }
         /// Reads this message from a frame whose framing and code are checked.
@@ -1179,7 +1184,7 @@ pub mod xbee_api2 {
                 ]),
                 source16: u16::from_be_bytes([frame[12], frame[13]]),
                 options: frame[14],
-                data: REPEAT_RECEIVE_PACKET.elements::<u8, 72>(elements, false, false)?,
+                data: REPEAT_RECEIVE_PACKET.elements::<u8, 72>(elements)?,
             })
         }
     }
