@@ -1064,7 +1064,13 @@ fn decode_in<'p>(
     }
     // Offsets count from the frame's first byte, after any preamble.
     let wire = p.framing.after_preamble(wire);
-    let un = escape::unescape(p, wire)?;
+    // Each direction's escaped region is the same wherever a frame is decoded both ways (the
+    // validator refuses `end` or a leading `start` in one direction only beside escaping).
+    let d = match limits.directions {
+        [d] => *d,
+        _ => Direction::Request,
+    };
+    let un = escape::unescape_as(p, d, wire)?;
     // A frame of either form of a length field the start byte chooses, in the IR's layout.
     let c = crate::long::canonical(p, &un.frame)?;
     decode_plain(p, limits, lookup, (reply_to, covered), &c.frame, spare)
@@ -1128,7 +1134,9 @@ fn decode_plain<'p>(
             found: wire.len(),
         });
     }
-    check_end(p, wire)?;
+    // Each direction's end bytes are the same wherever a frame is decoded both ways (`end` in
+    // one direction only is refused by the validator).
+    check_end(p, d0, wire)?;
     // A direction refused for its checksum or address alone is set aside with its refusal:
     // where the other is refused too, the refusal that got further is reported
     // ([`progress`], the first direction's on a tie), as the generated stream decoder, which
@@ -1324,10 +1332,12 @@ fn decode_kept<'p>(
     };
 
     // A frame without a checksum (`checksum: none`) has its code up to its end.
-    let clen = if unchecked {
-        0
-    } else {
-        p.framing.trailer_len()
+    let clen = |d: Direction| {
+        if unchecked {
+            0
+        } else {
+            p.framing.trailer_len_of(d)
+        }
     };
     let code_fits = |r: &MessageRef| {
         let m = p.message(*r);
@@ -1335,7 +1345,7 @@ fn decode_kept<'p>(
         // Byte by byte: a code is a byte or two, shorter than a call to compare slices. It
         // lies before the checksum: a checksum byte is no code byte.
         kept(r.direction)
-            && o.code + m.code.len() + clen <= wire.len()
+            && o.code + m.code.len() + clen(r.direction) <= wire.len()
             && (m.code.iter().enumerate()).all(|(i, c)| wire.get(o.code + i) == Some(c))
     };
     // In the lookup, a variable message stands under every length it can have: its frame
@@ -1400,7 +1410,7 @@ fn decode_kept<'p>(
             .flat_map(|d| p.framing.direction(*d).code_lengths.iter().copied())
             .max()
             .unwrap_or(1);
-        let end = (o.code + longest).min(wire.len().saturating_sub(clen));
+        let end = (o.code + longest).min(wire.len().saturating_sub(clen(d0)));
         let code = wire.get(o.code..end.max(o.code)).unwrap_or(&[]).to_vec();
         return Err(DecodeError::UnknownCode {
             offset: o.code,
@@ -1635,7 +1645,7 @@ fn decode_as_in<'p>(
     over: Over,
     wire: &[u8],
 ) -> Result<Frame<'p>, DecodeError> {
-    let un = escape::unescape(p, p.framing.after_preamble(wire))?;
+    let un = escape::unescape_as(p, r.direction, p.framing.after_preamble(wire))?;
     let c = crate::long::canonical(p, &un.frame)?;
     decode_as_unescaped(p, r, over, &c.frame).map_err(|e| un.locate(c.locate(e)))
 }
@@ -1699,7 +1709,7 @@ fn decode_as_unescaped<'p>(
             direction: Some(m.direction),
         });
     }
-    check_end(p, wire)?;
+    check_end(p, m.direction, wire)?;
     match (m.over_request, over) {
         _ if m.unchecked => {}
         (Some(from), Over::Check(covered)) => check_over_request(p, m, from, covered, wire)?,
@@ -1729,13 +1739,13 @@ pub(crate) fn check_checksum(
     wire: &[u8],
 ) -> Result<(), DecodeError> {
     let c = &p.framing.checksum;
-    if wire.len() < p.framing.trailer_len() {
+    if wire.len() < p.framing.trailer_len_of(d) {
         return Err(DecodeError::Truncated {
-            needed: p.framing.trailer_len(),
+            needed: p.framing.trailer_len_of(d),
             found: wire.len(),
         });
     }
-    let at = p.framing.checksum_at(wire.len());
+    let at = p.framing.checksum_at_of(d, wire.len());
     let covered = wire.get(c.covers_from_of(d)..at).unwrap_or(&[]);
     // The prepared tables know no extra byte.
     let expected = match prepared {
@@ -1765,7 +1775,7 @@ fn check_over_request(
     wire: &[u8],
 ) -> Result<(), DecodeError> {
     let c = &p.framing.checksum;
-    let at = p.framing.checksum_at(wire.len());
+    let at = p.framing.checksum_at_of(m.direction, wire.len());
     let Some(request) = covered else {
         return Err(DecodeError::NeedsRequest {
             message: m.name.clone(),
@@ -1825,11 +1835,15 @@ pub fn reseal_as(p: &Protocol, d: Direction, frame: &mut [u8]) {
 /// layout says (0: a frame as the IR lays it out).
 fn reseal_from(p: &Protocol, d: Direction, frame: &mut [u8], back: usize) {
     let (c, f) = (&p.framing.checksum, &p.framing);
-    if frame.len() < f.trailer_len() {
+    if frame.len() < f.trailer_len_of(d) {
         return;
     }
-    let (at, end) = (f.checksum_at(frame.len()), f.end_at(frame.len()));
-    frame[end..end + f.end.len()].copy_from_slice(&f.end);
+    let (at, end) = (
+        f.checksum_at_of(d, frame.len()),
+        f.end_at_of(d, frame.len()),
+    );
+    let bytes = f.end_of(d);
+    frame[end..end + bytes.len()].copy_from_slice(bytes);
     let from = c.covers_from_of(d).saturating_sub(back);
     let sum = c.compute(frame.get(from..at).unwrap_or(&[]));
     write_uint(sum, &mut frame[at..at + c.len()], c.byte_order);
@@ -1837,9 +1851,9 @@ fn reseal_from(p: &Protocol, d: Direction, frame: &mut [u8], back: usize) {
 
 /// Refuses a frame that does not end in the end bytes (the first that differs); the frame is
 /// at least as long as the shortest.
-fn check_end(p: &Protocol, wire: &[u8]) -> Result<(), DecodeError> {
-    let end = &p.framing.end;
-    let from = p.framing.end_at(wire.len());
+fn check_end(p: &Protocol, d: Direction, wire: &[u8]) -> Result<(), DecodeError> {
+    let end = p.framing.end_of(d);
+    let from = p.framing.end_at_of(d, wire.len());
     for (i, (&found, &expected)) in wire[from..].iter().zip(end).enumerate() {
         if found != expected {
             return Err(DecodeError::BadEnd {
@@ -2406,7 +2420,7 @@ pub fn trailer_of(p: &Protocol, m: &Message) -> usize {
     if m.unchecked {
         0
     } else {
-        p.framing.trailer_len()
+        p.framing.trailer_len_of(m.direction)
     }
 }
 
@@ -3366,7 +3380,8 @@ fn encode_values(
                 message: m.name.clone(),
             });
         };
-        let (c, at) = (&p.framing.checksum, p.framing.checksum_at(out.len()));
+        let c = &p.framing.checksum;
+        let at = p.framing.checksum_at_of(m.direction, out.len());
         let sum = c.compute_after(request, out.get(from..at).unwrap_or(&[]));
         write_uint(sum, &mut out[at..at + c.len()], c.byte_order);
     }
@@ -3394,7 +3409,7 @@ fn encode_values(
         })?;
     }
     if p.framing.escaping.is_some() {
-        return Ok(escape::escape(p, &out));
+        return Ok(escape::escape_as(p, r.direction, &out));
     }
     // Short where the length fits the short form, long otherwise (`framing.length.long`).
     let mut out = crate::long::travel(p, out);
@@ -3594,7 +3609,7 @@ fn reorder(p: &Protocol, m: &Message, text: &[u8], order: ByteOrder) -> Vec<u8> 
         }
     }
     let c = &p.framing.checksum;
-    let at = p.framing.checksum_at(wire.len());
+    let at = p.framing.checksum_at_of(m.direction, wire.len());
     if c.len() > 1 && flip(c.byte_order) && !m.unchecked {
         if let Some(s) = wire.get_mut(at..at + c.len()) {
             s.reverse();

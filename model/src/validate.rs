@@ -1501,6 +1501,9 @@ fn framing_by_direction(
     };
     framing.response_layout = response.layout;
     framing.response_heads = response.heads;
+    // Each direction's own end bytes (the same today: `end` in one direction only is refused
+    // above).
+    framing.response_end = response.end;
     framing
 }
 
@@ -1894,6 +1897,7 @@ fn framing_plain(
         start,
         sync,
         response_sync,
+        response_end: end.clone(),
         end,
         length,
         address: Address {
