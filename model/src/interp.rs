@@ -1064,10 +1064,39 @@ fn decode_in<'p>(
     }
     // Offsets count from the frame's first byte, after any preamble.
     let wire = p.framing.after_preamble(wire);
-    // Each direction's escaped region is the same wherever a frame is decoded both ways (the
-    // validator refuses `end` or a leading `start` in one direction only beside escaping).
+    // Where the end bytes (and so the escaped bytes) differ by direction (responses without
+    // start or end bytes beside flagged requests), a frame is unescaped and decoded as each
+    // direction on its own: the one it decodes as, ambiguous where it decodes both ways, else
+    // refused for the reason that got further (the first direction's on a tie).
     let d = match limits.directions {
         [d] => *d,
+        [a, b] if p.framing.end_by_direction() => {
+            let mut one = |d: Direction| {
+                decode_in(
+                    p,
+                    Limits::of(p, Some(d)),
+                    lookup,
+                    reply_to,
+                    covered,
+                    wire,
+                    spare,
+                )
+            };
+            return match (one(*a), one(*b)) {
+                (Ok(x), Ok(y)) => Err(DecodeError::Ambiguous {
+                    candidates: vec![
+                        p.message(x.message).name.clone(),
+                        p.message(y.message).name.clone(),
+                    ],
+                }),
+                (Ok(x), Err(_)) | (Err(_), Ok(x)) => Ok(x),
+                (Err(e0), Err(e1)) => Err(if progress(&e1) > progress(&e0) {
+                    e1
+                } else {
+                    e0
+                }),
+            };
+        }
         _ => Direction::Request,
     };
     let un = escape::unescape_as(p, d, wire)?;

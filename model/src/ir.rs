@@ -567,10 +567,14 @@ impl Framing {
             self.escaping.as_ref().map(|e| &e.kind),
             Some(EscapeKind::Bytes { .. } | EscapeKind::Cobs)
         );
-        let framed = [&self.layout, &self.response_layout]
-            .iter()
-            .all(|l| l.first() == Some(&Part::Start) && l.last() == Some(&Part::End))
-            && self.response_sync == self.sync;
+        // Every direction's frames between the flags, or requests between them and responses
+        // with neither start nor end bytes (F.Port's uplink: stuffed, found by its length
+        // between a poll's closing flag and the next frame's opening one).
+        let flagged = |l: &[Part]| l.first() == Some(&Part::Start) && l.last() == Some(&Part::End);
+        let bare = |l: &[Part]| !l.contains(&Part::Start) && !l.contains(&Part::End);
+        let framed = flagged(&self.layout)
+            && ((flagged(&self.response_layout) && self.response_sync == self.sync)
+                || bare(&self.response_layout));
         match (self.sync.as_slice(), self.end.as_slice()) {
             ([s], [e]) if escaped && framed && s == e => Some(*s),
             _ => None,

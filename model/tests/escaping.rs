@@ -545,9 +545,8 @@ fn fport_frames_check_their_end_around_sum() {
 /// The end bytes and the escaped region are each direction's own in the IR
 /// (`Framing::end_of`, `escaped_region_of`): a downlink frame of F.Port is escaped between its
 /// flags, an uplink frame (no start or end byte in its direction's layout) from its first
-/// byte to its last, and each engine's escaping by direction stuffs and unstuffs it so. The
-/// validator still refuses such a spec (`layout_dir_fport_uplink`): the IR is made by hand
-/// from fixture `fport`.
+/// byte to its last, and each engine's escaping by direction stuffs and unstuffs it so. The IR
+/// is made by hand from fixture `fport`, and is what the validator makes of `fport_both`.
 #[test]
 fn end_bytes_and_escaped_region_are_each_directions() {
     use busspec_model::ir::Part;
@@ -607,4 +606,12 @@ fn end_bytes_and_escaped_region_are_each_directions() {
         ),
         parse_hex("7E 7D 5E 7E").unwrap()
     );
+    let both = fixture("fport_both");
+    let g = &both.framing;
+    assert_eq!(
+        (&g.response_layout, &g.response_sync, &g.response_end),
+        (&f.response_layout, &f.response_sync, &f.response_end)
+    );
+    assert_eq!((&g.sync, &g.end), (&f.sync, &f.end));
+    assert_eq!(g.shared_flag(), Some(0x7E));
 }
