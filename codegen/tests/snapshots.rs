@@ -503,7 +503,10 @@ fn escaped_without_start_or_end_generates_its_snapshot() {
 /// `snapshots_compile.rs` compiles it and holds it to the interpreter).
 #[test]
 fn escaped_and_ended_by_direction_generates_its_snapshot() {
-    check("model/tests/fixtures/valid/fport_both.yaml", "fport_both.rs");
+    check(
+        "model/tests/fixtures/valid/fport_both.yaml",
+        "fport_both.rs",
+    );
 }
 
 /// Responses sent unasked (`unasked: true`): `Response::is_unasked` and the

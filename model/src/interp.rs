@@ -1090,11 +1090,16 @@ fn decode_in<'p>(
                     ],
                 }),
                 (Ok(x), Err(_)) | (Err(_), Ok(x)) => Ok(x),
-                (Err(e0), Err(e1)) => Err(if progress(&e1) > progress(&e0) {
-                    e1
-                } else {
-                    e0
-                }),
+                // A direction refused at its start bytes, then one refused at an escape, got
+                // less far than one whose frame unescaped and was checked.
+                (Err(e0), Err(e1)) => {
+                    let rank = |e: &DecodeError| match e {
+                        DecodeError::BadStart { .. } => 0,
+                        DecodeError::BadEscape { .. } => 1,
+                        e => 2 + progress(e),
+                    };
+                    Err(if rank(&e1) > rank(&e0) { e1 } else { e0 })
+                }
             };
         }
         _ => Direction::Request,

@@ -1530,7 +1530,12 @@ fn framing_by_direction(
         }) = &framing.escaping
         {
             let escaped = |b: &u8| map.iter().any(|(r, _)| r == b);
-            if let Some(b) = framing.sync.iter().chain(&framing.end).find(|b| !escaped(b)) {
+            if let Some(b) = framing
+                .sync
+                .iter()
+                .chain(&framing.end)
+                .find(|b| !escaped(b))
+            {
                 sink.error(
                     "framing.escaping",
                     format!("responses have no start or end bytes (their layout has neither): the requests' start and end bytes travel escaped so that none appears inside a response, and 0x{b:02X} does not"),

@@ -203,7 +203,12 @@ pub(super) fn emit_stream(p: &Protocol) -> TokenStream {
         // Requests and responses framed apart (F.Port's uplink: responses without start or
         // end bytes, found by their length field): each direction by its own escaping.
         let lens_fn = if p.framing.end_by_direction() {
-            quote!(rt::escaped_lens_by_direction(&ESCAPING, &RESPONSE_ESCAPING, head, MAX_FRAME_LEN))
+            quote!(rt::escaped_lens_by_direction(
+                &ESCAPING,
+                &RESPONSE_ESCAPING,
+                head,
+                MAX_FRAME_LEN
+            ))
         } else {
             quote!(rt::escaped_lens(&ESCAPING, head, MAX_FRAME_LEN))
         };
