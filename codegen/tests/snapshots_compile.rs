@@ -2000,11 +2000,11 @@ fn float_and_64_bit_snapshots_agree_with_the_interpreter() {
 /// grown, resealed (and its length field made to agree), escaped again; so that most reach the
 /// checks after the escapes, where the wire's own mutations mostly break an escape.
 fn escaped_mutations(p: &ir::Protocol, d: Direction, wire: &[u8]) -> Vec<Vec<u8>> {
-    let plain = busspec_model::escape::unescape_bytes(&p.framing, wire).unwrap();
+    let plain = busspec_model::escape::unescape_bytes_of(&p.framing, d, wire).unwrap();
     let mut out = Vec::new();
     for m in agree::mutations(p, d, &plain) {
-        out.push(busspec_model::escape::escape(p, &m));
-        out.push(busspec_model::escape::escape_bytes(&p.framing, &m));
+        out.push(busspec_model::escape::escape_as(p, d, &m));
+        out.push(busspec_model::escape::escape_bytes_of(&p.framing, d, &m));
     }
     out
 }

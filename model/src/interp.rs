@@ -3669,12 +3669,16 @@ pub fn wire_to_printed(p: &Protocol, m: &Message, wire: &[u8]) -> Vec<u8> {
     let frame = p.framing.after_preamble(wire);
     let mut out = wire[..wire.len() - frame.len()].to_vec();
     let wire = frame;
-    out.extend(match escape::unescape_bytes(&p.framing, wire) {
-        Ok(plain) if p.framing.escaping.is_some() => {
-            escape::escape_bytes(&p.framing, &reorder(p, m, &plain, p.byte_order))
-        }
-        _ => reorder(p, m, wire, p.byte_order),
-    });
+    out.extend(
+        match escape::unescape_bytes_of(&p.framing, m.direction, wire) {
+            Ok(plain) if p.framing.escaping.is_some() => escape::escape_bytes_of(
+                &p.framing,
+                m.direction,
+                &reorder(p, m, &plain, p.byte_order),
+            ),
+            _ => reorder(p, m, wire, p.byte_order),
+        },
+    );
     out
 }
 

@@ -5778,7 +5778,9 @@ fn frame_problems(
     // Wake-up bytes before the frame (0 to the preamble's most): the frame follows them.
     let printed = p.framing.after_preamble(&printed);
     // An escaped frame is read unescaped, reordered, and escaped again.
-    let printed = crate::escape::unescape_bytes(&p.framing, printed)
+    // By its direction's own escaped bytes (a response without start or end bytes is escaped
+    // from its first byte to its last).
+    let printed = crate::escape::unescape_bytes_of(&p.framing, m.direction, printed)
         .map_err(|e| format!("frame `{frame_text}`: {e}"))?;
     // Either form of a length field the start byte chooses, as the IR lays it out.
     let laid_out = crate::long::canonical(p, &printed)
@@ -5797,7 +5799,11 @@ fn frame_problems(
             m.payload_len
         ));
     }
-    let wire = crate::escape::escape_bytes(&p.framing, &interp::printed_to_wire(p, m, &printed));
+    let wire = crate::escape::escape_bytes_of(
+        &p.framing,
+        m.direction,
+        &interp::printed_to_wire(p, m, &printed),
+    );
     let frame = interp::decode_as_reply(p, r, covered, &wire).map_err(|e| e.to_string())?;
     // The frame must also decode on its own, without being told what it is (as a sniffer would),
     // unless only its request can tell it apart.

@@ -391,8 +391,8 @@ fn shared_flags_open_the_next_frame() {
 /// independent source quotes one byte for byte): 08 81 PRIM APPID DATA CRC without the 7E
 /// flags, stuffed throughout. Each unstuffs to a frame whose length counts the type and the
 /// payload and whose CRC is the one the fixture's checksum (`sum8_end_around`, from the length)
-/// computes; no 7E travels in one; and the language cannot carry the uplink yet (broken fixture
-/// `layout_dir_fport_uplink`), so the comment is checked here rather than by the examples.
+/// computes; and no 7E travels in one. Fixture `fport`'s own examples are the receiver's frames
+/// alone, so its comment is checked here (fixture `fport_both` has these frames as examples).
 #[test]
 fn fport_uplink_frames_in_the_comment_check() {
     let p = fixture("fport");

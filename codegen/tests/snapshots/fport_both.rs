@@ -26,7 +26,7 @@ pub mod fport_both {
     /// The document's date.
     pub const DOCUMENT_DATE: &str = "2017-11-21";
     /// SHA-256 of the spec file this module was generated from, lowercase hex (`sha256sum`).
-    pub const SPEC_SHA256: &str = "63588497e29d826d6868670ee582f1714e4c98a6b15147669772cca347ca13c5";
+    pub const SPEC_SHA256: &str = "6efc641a017ea4c672e017e2bef33193cb83b1d6d6e6e542d44e00dc10f776a5";
     /// The spec's text, exactly as this module was generated from it.
     pub const SPEC_YAML: &str = include_str!(
         "../../../model/tests/fixtures/valid/fport_both.yaml"
