@@ -1667,7 +1667,7 @@ fn bare_responses(seed: u64, text: &str) -> Option<String> {
     let hex = |b: u8| format!("{b:#04X}").replace("0X", "0x");
     let mut with = esc.clone();
     for b in sync {
-        if with.contains(&format!("bytes: [")) {
+        if with.contains("bytes: [") {
             let i = with.find("bytes: [")? + "bytes: [".len();
             let j = i + with[i..].find(']')?;
             if !with[i..j]
