@@ -104,6 +104,9 @@ fn cases() -> Vec<Case> {
         spec("model/tests/fixtures/valid/fport.yaml"),
         // Its uplink alone: escaped from the first byte, no flags, found by the length field.
         spec("model/tests/fixtures/valid/fport_uplink.yaml"),
+        // Both ways in one spec: requests between 7E flags, responses without them
+        // (`response_ends`, `response_escaping`).
+        spec("model/tests/fixtures/valid/fport_both.yaml"),
         // Wake-up bytes before frames (DL/T 645's preamble): the dissector skips them; its
         // payload travels +33H (`framing.transform`): shown transformed back.
         spec("model/tests/fixtures/valid/dlt645.yaml"),
@@ -226,7 +229,7 @@ fn out_of_spec(p: &Protocol, wire: &[u8], r: busspec_model::ir::MessageRef) -> V
         if f.special.iter().any(|s| s.value == v) {
             continue;
         }
-        let mut w = laid(p, wire);
+        let mut w = laid(p, r.direction, wire);
         let mut at = f.frame_at(&m.layout);
         if f.present.is_some() {
             // An optional field: where the frame has it, if it does.
@@ -240,47 +243,47 @@ fn out_of_spec(p: &Protocol, wire: &[u8], r: busspec_model::ir::MessageRef) -> V
         }
         interp::write_uint(v as u64, &mut w[at..at + f.width], f.byte_order);
         interp::reseal_as(p, r.direction, &mut w);
-        frames.push(sent(p, w));
+        frames.push(sent(p, r.direction, w));
         break;
     }
     // A header field the message gives a value (`header:`) holding another: not that message.
     if let Some(f) = m.fields.iter().find(|f| f.header && f.constant.is_some()) {
-        let mut w = laid(p, wire);
+        let mut w = laid(p, r.direction, wire);
         let at = f.frame_at(&m.layout);
         let other = f.constant.unwrap_or(0) ^ 1;
         interp::write_uint(other, &mut w[at..at + f.width], f.byte_order);
         interp::reseal_as(p, r.direction, &mut w);
-        frames.push(sent(p, w));
+        frames.push(sent(p, r.direction, w));
     }
     if let Some(at) = m.layout.address {
         let bad = (0..=255u8).rev().find(|a| !interp::address_allowed(p, *a));
         if let Some(a) = bad {
-            let mut w = laid(p, wire);
+            let mut w = laid(p, r.direction, wire);
             w[at] = a;
             interp::reseal_as(p, r.direction, &mut w);
-            frames.push(sent(p, w));
+            frames.push(sent(p, r.direction, w));
         }
     }
     frames
 }
 
-/// `wire` after its preamble and unescaped (`framing.preamble`, `framing.escaping`; as it is
-/// without): frames are changed unescaped and escaped again ([`escape::escape`]), and sent
-/// without a preamble.
-fn plain(p: &Protocol, wire: &[u8]) -> Vec<u8> {
-    escape::unescape_bytes(&p.framing, p.framing.after_preamble(wire)).unwrap()
+/// `wire` after its preamble and unescaped as a frame of direction `d` (`framing.preamble`,
+/// `framing.escaping`; as it is without): frames are changed unescaped and escaped again
+/// ([`escape::escape_as`]), and sent without a preamble.
+fn plain(p: &Protocol, d: Direction, wire: &[u8]) -> Vec<u8> {
+    escape::unescape_bytes_of(&p.framing, d, p.framing.after_preamble(wire)).unwrap()
 }
 
 /// [`plain`], laid out as the IR lays it out (a short form's or a long length form's short
 /// frame with the bytes it lacks), where offsets of the IR count.
-fn laid(p: &Protocol, wire: &[u8]) -> Vec<u8> {
-    let w = plain(p, wire);
+fn laid(p: &Protocol, d: Direction, wire: &[u8]) -> Vec<u8> {
+    let w = plain(p, d, wire);
     busspec_model::long::canonical(p, &w).map_or(w.clone(), |c| c.frame.into_owned())
 }
 
 /// A frame [`laid`] out, as it travels: in the form it takes, escaped.
-fn sent(p: &Protocol, w: Vec<u8>) -> Vec<u8> {
-    escape::escape(p, &busspec_model::long::travel(p, w))
+fn sent(p: &Protocol, d: Direction, w: Vec<u8>) -> Vec<u8> {
+    escape::escape_as(p, d, &busspec_model::long::travel(p, w))
 }
 
 /// The capture of `p`: every example with noise before every third, then out-of-spec frames
@@ -323,13 +326,14 @@ fn capture(p: &Protocol) -> (Vec<u8>, Vec<(Vec<u8>, String)>) {
             3
         };
         for _ in 0..rounds {
-            let mut w = plain(p, &e.wire);
+            let d = e.message.direction;
+            let mut w = plain(p, d, &e.wire);
             let end = w.len().saturating_sub(interp::trailer_of(p, m));
             w[m.layout.payload..end]
                 .iter_mut()
                 .for_each(|b| *b = rng.u8(..));
-            interp::reseal(p, &mut w);
-            bytes.extend_from_slice(&escape::escape(p, &w));
+            interp::reseal_as(p, d, &mut w);
+            bytes.extend_from_slice(&escape::escape_as(p, d, &w));
             bytes.extend_from_slice(&good);
         }
     }
@@ -350,12 +354,12 @@ fn capture(p: &Protocol) -> (Vec<u8>, Vec<(Vec<u8>, String)>) {
             let mut w = if escaped {
                 e.wire.clone()
             } else {
-                plain(p, &e.wire)
+                plain(p, e.message.direction, &e.wire)
             };
-            let at = p.framing.checksum_at(w.len());
+            let at = p.framing.checksum_at_of(e.message.direction, w.len());
             w[at] ^= 0x01;
             if !escaped {
-                w = escape::escape_bytes(&p.framing, &w);
+                w = escape::escape_bytes_of(&p.framing, e.message.direction, &w);
             }
             bytes.extend_from_slice(&good);
             bytes.extend_from_slice(&w);
@@ -688,10 +692,13 @@ fn compare(p: &Protocol, case: &Case, dir: &Path) -> Counts {
                 let frame_bytes = match &hex {
                     Some(h) => interp::parse_hex(h).unwrap(),
                     // A flag two frames share is the later one's packet's: this frame's
-                    // closing flag is the next event's first byte.
+                    // closing flag is the next event's first byte (a frame of a direction
+                    // that ends in it: F.Port's uplink has no flags).
                     None => match p.framing.shared_flag() {
                         Some(f)
-                            if bytes[..end].last() != Some(&f) && bytes.get(end) == Some(&f) =>
+                            if p.framing.end_of(d) == [f]
+                                && bytes[..end].last() != Some(&f)
+                                && bytes.get(end) == Some(&f) =>
                         {
                             bytes[offset as usize..=end].to_vec()
                         }

@@ -497,6 +497,18 @@ fn escaped_without_start_or_end_generates_its_snapshot() {
     );
 }
 
+/// F.Port both ways: requests between 7E flags, responses without start or end bytes,
+/// escaped from their first byte to their last and framed by their length field
+/// (`RESPONSE_ESCAPING`, `RESPONSE_FRAME`, `rt::escaped_lens_by_direction`;
+/// `snapshots_compile.rs` compiles it and holds it to the interpreter).
+#[test]
+fn escaped_and_ended_by_direction_generates_its_snapshot() {
+    check(
+        "model/tests/fixtures/valid/fport_both.yaml",
+        "fport_both.rs",
+    );
+}
+
 /// Responses sent unasked (`unasked: true`): `Response::is_unasked` and the
 /// `ResponseMessage::is_unasked` override; `snapshots_compile.rs` compiles it and holds it to
 /// the interpreter.

@@ -34,6 +34,7 @@ include!("snapshots/xbee_api2.rs");
 include!("snapshots/kiss.rs");
 include!("snapshots/fport.rs");
 include!("snapshots/fport_uplink.rs");
+include!("snapshots/fport_both.rs");
 include!("snapshots/unasked.rs");
 include!("snapshots/unasked_to_end.rs");
 include!("snapshots/lists_after.rs");
@@ -1999,11 +2000,11 @@ fn float_and_64_bit_snapshots_agree_with_the_interpreter() {
 /// grown, resealed (and its length field made to agree), escaped again; so that most reach the
 /// checks after the escapes, where the wire's own mutations mostly break an escape.
 fn escaped_mutations(p: &ir::Protocol, d: Direction, wire: &[u8]) -> Vec<Vec<u8>> {
-    let plain = busspec_model::escape::unescape_bytes(&p.framing, wire).unwrap();
+    let plain = busspec_model::escape::unescape_bytes_of(&p.framing, d, wire).unwrap();
     let mut out = Vec::new();
     for m in agree::mutations(p, d, &plain) {
-        out.push(busspec_model::escape::escape(p, &m));
-        out.push(busspec_model::escape::escape_bytes(&p.framing, &m));
+        out.push(busspec_model::escape::escape_as(p, d, &m));
+        out.push(busspec_model::escape::escape_bytes_of(&p.framing, d, &m));
     }
     out
 }
@@ -2086,9 +2087,15 @@ fn escaped_snapshots_agree_with_the_interpreter() {
         0x0881,
         "uplink_data",
     );
+    let both = escaped_agree::<fport_both::FportBoth>(
+        "model/tests/fixtures/valid/fport_both.yaml",
+        0x7E81,
+        "uplink_data",
+    );
     for (name, (accepted, refused, found)) in [
         ("fport", fport),
         ("fport_uplink", uplink),
+        ("fport_both", both),
         ("slip", slip),
         ("kiss", kiss),
         ("hdlc", hdlc),
@@ -3540,4 +3547,104 @@ fn end_around_sum_snapshot_agrees_with_the_interpreter() {
     let n = decoded.encode(0, &mut buf).unwrap();
     assert_eq!(&buf[..n], &failsafe[..]);
     assert_eq!(buf[n - 3..n], [0x7D, 0x5D, 0x7E]);
+}
+
+/// F.Port both ways in one spec (`fport_both`): a capture of polls and control frames between
+/// 7E flags, uplink frames (no flags, stuffed, found by their length) after the polls'
+/// closing flags, a control frame sharing a poll's closing flag, ArduPilot's FF pad byte, noise,
+/// an uplink frame with a bad CRC and one cut short. Both stream decoders report the same
+/// events however the capture is cut, in both directions and each alone; the interpreter's are
+/// pinned here.
+#[test]
+fn fport_both_streams_alike_interleaved_with_noise() {
+    use busspec_model::interp::parse_hex;
+    use fport_both::FportBoth;
+    let file = "model/tests/fixtures/valid/fport_both.yaml";
+    replay::<FportBoth>(file);
+    let p = fixture(file);
+    let hex = |s: &str| parse_hex(s).unwrap();
+    let poll = hex("7E 08 01 10 00 00 00 00 00 00 E6 7E");
+    let uplink = hex("08 81 10 10 01 7D 5E 00 00 00 D6");
+    let null = hex("08 81 00 00 00 00 00 00 00 76");
+    let control = p.examples[0].wire.clone();
+    let mut cap = Vec::new();
+    for part in [
+        &poll[..],
+        &uplink,
+        &control,
+        &[0xFF],
+        &poll,
+        &[0xFF],
+        &null,
+        &[0x12, 0x34],
+        &poll,
+        // The control frame's opening flag is the poll's closing one.
+        &control[1..],
+        &poll,
+        // A bad CRC: no frame.
+        &hex("08 81 00 00 00 00 00 00 00 77"),
+        &poll,
+        // Cut short: the next frame's flag ends it.
+        &null[..6],
+        &control,
+        &hex("08 81 32 7D 5D 0D 78 56 34 12 A4"),
+    ] {
+        cap.extend_from_slice(part);
+    }
+    let names = |seen: &[Seen]| -> Vec<String> {
+        seen.iter()
+            .filter(|s| s.0 != "-")
+            .map(|s| s.0.clone())
+            .collect()
+    };
+    let want = interp_seen(&p, &cap, &[cap.len()]);
+    assert_eq!(
+        names(&want),
+        [
+            "downlink_data",
+            "uplink_data",
+            "control",
+            "downlink_data",
+            "uplink_data",
+            "downlink_data",
+            "control",
+            "downlink_data",
+            "downlink_data",
+            "control",
+            "uplink_data"
+        ],
+        "{want:?}"
+    );
+    let mut rng = agree::Rng(0xF0E7);
+    for round in 0..200 {
+        let cuts: Vec<usize> = if round == 0 {
+            vec![1]
+        } else {
+            (0..6).map(|_| 1 + rng.below(24) as usize).collect()
+        };
+        assert_eq!(
+            generated_seen::<FportBoth>(&cap, &cuts),
+            interp_seen(&p, &cap, &cuts),
+            "cuts {cuts:?}"
+        );
+        for d in [Direction::Request, Direction::Response] {
+            assert_eq!(
+                generated_seen_as::<FportBoth>(&cap, &cuts, Some(d)),
+                interp_seen_as(&p, &cap, &cuts, Some(d)),
+                "{d:?}, cuts {cuts:?}"
+            );
+        }
+    }
+    // Each frame alone, each direction, and the frames decoded without a direction.
+    for e in &p.examples {
+        let d = e.message.direction;
+        assert!(agree::check::<FportBoth>(&p, d, None, &e.wire));
+        let other = match d {
+            Direction::Request => Direction::Response,
+            Direction::Response => Direction::Request,
+        };
+        assert!(!agree::check::<FportBoth>(&p, other, None, &e.wire));
+        let any = busspec_model::interp::decode(&p, None, None, &e.wire).unwrap();
+        assert_eq!(any.message, e.message, "{:02X?}", e.wire);
+    }
 }

@@ -253,6 +253,9 @@ enum Own {
     /// A layout per direction (`framing.layout: {request, response}`, SHDLC): whether a spec
     /// tries one, and how the two directions' layouts differ.
     LayoutByDirection = 0x7E5D_7E5D_7E5D_7E5D,
+    /// Responses without start or end bytes beside flagged, escaped requests (F.Port's
+    /// uplink): whether an eligible spec tries them.
+    BareResponses = 0x0881_7E7E_0881_7E7E,
     /// Frames only end bytes delimit: whether an eligible spec drops its checksum, its end
     /// bytes.
     EndDelimited = 0xFFFF_FF00_FFFF_FF00,
@@ -1258,6 +1261,15 @@ pub fn random_spec(seed: u64) -> String {
             (text, p) = (with, q);
         }
     }
+    // Responses without start or end bytes beside flagged requests, both escaped (F.Port's
+    // uplink): tried on half the specs whose one layout opens with start bytes and ends in an
+    // end byte beside byte escaping, a length field and a checksum, kept where the validator
+    // accepts it; drawn by a generator of its own, before any other layout per direction.
+    if let Some(with) = bare_responses(seed, &text) {
+        if let Ok(q) = busspec_model::load_str("generated.yaml", &with) {
+            (text, p) = (with, q);
+        }
+    }
     // A layout per direction (Sensirion SHDLC's state byte in replies only): tried on a
     // fraction of the specs, kept where the validator accepts it, so every rule it holds a
     // layout per direction to is the validator's; drawn by a generator of its own.
@@ -1593,6 +1605,100 @@ fn layout_by_direction(seed: u64, text: &str) -> Vec<String> {
         }
     }
     out
+}
+
+/// `text` with its responses laid out without start and end bytes (`Own::BareResponses`), the
+/// requests' layout as it was: in half the specs whose layout opens with `start`, ends in
+/// `end` and has `length` and `checksum`, beside byte escaping (`escape:`). None otherwise.
+fn bare_responses(seed: u64, text: &str) -> Option<String> {
+    let mut rng = own_rng(seed, Own::BareResponses);
+    if !rng.bool() || !text.contains("  escaping: {escape: ") {
+        return None;
+    }
+    let line = text.lines().find(|l| l.starts_with("  layout: ["))?;
+    let inner = line.strip_prefix("  layout: [")?.strip_suffix(']')?;
+    let layout: Vec<&str> = inner.split(", ").collect();
+    let eligible = layout.first() == Some(&"start")
+        && layout.last() == Some(&"end")
+        && layout.contains(&"length")
+        && layout.contains(&"checksum");
+    if !eligible {
+        return None;
+    }
+    let bare: Vec<&str> = layout
+        .iter()
+        .copied()
+        .filter(|p| *p != "start" && *p != "end")
+        .collect();
+    let by_direction = format!(
+        "  layout:\n    request: [{inner}]\n    response: [{}]",
+        bare.join(", ")
+    );
+    let mut out = text.replacen(line, &by_direction, 1);
+    // The length field counts only parts both directions have: not the start or end bytes.
+    let counts = out.lines().find_map(|l| {
+        let i = l.find("counts: [")? + "counts: [".len();
+        let j = i + l[i..].find(']')?;
+        Some((l.to_owned(), l[i..j].to_owned()))
+    })?;
+    let kept: Vec<&str> = (counts.1.split(", "))
+        .filter(|p| *p != "start" && *p != "end")
+        .collect();
+    if kept.is_empty() {
+        return None;
+    }
+    let line = counts.0.replacen(
+        &format!("counts: [{}]", counts.1),
+        &format!("counts: [{}]", kept.join(", ")),
+        1,
+    );
+    out = out.replacen(&counts.0, &line, 1);
+    // Every start byte travels escaped, so that none appears inside a response.
+    let start = out.lines().find(|l| l.starts_with("  start: "))?.to_owned();
+    let sync: Vec<u8> = start["  start: ".len()..]
+        .trim_matches(|c| c == '[' || c == ']')
+        .split(", ")
+        .map(|b| u8::from_str_radix(b.trim_start_matches("0x"), 16).ok())
+        .collect::<Option<_>>()?;
+    let esc = out
+        .lines()
+        .find(|l| l.starts_with("  escaping: {escape: "))?
+        .to_owned();
+    let hex = |b: u8| format!("{b:#04X}").replace("0X", "0x");
+    let mut with = esc.clone();
+    for b in sync {
+        if with.contains("bytes: [") {
+            let i = with.find("bytes: [")? + "bytes: [".len();
+            let j = i + with[i..].find(']')?;
+            if !with[i..j]
+                .split(", ")
+                .any(|x| x.eq_ignore_ascii_case(&hex(b)))
+            {
+                with = format!("{}, {}{}", &with[..j], hex(b), &with[j..]);
+            }
+        } else {
+            let i = with.find("map: [")? + "map: [".len();
+            let j = i + with[i..].rfind(']')?;
+            if with[i..j].contains(&format!("byte: {}", hex(b))) {
+                continue;
+            }
+            // A replacement no byte of the map, escape or start byte takes.
+            let taken = |r: u8| with.contains(&hex(r)) || r == b;
+            let r = (0..=255u8)
+                .cycle()
+                .skip(rng.usize(..256))
+                .take(256)
+                .find(|&r| !taken(r))?;
+            with = format!(
+                "{}, {{byte: {}, as: {}}}{}",
+                &with[..j],
+                hex(b),
+                hex(r),
+                &with[j..]
+            );
+        }
+    }
+    Some(out.replacen(&esc, &with, 1))
 }
 
 /// The items of a YAML flow sequence's inside (`{a: 1, b: [2, 3]}, {c: 4}`), each as written:

@@ -90,10 +90,26 @@ fn order(o: ByteOrder) -> &'static str {
 /// `framing.escaping` as the engine's table (`false` without), for `unescape` in
 /// `dissector_rt.lua`.
 fn escaping(p: &Protocol) -> String {
+    escaping_of(p, None)
+}
+
+/// [`escaping`] of direction `d`'s frames alone, where the end bytes (and so the escaped
+/// bytes) differ by direction (`response_escaping`: F.Port's uplink, stuffed from its first
+/// byte to its last).
+fn escaping_of(p: &Protocol, only: Option<Direction>) -> String {
     let f = &p.framing;
-    let (Some(e), Some((from, tail))) = (&f.escaping, f.escaped_bounds()) else {
+    let bounds = match only {
+        None => f.escaped_bounds(),
+        Some(d) => {
+            let probe = f.head(d, 0).len + 64;
+            f.escaped_region_of(d, probe)
+                .map(|(from, to)| (from, probe - to))
+        }
+    };
+    let (Some(e), Some((from, tail))) = (&f.escaping, bounds) else {
         return "false".to_owned();
     };
+    let d0 = only.unwrap_or(Direction::Request);
     let kind = match &e.kind {
         crate::ir::EscapeKind::Bytes { escape, map, .. } => {
             let raw: Vec<u8> = map.iter().map(|(b, _)| *b).collect();
@@ -109,14 +125,17 @@ fn escaping(p: &Protocol) -> String {
         }
         crate::ir::EscapeKind::Cobs => "kind = \"cobs\"".to_owned(),
     };
-    let (length_at, length_width) = match (&f.length, f.head(Direction::Request, 0).length) {
+    let (length_at, length_width) = match (&f.length, f.head(d0, 0).length) {
         (Some(l), Some(at)) => (at.to_string(), l.width),
         _ => ("false".to_owned(), 0),
     };
     format!(
         "{{ {kind}, from = {from}, tail = {tail}, computed_escaped = {}, length_at = {length_at}, length_width = {length_width}, checksum_from_end = {} }}",
         lua_bool(e.computed == crate::ir::Computed::Escaped),
-        f.checksum_from_end()
+        match only {
+            None => f.checksum_from_end(),
+            Some(d) => f.trailer_len_of(d) - f.checksum_at_of(d, f.trailer_len_of(d)),
+        }
     )
 }
 
@@ -592,6 +611,18 @@ fn protocol(p: &Protocol) -> String {
     };
     let _ = writeln!(s, "  address = {address},");
     let _ = writeln!(s, "  escaping = {},", escaping(p));
+    if f.end_by_direction() {
+        // Responses without the requests' end bytes (F.Port's uplink): their own trailer and
+        // escaped bytes.
+        let d = Direction::Response;
+        let _ = writeln!(
+            s,
+            "  response_ends = {}, response_trailer = {}, response_escaping = {},",
+            bytes(f.end_of(d)),
+            f.trailer_len_of(d),
+            escaping_of(p, Some(d))
+        );
+    }
     let preamble = match &f.preamble {
         Some(pre) => format!("{{ byte = {}, max = {} }}", pre.byte, pre.max),
         None => "false".to_owned(),

@@ -386,8 +386,8 @@ end
 -- its length and how many bytes escaping added; or nil, the offset and the words of a bad
 -- escape. Where the spec computes the length field and checksum on the escaped bytes, they are
 -- rewritten so that they are right for the unescaped frame exactly where the escaped ones are.
-local function unescape(P, w, n)
-  local e = P.escaping
+local function unescape(P, w, n, e)
+  e = e or P.escaping
   local from, to = e.from, n - e.tail
   if to < from then return w, n, 0 end
   local out, k = {}, 0
@@ -769,21 +769,33 @@ local function places(m, b, n, pend)
   return at, len
 end
 
-local function end_at(P, n)
-  if P.end_first then return n - P.trailer end
-  return n - #P.ends
+-- The end bytes and the bytes after the payload of a frame of direction dir: a response's own
+-- where they differ by direction (`response_ends`, F.Port's uplink without the flags).
+local function ends_of(P, dir)
+  if dir == "response" and P.response_ends then return P.response_ends end
+  return P.ends
 end
 
-local function checksum_at(P, n)
+local function trailer_by(P, dir)
+  if dir == "response" and P.response_trailer then return P.response_trailer end
+  return P.trailer
+end
+
+local function end_at(P, n, dir)
+  if P.end_first then return n - trailer_by(P, dir) end
+  return n - #ends_of(P, dir)
+end
+
+local function checksum_at(P, n, dir)
   if P.end_first then return n - P.checksum.len end
-  return n - P.checksum.len - #P.ends
+  return n - P.checksum.len - #ends_of(P, dir)
 end
 
 -- The bytes after message m's payload: none for a message without a checksum
 -- (`checksum: none`, validated without end bytes).
 local function trailer_of(P, m)
   if m.unchecked then return 0 end
-  return P.trailer
+  return trailer_by(P, m.dir)
 end
 
 -- Whether the frame has message m's shape: start, code, end bytes, length field and length.
@@ -845,8 +857,8 @@ local function structural(P, m, b, n)
   for i, c in ipairs(m.code) do
     if b[m.code_at + i - 1] ~= c then return false end
   end
-  local e = end_at(P, n)
-  for i, x in ipairs(P.ends) do
+  local e = end_at(P, n, m.dir)
+  for i, x in ipairs(ends_of(P, m.dir)) do
     if b[e + i - 1] ~= x then return false end
   end
   local rule = P.rules[m.dir]
@@ -1482,7 +1494,15 @@ local function setup(P)
     local w = {}
     local wa = tvb:range(0, n):bytes()
     for i = 0, n - 1 do w[i] = wa:get_index(i) end
-    local out, k, added, wire_ck = unescape(P, w, n)
+    -- Responses escaped apart (`response_escaping`: from their first byte, no start byte):
+    -- a packet is a response's by its direction, or without one where it does not open
+    -- with the requests' start byte.
+    local esc
+    if P.response_escaping then
+      local flags = field_value(f_direction) or 0
+      if flags == 1 or (flags ~= 2 and w[0] ~= P.sync[1]) then esc = P.response_escaping end
+    end
+    local out, k, added, wire_ck = unescape(P, w, n, esc)
     if not out then
       pinfo.cols.protocol = P.name
       local text = fmt("bad escape at offset %d: %s", k, added)
@@ -1588,7 +1608,7 @@ local function setup(P)
     elseif ck.len > 0 and not constant and not pool[1].m.unchecked then
       -- (A message without a checksum, `checksum: none`, is told apart from every message
       -- with one by its code and length: it has none to check.)
-      ck_at = checksum_at(P, n)
+      ck_at = checksum_at(P, n, pool[1].m.dir)
       ck_found = read_uint(b, ck_at, ck.len, ck.order)
       -- Each direction's checksum covers from its own byte (`covers_from: {request,
       -- response}`): the messages whose direction's checksum holds are kept, where any.
@@ -1739,14 +1759,15 @@ local function setup(P)
     local rule = P.rules[m.dir]
     if rule and not constant then root:add(F.length, tvb:range(rule.at, rule.width), read_uint(b, rule.at, rule.width, P.order)) end
     root:add(F.code, (#m.code > 0) and tvb:range(m.code_at, #m.code) or whole, m.code_hex)
-    local pend = n - P.trailer
+    local pend = n - trailer_by(P, m.dir)
     local plen = pend - m.payload_at
     local fields_node = root
     if constant then
       item:append_text(" [constant frame]")
     elseif plen > 0 then fields_node = root:add(F.payload, tvb:range(m.payload_at, plen)) end
     local info = show_leaves(m, b, n, tvb, fields_node)
-    if #P.ends > 0 and not constant then root:add(F.ends, tvb:range(end_at(P, n), #P.ends)) end
+    local ends = ends_of(P, m.dir)
+    if #ends > 0 and not constant then root:add(F.ends, tvb:range(end_at(P, n, m.dir), #ends)) end
     show_checksum()
     for _, why in ipairs(chosen.soft) do
       root:add(F.out_of_spec, whole, why):set_generated()

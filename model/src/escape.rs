@@ -74,8 +74,19 @@ impl Unescaped<'_> {
 /// frame is too short to hold the bytes around its escaped ones (decoding then says what is
 /// wrong with it).
 pub fn unescape<'w>(p: &Protocol, wire: &'w [u8]) -> Result<Unescaped<'w>, DecodeError> {
+    unescape_as(p, Direction::Request, wire)
+}
+
+/// [`unescape`] of a frame of direction `d`: the bytes between its own start and end bytes
+/// ([`Framing::escaped_region_of`]). Where the escaped region differs by direction, a frame
+/// decoded without a known direction is unescaped once per direction tried.
+pub fn unescape_as<'w>(
+    p: &Protocol,
+    d: Direction,
+    wire: &'w [u8],
+) -> Result<Unescaped<'w>, DecodeError> {
     let f = &p.framing;
-    let (Some(e), Some((from, to))) = (&f.escaping, f.escaped_region(wire.len())) else {
+    let (Some(e), Some((from, to))) = (&f.escaping, f.escaped_region_of(d, wire.len())) else {
         return Ok(Unescaped {
             frame: Cow::Borrowed(wire),
             escaped: None,
@@ -279,8 +290,13 @@ fn escape_region(kind: &EscapeKind, frame: &[u8], out: &mut Vec<u8>) {
 /// those of the unescaped frame): escaped, and where the spec computes the length field and
 /// checksum on the escaped bytes, those rewritten for them.
 pub fn escape(p: &Protocol, frame: &[u8]) -> Vec<u8> {
+    escape_as(p, Direction::Request, frame)
+}
+
+/// [`escape`] of a frame of direction `d` ([`Framing::escaped_region_of`]).
+pub fn escape_as(p: &Protocol, d: Direction, frame: &[u8]) -> Vec<u8> {
     let f = &p.framing;
-    let wire = escape_bytes(f, frame);
+    let wire = escape_bytes_of(f, d, frame);
     match &f.escaping {
         Some(e) if e.computed == Computed::Escaped && wire.len() > frame.len() => {
             let mut wire = wire;
@@ -294,7 +310,7 @@ pub fn escape(p: &Protocol, frame: &[u8]) -> Vec<u8> {
                 );
             }
             let c = &f.checksum;
-            let at = f.checksum_at(wire.len());
+            let at = f.checksum_at_of(d, wire.len());
             let sum = c.compute(wire.get(c.covers_from..at).unwrap_or(&[]));
             write_uint(sum, &mut wire[at..at + c.len()], c.byte_order);
             wire
@@ -306,7 +322,12 @@ pub fn escape(p: &Protocol, frame: &[u8]) -> Vec<u8> {
 /// `frame` escaped byte for byte, nothing rewritten (examples go through it to put printed
 /// text in the wire's byte order).
 pub fn escape_bytes(f: &Framing, frame: &[u8]) -> Vec<u8> {
-    let (Some(e), Some((from, to))) = (&f.escaping, f.escaped_region(frame.len())) else {
+    escape_bytes_of(f, Direction::Request, frame)
+}
+
+/// [`escape_bytes`] of a frame of direction `d`.
+pub fn escape_bytes_of(f: &Framing, d: Direction, frame: &[u8]) -> Vec<u8> {
+    let (Some(e), Some((from, to))) = (&f.escaping, f.escaped_region_of(d, frame.len())) else {
         return frame.to_vec();
     };
     let mut out = Vec::with_capacity(f.wire_len(frame.len()));
@@ -318,7 +339,12 @@ pub fn escape_bytes(f: &Framing, frame: &[u8]) -> Vec<u8> {
 
 /// `wire` unescaped byte for byte, nothing rewritten or checked beyond the escapes.
 pub fn unescape_bytes(f: &Framing, wire: &[u8]) -> Result<Vec<u8>, DecodeError> {
-    let (Some(e), Some((from, to))) = (&f.escaping, f.escaped_region(wire.len())) else {
+    unescape_bytes_of(f, Direction::Request, wire)
+}
+
+/// [`unescape_bytes`] of a frame of direction `d`.
+pub fn unescape_bytes_of(f: &Framing, d: Direction, wire: &[u8]) -> Result<Vec<u8>, DecodeError> {
+    let (Some(e), Some((from, to))) = (&f.escaping, f.escaped_region_of(d, wire.len())) else {
         return Ok(wire.to_vec());
     };
     let mut out = Vec::with_capacity(wire.len());

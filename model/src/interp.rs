@@ -1064,7 +1064,47 @@ fn decode_in<'p>(
     }
     // Offsets count from the frame's first byte, after any preamble.
     let wire = p.framing.after_preamble(wire);
-    let un = escape::unescape(p, wire)?;
+    // Where the end bytes (and so the escaped bytes) differ by direction (responses without
+    // start or end bytes beside flagged requests), a frame is unescaped and decoded as each
+    // direction on its own: the one it decodes as, ambiguous where it decodes both ways, else
+    // refused for the reason that got further (the first direction's on a tie).
+    let d = match limits.directions {
+        [d] => *d,
+        [a, b] if p.framing.end_by_direction() => {
+            let mut one = |d: Direction| {
+                decode_in(
+                    p,
+                    Limits::of(p, Some(d)),
+                    lookup,
+                    reply_to,
+                    covered,
+                    wire,
+                    spare,
+                )
+            };
+            return match (one(*a), one(*b)) {
+                (Ok(x), Ok(y)) => Err(DecodeError::Ambiguous {
+                    candidates: vec![
+                        p.message(x.message).name.clone(),
+                        p.message(y.message).name.clone(),
+                    ],
+                }),
+                (Ok(x), Err(_)) | (Err(_), Ok(x)) => Ok(x),
+                // A direction refused at its start bytes, then one refused at an escape, got
+                // less far than one whose frame unescaped and was checked.
+                (Err(e0), Err(e1)) => {
+                    let rank = |e: &DecodeError| match e {
+                        DecodeError::BadStart { .. } => 0,
+                        DecodeError::BadEscape { .. } => 1,
+                        e => 2 + progress(e),
+                    };
+                    Err(if rank(&e1) > rank(&e0) { e1 } else { e0 })
+                }
+            };
+        }
+        _ => Direction::Request,
+    };
+    let un = escape::unescape_as(p, d, wire)?;
     // A frame of either form of a length field the start byte chooses, in the IR's layout.
     let c = crate::long::canonical(p, &un.frame)?;
     decode_plain(p, limits, lookup, (reply_to, covered), &c.frame, spare)
@@ -1128,7 +1168,9 @@ fn decode_plain<'p>(
             found: wire.len(),
         });
     }
-    check_end(p, wire)?;
+    // Each direction's end bytes are the same wherever a frame is decoded both ways (`end` in
+    // one direction only is refused by the validator).
+    check_end(p, d0, wire)?;
     // A direction refused for its checksum or address alone is set aside with its refusal:
     // where the other is refused too, the refusal that got further is reported
     // ([`progress`], the first direction's on a tie), as the generated stream decoder, which
@@ -1324,10 +1366,12 @@ fn decode_kept<'p>(
     };
 
     // A frame without a checksum (`checksum: none`) has its code up to its end.
-    let clen = if unchecked {
-        0
-    } else {
-        p.framing.trailer_len()
+    let clen = |d: Direction| {
+        if unchecked {
+            0
+        } else {
+            p.framing.trailer_len_of(d)
+        }
     };
     let code_fits = |r: &MessageRef| {
         let m = p.message(*r);
@@ -1335,7 +1379,7 @@ fn decode_kept<'p>(
         // Byte by byte: a code is a byte or two, shorter than a call to compare slices. It
         // lies before the checksum: a checksum byte is no code byte.
         kept(r.direction)
-            && o.code + m.code.len() + clen <= wire.len()
+            && o.code + m.code.len() + clen(r.direction) <= wire.len()
             && (m.code.iter().enumerate()).all(|(i, c)| wire.get(o.code + i) == Some(c))
     };
     // In the lookup, a variable message stands under every length it can have: its frame
@@ -1400,7 +1444,7 @@ fn decode_kept<'p>(
             .flat_map(|d| p.framing.direction(*d).code_lengths.iter().copied())
             .max()
             .unwrap_or(1);
-        let end = (o.code + longest).min(wire.len().saturating_sub(clen));
+        let end = (o.code + longest).min(wire.len().saturating_sub(clen(d0)));
         let code = wire.get(o.code..end.max(o.code)).unwrap_or(&[]).to_vec();
         return Err(DecodeError::UnknownCode {
             offset: o.code,
@@ -1632,7 +1676,7 @@ fn decode_as_in<'p>(
     over: Over,
     wire: &[u8],
 ) -> Result<Frame<'p>, DecodeError> {
-    let un = escape::unescape(p, p.framing.after_preamble(wire))?;
+    let un = escape::unescape_as(p, r.direction, p.framing.after_preamble(wire))?;
     let c = crate::long::canonical(p, &un.frame)?;
     decode_as_unescaped(p, r, over, &c.frame).map_err(|e| un.locate(c.locate(e)))
 }
@@ -1696,7 +1740,7 @@ fn decode_as_unescaped<'p>(
             direction: Some(m.direction),
         });
     }
-    check_end(p, wire)?;
+    check_end(p, m.direction, wire)?;
     match (m.over_request, over) {
         _ if m.unchecked => {}
         (Some(from), Over::Check(covered)) => check_over_request(p, m, from, covered, wire)?,
@@ -1726,13 +1770,13 @@ pub(crate) fn check_checksum(
     wire: &[u8],
 ) -> Result<(), DecodeError> {
     let c = &p.framing.checksum;
-    if wire.len() < p.framing.trailer_len() {
+    if wire.len() < p.framing.trailer_len_of(d) {
         return Err(DecodeError::Truncated {
-            needed: p.framing.trailer_len(),
+            needed: p.framing.trailer_len_of(d),
             found: wire.len(),
         });
     }
-    let at = p.framing.checksum_at(wire.len());
+    let at = p.framing.checksum_at_of(d, wire.len());
     let covered = wire.get(c.covers_from_of(d)..at).unwrap_or(&[]);
     // The prepared tables know no extra byte.
     let expected = match prepared {
@@ -1762,7 +1806,7 @@ fn check_over_request(
     wire: &[u8],
 ) -> Result<(), DecodeError> {
     let c = &p.framing.checksum;
-    let at = p.framing.checksum_at(wire.len());
+    let at = p.framing.checksum_at_of(m.direction, wire.len());
     let Some(request) = covered else {
         return Err(DecodeError::NeedsRequest {
             message: m.name.clone(),
@@ -1822,11 +1866,15 @@ pub fn reseal_as(p: &Protocol, d: Direction, frame: &mut [u8]) {
 /// layout says (0: a frame as the IR lays it out).
 fn reseal_from(p: &Protocol, d: Direction, frame: &mut [u8], back: usize) {
     let (c, f) = (&p.framing.checksum, &p.framing);
-    if frame.len() < f.trailer_len() {
+    if frame.len() < f.trailer_len_of(d) {
         return;
     }
-    let (at, end) = (f.checksum_at(frame.len()), f.end_at(frame.len()));
-    frame[end..end + f.end.len()].copy_from_slice(&f.end);
+    let (at, end) = (
+        f.checksum_at_of(d, frame.len()),
+        f.end_at_of(d, frame.len()),
+    );
+    let bytes = f.end_of(d);
+    frame[end..end + bytes.len()].copy_from_slice(bytes);
     let from = c.covers_from_of(d).saturating_sub(back);
     let sum = c.compute(frame.get(from..at).unwrap_or(&[]));
     write_uint(sum, &mut frame[at..at + c.len()], c.byte_order);
@@ -1834,9 +1882,9 @@ fn reseal_from(p: &Protocol, d: Direction, frame: &mut [u8], back: usize) {
 
 /// Refuses a frame that does not end in the end bytes (the first that differs); the frame is
 /// at least as long as the shortest.
-fn check_end(p: &Protocol, wire: &[u8]) -> Result<(), DecodeError> {
-    let end = &p.framing.end;
-    let from = p.framing.end_at(wire.len());
+fn check_end(p: &Protocol, d: Direction, wire: &[u8]) -> Result<(), DecodeError> {
+    let end = p.framing.end_of(d);
+    let from = p.framing.end_at_of(d, wire.len());
     for (i, (&found, &expected)) in wire[from..].iter().zip(end).enumerate() {
         if found != expected {
             return Err(DecodeError::BadEnd {
@@ -2403,7 +2451,7 @@ pub fn trailer_of(p: &Protocol, m: &Message) -> usize {
     if m.unchecked {
         0
     } else {
-        p.framing.trailer_len()
+        p.framing.trailer_len_of(m.direction)
     }
 }
 
@@ -3363,7 +3411,8 @@ fn encode_values(
                 message: m.name.clone(),
             });
         };
-        let (c, at) = (&p.framing.checksum, p.framing.checksum_at(out.len()));
+        let c = &p.framing.checksum;
+        let at = p.framing.checksum_at_of(m.direction, out.len());
         let sum = c.compute_after(request, out.get(from..at).unwrap_or(&[]));
         write_uint(sum, &mut out[at..at + c.len()], c.byte_order);
     }
@@ -3391,7 +3440,7 @@ fn encode_values(
         })?;
     }
     if p.framing.escaping.is_some() {
-        return Ok(escape::escape(p, &out));
+        return Ok(escape::escape_as(p, r.direction, &out));
     }
     // Short where the length fits the short form, long otherwise (`framing.length.long`).
     let mut out = crate::long::travel(p, out);
@@ -3591,7 +3640,7 @@ fn reorder(p: &Protocol, m: &Message, text: &[u8], order: ByteOrder) -> Vec<u8> 
         }
     }
     let c = &p.framing.checksum;
-    let at = p.framing.checksum_at(wire.len());
+    let at = p.framing.checksum_at_of(m.direction, wire.len());
     if c.len() > 1 && flip(c.byte_order) && !m.unchecked {
         if let Some(s) = wire.get_mut(at..at + c.len()) {
             s.reverse();
@@ -3617,12 +3666,16 @@ pub fn wire_to_printed(p: &Protocol, m: &Message, wire: &[u8]) -> Vec<u8> {
     let frame = p.framing.after_preamble(wire);
     let mut out = wire[..wire.len() - frame.len()].to_vec();
     let wire = frame;
-    out.extend(match escape::unescape_bytes(&p.framing, wire) {
-        Ok(plain) if p.framing.escaping.is_some() => {
-            escape::escape_bytes(&p.framing, &reorder(p, m, &plain, p.byte_order))
-        }
-        _ => reorder(p, m, wire, p.byte_order),
-    });
+    out.extend(
+        match escape::unescape_bytes_of(&p.framing, m.direction, wire) {
+            Ok(plain) if p.framing.escaping.is_some() => escape::escape_bytes_of(
+                &p.framing,
+                m.direction,
+                &reorder(p, m, &plain, p.byte_order),
+            ),
+            _ => reorder(p, m, wire, p.byte_order),
+        },
+    );
     out
 }
 

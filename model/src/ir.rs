@@ -79,8 +79,12 @@ pub struct Framing {
     pub response_sync: Vec<u8>,
     /// The bytes that end every frame after its checksum (or just before it, where the layout
     /// says so: [`Framing::end_first`]), in order (empty without `end`): `16` for an M-Bus
-    /// frame, `AF` (before the checksum) for Pelco-P.
+    /// frame, `AF` (before the checksum) for Pelco-P. A request's, where the end bytes are
+    /// given per direction: see [`Self::end_of`].
     pub end: Vec<u8>,
+    /// The end bytes of a response: the same as [`Self::end`] unless the directions' layouts
+    /// differ in `end` (validated to be the same today); see [`Self::end_of`].
+    pub response_end: Vec<u8>,
     /// The length field, where the framing has one.
     pub length: Option<LengthField>,
     /// The addresses a frame may carry. A protocol whose frames carry none (the layout has no
@@ -505,9 +509,29 @@ impl Framing {
         self.sync != self.response_sync
     }
 
-    /// Bytes after the payload: the checksum and the end bytes.
+    /// Bytes after the payload: the checksum and the end bytes (a request's; see
+    /// [`Self::trailer_len_of`]).
     pub fn trailer_len(&self) -> usize {
-        self.checksum.len() + self.end.len()
+        self.trailer_len_of(Direction::Request)
+    }
+
+    /// The end bytes of a frame of direction `d` (empty where its layout has no `end`).
+    pub fn end_of(&self, d: Direction) -> &[u8] {
+        match d {
+            Direction::Request => &self.end,
+            Direction::Response => &self.response_end,
+        }
+    }
+
+    /// Whether the end bytes differ by direction (one direction's layout has `end`, the
+    /// other's not).
+    pub fn end_by_direction(&self) -> bool {
+        self.end != self.response_end
+    }
+
+    /// Bytes after the payload of a frame of direction `d`: its checksum and end bytes.
+    pub fn trailer_len_of(&self, d: Direction) -> usize {
+        self.checksum.len() + self.end_of(d).len()
     }
 
     /// Whether end bytes alone delimit a frame: the framing has end bytes and no length
@@ -543,10 +567,14 @@ impl Framing {
             self.escaping.as_ref().map(|e| &e.kind),
             Some(EscapeKind::Bytes { .. } | EscapeKind::Cobs)
         );
-        let framed = [&self.layout, &self.response_layout]
-            .iter()
-            .all(|l| l.first() == Some(&Part::Start) && l.last() == Some(&Part::End))
-            && self.response_sync == self.sync;
+        // Every direction's frames between the flags, or requests between them and responses
+        // with neither start nor end bytes (F.Port's uplink: stuffed, found by its length
+        // between a poll's closing flag and the next frame's opening one).
+        let flagged = |l: &[Part]| l.first() == Some(&Part::Start) && l.last() == Some(&Part::End);
+        let bare = |l: &[Part]| !l.contains(&Part::Start) && !l.contains(&Part::End);
+        let framed = flagged(&self.layout)
+            && ((flagged(&self.response_layout) && self.response_sync == self.sync)
+                || bare(&self.response_layout));
         match (self.sync.as_slice(), self.end.as_slice()) {
             ([s], [e]) if escaped && framed && s == e => Some(*s),
             _ => None,
@@ -639,14 +667,29 @@ impl Framing {
     /// Whether the end bytes come before the checksum (which then covers them: Pelco-P's
     /// ETX), rather than after it.
     pub fn end_first(&self) -> bool {
-        let at = |p: Part| self.layout.iter().position(|x| *x == p);
+        self.end_first_of(Direction::Request)
+    }
+
+    /// [`Self::end_first`] of a frame of direction `d`, by its own layout.
+    pub fn end_first_of(&self, d: Direction) -> bool {
+        let layout = self.layout_of(d);
+        let at = |p: Part| layout.iter().position(|x| *x == p);
         matches!((at(Part::End), at(Part::Checksum)), (Some(e), Some(c)) if e < c)
     }
 
-    /// Where the checksum of a frame of `len` bytes starts; its end bytes start at
-    /// [`Self::end_at`].
+    /// Where the checksum of a request of `len` bytes starts; its end bytes start at
+    /// [`Self::end_at`]. See [`Self::checksum_at_of`].
     pub fn checksum_at(&self, len: usize) -> usize {
-        let after = if self.end_first() { 0 } else { self.end.len() };
+        self.checksum_at_of(Direction::Request, len)
+    }
+
+    /// Where the checksum of a frame of direction `d` and `len` bytes starts.
+    pub fn checksum_at_of(&self, d: Direction, len: usize) -> usize {
+        let after = if self.end_first_of(d) {
+            0
+        } else {
+            self.end_of(d).len()
+        };
         len.saturating_sub(self.checksum.len() + after)
     }
 
@@ -661,12 +704,17 @@ impl Framing {
         w.get(self.checksum.covers_from..self.checksum_at(w.len()))
     }
 
-    /// Where the end bytes of a frame of `len` bytes start.
+    /// Where the end bytes of a request of `len` bytes start; see [`Self::end_at_of`].
     pub fn end_at(&self, len: usize) -> usize {
-        if self.end_first() {
-            len.saturating_sub(self.trailer_len())
+        self.end_at_of(Direction::Request, len)
+    }
+
+    /// Where the end bytes of a frame of direction `d` and `len` bytes start.
+    pub fn end_at_of(&self, d: Direction, len: usize) -> usize {
+        if self.end_first_of(d) {
+            len.saturating_sub(self.trailer_len_of(d))
         } else {
-            len.saturating_sub(self.end.len())
+            len.saturating_sub(self.end_of(d).len())
         }
     }
 
@@ -771,20 +819,28 @@ impl Framing {
 
     /// The bytes of a frame of `len` bytes (escaped or not) that escaping applies to,
     /// `from..to`; `None` where there is no escaping or the frame is too short to hold its
-    /// fixed bytes around them.
+    /// fixed bytes around them. A request's: see [`Self::escaped_region_of`].
     pub fn escaped_region(&self, len: usize) -> Option<(usize, usize)> {
+        self.escaped_region_of(Direction::Request, len)
+    }
+
+    /// [`Self::escaped_region`] of a frame of direction `d`: between its own leading start
+    /// bytes (none where its layout does not begin with `start`) and its own end bytes
+    /// (none where its layout has no `end`: escaped to its last byte, framed by its length
+    /// field).
+    pub fn escaped_region_of(&self, d: Direction, len: usize) -> Option<(usize, usize)> {
         let e = self.escaping.as_ref()?;
         let (from, tail) = match &e.kind {
             EscapeKind::Bytes { .. } | EscapeKind::Cobs => {
-                let lead = if self.layout.first() == Some(&Part::Start) {
-                    self.sync.len()
+                let lead = if self.layout_of(d).first() == Some(&Part::Start) {
+                    self.sync_of(d).len()
                 } else {
                     0
                 };
-                (lead, self.end.len())
+                (lead, self.end_of(d).len())
             }
             EscapeKind::Insert { from, .. } => {
-                let h = self.head(Direction::Request, 0);
+                let h = self.head(d, 0);
                 let at = match from {
                     Part::Start => h.start,
                     Part::Address => h.address,
@@ -792,7 +848,7 @@ impl Framing {
                     Part::Code => Some(h.code),
                     _ => None,
                 };
-                (at?, self.trailer_len())
+                (at?, self.trailer_len_of(d))
             }
         };
         let to = len.checked_sub(tail)?;

@@ -53,7 +53,7 @@ pub fn mutations(p: &Protocol, d: Direction, wire: &[u8]) -> Vec<Vec<u8>> {
     let clen = if p.unchecked(&[d], wire).is_some() {
         0
     } else {
-        p.framing.trailer_len()
+        p.framing.trailer_len_of(d)
     };
     let mut out = Vec::new();
     for i in 0..wire.len() {

@@ -902,11 +902,57 @@ impl<'p> StreamDecoder<'p> {
     /// module docs, "Escaped frames"), in `lens`: up to the first end byte after the start
     /// bytes (byte escaping, COBS), or as the length field of stuffed frames says.
     fn escaped_lens(&self, flushing: bool, lens: &mut Vec<usize>, dirs: &mut Vec<u8>) -> Escaped {
+        if !self.p.framing.end_by_direction() {
+            return self.escaped_lens_of(None, flushing, lens, dirs);
+        }
+        // Requests between their flags, responses (without start or end bytes) by their
+        // length field: each direction's lengths by its own framing; a direction still
+        // waiting for bytes makes the head wait, as the generated stream decoder's
+        // candidates of both directions do (`rt::escaped_lens_by_direction`).
+        let mut waiting = false;
+        for d in [Direction::Request, Direction::Response] {
+            if self.direction.is_some_and(|want| want != d) {
+                continue;
+            }
+            let (mut l, mut k) = (Vec::new(), Vec::new());
+            match self.escaped_lens_of(Some(d), flushing, &mut l, &mut k) {
+                Escaped::Try => {
+                    lens.extend(l);
+                    dirs.extend(k);
+                }
+                Escaped::NeedMore => waiting = true,
+                Escaped::Drop => {}
+            }
+        }
+        if waiting {
+            lens.clear();
+            dirs.clear();
+            return Escaped::NeedMore;
+        }
+        if lens.is_empty() {
+            return Escaped::Drop;
+        }
+        Escaped::Try
+    }
+
+    /// [`Self::escaped_lens`] of the directions `only` names (both: `None`), by its framing
+    /// (where they differ, [`crate::ir::Framing::end_by_direction`], one direction at a time).
+    fn escaped_lens_of(
+        &self,
+        only: Option<Direction>,
+        flushing: bool,
+        lens: &mut Vec<usize>,
+        dirs: &mut Vec<u8>,
+    ) -> Escaped {
         let (p, buf) = (self.p, &self.buf);
         let f = &p.framing;
-        let head = f.head(crate::ir::Direction::Request, 0);
+        let d0 = only.unwrap_or(Direction::Request);
+        let wanted = |d: Direction| {
+            only.map_or(true, |o| o == d) && self.direction.map_or(true, |want| want == d)
+        };
+        let head = f.head(d0, 0);
         if let Some(at) = head.start {
-            for (i, &b) in f.sync.iter().enumerate() {
+            for (i, &b) in f.sync_of(d0).iter().enumerate() {
                 if buf.get(at + i).is_some_and(|&x| x != b) {
                     return Escaped::Drop;
                 }
@@ -922,23 +968,23 @@ impl<'p> StreamDecoder<'p> {
             f.escaping.as_ref().map(|e| &e.kind),
             Some(crate::ir::EscapeKind::Insert { .. })
         );
-        let lead = if f.layout.first() == Some(&crate::ir::Part::Start) {
-            f.sync.len()
+        let lead = if f.layout_of(d0).first() == Some(&crate::ir::Part::Start) {
+            f.sync_of(d0).len()
         } else {
             0
         };
-        if !insert && f.end.is_empty() {
-            return self.escaped_lens_by_length(lead, flushing, lens, dirs);
+        if !insert && f.end_of(d0).is_empty() {
+            return self.escaped_lens_by_length(lead, only, flushing, lens, dirs);
         }
         if !insert {
-            let end = f.end.first().copied().unwrap_or(0);
+            let end = f.end_of(d0).first().copied().unwrap_or(0);
             let Some(i) = buf.iter().skip(lead).position(|&b| b == end) else {
                 return wait;
             };
             // Each direction whose frames can be as long unescaped (none where the escapes
             // are bad): the generated stream decoder's candidates (`rt::escaped_lens`).
             let len = lead + i + 1;
-            let Ok(plain) = crate::escape::unescape_bytes(f, &buf[..len]) else {
+            let Ok(plain) = crate::escape::unescape_bytes_of(f, d0, &buf[..len]) else {
                 return Escaped::Drop;
             };
             let mut dir = 0;
@@ -946,7 +992,7 @@ impl<'p> StreamDecoder<'p> {
                 let fits = p
                     .frame_len_bounds(d)
                     .is_some_and(|(lo, hi)| (lo..=hi).contains(&plain.len()));
-                if fits && self.direction.map_or(true, |want| want == d) {
+                if fits && wanted(d) {
                     dir |= bit;
                 }
             }
@@ -1065,6 +1111,7 @@ impl<'p> StreamDecoder<'p> {
     fn escaped_lens_by_length(
         &self,
         lead: usize,
+        only: Option<Direction>,
         flushing: bool,
         lens: &mut Vec<usize>,
         dirs: &mut Vec<u8>,
@@ -1076,8 +1123,8 @@ impl<'p> StreamDecoder<'p> {
         } else {
             Escaped::NeedMore
         };
-        let (Some(l), Some(at)) = (&f.length, f.head(crate::ir::Direction::Request, 0).length)
-        else {
+        let d0 = only.unwrap_or(Direction::Request);
+        let (Some(l), Some(at)) = (&f.length, f.head(d0, 0).length) else {
             return Escaped::Drop;
         };
         // `ends[n]`: where the first `n` unescaped bytes end on the wire (from `lead` on);
@@ -1107,7 +1154,7 @@ impl<'p> StreamDecoder<'p> {
         let v = interp::read_uint(&plain[at..at + l.width], p.byte_order) as i64;
         let mut waiting = false;
         for (d, bit) in [(Direction::Request, 1u8), (Direction::Response, 2)] {
-            if self.direction.is_some_and(|want| want != d) {
+            if self.direction.is_some_and(|want| want != d) || only.is_some_and(|o| o != d) {
                 continue;
             }
             let Some(rule) = f.length_rule(d).filter(|r| r.grows) else {

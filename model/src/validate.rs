@@ -1320,12 +1320,28 @@ fn framing_by_direction(
     if f.transform.is_some() {
         sink.error("framing.transform", not_yet("a transform of the payload"));
     }
+    // Responses without start and end bytes beside flagged requests (F.Port's uplink after
+    // its 7E-flagged downlink): byte escaping, every response stuffed from its first byte to
+    // its last and framed by its length field, the requests' flags among the escaped bytes
+    // (checked once the framing is joined), both directions with a length field and a
+    // checksum. Each engine finds a request between its flags and a response, at a byte that
+    // is no start byte, by its length.
+    let framed = |l: &[Part]| l.first() == Some(&Part::Start) && l.last() == Some(&Part::End);
+    let bare = |l: &[Part]| !l.contains(&Part::Start) && !l.contains(&Part::End);
+    let both = |l: &[Part]| l.contains(&Part::Length) && l.contains(&Part::Checksum);
+    let bare_responses = f.escaping.as_ref().is_some_and(|e| e.escape.is_some())
+        && framed(&d.request)
+        && bare(&d.response)
+        && both(&d.request)
+        && both(&d.response);
     let mut escaping_refused = false;
     if let Some(e) = &f.escaping {
         let bytes = e.escape.is_some() || e.cobs == Some(true);
         if !bytes {
             sink.error("framing.escaping", not_yet("escaping by insertion"));
             escaping_refused = true;
+        } else if bare_responses {
+            // Responses framed by their length field, requests by their end byte.
         } else if !d.request.contains(&Part::End) || !d.response.contains(&Part::End) {
             sink.error(
                 "framing.escaping",
@@ -1354,7 +1370,8 @@ fn framing_by_direction(
         (Part::End, "end"),
     ] {
         let (rq, rs) = (d.request.contains(&part), d.response.contains(&part));
-        if rq != rs {
+        let flags = matches!(part, Part::Start | Part::End);
+        if rq != rs && !(flags && bare_responses) {
             let lacks = if rq { "response" } else { "request" };
             sink.error(
                 format!("framing.layout.{lacks}"),
@@ -1501,6 +1518,31 @@ fn framing_by_direction(
     };
     framing.response_layout = response.layout;
     framing.response_heads = response.heads;
+    // Each direction's own end and start bytes (none in a response without them).
+    framing.response_end = response.end;
+    if bare_responses {
+        framing.response_sync = Vec::new();
+        // Every start and end byte of a request travels escaped, so that none appears
+        // inside a response (stuffed from its first byte to its last) or a request.
+        if let Some(Escaping {
+            kind: EscapeKind::Bytes { map, .. },
+            ..
+        }) = &framing.escaping
+        {
+            let escaped = |b: &u8| map.iter().any(|(r, _)| r == b);
+            if let Some(b) = framing
+                .sync
+                .iter()
+                .chain(&framing.end)
+                .find(|b| !escaped(b))
+            {
+                sink.error(
+                    "framing.escaping",
+                    format!("responses have no start or end bytes (their layout has neither): the requests' start and end bytes travel escaped so that none appears inside a response, and 0x{b:02X} does not"),
+                );
+            }
+        }
+    }
     framing
 }
 
@@ -1894,6 +1936,7 @@ fn framing_plain(
         start,
         sync,
         response_sync,
+        response_end: end.clone(),
         end,
         length,
         address: Address {
@@ -5735,7 +5778,9 @@ fn frame_problems(
     // Wake-up bytes before the frame (0 to the preamble's most): the frame follows them.
     let printed = p.framing.after_preamble(&printed);
     // An escaped frame is read unescaped, reordered, and escaped again.
-    let printed = crate::escape::unescape_bytes(&p.framing, printed)
+    // By its direction's own escaped bytes (a response without start or end bytes is escaped
+    // from its first byte to its last).
+    let printed = crate::escape::unescape_bytes_of(&p.framing, m.direction, printed)
         .map_err(|e| format!("frame `{frame_text}`: {e}"))?;
     // Either form of a length field the start byte chooses, as the IR lays it out.
     let laid_out = crate::long::canonical(p, &printed)
@@ -5754,7 +5799,11 @@ fn frame_problems(
             m.payload_len
         ));
     }
-    let wire = crate::escape::escape_bytes(&p.framing, &interp::printed_to_wire(p, m, &printed));
+    let wire = crate::escape::escape_bytes_of(
+        &p.framing,
+        m.direction,
+        &interp::printed_to_wire(p, m, &printed),
+    );
     let frame = interp::decode_as_reply(p, r, covered, &wire).map_err(|e| e.to_string())?;
     // The frame must also decode on its own, without being told what it is (as a sniffer would),
     // unless only its request can tell it apart.

@@ -47,12 +47,15 @@ const CASES: &[(&str, &[(&str, &str)])] = &[
         &[("framing.layout.response", "the response's layout has no `length`, the other direction's has: `length` in one")],
     ),
     (
-        "layout_dir_fport_uplink",
+        "layout_dir_fport_uplink_unstuffed",
         &[
-            ("framing.escaping", "escaping without an end byte (frames found by their length field) is not expressible with"),
             ("framing.layout.response", "the response's layout has no `start`, the other direction's has: `start` in one"),
             ("framing.layout.response", "the response's layout has no `end`, the other direction's has: `end` in one"),
         ],
+    ),
+    (
+        "layout_dir_bare_responses_start_unescaped",
+        &[("framing.escaping", "responses have no start or end bytes (their layout has neither): the requests' start and end bytes travel escaped so that none appears inside a response, and 0x7E does not")],
     ),
     (
         "layout_dir_counts_missing",

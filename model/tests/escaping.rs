@@ -391,8 +391,8 @@ fn shared_flags_open_the_next_frame() {
 /// independent source quotes one byte for byte): 08 81 PRIM APPID DATA CRC without the 7E
 /// flags, stuffed throughout. Each unstuffs to a frame whose length counts the type and the
 /// payload and whose CRC is the one the fixture's checksum (`sum8_end_around`, from the length)
-/// computes; no 7E travels in one; and the language cannot carry the uplink yet (broken fixture
-/// `layout_dir_fport_uplink`), so the comment is checked here rather than by the examples.
+/// computes; and no 7E travels in one. Fixture `fport`'s own examples are the receiver's frames
+/// alone, so its comment is checked here (fixture `fport_both` has these frames as examples).
 #[test]
 fn fport_uplink_frames_in_the_comment_check() {
     let p = fixture("fport");
@@ -540,4 +540,78 @@ fn fport_frames_check_their_end_around_sum() {
             (39, "control".to_owned()),
         ]
     );
+}
+
+/// The end bytes and the escaped region are each direction's own in the IR
+/// (`Framing::end_of`, `escaped_region_of`): a downlink frame of F.Port is escaped between its
+/// flags, an uplink frame (no start or end byte in its direction's layout) from its first
+/// byte to its last, and each engine's escaping by direction stuffs and unstuffs it so. The IR
+/// is made by hand from fixture `fport`, and is what the validator makes of `fport_both`.
+#[test]
+fn end_bytes_and_escaped_region_are_each_directions() {
+    use busspec_model::ir::Part;
+    let mut p = fixture("fport");
+    let f = &p.framing;
+    assert_eq!(f.end_of(Direction::Request), f.end_of(Direction::Response));
+    assert!(!f.end_by_direction());
+    assert_eq!(f.escaped_region_of(Direction::Response, 12), Some((1, 11)));
+    let f = &mut p.framing;
+    f.response_layout = vec![Part::Length, Part::Code, Part::Payload, Part::Checksum];
+    f.response_sync = Vec::new();
+    f.response_end = Vec::new();
+    assert!(f.end_by_direction());
+    assert_eq!(f.end_of(Direction::Request), &[0x7E]);
+    assert_eq!(f.end_of(Direction::Response), &[] as &[u8]);
+    assert_eq!(f.escaped_region_of(Direction::Request, 12), Some((1, 11)));
+    assert_eq!(f.escaped_region(12), Some((1, 11)));
+    assert_eq!(f.escaped_region_of(Direction::Response, 10), Some((0, 10)));
+    assert_eq!(
+        (
+            f.trailer_len_of(Direction::Request),
+            f.trailer_len_of(Direction::Response)
+        ),
+        (2, 1)
+    );
+    assert_eq!(
+        (
+            f.checksum_at_of(Direction::Request, 12),
+            f.checksum_at_of(Direction::Response, 10)
+        ),
+        (10, 9)
+    );
+    assert_eq!(
+        (
+            f.end_at_of(Direction::Request, 12),
+            f.end_at_of(Direction::Response, 10)
+        ),
+        (11, 10)
+    );
+    // "08 81 10 10 01 7D 5E 00 00 00 D6" of the comment: the uplink stuffed from its first byte.
+    let plain = parse_hex("08 81 10 10 01 7E 00 00 00 D6").unwrap();
+    let wire = busspec_model::escape::escape_bytes_of(f, Direction::Response, &plain);
+    assert_eq!(wire, parse_hex("08 81 10 10 01 7D 5E 00 00 00 D6").unwrap());
+    let back = busspec_model::escape::unescape_bytes_of(f, Direction::Response, &wire).unwrap();
+    assert_eq!(back, plain);
+    // A 7E leading an uplink frame is stuffed too, where a request's first byte is its flag.
+    let lead = parse_hex("7E 81").unwrap();
+    assert_eq!(
+        busspec_model::escape::escape_bytes_of(f, Direction::Response, &lead),
+        parse_hex("7D 5E 81").unwrap()
+    );
+    assert_eq!(
+        busspec_model::escape::escape_bytes_of(
+            f,
+            Direction::Request,
+            &parse_hex("7E 7E 7E").unwrap()
+        ),
+        parse_hex("7E 7D 5E 7E").unwrap()
+    );
+    let both = fixture("fport_both");
+    let g = &both.framing;
+    assert_eq!(
+        (&g.response_layout, &g.response_sync, &g.response_end),
+        (&f.response_layout, &f.response_sync, &f.response_end)
+    );
+    assert_eq!((&g.sync, &g.end), (&f.sync, &f.end));
+    assert_eq!(g.shared_flag(), Some(0x7E));
 }

@@ -17,7 +17,8 @@ pub use core::option::Option::{self, None, Some};
 pub use core::result::Result::{self, Err, Ok};
 
 pub use crate::escape::{
-    escape as escape_frame, frame_lens as escaped_lens, unescape as unescape_frame, EscapeKind,
+    escape as escape_frame, frame_lens as escaped_lens,
+    frame_lens_by_direction as escaped_lens_by_direction, unescape as unescape_frame, EscapeKind,
     Escaping,
 };
 pub use crate::lists::{Lists, Split};

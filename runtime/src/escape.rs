@@ -448,6 +448,23 @@ pub fn frame_lens(e: &Escaping, head: &[u8], max: usize) -> VarLens {
     }
 }
 
+/// [`frame_lens`] where requests and responses are escaped and framed apart (F.Port: requests
+/// between 7E flags, responses without start or end bytes, stuffed from their first byte and
+/// framed by their length field): each direction's lengths by its own escaping, `requests`'
+/// for requests, `responses`' for responses (each constant gives no rule or lengths for the
+/// other direction).
+pub fn frame_lens_by_direction(
+    requests: &Escaping,
+    responses: &Escaping,
+    head: &[u8],
+    max: usize,
+) -> VarLens {
+    VarLens {
+        requests: frame_lens(requests, head, max).requests,
+        responses: frame_lens(responses, head, max).responses,
+    }
+}
+
 /// Byte escaping without an end byte (XBee API mode 2): the length field read as the bytes
 /// after the start bytes unescape, and each direction's frame as far as that many bytes
 /// unescape (its frame length from the field, [`Escaping::rules`], within [`Escaping::lens`]).

@@ -58,7 +58,7 @@ pub(super) fn emit_dispatch(ctx: &Ctx, d: Direction, ty: &TokenStream) -> TokenS
     let clen = if unchecked {
         0
     } else {
-        p.framing.trailer_len()
+        p.framing.trailer_len_of(d)
     };
     let (min_len, max_len) = frame_bounds(p, d);
     let replies = d == Direction::Response;
@@ -171,9 +171,10 @@ pub(super) fn emit_dispatch(ctx: &Ctx, d: Direction, ty: &TokenStream) -> TokenS
     let (checks, unescaped_fn) = if p.framing.escaping.is_some() {
         let sum = frame_sum(p, d);
         let max = usize_lit(p.max_frame_len(d));
+        let escaping = escaping_of(p, d);
         let unescape = quote! {
             let mut plain = [0u8; UNESCAPED_LEN];
-            let un = rt::unescape_frame(&ESCAPING, frame, &mut plain, #sum)?;
+            let un = rt::unescape_frame(&#escaping, frame, &mut plain, #sum)?;
             let rt::Some(plain) = plain.get(..un.len) else {
                 return rt::Err(rt::DecodeError::TooLong { max: #max, found: un.len });
             };
@@ -700,7 +701,7 @@ pub(super) fn emit_frame_checks(p: &Protocol) -> TokenStream {
                 syncs.is_empty() && head.start.is_some() && f.start.is_some(),
                 "its start byte".to_string(),
             ),
-            (!f.end.is_empty(), "its end bytes".to_string()),
+            (!f.end_of(d).is_empty(), "its end bytes".to_string()),
             (!f.checksum.is_empty(), "its checksum".to_string()),
             (
                 f.has_address_in(d),
@@ -761,7 +762,7 @@ pub(super) fn code_consts(ctx: &Ctx) -> TokenStream {
         let (at, longest, trailer) = (
             usize_lit(p.framing.head(d, 1).code),
             usize_lit(longest),
-            usize_lit(p.framing.trailer_len()),
+            usize_lit(p.framing.trailer_len_of(d)),
         );
         let response = d == Direction::Response;
         let what = if response { "a response's" } else { "a request's" };

@@ -73,6 +73,29 @@ pub(super) fn emit_header(p: &Protocol, source: &str, spec_path: &str) -> TokenS
     } else {
         quote!()
     };
+    // End bytes in requests only (responses without start or end bytes, F.Port's uplink):
+    // a response's frames are checked and sealed without them.
+    let response_frame = if p.framing.end_by_direction() {
+        let d = Direction::Response;
+        let end = p.framing.end_of(d).iter().map(|b| hex_u8(*b));
+        let end_first = p.framing.end_first_of(d);
+        let base = frame_of(p, Direction::Request);
+        let base = if p.framing.has_address() && !p.framing.has_address_in(d) {
+            quote!(FRAME_UNADDRESSED)
+        } else {
+            base
+        };
+        quote! {
+            /// What every response shares, where its end bytes are not the requests'.
+            const RESPONSE_FRAME: rt::Frame = rt::Frame {
+                end: &[#(#end),*],
+                end_first: #end_first,
+                ..#base
+            };
+        }
+    } else {
+        quote!()
+    };
     let checksum_be = p.framing.checksum.byte_order == ByteOrder::Big;
     let baud = p.serial.baud;
     let optional = |v: Option<u32>| match v {
@@ -146,6 +169,7 @@ pub(super) fn emit_header(p: &Protocol, source: &str, spec_path: &str) -> TokenS
             end_first: #end_first,
         };
         #unaddressed
+        #response_frame
         #escaping
         #preamble
         #transform
@@ -336,10 +360,23 @@ pub(super) fn starts_by_direction(p: &Protocol) -> bool {
     p.framing.sync_by_direction() || p.framing.layout_by_direction()
 }
 
+/// The frame constant direction `d`'s encode seals by (its checksum and end bytes): `FRAME`,
+/// or a response's `RESPONSE_FRAME` where the end bytes differ by direction.
+pub(super) fn seal_frame_of(p: &Protocol, d: Direction) -> TokenStream {
+    if p.framing.end_by_direction() && d == Direction::Response {
+        quote!(RESPONSE_FRAME)
+    } else {
+        quote!(FRAME)
+    }
+}
+
 /// The frame checks a direction's decode and encode take: `FRAME`, or where the direction's
-/// layout has no address beside one that has, `FRAME_UNADDRESSED`.
+/// layout has no address beside one that has, `FRAME_UNADDRESSED`; a response's
+/// `RESPONSE_FRAME` where the end bytes differ by direction.
 pub(super) fn frame_of(p: &Protocol, d: Direction) -> TokenStream {
-    if p.framing.has_address() && !p.framing.has_address_in(d) {
+    if p.framing.end_by_direction() && d == Direction::Response {
+        quote!(RESPONSE_FRAME)
+    } else if p.framing.has_address() && !p.framing.has_address_in(d) {
         quote!(FRAME_UNADDRESSED)
     } else {
         quote!(FRAME)
@@ -659,13 +696,57 @@ pub(super) fn emit_checksum(p: &Protocol) -> TokenStream {
 /// `UNESCAPED_LEN` and `ESCAPING` for a protocol with `framing.escaping` (nothing without).
 pub(super) fn emit_escaping(p: &Protocol) -> TokenStream {
     let f = &p.framing;
-    let Some(e) = &f.escaping else {
+    if f.escaping.is_none() {
         return quote!();
-    };
+    }
     let unescaped = usize_lit(
         p.max_frame_len(Direction::Request)
             .max(p.max_frame_len(Direction::Response)),
     );
+    if !f.end_by_direction() {
+        let value = escaping_value(p, None);
+        return quote! {
+            /// The longest frame before escaping: what generated code unescapes into.
+            const UNESCAPED_LEN: usize = #unescaped;
+            /// How frames are escaped on the wire (`framing.escaping`).
+            const ESCAPING: rt::Escaping = #value;
+        };
+    }
+    let (rq, rs) = (
+        escaping_value(p, Some(Direction::Request)),
+        escaping_value(p, Some(Direction::Response)),
+    );
+    quote! {
+        /// The longest frame before escaping: what generated code unescapes into.
+        const UNESCAPED_LEN: usize = #unescaped;
+        /// How requests are escaped on the wire (`framing.escaping`, between their start and
+        /// end bytes).
+        const ESCAPING: rt::Escaping = #rq;
+        /// How responses are escaped on the wire (`framing.escaping`, between their own start
+        /// and end bytes, or from their first byte to their last where they have none).
+        const RESPONSE_ESCAPING: rt::Escaping = #rs;
+    }
+}
+
+/// The escaping constant direction `d`'s decode and encode take: `ESCAPING`, or where the
+/// end bytes differ by direction a response's `RESPONSE_ESCAPING`.
+pub(super) fn escaping_of(p: &Protocol, d: Direction) -> TokenStream {
+    if p.framing.end_by_direction() && d == Direction::Response {
+        quote!(RESPONSE_ESCAPING)
+    } else {
+        quote!(ESCAPING)
+    }
+}
+
+/// An `rt::Escaping` value: of both directions (`None`), or of direction `d` alone (its
+/// escaped region, start and end bytes, length field and checksum's place; no rule or lengths
+/// for the other direction, so that a stream reads each direction's frames by its own).
+fn escaping_value(p: &Protocol, only: Option<Direction>) -> TokenStream {
+    let f = &p.framing;
+    let Some(e) = &f.escaping else {
+        return quote!();
+    };
+    let d0 = only.unwrap_or(Direction::Request);
     let kind = match &e.kind {
         EscapeKind::Bytes { escape, map, .. } => {
             let escape = hex_u8(*escape);
@@ -682,16 +763,23 @@ pub(super) fn emit_escaping(p: &Protocol) -> TokenStream {
         }
         EscapeKind::Cobs => quote!(rt::EscapeKind::Cobs),
     };
-    let (from, tail) = f.escaped_bounds().unwrap_or((0, 0));
+    let (from, tail) = match only {
+        None => f.escaped_bounds().unwrap_or((0, 0)),
+        Some(d) => {
+            let probe = f.head(d, 0).len + 64;
+            f.escaped_region_of(d, probe)
+                .map_or((0, 0), |(from, to)| (from, probe - to))
+        }
+    };
     let (from_l, tail) = (usize_lit(from), usize_lit(tail));
-    let head = f.head(Direction::Request, 0);
+    let head = f.head(d0, 0);
     let (sync_at, sync) = match head.start {
-        Some(at) => (at, f.sync.clone()),
+        Some(at) => (at, f.sync_of(d0).to_vec()),
         None => (0, Vec::new()),
     };
     let sync_at = usize_lit(sync_at);
     let sync = sync.iter().map(|b| hex_u8(*b));
-    let end = hex_u8(f.end.first().copied().unwrap_or(0));
+    let end = hex_u8(f.end_of(d0).first().copied().unwrap_or(0));
     let length = match (&f.length, head.length) {
         (Some(l), Some(at)) => {
             let (at, w, le) = (
@@ -703,7 +791,8 @@ pub(super) fn emit_escaping(p: &Protocol) -> TokenStream {
         }
         _ => quote!(rt::None),
     };
-    let rule = |d: Direction| match f.length_rule(d).filter(|r| r.grows) {
+    let wanted = |d: Direction| only.map_or(true, |o| o == d);
+    let rule = |d: Direction| match f.length_rule(d).filter(|r| r.grows && wanted(d)) {
         Some(r) => {
             let (k, h) = (i64_lit(r.k), usize_lit(r.head_len));
             quote!(rt::Some((#k, #h)))
@@ -711,7 +800,7 @@ pub(super) fn emit_escaping(p: &Protocol) -> TokenStream {
         None => quote!(rt::None),
     };
     let (rq, rs) = (rule(Direction::Request), rule(Direction::Response));
-    let bounds = |d: Direction| match p.frame_len_bounds(d) {
+    let bounds = |d: Direction| match p.frame_len_bounds(d).filter(|_| wanted(d)) {
         Some((lo, hi)) => {
             let (lo, hi) = (usize_lit(lo), usize_lit(hi));
             quote!((#lo, #hi))
@@ -721,15 +810,15 @@ pub(super) fn emit_escaping(p: &Protocol) -> TokenStream {
     let (bq, bs) = (bounds(Direction::Request), bounds(Direction::Response));
     let computed = e.computed == busspec_model::ir::Computed::Escaped;
     let c = &f.checksum;
-    let covers = usize_lit(c.covers_from);
+    let covers = usize_lit(c.covers_from_of(d0));
     let ck_len = usize_lit(c.len());
     let ck_be = c.byte_order == ByteOrder::Big;
-    let from_end = usize_lit(f.checksum_from_end());
+    let from_end = usize_lit(match only {
+        None => f.checksum_from_end(),
+        Some(d) => f.trailer_len_of(d) - f.checksum_at_of(d, f.trailer_len_of(d)),
+    });
     quote! {
-        /// The longest frame before escaping: what generated code unescapes into.
-        const UNESCAPED_LEN: usize = #unescaped;
-        /// How frames are escaped on the wire (`framing.escaping`).
-        const ESCAPING: rt::Escaping = rt::Escaping {
+        rt::Escaping {
             kind: #kind,
             from: #from_l,
             tail: #tail,
@@ -744,7 +833,7 @@ pub(super) fn emit_escaping(p: &Protocol) -> TokenStream {
             checksum_len: #ck_len,
             checksum_be: #ck_be,
             checksum_from_end: #from_end,
-        };
+        }
     }
 }
 
@@ -763,6 +852,7 @@ pub(super) fn checksum_in_arms(p: &Protocol) -> bool {
         && p.framing.checksum.covers_from == 0
         && p.framing.checksum.response_covers_from == 0
         && p.framing.end.is_empty()
+        && p.framing.response_end.is_empty()
         // The sum covers the payload as it travels, transformed after the arms write it.
         && p.framing.transform.is_none()
 }

@@ -344,8 +344,9 @@ fn encode_seal(p: &Protocol, d: Direction) -> TokenStream {
         quote!(rt::Ok(len))
     } else {
         let sum = frame_sum(p, d);
+        let frame = seal_frame_of(p, d);
         quote! {
-            FRAME.seal(buf, len, #sum);
+            #frame.seal(buf, len, #sum);
             rt::Ok(len)
         }
     }
@@ -526,6 +527,7 @@ fn encode_fn(
         }
     } else {
         let sum = frame_sum(p, d);
+        let escaping = escaping_of(p, d);
         quote! {
             ///
             /// The frame is written escaped (`framing.escaping`); `buf` of `MAX_FRAME_LEN`
@@ -533,7 +535,7 @@ fn encode_fn(
             pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
                 let mut plain = [0u8; UNESCAPED_LEN];
                 let len = self.encode_unescaped(address, &mut plain)?;
-                rt::escape_frame(&ESCAPING, &plain[..len], buf, #sum)
+                rt::escape_frame(&#escaping, &plain[..len], buf, #sum)
             }
             /// The frame before escaping, into `buf`.
             fn encode_unescaped(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {

@@ -200,6 +200,18 @@ pub(super) fn emit_stream(p: &Protocol) -> TokenStream {
     } else {
         // Escaped frames are framed by their end byte or their length field alone; a flag
         // that opens and closes them may be shared by two frames.
+        // Requests and responses framed apart (F.Port's uplink: responses without start or
+        // end bytes, found by their length field): each direction by its own escaping.
+        let lens_fn = if p.framing.end_by_direction() {
+            quote!(rt::escaped_lens_by_direction(
+                &ESCAPING,
+                &RESPONSE_ESCAPING,
+                head,
+                MAX_FRAME_LEN
+            ))
+        } else {
+            quote!(rt::escaped_lens(&ESCAPING, head, MAX_FRAME_LEN))
+        };
         let shared_flag = p.framing.shared_flag().map(|flag| {
             let flag = hex_u8(flag);
             quote! { const SHARED_FLAG: rt::Option<u8> = rt::Some(#flag); }
@@ -212,7 +224,7 @@ pub(super) fn emit_stream(p: &Protocol) -> TokenStream {
             }
             #[inline]
             fn variable_candidates(head: &[u8]) -> rt::VarLens {
-                rt::escaped_lens(&ESCAPING, head, MAX_FRAME_LEN)
+                #lens_fn
             }
         }
     };
@@ -472,7 +484,9 @@ fn request_may_decode(p: &Protocol) -> TokenStream {
         return quote!();
     }
     let (min, max) = frame_bounds(p, Direction::Request);
-    if min <= address_at(p, Direction::Request) || min < p.framing.trailer_len() {
+    if min <= address_at(p, Direction::Request)
+        || min < p.framing.trailer_len_of(Direction::Request)
+    {
         return quote!();
     }
     // Only the frame check (no sync sequence, length field or message without a checksum):
@@ -517,7 +531,8 @@ fn both_ways_check(p: &Protocol) -> TokenStream {
     // The frame checks refuse every frame of a direction whose shortest frame does not
     // reach past its address or hold its checksum and end bytes, whatever its length: such a
     // direction's checks are not the other's for any frame.
-    let lies = |d: Direction, min: usize| min <= address_at(p, d) || min < p.framing.trailer_len();
+    let lies =
+        |d: Direction, min: usize| min <= address_at(p, d) || min < p.framing.trailer_len_of(d);
     if lies(Direction::Request, q) || lies(Direction::Response, r) {
         return quote!();
     }

@@ -85,7 +85,7 @@ pub fn check<P: Protocol>(
             };
             assert_eq!(g.address, i.address);
             same(p, &g.message, &i, wire);
-            assert_eq!(g.message.frame_len(), unescaped_len(p, wire));
+            assert_eq!(g.message.frame_len(), unescaped_len(p, d, wire));
             let n = g.message.encode(g.address, &mut buf).unwrap();
             written_back(p, &buf[..n], wire);
         }
@@ -107,7 +107,7 @@ pub fn check<P: Protocol>(
             };
             assert_eq!(g.address, i.address);
             same(p, &g.message, &i, wire);
-            assert_eq!(g.message.frame_len(), unescaped_len(p, wire));
+            assert_eq!(g.message.frame_len(), unescaped_len(p, d, wire));
             if let Some((r, _, _)) = request {
                 assert!(g.message.answers(r), "{wire:02X?}");
             }
@@ -124,12 +124,12 @@ pub fn check<P: Protocol>(
 /// The length of `wire` after its preamble and unescaped (`framing.preamble`,
 /// `framing.escaping`), or laid out in a long length form's width (`framing.length.long`): a
 /// message's `frame_len`.
-fn unescaped_len(p: &ir::Protocol, wire: &[u8]) -> usize {
+fn unescaped_len(p: &ir::Protocol, d: Direction, wire: &[u8]) -> usize {
     if p.framing.long.is_some() || p.framing.form.is_some() || p.framing.truncation.is_some() {
         return busspec_model::long::canonical(p, wire).map_or(wire.len(), |c| c.frame.len());
     }
     let frame = p.framing.after_preamble(wire);
-    busspec_model::escape::unescape_bytes(&p.framing, frame).map_or(frame.len(), |f| f.len())
+    busspec_model::escape::unescape_bytes_of(&p.framing, d, frame).map_or(frame.len(), |f| f.len())
 }
 
 /// What an encoder wrote back is the frame decoded: byte for byte, but that it sends its

@@ -26,7 +26,7 @@ pub mod fport {
     /// The document's date.
     pub const DOCUMENT_DATE: &str = "2017-11-21";
     /// SHA-256 of the spec file this module was generated from, lowercase hex (`sha256sum`).
-    pub const SPEC_SHA256: &str = "5267713941a94d9ac482bd31587ac7570aa1f81c55e3d49e457f3338426668f6";
+    pub const SPEC_SHA256: &str = "000d37348d9fe70c97f2173e4bfaa52a67cea3fa1426ce38886dab0625bd1b42";
     /// The spec's text, exactly as this module was generated from it.
     pub const SPEC_YAML: &str = include_str!(
         "../../../model/tests/fixtures/valid/fport.yaml"

@@ -26,7 +26,7 @@ pub mod fport_uplink {
     /// The document's date.
     pub const DOCUMENT_DATE: &str = "2017-11-21";
     /// SHA-256 of the spec file this module was generated from, lowercase hex (`sha256sum`).
-    pub const SPEC_SHA256: &str = "e0e019c51cf0059a5a755c03ce75e73339d1048f6566ddd0c7730227446465ba";
+    pub const SPEC_SHA256: &str = "51681d798aec8e3fe7202a967670cd9a36726b5e66872a5e8fe9c59522523b94";
     /// The spec's text, exactly as this module was generated from it.
     pub const SPEC_YAML: &str = include_str!(
         "../../../model/tests/fixtures/valid/fport_uplink.yaml"
