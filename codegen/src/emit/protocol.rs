@@ -540,34 +540,24 @@ pub(super) fn checksum_ok_fn(p: &Protocol) -> TokenStream {
     } else if p.framing.end_by_direction() {
         // Requests and responses escaped and ended apart (F.Port's uplink): a frame passes
         // whose checksum is either direction's, unescaped as that direction.
+        // Each direction's `Frame` holds its own trailer (checksum and end bytes).
         let rs = frame_sum(p, Direction::Response);
-        let (ck_q, ck_r) = (
-            usize_lit(p.framing.trailer_len_of(Direction::Request)),
-            usize_lit(p.framing.trailer_len_of(Direction::Response)),
-        );
         quote! {
             fn checksum_ok(frame: &[u8]) -> bool {
                 fn ok(
                     frame: &[u8],
                     e: &rt::Escaping,
                     f: &rt::Frame,
-                    trailer: usize,
                     sum: fn(&[u8]) -> u32,
                 ) -> bool {
                     let mut plain = [0u8; UNESCAPED_LEN];
                     let rt::Ok(un) = rt::unescape_frame(e, frame, &mut plain, sum) else {
                         return false;
                     };
-                    let rt::Some(frame) = plain.get(..un.len) else {
-                        return false;
-                    };
-                    match frame.len().checked_sub(trailer) {
-                        rt::Some(n) if n > 0 => rt::check_sum(frame, n, f, sum),
-                        _ => false,
-                    }
+                    plain.get(..un.len).is_some_and(|frame| f.checksum_ok(frame, sum))
                 }
-                ok(frame, &ESCAPING, &FRAME, #ck_q, #sum)
-                    || ok(frame, &RESPONSE_ESCAPING, &RESPONSE_FRAME, #ck_r, #rs)
+                ok(frame, &ESCAPING, &FRAME, #sum)
+                    || ok(frame, &RESPONSE_ESCAPING, &RESPONSE_FRAME, #rs)
             }
         }
     } else {

@@ -719,23 +719,16 @@ pub mod fport_both {
                 frame: &[u8],
                 e: &rt::Escaping,
                 f: &rt::Frame,
-                trailer: usize,
                 sum: fn(&[u8]) -> u32,
             ) -> bool {
                 let mut plain = [0u8; UNESCAPED_LEN];
                 let rt::Ok(un) = rt::unescape_frame(e, frame, &mut plain, sum) else {
                     return false;
                 };
-                let rt::Some(frame) = plain.get(..un.len) else {
-                    return false;
-                };
-                match frame.len().checked_sub(trailer) {
-                    rt::Some(n) if n > 0 => rt::check_sum(frame, n, f, sum),
-                    _ => false,
-                }
+                plain.get(..un.len).is_some_and(|frame| f.checksum_ok(frame, sum))
             }
-            ok(frame, &ESCAPING, &FRAME, 2, request_frame_sum)
-                || ok(frame, &RESPONSE_ESCAPING, &RESPONSE_FRAME, 1, response_frame_sum)
+            ok(frame, &ESCAPING, &FRAME, request_frame_sum)
+                || ok(frame, &RESPONSE_ESCAPING, &RESPONSE_FRAME, response_frame_sum)
         }
     }
     /// A streaming decoder for this protocol: see [`busspec_runtime::stream`].
