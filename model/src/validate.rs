@@ -1373,10 +1373,16 @@ fn framing_by_direction(
         let flags = matches!(part, Part::Start | Part::End);
         if rq != rs && !(flags && bare_responses) {
             let lacks = if rq { "response" } else { "request" };
+            // Start and end bytes in the requests alone are taken in one shape: say which.
+            let taken = if flags {
+                "; taken only for responses with neither start nor end bytes beside requests with both, byte-escaped (every request start and end byte among the escaped), with a length field and a checksum in both directions (F.Port's uplink beside its downlink)"
+            } else {
+                ""
+            };
             sink.error(
                 format!("framing.layout.{lacks}"),
                 format!(
-                    "the {lacks}'s layout has no `{pname}`, the other direction's has: {}",
+                    "the {lacks}'s layout has no `{pname}`, the other direction's has: {}{taken}",
                     not_yet(&format!("`{pname}` in one direction only"))
                 ),
             );
