@@ -1353,16 +1353,13 @@ fn over_request(seed: u64, text: &str, p: &ir::Protocol) -> Vec<String> {
         }
     }
     let with = |chosen: &[(&str, &str)]| {
-        let mut t = text.to_owned();
-        for (r, part) in chosen {
-            let line = format!("  - {{name: {r}, ");
-            t = t.replacen(
-                &line,
-                &format!("{line}checksum_over_request: {{covers_from: {part}}}, "),
-                1,
-            );
-        }
-        t
+        let keys = chosen.iter().map(|(r, part)| {
+            (
+                *r,
+                format!("checksum_over_request: {{covers_from: {part}}}"),
+            )
+        });
+        with_keys(text, keys)
     };
     let mut out = vec![with(&drawn)];
     // Then each reply alone, in an order drawn: the validator refuses a reply that another
@@ -1373,6 +1370,17 @@ fn over_request(seed: u64, text: &str, p: &ir::Protocol) -> Vec<String> {
         out.push(with(&[(r, parts[rng.usize(..parts.len())])]));
     }
     out
+}
+
+/// `text` with each named message's line given a key right after its name (`  - {name: m,
+/// KEY, ...`): a message's own `checksum`, `header` or `checksum_over_request`.
+fn with_keys<'a>(text: &str, keys: impl IntoIterator<Item = (&'a str, String)>) -> String {
+    let mut t = text.to_owned();
+    for (m, key) in keys {
+        let line = format!("  - {{name: {m}, ");
+        t = t.replacen(&line, &format!("{line}{key}, "), 1);
+    }
+    t
 }
 
 /// `text` with messages that give their header fields a value (`Own::HeaderValues`), in
@@ -1440,12 +1448,10 @@ fn header_values(seed: u64, text: &str, p: &ir::Protocol) -> Vec<String> {
         given.push((m.name.clone(), items.join(", ")));
     }
     let with = |chosen: &[(String, String)]| {
-        let mut t = text.to_owned();
-        for (m, items) in chosen {
-            let line = format!("  - {{name: {m}, ");
-            t = t.replacen(&line, &format!("{line}header: {{{items}}}, "), 1);
-        }
-        t
+        let keys = chosen
+            .iter()
+            .map(|(m, items)| (m.as_str(), format!("header: {{{items}}}")));
+        with_keys(text, keys)
     };
     let mut out = vec![with(&given)];
     let mut alone = given.clone();
@@ -1481,12 +1487,10 @@ fn unchecked(seed: u64, text: &str, p: &ir::Protocol) -> Vec<String> {
         }
     }
     let with = |chosen: &[&str]| {
-        let mut t = text.to_owned();
-        for m in chosen {
-            let line = format!("  - {{name: {m}, ");
-            t = t.replacen(&line, &format!("{line}checksum: none, "), 1);
-        }
-        t
+        with_keys(
+            text,
+            chosen.iter().map(|m| (*m, "checksum: none".to_owned())),
+        )
     };
     let mut out = vec![with(&drawn)];
     let mut alone = names.clone();

@@ -1168,8 +1168,8 @@ fn decode_plain<'p>(
             found: wire.len(),
         });
     }
-    // Each direction's end bytes are the same wherever a frame is decoded both ways (`end` in
-    // one direction only is refused by the validator).
+    // Each direction's end bytes are the same wherever a frame is decoded both ways (where
+    // they differ, `decode_in` decodes it as each direction on its own).
     check_end(p, d0, wire)?;
     // A direction refused for its checksum or address alone is set aside with its refusal:
     // where the other is refused too, the refusal that got further is reported

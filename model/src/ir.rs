@@ -83,7 +83,8 @@ pub struct Framing {
     /// given per direction: see [`Self::end_of`].
     pub end: Vec<u8>,
     /// The end bytes of a response: the same as [`Self::end`] unless the directions' layouts
-    /// differ in `end` (validated to be the same today); see [`Self::end_of`].
+    /// differ in `end` (responses without start or end bytes beside flagged requests, F.Port's
+    /// uplink); see [`Self::end_of`].
     pub response_end: Vec<u8>,
     /// The length field, where the framing has one.
     pub length: Option<LengthField>,
@@ -858,15 +859,25 @@ impl Framing {
     /// Where the escaped bytes of any frame lie: from this offset to this many bytes before
     /// the frame's end (`None` without escaping).
     pub fn escaped_bounds(&self) -> Option<(usize, usize)> {
-        let probe = self.head(Direction::Request, 0).len + 64;
-        let (from, to) = self.escaped_region(probe)?;
+        self.escaped_bounds_of(Direction::Request)
+    }
+
+    /// [`Self::escaped_bounds`] of a frame of direction `d` ([`Self::escaped_region_of`]).
+    pub fn escaped_bounds_of(&self, d: Direction) -> Option<(usize, usize)> {
+        let probe = self.head(d, 0).len + 64;
+        let (from, to) = self.escaped_region_of(d, probe)?;
         Some((from, probe - to))
     }
 
-    /// How far before a frame's end its checksum starts.
+    /// How far before a request's end its checksum starts; see [`Self::checksum_from_end_of`].
     pub fn checksum_from_end(&self) -> usize {
-        let probe = self.trailer_len();
-        probe - self.checksum_at(probe)
+        self.checksum_from_end_of(Direction::Request)
+    }
+
+    /// How far before the end of a frame of direction `d` its checksum starts.
+    pub fn checksum_from_end_of(&self, d: Direction) -> usize {
+        let probe = self.trailer_len_of(d);
+        probe - self.checksum_at_of(d, probe)
     }
 
     /// The longest a frame of `len` unescaped bytes can be on the wire.

@@ -911,7 +911,7 @@ impl<'p> StreamDecoder<'p> {
         // candidates of both directions do (`rt::escaped_lens_by_direction`).
         let mut waiting = false;
         for d in [Direction::Request, Direction::Response] {
-            if self.direction.is_some_and(|want| want != d) {
+            if !self.looks_for(None, d) {
                 continue;
             }
             let (mut l, mut k) = (Vec::new(), Vec::new());
@@ -935,6 +935,12 @@ impl<'p> StreamDecoder<'p> {
         Escaped::Try
     }
 
+    /// Whether frames of direction `d` are looked for: the decoder's direction (both where it
+    /// has none) and `only` (both: `None`) take it.
+    fn looks_for(&self, only: Option<Direction>, d: Direction) -> bool {
+        only.map_or(true, |o| o == d) && self.direction.map_or(true, |want| want == d)
+    }
+
     /// [`Self::escaped_lens`] of the directions `only` names (both: `None`), by its framing
     /// (where they differ, [`crate::ir::Framing::end_by_direction`], one direction at a time).
     fn escaped_lens_of(
@@ -947,9 +953,7 @@ impl<'p> StreamDecoder<'p> {
         let (p, buf) = (self.p, &self.buf);
         let f = &p.framing;
         let d0 = only.unwrap_or(Direction::Request);
-        let wanted = |d: Direction| {
-            only.map_or(true, |o| o == d) && self.direction.map_or(true, |want| want == d)
-        };
+        let wanted = |d: Direction| self.looks_for(only, d);
         let head = f.head(d0, 0);
         if let Some(at) = head.start {
             for (i, &b) in f.sync_of(d0).iter().enumerate() {
@@ -1154,7 +1158,7 @@ impl<'p> StreamDecoder<'p> {
         let v = interp::read_uint(&plain[at..at + l.width], p.byte_order) as i64;
         let mut waiting = false;
         for (d, bit) in [(Direction::Request, 1u8), (Direction::Response, 2)] {
-            if self.direction.is_some_and(|want| want != d) || only.is_some_and(|o| o != d) {
+            if !self.looks_for(only, d) {
                 continue;
             }
             let Some(rule) = f.length_rule(d).filter(|r| r.grows) else {

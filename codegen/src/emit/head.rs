@@ -763,14 +763,7 @@ fn escaping_value(p: &Protocol, only: Option<Direction>) -> TokenStream {
         }
         EscapeKind::Cobs => quote!(rt::EscapeKind::Cobs),
     };
-    let (from, tail) = match only {
-        None => f.escaped_bounds().unwrap_or((0, 0)),
-        Some(d) => {
-            let probe = f.head(d, 0).len + 64;
-            f.escaped_region_of(d, probe)
-                .map_or((0, 0), |(from, to)| (from, probe - to))
-        }
-    };
+    let (from, tail) = f.escaped_bounds_of(d0).unwrap_or((0, 0));
     let (from_l, tail) = (usize_lit(from), usize_lit(tail));
     let head = f.head(d0, 0);
     let (sync_at, sync) = match head.start {
@@ -813,10 +806,7 @@ fn escaping_value(p: &Protocol, only: Option<Direction>) -> TokenStream {
     let covers = usize_lit(c.covers_from_of(d0));
     let ck_len = usize_lit(c.len());
     let ck_be = c.byte_order == ByteOrder::Big;
-    let from_end = usize_lit(match only {
-        None => f.checksum_from_end(),
-        Some(d) => f.trailer_len_of(d) - f.checksum_at_of(d, f.trailer_len_of(d)),
-    });
+    let from_end = usize_lit(f.checksum_from_end_of(d0));
     quote! {
         rt::Escaping {
             kind: #kind,
