@@ -975,11 +975,11 @@ impl<P: Link, const CAP: usize> MasterCore<P, CAP> {
     /// last byte a checksum by chance: only the line's quiet time ends such a frame. Before it
     /// (`quiet` false) the shortest head that decodes is set aside only where no longer
     /// response frame can start with it, else nothing is (the bytes wait for the quiet gap);
-    /// once the line is quiet, the longest head after which the rest is the reply is, else
-    /// the longest head that decodes. So a reply that came in the same gap is not swallowed
-    /// by a longer unasked frame whose checksum its bytes happen to match; where several
-    /// unasked frames to their end come before the reply in one gap, only the last is split
-    /// off this way (the first ones are taken longest, as a stream decoder takes them).
+    /// once the line is quiet, the bytes are split into unasked frames followed by the reply
+    /// where they can be ([`Self::reply_after_unasked`]), and the first of those frames is set
+    /// aside, else the longest head that decodes. So a reply that came in the same gap is not
+    /// swallowed by a longer unasked frame whose checksum its bytes happen to match, however
+    /// many unasked frames to their end come before it.
     fn set_aside_unasked(&mut self, quiet: bool) -> bool {
         if !<P::Response as ResponseMessage<P::Request>>::HAS_UNASKED || self.rx_len > CAP {
             return false;
@@ -990,13 +990,14 @@ impl<P: Link, const CAP: usize> MasterCore<P, CAP> {
                 .is_ok_and(|d| d.message.is_unasked() && !d.message.answers(&request))
         };
         let found = if quiet {
-            let mut longest = None;
-            let mut heads = (1..=self.rx_len).rev().filter(|&n| unasked(&self.rx[..n]));
-            let leaves_reply = heads.find(|&n| {
-                longest.get_or_insert(n);
-                self.accept_bytes(&self.rx[n..self.rx_len]).is_ok()
-            });
-            leaves_reply.or(longest)
+            let longest = || (1..=self.rx_len).rev().find(|&n| unasked(&self.rx[..n]));
+            match self.reply_after_unasked(&unasked) {
+                // The first unasked frame: the longest head from whose end the reply is reached.
+                Some(reply) => (1..=reply)
+                    .rev()
+                    .find(|&n| unasked(&self.rx[..n]) && self.unasked_reach(n, reply, &unasked)),
+                None => longest(),
+            }
         } else {
             match (1..=self.rx_len).find(|&n| unasked(&self.rx[..n])) {
                 Some(n) if !self.longer_response_may_start(n) => Some(n),
@@ -1010,6 +1011,44 @@ impl<P: Link, const CAP: usize> MasterCore<P, CAP> {
         self.rx_len -= n;
         self.unasked = self.unasked.saturating_add(1);
         true
+    }
+
+    /// Where the reply begins in the received bytes when they are unasked frames (each one
+    /// `unasked` accepts) followed by the reply: the latest such offset, so the fewest bytes are
+    /// taken as the reply. `None` where no split of the bytes ends in the reply.
+    fn reply_after_unasked(&self, unasked: &impl Fn(&[u8]) -> bool) -> Option<usize> {
+        let mut reach = [false; CAP];
+        self.unasked_walk(0, &mut reach, unasked);
+        (1..self.rx_len)
+            .rev()
+            .find(|&p| reach[p - 1] && self.accept_bytes(&self.rx[p..self.rx_len]).is_ok())
+    }
+
+    /// Whether the received bytes from offset `from` to `to` are unasked frames back to back.
+    fn unasked_reach(&self, from: usize, to: usize, unasked: &impl Fn(&[u8]) -> bool) -> bool {
+        if from == to {
+            return true;
+        }
+        let mut reach = [false; CAP];
+        self.unasked_walk(from, &mut reach, unasked);
+        reach[to - 1]
+    }
+
+    /// Marks in `reach` (offset `p` at index `p - 1`) every offset of the received bytes that
+    /// unasked frames back to back lead to from `from`. Each frame is at most the protocol's
+    /// longest, so the walk costs at most that many decodes an offset reached.
+    fn unasked_walk(&self, from: usize, reach: &mut [bool; CAP], unasked: &impl Fn(&[u8]) -> bool) {
+        let len = self.rx_len.min(CAP);
+        for pos in from..len {
+            if pos != from && !reach[pos - 1] {
+                continue;
+            }
+            for n in 1..=P::MAX_FRAME_LEN.min(len - pos) {
+                if !reach[pos + n - 1] && unasked(&self.rx[pos..pos + n]) {
+                    reach[pos + n - 1] = true;
+                }
+            }
+        }
     }
 
     /// Whether a response frame longer than `n` bytes may begin with the received bytes (its

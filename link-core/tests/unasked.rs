@@ -207,3 +207,47 @@ fn a_reply_after_an_unasked_frame_to_its_end_is_not_swallowed() {
     assert_eq!((r.response, r.attempts), (want, 1));
     assert_eq!(core.unasked_seen(), 1);
 }
+
+/// Three unasked frames to their end, then the reply, in one quiet gap: no one head of the
+/// bytes leaves the reply, and after the first log the longest head that decodes runs to the
+/// reply's end (the reply's bytes extend the second log with a matching checksum). The master
+/// splits the bytes into the three logs and the reply.
+#[test]
+fn a_reply_after_several_unasked_frames_to_their_end_is_not_swallowed() {
+    use unasked_to_end::{request, response, Request, Response, UnaskedToEnd};
+    let logs: [&[u8]; 3] = [
+        &[0xAA, 0x21, 0x72, 0xAA, 0xE7],
+        &[0xAA, 0x21, 0x72, 0x43, 0x43, 0xC3],
+        &[0xAA, 0x21, 0x72, 0x3D],
+    ];
+    let status = [0xAA, 0x21, 0x40, 0x00, 0x05, 0x10];
+    let all = [logs[0], logs[1], logs[2], &status[..]].concat();
+    for log in logs {
+        assert_eq!(Response::decode(log).unwrap().message.name(), "log");
+    }
+    // What made a split one frame at a time fail: after the first log, the rest (the reply
+    // too) decodes as one log, and no head leaves the reply alone.
+    let heads = |at: usize| -> Vec<usize> {
+        (at + 1..=all.len())
+            .filter(|&n| Response::decode(&all[at..n]).is_ok_and(|d| d.message.name() == "log"))
+            .collect()
+    };
+    assert_eq!((heads(0), heads(5)), (vec![5], vec![11, all.len()]));
+    let q = Request::GetStatus(request::GetStatus { channel: 1 });
+
+    let mut core: MasterCore<Plain<UnaskedToEnd>> = MasterCore::new();
+    sent(&mut core, q, ms(0));
+    core.received(&all, ms(5));
+    let mut t = ms(5);
+    loop {
+        match core.poll(t) {
+            Action::Done => break,
+            Action::Read { until } | Action::Sleep(until) => t = until,
+            other => panic!("{other:?}"),
+        }
+    }
+    let r = core.take_outcome().unwrap().unwrap();
+    let want = Some(Response::Status(response::Status { value: 5 }));
+    assert_eq!((r.response, r.attempts), (want, 1));
+    assert_eq!(core.unasked_seen(), 3);
+}
