@@ -3648,3 +3648,124 @@ fn fport_both_streams_alike_interleaved_with_noise() {
         assert_eq!(any.message, e.message, "{:02X?}", e.wire);
     }
 }
+
+/// Every snapshot's `Framing::checksum_ok` (the weakest acceptance test, the checksum-only
+/// soak master's rule) decides as the interpreter's `interp::checksum_ok`, on each example
+/// frame (requests of replies too), each with one bit flipped at each offset, and each cut by
+/// its last byte.
+#[test]
+fn every_snapshot_checks_checksums_as_the_interpreter_does() {
+    fn one<P: Framing>(file: &str) -> (usize, usize) {
+        let p = fixture(file);
+        let mut frames: Vec<Vec<u8>> = Vec::new();
+        for e in &p.examples {
+            frames.push(e.wire.clone());
+            frames.extend(e.request.clone());
+        }
+        let mut inputs = Vec::new();
+        for w in &frames {
+            inputs.push(w.clone());
+            inputs.push(w[..w.len() - 1].to_vec());
+            for at in 0..w.len() {
+                for bit in [0x01, 0x80] {
+                    let mut x = w.clone();
+                    x[at] ^= bit;
+                    inputs.push(x);
+                }
+            }
+        }
+        let (mut passed, mut failed) = (0, 0);
+        let mut wrong = Vec::new();
+        for x in &inputs {
+            let (g, i) = (P::checksum_ok(x), busspec_model::interp::checksum_ok(&p, x));
+            if g != i {
+                wrong.push(format!("{} generated {g}, interpreter {i}", hex(x)));
+            }
+            if g {
+                passed += 1
+            } else {
+                failed += 1
+            }
+        }
+        assert!(wrong.is_empty(), "{file}: {}", wrong.join("\n"));
+        (passed, failed)
+    }
+    fn hex(b: &[u8]) -> String {
+        b.iter()
+            .map(|x| format!("{x:02X}"))
+            .collect::<Vec<_>>()
+            .join(" ")
+    }
+    macro_rules! each {
+        ($($module:ident :: $ty:ident, $file:literal;)*) => {{
+            let mut totals = (0, 0);
+            $(
+                let (p, f) = one::<$module::$ty>($file);
+                assert!(p > 0, "{}: no frame passes", $file);
+                totals = (totals.0 + p, totals.1 + f);
+            )*
+            totals
+        }};
+    }
+    let (passed, failed) = each! {
+        mini::Mini, "model/tests/fixtures/valid/minimal.yaml";
+        mini_crc::MiniCrc, "model/tests/fixtures/valid/minimal_crc.yaml";
+        clash::Clash, "codegen/tests/fixtures/core_names.yaml";
+        syncy::Syncy, "model/tests/fixtures/valid/minimal_sync.yaml";
+        codeless::Codeless, "model/tests/fixtures/valid/minimal_codeless.yaml";
+        vario::Vario, "model/tests/fixtures/valid/minimal_variable.yaml";
+        ending::Ending, "model/tests/fixtures/valid/minimal_end.yaml";
+        pelco_d2::PelcoD2, "model/tests/fixtures/valid/pelco_d_codeless.yaml";
+        unaddressed::Unaddressed, "model/tests/fixtures/valid/unaddressed.yaml";
+        ft12_fixed::Ft12Fixed, "model/tests/fixtures/valid/ft12_fixed.yaml";
+        ubx_like::UbxLike, "model/tests/fixtures/valid/ubx_like.yaml";
+        maestro_compact::MaestroCompact, "model/tests/fixtures/valid/maestro_compact.yaml";
+        pelco_p::PelcoP, "model/tests/fixtures/valid/pelco_p.yaml";
+        msp_v1::MspV1, "model/tests/fixtures/valid/msp_v1.yaml";
+        msp_by_direction::MspByDirection, "model/tests/fixtures/valid/msp_by_direction.yaml";
+        bcd_meter::BcdMeter, "model/tests/fixtures/valid/bcd_meter.yaml";
+        crc_extra::CrcExtra, "model/tests/fixtures/valid/crc_extra.yaml";
+        mavlink_v1::MavlinkV1, "model/tests/fixtures/valid/mavlink_v1.yaml";
+        mavlink_v2::MavlinkV2, "model/tests/fixtures/valid/mavlink_v2.yaml";
+        msp_v2::MspV2, "model/tests/fixtures/valid/msp_v2.yaml";
+        ft12_variable::Ft12Variable, "model/tests/fixtures/valid/ft12_variable.yaml";
+        sync_after_code::SyncAfterCode, "model/tests/fixtures/valid/sync_after_code.yaml";
+        meter_floats::MeterFloats, "model/tests/fixtures/valid/meter_floats.yaml";
+        telemetry_le::TelemetryLe, "model/tests/fixtures/valid/telemetry_le.yaml";
+        slip_sensor::SlipSensor, "model/tests/fixtures/valid/slip_sensor.yaml";
+        hdlc_like::HdlcLike, "model/tests/fixtures/valid/hdlc_like.yaml";
+        cobs_link::CobsLink, "model/tests/fixtures/valid/cobs_link.yaml";
+        dynamixel2_stuffed::Dynamixel2Stuffed, "model/tests/fixtures/valid/dynamixel2_stuffed.yaml";
+        xbee_api2::XbeeApi2, "model/tests/fixtures/valid/xbee_api2.yaml";
+        kiss::Kiss, "model/tests/fixtures/valid/kiss.yaml";
+        fport::Fport, "model/tests/fixtures/valid/fport.yaml";
+        fport_uplink::FportUplink, "model/tests/fixtures/valid/fport_uplink.yaml";
+        fport_both::FportBoth, "model/tests/fixtures/valid/fport_both.yaml";
+        unasked::Unasked, "model/tests/fixtures/valid/unasked.yaml";
+        unasked_to_end::UnaskedToEnd, "model/tests/fixtures/valid/unasked_to_end.yaml";
+        lists_after::ListsAfter, "model/tests/fixtures/valid/lists_after.yaml";
+        lists_length::ListsLength, "model/tests/fixtures/valid/lists_length.yaml";
+        packed_channels::PackedChannels, "model/tests/fixtures/valid/packed_channels.yaml";
+        records::Records, "model/tests/fixtures/valid/records.yaml";
+        records_sized::RecordsSized, "model/tests/fixtures/valid/records_sized.yaml";
+        mbus_short::MbusShort, "model/tests/fixtures/valid/mbus_short.yaml";
+        dlt645::Dlt645, "model/tests/fixtures/valid/dlt645.yaml";
+        optional_sensor::OptionalSensor, "model/tests/fixtures/valid/optional_sensor.yaml";
+        text_counted::TextCounted, "model/tests/fixtures/valid/text_counted.yaml";
+        text_terminated::TextTerminated, "model/tests/fixtures/valid/text_terminated.yaml";
+        vesc::Vesc, "model/tests/fixtures/valid/vesc.yaml";
+        mbus::Mbus, "model/tests/fixtures/valid/mbus.yaml";
+        jbd_bms::JbdBms, "model/tests/fixtures/valid/jbd_bms.yaml";
+        shdlc::Shdlc, "model/tests/fixtures/valid/shdlc.yaml";
+        nextion::Nextion, "model/tests/fixtures/valid/nextion.yaml";
+        rtcm3_frame::Rtcm3Frame, "model/tests/fixtures/valid/rtcm3_frame.yaml";
+        ubx_fixed_blocks::UbxFixedBlocks, "model/tests/fixtures/valid/ubx_fixed_blocks.yaml";
+        float_lists::FloatLists, "model/tests/fixtures/valid/float_lists.yaml";
+        pelco_d_replies::PelcoDReplies, "model/tests/fixtures/valid/pelco_d_replies.yaml";
+        roboclaw::Roboclaw, "model/tests/fixtures/valid/roboclaw.yaml";
+    };
+    assert!(
+        passed > 0 && failed > passed,
+        "{passed} passed, {failed} failed"
+    );
+}

@@ -726,9 +726,43 @@ impl<'p, P: Protocol> Run<'p, P> {
         }
     }
 
+    /// One frame through both engines' weakest acceptance test (`Framing::checksum_ok`, which
+    /// the checksum-only soak master and the fuzz bodies take as the rule).
+    fn checksum_ok(&mut self, frame: &[u8]) {
+        let g = catch_unwind(|| P::checksum_ok(frame));
+        let i = catch_unwind(AssertUnwindSafe(|| interp::checksum_ok(self.p, frame)));
+        if g.as_ref().ok() == i.as_ref().ok() && g.is_ok() {
+            return;
+        }
+        let say = |r: &std::thread::Result<bool>| match r {
+            Ok(true) => "passes".to_owned(),
+            Ok(false) => "fails".to_owned(),
+            Err(_) => "panics".to_owned(),
+        };
+        let kind = if g.is_err() || i.is_err() {
+            "panic"
+        } else {
+            "checksum_ok"
+        };
+        self.report.record(Disagreement {
+            kind,
+            signature: format!(
+                "checksum_ok: the frame {} the generated test, {} the interpreter's",
+                say(&g),
+                say(&i)
+            ),
+            class_only: false,
+            how: "checked by its checksum alone".into(),
+            input: interp::format_hex(frame),
+            generated: say(&g),
+            interpreter: say(&i),
+        });
+    }
+
     /// One frame every way: as request, as response, and as the reply to each request (all
     /// of them, or `replies` drawn at random).
     fn decode_all_ways(&mut self, frame: &[u8], replies: Option<usize>) {
+        self.checksum_ok(frame);
         self.decode(frame, Mode::Request);
         self.decode(frame, Mode::Response);
         let n = self.asks.len();

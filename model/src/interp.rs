@@ -1826,6 +1826,49 @@ fn check_over_request(
     Ok(())
 }
 
+/// Whether `wire` ends in the checksum of the bytes it covers and the end bytes, and nothing
+/// else, as the generated `Framing::checksum_ok` decides: the weakest acceptance test, which
+/// knows no message. A frame without a checksum (`checksum: none`) passes; any other must lay
+/// out (a long or short form's), is taken after its preamble, unescaped (and then no longer
+/// than the longest frame), and must hold at least one byte before its checksum. Where
+/// the directions' checksums cover from different bytes or their frames end apart, a frame
+/// passes that is either direction's. A reply whose checksum takes in its request's bytes is
+/// taken over its own bytes alone, which it fails.
+pub fn checksum_ok(p: &Protocol, wire: &[u8]) -> bool {
+    let both = [Direction::Request, Direction::Response];
+    if p.unchecked(&both, wire).is_some() {
+        return true;
+    }
+    let f = &p.framing;
+    // A frame of a long or short form is laid out first, which refuses a long frame whose
+    // length the short form holds.
+    if (f.long.is_some() || f.form.is_some()) && crate::long::canonical(p, wire).is_err() {
+        return false;
+    }
+    let directions: &[Direction] = if f.checksum.covers_by_direction() || f.end_by_direction() {
+        &both
+    } else {
+        &both[..1]
+    };
+    directions.iter().any(|&d| {
+        let Ok(plain) = escape::unescape_as(p, d, f.after_preamble(wire)) else {
+            return false;
+        };
+        let frame = &plain.frame[..];
+        // Generated code unescapes into a buffer of the longest frame's length.
+        let longest = || {
+            p.max_frame_len(Direction::Request)
+                .max(p.max_frame_len(Direction::Response))
+        };
+        if frame.len() <= f.trailer_len_of(d) || f.escaping.is_some() && frame.len() > longest() {
+            return false;
+        }
+        let mut copy = frame.to_vec();
+        reseal_as(p, d, &mut copy);
+        copy == frame
+    })
+}
+
 /// Writes into `frame` (of any message's length) its checksum, over the bytes it covers, and
 /// the end bytes after it; nothing into a frame shorter than those.
 ///
