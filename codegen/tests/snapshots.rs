@@ -127,6 +127,10 @@ fn constant_frame_spec_generates_its_snapshot() {
 #[test]
 fn sum16_complement_spec_generates_its_snapshot() {
     check("model/tests/fixtures/valid/jbd_bms.yaml", "jbd_bms.rs");
+    check(
+        "model/tests/fixtures/valid/header_constant.yaml",
+        "header_constant.rs",
+    );
     check("model/tests/fixtures/valid/nextion.yaml", "nextion.rs");
     check(
         "model/tests/fixtures/valid/rtcm3_frame.yaml",

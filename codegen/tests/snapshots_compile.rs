@@ -57,6 +57,7 @@ include!("snapshots/ubx_fixed_blocks.rs");
 include!("snapshots/float_lists.rs");
 include!("snapshots/pelco_d_replies.rs");
 include!("snapshots/roboclaw.rs");
+include!("snapshots/header_constant.rs");
 
 mod agree;
 
@@ -3763,9 +3764,58 @@ fn every_snapshot_checks_checksums_as_the_interpreter_does() {
         float_lists::FloatLists, "model/tests/fixtures/valid/float_lists.yaml";
         pelco_d_replies::PelcoDReplies, "model/tests/fixtures/valid/pelco_d_replies.yaml";
         roboclaw::Roboclaw, "model/tests/fixtures/valid/roboclaw.yaml";
+        header_constant::HeaderConstant, "model/tests/fixtures/valid/header_constant.yaml";
     };
     assert!(
         passed > 0 && failed > passed,
         "{passed} passed, {failed} failed"
     );
+}
+
+/// Header fields whose value every frame holds (`value` in `framing.header`, fixture
+/// `header_constant`): the generated messages carry only the sequence number; a frame with
+/// another header length or reserved byte is refused in both engines' words; both agree on
+/// every frame mutated from the examples and find the position reports in a noisy capture.
+#[test]
+fn header_constant_snapshot_agrees_with_the_interpreter() {
+    use header_constant::{HeaderConstant, Request, Response};
+    let file = "model/tests/fixtures/valid/header_constant.yaml";
+    replay::<HeaderConstant>(file);
+    let p = fixture(file);
+    assert!(p.framing.header.iter().any(|h| h.constant == Some(0x0B)));
+    let log = Request::Log(header_constant::request::Log {
+        sequence: 1,
+        port: 7,
+        trigger: 2,
+    });
+    let mut buf = [0u8; 64];
+    let n = log.encode(0, &mut buf).unwrap();
+    assert_eq!(&buf[..4], &[0xAA, 0x44, 0x12, 0x0B]);
+    assert_eq!(buf[6], 0x00, "the reserved byte");
+    // The header length one off, its CRC made right: no frame of this protocol.
+    let mut other = buf[..n].to_vec();
+    other[3] = 0x0C;
+    busspec_model::interp::reseal(&p, &mut other);
+    let g = Request::decode(&other).map(|_| ());
+    assert_eq!(
+        g.unwrap_err().to_string(),
+        "invalid value for log.header_length at offset 3: expected 0x0B, found 0x0C"
+    );
+    let i = busspec_model::interp::decode(&p, Some(Direction::Request), None, &other);
+    same_text(g, i.map(|_| ()));
+    // The reserved byte set in a report.
+    let mut report = p.examples[2].wire.clone();
+    report[6] = 0x01;
+    busspec_model::interp::reseal(&p, &mut report);
+    let g = Response::decode(&report).map(|_| ());
+    assert_eq!(
+        g.unwrap_err().to_string(),
+        "invalid value for position.reserved at offset 6: expected 0x00, found 0x01"
+    );
+    let i = busspec_model::interp::decode(&p, Some(Direction::Response), None, &report);
+    same_text(g, i.map(|_| ()));
+    let t = agree::agree::<HeaderConstant>(&p);
+    assert!(t.accepted >= 3 && t.refused > 100, "{t:?}");
+    let found = examples_stream_alike::<HeaderConstant>(&p, 0x4E0B, "position");
+    assert!(found > 20, "only {found} position frames found");
 }

@@ -335,6 +335,19 @@ impl G {
                 (format!("{{name: {name}, type: u8, enum: e{e}}}"), 1)
             }
             20..=29 if self.n_flags > 0 => (format!("{{name: {name}, type: u16, flags: fl0}}"), 2),
+            // A constant every frame holds (a header's own length, a reserved byte).
+            50..=59 => {
+                let (ty, width) = if self.rng.bool() {
+                    ("u8", 1)
+                } else {
+                    ("u16", 2)
+                };
+                let v = self.rng.u64(..1 << (8 * width));
+                (
+                    format!("{{name: {name}, type: {ty}, value: {v:#X}}}"),
+                    width,
+                )
+            }
             // Sub-fields (MSP v2's flag byte), some of them constant.
             30..=49 => {
                 for _ in 0..64 {
@@ -1385,7 +1398,7 @@ fn with_keys<'a>(text: &str, keys: impl IntoIterator<Item = (&'a str, String)>) 
 
 /// `text` with messages that give their header fields a value (`Own::HeaderValues`), in
 /// about half the specs whose messages carry header fields: one to three framed messages
-/// drawn, each giving one or all of its whole (not sub-divided) header fields a value within
+/// drawn, each giving one or all of its whole (not sub-divided, not constant) header fields a value within
 /// its range (or one of its enum's values, or any of its width); the variants in the order
 /// tried (the drawn messages, then each alone, in an order drawn).
 fn header_values(seed: u64, text: &str, p: &ir::Protocol) -> Vec<String> {
@@ -1397,9 +1410,8 @@ fn header_values(seed: u64, text: &str, p: &ir::Protocol) -> Vec<String> {
         .into_iter()
         .flat_map(|d| p.framed(d))
         .filter(|m| {
-            m.fields
-                .first()
-                .is_some_and(|f| f.header && f.bits.is_empty())
+            let mut header = m.fields.iter().take_while(|f| f.header);
+            header.any(|f| f.bits.is_empty() && f.constant.is_none())
         })
         .collect();
     if messages.is_empty() {
@@ -1434,7 +1446,7 @@ fn header_values(seed: u64, text: &str, p: &ir::Protocol) -> Vec<String> {
             .fields
             .iter()
             .take_while(|f| f.header)
-            .filter(|f| f.bits.is_empty())
+            .filter(|f| f.bits.is_empty() && f.constant.is_none())
             .collect();
         let chosen: Vec<&ir::Field> = if rng.bool() {
             whole.clone()
@@ -3651,10 +3663,23 @@ pub fn constructs(p: &ir::Protocol) -> Vec<&'static str> {
     add(!f.has_address(), "no address");
     add(!f.header.is_empty(), "header fields");
     add(
-        p.commands
+        f.header
             .iter()
-            .chain(&p.responses)
-            .any(|m| m.fields.iter().any(|h| h.header && h.constant.is_some())),
+            .chain(&f.response_header)
+            .any(|h| h.constant.is_some()),
+        "header constants",
+    );
+    add(
+        p.commands.iter().chain(&p.responses).any(|m| {
+            let framing = f.header_of(m.direction);
+            m.fields.iter().any(|h| {
+                h.header
+                    && h.constant.is_some()
+                    && !framing
+                        .iter()
+                        .any(|g| g.name == h.name && g.constant.is_some())
+            })
+        }),
         "header values",
     );
     add(

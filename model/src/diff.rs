@@ -1281,6 +1281,22 @@ impl<'a> Differ<'a> {
                 );
                 continue;
             }
+            // A constant every message carries (`value`): a frame with another is no frame.
+            if f.constant != g.constant {
+                let show =
+                    |c: Option<u64>| c.map_or("any value".to_owned(), |c| format!("0x{c:02X}"));
+                self.wire(
+                    "header_field_changed",
+                    path,
+                    format!(
+                        "header field `{}` holds {} → {}",
+                        f.name,
+                        show(f.constant),
+                        show(g.constant)
+                    ),
+                );
+                continue;
+            }
             let unit = |p: &Protocol, f: &Field| f.unit.map(|u| p.units[u].name.clone());
             let en = |p: &Protocol, f: &Field| f.enumeration.map(|e| p.enums[e].name.clone());
             let fl = |p: &Protocol, f: &Field| f.flags.map(|e| p.flags[e].name.clone());
@@ -1416,10 +1432,18 @@ impl<'a> Differ<'a> {
         let (mh, xh) = (headers(m), headers(x));
         // A message's own values for its header fields (`header:`): a frame with another value
         // is not this message, so giving, taking away or changing one reads frames differently.
+        // (A constant of `framing.header` itself changed is said once, by `header`.)
+        let framing_value = |p: &Protocol, name: &str| {
+            let h = p.framing.header_of(m.direction).iter();
+            h.filter(|h| h.name == name).find_map(|h| h.constant)
+        };
         for f in &m.fields[..mh] {
             let Some(g) = x.fields[..xh].iter().find(|g| g.name == f.name) else {
                 continue;
             };
+            if framing_value(self.old, &f.name) != framing_value(self.new, &f.name) {
+                continue;
+            }
             if f.constant != g.constant {
                 let show =
                     |c: Option<u64>| c.map_or("any value".to_owned(), |c| format!("0x{c:02X}"));

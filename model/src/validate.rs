@@ -2995,7 +2995,6 @@ fn header_fields(
             h,
             &p,
             &[
-                "value",
                 "equals",
                 "repeat",
                 "packed",
@@ -3464,6 +3463,13 @@ fn header_constants(
             sink.error(p, why);
             continue;
         };
+        if let Some(c) = f.constant {
+            sink.error(
+                p,
+                format!("header field `{name}` is a constant of framing.header ({c:#04X}): every message carries it"),
+            );
+            continue;
+        }
         let bits = 8 * f.width as u32;
         if !fits_unsigned(v, bits) {
             sink.error(

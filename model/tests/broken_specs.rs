@@ -1006,8 +1006,12 @@ const CASES: &[(&str, &[(&str, &str)])] = &[
         &[("framing.layout", "layout has `header` but `framing.header` is missing")],
     ),
     (
-        "header_constant",
-        &[("framing.header.sequence.value", "`value` cannot be used in a header field")],
+        "header_constant_unfit",
+        &[
+            ("framing.header.sequence.unit", "`unit` cannot be combined with a constant `value`"),
+            ("framing.header.sysid.value", "constant 0x1FF does not fit in a 8-bit field"),
+            ("commands.ping.header.compid", "header field `compid` is a constant of framing.header (0x01): every message carries it"),
+        ],
     ),
     (
         "header_float",
