@@ -1829,8 +1829,9 @@ fn check_over_request(
 /// Whether `wire` ends in the checksum of the bytes it covers and the end bytes, and nothing
 /// else, as the generated `Framing::checksum_ok` decides: the weakest acceptance test, which
 /// knows no message. A frame without a checksum (`checksum: none`) passes; any other must lay
-/// out (a long or short form's), is taken after its preamble, unescaped (and then no longer
-/// than the longest frame), and must hold at least one byte before its checksum. Where
+/// out (a long or short form's; a short length field widened, no longer than the longest
+/// frame), is taken after its preamble, unescaped (and then no longer than the longest frame),
+/// and must hold at least one byte before its checksum. Where
 /// the directions' checksums cover from different bytes or their frames end apart, a frame
 /// passes that is either direction's. A reply whose checksum takes in its request's bytes is
 /// taken over its own bytes alone, which it fails.
@@ -1842,8 +1843,16 @@ pub fn checksum_ok(p: &Protocol, wire: &[u8]) -> bool {
     let f = &p.framing;
     // A frame of a long or short form is laid out first, which refuses a long frame whose
     // length the short form holds.
-    if (f.long.is_some() || f.form.is_some()) && crate::long::canonical(p, wire).is_err() {
-        return false;
+    if f.long.is_some() || f.form.is_some() {
+        // Generated code widens a short frame's length field into a buffer of the longest
+        // frame's length.
+        let most = p
+            .max_wire_len(Direction::Request)
+            .max(p.max_wire_len(Direction::Response));
+        match crate::long::canonical(p, wire) {
+            Ok(laid) if laid.short.is_none() || laid.frame.len() <= most => {}
+            _ => return false,
+        }
     }
     let directions: &[Direction] = if f.checksum.covers_by_direction() || f.end_by_direction() {
         &both
