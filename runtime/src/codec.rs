@@ -25,8 +25,8 @@ pub use crate::lists::{Lists, Split};
 pub use crate::optional::{presence, OptionalAt, Optionals, Present, When};
 pub use crate::repeated::{
     encode_packed_in_range, fixed_elements, list, list_bits, list_text, pack, packed_in_range,
-    packed_padding, read_bits, records, unpack, write_bits, write_fixed, CountBy, CountField,
-    Element, RepeatAt, SizedBy,
+    packed_padding, read_bits, records, unpack, write_bits, write_fixed, ByteCount, CountBy,
+    CountField, CountLen, Element, RepeatAt, SizedBy,
 };
 pub use crate::stream::{Candidate, Candidates, LengthField, VarLen, VarLens};
 pub use crate::Bits;
@@ -972,18 +972,18 @@ pub fn var_by_length(head: &[u8], shapes: &[(Fixed, usize, usize)], field: Lengt
 }
 
 /// The variable-length candidate of one direction whose variable-length messages are counted
-/// by a field (`(the bytes it fixes, where the repeat sits)`): the length the count field of
-/// the first whose fixed bytes agree with `head` gives; [`VarLen::NEED_MORE`] while some are
-/// not buffered yet.
+/// by a field (`(the bytes it fixes, how its count gives its length)`, the latter
+/// [`RepeatAt::count_len`] in a `const`): the length the count field of the first whose fixed
+/// bytes agree with `head` gives; [`VarLen::NEED_MORE`] while some are not buffered yet.
 #[inline(always)]
-pub fn var_by_count(head: &[u8], shapes: &[(Fixed, RepeatAt)]) -> VarLen {
+pub fn var_by_count(head: &[u8], shapes: &[(Fixed, CountLen)]) -> VarLen {
     // Written out rather than through `first_agreeing`: its closure was not inlined, so
     // every head paid a call and a count read generic over the repeat (Modbus: 62
     // instructions where a count field agreed); inlined, each shape's constants fold.
     let mut wait = false;
     for (fixed, r) in shapes {
         match fixed.agrees(head) {
-            Some(true) => return VarLen::of(r.frame_len_inline(head)),
+            Some(true) => return VarLen::of(r.frame_len(head)),
             Some(false) => {}
             None => wait = true,
         }

@@ -455,6 +455,51 @@ pub struct RepeatAt {
     pub max: usize,
 }
 
+/// A repeat counted by one byte, as the numbers that give its frame's length from that byte
+/// ([`RepeatAt::byte_count`]).
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct ByteCount {
+    pub at: usize,
+    pub mul: usize,
+    pub add: usize,
+    pub shift: u32,
+    pub lo: usize,
+    pub hi: usize,
+    pub mask: usize,
+    pub base: usize,
+}
+
+impl ByteCount {
+    /// [`RepeatAt::frame_len`] of the repeat this came from.
+    #[inline(always)]
+    pub fn frame_len(&self, head: &[u8]) -> Option<usize> {
+        let v = usize::from(*head.get(self.at)?);
+        let extra = (v * self.mul + self.add) >> self.shift;
+        let fits = extra >= self.lo && extra <= self.hi && extra & self.mask == 0;
+        Some(if fits { self.base + extra } else { 0 })
+    }
+}
+
+/// How the stream decoder finds a variable-length frame's length from its count field
+/// ([`RepeatAt::count_len`], computed where the generated tables are written, in a `const`):
+/// a count of one byte as plain numbers, any other through its [`RepeatAt`].
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum CountLen {
+    Byte(ByteCount),
+    Other(RepeatAt),
+}
+
+impl CountLen {
+    /// [`RepeatAt::frame_len`] of the repeat this came from.
+    #[inline(always)]
+    pub fn frame_len(&self, head: &[u8]) -> Option<usize> {
+        match self {
+            CountLen::Byte(b) => b.frame_len(head),
+            CountLen::Other(r) => r.frame_len_inline(head),
+        }
+    }
+}
+
 /// What a repeated field's count is.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub enum CountBy {
@@ -827,6 +872,59 @@ impl RepeatAt {
     #[inline]
     pub fn frame_len(&self, head: &[u8]) -> Option<usize> {
         self.frame_len_inline(head)
+    }
+
+    /// [`Self::frame_len`] as plain numbers where the count is one byte (Modbus's byte
+    /// counts): the length the count byte `v` gives is `base + extra`, `extra` being
+    /// `(v * mul + add) >> shift`, where `lo <= extra <= hi` and `extra & mask == 0`, else 0;
+    /// `None` for any other count. What the generated `variable_candidates` hand
+    /// `rt::var_by_count` ([`Self::count_len`], in a `const`): the compiler did not fold the
+    /// generic arithmetic (the count's kind, its width, the bounds as bytes, a division) where
+    /// several messages' repeats share one path (Modbus's four read replies became a table of
+    /// the four constants and the arithmetic on each), and as these numbers it is a few
+    /// operations whether folded or not.
+    pub const fn byte_count(&self) -> Option<ByteCount> {
+        let (c, bytes) = match self.count {
+            CountBy::Elements(c) => (c, false),
+            CountBy::Bytes(c) => (c, true),
+            _ => return None,
+        };
+        if c.width != 1 {
+            return None;
+        }
+        // `extra % width == 0` as a mask: where it is not always true, the width must be a
+        // power of two.
+        let mask = if self.width == 0 || !bytes {
+            0
+        } else if self.width.is_power_of_two() {
+            self.width - 1
+        } else {
+            return None;
+        };
+        let (mul, add, shift) = match (bytes, self.width) {
+            (true, _) => (1, 0, 0),
+            (false, 0) => (1, 7, 3),
+            (false, w) => (w, 0, 0),
+        };
+        Some(ByteCount {
+            at: c.at,
+            mul,
+            add,
+            shift,
+            lo: self.bytes_of(self.min),
+            hi: self.bytes_of(self.max),
+            mask,
+            base: self.base,
+        })
+    }
+
+    /// [`Self::frame_len`] as the stream decoder's tables hold it ([`CountLen`]), for a
+    /// `const`.
+    pub const fn count_len(self) -> CountLen {
+        match self.byte_count() {
+            Some(b) => CountLen::Byte(b),
+            None => CountLen::Other(self),
+        }
     }
 
     /// [`Self::frame_len`], always inlined: where the repeat is a constant (the generated
@@ -1569,6 +1667,54 @@ mod tests {
     extern crate std;
     use super::*;
     use std::format;
+
+    /// A count of one byte gives the stream decoder the same frame length as plain numbers
+    /// ([`RepeatAt::count_len`]) as through the repeat, for every count byte and a head that
+    /// does not reach it yet.
+    #[test]
+    fn a_byte_count_gives_the_lengths_the_repeat_gives() {
+        static DESC: crate::FieldDesc = crate::FieldDesc {
+            message: "m",
+            name: "values",
+        };
+        let field = CountField {
+            name: "count",
+            at: 2,
+            width: 1,
+            le: false,
+        };
+        let mut byte = 0;
+        for width in [0, 1, 2, 3, 4, 8] {
+            for bytes in [false, true] {
+                for (min, max) in [(0, 0), (0, 255), (1, 125), (3, 7), (8, 2000), (16, 16)] {
+                    let r = RepeatAt {
+                        field: &DESC,
+                        base: 5,
+                        at: 3,
+                        width,
+                        le: false,
+                        signed: false,
+                        count: if bytes {
+                            CountBy::Bytes(field)
+                        } else {
+                            CountBy::Elements(field)
+                        },
+                        min,
+                        max,
+                    };
+                    let c = r.count_len();
+                    byte += usize::from(matches!(c, CountLen::Byte(_)));
+                    assert_eq!(c.frame_len(&[1, 2]), r.frame_len(&[1, 2]));
+                    for v in 0..=255u8 {
+                        let head = [1, 3, v, 0];
+                        assert_eq!(c.frame_len(&head), r.frame_len(&head), "{r:?} {v}");
+                    }
+                }
+            }
+        }
+        // All but the byte counts of 3-byte elements.
+        assert_eq!(byte, 66);
+    }
 
     #[test]
     fn holds_at_most_its_capacity_and_compares_only_what_it_holds() {

@@ -810,7 +810,7 @@ pub(super) fn emit_variable_candidates(p: &Protocol, start_check: TokenStream) -
                         match (many, has_lists(m)) {
                             (false, _) => {
                                 let r = repeat_const(m);
-                                quote!((#fixed, #r))
+                                quote!((#fixed, #r.count_len()))
                             }
                             (true, false) => {
                                 let r = repeat_const(m);
@@ -828,7 +828,7 @@ pub(super) fn emit_variable_candidates(p: &Protocol, start_check: TokenStream) -
                 } else if many {
                     quote!(rt::var_by_counts(head, &[#(#shapes),*]))
                 } else {
-                    quote!(rt::var_by_count(head, &[#(#shapes),*]))
+                    quote!(rt::var_by_count(head, const { &[#(#shapes),*] }))
                 }
             }
         };

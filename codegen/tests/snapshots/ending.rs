@@ -784,17 +784,19 @@ pub mod ending {
             rt::VarLens {
                 requests: rt::var_by_count(
                     head,
-                    &[
-                        (
-                            rt::Fixed {
-                                code_at: 3,
-                                code: &[0x02],
-                                lead_at: 4,
-                                lead: &[],
-                            },
-                            REPEAT_WRITE,
-                        ),
-                    ],
+                    const {
+                        &[
+                            (
+                                rt::Fixed {
+                                    code_at: 3,
+                                    code: &[0x02],
+                                    lead_at: 4,
+                                    lead: &[],
+                                },
+                                REPEAT_WRITE.count_len(),
+                            ),
+                        ]
+                    },
                 ),
                 responses: rt::VarLen::NONE,
             }

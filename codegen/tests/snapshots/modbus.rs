@@ -1858,67 +1858,71 @@ pub mod modbus {
             rt::VarLens {
                 requests: rt::var_by_count(
                     head,
-                    &[
-                        (
-                            rt::Fixed {
-                                code_at: 1,
-                                code: &[0x0F],
-                                lead_at: 2,
-                                lead: &[],
-                            },
-                            REPEAT_WRITE_MULTIPLE_COILS,
-                        ),
-                        (
-                            rt::Fixed {
-                                code_at: 1,
-                                code: &[0x10],
-                                lead_at: 2,
-                                lead: &[],
-                            },
-                            REPEAT_WRITE_MULTIPLE_REGISTERS,
-                        ),
-                    ],
+                    const {
+                        &[
+                            (
+                                rt::Fixed {
+                                    code_at: 1,
+                                    code: &[0x0F],
+                                    lead_at: 2,
+                                    lead: &[],
+                                },
+                                REPEAT_WRITE_MULTIPLE_COILS.count_len(),
+                            ),
+                            (
+                                rt::Fixed {
+                                    code_at: 1,
+                                    code: &[0x10],
+                                    lead_at: 2,
+                                    lead: &[],
+                                },
+                                REPEAT_WRITE_MULTIPLE_REGISTERS.count_len(),
+                            ),
+                        ]
+                    },
                 ),
                 responses: rt::var_by_count(
                     head,
-                    &[
-                        (
-                            rt::Fixed {
-                                code_at: 1,
-                                code: &[0x01],
-                                lead_at: 2,
-                                lead: &[],
-                            },
-                            REPEAT_READ_COILS_REPLY,
-                        ),
-                        (
-                            rt::Fixed {
-                                code_at: 1,
-                                code: &[0x02],
-                                lead_at: 2,
-                                lead: &[],
-                            },
-                            REPEAT_READ_DISCRETE_INPUTS_REPLY,
-                        ),
-                        (
-                            rt::Fixed {
-                                code_at: 1,
-                                code: &[0x03],
-                                lead_at: 2,
-                                lead: &[],
-                            },
-                            REPEAT_READ_HOLDING_REGISTERS_REPLY,
-                        ),
-                        (
-                            rt::Fixed {
-                                code_at: 1,
-                                code: &[0x04],
-                                lead_at: 2,
-                                lead: &[],
-                            },
-                            REPEAT_READ_INPUT_REGISTERS_REPLY,
-                        ),
-                    ],
+                    const {
+                        &[
+                            (
+                                rt::Fixed {
+                                    code_at: 1,
+                                    code: &[0x01],
+                                    lead_at: 2,
+                                    lead: &[],
+                                },
+                                REPEAT_READ_COILS_REPLY.count_len(),
+                            ),
+                            (
+                                rt::Fixed {
+                                    code_at: 1,
+                                    code: &[0x02],
+                                    lead_at: 2,
+                                    lead: &[],
+                                },
+                                REPEAT_READ_DISCRETE_INPUTS_REPLY.count_len(),
+                            ),
+                            (
+                                rt::Fixed {
+                                    code_at: 1,
+                                    code: &[0x03],
+                                    lead_at: 2,
+                                    lead: &[],
+                                },
+                                REPEAT_READ_HOLDING_REGISTERS_REPLY.count_len(),
+                            ),
+                            (
+                                rt::Fixed {
+                                    code_at: 1,
+                                    code: &[0x04],
+                                    lead_at: 2,
+                                    lead: &[],
+                                },
+                                REPEAT_READ_INPUT_REGISTERS_REPLY.count_len(),
+                            ),
+                        ]
+                    },
                 ),
             }
         }

@@ -847,31 +847,35 @@ pub mod nextion {
             rt::VarLens {
                 requests: rt::var_by_count(
                     head,
-                    &[
-                        (
-                            rt::Fixed {
-                                code_at: 0,
-                                code: &[],
-                                lead_at: 0,
-                                lead: &[],
-                            },
-                            REPEAT_INSTRUCTION,
-                        ),
-                    ],
+                    const {
+                        &[
+                            (
+                                rt::Fixed {
+                                    code_at: 0,
+                                    code: &[],
+                                    lead_at: 0,
+                                    lead: &[],
+                                },
+                                REPEAT_INSTRUCTION.count_len(),
+                            ),
+                        ]
+                    },
                 ),
                 responses: rt::var_by_count(
                     head,
-                    &[
-                        (
-                            rt::Fixed {
-                                code_at: 0,
-                                code: &[0x70],
-                                lead_at: 1,
-                                lead: &[],
-                            },
-                            REPEAT_STRING,
-                        ),
-                    ],
+                    const {
+                        &[
+                            (
+                                rt::Fixed {
+                                    code_at: 0,
+                                    code: &[0x70],
+                                    lead_at: 1,
+                                    lead: &[],
+                                },
+                                REPEAT_STRING.count_len(),
+                            ),
+                        ]
+                    },
                 ),
             }
         }
