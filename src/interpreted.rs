@@ -848,7 +848,10 @@ impl Framing for Interpreted {
         if p.unchecked(&both, frame).is_some() {
             return true;
         }
-        if frame.len() <= p.framing.trailer_len() {
+        // (A checksum before the bytes it covers: at least as far as its own end.)
+        let (c, f) = (&p.framing.checksum, &p.framing);
+        if frame.len() <= c.len() + f.end.len() || frame.len() < c.lead.map_or(0, |at| at + c.len())
+        {
             return false;
         }
         let mut copy = frame.to_vec();
