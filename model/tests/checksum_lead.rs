@@ -222,3 +222,17 @@ fn moving_the_checksum_is_wire_breaking() {
         moved[0].text
     );
 }
+
+#[test]
+fn docs_and_the_dissector_say_where_it_sits_and_what_it_covers() {
+    let p = fixture();
+    let docs = busspec_model::docs::render(&p, "sbf_blocks.yaml");
+    assert!(
+        docs.contains(
+            "| checksum | 2 | over the bytes from offset 4 to the frame's end, after it |"
+        ),
+        "{docs}"
+    );
+    let lua = busspec_model::dissector::render(&[&p]);
+    assert!(lua.contains("covers_from = 4, lead = 2,"), "{lua}");
+}

@@ -357,7 +357,9 @@ fn sums<T>(frame: &[u8], at: usize, f: &Frame, checksum: impl FnOnce(&[u8]) -> T
         // Before the bytes it covers: the frame to its end bytes goes to `checksum`, which
         // takes the covered ones from it.
         let found = frame.get(at..at + f.checksum_len).unwrap_or(&[]);
-        let body = frame.get(..frame.len() - f.end.len()).unwrap_or(frame);
+        let body = frame
+            .get(..frame.len().saturating_sub(f.end.len()))
+            .unwrap_or(frame);
         return (uint(found, !f.checksum_be) as u32, checksum(body));
     }
     let (body, tail) = frame.split_at(at);
