@@ -170,6 +170,18 @@ fn fletcher_spec_generates_its_snapshot() {
     check("model/tests/fixtures/valid/ubx_like.yaml", "ubx_like.rs");
 }
 
+/// A checksum before the bytes it covers (Septentrio SBF: `$@`, a CRC-16/XMODEM at offset 2
+/// over the ID, the length and the body after it): `FRAME.lead`, the frame sum over the bytes
+/// from offset 4 to the end (`snapshots_compile.rs` compiles it and holds it to the
+/// interpreter).
+#[test]
+fn checksum_before_the_payload_spec_generates_its_snapshot() {
+    check(
+        "model/tests/fixtures/valid/sbf_blocks.yaml",
+        "sbf_blocks.rs",
+    );
+}
+
 /// Records of a fixed count in UBX-shaped frames (`rt::CountBy::Fixed`): three satellite
 /// records followed by a field, two port records followed by a counted list
 /// (`snapshots_compile.rs` compiles it and holds it to the interpreter).

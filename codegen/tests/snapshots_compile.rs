@@ -13,6 +13,7 @@ include!("snapshots/pelco_d.rs");
 include!("snapshots/unaddressed.rs");
 include!("snapshots/ft12_fixed.rs");
 include!("snapshots/ubx_like.rs");
+include!("snapshots/sbf_blocks.rs");
 include!("snapshots/maestro_compact.rs");
 include!("snapshots/pelco_p.rs");
 include!("snapshots/msp_v1.rs");
@@ -938,6 +939,49 @@ fn fletcher_snapshot_agrees_with_the_interpreter() {
     assert!(t.accepted >= 6 && t.refused > 100, "{t:?}");
     let found = examples_stream_alike::<UbxLike>(&p, 0xF1E7, "ack");
     assert!(found > 50, "only {found} ack frames found");
+}
+
+/// A checksum before the bytes it covers (Septentrio SBF's CRC-16/XMODEM at offset 2, over
+/// the ID, the length and the body after it): the examples replay (their CRCs computed apart
+/// from busspec), a byte changed anywhere the CRC covers is a mismatch at offset 2 in both
+/// engines' words, the sync bytes are not covered, and both agree on every frame mutated from
+/// the examples and on captures of them with noise between.
+#[test]
+fn checksum_before_the_payload_snapshot_agrees_with_the_interpreter() {
+    use busspec_runtime::DecodeError;
+    use sbf_blocks::{Response, SbfBlocks};
+    let file = "model/tests/fixtures/valid/sbf_blocks.yaml";
+    replay::<SbfBlocks>(file);
+    let p = fixture(file);
+    assert_eq!(p.framing.checksum.lead, Some(2));
+    assert_eq!(sbf_blocks::checksum(b"123456789"), 0x31C3);
+    let good = p.examples[2].wire.clone();
+    assert!(Response::decode(&good).is_ok());
+    for i in [4, 6, 9, good.len() - 1] {
+        let mut bad = good.clone();
+        bad[i] ^= 0x10;
+        let g = Response::decode(&bad).map(|_| ());
+        assert!(
+            matches!(g, Err(DecodeError::ChecksumMismatch { offset: 2, .. })),
+            "byte {i}: {g:?}"
+        );
+        let i = busspec_model::interp::decode(&p, Some(Direction::Response), None, &bad);
+        same_text(g, i.map(|_| ()));
+    }
+    // The CRC itself changed: found where it sits.
+    let mut bad = good.clone();
+    bad[3] ^= 0x01;
+    let g = Response::decode(&bad).map(|_| ());
+    assert_eq!(
+        g.unwrap_err().to_string(),
+        "checksum mismatch at offset 2: expected 0x5010, found 0x5110"
+    );
+    let i = busspec_model::interp::decode(&p, Some(Direction::Response), None, &bad);
+    same_text(g, i.map(|_| ()));
+    let t = agree::agree::<SbfBlocks>(&p);
+    assert!(t.accepted >= 4 && t.refused > 50, "{t:?}");
+    let found = examples_stream_alike::<SbfBlocks>(&p, 0x5BF0, "end_of_pvt");
+    assert!(found > 50, "only {found} EndOfPVT blocks found");
 }
 
 /// The 16-bit sum negated (JBD's battery management protocol), a layout, header fields and a
@@ -3765,6 +3809,7 @@ fn every_snapshot_checks_checksums_as_the_interpreter_does() {
         pelco_d_replies::PelcoDReplies, "model/tests/fixtures/valid/pelco_d_replies.yaml";
         roboclaw::Roboclaw, "model/tests/fixtures/valid/roboclaw.yaml";
         header_constant::HeaderConstant, "model/tests/fixtures/valid/header_constant.yaml";
+        sbf_blocks::SbfBlocks, "model/tests/fixtures/valid/sbf_blocks.yaml";
     };
     assert!(
         passed > 0 && failed > passed,

@@ -281,6 +281,9 @@ enum Own {
     /// A message's own values for its header fields (`header:`, JBD's request state and reply
     /// status): whether a spec tries them, which messages, which fields, which values.
     HeaderValues = 0xA55A_A55A_A55A_A55A,
+    /// A checksum before the bytes it covers (Septentrio SBF's CRC at offset 2): whether a
+    /// spec tries it, and where it goes.
+    ChecksumLead = 0x5BF0_2440_5BF0_2440,
 }
 
 /// The generator of `what` for the spec of `seed`.
@@ -1319,6 +1322,16 @@ pub fn random_spec(seed: u64) -> String {
             break;
         }
     }
+    // A checksum before the bytes it covers (Septentrio SBF's CRC at offset 2, over the ID,
+    // length and body after it): tried last, on three in five of the specs whose one layout
+    // ends in its checksum, kept where the validator accepts it (every rule it holds such a
+    // checksum to is the validator's); drawn by a generator of its own.
+    for with in checksum_lead(seed, &text) {
+        if let Ok(q) = busspec_model::load_str("generated.yaml", &with) {
+            (text, p) = (with, q);
+            break;
+        }
+    }
     let mut rng = own_rng(seed, Own::Examples);
     match examples(&p, &mut rng) {
         Some(examples) => format!("{text}examples:\n{examples}errata: []\n"),
@@ -1719,6 +1732,63 @@ fn bare_responses(seed: u64, text: &str) -> Option<String> {
 
 /// The items of a YAML flow sequence's inside (`{a: 1, b: [2, 3]}, {c: 4}`), each as written:
 /// split at the commas outside brackets and braces.
+/// `text` with its checksum moved before the payload (`Own::ChecksumLead`), in three in five
+/// of the specs whose one layout ends in it: just before a part of the layout before the
+/// payload, which it then covers from, to the frame's end (`covers_from` that part); the
+/// variants in the order tried, each place once.
+fn checksum_lead(seed: u64, text: &str) -> Vec<String> {
+    let mut rng = own_rng(seed, Own::ChecksumLead);
+    if rng.u8(..100) >= 60 {
+        return Vec::new();
+    }
+    let Some(line) = text.lines().find(|l| l.starts_with("  layout: [")) else {
+        return Vec::new();
+    };
+    let Some(inner) = line
+        .strip_prefix("  layout: [")
+        .and_then(|l| l.strip_suffix(']'))
+    else {
+        return Vec::new();
+    };
+    let layout: Vec<&str> = inner.split(", ").collect();
+    let Some((&"checksum", rest)) = layout.split_last() else {
+        return Vec::new();
+    };
+    let Some(payload) = rest.iter().position(|p| *p == "payload") else {
+        return Vec::new();
+    };
+    let Some(cs_line) = text.lines().find(|l| l.starts_with("  checksum: {")) else {
+        return Vec::new();
+    };
+    let Some(body) = cs_line
+        .strip_prefix("  checksum: {")
+        .and_then(|l| l.strip_suffix('}'))
+    else {
+        return Vec::new();
+    };
+    let items: Vec<String> = flow_items(body)
+        .into_iter()
+        .filter(|i| !i.starts_with("covers_from:"))
+        .collect();
+    let mut places: Vec<usize> = (0..payload).collect();
+    rng.shuffle(&mut places);
+    places
+        .into_iter()
+        .map(|i| {
+            let mut moved = rest.to_vec();
+            moved.insert(i, "checksum");
+            let layout = format!("  layout: [{}]", moved.join(", "));
+            let checksum = format!(
+                "  checksum: {{{}, covers_from: {}}}",
+                items.join(", "),
+                rest[i]
+            );
+            text.replacen(line, &layout, 1)
+                .replacen(cs_line, &checksum, 1)
+        })
+        .collect()
+}
+
 fn flow_items(inner: &str) -> Vec<String> {
     let (mut out, mut depth, mut from) = (Vec::new(), 0i32, 0usize);
     for (i, c) in inner.char_indices() {
@@ -3982,6 +4052,7 @@ pub fn constructs(p: &ir::Protocol) -> Vec<&'static str> {
     };
     add(true, alg);
     add(f.checksum.covers_from > 0, "covers_from");
+    add(f.checksum.lead.is_some(), "checksum before the payload");
     add(
         f.checksum.extra.is_some(),
         "checksum extra byte per message",

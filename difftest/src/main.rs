@@ -251,6 +251,10 @@ fn main() {
         count("checksum covering from another offset by direction"),
         count("header fields by direction")
     );
+    println!(
+        "  specs with a checksum before the bytes it covers {}",
+        count("checksum before the payload")
+    );
     if !f.signatures.is_empty() {
         println!("disagreements by what differs (count, what):");
         for (sig, n) in &f.signatures {

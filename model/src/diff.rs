@@ -836,6 +836,19 @@ impl<'a> Differ<'a> {
                 format!("checksum covers from offset {ocf} → {ncf}"),
             );
         }
+        // Moved before the bytes it covers, back to the end, or elsewhere before them: every
+        // frame's checksum travels at another offset (the layout's change says where).
+        if oc.lead != nc.lead {
+            let show = |l: Option<usize>| match l {
+                Some(at) => format!("at offset {at}, before the bytes it covers"),
+                None => "at the frame's end".to_owned(),
+            };
+            self.wire(
+                "checksum_moved",
+                "framing.checksum",
+                format!("checksum {} → {}", show(oc.lead), show(nc.lead)),
+            );
+        }
         // A response's, where each direction's checksum covers from its own byte
         // (`covers_from: {request, response}`): unchanged with the request's where neither
         // protocol's differs by direction.

@@ -737,7 +737,7 @@ fn protocol(p: &Protocol) -> String {
     };
     let _ = writeln!(
         s,
-        "  checksum = {{ name = {}, width = {}, len = {}, order = {}, covers_from = {}{}, check = {},\n    plain = {plain},\n    fn = {} }},",
+        "  checksum = {{ name = {}, width = {}, len = {}, order = {}, covers_from = {}{}{}, check = {},\n    plain = {plain},\n    fn = {} }},",
         lua_str(&c.algorithm.name()),
         c.width,
         c.len(),
@@ -748,6 +748,11 @@ fn protocol(p: &Protocol) -> String {
             format!(", response_covers_from = {}", c.response_covers_from)
         } else {
             String::new()
+        },
+        // A checksum before the bytes it covers (SBF): where it sits.
+        match c.lead {
+            Some(at) => format!(", lead = {at}"),
+            None => String::new(),
         },
         c.check,
         if c.extra.is_some() { with_extra } else { "nil".to_owned() }

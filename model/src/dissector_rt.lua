@@ -787,6 +787,8 @@ local function end_at(P, n, dir)
 end
 
 local function checksum_at(P, n, dir)
+  -- Before the bytes it covers (SBF's CRC at offset 2): there whatever the length.
+  if P.checksum.lead then return P.checksum.lead end
   if P.end_first then return n - P.checksum.len end
   return n - P.checksum.len - #ends_of(P, dir)
 end
@@ -1616,14 +1618,17 @@ local function setup(P)
         if dir == "response" and ck.response_covers_from then return ck.response_covers_from end
         return ck.covers_from
       end
+      -- Up to itself, or to the end bytes where it comes before the bytes it covers.
+      local ck_to = ck_at
+      if ck.lead then ck_to = n - #ends_of(P, pool[1].m.dir) end
       if ck.response_covers_from then
         local kept = {}
         for _, c in ipairs(pool) do
-          if ck.fn(b, ck_from(c.m.dir), ck_at) == ck_found then kept[#kept + 1] = c end
+          if ck.fn(b, ck_from(c.m.dir), ck_to) == ck_found then kept[#kept + 1] = c end
         end
         if #kept > 0 then pool = kept end
       end
-      ck_expected = ck.fn(b, ck_from(pool[1].m.dir), ck_at)
+      ck_expected = ck.fn(b, ck_from(pool[1].m.dir), ck_to)
       ck_good = (ck_expected == ck_found)
     end
 

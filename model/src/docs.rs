@@ -630,7 +630,11 @@ pub fn render(p: &Protocol, source: &str) -> String {
                     (
                         "checksum".to_owned(),
                         f.checksum.len().to_string(),
-                        if from == 0 {
+                        if f.checksum.lead.is_some() {
+                            format!(
+                                "over the bytes from offset {from} to the frame's end, after it"
+                            )
+                        } else if from == 0 {
                             "over every byte before it".to_owned()
                         } else {
                             format!("over the bytes from offset {from} up to it")

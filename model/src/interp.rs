@@ -1770,14 +1770,19 @@ pub(crate) fn check_checksum(
     wire: &[u8],
 ) -> Result<(), DecodeError> {
     let c = &p.framing.checksum;
-    if wire.len() < p.framing.trailer_len_of(d) {
+    // A checksum before the payload needs the bytes up to its own end.
+    let needed = match c.lead {
+        Some(at) => at + c.len(),
+        None => p.framing.trailer_len_of(d),
+    };
+    if wire.len() < needed {
         return Err(DecodeError::Truncated {
-            needed: p.framing.trailer_len_of(d),
+            needed,
             found: wire.len(),
         });
     }
     let at = p.framing.checksum_at_of(d, wire.len());
-    let covered = wire.get(c.covers_from_of(d)..at).unwrap_or(&[]);
+    let covered = wire.get(p.framing.covered_of(d, wire.len())).unwrap_or(&[]);
     // The prepared tables know no extra byte.
     let expected = match prepared {
         Some(prepared) if c.extra.is_none() => prepared.compute(covered),
@@ -1869,7 +1874,16 @@ pub fn checksum_ok(p: &Protocol, wire: &[u8]) -> bool {
             p.max_frame_len(Direction::Request)
                 .max(p.max_frame_len(Direction::Response))
         };
-        if frame.len() <= f.trailer_len_of(d) || f.escaping.is_some() && frame.len() > longest() {
+        // A checksum before the bytes it covers: at least one byte besides it, and the frame
+        // at least as long as its end.
+        let c = &f.checksum;
+        let lead_short = c.lead.is_some_and(|at| {
+            frame.len() <= c.len() + f.end_of(d).len() || frame.len() < at + c.len()
+        });
+        if frame.len() <= f.trailer_len_of(d)
+            || lead_short
+            || f.escaping.is_some() && frame.len() > longest()
+        {
             return false;
         }
         let mut copy = frame.to_vec();
@@ -1918,7 +1932,7 @@ pub fn reseal_as(p: &Protocol, d: Direction, frame: &mut [u8]) {
 /// layout says (0: a frame as the IR lays it out).
 fn reseal_from(p: &Protocol, d: Direction, frame: &mut [u8], back: usize) {
     let (c, f) = (&p.framing.checksum, &p.framing);
-    if frame.len() < f.trailer_len_of(d) {
+    if frame.len() < f.trailer_len_of(d) || frame.len() < c.lead.map_or(0, |at| at + c.len()) {
         return;
     }
     let (at, end) = (
@@ -1927,8 +1941,9 @@ fn reseal_from(p: &Protocol, d: Direction, frame: &mut [u8], back: usize) {
     );
     let bytes = f.end_of(d);
     frame[end..end + bytes.len()].copy_from_slice(bytes);
-    let from = c.covers_from_of(d).saturating_sub(back);
-    let sum = c.compute(frame.get(from..at).unwrap_or(&[]));
+    let covered = f.covered_of(d, frame.len());
+    let from = covered.start.saturating_sub(back);
+    let sum = c.compute(frame.get(from..covered.end).unwrap_or(&[]));
     write_uint(sum, &mut frame[at..at + c.len()], c.byte_order);
 }
 

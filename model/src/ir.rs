@@ -531,7 +531,11 @@ impl Framing {
     }
 
     /// Bytes after the payload of a frame of direction `d`: its checksum and end bytes.
+    /// A checksum before the payload ([`Checksum::lead`]) is not among them.
     pub fn trailer_len_of(&self, d: Direction) -> usize {
+        if self.checksum.lead.is_some() {
+            return self.end_of(d).len();
+        }
         self.checksum.len() + self.end_of(d).len()
     }
 
@@ -685,7 +689,11 @@ impl Framing {
     }
 
     /// Where the checksum of a frame of direction `d` and `len` bytes starts.
+    /// Where it sits before the payload ([`Checksum::lead`]), there whatever the length.
     pub fn checksum_at_of(&self, d: Direction, len: usize) -> usize {
+        if let Some(at) = self.checksum.lead {
+            return at;
+        }
         let after = if self.end_first_of(d) {
             0
         } else {
@@ -702,7 +710,20 @@ impl Framing {
         if w.len() < self.trailer_len() {
             return None;
         }
-        w.get(self.checksum.covers_from..self.checksum_at(w.len()))
+        w.get(self.covered_of(Direction::Request, w.len()))
+    }
+
+    /// The bytes a frame of direction `d` and `len` bytes has its checksum over: from its
+    /// `covers_from` up to the checksum, or, where the checksum comes before the payload
+    /// ([`Checksum::lead`]), from `covers_from` (after it) to the frame's end bytes. Empty
+    /// (start past end) for a frame too short to hold them.
+    pub fn covered_of(&self, d: Direction, len: usize) -> std::ops::Range<usize> {
+        let from = self.checksum.covers_from_of(d);
+        let to = match self.checksum.lead {
+            Some(_) => len.saturating_sub(self.end_of(d).len()),
+            None => self.checksum_at_of(d, len),
+        };
+        from..to
     }
 
     /// Where the end bytes of a request of `len` bytes start; see [`Self::end_at_of`].
@@ -993,6 +1014,11 @@ pub struct Checksum {
     /// A byte of each message's own the checksum takes after the bytes it covers (MAVLink's
     /// CRC_EXTRA), found by the code the covered bytes hold.
     pub extra: Option<ChecksumExtra>,
+    /// Where the checksum sits where the layout places it before the payload (Septentrio
+    /// SBF's CRC at offset 2, after the `$@` sync and before the ID, length and body it
+    /// covers): it then covers from `covers_from` (after it) to the frame's end. `None`, the
+    /// checksum at the frame's end, covering the bytes before it.
+    pub lead: Option<usize>,
 }
 
 /// Each message's extra checksum byte, by its code (`framing.checksum.extra: per_message`).
@@ -1049,6 +1075,7 @@ impl Checksum {
             covers_from: 0,
             response_covers_from: 0,
             extra: None,
+            lead: None,
         }
     }
 

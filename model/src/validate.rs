@@ -819,6 +819,10 @@ fn unchecked_messages(
             ),
             (extra, "its own `checksum_extra`"),
             (over, "`checksum_over_request`"),
+            (
+                framing.checksum.lead.is_some(),
+                "a checksum before the payload",
+            ),
         ] {
             if given {
                 sink.error(
@@ -910,6 +914,10 @@ fn over_requests(
             (
                 framing.preamble.is_some(),
                 "a preamble (`framing.preamble`)",
+            ),
+            (
+                framing.checksum.lead.is_some(),
+                "a checksum before the payload",
             ),
         ] {
             if given {
@@ -1389,6 +1397,14 @@ fn framing_by_direction(
         }
     }
     let at = |l: &[Part], p: Part| l.iter().position(|x| *x == p);
+    for (name, l) in [("request", &d.request), ("response", &d.response)] {
+        if matches!((at(l, Part::Checksum), at(l, Part::Payload)), (Some(c), Some(p)) if c < p) {
+            sink.error(
+                format!("framing.layout.{name}"),
+                not_yet("a checksum before the payload with a layout per direction"),
+            );
+        }
+    }
     let end_first = |l: &[Part]| matches!((at(l, Part::End), at(l, Part::Checksum)), (Some(e), Some(c)) if e < c);
     if end_first(&d.request) != end_first(&d.response) {
         sink.error(
@@ -1671,12 +1687,16 @@ fn framing_plain(
             at + 1 == n || (at + 2 == n && f.layout[n - 1] == other)
         })
     };
+    // Or the checksum comes before the payload, covering from a part after it to the
+    // frame's end (Septentrio SBF): see `checksum_lead`.
+    let pos = |p: Part| f.layout.iter().position(|x| *x == p);
+    let lead = matches!((pos(Part::Checksum), pos(Part::Payload)), (Some(c), Some(p)) if c < p);
     if !tail(Part::End, Part::Checksum) {
         sink.error(
             "framing.layout",
             "`end` must be the last part of the frame, or come just before the checksum",
         );
-    } else if !tail(Part::Checksum, Part::End) {
+    } else if !lead && !tail(Part::Checksum, Part::End) {
         sink.error(
             "framing.layout",
             "the checksum must be the last part of the frame, or come just before `end`: it covers every byte before it",
@@ -2055,7 +2075,92 @@ fn framing_plain(
     if let Some(t) = f.truncation {
         framing.truncation = truncation(t, f, &framing, sink);
     }
+    if lead {
+        framing.checksum.lead = checksum_lead(f, &framing, &lens, sink);
+    }
     framing
+}
+
+/// Where a checksum the layout places before the payload sits (Septentrio SBF's CRC at offset
+/// 2, after `$@`, over the ID, length and body after it): it covers from `covers_from`, a part
+/// after it, to the frame's end. Refused (located): no `covers_from`, or one at or before the
+/// checksum (bytes on both sides of it: HerkuleX's), a code before it of several lengths (it
+/// would move), and beside what no engine carries with it yet.
+fn checksum_lead(
+    f: &model::Framing,
+    framing: &Framing,
+    lens: &[usize],
+    sink: &mut Sink,
+) -> Option<usize> {
+    let errors = sink.items.len();
+    let pos = |p: Part| f.layout.iter().position(|x| *x == p);
+    let at_checksum = pos(Part::Checksum)?;
+    if pos(Part::Code) < Some(at_checksum) && lens.len() > 1 {
+        sink.error(
+            "framing.layout",
+            format!(
+                "the checksum before the payload comes after the code, whose lengths {lens:?} would move it: not expressible yet"
+            ),
+        );
+    }
+    match f.checksum.as_ref().and_then(|c| c.covers_from.as_ref()) {
+        None => sink.error(
+            "framing.checksum.covers_from",
+            "the checksum comes before the payload and covers from a part after it to the frame's end: say which (`covers_from`)",
+        ),
+        Some(model::CoversFrom::Same(part)) => {
+            if pos(*part).is_some_and(|p| p < at_checksum) {
+                sink.error(
+                    "framing.checksum.covers_from",
+                    format!(
+                        "the checksum comes before the payload and covers from `{}` to the frame's end: name a part after it (bytes on both sides of the checksum, as HerkuleX's, are not expressible yet)",
+                        part_name(*part)
+                    ),
+                );
+            }
+        }
+        Some(model::CoversFrom::ByDirection(_)) => {}
+    }
+    let times = |p: Part| f.layout.iter().filter(|x| **x == p).count();
+    for (given, what) in [
+        (times(Part::End) > 0, "end bytes"),
+        (f.escaping.is_some(), "escaping"),
+        (f.transform.is_some(), "a transform (`framing.transform`)"),
+        (
+            f.length.as_ref().is_some_and(|l| l.long.is_some()),
+            "a long length form (`framing.length.long`)",
+        ),
+        (!f.forms.is_empty(), "a short form (`framing.forms`)"),
+        (f.truncation.is_some(), "payload truncation"),
+        (
+            framing.checksum.extra.is_some(),
+            "an extra checksum byte per message",
+        ),
+        (f.preamble.is_some(), "a preamble (`framing.preamble`)"),
+    ] {
+        if given {
+            sink.error(
+                "framing.layout",
+                format!("a checksum before the payload is not expressible beside {what} yet"),
+            );
+        }
+    }
+    if sink.items.len() != errors {
+        return None;
+    }
+    let code_len = lens.first().copied().unwrap_or(0);
+    let at = f.layout[..at_checksum]
+        .iter()
+        .map(|p| match p {
+            Part::Start => framing.sync.len(),
+            Part::Length => framing.length.as_ref().map_or(0, |l| l.width),
+            Part::Address => 1,
+            Part::Code => code_len,
+            Part::Header => framing.header_len_of(Direction::Request),
+            Part::Payload | Part::Checksum | Part::End => 0,
+        })
+        .sum();
+    Some(at)
 }
 
 /// `framing.truncation`, checked against the rest of the framing (resolved but for it): a
@@ -3278,6 +3383,7 @@ fn checksum_params(c: &model::Checksum, byte_order: ByteOrder, sink: &mut Sink) 
         covers_from: 0,
         response_covers_from: 0,
         extra: None,
+        lead: None,
     }
 }
 

@@ -879,6 +879,14 @@ const CASES: &[(&str, &[(&str, &str)])] = &[
         &[("framing.checksum", "layout has `checksum` but no `checksum` section describes it")],
     ),
     (
+        "checksum_lead_covers_before_it",
+        &[("framing.checksum.covers_from", "the checksum comes before the payload and covers from `start` to the frame's end: name a part after it (bytes on both sides of the checksum, as HerkuleX's, are not expressible yet)")],
+    ),
+    (
+        "checksum_lead_without_covers_from",
+        &[("framing.checksum.covers_from", "the checksum comes before the payload and covers from a part after it to the frame's end: say which (`covers_from`)")],
+    ),
+    (
         "mask_on_a_crc",
         &[("framing.checksum.mask", "a mask keeps some bits of a sum or XOR")],
     ),

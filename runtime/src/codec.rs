@@ -259,6 +259,11 @@ pub struct Frame {
     /// before it where `end_first` (the checksum then covers them).
     pub end: &'static [u8],
     pub end_first: bool,
+    /// Where the checksum sits where it comes before the bytes it covers (Septentrio SBF's
+    /// CRC at offset 2, before the ID, length and body): it is then the checksum of the bytes
+    /// from its `covers_from` to the frame's end, which the module's `frame_sum` takes from
+    /// the whole frame. `None`: at the frame's end, over the bytes before it.
+    pub lead: Option<usize>,
 }
 
 impl Frame {
@@ -266,6 +271,9 @@ impl Frame {
     /// least as long as both.
     #[inline(always)]
     const fn trailer(&self, len: usize) -> (usize, usize) {
+        if let Some(at) = self.lead {
+            return (at, len - self.end.len());
+        }
         let at = len - self.checksum_len - self.end.len();
         if self.end_first {
             (at + self.end.len(), at)
@@ -279,7 +287,9 @@ impl Frame {
     /// it). Where frames carry no checksum nor end bytes, nothing.
     #[inline(always)]
     pub fn seal(&self, buf: &mut [u8], len: usize, sum: impl FnOnce(&[u8]) -> u32) {
-        if self.end.is_empty() {
+        if let Some(at) = self.lead {
+            seal_lead(buf, len, sum, at, self);
+        } else if self.end.is_empty() {
             seal(buf, len, sum, self.checksum_len, self.checksum_be);
         } else {
             seal_end(buf, len, sum, self);
@@ -320,8 +330,12 @@ impl Frame {
     /// and the end bytes, and nothing else: `FRAME.checksum_ok(frame, frame_sum)`.
     #[inline(always)]
     pub fn checksum_ok(&self, frame: &[u8], checksum: impl FnOnce(&[u8]) -> u32) -> bool {
+        // A checksum before the bytes it covers: a frame at least as long as its end.
+        let holds = |at: usize| frame.len() >= at + self.checksum_len;
         match frame.len().checked_sub(self.checksum_len + self.end.len()) {
-            Some(n) if n > 0 => check_sum(frame, n, self, checksum),
+            Some(n) if n > 0 && self.lead.map_or(true, holds) => {
+                check_sum(frame, n, self, checksum)
+            }
             _ => false,
         }
     }
@@ -339,6 +353,15 @@ impl Frame {
 /// it: `(found, expected)`.
 #[inline(always)]
 fn sums<T>(frame: &[u8], at: usize, f: &Frame, checksum: impl FnOnce(&[u8]) -> T) -> (u32, T) {
+    if f.lead.is_some() {
+        // Before the bytes it covers: the frame to its end bytes goes to `checksum`, which
+        // takes the covered ones from it.
+        let found = frame.get(at..at + f.checksum_len).unwrap_or(&[]);
+        let body = frame
+            .get(..frame.len().saturating_sub(f.end.len()))
+            .unwrap_or(frame);
+        return (uint(found, !f.checksum_be) as u32, checksum(body));
+    }
     let (body, tail) = frame.split_at(at);
     let tail = tail.get(..f.checksum_len).unwrap_or(tail);
     let found = uint(tail, !f.checksum_be) as u32;
@@ -1384,8 +1407,26 @@ pub fn span<'f>(frame: &'f [u8], from: usize, f: &Frame) -> &'f [u8] {
     if frame.len() < f.checksum_len + f.end.len() {
         return &[];
     }
-    let (at, _) = f.trailer(frame.len());
-    frame.get(from..at).unwrap_or(&[])
+    let (at, end_at) = f.trailer(frame.len());
+    // A checksum before the bytes it covers covers them to the frame's end bytes.
+    let to = if f.lead.is_some() { end_at } else { at };
+    frame.get(from..to).unwrap_or(&[])
+}
+
+/// Writes the checksum that sits at `at`, before the bytes it covers (`sum` of the frame up to
+/// its end bytes, from which it takes them), and the end bytes, of the `len`-byte frame in
+/// `buf`.
+#[inline(always)]
+fn seal_lead(buf: &mut [u8], len: usize, sum: impl FnOnce(&[u8]) -> u32, at: usize, f: &Frame) {
+    let end_at = len - f.end.len();
+    buf[end_at..len].copy_from_slice(f.end);
+    let s = sum(&buf[..end_at]);
+    let n = f.checksum_len;
+    if f.checksum_be {
+        buf[at..at + n].copy_from_slice(&s.to_be_bytes()[4 - n..]);
+    } else {
+        buf[at..at + n].copy_from_slice(&s.to_le_bytes()[..n]);
+    }
 }
 
 /// [`seal`] for a protocol whose frames have end bytes: the end bytes and the checksum of the
@@ -1836,8 +1877,50 @@ mod lang_tests {
             checksum_be: be,
             end: &[],
             end_first: false,
+            lead: None,
         };
         sums(frame, frame.len() - n, &f, |_| 0).0
+    }
+
+    /// A checksum before the bytes it covers (SBF's CRC at offset 2): `seal` writes it there
+    /// over the bytes from the `frame_sum`'s offset to the end, and the frame checks read it
+    /// there; a byte changed after it is a mismatch at its offset.
+    #[test]
+    fn a_checksum_before_the_bytes_it_covers_is_sealed_and_checked_where_it_sits() {
+        let f = Frame {
+            start: Some((0, 0x24)),
+            addressed: false,
+            devices: (0, 0),
+            broadcast: None,
+            host: None,
+            checksum_len: 2,
+            checksum_be: false,
+            end: &[],
+            end_first: false,
+            lead: Some(2),
+        };
+        // A sum-16 of the bytes from offset 4 on, standing in for the CRC.
+        let sum = |b: &[u8]| b[4..].iter().map(|&x| u32::from(x)).sum::<u32>();
+        let mut buf = [0x24, 0x40, 0, 0, 0x21, 0x17, 0x08, 0x00, 0xAA];
+        f.seal(&mut buf, 8, sum);
+        assert_eq!(buf, [0x24, 0x40, 0x40, 0x00, 0x21, 0x17, 0x08, 0x00, 0xAA]);
+        let frame = &buf[..8];
+        assert!(f.checksum_ok(frame, sum));
+        assert_eq!(check_frame(frame, 8, 8, 0, &f, sum), Ok(0));
+        assert_eq!(span(frame, 4, &f), &frame[4..]);
+        let mut bad = [0u8; 8];
+        bad.copy_from_slice(frame);
+        bad[7] = 1;
+        assert!(!f.checksum_ok(&bad, sum));
+        assert_eq!(
+            check_frame(&bad, 8, 8, 0, &f, sum),
+            Err(DecodeError::ChecksumMismatch {
+                offset: 2,
+                expected: 0x41,
+                found: 0x40,
+                width: 2
+            })
+        );
     }
 
     #[test]

@@ -52,6 +52,14 @@ pub(super) fn emit_header(p: &Protocol, source: &str, spec_path: &str) -> TokenS
     let checksum_len = usize_lit(p.framing.checksum.len());
     let end = p.framing.end.iter().map(|b| hex_u8(*b));
     let end_first = p.framing.end_first();
+    // A checksum before the bytes it covers (SBF's CRC at offset 2): where it sits.
+    let lead = match p.framing.checksum.lead {
+        Some(at) => {
+            let at = usize_lit(at);
+            quote!(rt::Some(#at))
+        }
+        None => quote!(rt::None),
+    };
     let addressed = p.framing.has_address();
     // A layout per direction with the address in one direction only: the other direction's
     // frames are checked and encoded as a protocol's without addresses.
@@ -167,6 +175,7 @@ pub(super) fn emit_header(p: &Protocol, source: &str, spec_path: &str) -> TokenS
             checksum_be: #checksum_be,
             end: &[#(#end),*],
             end_first: #end_first,
+            lead: #lead,
         };
         #unaddressed
         #response_frame
@@ -841,6 +850,8 @@ pub(super) fn checksum_in_arms(p: &Protocol) -> bool {
         && !p.has_unchecked()
         && p.framing.checksum.covers_from == 0
         && p.framing.checksum.response_covers_from == 0
+        // A checksum before the bytes it covers is sealed where it sits, after the arms.
+        && p.framing.checksum.lead.is_none()
         && p.framing.end.is_empty()
         && p.framing.response_end.is_empty()
         // The sum covers the payload as it travels, transformed after the arms write it.
@@ -878,8 +889,12 @@ pub(super) fn emit_frame_sums(p: &Protocol) -> TokenStream {
             ),
             from => {
                 let lit = usize_lit(from);
+                let over = match p.framing.checksum.lead {
+                    Some(at) => format!("at offset {at}: over the bytes after it from offset {from} to the frame's end (the whole frame given)"),
+                    None => format!("over the bytes before it from offset {from} on"),
+                };
                 (
-                    format!(" The checksum a frame carries, as the frame checks compare it: over the bytes before it from offset {from} on."),
+                    format!(" The checksum a frame carries, as the frame checks compare it: {over}."),
                     quote!(rt::covered(bytes, #lit)),
                 )
             }

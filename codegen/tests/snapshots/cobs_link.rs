@@ -62,6 +62,7 @@ pub mod cobs_link {
         checksum_be: false,
         end: &[0x00],
         end_first: false,
+        lead: rt::None,
     };
     /// The longest frame before escaping: what generated code unescapes into.
     const UNESCAPED_LEN: usize = 258;

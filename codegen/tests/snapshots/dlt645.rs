@@ -62,6 +62,7 @@ pub mod dlt645 {
         checksum_be: false,
         end: &[0x16],
         end_first: false,
+        lead: rt::None,
     };
     /// The wake-up bytes sent before every frame (`framing.preamble`): `send` of
     /// them are written, 0 to `max` taken.

@@ -62,6 +62,7 @@ pub mod dynamixel2_stuffed {
         checksum_be: false,
         end: &[],
         end_first: false,
+        lead: rt::None,
     };
     /// The longest frame before escaping: what generated code unescapes into.
     const UNESCAPED_LEN: usize = 16;

@@ -62,6 +62,7 @@ pub mod fport_both {
         checksum_be: false,
         end: &[0x7E],
         end_first: false,
+        lead: rt::None,
     };
     /// What every response shares, where its end bytes are not the requests'.
     const RESPONSE_FRAME: rt::Frame = rt::Frame {

@@ -62,6 +62,7 @@ pub mod fport_uplink {
         checksum_be: false,
         end: &[],
         end_first: false,
+        lead: rt::None,
     };
     /// The longest frame before escaping: what generated code unescapes into.
     const UNESCAPED_LEN: usize = 10;

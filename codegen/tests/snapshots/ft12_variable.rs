@@ -62,6 +62,7 @@ pub mod ft12_variable {
         checksum_be: false,
         end: &[0x16],
         end_first: false,
+        lead: rt::None,
     };
     /// The length field: `width` bytes at `at`, holding the frame's length plus `k`.
     const LENGTH: rt::FrameLength = rt::FrameLength {

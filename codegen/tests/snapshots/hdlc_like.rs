@@ -62,6 +62,7 @@ pub mod hdlc_like {
         checksum_be: false,
         end: &[0x7E],
         end_first: false,
+        lead: rt::None,
     };
     /// The longest frame before escaping: what generated code unescapes into.
     const UNESCAPED_LEN: usize = 10;

@@ -62,6 +62,7 @@ pub mod kiss {
         checksum_be: true,
         end: &[0xC0],
         end_first: false,
+        lead: rt::None,
     };
     /// The longest frame before escaping: what generated code unescapes into.
     const UNESCAPED_LEN: usize = 1027;

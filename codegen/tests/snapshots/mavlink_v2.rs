@@ -62,6 +62,7 @@ pub mod mavlink_v2 {
         checksum_be: false,
         end: &[],
         end_first: false,
+        lead: rt::None,
     };
     /// Payload truncation (`framing.truncation: trailing_zeros`): a payload's trailing
     /// zero bytes are stripped as it travels (one byte kept); decoding pads it with

@@ -62,6 +62,7 @@ pub mod mbus {
         checksum_be: false,
         end: &[0x16],
         end_first: false,
+        lead: rt::None,
     };
     /// The short form of the frame (`framing.forms`): frames starting with its start
     /// byte lack the parts it drops and carry an empty payload. Decoding lays every

@@ -62,6 +62,7 @@ pub mod nextion {
         checksum_be: false,
         end: &[0xFF, 0xFF, 0xFF],
         end_first: false,
+        lead: rt::None,
     };
     /// Where a response's code sits: from `at`, at most `longest` bytes, before `trailer` bytes.
     const RESPONSE_CODE: rt::CodeAt = rt::CodeAt {

@@ -62,6 +62,7 @@ pub mod pelco_d2 {
         checksum_be: true,
         end: &[],
         end_first: false,
+        lead: rt::None,
     };
     /// The frame checksum: 8-bit sum of every byte before it.
     #[inline]

@@ -62,6 +62,7 @@ pub mod pelco_p {
         checksum_be: true,
         end: &[0xAF],
         end_first: true,
+        lead: rt::None,
     };
     /// Where a response's code sits: from `at`, at most `longest` bytes, before `trailer` bytes.
     const RESPONSE_CODE: rt::CodeAt = rt::CodeAt {

@@ -62,6 +62,7 @@ pub mod roboclaw {
         checksum_be: true,
         end: &[],
         end_first: false,
+        lead: rt::None,
     };
     /// What every frame of the direction whose layout has no address shares.
     const FRAME_UNADDRESSED: rt::Frame = rt::Frame {

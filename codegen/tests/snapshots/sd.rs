@@ -60,6 +60,7 @@ pub mod sd {
         checksum_be: true,
         end: &[],
         end_first: false,
+        lead: rt::None,
     };
     /// Where a request's code sits: from `at`, at most `longest` bytes, before `trailer` bytes.
     const REQUEST_CODE: rt::CodeAt = rt::CodeAt {

@@ -62,6 +62,7 @@ pub mod shdlc {
         checksum_be: true,
         end: &[0x7E],
         end_first: false,
+        lead: rt::None,
     };
     /// The longest frame before escaping: what generated code unescapes into.
     const UNESCAPED_LEN: usize = 47;

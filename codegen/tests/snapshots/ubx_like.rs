@@ -62,6 +62,7 @@ pub mod ubx_like {
         checksum_be: false,
         end: &[],
         end_first: false,
+        lead: rt::None,
     };
     /// The length field: `width` bytes at `at`, holding the frame's length plus `k`.
     const LENGTH: rt::FrameLength = rt::FrameLength {

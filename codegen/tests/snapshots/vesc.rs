@@ -62,6 +62,7 @@ pub mod vesc {
         checksum_be: true,
         end: &[0x03],
         end_first: false,
+        lead: rt::None,
     };
     /// The long form of the length field (`framing.length.long`): frames starting with
     /// its start byte carry the wider length field. Decoding lays every frame out in

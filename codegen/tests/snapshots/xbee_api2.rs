@@ -62,6 +62,7 @@ pub mod xbee_api2 {
         checksum_be: true,
         end: &[],
         end_first: false,
+        lead: rt::None,
     };
     /// The longest frame before escaping: what generated code unescapes into.
     const UNESCAPED_LEN: usize = 90;
