@@ -1770,11 +1770,7 @@ pub(crate) fn check_checksum(
     wire: &[u8],
 ) -> Result<(), DecodeError> {
     let c = &p.framing.checksum;
-    // A checksum before the payload needs the bytes up to its own end.
-    let needed = match c.lead {
-        Some(at) => at + c.len(),
-        None => p.framing.trailer_len_of(d),
-    };
+    let needed = p.framing.sealed_len_of(d);
     if wire.len() < needed {
         return Err(DecodeError::Truncated {
             needed,
@@ -1851,11 +1847,8 @@ pub fn checksum_ok(p: &Protocol, wire: &[u8]) -> bool {
     if f.long.is_some() || f.form.is_some() {
         // Generated code widens a short frame's length field into a buffer of the longest
         // frame's length.
-        let most = p
-            .max_wire_len(Direction::Request)
-            .max(p.max_wire_len(Direction::Response));
         match crate::long::canonical(p, wire) {
-            Ok(laid) if laid.short.is_none() || laid.frame.len() <= most => {}
+            Ok(laid) if laid.short.is_none() || laid.frame.len() <= p.longest_wire() => {}
             _ => return false,
         }
     }
@@ -1869,20 +1862,11 @@ pub fn checksum_ok(p: &Protocol, wire: &[u8]) -> bool {
             return false;
         };
         let frame = &plain.frame[..];
-        // Generated code unescapes into a buffer of the longest frame's length.
-        let longest = || {
-            p.max_frame_len(Direction::Request)
-                .max(p.max_frame_len(Direction::Response))
-        };
-        // A checksum before the bytes it covers: at least one byte besides it, and the frame
-        // at least as long as its end.
-        let c = &f.checksum;
-        let lead_short = c.lead.is_some_and(|at| {
-            frame.len() <= c.len() + f.end_of(d).len() || frame.len() < at + c.len()
-        });
-        if frame.len() <= f.trailer_len_of(d)
-            || lead_short
-            || f.escaping.is_some() && frame.len() > longest()
+        // At least one byte besides the checksum and end bytes, all where they sit; generated
+        // code unescapes into a buffer of the longest frame's length.
+        if frame.len() <= f.checksum.len() + f.end_of(d).len()
+            || frame.len() < f.sealed_len_of(d)
+            || f.escaping.is_some() && frame.len() > p.longest_frame()
         {
             return false;
         }
@@ -1932,7 +1916,7 @@ pub fn reseal_as(p: &Protocol, d: Direction, frame: &mut [u8]) {
 /// layout says (0: a frame as the IR lays it out).
 fn reseal_from(p: &Protocol, d: Direction, frame: &mut [u8], back: usize) {
     let (c, f) = (&p.framing.checksum, &p.framing);
-    if frame.len() < f.trailer_len_of(d) || frame.len() < c.lead.map_or(0, |at| at + c.len()) {
+    if frame.len() < f.sealed_len_of(d) {
         return;
     }
     let (at, end) = (

@@ -688,6 +688,13 @@ impl Framing {
         self.checksum_at_of(Direction::Request, len)
     }
 
+    /// The fewest bytes a frame of direction `d` takes to hold its checksum and end bytes
+    /// where they sit: its trailer, or a checksum before the payload up to its own end.
+    pub fn sealed_len_of(&self, d: Direction) -> usize {
+        let lead = self.checksum.lead.map_or(0, |at| at + self.checksum.len());
+        self.trailer_len_of(d).max(lead)
+    }
+
     /// Where the checksum of a frame of direction `d` and `len` bytes starts.
     /// Where it sits before the payload ([`Checksum::lead`]), there whatever the length.
     pub fn checksum_at_of(&self, d: Direction, len: usize) -> usize {
@@ -2235,6 +2242,20 @@ impl Protocol {
         let ms = self.messages(d);
         let lo = ms.iter().map(|m| m.min_len()).min()?;
         Some((lo, self.max_frame_len(d)))
+    }
+
+    /// The longest frame of either direction before escaping: what generated code unescapes
+    /// into (`UNESCAPED_LEN`).
+    pub fn longest_frame(&self) -> usize {
+        self.max_frame_len(Direction::Request)
+            .max(self.max_frame_len(Direction::Response))
+    }
+
+    /// The longest frame of either direction as it travels (generated `MAX_FRAME_LEN`: what
+    /// generated code lays a frame out into).
+    pub fn longest_wire(&self) -> usize {
+        self.max_wire_len(Direction::Request)
+            .max(self.max_wire_len(Direction::Response))
     }
 
     /// The longest frame in a direction as it travels: escaped at worst, after the preamble

@@ -10,7 +10,7 @@ pub(super) fn emit_header(p: &Protocol, source: &str, spec_path: &str) -> TokenS
     // Escaped frames: buffers hold the worst case on the wire.
     let max_req = p.max_wire_len(Direction::Request);
     let max_resp = p.max_wire_len(Direction::Response);
-    let max = max_req.max(max_resp);
+    let max = p.longest_wire();
     let (max_req, max_resp, max) = (usize_lit(max_req), usize_lit(max_resp), usize_lit(max));
     let escaping = emit_escaping(p);
     let preamble = preamble_const(p);
@@ -708,10 +708,7 @@ pub(super) fn emit_escaping(p: &Protocol) -> TokenStream {
     if f.escaping.is_none() {
         return quote!();
     }
-    let unescaped = usize_lit(
-        p.max_frame_len(Direction::Request)
-            .max(p.max_frame_len(Direction::Response)),
-    );
+    let unescaped = usize_lit(p.longest_frame());
     if !f.end_by_direction() {
         let value = escaping_value(p, None);
         return quote! {
