@@ -151,6 +151,8 @@ fn cases() -> Vec<Case> {
         spec("model/tests/fixtures/valid/rtcm3_frame.yaml"),
         // Header fields whose value every frame holds (a header length, a reserved byte).
         spec("model/tests/fixtures/valid/header_constant.yaml"),
+        // Header fields in three places, around the code and the length (NovAtel OEM).
+        spec("model/tests/fixtures/valid/novatel_oem.yaml"),
         // A reply whose checksum takes in its request's bytes (Pelco D's general response).
         spec("model/tests/fixtures/valid/pelco_d_replies.yaml"),
         // Messages without a checksum beside replies whose CRC takes in the read's bytes

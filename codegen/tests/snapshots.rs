@@ -131,6 +131,10 @@ fn sum16_complement_spec_generates_its_snapshot() {
         "model/tests/fixtures/valid/header_constant.yaml",
         "header_constant.rs",
     );
+    check(
+        "model/tests/fixtures/valid/novatel_oem.yaml",
+        "novatel_oem.rs",
+    );
     check("model/tests/fixtures/valid/nextion.yaml", "nextion.rs");
     check(
         "model/tests/fixtures/valid/rtcm3_frame.yaml",

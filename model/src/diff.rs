@@ -1257,10 +1257,10 @@ impl<'a> Differ<'a> {
                     "header_field_removed",
                     path,
                     format!(
-                        "header field `{}` ({} at header + {}) removed",
+                        "header field `{}` ({} at {}) removed",
                         f.name,
                         type_name(f),
-                        f.offset
+                        f.header_place()
                     ),
                 );
                 continue;
@@ -1271,7 +1271,7 @@ impl<'a> Differ<'a> {
                     .map(|b| (b.name.clone(), b.msb, b.lsb, b.signed, b.constant))
                     .collect()
             };
-            if subs(f) != subs(g) && (f.offset, f.width) == (g.offset, g.width) {
+            if subs(f) != subs(g) && (f.part, f.offset, f.width) == (g.part, g.offset, g.width) {
                 self.wire(
                     "header_field_changed",
                     path,
@@ -1279,17 +1279,17 @@ impl<'a> Differ<'a> {
                 );
                 continue;
             }
-            if (f.offset, f.width, f.signed) != (g.offset, g.width, g.signed) {
+            if (f.part, f.offset, f.width, f.signed) != (g.part, g.offset, g.width, g.signed) {
                 self.wire(
                     "header_field_changed",
                     path,
                     format!(
-                        "header field `{}`: {} at header + {} → {} at header + {}",
+                        "header field `{}`: {} at {} → {} at {}",
                         f.name,
                         type_name(f),
-                        f.offset,
+                        f.header_place(),
                         type_name(g),
-                        g.offset
+                        g.header_place()
                     ),
                 );
                 continue;
@@ -1333,10 +1333,10 @@ impl<'a> Differ<'a> {
                 "header_field_added",
                 format!("{at}.{}", g.name),
                 format!(
-                    "header field `{}` ({} at header + {}) added",
+                    "header field `{}` ({} at {}) added",
                     g.name,
                     type_name(g),
-                    g.offset
+                    g.header_place()
                 ),
             );
         }

@@ -344,7 +344,17 @@ fn examples_of(out: &mut String, p: &Protocol, r: MessageRef) {
             .iter()
             .map(|(k, v)| match v {
                 StatedValue::Number(n) => format!("{k} = {n}"),
-                StatedValue::Name(s) => format!("{k} = {s}"),
+                // Control characters (text padded with NULs) as escapes, not raw bytes.
+                StatedValue::Name(s) => format!(
+                    "{k} = {}",
+                    s.chars()
+                        .map(|c| if c.is_control() {
+                            c.escape_default().to_string()
+                        } else {
+                            c.to_string()
+                        })
+                        .collect::<String>()
+                ),
                 StatedValue::Exact { text, .. } => format!("{k} = {text}"),
                 StatedValue::Names(n) => format!("{k} = [{}]", n.join(", ")),
                 StatedValue::Numbers(n) => format!(
@@ -526,6 +536,7 @@ pub fn render(p: &Protocol, source: &str) -> String {
             _ => Direction::Request,
         };
         o.push_str("| Part | Bytes | Content |\n|---|---|---|\n");
+        let mut header_part = 0;
         for part in layout {
             let row = match part {
                 Part::Start => {
@@ -612,18 +623,23 @@ pub fn render(p: &Protocol, source: &str) -> String {
                     ),
                     "fields of the message".to_owned(),
                 ),
-                Part::Header => (
-                    "header".to_owned(),
-                    f.header_len_of(table_dir).to_string(),
-                    format!(
-                        "header fields {every} carries: {}",
-                        f.header_of(table_dir)
-                            .iter()
-                            .map(|h| format!("`{}` ({})", h.name, h.width))
-                            .collect::<Vec<_>>()
-                            .join(", ")
-                    ),
-                ),
+                Part::Header => {
+                    header_part += 1;
+                    let k = header_part - 1;
+                    (
+                        "header".to_owned(),
+                        f.header_part_len_of(table_dir, k).to_string(),
+                        format!(
+                            "header fields {every} carries: {}",
+                            f.header_of(table_dir)
+                                .iter()
+                                .filter(|h| h.part == k)
+                                .map(|h| format!("`{}` ({})", h.name, h.width))
+                                .collect::<Vec<_>>()
+                                .join(", ")
+                        ),
+                    )
+                }
                 Part::Checksum => {
                     // Each direction's table its own first covered byte.
                     let from = f.checksum.covers_from_of(table_dir);

@@ -402,6 +402,10 @@ impl LengthRule {
 /// The longest code a frame can have, in bytes.
 pub const MAX_CODE_LEN: usize = 4;
 
+/// The most times a layout holds `header` (NovAtel's OEM header needs three: before the
+/// message id, between it and the length, after the length).
+pub const MAX_HEADER_PARTS: usize = 4;
+
 /// Byte offsets of the parts of one frame, and its length; resolved by the validator.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub struct FrameLayout {
@@ -417,8 +421,9 @@ pub struct FrameLayout {
     pub length_again: Option<usize>,
     /// `None` when the layout has no address.
     pub address: Option<usize>,
-    /// Where the header fields begin (`framing.header`; 0 when the layout has none).
-    pub header: usize,
+    /// Where each `header` part begins, in layout order (`framing.header`; 0 for a part the
+    /// layout does not hold).
+    pub headers: [usize; MAX_HEADER_PARTS],
     pub code: usize,
     pub payload: usize,
     /// Where the checksum is: the payload's end (also where frames have none).
@@ -488,7 +493,7 @@ impl Framing {
     /// Whether the header fields differ by direction (`framing.header: {request, response}`,
     /// each direction's layout with `header`): their names, types or places.
     pub fn header_by_direction(&self) -> bool {
-        let key = |f: &Field| (f.name.clone(), f.width, f.signed, f.offset);
+        let key = |f: &Field| (f.name.clone(), f.width, f.signed, f.part, f.offset);
         self.header.len() != self.response_header.len()
             || self
                 .header
@@ -754,9 +759,46 @@ impl Framing {
     }
 
     /// Bytes of the header fields a frame of direction `d` carries where its layout has
-    /// `header`.
+    /// `header`: of every `header` part.
     pub fn header_len_of(&self, d: Direction) -> usize {
         self.header_of(d).iter().map(|f| f.width).sum()
+    }
+
+    /// Bytes of the `header` part `part` (counted from 0 in layout order) of a frame of
+    /// direction `d`.
+    pub fn header_part_len_of(&self, d: Direction, part: usize) -> usize {
+        self.header_of(d)
+            .iter()
+            .filter(|f| f.part == part)
+            .map(|f| f.width)
+            .sum()
+    }
+
+    /// Bytes of each part of direction `d`'s layout, in its order, for a code of `code_len`
+    /// bytes and a payload of `payload` (each `header` its own part's fields).
+    pub fn part_lens_of(
+        &self,
+        d: Direction,
+        code_len: usize,
+        payload: usize,
+    ) -> impl Iterator<Item = (Part, usize)> + '_ {
+        let mut headers = 0;
+        self.layout_of(d).iter().map(move |&p| {
+            let len = match p {
+                Part::Start => self.sync.len(),
+                Part::Address => 1,
+                Part::Length => self.length.as_ref().map_or(0, |l| l.width),
+                Part::Code => code_len,
+                Part::Payload => payload,
+                Part::Checksum => self.checksum.len(),
+                Part::End => self.end.len(),
+                Part::Header => {
+                    headers += 1;
+                    self.header_part_len_of(d, headers - 1)
+                }
+            };
+            (p, len)
+        })
     }
 
     /// Whether frames carry an address (the layout has `address`; with a layout per
@@ -773,18 +815,7 @@ impl Framing {
 
     /// Bytes in a frame of direction `d` besides code and payload: start, address, checksum.
     pub fn overhead(&self, d: Direction) -> usize {
-        self.layout_of(d)
-            .iter()
-            .map(|p| match p {
-                Part::Start => self.sync.len(),
-                Part::Address => 1,
-                Part::Length => self.length.as_ref().map_or(0, |l| l.width),
-                Part::Checksum => self.checksum.len(),
-                Part::End => self.end.len(),
-                Part::Header => self.header_len_of(d),
-                Part::Code | Part::Payload => 0,
-            })
-            .sum()
+        self.part_lens_of(d, 0, 0).map(|(_, n)| n).sum()
     }
 
     /// Where the length field of a frame of direction `d` sits and how its value follows from
@@ -825,24 +856,21 @@ impl Framing {
         code_len: usize,
         payload: usize,
     ) -> i64 {
-        let bytes: usize = l
-            .counts
-            .iter()
-            .map(|p| {
-                let times = self.layout.iter().filter(|x| *x == p).count();
-                times
-                    * match p {
-                        Part::Start => self.sync.len(),
-                        Part::Address => 1,
-                        Part::Length => l.width,
-                        Part::Code => code_len,
-                        Part::Payload => payload,
-                        Part::Checksum => self.checksum.len(),
-                        Part::End => self.end.len(),
-                        Part::Header => self.header_len_of(d),
-                    }
+        let bytes: usize = self
+            .part_lens_of(Direction::Request, code_len, payload)
+            .filter(|(p, _)| l.counts.contains(p))
+            .map(|(p, n)| match p {
+                Part::Length => l.width,
+                // Where they differ by direction, this direction's own header fields (below).
+                Part::Header => 0,
+                _ => n,
             })
-            .sum();
+            .sum::<usize>()
+            + if l.counts.contains(&Part::Header) && self.layout.contains(&Part::Header) {
+                self.header_len_of(d)
+            } else {
+                0
+            };
         bytes as i64 + l.adjust
     }
 
@@ -1296,7 +1324,7 @@ impl Message {
             return String::new();
         };
         match self.fields[..i].iter().rev().find(|g| g.repeat.is_some()) {
-            _ if f.header => format!("header + {}", f.offset),
+            _ if f.header => f.header_place(),
             // After the optional fields before it that are present.
             _ if f.present.is_some() && self.fields[..i].iter().any(|g| g.present.is_some()) => {
                 format!("{} + earlier optional", f.offset)
@@ -1473,12 +1501,16 @@ pub struct Field {
     pub name: String,
     pub doc: String,
     pub ty: FieldType,
-    /// Offset in the payload, bytes; for a header field ([`Self::header`]), in the header.
+    /// Offset in the payload, bytes; for a header field ([`Self::header`]), in its `header`
+    /// part ([`Self::part`]).
     pub offset: usize,
     /// A header field (`framing.header`): it sits in the frame's header, at the layout's
     /// `header` part plus `offset`, not in the payload. Header fields come first in a
     /// message's fields.
     pub header: bool,
+    /// A header field's `header` part, counted from 0 in layout order (a layout may hold
+    /// `header` up to [`MAX_HEADER_PARTS`] times); 0 for every other field.
+    pub part: usize,
     /// Width on the wire, bytes.
     pub width: usize,
     pub signed: bool,
@@ -1736,9 +1768,18 @@ impl Field {
     /// in a frame laid out as `o`: in the header or in the payload.
     pub fn frame_at(&self, o: &FrameLayout) -> usize {
         if self.header {
-            o.header + self.offset
+            o.headers[self.part] + self.offset
         } else {
             o.payload + self.offset
+        }
+    }
+
+    /// Where a header field sits, as docs and diff print it: `header + 2`, or `header part 3
+    /// + 2` past the layout's first `header` (`framing.header`'s `part`).
+    pub fn header_place(&self) -> String {
+        match self.part {
+            0 => format!("header + {}", self.offset),
+            k => format!("header part {} + {}", k + 1, self.offset),
         }
     }
 

@@ -968,6 +968,11 @@ pub struct Field {
     /// flags, bit: 0}` or `present: {field: kind, equals: 2}`).
     #[serde(default)]
     pub present: Option<Present>,
+    /// A header field only (`framing.header`), where the layout holds `header` more than once:
+    /// the `header` it sits in, counted from 1 (NovAtel's OEM header: fields before the
+    /// message id, between it and the length, and after the length). 1 where not given.
+    #[serde(default)]
+    pub part: Option<i64>,
     #[serde(default)]
     pub doc: Option<String>,
 }
@@ -994,6 +999,7 @@ impl Field {
             "fields" => !self.fields.is_empty(),
             "bytes" => self.bytes.is_some(),
             "present" => self.present.is_some(),
+            "part" => self.part.is_some(),
             // The validator's own key lists name only these: a misspelt one is its bug.
             _ => {
                 debug_assert!(false, "`{key}` is no key of a field");

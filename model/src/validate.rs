@@ -420,7 +420,7 @@ fn validate_ordered(spec: &model::Spec, sink: &mut Sink) -> Option<Protocol> {
                     length: None,
                     length_again: None,
                     address: None,
-                    header: 0,
+                    headers: [0; MAX_HEADER_PARTS],
                     code: 0,
                     payload: 0,
                     checksum: len,
@@ -935,7 +935,7 @@ fn over_requests(
             Part::Start => o.start,
             Part::Address => o.address,
             Part::Length => o.length,
-            Part::Header => Some(o.header),
+            Part::Header => Some(o.headers[0]),
             Part::Code => Some(o.code),
             Part::Payload => Some(o.payload),
             Part::Checksum | Part::End => None,
@@ -2051,7 +2051,7 @@ fn framing_plain(
             Part::Address => head.address,
             Part::Length => head.length,
             Part::Code => Some(head.code),
-            Part::Header => Some(head.header),
+            Part::Header => Some(head.headers[0]),
             Part::Payload | Part::Checksum | Part::End => None,
         };
         match at {
@@ -2149,16 +2149,10 @@ fn checksum_lead(
         return None;
     }
     let code_len = lens.first().copied().unwrap_or(0);
-    let at = f.layout[..at_checksum]
-        .iter()
-        .map(|p| match p {
-            Part::Start => framing.sync.len(),
-            Part::Length => framing.length.as_ref().map_or(0, |l| l.width),
-            Part::Address => 1,
-            Part::Code => code_len,
-            Part::Header => framing.header_len_of(Direction::Request),
-            Part::Payload | Part::Checksum | Part::End => 0,
-        })
+    let at = framing
+        .part_lens_of(Direction::Request, code_len, 0)
+        .take(at_checksum)
+        .map(|(_, n)| n)
         .sum();
     Some(at)
 }
@@ -3043,19 +3037,33 @@ fn header_fields(
         }
     };
     let path = "framing.header";
-    match in_layout {
-        0 => sink.error(
+    if in_layout == 0 {
+        sink.error(
             path,
             "`framing.header` needs a `header` part in the layout, where its fields sit",
-        ),
-        1 => {}
-        _ => sink.error("framing.layout", "layout holds `header` more than once"),
+        );
+    }
+    if in_layout > MAX_HEADER_PARTS {
+        sink.error(
+            "framing.layout",
+            format!("layout holds `header` {in_layout} times: at most {MAX_HEADER_PARTS}"),
+        );
+    }
+    if f.layout
+        .windows(2)
+        .any(|w| w == [Part::Header, Part::Header])
+    {
+        sink.error(
+            "framing.layout",
+            "two `header` parts side by side: one `header` holds all their fields",
+        );
     }
     let pos = |p: Part| f.layout.iter().position(|x| *x == p);
-    if in_layout > 0 && pos(Part::Header) > pos(Part::Payload) {
+    let last_header = f.layout.iter().rposition(|x| *x == Part::Header);
+    if in_layout > 0 && last_header > pos(Part::Payload) {
         sink.error("framing.layout", "`header` must come before the payload");
     }
-    if in_layout > 0 && pos(Part::Header) > pos(Part::Code) && {
+    if in_layout > 0 && last_header > pos(Part::Code) && {
         let mut lens: Vec<i64> = f
             .request
             .code_lengths
@@ -3080,8 +3088,44 @@ fn header_fields(
     }
     let mut out: Vec<Field> = Vec::new();
     let mut offset = 0;
+    // The `header` part each field sits in (`part`, from 1), in layout order.
+    let mut part = 0;
     for h in fields {
         let p = join(path, &h.name);
+        match h.part {
+            None | Some(1) if part == 0 => {}
+            None => sink.error(
+                join(&p, "part"),
+                format!("a field after those of `header` part {} needs its `part`: fields are listed in layout order", part + 1),
+            ),
+            Some(n) if n < 1 || n > in_layout.max(1) as i64 => sink.error(
+                join(&p, "part"),
+                if in_layout > 1 {
+                    format!("part {n} is not one of the layout's `header` parts, 1 to {in_layout}")
+                } else {
+                    format!("part {n}: the layout holds `header` once, so every field sits in part 1 (leave `part` out)")
+                },
+            ),
+            Some(n) if ((n - 1) as usize) < part => sink.error(
+                join(&p, "part"),
+                format!("part {n} after a field of part {}: list the fields in layout order", part + 1),
+            ),
+            Some(n) => {
+                let n = (n - 1) as usize;
+                // The first part that could be left without a field.
+                let next = if out.is_empty() { 0 } else { part + 1 };
+                if n > next {
+                    sink.error(
+                        join(&p, "part"),
+                        format!("`header` part {} holds no field: every `header` of the layout holds at least one", next + 1),
+                    );
+                }
+                if n != part {
+                    offset = 0;
+                }
+                part = n;
+            }
+        }
         check_ident(&h.name, &p, "field", sink);
         if out.iter().any(|g| g.name == h.name) {
             sink.error(&p, format!("duplicate field name `{}`", h.name));
@@ -3118,8 +3162,15 @@ fn header_fields(
         ) {
             continue;
         }
-        let mut field = field(h, &p, offset, byte_order, &out, refs, sink);
+        let mut field = {
+            let h = model::Field {
+                part: None,
+                ..h.clone()
+            };
+            field(&h, &p, offset, byte_order, &out, refs, sink)
+        };
         field.header = true;
+        field.part = part;
         for b in &field.bits {
             let taken = out
                 .iter()
@@ -3133,6 +3184,15 @@ fn header_fields(
         }
         offset += field.width;
         out.push(field);
+    }
+    if in_layout > 1 && !out.is_empty() && part + 1 < in_layout {
+        sink.error(
+            path,
+            format!(
+                "the layout holds `header` {in_layout} times and the fields fill {}: give each part its fields (`part: N`)",
+                part + 1
+            ),
+        );
     }
     out
 }
@@ -3167,13 +3227,14 @@ fn frame_layout(
         length: None,
         length_again: None,
         address: None,
-        header: 0,
+        headers: [0; MAX_HEADER_PARTS],
         code: 0,
         payload: 0,
         checksum: 0,
         len: 0,
     };
     let mut at = 0;
+    let mut headers = 0;
     for part in framing.layout_of(d) {
         match part {
             Part::Start => {
@@ -3211,8 +3272,12 @@ fn frame_layout(
             }
             Part::End => at += framing.end.len(),
             Part::Header => {
-                o.header = at;
-                at += framing.header_len_of(d);
+                // Parts past the most are refused (`header_fields`).
+                if let Some(h) = o.headers.get_mut(headers) {
+                    *h = at;
+                }
+                at += framing.header_part_len_of(d, headers);
+                headers += 1;
             }
         }
     }
@@ -4075,6 +4140,12 @@ fn field(
             "`length` is only for ascii fields; a number's width comes from its type",
         );
     }
+    if f.part.is_some() {
+        sink.error(
+            join(p, "part"),
+            "`part` places a header field (framing.header) in one of the layout's `header` parts: other fields sit in the payload",
+        );
+    }
     let mut out = Field {
         name: f.name.clone(),
         doc: text(&f.doc),
@@ -4099,6 +4170,7 @@ fn field(
         record: Vec::new(),
         bytes_from: None,
         header: false,
+        part: 0,
         present: None,
     };
     if f.bytes.is_some() {

@@ -1037,6 +1037,43 @@ const CASES: &[(&str, &[(&str, &str)])] = &[
         "header_after_payload",
         &[("framing.layout", "`header` must come before the payload")],
     ),
+    // ---- header fields in several places (`part`; made from valid/novatel_oem.yaml, without its examples)
+    (
+        "header_part_out_of_order",
+        &[("framing.header.port_address.part", "part 2 after a field of part 3: list the fields in layout order")],
+    ),
+    (
+        "header_parts_unfilled",
+        &[("framing.header", "the layout holds `header` 3 times and the fields fill 2: give each part its fields (`part: N`)")],
+    ),
+    (
+        "header_part_empty",
+        &[("framing.header.message_type.part", "`header` part 2 holds no field: every `header` of the layout holds at least one")],
+    ),
+    (
+        "header_part_beyond",
+        &[("framing.header.software_version.part", "part 4 is not one of the layout's `header` parts, 1 to 3")],
+    ),
+    (
+        "header_part_without_part",
+        &[("framing.header.sequence.part", "a field after those of `header` part 2 needs its `part`: fields are listed in layout order")],
+    ),
+    (
+        "header_parts_side_by_side",
+        &[("framing.layout", "two `header` parts side by side: one `header` holds all their fields")],
+    ),
+    (
+        "header_part_in_message",
+        &[("responses.bestpos.fields.datum.part", "`part` places a header field (framing.header) in one of the layout's `header` parts: other fields sit in the payload")],
+    ),
+    (
+        "header_parts_too_many",
+        &[("framing.layout", "layout holds `header` 5 times: at most 4")],
+    ),
+    (
+        "header_part_one_header",
+        &[("framing.header.message_type.part", "part 2: the layout holds `header` once, so every field sits in part 1 (leave `part` out)")],
+    ),
     (
         "header_counts_a_list",
         &[("responses.heartbeat.fields.extra", "refers to `compid`, a header field (framing.header)")],

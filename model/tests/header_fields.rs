@@ -165,7 +165,10 @@ fn a_header_before_the_code_is_covered_by_a_checksum_from_it() {
     let path = Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/fixtures/valid/msp_v2.yaml");
     let p = busspec_model::load_file(&path).unwrap_or_else(|d| panic!("{d}"));
     let h = p.framing.head(busspec_model::ir::Direction::Request, 2);
-    assert_eq!((h.header, h.code, h.length, h.payload), (3, 4, Some(6), 8));
+    assert_eq!(
+        (h.headers[0], h.code, h.length, h.payload),
+        (3, 4, Some(6), 8)
+    );
     assert_eq!(p.framing.checksum.covers_from, 3);
     let wire = interp::parse_hex("24 58 3C 01 02 00 00 00 3C").unwrap();
     let f = interp::decode(&p, None, None, &wire).unwrap();

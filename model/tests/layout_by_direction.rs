@@ -36,7 +36,7 @@ fn each_direction_is_laid_out_by_its_own_layout() {
     );
     assert_eq!((q.code, q.length, q.payload, q.len), (2, Some(3), 4, 6));
     assert_eq!(
-        (r.code, r.header, r.length, r.payload, r.len),
+        (r.code, r.headers[0], r.length, r.payload, r.len),
         (2, 3, Some(4), 5, 7)
     );
     for m in p.framed(Direction::Request) {
@@ -45,7 +45,7 @@ fn each_direction_is_laid_out_by_its_own_layout() {
     for m in p.framed(Direction::Response) {
         assert_eq!(m.fields[0].name, "state", "{}", m.name);
         assert!(m.fields[0].header);
-        assert_eq!(m.layout.header, 3);
+        assert_eq!(m.layout.headers[0], 3);
     }
 }
 
@@ -371,8 +371,14 @@ fn header_fields_lead_their_own_directions_messages() {
         f.head(Direction::Request, 1),
         f.head(Direction::Response, 1),
     );
-    assert_eq!((q.header, q.code, q.length, q.payload), (1, 2, Some(3), 4));
-    assert_eq!((r.code, r.header, r.length, r.payload), (1, 2, Some(3), 4));
+    assert_eq!(
+        (q.headers[0], q.code, q.length, q.payload),
+        (1, 2, Some(3), 4)
+    );
+    assert_eq!(
+        (r.code, r.headers[0], r.length, r.payload),
+        (1, 2, Some(3), 4)
+    );
     for m in p.framed(Direction::Request) {
         assert_eq!(m.fields[0].name, "state", "{}", m.name);
     }

@@ -33,6 +33,7 @@ fn field(range: (i64, i64), special: &[i64]) -> Field {
         bytes_from: None,
         present: None,
         header: false,
+        part: 0,
     }
 }
 
