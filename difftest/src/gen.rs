@@ -2212,7 +2212,7 @@ fn random_spec_without_examples(seed: u64) -> (String, usize) {
     // Header fields every message carries (MAVLink's sequence, system and component IDs):
     // anywhere after the leading start bytes and before the payload; after the code only
     // where every code has one length (it would move them).
-    let header: Vec<(String, usize)> = if g.chance(15) {
+    let mut header: Vec<(String, usize)> = if g.chance(15) {
         (0..g.rng.usize(1..=3))
             .map(|k| g.header_field(format!("h{k}")))
             .collect()
@@ -2232,6 +2232,23 @@ fn random_spec_without_examples(seed: u64) -> (String, usize) {
         .unwrap_or(layout.len());
         let at = g.rng.usize(first..=last.max(first));
         layout.insert(at, "header");
+        // Header fields in two places (NovAtel's OEM header around the message id and the
+        // length): the later fields in a second `header` (`part: 2`) not beside the first,
+        // before the payload, and before the code where codes have several lengths.
+        let last = if lens.len() == 1 {
+            pos(&layout, "payload")
+        } else {
+            pos(&layout, "code")
+        }
+        .unwrap_or(layout.len());
+        if header.len() >= 2 && at + 2 <= last && g.chance(40) {
+            let second = g.rng.usize(at + 2..=last);
+            layout.insert(second, "header");
+            let k = g.rng.usize(1..header.len());
+            for h in &mut header[k..] {
+                h.0 = h.0.replacen(", ", ", part: 2, ", 1);
+            }
+        }
     }
     let header_len: usize = header.iter().map(|h| h.1).sum();
     let mut escaping_yaml = String::new();
@@ -3769,6 +3786,13 @@ pub fn constructs(p: &ir::Protocol) -> Vec<&'static str> {
     add(
         !f.header.is_empty() && pos(Part::Code) < pos(Part::Header),
         "header after the code",
+    );
+    add(
+        f.header
+            .iter()
+            .chain(&f.response_header)
+            .any(|h| h.part > 0),
+        "header in two parts",
     );
     add(!f.end.is_empty(), "end bytes");
     add(f.end_first(), "end bytes before the checksum");

@@ -26,7 +26,7 @@ pub mod header_constant {
     /// The document's date.
     pub const DOCUMENT_DATE: &str = "2026-11-29";
     /// SHA-256 of the spec file this module was generated from, lowercase hex (`sha256sum`).
-    pub const SPEC_SHA256: &str = "fb51bf268539654d587b19ac3ffe321bd0314449430237512321c96df4f7aafd";
+    pub const SPEC_SHA256: &str = "406cc9fb3636ea9bc1f13bc9a25a5078c1cb1763b1d8b51b22b1554f7ebdb298";
     /// The spec's text, exactly as this module was generated from it.
     pub const SPEC_YAML: &str = include_str!(
         "../../../model/tests/fixtures/valid/header_constant.yaml"
