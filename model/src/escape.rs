@@ -238,6 +238,41 @@ fn unescape_byte(
     Some(Ok((b, i + 1)))
 }
 
+/// Where a frame with byte escaping or COBS that starts `buf` ends: just after the first end
+/// byte after its `lead` start bytes, or, where the escape byte travels doubled (Garmin's and
+/// TSIP's DLE stuffing, [`EscapeKind::doubled`]), after the first escape byte that pairs with
+/// the frame's last end byte (`10 10` is a data byte, `10 03` ends the frame, the escape byte
+/// and a replacement another byte). `None`: the bytes end first; `Some(None)`: an escape byte
+/// followed by another byte (a bad escape: the stream drops a byte). How the stream decoder
+/// frames escaped bytes (the generated one's `rt::escaped_lens` reads the same way).
+pub fn frame_end(f: &Framing, d: Direction, buf: &[u8], lead: usize) -> Option<Option<usize>> {
+    let kind = f.escaping.as_ref().map(|e| &e.kind);
+    let end = f.end_of(d);
+    if let (Some(escape), Some(EscapeKind::Bytes { map, .. }), [_, after]) =
+        (kind.and_then(EscapeKind::doubled), kind, end)
+    {
+        let mut i = lead;
+        while i < buf.len() {
+            if buf[i] != escape {
+                i += 1;
+                continue;
+            }
+            let next = *buf.get(i + 1)?;
+            if next == *after {
+                return Some(Some(i + 2));
+            }
+            if !map.iter().any(|(_, r)| *r == next) {
+                return Some(None);
+            }
+            i += 2;
+        }
+        return None;
+    }
+    let end = end.first().copied().unwrap_or(0);
+    let i = buf.iter().skip(lead).position(|&b| b == end)?;
+    Some(Some(lead + i + 1))
+}
+
 /// Escapes `frame[from..to]` onto `out`.
 fn escape_region(kind: &EscapeKind, frame: &[u8], out: &mut Vec<u8>) {
     match kind {

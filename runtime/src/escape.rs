@@ -35,7 +35,9 @@ pub struct Escaping {
     /// Where the start bytes sit, and them (empty: none).
     pub sync_at: usize,
     pub sync: &'static [u8],
-    /// The end byte a frame ends in (byte escaping and COBS).
+    /// The end byte a frame ends in (byte escaping and COBS); where the escape byte travels
+    /// doubled (a map entry `(escape, escape)`: Garmin's and TSIP's DLE stuffing), the byte
+    /// after the escape byte that ends it (DLE ETX's `03`), found by pairing.
     pub end: u8,
     /// The length field (offset, width, least significant byte first), if any.
     pub length: Option<(usize, usize, bool)>,
@@ -405,13 +407,16 @@ pub fn frame_lens(e: &Escaping, head: &[u8], max: usize) -> VarLens {
     }
     if let EscapeKind::Bytes { .. } | EscapeKind::Cobs = e.kind {
         let lead = e.sync.len();
-        let Some(i) = head.iter().skip(lead).position(|&b| b == e.end) else {
-            return VarLens {
-                requests: VarLen::NEED_MORE,
-                responses: VarLen::NEED_MORE,
-            };
+        let len = match frame_end(e, head, lead) {
+            Some(Some(len)) => len,
+            Some(None) => return VarLens::NONE,
+            None => {
+                return VarLens {
+                    requests: VarLen::NEED_MORE,
+                    responses: VarLen::NEED_MORE,
+                }
+            }
         };
-        let len = lead + i + 1;
         // Unescaped without a buffer: its length, or none where the escapes are bad.
         let plain = unescape(e, &head[..len], &mut [], |_| 0)
             .ok()
@@ -446,6 +451,36 @@ pub fn frame_lens(e: &Escaping, head: &[u8], max: usize) -> VarLens {
         requests: of(e.rules[0]),
         responses: of(e.rules[1]),
     }
+}
+
+/// Where a frame with byte escaping or COBS that starts `head` ends: just after the first end
+/// byte after its `lead` start bytes, or, where the escape byte travels doubled (DLE
+/// stuffing), after the first escape byte followed by [`Escaping::end`] (`10 10` is a data
+/// byte, `10 03` ends the frame, the escape byte and a replacement another byte). `None`: the
+/// bytes end first; `Some(None)`: an escape byte followed by another byte, a bad escape.
+fn frame_end(e: &Escaping, head: &[u8], lead: usize) -> Option<Option<usize>> {
+    if let EscapeKind::Bytes { escape, map } = e.kind {
+        if map.contains(&(escape, escape)) {
+            let mut i = lead;
+            while i < head.len() {
+                if head[i] != escape {
+                    i += 1;
+                    continue;
+                }
+                let next = *head.get(i + 1)?;
+                if next == e.end {
+                    return Some(Some(i + 2));
+                }
+                if !map.iter().any(|(_, r)| *r == next) {
+                    return Some(None);
+                }
+                i += 2;
+            }
+            return None;
+        }
+    }
+    let i = head.iter().skip(lead).position(|&b| b == e.end)?;
+    Some(Some(lead + i + 1))
 }
 
 /// [`frame_lens`] where requests and responses are escaped and framed apart (F.Port: requests
