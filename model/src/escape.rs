@@ -438,9 +438,16 @@ pub fn describe(e: Option<&crate::ir::Escaping>) -> String {
         EscapeKind::Bytes { escape, map, .. } => {
             let pairs: Vec<String> = map
                 .iter()
-                .map(|(b, r)| format!("{b:02X} as {escape:02X} {r:02X}"))
+                .map(|(b, r)| match b == r {
+                    true => format!("{b:02X} doubled"),
+                    false => format!("{b:02X} as {escape:02X} {r:02X}"),
+                })
                 .collect();
-            format!("escape byte {escape:02X}: {}", pairs.join(", "))
+            let ends = match e.kind.doubled() {
+                Some(x) => format!("; a frame ends at the first {x:02X} not doubled"),
+                None => String::new(),
+            };
+            format!("escape byte {escape:02X}: {}{ends}", pairs.join(", "))
         }
         EscapeKind::Insert { after, byte, from } => {
             let after: Vec<String> = after.iter().map(|b| format!("{b:02X}")).collect();
