@@ -11,7 +11,10 @@
 //! - **Bytes** (SLIP, KISS, HDLC): between the leading start bytes and the end byte (or the
 //!   frame's end, where a length field frames it: XBee API mode 2), each byte of the map
 //!   travels as the escape byte and its replacement. An escape byte followed by anything else,
-//!   or a byte of the map found as it is, is refused.
+//!   or a byte of the map found as it is, is refused. Where the map has the escape byte stand
+//!   for itself (DLE stuffing: Garmin's serial link, TSIP), it travels doubled and frames end
+//!   in it and a byte no escape stands for (`10 03`), found in a stream by pairing
+//!   ([`frame_end`]).
 //! - **Insert** (Dynamixel 2.0): from the declared part through the payload, the byte is
 //!   inserted after every occurrence of the pattern, matched left to right on the unstuffed
 //!   bytes and afresh after each one. A pattern not followed by the byte is refused.

@@ -610,3 +610,67 @@ fn unescape_byte(
     }
     Some(Ok((b, i + 1)))
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// Garmin's serial link: `10 ID size data checksum 10 03`, every 10 inside doubled.
+    const GARMIN: Escaping = Escaping {
+        kind: EscapeKind::Bytes {
+            escape: 0x10,
+            map: &[(0x10, 0x10)],
+        },
+        from: 1,
+        tail: 2,
+        sync_at: 0,
+        sync: &[0x10],
+        end: 0x03,
+        length: None,
+        rules: [None, None],
+        lens: [(5, 300), (5, 300)],
+        computed_escaped: false,
+        covers_from: 1,
+        checksum_len: 1,
+        checksum_be: false,
+        checksum_from_end: 3,
+    };
+
+    fn end(head: &[u8]) -> Option<Option<usize>> {
+        frame_end(&GARMIN, head, 1)
+    }
+
+    /// The end is found by pairing: a doubled 10 is data, however many there are before
+    /// DLE ETX; a 10 followed by anything else is a bad escape; a frame cut after a 10 waits.
+    #[test]
+    fn doubled_escape_frames_end_where_the_pairs_say() {
+        assert_eq!(end(&[0x10, 0xFE, 0x00, 0x02, 0x10, 0x03]), Some(Some(6)));
+        // The checksum 10 doubled just before DLE ETX: 10 10 10 03.
+        assert_eq!(
+            end(&[0x10, 0x15, 0x02, 0x10, 0x10, 0x10, 0x10, 0x10, 0x03, 0x10]),
+            Some(Some(9))
+        );
+        // 10 10 03: the 03 is data, the frame goes on.
+        assert_eq!(end(&[0x10, 0x06, 0x10, 0x10, 0x03, 0x01]), None);
+        assert_eq!(end(&[0x10, 0x06, 0x10]), None);
+        assert_eq!(end(&[0x10, 0x06, 0x10, 0x41, 0x10, 0x03]), Some(None));
+        let lens = frame_lens(&GARMIN, &[0x10, 0x06, 0x10, 0x41, 0x10, 0x03], 600);
+        assert_eq!(lens.requests, VarLen::NONE);
+        // A first end byte alone is no end: the frame waits for more bytes.
+        let lens = frame_lens(&GARMIN, &[0x10, 0x06, 0x10, 0x10, 0x03, 0x01], 600);
+        assert_eq!(lens.requests, VarLen::NEED_MORE);
+        let lens = frame_lens(&GARMIN, &[0x10, 0xFE, 0x00, 0x02, 0x10, 0x03], 600);
+        assert_eq!(lens.requests, VarLen::len(6));
+        // Unescaped, the frame is 10 15 02 10 00 D9 10 03 less one byte of the wire.
+        let wire = [0x10, 0x15, 0x02, 0x10, 0x10, 0x00, 0xD9, 0x10, 0x03];
+        let mut out = [0u8; 16];
+        let u = unescape(&GARMIN, &wire, &mut out, |_| 0).unwrap();
+        assert_eq!(
+            &out[..u.len],
+            &[0x10, 0x15, 0x02, 0x10, 0x00, 0xD9, 0x10, 0x03]
+        );
+        let mut back = [0u8; 16];
+        let n = escape(&GARMIN, &out[..u.len], &mut back, |_| 0).unwrap();
+        assert_eq!(&back[..n], &wire);
+    }
+}
