@@ -147,6 +147,10 @@ fn cases() -> Vec<Case> {
         // A flag two frames share (KISS's FEND): the earlier frame's packet lacks its closing
         // flag, the next packet's first byte.
         spec("model/tests/fixtures/valid/kiss.yaml"),
+        // DLE stuffing (Garmin's serial link): 10 doubled inside, the frame ends at DLE ETX.
+        spec("model/tests/fixtures/valid/garmin_link.yaml"),
+        // The same without a size or checksum (Trimble TSIP).
+        spec("model/tests/fixtures/valid/tsip.yaml"),
         // A 24-bit CRC (RTCM 3's CRC-24Q).
         spec("model/tests/fixtures/valid/rtcm3_frame.yaml"),
         // Header fields whose value every frame holds (a header length, a reserved byte).

@@ -481,7 +481,7 @@ fn float_and_64_bit_specs_generate_their_snapshots() {
 }
 
 /// Escaping and stuffing (`framing.escaping`): SLIP, HDLC, COBS, Dynamixel 2.0's stuffing and
-/// XBee's escaping without an end byte (`snapshots_compile.rs` compiles them and holds them to the interpreter).
+/// XBee's escaping without an end byte, Garmin's and TSIP's DLE stuffing (`snapshots_compile.rs` compiles them and holds them to the interpreter).
 #[test]
 fn escaped_specs_generate_their_snapshots() {
     check(
@@ -496,6 +496,11 @@ fn escaped_specs_generate_their_snapshots() {
     );
     check("model/tests/fixtures/valid/xbee_api2.yaml", "xbee_api2.rs");
     check("model/tests/fixtures/valid/kiss.yaml", "kiss.rs");
+    check(
+        "model/tests/fixtures/valid/garmin_link.yaml",
+        "garmin_link.rs",
+    );
+    check("model/tests/fixtures/valid/tsip.yaml", "tsip.rs");
 }
 
 /// FrSky F.Port v1: its CRC the end-around sum (`sum8_end_around`, `rt::sum8_end_around`) from

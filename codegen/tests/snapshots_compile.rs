@@ -33,6 +33,8 @@ include!("snapshots/cobs_link.rs");
 include!("snapshots/dynamixel2_stuffed.rs");
 include!("snapshots/xbee_api2.rs");
 include!("snapshots/kiss.rs");
+include!("snapshots/garmin_link.rs");
+include!("snapshots/tsip.rs");
 include!("snapshots/fport.rs");
 include!("snapshots/fport_uplink.rs");
 include!("snapshots/fport_both.rs");
@@ -2177,6 +2179,94 @@ fn escaped_snapshots_agree_with_the_interpreter() {
     );
 }
 
+/// Garmin's serial link (fixture `garmin_link`): DLE stuffing, 10 doubled between the leading
+/// DLE and the closing DLE ETX. Both engines agree on the examples, frames mutated from them and
+/// random bytes ([`escaped_agree`]); a lone 10 is refused by both in the same words; the
+/// generated encoder doubles a 10 in the data; both stream decoders find the end by pairing, so
+/// a frame whose last data byte is 10 (`10 10 10 03`) and a size of 0x10 (`10 11 10 10 ...`)
+/// are found whole.
+#[test]
+fn garmin_link_snapshot_agrees_with_the_interpreter() {
+    use garmin_link::{GarminLink, Response};
+    let file = "model/tests/fixtures/valid/garmin_link.yaml";
+    let (accepted, refused, found) = escaped_agree::<GarminLink>(file, 0x1003, "date_time");
+    assert!(
+        accepted > 5 && refused > 100 && found > 50,
+        "{accepted} {refused} {found}"
+    );
+    let p = fixture(file);
+    let hex = |s: &str| busspec_model::interp::parse_hex(s).unwrap();
+    for (bad, words) in [
+        (
+            "10 15 02 10 00 D9 10 03",
+            "bad escape at offset 3: 0x10 followed by 0x00",
+        ),
+        (
+            "10 FE 10 03 00 02 10 03",
+            "bad escape at offset 2: 0x10 followed by 0x03",
+        ),
+    ] {
+        let g = GarminLink::decode_response(&hex(bad)).map(|_| ());
+        let i = busspec_model::interp::decode(&p, Some(Direction::Response), None, &hex(bad))
+            .map(|_| ());
+        assert_eq!(g.as_ref().unwrap_err().to_string(), words);
+        same_text(g, i);
+    }
+    let nak = Response::Nak(garmin_link::response::Nak { packet_id: 0x10 });
+    let mut buf = [0u8; garmin_link::MAX_FRAME_LEN];
+    let n = nak.encode(0, &mut buf).unwrap();
+    assert_eq!(&buf[..n], &hex("10 15 02 10 10 00 D9 10 03")[..]);
+    // A capture of the date and time (its checksum's 10 doubled just before DLE ETX) and the
+    // position (its size 0x10 doubled), a byte of noise between: each found whole.
+    let cap = hex(
+        "10 0E 08 0B 1D EA 07 0D 00 0A 10 10 AA 10 03 55 10 11 10 10 00 00 00 00 00 00 E0 3F 00 00 00 00 00 00 F4 BF 0D 10 03",
+    );
+    let want: Vec<Seen> = vec![
+        ("date_time".into(), 0, 15),
+        ("-".into(), 15, 1),
+        ("position".into(), 16, 23),
+    ];
+    for cuts in [[1usize], [3], [64]] {
+        assert_eq!(generated_seen::<GarminLink>(&cap, &cuts), want);
+        assert_eq!(interp_seen(&p, &cap, &cuts), want);
+    }
+}
+
+/// Trimble TSIP (fixture `tsip`): DLE stuffing without a size or checksum. Both engines agree
+/// on the examples, mutated frames and random bytes; the generated encoder doubles the 10 of
+/// a float; a lone 10 is refused by both in the same words.
+#[test]
+fn tsip_snapshot_agrees_with_the_interpreter() {
+    use tsip::{Response, Tsip};
+    let file = "model/tests/fixtures/valid/tsip.yaml";
+    let (accepted, refused, found) = escaped_agree::<Tsip>(file, 0x7519, "gps_time");
+    assert!(
+        accepted > 5 && refused > 50 && found > 50,
+        "{accepted} {refused} {found}"
+    );
+    let p = fixture(file);
+    let hex = |s: &str| busspec_model::interp::parse_hex(s).unwrap();
+    let bad = hex("10 41 41 10 00 00 09 60 41 90 00 00 10 03");
+    let g = Tsip::decode_response(&bad).map(|_| ());
+    let i = busspec_model::interp::decode(&p, Some(Direction::Response), None, &bad).map(|_| ());
+    assert_eq!(
+        g.as_ref().unwrap_err().to_string(),
+        "bad escape at offset 3: 0x10 followed by 0x00"
+    );
+    same_text(g, i);
+    let time = Response::GpsTime(tsip::response::GpsTime {
+        time_of_week: 9.0,
+        week: 2400,
+        utc_offset: 18.0,
+    });
+    let mut buf = [0u8; tsip::MAX_FRAME_LEN];
+    let n = time.encode(0, &mut buf).unwrap();
+    assert_eq!(
+        &buf[..n],
+        &hex("10 41 41 10 10 00 00 09 60 41 90 00 00 10 03")[..]
+    );
+}
+
 /// Fields after a list and several lists: the examples replay, and every frame mutated from
 /// them decodes alike in both engines (the same values, the same refusals in the same words);
 /// lists of other lengths encode alike.
@@ -3784,6 +3874,8 @@ fn every_snapshot_checks_checksums_as_the_interpreter_does() {
         dynamixel2_stuffed::Dynamixel2Stuffed, "model/tests/fixtures/valid/dynamixel2_stuffed.yaml";
         xbee_api2::XbeeApi2, "model/tests/fixtures/valid/xbee_api2.yaml";
         kiss::Kiss, "model/tests/fixtures/valid/kiss.yaml";
+        garmin_link::GarminLink, "model/tests/fixtures/valid/garmin_link.yaml";
+        tsip::Tsip, "model/tests/fixtures/valid/tsip.yaml";
         fport::Fport, "model/tests/fixtures/valid/fport.yaml";
         fport_uplink::FportUplink, "model/tests/fixtures/valid/fport_uplink.yaml";
         fport_both::FportBoth, "model/tests/fixtures/valid/fport_both.yaml";

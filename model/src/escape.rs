@@ -11,7 +11,10 @@
 //! - **Bytes** (SLIP, KISS, HDLC): between the leading start bytes and the end byte (or the
 //!   frame's end, where a length field frames it: XBee API mode 2), each byte of the map
 //!   travels as the escape byte and its replacement. An escape byte followed by anything else,
-//!   or a byte of the map found as it is, is refused.
+//!   or a byte of the map found as it is, is refused. Where the map has the escape byte stand
+//!   for itself (DLE stuffing: Garmin's serial link, TSIP), it travels doubled and frames end
+//!   in it and a byte no escape stands for (`10 03`), found in a stream by pairing
+//!   ([`frame_end`]).
 //! - **Insert** (Dynamixel 2.0): from the declared part through the payload, the byte is
 //!   inserted after every occurrence of the pattern, matched left to right on the unstuffed
 //!   bytes and afresh after each one. A pattern not followed by the byte is refused.
@@ -238,6 +241,41 @@ fn unescape_byte(
     Some(Ok((b, i + 1)))
 }
 
+/// Where a frame with byte escaping or COBS that starts `buf` ends: just after the first end
+/// byte after its `lead` start bytes, or, where the escape byte travels doubled (Garmin's and
+/// TSIP's DLE stuffing, [`EscapeKind::doubled`]), after the first escape byte that pairs with
+/// the frame's last end byte (`10 10` is a data byte, `10 03` ends the frame, the escape byte
+/// and a replacement another byte). `None`: the bytes end first; `Some(None)`: an escape byte
+/// followed by another byte (a bad escape: the stream drops a byte). How the stream decoder
+/// frames escaped bytes (the generated one's `rt::escaped_lens` reads the same way).
+pub fn frame_end(f: &Framing, d: Direction, buf: &[u8], lead: usize) -> Option<Option<usize>> {
+    let kind = f.escaping.as_ref().map(|e| &e.kind);
+    let end = f.end_of(d);
+    if let (Some(escape), Some(EscapeKind::Bytes { map, .. }), [_, after]) =
+        (kind.and_then(EscapeKind::doubled), kind, end)
+    {
+        let mut i = lead;
+        while i < buf.len() {
+            if buf[i] != escape {
+                i += 1;
+                continue;
+            }
+            let next = *buf.get(i + 1)?;
+            if next == *after {
+                return Some(Some(i + 2));
+            }
+            if !map.iter().any(|(_, r)| *r == next) {
+                return Some(None);
+            }
+            i += 2;
+        }
+        return None;
+    }
+    let end = end.first().copied().unwrap_or(0);
+    let i = buf.iter().skip(lead).position(|&b| b == end)?;
+    Some(Some(lead + i + 1))
+}
+
 /// Escapes `frame[from..to]` onto `out`.
 fn escape_region(kind: &EscapeKind, frame: &[u8], out: &mut Vec<u8>) {
     match kind {
@@ -403,9 +441,16 @@ pub fn describe(e: Option<&crate::ir::Escaping>) -> String {
         EscapeKind::Bytes { escape, map, .. } => {
             let pairs: Vec<String> = map
                 .iter()
-                .map(|(b, r)| format!("{b:02X} as {escape:02X} {r:02X}"))
+                .map(|(b, r)| match b == r {
+                    true => format!("{b:02X} doubled"),
+                    false => format!("{b:02X} as {escape:02X} {r:02X}"),
+                })
                 .collect();
-            format!("escape byte {escape:02X}: {}", pairs.join(", "))
+            let ends = match e.kind.doubled() {
+                Some(x) => format!("; a frame ends at the first {x:02X} not doubled"),
+                None => String::new(),
+            };
+            format!("escape byte {escape:02X}: {}{ends}", pairs.join(", "))
         }
         EscapeKind::Insert { after, byte, from } => {
             let after: Vec<String> = after.iter().map(|b| format!("{b:02X}")).collect();

@@ -350,6 +350,18 @@ pub enum EscapeKind {
 }
 
 impl EscapeKind {
+    /// The escape byte where it travels doubled (`{byte: 0x10, as: 0x10}`: Garmin's and
+    /// TSIP's DLE stuffing), whose frames end in it and a byte no escape stands for (DLE ETX,
+    /// `10 03`).
+    pub fn doubled(&self) -> Option<u8> {
+        match self {
+            EscapeKind::Bytes { escape, map, .. } if map.contains(&(*escape, *escape)) => {
+                Some(*escape)
+            }
+            _ => None,
+        }
+    }
+
     /// The most bytes `n` unescaped bytes of the escaped region can take on the wire.
     pub fn worst_len(&self, n: usize) -> usize {
         match self {

@@ -981,13 +981,13 @@ impl<'p> StreamDecoder<'p> {
             return self.escaped_lens_by_length(lead, only, flushing, lens, dirs);
         }
         if !insert {
-            let end = f.end_of(d0).first().copied().unwrap_or(0);
-            let Some(i) = buf.iter().skip(lead).position(|&b| b == end) else {
-                return wait;
+            let len = match crate::escape::frame_end(f, d0, buf, lead) {
+                None => return wait,
+                Some(None) => return Escaped::Drop,
+                Some(Some(len)) => len,
             };
             // Each direction whose frames can be as long unescaped (none where the escapes
             // are bad): the generated stream decoder's candidates (`rt::escaped_lens`).
-            let len = lead + i + 1;
             let Ok(plain) = crate::escape::unescape_bytes_of(f, d0, &buf[..len]) else {
                 return Escaped::Drop;
             };

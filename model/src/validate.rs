@@ -2815,7 +2815,9 @@ fn escaping(e: &model::Escaping, f: &Framing, sink: &mut Sink) -> Option<Escapin
                     format!("two bytes travel as 0x{escape:02X} 0x{rep:02X}"),
                 );
             }
-            if map.iter().any(|(r, _)| r == rep) {
+            // The escape byte escaping itself: it travels doubled (Garmin's DLE stuffing).
+            let doubled = *raw == escape && *rep == escape;
+            if !doubled && map.iter().any(|(r, _)| r == rep) {
                 sink.error(
                     join(path, key),
                     format!("0x{raw:02X} travels as 0x{rep:02X}, a byte that is itself escaped"),
@@ -2829,9 +2831,33 @@ fn escaping(e: &model::Escaping, f: &Framing, sink: &mut Sink) -> Option<Escapin
             );
         }
         // Framed by an end byte (SLIP, KISS, HDLC), or without one by the length field
-        // (XBee API mode 2), which then sits at one offset, read as the bytes unescape.
-        let by_end =
-            last_is_end && f.end.len() == 1 && map.iter().any(|(r, _)| Some(r) == f.end.first());
+        // (XBee API mode 2), which then sits at one offset, read as the bytes unescape; or,
+        // where the escape byte travels doubled, by the escape byte and a byte that follows
+        // it nowhere else (Garmin's DLE ETX, found by pairing).
+        let doubled = map.iter().any(|&(r, s)| r == escape && s == escape);
+        let by_end = last_is_end
+            && ((f.end.len() == 1 && map.iter().any(|(r, _)| Some(r) == f.end.first()))
+                || (doubled && f.end.len() == 2 && f.end[0] == escape));
+        if doubled && last_is_end && f.end.len() == 2 && f.end[0] == escape {
+            let after = f.end[1];
+            if after == escape {
+                sink.error(
+                    "framing.end",
+                    format!("0x{escape:02X} 0x{after:02X} is a doubled escape byte, not an end: the byte after the escape byte that ends a frame must stand for no byte"),
+                );
+            } else if let Some((raw, _)) = map.iter().find(|(_, r)| *r == after) {
+                sink.error(
+                    "framing.end",
+                    format!("0x{escape:02X} 0x{after:02X} also stands for 0x{raw:02X} inside a frame: the byte after the escape byte that ends a frame must be no replacement"),
+                );
+            }
+        }
+        if doubled && !(last_is_end && f.end.len() == 2 && f.end[0] == escape) {
+            sink.error(
+                join(path, key),
+                format!("0x{escape:02X} travels doubled (0x{escape:02X} 0x{escape:02X}): frames then end in two `end` bytes, the escape byte and a byte no escape stands for (Garmin's DLE ETX: `end: [0x10, 0x03]`, the last part of the layout)"),
+            );
+        }
         let codes = f
             .request
             .code_lengths
@@ -2849,10 +2875,10 @@ fn escaping(e: &model::Escaping, f: &Framing, sink: &mut Sink) -> Option<Escapin
             && length_at
                 .first()
                 .is_some_and(|first| first.is_some() && length_at.iter().all(|at| at == first));
-        if !by_end && !by_length {
+        if !by_end && !by_length && !doubled {
             sink.error(
                 path,
-                "escaped frames end in one `end` byte (the last part of the layout) that travels escaped inside them, or, without `end`, carry a length field at one offset (before the code, or every code one length): it is how a frame's end is found",
+                "escaped frames end in one `end` byte (the last part of the layout) that travels escaped inside them, or in the escape byte and another where it travels doubled (`{byte: 0x10, as: 0x10}`, `end: [0x10, 0x03]`), or, without `end`, carry a length field at one offset (before the code, or every code one length): it is how a frame's end is found",
             );
         }
         EscapeKind::Bytes {

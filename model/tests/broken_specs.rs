@@ -752,6 +752,23 @@ const CASES: &[(&str, &[(&str, &str)])] = &[
         "escaping_replacement_escaped",
         &[("framing.escaping.map", "0xC0 travels as 0xDB, a byte that is itself escaped")],
     ),
+    // DLE stuffing (made from valid/garmin_link, without its examples)
+    (
+        "dle_without_two_byte_end",
+        &[("framing.escaping.map", "0x10 travels doubled (0x10 0x10): frames then end in two `end` bytes, the escape byte and a byte no escape stands for")],
+    ),
+    (
+        "dle_end_replacement",
+        &[("framing.end", "0x10 0x03 also stands for 0x02 inside a frame: the byte after the escape byte that ends a frame must be no replacement")],
+    ),
+    (
+        "dle_end_doubled",
+        &[("framing.end", "0x10 0x10 is a doubled escape byte, not an end")],
+    ),
+    (
+        "dle_doubled_other_byte",
+        &[("framing.escaping.map", "0xC0 travels as 0xC0, a byte that is itself escaped")],
+    ),
     (
         "escaping_without_end",
         &[("framing.escaping", "escaped frames end in one `end` byte (the last part of the layout) that travels escaped inside them")],

@@ -388,6 +388,48 @@ fn escaping_changes_are_wire_breaking() {
     assert_eq!(summary_of(&escaped, &escaped), []);
 }
 
+/// DLE stuffing (Garmin's serial link): other end bytes, or another byte doubled or escaped
+/// beside the doubled one, are wire-breaking changes (`framing_changed` of the end bytes,
+/// `escaping_changed`), each said in its bytes.
+#[test]
+fn dle_stuffing_changes_are_wire_breaking() {
+    let path = Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/fixtures/valid/garmin_link.yaml");
+    let text = std::fs::read_to_string(&path).expect("garmin_link.yaml");
+    let head = &text[..text.find("examples:").expect("examples")];
+    let load = |t: &str| busspec_model::load_str("x.yaml", t).unwrap_or_else(|d| panic!("{d}"));
+    let dle = load(head);
+    let etb = load(&head.replace("end: [0x10, 0x03]", "end: [0x10, 0x17]"));
+    let more = load(&head.replace(
+        "      - {byte: 0x10, as: 0x10}        # DLE travels doubled: 10 10\n",
+        "      - {byte: 0x10, as: 0x10}        # DLE travels doubled: 10 10\n      - {byte: 0x03, as: 0x83}\n",
+    ));
+    let summary_of = |a: &Protocol, b: &Protocol| {
+        diff::diff(a, b)
+            .into_iter()
+            .map(|c| (c.category, c.kind, c.path, c.text))
+            .collect::<Vec<_>>()
+    };
+    assert_eq!(
+        summary_of(&dle, &etb),
+        [(
+            Wire,
+            "framing_changed",
+            "framing.end".to_owned(),
+            "end bytes: 10 03 → 10 17".to_owned()
+        )]
+    );
+    assert_eq!(
+        summary_of(&dle, &more),
+        [(
+            Wire,
+            "escaping_changed",
+            "framing.escaping".to_owned(),
+            "escaping: escape byte 10: 10 doubled; a frame ends at the first 10 not doubled (checksum and length computed before escaping) → escape byte 10: 10 doubled, 03 as 10 83; a frame ends at the first 10 not doubled (checksum and length computed before escaping)".to_owned()
+        )]
+    );
+    assert_eq!(summary_of(&dle, &dle), []);
+}
+
 /// `base.yaml` with a `transactions:` section (empty text: none).
 fn with_transactions(section: &str) -> Protocol {
     let path = Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/fixtures/diff/base.yaml");

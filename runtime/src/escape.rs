@@ -35,7 +35,9 @@ pub struct Escaping {
     /// Where the start bytes sit, and them (empty: none).
     pub sync_at: usize,
     pub sync: &'static [u8],
-    /// The end byte a frame ends in (byte escaping and COBS).
+    /// The end byte a frame ends in (byte escaping and COBS); where the escape byte travels
+    /// doubled (a map entry `(escape, escape)`: Garmin's and TSIP's DLE stuffing), the byte
+    /// after the escape byte that ends it (DLE ETX's `03`), found by pairing.
     pub end: u8,
     /// The length field (offset, width, least significant byte first), if any.
     pub length: Option<(usize, usize, bool)>,
@@ -405,13 +407,16 @@ pub fn frame_lens(e: &Escaping, head: &[u8], max: usize) -> VarLens {
     }
     if let EscapeKind::Bytes { .. } | EscapeKind::Cobs = e.kind {
         let lead = e.sync.len();
-        let Some(i) = head.iter().skip(lead).position(|&b| b == e.end) else {
-            return VarLens {
-                requests: VarLen::NEED_MORE,
-                responses: VarLen::NEED_MORE,
-            };
+        let len = match frame_end(e, head, lead) {
+            Some(Some(len)) => len,
+            Some(None) => return VarLens::NONE,
+            None => {
+                return VarLens {
+                    requests: VarLen::NEED_MORE,
+                    responses: VarLen::NEED_MORE,
+                }
+            }
         };
-        let len = lead + i + 1;
         // Unescaped without a buffer: its length, or none where the escapes are bad.
         let plain = unescape(e, &head[..len], &mut [], |_| 0)
             .ok()
@@ -446,6 +451,36 @@ pub fn frame_lens(e: &Escaping, head: &[u8], max: usize) -> VarLens {
         requests: of(e.rules[0]),
         responses: of(e.rules[1]),
     }
+}
+
+/// Where a frame with byte escaping or COBS that starts `head` ends: just after the first end
+/// byte after its `lead` start bytes, or, where the escape byte travels doubled (DLE
+/// stuffing), after the first escape byte followed by [`Escaping::end`] (`10 10` is a data
+/// byte, `10 03` ends the frame, the escape byte and a replacement another byte). `None`: the
+/// bytes end first; `Some(None)`: an escape byte followed by another byte, a bad escape.
+fn frame_end(e: &Escaping, head: &[u8], lead: usize) -> Option<Option<usize>> {
+    if let EscapeKind::Bytes { escape, map } = e.kind {
+        if map.contains(&(escape, escape)) {
+            let mut i = lead;
+            while i < head.len() {
+                if head[i] != escape {
+                    i += 1;
+                    continue;
+                }
+                let next = *head.get(i + 1)?;
+                if next == e.end {
+                    return Some(Some(i + 2));
+                }
+                if !map.iter().any(|(_, r)| *r == next) {
+                    return Some(None);
+                }
+                i += 2;
+            }
+            return None;
+        }
+    }
+    let i = head.iter().skip(lead).position(|&b| b == e.end)?;
+    Some(Some(lead + i + 1))
 }
 
 /// [`frame_lens`] where requests and responses are escaped and framed apart (F.Port: requests
@@ -574,4 +609,68 @@ fn unescape_byte(
         return Some(Err(EscapeFault::Unescaped { found: b }));
     }
     Some(Ok((b, i + 1)))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// Garmin's serial link: `10 ID size data checksum 10 03`, every 10 inside doubled.
+    const GARMIN: Escaping = Escaping {
+        kind: EscapeKind::Bytes {
+            escape: 0x10,
+            map: &[(0x10, 0x10)],
+        },
+        from: 1,
+        tail: 2,
+        sync_at: 0,
+        sync: &[0x10],
+        end: 0x03,
+        length: None,
+        rules: [None, None],
+        lens: [(5, 300), (5, 300)],
+        computed_escaped: false,
+        covers_from: 1,
+        checksum_len: 1,
+        checksum_be: false,
+        checksum_from_end: 3,
+    };
+
+    fn end(head: &[u8]) -> Option<Option<usize>> {
+        frame_end(&GARMIN, head, 1)
+    }
+
+    /// The end is found by pairing: a doubled 10 is data, however many there are before
+    /// DLE ETX; a 10 followed by anything else is a bad escape; a frame cut after a 10 waits.
+    #[test]
+    fn doubled_escape_frames_end_where_the_pairs_say() {
+        assert_eq!(end(&[0x10, 0xFE, 0x00, 0x02, 0x10, 0x03]), Some(Some(6)));
+        // The checksum 10 doubled just before DLE ETX: 10 10 10 03.
+        assert_eq!(
+            end(&[0x10, 0x15, 0x02, 0x10, 0x10, 0x10, 0x10, 0x10, 0x03, 0x10]),
+            Some(Some(9))
+        );
+        // 10 10 03: the 03 is data, the frame goes on.
+        assert_eq!(end(&[0x10, 0x06, 0x10, 0x10, 0x03, 0x01]), None);
+        assert_eq!(end(&[0x10, 0x06, 0x10]), None);
+        assert_eq!(end(&[0x10, 0x06, 0x10, 0x41, 0x10, 0x03]), Some(None));
+        let lens = frame_lens(&GARMIN, &[0x10, 0x06, 0x10, 0x41, 0x10, 0x03], 600);
+        assert_eq!(lens.requests, VarLen::NONE);
+        // A first end byte alone is no end: the frame waits for more bytes.
+        let lens = frame_lens(&GARMIN, &[0x10, 0x06, 0x10, 0x10, 0x03, 0x01], 600);
+        assert_eq!(lens.requests, VarLen::NEED_MORE);
+        let lens = frame_lens(&GARMIN, &[0x10, 0xFE, 0x00, 0x02, 0x10, 0x03], 600);
+        assert_eq!(lens.requests, VarLen::len(6));
+        // Unescaped, the frame is 10 15 02 10 00 D9 10 03 less one byte of the wire.
+        let wire = [0x10, 0x15, 0x02, 0x10, 0x10, 0x00, 0xD9, 0x10, 0x03];
+        let mut out = [0u8; 16];
+        let u = unescape(&GARMIN, &wire, &mut out, |_| 0).unwrap();
+        assert_eq!(
+            &out[..u.len],
+            &[0x10, 0x15, 0x02, 0x10, 0x00, 0xD9, 0x10, 0x03]
+        );
+        let mut back = [0u8; 16];
+        let n = escape(&GARMIN, &out[..u.len], &mut back, |_| 0).unwrap();
+        assert_eq!(&back[..n], &wire);
+    }
 }

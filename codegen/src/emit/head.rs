@@ -778,7 +778,13 @@ fn escaping_value(p: &Protocol, only: Option<Direction>) -> TokenStream {
     };
     let sync_at = usize_lit(sync_at);
     let sync = sync.iter().map(|b| hex_u8(*b));
-    let end = hex_u8(f.end_of(d0).first().copied().unwrap_or(0));
+    // Where the escape byte travels doubled, the end byte after it (DLE ETX's 03).
+    let end = if e.kind.doubled().is_some() {
+        f.end_of(d0).last()
+    } else {
+        f.end_of(d0).first()
+    };
+    let end = hex_u8(end.copied().unwrap_or(0));
     let length = match (&f.length, head.length) {
         (Some(l), Some(at)) => {
             let (at, w, le) = (
