@@ -787,10 +787,14 @@ fn unchecked_messages(
                 })
                 .zip(responses.iter_mut().map(|m| ("responses", m))),
         );
+    // Every message that leaves its checksum out, refused or not: none of them is one that
+    // carries a checksum to tell the others from.
+    let mut asked: Vec<(Direction, String)> = Vec::new();
     for ((checksum, extra, over, constant), (list, m)) in given {
         if checksum.is_none() || constant {
             continue;
         }
+        asked.push((m.direction, m.name.clone()));
         let path = format!("{list}.{}.checksum", m.name);
         let errors = sink.items.len();
         if framing.checksum.is_empty() {
@@ -843,6 +847,14 @@ fn unchecked_messages(
                 "a message without a checksum beside several code lengths in its direction is not expressible yet",
             );
         }
+        // Its frame without the checksum: no start byte, address, code or field leaves nothing
+        // on the wire to find, tell apart or decode.
+        if m.layout.len <= clen {
+            sink.error(
+                &path,
+                "without its checksum the message's frame holds no byte (no start byte, address, code or field): nothing would travel",
+            );
+        }
         if sink.items.len() == errors {
             m.unchecked = true;
             m.layout.len -= clen;
@@ -852,7 +864,11 @@ fn unchecked_messages(
     // Told apart by code and length alone from every message with a checksum.
     let all: Vec<&Message> = commands.iter().chain(responses.iter()).collect();
     for m in all.iter().filter(|m| m.unchecked) {
-        let clash = all.iter().find(|x| !x.unchecked && !told_apart(m, x));
+        let clash = all.iter().find(|x| {
+            !x.unchecked
+                && !asked.iter().any(|(d, n)| *d == x.direction && *n == x.name)
+                && !told_apart(m, x)
+        });
         if let Some(x) = clash {
             let list = match m.direction {
                 Direction::Request => "commands",

@@ -489,6 +489,10 @@ const CASES: &[(&str, &[(&str, &str)])] = &[
         ],
     ),
     (
+        "unchecked_empty",
+        &[("responses.ack.checksum", "without its checksum the message's frame holds no byte (no start byte, address, code or field): nothing would travel")],
+    ),
+    (
         "unchecked_beside",
         &[
             ("commands.read_status.checksum", "a message without a checksum has one length yet: it takes no repeated or optional field"),
