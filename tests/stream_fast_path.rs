@@ -17,7 +17,9 @@
 //! Then whole random captures with noise, fed in chunks (the fast path where it can) and
 //! pushed byte by byte (the full rule only). The fast path asks `Framing::candidate` (UB2's
 //! generated table) before the candidates' mask, so these comparisons run that route; its
-//! answers are also held to the candidates' on every two-byte code.
+//! answers are also held to the candidates' on every two-byte code, and the decoders it calls
+//! on a frame whose length the table gave (`decode_request_fixed`, `decode_response_fixed`) to
+//! the decoders of any length.
 
 mod common;
 
@@ -92,6 +94,55 @@ fn compare<P: Protocol>(
 }
 
 /// The spec of `P`, its example frames (sorted, each once) and the [`states`] they give.
+/// `decode_request_fixed` and `decode_response_fixed` (the fast path's decoders of a frame
+/// whose length the table gave: generated, for UB2, a copy of the decoder for each length)
+/// against `decode_request` and `decode_response`, on every example cut or padded to every
+/// listed length, with each value of each of its first four bytes, its checksum written
+/// again and left as it was. Returns how many frames were compared.
+fn fixed_decoders_are_the_decoders<P: Protocol>() -> usize {
+    let p = spec::<P>();
+    let mut n = 0;
+    for e in &p.examples {
+        for &len in P::FRAME_LENGTHS {
+            let mut b = window(&e.wire, len);
+            for at in 0..len.min(4) {
+                let was = b[at];
+                for v in 0..=u8::MAX {
+                    b[at] = v;
+                    for fix in [false, true] {
+                        let mut f = b.clone();
+                        if fix {
+                            fix_checksum(&p, &mut f);
+                        }
+                        assert_eq!(
+                            P::decode_request_fixed(&f),
+                            P::decode_request(&f),
+                            "{:02X?}",
+                            f
+                        );
+                        assert_eq!(
+                            P::decode_response_fixed(&f),
+                            P::decode_response(&f),
+                            "{:02X?}",
+                            f
+                        );
+                        n += 1;
+                    }
+                }
+                b[at] = was;
+            }
+        }
+    }
+    n
+}
+
+#[test]
+fn fixed_length_decoders_answer_as_the_decoders() {
+    // UB2, the one built-in protocol with a candidate table, has them generated; the others
+    // take the defaults, the decoders themselves.
+    assert!(fixed_decoders_are_the_decoders::<Ub2>() > 100_000);
+}
+
 fn examples<P: Protocol>() -> (
     busspec_model::ir::Protocol,
     Vec<Vec<u8>>,

@@ -55,6 +55,20 @@ macro_rules! protocol_as {
             ) -> Result<busspec_runtime::Decoded<Self::Request>, busspec_runtime::DecodeError> {
                 <$codec as busspec_runtime::Protocol>::decode_request(frame)
             }
+
+            #[inline]
+            fn decode_request_fixed(
+                frame: &[u8],
+            ) -> Result<busspec_runtime::Decoded<Self::Request>, busspec_runtime::DecodeError> {
+                <$codec as busspec_runtime::Protocol>::decode_request_fixed(frame)
+            }
+
+            #[inline]
+            fn decode_response_fixed(
+                frame: &[u8],
+            ) -> Result<busspec_runtime::Decoded<Self::Response>, busspec_runtime::DecodeError> {
+                <$codec as busspec_runtime::Protocol>::decode_response_fixed(frame)
+            }
         }
 
         impl busspec_runtime::Framing for $name {

@@ -152,6 +152,16 @@ impl<P: Protocol> Protocol for Plain<P> {
     ) -> Result<busspec_runtime::Decoded<Self::Request>, busspec_runtime::DecodeError> {
         P::decode_request(frame)
     }
+    fn decode_request_fixed(
+        frame: &[u8],
+    ) -> Result<busspec_runtime::Decoded<Self::Request>, busspec_runtime::DecodeError> {
+        P::decode_request_fixed(frame)
+    }
+    fn decode_response_fixed(
+        frame: &[u8],
+    ) -> Result<busspec_runtime::Decoded<Self::Response>, busspec_runtime::DecodeError> {
+        P::decode_response_fixed(frame)
+    }
 }
 
 impl<P: Protocol> busspec_runtime::Framing for Plain<P> {

@@ -155,6 +155,21 @@ pub trait Protocol: Framing + Copy + Debug + Default + Send + Sync + 'static {
     fn decode_response(frame: &[u8]) -> Result<Decoded<Self::Response>, DecodeError> {
         Self::Response::decode_as_reply(frame, None)
     }
+    /// [`Self::decode_request`]'s answer, where the stream decoder's candidate table
+    /// ([`Framing::candidate`]) gave the frame's length: generated code decodes each of the
+    /// direction's fixed lengths through a copy of the decoder of its own, which checks a
+    /// frame of constant length (UB2's stream: fewer instructions a frame than the decoder
+    /// that takes any length). The default is [`Self::decode_request`].
+    #[inline]
+    fn decode_request_fixed(frame: &[u8]) -> Result<Decoded<Self::Request>, DecodeError> {
+        Self::decode_request(frame)
+    }
+    /// [`Self::decode_response`]'s answer, as [`Self::decode_request_fixed`] gives
+    /// [`Self::decode_request`]'s.
+    #[inline]
+    fn decode_response_fixed(frame: &[u8]) -> Result<Decoded<Self::Response>, DecodeError> {
+        Self::decode_response(frame)
+    }
     /// Decodes a frame as the reply to `request`: only the responses `request` may get.
     #[inline]
     fn decode_reply(

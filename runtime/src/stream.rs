@@ -975,12 +975,23 @@ impl<C: Protocol> Core<C> {
         }
         // One frame tried: returns with its event, or where it leaves the case to the full
         // rule; goes on where it is not a frame.
+        // `$fixed`: the frame's length is one the candidate table gave, which generated code
+        // decodes through a copy of the decoder for that length
+        // (`Protocol::decode_request_fixed`, the same answer).
         macro_rules! try_frame {
             ($frame:expr, $request:expr, $defer:expr) => {
+                try_frame!($frame, $request, $defer, false)
+            };
+            ($frame:expr, $request:expr, $defer:expr, $fixed:expr) => {
                 let Some(frame) = $frame else { slow!() };
                 let (offset, len) = (self.head, frame.len());
                 if $request {
-                    match C::decode_request(frame) {
+                    let decoded = if $fixed {
+                        C::decode_request_fixed(frame)
+                    } else {
+                        C::decode_request(frame)
+                    };
+                    match decoded {
                         Ok(d) => {
                             self.keep_span(frame);
                             settle!(
@@ -1004,7 +1015,9 @@ impl<C: Protocol> Core<C> {
                     // decoding. Where one frame length is the route (SD: 129.1 -> 127.6
                     // instructions a frame); UB2's route compiles worse with it (148.4 ->
                     // 153.3), so there the frame is decoded on its own out of line.
-                    let reply = if !$defer || !(C::REPLY_BY_REQUEST || C::OVER_REQUEST) {
+                    let reply = if $fixed && !(C::REPLY_BY_REQUEST || C::OVER_REQUEST) {
+                        C::decode_response_fixed(frame)
+                    } else if !$defer || !(C::REPLY_BY_REQUEST || C::OVER_REQUEST) {
                         self.response(frame)
                     } else {
                         match self.last_request.as_ref().or(self.default_request.as_ref()) {
@@ -1054,7 +1067,7 @@ impl<C: Protocol> Core<C> {
             while slots != 0 {
                 let (len, request) = (usize::from(slots & 0x7F), slots & 0x80 == 0);
                 slots >>= 8;
-                try_frame!(window.get(..len), request, false);
+                try_frame!(window.get(..len), request, false, true);
             }
             self.noise_byte(window);
             *end = FastEnd::Noise;

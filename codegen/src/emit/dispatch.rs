@@ -151,9 +151,24 @@ pub(super) fn emit_dispatch(ctx: &Ctx, d: Direction, ty: &TokenStream) -> TokenS
         used[usize::from(d == Direction::Response)] = true;
         ctx.codes_used.set(used);
     }
+    // The stream decoder's fast path decodes a frame of a length its candidate table gave
+    // through a copy of the checks for each length (`Protocol::decode_request_fixed`): the
+    // length a constant in each, its bounds, checksum loop and messages' length checks fold.
+    // The dispatch is then inlined into every copy and into `decode`, as it is into `decode`
+    // alone otherwise (not inlined, it would cost the decoder a call).
+    let lens = if ctx.view.get() {
+        Vec::new()
+    } else {
+        super::stream::fixed_lengths(p, d)
+    };
+    let inline = if lens.is_empty() {
+        quote!(#[inline])
+    } else {
+        quote!(#[inline(always)])
+    };
     let dispatch = quote! {
         /// The message of a frame that passed the checks every frame passes, by its code.
-        #[inline]
+        #inline
         fn dispatch(frame: #fr #request_param) -> rt::DecodeResult<Self> {
             #asked
             #(#body)*
@@ -252,6 +267,48 @@ pub(super) fn emit_dispatch(ctx: &Ctx, d: Direction, ty: &TokenStream) -> TokenS
     } else {
         (checks, quote!())
     };
+    let fixed = if lens.is_empty() {
+        quote!()
+    } else {
+        let (inline_fn, each, other) = if replies {
+            (
+                quote!(decode_for_inline(frame: &[u8], request: rt::Option<&Request>)),
+                quote!(decode_for_inline),
+                quote!(Self::decode_for(frame, rt::None)),
+            )
+        } else {
+            (
+                quote!(decode_inline(frame: &[u8])),
+                quote!(decode_inline),
+                quote!(Self::decode(frame)),
+            )
+        };
+        let none = if replies {
+            quote!(, rt::None)
+        } else {
+            quote!()
+        };
+        let arms = lens.iter().map(|l| {
+            let l = usize_lit(*l);
+            quote!(#l => Self::#each(&frame[..#l] #none),)
+        });
+        quote! {
+            /// What [`Self::decode`] answers, for the stream decoder's fast path: a frame of
+            /// one of the direction's fixed lengths through a copy of the checks for that
+            /// length.
+            pub(crate) fn decode_fixed(frame: &[u8]) -> rt::Result<Decoded<#ty>, rt::DecodeError> {
+                match frame.len() {
+                    #(#arms)*
+                    _ => #other,
+                }
+            }
+            /// The decoder's checks, inlined into each length of [`Self::decode_fixed`].
+            #[inline(always)]
+            fn #inline_fn -> rt::Result<Decoded<#ty>, rt::DecodeError> {
+                #decode_for_body
+            }
+        }
+    };
     if !replies {
         let checks = decode_for_body;
         return quote! {
@@ -259,6 +316,7 @@ pub(super) fn emit_dispatch(ctx: &Ctx, d: Direction, ty: &TokenStream) -> TokenS
             pub fn decode(frame: #fr) -> rt::Result<Decoded<#ty>, rt::DecodeError> {
                 #checks
             }
+            #fixed
             #unescaped_fn
             #dispatch
         };
@@ -285,6 +343,7 @@ pub(super) fn emit_dispatch(ctx: &Ctx, d: Direction, ty: &TokenStream) -> TokenS
             #decode_for_body
         }
         #over_fns
+        #fixed
         #unescaped_fn
         #dispatch
     }

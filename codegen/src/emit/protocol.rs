@@ -356,6 +356,24 @@ pub(super) fn emit_follows_request(ctx: &Ctx) -> Option<TokenStream> {
 /// NAKs, its decoding as a reply).
 pub(super) fn emit_protocol_impl(p: &Protocol) -> TokenStream {
     let ty = type_ident(&p.name);
+    // The decoders by fixed length of the stream decoder's fast path, where generated.
+    let fixed_request = (!super::stream::fixed_lengths(p, Direction::Request).is_empty()).then(|| {
+        quote! {
+            #[inline]
+            fn decode_request_fixed(frame: &[u8]) -> rt::Result<Decoded<Request>, rt::DecodeError> {
+                Request::decode_fixed(frame)
+            }
+        }
+    });
+    let fixed_response = (!super::stream::fixed_lengths(p, Direction::Response).is_empty()).then(|| {
+        quote! {
+            #[inline]
+            fn decode_response_fixed(frame: &[u8]) -> rt::Result<Decoded<Response>, rt::DecodeError> {
+                Response::decode_fixed(frame)
+            }
+        }
+    });
+    let fixed = quote!(#fixed_request #fixed_response);
     let naks: Vec<TokenStream> = p
         .responses
         .iter()
@@ -460,6 +478,7 @@ pub(super) fn emit_protocol_impl(p: &Protocol) -> TokenStream {
             fn decode_request(frame: &[u8]) -> rt::Result<Decoded<Request>, rt::DecodeError> {
                 Request::decode(frame)
             }
+            #fixed
         }
         impl rt::RequestMessage for Request {
             #[inline]

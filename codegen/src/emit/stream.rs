@@ -253,6 +253,44 @@ pub(super) fn emit_stream(p: &Protocol) -> TokenStream {
     }
 }
 
+/// The fixed frame lengths of direction `d` where the stream decoder's fast path decodes its
+/// frames by length (`Protocol::decode_request_fixed`, `decode_response_fixed`: a copy of the
+/// decoder for each length, which then checks a frame of constant length), shortest first;
+/// empty where it does not: the protocol has no candidate table ([`emit_candidate`], the
+/// route that asks them), or its frames are unescaped, laid out or checksummed over their
+/// request before they are checked.
+pub(super) fn fixed_lengths(p: &Protocol, d: Direction) -> Vec<usize> {
+    let f = &p.framing;
+    if f.escaping.is_some()
+        || f.truncation.is_some()
+        || f.long.is_some()
+        || f.form.is_some()
+        || p.has_over_request()
+    {
+        return Vec::new();
+    }
+    let lengths = frame_lengths(p);
+    let shapes = length_shapes(p, &lengths);
+    let depth = shapes.iter().map(|s| s.0.len()).max().unwrap_or(0);
+    let code_at = f.head(Direction::Request, 1).code;
+    let table = lengths.len() >= 2
+        && (1..=2).contains(&depth)
+        && emit_variable_candidates(p, quote!()).is_empty()
+        && !f.sync_by_direction()
+        && f.head(Direction::Response, 1).code == code_at;
+    if !table {
+        return Vec::new();
+    }
+    let mut own: Vec<usize> = p
+        .framed(d)
+        .iter()
+        .flat_map(|m| m.listed_lengths(f))
+        .collect();
+    own.sort_unstable();
+    own.dedup();
+    own
+}
+
 /// Every distinct frame length the stream decoder lists, longest first (`FRAME_LENGTHS`).
 /// A variable-length message whose length or count field gives its length lists none
 /// (`variable_candidates` reads it); a repeat to the end without a length field lists every

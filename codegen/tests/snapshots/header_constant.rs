@@ -187,8 +187,28 @@ pub mod header_constant {
             let message = Self::dispatch(frame)?;
             rt::Ok(Decoded { address, message })
         }
+        /// What [`Self::decode`] answers, for the stream decoder's fast path: a frame of
+        /// one of the direction's fixed lengths through a copy of the checks for that
+        /// length.
+        pub(crate) fn decode_fixed(
+            frame: &[u8],
+        ) -> rt::Result<Decoded<Request>, rt::DecodeError> {
+            match frame.len() {
+                15 => Self::decode_inline(&frame[..15]),
+                20 => Self::decode_inline(&frame[..20]),
+                _ => Self::decode(frame),
+            }
+        }
+        /// The decoder's checks, inlined into each length of [`Self::decode_fixed`].
+        #[inline(always)]
+        fn decode_inline(frame: &[u8]) -> rt::Result<Decoded<Request>, rt::DecodeError> {
+            let address = REQUEST_CHECKS.check(frame, frame_sum)?;
+            LENGTH.check(frame)?;
+            let message = Self::dispatch(frame)?;
+            rt::Ok(Decoded { address, message })
+        }
         /// The message of a frame that passed the checks every frame passes, by its code.
-        #[inline]
+        #[inline(always)]
         fn dispatch(frame: &[u8]) -> rt::DecodeResult<Self> {
             match u16::from_be_bytes([frame[7], frame[8]]) {
                 0x0100 => request::Log::from_frame(frame).map(Self::Log),
@@ -372,8 +392,41 @@ pub mod header_constant {
             }
             rt::Ok(Decoded { address, message })
         }
+        /// What [`Self::decode`] answers, for the stream decoder's fast path: a frame of
+        /// one of the direction's fixed lengths through a copy of the checks for that
+        /// length.
+        pub(crate) fn decode_fixed(
+            frame: &[u8],
+        ) -> rt::Result<Decoded<Response>, rt::DecodeError> {
+            match frame.len() {
+                35 => Self::decode_for_inline(&frame[..35], rt::None),
+                _ => Self::decode_for(frame, rt::None),
+            }
+        }
+        /// The decoder's checks, inlined into each length of [`Self::decode_fixed`].
+        #[inline(always)]
+        fn decode_for_inline(
+            frame: &[u8],
+            request: rt::Option<&Request>,
+        ) -> rt::Result<Decoded<Response>, rt::DecodeError> {
+            let address = RESPONSE_CHECKS.check(frame, frame_sum)?;
+            LENGTH.check(frame)?;
+            let message = Self::dispatch(frame)?;
+            if let rt::Some(request) = request {
+                if request.replies() >> message.index() & 1 == 0 {
+                    return rt::Err(
+                        rt::not_a_reply_unasked(
+                            message.name(),
+                            request.name(),
+                            1u64 >> message.index() & 1 != 0,
+                        ),
+                    );
+                }
+            }
+            rt::Ok(Decoded { address, message })
+        }
         /// The message of a frame that passed the checks every frame passes, by its code.
-        #[inline]
+        #[inline(always)]
         fn dispatch(frame: &[u8]) -> rt::DecodeResult<Self> {
             match u16::from_be_bytes([frame[7], frame[8]]) {
                 0x2A00 => response::Position::from_frame(frame).map(Self::Position),
@@ -474,6 +527,18 @@ pub mod header_constant {
             frame: &[u8],
         ) -> rt::Result<Decoded<Request>, rt::DecodeError> {
             Request::decode(frame)
+        }
+        #[inline]
+        fn decode_request_fixed(
+            frame: &[u8],
+        ) -> rt::Result<Decoded<Request>, rt::DecodeError> {
+            Request::decode_fixed(frame)
+        }
+        #[inline]
+        fn decode_response_fixed(
+            frame: &[u8],
+        ) -> rt::Result<Decoded<Response>, rt::DecodeError> {
+            Response::decode_fixed(frame)
         }
     }
     impl rt::RequestMessage for Request {

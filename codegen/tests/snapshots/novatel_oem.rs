@@ -183,8 +183,27 @@ pub mod novatel_oem {
             let message = Self::dispatch(frame)?;
             rt::Ok(Decoded { address, message })
         }
+        /// What [`Self::decode`] answers, for the stream decoder's fast path: a frame of
+        /// one of the direction's fixed lengths through a copy of the checks for that
+        /// length.
+        pub(crate) fn decode_fixed(
+            frame: &[u8],
+        ) -> rt::Result<Decoded<Request>, rt::DecodeError> {
+            match frame.len() {
+                40 => Self::decode_inline(&frame[..40]),
+                _ => Self::decode(frame),
+            }
+        }
+        /// The decoder's checks, inlined into each length of [`Self::decode_fixed`].
+        #[inline(always)]
+        fn decode_inline(frame: &[u8]) -> rt::Result<Decoded<Request>, rt::DecodeError> {
+            let address = REQUEST_CHECKS.check(frame, frame_sum)?;
+            LENGTH.check(frame)?;
+            let message = Self::dispatch(frame)?;
+            rt::Ok(Decoded { address, message })
+        }
         /// The message of a frame that passed the checks every frame passes, by its code.
-        #[inline]
+        #[inline(always)]
         fn dispatch(frame: &[u8]) -> rt::DecodeResult<Self> {
             match u16::from_be_bytes([frame[4], frame[5]]) {
                 0x2600 => request::UnlogAll::from_frame(frame).map(Self::UnlogAll),
@@ -369,8 +388,41 @@ pub mod novatel_oem {
             }
             rt::Ok(Decoded { address, message })
         }
+        /// What [`Self::decode`] answers, for the stream decoder's fast path: a frame of
+        /// one of the direction's fixed lengths through a copy of the checks for that
+        /// length.
+        pub(crate) fn decode_fixed(
+            frame: &[u8],
+        ) -> rt::Result<Decoded<Response>, rt::DecodeError> {
+            match frame.len() {
+                104 => Self::decode_for_inline(&frame[..104], rt::None),
+                _ => Self::decode_for(frame, rt::None),
+            }
+        }
+        /// The decoder's checks, inlined into each length of [`Self::decode_fixed`].
+        #[inline(always)]
+        fn decode_for_inline(
+            frame: &[u8],
+            request: rt::Option<&Request>,
+        ) -> rt::Result<Decoded<Response>, rt::DecodeError> {
+            let address = RESPONSE_CHECKS.check(frame, frame_sum)?;
+            LENGTH.check(frame)?;
+            let message = Self::dispatch(frame)?;
+            if let rt::Some(request) = request {
+                if request.replies() >> message.index() & 1 == 0 {
+                    return rt::Err(
+                        rt::not_a_reply_unasked(
+                            message.name(),
+                            request.name(),
+                            1u64 >> message.index() & 1 != 0,
+                        ),
+                    );
+                }
+            }
+            rt::Ok(Decoded { address, message })
+        }
         /// The message of a frame that passed the checks every frame passes, by its code.
-        #[inline]
+        #[inline(always)]
         fn dispatch(frame: &[u8]) -> rt::DecodeResult<Self> {
             match u16::from_be_bytes([frame[4], frame[5]]) {
                 0x2A00 => response::Bestpos::from_frame(frame).map(Self::Bestpos),
@@ -498,6 +550,18 @@ pub mod novatel_oem {
             frame: &[u8],
         ) -> rt::Result<Decoded<Request>, rt::DecodeError> {
             Request::decode(frame)
+        }
+        #[inline]
+        fn decode_request_fixed(
+            frame: &[u8],
+        ) -> rt::Result<Decoded<Request>, rt::DecodeError> {
+            Request::decode_fixed(frame)
+        }
+        #[inline]
+        fn decode_response_fixed(
+            frame: &[u8],
+        ) -> rt::Result<Decoded<Response>, rt::DecodeError> {
+            Response::decode_fixed(frame)
         }
     }
     impl rt::RequestMessage for Request {

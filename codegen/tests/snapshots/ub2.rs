@@ -690,8 +690,30 @@ pub mod ub2 {
             let message = Self::dispatch(frame)?;
             rt::Ok(Decoded { address, message })
         }
+        /// What [`Self::decode`] answers, for the stream decoder's fast path: a frame of
+        /// one of the direction's fixed lengths through a copy of the checks for that
+        /// length.
+        pub(crate) fn decode_fixed(
+            frame: &[u8],
+        ) -> rt::Result<Decoded<Request>, rt::DecodeError> {
+            match frame.len() {
+                5 => Self::decode_inline(&frame[..5]),
+                6 => Self::decode_inline(&frame[..6]),
+                7 => Self::decode_inline(&frame[..7]),
+                8 => Self::decode_inline(&frame[..8]),
+                9 => Self::decode_inline(&frame[..9]),
+                _ => Self::decode(frame),
+            }
+        }
+        /// The decoder's checks, inlined into each length of [`Self::decode_fixed`].
+        #[inline(always)]
+        fn decode_inline(frame: &[u8]) -> rt::Result<Decoded<Request>, rt::DecodeError> {
+            let address = REQUEST_CHECKS.check(frame, frame_sum)?;
+            let message = Self::dispatch(frame)?;
+            rt::Ok(Decoded { address, message })
+        }
         /// The message of a frame that passed the checks every frame passes, by its code.
-        #[inline]
+        #[inline(always)]
         fn dispatch(frame: &[u8]) -> rt::DecodeResult<Self> {
             match u16::from_be_bytes([frame[2], frame[3]]) {
                 0x1000 => {
@@ -1517,8 +1539,42 @@ pub mod ub2 {
             }
             rt::Ok(Decoded { address, message })
         }
+        /// What [`Self::decode`] answers, for the stream decoder's fast path: a frame of
+        /// one of the direction's fixed lengths through a copy of the checks for that
+        /// length.
+        pub(crate) fn decode_fixed(
+            frame: &[u8],
+        ) -> rt::Result<Decoded<Response>, rt::DecodeError> {
+            match frame.len() {
+                4 => Self::decode_for_inline(&frame[..4], rt::None),
+                5 => Self::decode_for_inline(&frame[..5], rt::None),
+                6 => Self::decode_for_inline(&frame[..6], rt::None),
+                7 => Self::decode_for_inline(&frame[..7], rt::None),
+                8 => Self::decode_for_inline(&frame[..8], rt::None),
+                9 => Self::decode_for_inline(&frame[..9], rt::None),
+                10 => Self::decode_for_inline(&frame[..10], rt::None),
+                13 => Self::decode_for_inline(&frame[..13], rt::None),
+                16 => Self::decode_for_inline(&frame[..16], rt::None),
+                _ => Self::decode_for(frame, rt::None),
+            }
+        }
+        /// The decoder's checks, inlined into each length of [`Self::decode_fixed`].
+        #[inline(always)]
+        fn decode_for_inline(
+            frame: &[u8],
+            request: rt::Option<&Request>,
+        ) -> rt::Result<Decoded<Response>, rt::DecodeError> {
+            let address = RESPONSE_CHECKS.check(frame, frame_sum)?;
+            let message = Self::dispatch(frame, request)?;
+            if let rt::Some(request) = request {
+                if request.replies() >> message.index() & 1 == 0 {
+                    return rt::Err(rt::not_a_reply(message.name(), request.name()));
+                }
+            }
+            rt::Ok(Decoded { address, message })
+        }
         /// The message of a frame that passed the checks every frame passes, by its code.
-        #[inline]
+        #[inline(always)]
         fn dispatch(
             frame: &[u8],
             request: rt::Option<&Request>,
@@ -1990,6 +2046,18 @@ pub mod ub2 {
             frame: &[u8],
         ) -> rt::Result<Decoded<Request>, rt::DecodeError> {
             Request::decode(frame)
+        }
+        #[inline]
+        fn decode_request_fixed(
+            frame: &[u8],
+        ) -> rt::Result<Decoded<Request>, rt::DecodeError> {
+            Request::decode_fixed(frame)
+        }
+        #[inline]
+        fn decode_response_fixed(
+            frame: &[u8],
+        ) -> rt::Result<Decoded<Response>, rt::DecodeError> {
+            Response::decode_fixed(frame)
         }
     }
     impl rt::RequestMessage for Request {

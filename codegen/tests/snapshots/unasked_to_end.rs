@@ -161,8 +161,26 @@ pub mod unasked_to_end {
             let message = Self::dispatch(frame)?;
             rt::Ok(Decoded { address, message })
         }
+        /// What [`Self::decode`] answers, for the stream decoder's fast path: a frame of
+        /// one of the direction's fixed lengths through a copy of the checks for that
+        /// length.
+        pub(crate) fn decode_fixed(
+            frame: &[u8],
+        ) -> rt::Result<Decoded<Request>, rt::DecodeError> {
+            match frame.len() {
+                5 => Self::decode_inline(&frame[..5]),
+                _ => Self::decode(frame),
+            }
+        }
+        /// The decoder's checks, inlined into each length of [`Self::decode_fixed`].
+        #[inline(always)]
+        fn decode_inline(frame: &[u8]) -> rt::Result<Decoded<Request>, rt::DecodeError> {
+            let address = REQUEST_CHECKS.check(frame, frame_sum)?;
+            let message = Self::dispatch(frame)?;
+            rt::Ok(Decoded { address, message })
+        }
         /// The message of a frame that passed the checks every frame passes, by its code.
-        #[inline]
+        #[inline(always)]
         fn dispatch(frame: &[u8]) -> rt::DecodeResult<Self> {
             match frame[2] {
                 0x40 => request::GetStatus::from_frame(frame).map(Self::GetStatus),
@@ -350,8 +368,56 @@ pub mod unasked_to_end {
             }
             rt::Ok(Decoded { address, message })
         }
+        /// What [`Self::decode`] answers, for the stream decoder's fast path: a frame of
+        /// one of the direction's fixed lengths through a copy of the checks for that
+        /// length.
+        pub(crate) fn decode_fixed(
+            frame: &[u8],
+        ) -> rt::Result<Decoded<Response>, rt::DecodeError> {
+            match frame.len() {
+                4 => Self::decode_for_inline(&frame[..4], rt::None),
+                5 => Self::decode_for_inline(&frame[..5], rt::None),
+                6 => Self::decode_for_inline(&frame[..6], rt::None),
+                7 => Self::decode_for_inline(&frame[..7], rt::None),
+                8 => Self::decode_for_inline(&frame[..8], rt::None),
+                9 => Self::decode_for_inline(&frame[..9], rt::None),
+                10 => Self::decode_for_inline(&frame[..10], rt::None),
+                11 => Self::decode_for_inline(&frame[..11], rt::None),
+                12 => Self::decode_for_inline(&frame[..12], rt::None),
+                13 => Self::decode_for_inline(&frame[..13], rt::None),
+                14 => Self::decode_for_inline(&frame[..14], rt::None),
+                15 => Self::decode_for_inline(&frame[..15], rt::None),
+                16 => Self::decode_for_inline(&frame[..16], rt::None),
+                17 => Self::decode_for_inline(&frame[..17], rt::None),
+                18 => Self::decode_for_inline(&frame[..18], rt::None),
+                19 => Self::decode_for_inline(&frame[..19], rt::None),
+                20 => Self::decode_for_inline(&frame[..20], rt::None),
+                _ => Self::decode_for(frame, rt::None),
+            }
+        }
+        /// The decoder's checks, inlined into each length of [`Self::decode_fixed`].
+        #[inline(always)]
+        fn decode_for_inline(
+            frame: &[u8],
+            request: rt::Option<&Request>,
+        ) -> rt::Result<Decoded<Response>, rt::DecodeError> {
+            let address = RESPONSE_CHECKS.check(frame, frame_sum)?;
+            let message = Self::dispatch(frame)?;
+            if let rt::Some(request) = request {
+                if request.replies() >> message.index() & 1 == 0 {
+                    return rt::Err(
+                        rt::not_a_reply_unasked(
+                            message.name(),
+                            request.name(),
+                            2u64 >> message.index() & 1 != 0,
+                        ),
+                    );
+                }
+            }
+            rt::Ok(Decoded { address, message })
+        }
         /// The message of a frame that passed the checks every frame passes, by its code.
-        #[inline]
+        #[inline(always)]
         fn dispatch(frame: &[u8]) -> rt::DecodeResult<Self> {
             match frame[2] {
                 0x40 => response::Status::from_frame(frame).map(Self::Status),
@@ -547,6 +613,18 @@ pub mod unasked_to_end {
             frame: &[u8],
         ) -> rt::Result<Decoded<Request>, rt::DecodeError> {
             Request::decode(frame)
+        }
+        #[inline]
+        fn decode_request_fixed(
+            frame: &[u8],
+        ) -> rt::Result<Decoded<Request>, rt::DecodeError> {
+            Request::decode_fixed(frame)
+        }
+        #[inline]
+        fn decode_response_fixed(
+            frame: &[u8],
+        ) -> rt::Result<Decoded<Response>, rt::DecodeError> {
+            Response::decode_fixed(frame)
         }
     }
     impl rt::RequestMessage for Request {
