@@ -159,13 +159,16 @@ pub trait Protocol: Framing + Copy + Debug + Default + Send + Sync + 'static {
     /// ([`Framing::candidate`]) gave the frame's length: generated code decodes each of the
     /// direction's fixed lengths through a copy of the decoder of its own, which checks a
     /// frame of constant length (UB2's stream: fewer instructions a frame than the decoder
-    /// that takes any length). The default is [`Self::decode_request`].
+    /// that takes any length). The default is [`Self::decode_request`]. The stream decoder's,
+    /// not a user's: hidden from the protocol's face.
+    #[doc(hidden)]
     #[inline]
     fn decode_request_fixed(frame: &[u8]) -> Result<Decoded<Self::Request>, DecodeError> {
         Self::decode_request(frame)
     }
     /// [`Self::decode_response`]'s answer, as [`Self::decode_request_fixed`] gives
     /// [`Self::decode_request`]'s.
+    #[doc(hidden)]
     #[inline]
     fn decode_response_fixed(frame: &[u8]) -> Result<Decoded<Self::Response>, DecodeError> {
         Self::decode_response(frame)
