@@ -2117,7 +2117,7 @@ fn checksum_lead(
                 sink.error(
                     "framing.checksum.covers_from",
                     format!(
-                        "the checksum covers from `{}`, before it, to the frame's end, skipping itself: over two spans only a sum or XOR (sum8, xor8, sum16; masked, or followed by its complement) is expressible yet, not {}",
+                        "the checksum covers from `{}`, before it, to the frame's end, skipping itself: over two spans only a sum or XOR (sum8, xor8, sum16, their inverted or negated forms, lrc; masked, or followed by its complement) is expressible yet, not {}",
                         part_name(*part),
                         framing.checksum.algorithm.name()
                     ),
@@ -2163,10 +2163,17 @@ fn checksum_lead(
 }
 
 /// Whether a checksum is taken over two spans as over their bytes in one: a sum or XOR whose
-/// value over both is its values over each added (XORed), then masked or complemented.
+/// value over both is its values over each added (XORed), then inverted or negated, masked or
+/// complemented. Not FrSky's end-around sum, Fletcher's running sums, nor a CRC.
 pub(crate) fn splits(a: &ChecksumAlgorithm) -> bool {
     match a {
-        ChecksumAlgorithm::Sum8 | ChecksumAlgorithm::Xor8 | ChecksumAlgorithm::Sum16 => true,
+        ChecksumAlgorithm::Sum8
+        | ChecksumAlgorithm::Sum8OnesComplement
+        | ChecksumAlgorithm::Sum8TwosComplement
+        | ChecksumAlgorithm::Xor8
+        | ChecksumAlgorithm::Sum16
+        | ChecksumAlgorithm::Sum16OnesComplement
+        | ChecksumAlgorithm::Sum16TwosComplement => true,
         ChecksumAlgorithm::Masked(inner, _) | ChecksumAlgorithm::Complemented(inner, _) => {
             splits(inner)
         }

@@ -897,7 +897,7 @@ const CASES: &[(&str, &[(&str, &str)])] = &[
     ),
     (
         "checksum_lead_covers_before_it",
-        &[("framing.checksum.covers_from", "the checksum covers from `start`, before it, to the frame's end, skipping itself: over two spans only a sum or XOR (sum8, xor8, sum16; masked, or followed by its complement) is expressible yet, not sum8_ones_complement")],
+        &[("framing.checksum.covers_from", "the checksum covers from `start`, before it, to the frame's end, skipping itself: over two spans only a sum or XOR (sum8, xor8, sum16, their inverted or negated forms, lrc; masked, or followed by its complement) is expressible yet, not sum8_end_around")],
     ),
     (
         "complement_on_a_crc",

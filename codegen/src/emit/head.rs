@@ -483,6 +483,21 @@ pub(super) fn split_checksum(
 ) -> Option<(TokenStream, TokenStream)> {
     Some(match a {
         ChecksumAlgorithm::Sum8 => (quote!(u8), quote!(rt::sum8(#x).wrapping_add(rt::sum8(#y)))),
+        ChecksumAlgorithm::Sum8OnesComplement => {
+            (quote!(u8), quote!(!rt::sum8(#x).wrapping_add(rt::sum8(#y))))
+        }
+        ChecksumAlgorithm::Sum8TwosComplement => (
+            quote!(u8),
+            quote!(rt::sum8(#x).wrapping_add(rt::sum8(#y)).wrapping_neg()),
+        ),
+        ChecksumAlgorithm::Sum16OnesComplement => (
+            quote!(u16),
+            quote!(!rt::sum16(#x).wrapping_add(rt::sum16(#y))),
+        ),
+        ChecksumAlgorithm::Sum16TwosComplement => (
+            quote!(u16),
+            quote!(rt::sum16(#x).wrapping_add(rt::sum16(#y)).wrapping_neg()),
+        ),
         ChecksumAlgorithm::Xor8 => (quote!(u8), quote!(rt::xor8(#x) ^ rt::xor8(#y))),
         ChecksumAlgorithm::Sum16 => (
             quote!(u16),
