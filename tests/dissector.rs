@@ -74,6 +74,8 @@ fn cases() -> Vec<Case> {
         spec("model/tests/fixtures/valid/ubx_like.yaml"),
         // A checksum before the bytes it covers (SBF's CRC at offset 2).
         spec("model/tests/fixtures/valid/sbf_blocks.yaml"),
+        // A checksum over bytes on both sides of it, followed by its complement (HerkuleX).
+        spec("model/tests/fixtures/valid/herkulex.yaml"),
         spec("model/tests/fixtures/valid/pelco_p.yaml"),
         spec("model/tests/fixtures/valid/ft12_fixed.yaml"),
         // A constant whole frame (M-Bus's single character E5) beside framed ones.

@@ -186,6 +186,13 @@ fn checksum_before_the_payload_spec_generates_its_snapshot() {
     );
 }
 
+/// A checksum before the payload over bytes on both sides of it, followed by its complement
+/// (HerkuleX): `frame_sum` over the two spans, `checksum` the value and its complement.
+#[test]
+fn herkulex_spec_generates_its_snapshot() {
+    check("model/tests/fixtures/valid/herkulex.yaml", "herkulex.rs");
+}
+
 /// Records of a fixed count in UBX-shaped frames (`rt::CountBy::Fixed`): three satellite
 /// records followed by a field, two port records followed by a counted list
 /// (`snapshots_compile.rs` compiles it and holds it to the interpreter).

@@ -14,6 +14,7 @@ include!("snapshots/unaddressed.rs");
 include!("snapshots/ft12_fixed.rs");
 include!("snapshots/ubx_like.rs");
 include!("snapshots/sbf_blocks.rs");
+include!("snapshots/herkulex.rs");
 include!("snapshots/maestro_compact.rs");
 include!("snapshots/pelco_p.rs");
 include!("snapshots/msp_v1.rs");
@@ -985,6 +986,78 @@ fn checksum_before_the_payload_snapshot_agrees_with_the_interpreter() {
     assert!(t.accepted >= 4 && t.refused > 50, "{t:?}");
     let found = examples_stream_alike::<SbfBlocks>(&p, 0x5BF0, "end_of_pvt");
     assert!(found > 50, "only {found} EndOfPVT blocks found");
+}
+
+/// HerkuleX's checksum: before the data it covers, over the size, ID and command before it
+/// and the data after it (skipping its own two bytes), its XOR kept to 0xFE and followed by
+/// that value's complement kept to 0xFE. The examples replay (their checksums computed apart
+/// from busspec); a byte changed on either side of it is a mismatch at offset 5 in both
+/// engines' words, a wrong complement byte too; the sync bytes are not covered, and a change
+/// of bit 0 (which the mask drops) passes both; both agree on every frame mutated from the
+/// examples and on captures of them with noise between.
+#[test]
+fn herkulex_snapshot_agrees_with_the_interpreter() {
+    use busspec_runtime::DecodeError;
+    use herkulex::{Herkulex, Request, Response};
+    let file = "model/tests/fixtures/valid/herkulex.yaml";
+    replay::<Herkulex>(file);
+    let p = fixture(file);
+    assert_eq!(p.framing.checksum.lead, Some(5));
+    assert_eq!(p.framing.checksum.covers_from, 2);
+    assert!(p.framing.covers_around());
+    // 0x31 ^ 0x32 ^ .. ^ 0x39 = 0x31, kept to 0xFE: 0x30, then !0x30 & 0xFE = 0xCE.
+    assert_eq!(herkulex::checksum(b"123456789"), 0x30CE);
+    // The broadcast STAT request, FF FF 07 FE 07 FE 00.
+    assert_eq!(
+        p.examples[0].wire,
+        [0xFF, 0xFF, 0x07, 0xFE, 0x07, 0xFE, 0x00]
+    );
+    assert!(Request::decode(&p.examples[0].wire).is_ok());
+    // STAT ACK of servo 1: FF FF 09 01 47 0C F2 00 42.
+    let good = p.examples[2].wire.clone();
+    assert_eq!(good, [0xFF, 0xFF, 0x09, 0x01, 0x47, 0x0C, 0xF2, 0x00, 0x42]);
+    assert!(Response::decode(&good).is_ok());
+    // Bytes before it (ID, command) and after it (both status bytes).
+    for i in [3, 4, 7, 8] {
+        let mut bad = good.clone();
+        bad[i] ^= 0x10;
+        let g = Response::decode(&bad).map(|_| ());
+        assert!(
+            matches!(g, Err(DecodeError::ChecksumMismatch { offset: 5, .. })),
+            "byte {i}: {g:?}"
+        );
+        let i = busspec_model::interp::decode(&p, Some(Direction::Response), None, &bad);
+        same_text(g, i.map(|_| ()));
+    }
+    // The complement byte wrong.
+    let mut bad = good.clone();
+    bad[6] ^= 0x02;
+    let g = Response::decode(&bad).map(|_| ());
+    assert_eq!(
+        g.unwrap_err().to_string(),
+        "checksum mismatch at offset 5: expected 0x0CF2, found 0x0CF0"
+    );
+    let i = busspec_model::interp::decode(&p, Some(Direction::Response), None, &bad);
+    same_text(g, i.map(|_| ()));
+    // The first byte wrong: the expected value is over the frame, not from the first byte.
+    let mut bad = good.clone();
+    bad[5] = 0x0E;
+    let g = Response::decode(&bad).map(|_| ());
+    assert_eq!(
+        g.unwrap_err().to_string(),
+        "checksum mismatch at offset 5: expected 0x0CF2, found 0x0EF2"
+    );
+    let i = busspec_model::interp::decode(&p, Some(Direction::Response), None, &bad);
+    same_text(g, i.map(|_| ()));
+    // Bit 0 of a status byte, which the mask drops: both engines take the frame.
+    let mut odd = good.clone();
+    odd[8] ^= 0x01;
+    assert!(Response::decode(&odd).is_ok());
+    assert!(busspec_model::interp::decode(&p, Some(Direction::Response), None, &odd).is_ok());
+    let t = agree::agree::<Herkulex>(&p);
+    assert!(t.accepted >= 6 && t.refused > 50, "{t:?}");
+    let found = examples_stream_alike::<Herkulex>(&p, 0x4E5C, "stat_ack");
+    assert!(found > 50, "only {found} STAT ACKs found");
 }
 
 /// The 16-bit sum negated (JBD's battery management protocol), a layout, header fields and a
@@ -3903,6 +3976,7 @@ fn every_snapshot_checks_checksums_as_the_interpreter_does() {
         roboclaw::Roboclaw, "model/tests/fixtures/valid/roboclaw.yaml";
         header_constant::HeaderConstant, "model/tests/fixtures/valid/header_constant.yaml";
         sbf_blocks::SbfBlocks, "model/tests/fixtures/valid/sbf_blocks.yaml";
+        herkulex::Herkulex, "model/tests/fixtures/valid/herkulex.yaml";
         novatel_oem::NovatelOem, "model/tests/fixtures/valid/novatel_oem.yaml";
     };
     assert!(

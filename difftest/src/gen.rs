@@ -284,6 +284,13 @@ enum Own {
     /// A checksum before the bytes it covers (Septentrio SBF's CRC at offset 2): whether a
     /// spec tries it, and where it goes.
     ChecksumLead = 0x5BF0_2440_5BF0_2440,
+    /// A checksum before the payload covering from a part before it too (HerkuleX's, from its
+    /// size byte): whether a spec with a checksum before the payload tries it, from which
+    /// part.
+    ChecksumAround = 0x4E5C_0707_4E5C_0707,
+    /// A checksum followed by its complement (`complement: true`, HerkuleX's CS2): whether a
+    /// spec tries it.
+    ChecksumComplement = 0xC5C2_FEFE_C5C2_FEFE,
     /// DLE stuffing (Garmin's serial link, TSIP): whether a spec takes it in place of the
     /// escaping it drew.
     Doubled = 0x1010_1003_1010_1003,
@@ -1335,6 +1342,14 @@ pub fn random_spec(seed: u64) -> String {
             break;
         }
     }
+    // A checksum followed by its complement (HerkuleX's CS1 and CS2): tried after, on half
+    // the specs, kept where the validator accepts it (an 8-bit sum or XOR); drawn by a
+    // generator of its own.
+    if let Some(with) = checksum_complement(seed, &text) {
+        if let Ok(q) = busspec_model::load_str("generated.yaml", &with) {
+            (text, p) = (with, q);
+        }
+    }
     let mut rng = own_rng(seed, Own::Examples);
     match examples(&p, &mut rng) {
         Some(examples) => format!("{text}examples:\n{examples}errata: []\n"),
@@ -1775,21 +1790,46 @@ fn checksum_lead(seed: u64, text: &str) -> Vec<String> {
         .collect();
     let mut places: Vec<usize> = (0..payload).collect();
     rng.shuffle(&mut places);
+    // Covering from a part before it too (HerkuleX's, `Own::ChecksumAround`): on three in
+    // four specs, each place that has a part before it tried first so, from one of those.
+    let mut around = own_rng(seed, Own::ChecksumAround);
+    let tries_around = around.u8(..4) != 0;
     places
         .into_iter()
-        .map(|i| {
+        .flat_map(|i| {
             let mut moved = rest.to_vec();
             moved.insert(i, "checksum");
             let layout = format!("  layout: [{}]", moved.join(", "));
-            let checksum = format!(
-                "  checksum: {{{}, covers_from: {}}}",
-                items.join(", "),
-                rest[i]
-            );
-            text.replacen(line, &layout, 1)
-                .replacen(cs_line, &checksum, 1)
+            let with = |from: &str| {
+                let checksum =
+                    format!("  checksum: {{{}, covers_from: {from}}}", items.join(", "),);
+                text.replacen(line, &layout, 1)
+                    .replacen(cs_line, &checksum, 1)
+            };
+            let mut variants = Vec::new();
+            if tries_around && i > 0 {
+                variants.push(with(rest[around.usize(..i)]));
+            }
+            variants.push(with(rest[i]));
+            variants
         })
         .collect()
+}
+
+/// `text` with its checksum followed by its complement (`Own::ChecksumComplement`,
+/// `complement: true`), on half the specs with a checksum; the validator takes it after
+/// an 8-bit sum or XOR only.
+fn checksum_complement(seed: u64, text: &str) -> Option<String> {
+    let mut rng = own_rng(seed, Own::ChecksumComplement);
+    if rng.bool() {
+        return None;
+    }
+    let cs_line = text.lines().find(|l| l.starts_with("  checksum: {"))?;
+    let body = cs_line
+        .strip_prefix("  checksum: {")
+        .and_then(|l| l.strip_suffix('}'))?;
+    let checksum = format!("  checksum: {{{body}, complement: true}}");
+    Some(text.replacen(cs_line, &checksum, 1))
 }
 
 fn flow_items(inner: &str) -> Vec<String> {
@@ -4129,6 +4169,10 @@ pub fn constructs(p: &ir::Protocol) -> Vec<&'static str> {
             "masked sum8_end_around"
         }
         ChecksumAlgorithm::Masked(..) => "masked sum",
+        ChecksumAlgorithm::Complemented(a, _) => match **a {
+            ChecksumAlgorithm::Masked(..) => "masked sum then its complement",
+            _ => "sum then its complement",
+        },
         ChecksumAlgorithm::None => "no checksum",
         ChecksumAlgorithm::Crc(c) => match c.width {
             8 => "crc8",
@@ -4140,6 +4184,11 @@ pub fn constructs(p: &ir::Protocol) -> Vec<&'static str> {
     add(true, alg);
     add(f.checksum.covers_from > 0, "covers_from");
     add(f.checksum.lead.is_some(), "checksum before the payload");
+    add(f.covers_around(), "checksum covering both sides of it");
+    add(
+        matches!(f.checksum.algorithm, ChecksumAlgorithm::Complemented(..)),
+        "checksum followed by its complement",
+    );
     add(
         f.checksum.extra.is_some(),
         "checksum extra byte per message",

@@ -255,6 +255,11 @@ fn main() {
         "  specs with a checksum before the bytes it covers {}",
         count("checksum before the payload")
     );
+    println!(
+        "  specs with a checksum covering bytes on both sides of it {}, followed by its complement {}",
+        count("checksum covering both sides of it"),
+        count("checksum followed by its complement")
+    );
     if !f.signatures.is_empty() {
         println!("disagreements by what differs (count, what):");
         for (sig, n) in &f.signatures {

@@ -54,6 +54,10 @@ pub fn compute(algorithm: &ChecksumAlgorithm, data: &[u8]) -> u64 {
         }
         ChecksumAlgorithm::Crc(p) => crc(p, data),
         ChecksumAlgorithm::Masked(a, mask) => compute(a, data) & mask,
+        ChecksumAlgorithm::Complemented(a, mask) => {
+            let v = compute(a, data) & 0xFF;
+            v << 8 | (!v & mask & 0xFF)
+        }
         ChecksumAlgorithm::None => 0,
     }
 }

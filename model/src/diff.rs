@@ -865,7 +865,29 @@ impl<'a> Differ<'a> {
         }
         // The byte order of a one-byte checksum means nothing on the wire.
         let order_changed = oc.byte_order != nc.byte_order && oc.width.max(nc.width) > 8;
-        if oc.algorithm != nc.algorithm || oc.width != nc.width || order_changed {
+        // Followed by its complement or not (`complement`, HerkuleX's CS2): every frame's
+        // checksum takes another number of bytes. Said apart from the rest of the checksum.
+        let bare = |c: &crate::ir::Checksum| match &c.algorithm {
+            crate::ir::ChecksumAlgorithm::Complemented(inner, _) => ((**inner).clone(), 8, true),
+            a => (a.clone(), c.width, false),
+        };
+        let ((oa, ow, ox), (na, nw, nx)) = (bare(oc), bare(nc));
+        if ox != nx {
+            let show = |x: bool| {
+                if x {
+                    "followed by its complement"
+                } else {
+                    "alone"
+                }
+            };
+            self.wire(
+                "checksum_changed",
+                "framing.checksum.complement",
+                format!("checksum {} → {}", show(ox), show(nx)),
+            );
+        }
+        let order_changed = order_changed && !(ox || nx);
+        if oa != na || ow != nw || order_changed {
             let show = |c: &crate::ir::Checksum| {
                 let name = match &c.algorithm {
                     crate::ir::ChecksumAlgorithm::Crc(_) => {

@@ -546,6 +546,12 @@ fn checksum_fn(algorithm: &ChecksumAlgorithm) -> String {
             m & 0xFFFF_FFFF,
             checksum_fn(inner)
         ),
+        // The value, then its complement kept to the mask (HerkuleX's CS1, CS2).
+        ChecksumAlgorithm::Complemented(inner, m) => format!(
+            "(function(inner) return function(b, from, to) local v = inner(b, from, to) % 256 return v * 256 + bit32.band(bit32.bnot(v), {}) end end)({})",
+            m & 0xFF,
+            checksum_fn(inner)
+        ),
         ChecksumAlgorithm::None => "function() return 0 end".to_owned(),
     }
 }
@@ -754,7 +760,12 @@ fn protocol(p: &Protocol) -> String {
             Some(at) => format!(", lead = {at}"),
             None => String::new(),
         },
-        c.check,
+        // A checksum followed by its complement checks both bytes (the spec's check value is
+        // the first's).
+        match &c.algorithm {
+            ChecksumAlgorithm::Complemented(_, m) => c.check << 8 | (!c.check & m & 0xFF),
+            _ => c.check,
+        },
         if c.extra.is_some() { with_extra } else { "nil".to_owned() }
     );
     s.push_str("  units = {\n");

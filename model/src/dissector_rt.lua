@@ -1621,14 +1621,25 @@ local function setup(P)
       -- Up to itself, or to the end bytes where it comes before the bytes it covers.
       local ck_to = ck_at
       if ck.lead then ck_to = n - #ends_of(P, pool[1].m.dir) end
+      -- Bytes on both sides of it (HerkuleX's, from the size byte before it): those before
+      -- it, then those after it, skipping its own.
+      local function ck_sum(from)
+        if ck.lead and from < ck.lead then
+          local t, k = {}, 0
+          for i = from, ck.lead - 1 do t[k] = b[i] k = k + 1 end
+          for i = ck.lead + ck.len, ck_to - 1 do t[k] = b[i] k = k + 1 end
+          return ck.fn(t, 0, k)
+        end
+        return ck.fn(b, from, ck_to)
+      end
       if ck.response_covers_from then
         local kept = {}
         for _, c in ipairs(pool) do
-          if ck.fn(b, ck_from(c.m.dir), ck_to) == ck_found then kept[#kept + 1] = c end
+          if ck_sum(ck_from(c.m.dir)) == ck_found then kept[#kept + 1] = c end
         end
         if #kept > 0 then pool = kept end
       end
-      ck_expected = ck.fn(b, ck_from(pool[1].m.dir), ck_to)
+      ck_expected = ck_sum(ck_from(pool[1].m.dir))
       ck_good = (ck_expected == ck_found)
     end
 

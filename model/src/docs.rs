@@ -646,7 +646,11 @@ pub fn render(p: &Protocol, source: &str) -> String {
                     (
                         "checksum".to_owned(),
                         f.checksum.len().to_string(),
-                        if f.checksum.lead.is_some() {
+                        if f.checksum.lead.is_some_and(|at| from < at) {
+                            format!(
+                                "over the bytes from offset {from} to the frame's end, skipping its own"
+                            )
+                        } else if f.checksum.lead.is_some() {
                             format!(
                                 "over the bytes from offset {from} to the frame's end, after it"
                             )
@@ -696,9 +700,16 @@ pub fn render(p: &Protocol, source: &str) -> String {
         }
         a => {
             let (what, aside) = sum_text(a);
-            let digits = usize::from(c.width / 4);
+            let complemented = matches!(a, ChecksumAlgorithm::Complemented(..));
+            // The check value is the first byte's (a complement byte follows it).
+            let digits = if complemented {
+                2
+            } else {
+                usize::from(c.width / 4)
+            };
             let sent = match (c.width, c.byte_order) {
                 (8, _) => "",
+                _ if complemented => "",
                 (_, ByteOrder::Big) => "; sent high byte first",
                 (_, ByteOrder::Little) => "; sent low byte first",
             };
@@ -1090,6 +1101,13 @@ fn sum_text(a: &ChecksumAlgorithm) -> (String, &'static str) {
         ChecksumAlgorithm::Masked(inner, mask) => {
             let (what, aside) = sum_text(inner);
             (format!("{what}, kept to the bits of 0x{mask:X}"), aside)
+        }
+        ChecksumAlgorithm::Complemented(inner, mask) => {
+            let (what, aside) = sum_text(inner);
+            (
+                format!("{what}, one byte followed by a second, its bitwise complement kept to the bits of 0x{mask:X} (two bytes)"),
+                aside,
+            )
         }
         _ => ("8-bit sum of the bytes, modulo 256".to_owned(), ""),
     }

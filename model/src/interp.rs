@@ -1778,7 +1778,14 @@ pub(crate) fn check_checksum(
         });
     }
     let at = p.framing.checksum_at_of(d, wire.len());
-    let covered = wire.get(p.framing.covered_of(d, wire.len())).unwrap_or(&[]);
+    // Bytes on both sides of it (HerkuleX's): both spans, in order.
+    let around;
+    let covered = if p.framing.covers_around() {
+        around = p.framing.covered_bytes_of(d, wire);
+        &around[..]
+    } else {
+        wire.get(p.framing.covered_of(d, wire.len())).unwrap_or(&[])
+    };
     // The prepared tables know no extra byte.
     let expected = match prepared {
         Some(prepared) if c.extra.is_none() => prepared.compute(covered),
@@ -1925,9 +1932,14 @@ fn reseal_from(p: &Protocol, d: Direction, frame: &mut [u8], back: usize) {
     );
     let bytes = f.end_of(d);
     frame[end..end + bytes.len()].copy_from_slice(bytes);
-    let covered = f.covered_of(d, frame.len());
-    let from = covered.start.saturating_sub(back);
-    let sum = c.compute(frame.get(from..covered.end).unwrap_or(&[]));
+    let sum = if f.covers_around() {
+        // Bytes on both sides of it (HerkuleX's): both spans, in order.
+        c.compute(&f.covered_bytes_of(d, frame))
+    } else {
+        let covered = f.covered_of(d, frame.len());
+        let from = covered.start.saturating_sub(back);
+        c.compute(frame.get(from..covered.end).unwrap_or(&[]))
+    };
     write_uint(sum, &mut frame[at..at + c.len()], c.byte_order);
 }
 
@@ -3692,7 +3704,9 @@ fn reorder(p: &Protocol, m: &Message, text: &[u8], order: ByteOrder) -> Vec<u8> 
     }
     let c = &p.framing.checksum;
     let at = p.framing.checksum_at_of(m.direction, wire.len());
-    if c.len() > 1 && flip(c.byte_order) && !m.unchecked {
+    // A checksum followed by its complement is two bytes, each printed as it travels.
+    let bytes = matches!(c.algorithm, crate::ir::ChecksumAlgorithm::Complemented(..));
+    if c.len() > 1 && flip(c.byte_order) && !m.unchecked && !bytes {
         if let Some(s) = wire.get_mut(at..at + c.len()) {
             s.reverse();
         }

@@ -741,13 +741,55 @@ impl Framing {
     /// `covers_from` up to the checksum, or, where the checksum comes before the payload
     /// ([`Checksum::lead`]), from `covers_from` (after it) to the frame's end bytes. Empty
     /// (start past end) for a frame too short to hold them.
+    /// Where it covers bytes on both sides of itself (HerkuleX's, from the size byte before
+    /// it), the bytes before it: the rest are [`Self::covered_after_of`].
     pub fn covered_of(&self, d: Direction, len: usize) -> std::ops::Range<usize> {
         let from = self.checksum.covers_from_of(d);
         let to = match self.checksum.lead {
+            Some(at) if from < at => at,
             Some(_) => len.saturating_sub(self.end_of(d).len()),
             None => self.checksum_at_of(d, len),
         };
         from..to
+    }
+
+    /// Whether the checksum covers bytes on both sides of itself: it comes before the payload
+    /// and covers from a part before it (HerkuleX's, from the size byte), skipping its own
+    /// bytes, to the frame's end.
+    pub fn covers_around(&self) -> bool {
+        self.checksum.lead.is_some_and(|at| {
+            self.checksum
+                .covers_from
+                .min(self.checksum.response_covers_from)
+                < at
+        })
+    }
+
+    /// The bytes a checksum that covers bytes on both sides of itself ([`Self::covers_around`])
+    /// covers after itself in a frame of direction `d` and `len` bytes: from its end to the
+    /// frame's end bytes (empty, start past end, for a frame too short). Empty otherwise.
+    pub fn covered_after_of(&self, d: Direction, len: usize) -> std::ops::Range<usize> {
+        match self.checksum.lead {
+            Some(at) if self.checksum.covers_from_of(d) < at => {
+                at + self.checksum.len()..len.saturating_sub(self.end_of(d).len())
+            }
+            _ => 0..0,
+        }
+    }
+
+    /// Every byte a frame of direction `d` (`wire`, as it travelled) has its checksum over, in
+    /// order: [`Self::covered_of`] then [`Self::covered_after_of`] (spans past the frame
+    /// contribute nothing).
+    pub fn covered_bytes_of(&self, d: Direction, wire: &[u8]) -> Vec<u8> {
+        let mut v = wire
+            .get(self.covered_of(d, wire.len()))
+            .unwrap_or(&[])
+            .to_vec();
+        v.extend_from_slice(
+            wire.get(self.covered_after_of(d, wire.len()))
+                .unwrap_or(&[]),
+        );
+        v
     }
 
     /// Where the end bytes of a request of `len` bytes start; see [`Self::end_at_of`].
@@ -1006,6 +1048,10 @@ pub enum ChecksumAlgorithm {
     Crc(CrcParams),
     /// Another algorithm's value kept to the bits of a mask (`sum8` & 0x7F).
     Masked(Box<ChecksumAlgorithm>, u64),
+    /// An 8-bit sum or XOR (masked or not) followed by its complement kept to the mask
+    /// (`complement: true`, HerkuleX's CS1 and CS2): the value `v << 8 | (!v & mask)`, two
+    /// bytes, `v` first.
+    Complemented(Box<ChecksumAlgorithm>, u64),
     /// No checksum: the layout has none (width 0).
     None,
 }
@@ -1026,6 +1072,7 @@ impl ChecksumAlgorithm {
             ChecksumAlgorithm::Fletcher16 => "fletcher16".to_owned(),
             ChecksumAlgorithm::Crc(_) => "crc".to_owned(),
             ChecksumAlgorithm::Masked(a, mask) => format!("{} & 0x{mask:X}", a.name()),
+            ChecksumAlgorithm::Complemented(a, _) => format!("{}, then its complement", a.name()),
             ChecksumAlgorithm::None => "none".to_owned(),
         }
     }

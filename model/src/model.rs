@@ -536,6 +536,11 @@ pub struct Checksum {
     /// A sum or XOR kept to these bits (`0x7F`: the sum's low seven bits).
     #[serde(default)]
     pub mask: Option<i64>,
+    /// Followed by its complement (HerkuleX's CS1, CS2): the checksum takes two bytes, its
+    /// 8-bit value and then that value's bitwise complement, both kept to `mask`. 8-bit sums
+    /// and XOR only.
+    #[serde(default)]
+    pub complement: Option<bool>,
     /// The first part of the frame the checksum covers (default: the first part); it covers
     /// every byte from there up to itself. With a layout per direction, a part per direction
     /// (`{request: code, response: header}`, JBD's BMS).

@@ -2099,8 +2099,9 @@ fn framing_plain(
 
 /// Where a checksum the layout places before the payload sits (Septentrio SBF's CRC at offset
 /// 2, after `$@`, over the ID, length and body after it): it covers from `covers_from`, a part
-/// after it, to the frame's end. Refused (located): no `covers_from`, or one at or before the
-/// checksum (bytes on both sides of it: HerkuleX's), a code before it of several lengths (it
+/// after it, to the frame's end, or a part before it (HerkuleX's size byte): from there to the
+/// frame's end, skipping its own bytes. Refused (located): no `covers_from`, one before it
+/// under an algorithm other than a sum or XOR ([`splits`]), a code before it of several lengths (it
 /// would move), and beside what no engine carries with it yet.
 fn checksum_lead(
     f: &model::Framing,
@@ -2125,12 +2126,16 @@ fn checksum_lead(
             "the checksum comes before the payload and covers from a part after it to the frame's end: say which (`covers_from`)",
         ),
         Some(model::CoversFrom::Same(part)) => {
-            if pos(*part).is_some_and(|p| p < at_checksum) {
+            // Bytes on both sides of it (HerkuleX's, from the size byte): a sum or XOR, which
+            // generated code takes over two spans without copying them.
+            if pos(*part).is_some_and(|p| p < at_checksum) && !splits(&framing.checksum.algorithm)
+            {
                 sink.error(
                     "framing.checksum.covers_from",
                     format!(
-                        "the checksum comes before the payload and covers from `{}` to the frame's end: name a part after it (bytes on both sides of the checksum, as HerkuleX's, are not expressible yet)",
-                        part_name(*part)
+                        "the checksum covers from `{}`, before it, to the frame's end, skipping itself: over two spans only a sum or XOR (sum8, xor8, sum16, their inverted or negated forms, lrc; masked, or followed by its complement) is expressible yet, not {}",
+                        part_name(*part),
+                        framing.checksum.algorithm.name()
                     ),
                 );
             }
@@ -2171,6 +2176,25 @@ fn checksum_lead(
         .map(|(_, n)| n)
         .sum();
     Some(at)
+}
+
+/// Whether a checksum is taken over two spans as over their bytes in one: a sum or XOR whose
+/// value over both is its values over each added (XORed), then inverted or negated, masked or
+/// complemented. Not FrSky's end-around sum, Fletcher's running sums, nor a CRC.
+pub(crate) fn splits(a: &ChecksumAlgorithm) -> bool {
+    match a {
+        ChecksumAlgorithm::Sum8
+        | ChecksumAlgorithm::Sum8OnesComplement
+        | ChecksumAlgorithm::Sum8TwosComplement
+        | ChecksumAlgorithm::Xor8
+        | ChecksumAlgorithm::Sum16
+        | ChecksumAlgorithm::Sum16OnesComplement
+        | ChecksumAlgorithm::Sum16TwosComplement => true,
+        ChecksumAlgorithm::Masked(inner, _) | ChecksumAlgorithm::Complemented(inner, _) => {
+            splits(inner)
+        }
+        _ => false,
+    }
 }
 
 /// `framing.truncation`, checked against the rest of the framing (resolved but for it): a
@@ -3481,10 +3505,44 @@ fn checksum_params(c: &model::Checksum, byte_order: ByteOrder, sink: &mut Sink) 
             "a multi-byte checksum must say its byte order",
         );
     }
+    // Followed by its complement (HerkuleX's CS1, CS2): two bytes, the value first.
+    let (algorithm, width, byte_order) = match c.complement {
+        Some(true) => {
+            let (inner, mask) = match &algorithm {
+                ChecksumAlgorithm::Masked(inner, m) => (&**inner, *m),
+                a => (a, 0xFF),
+            };
+            let eight = matches!(
+                inner,
+                ChecksumAlgorithm::Sum8
+                    | ChecksumAlgorithm::Sum8OnesComplement
+                    | ChecksumAlgorithm::Sum8TwosComplement
+                    | ChecksumAlgorithm::Sum8EndAround
+                    | ChecksumAlgorithm::Xor8
+            );
+            if !eight || width != 8 {
+                sink.error(
+                    join(path, "complement"),
+                    "a complement byte follows an 8-bit sum or XOR (sum8, sum8_ones_complement, sum8_twos_complement, sum8_end_around, lrc, xor8; width 8), not this checksum",
+                );
+            } else if c.byte_order.is_some() {
+                sink.error(
+                    join(path, "byte_order"),
+                    "a checksum followed by its complement sends its value first: it takes no byte order",
+                );
+            }
+            (
+                ChecksumAlgorithm::Complemented(Box::new(algorithm), mask),
+                16,
+                ByteOrder::Big,
+            )
+        }
+        _ => (algorithm, width, c.byte_order.unwrap_or(byte_order)),
+    };
     Checksum {
         algorithm,
         width,
-        byte_order: c.byte_order.unwrap_or(byte_order),
+        byte_order,
         catalogue: c.catalogue.clone(),
         check,
         covers_from: 0,

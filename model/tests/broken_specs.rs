@@ -901,7 +901,15 @@ const CASES: &[(&str, &[(&str, &str)])] = &[
     ),
     (
         "checksum_lead_covers_before_it",
-        &[("framing.checksum.covers_from", "the checksum comes before the payload and covers from `start` to the frame's end: name a part after it (bytes on both sides of the checksum, as HerkuleX's, are not expressible yet)")],
+        &[("framing.checksum.covers_from", "the checksum covers from `start`, before it, to the frame's end, skipping itself: over two spans only a sum or XOR (sum8, xor8, sum16, their inverted or negated forms, lrc; masked, or followed by its complement) is expressible yet, not sum8_end_around")],
+    ),
+    (
+        "complement_on_a_crc",
+        &[("framing.checksum.complement", "a complement byte follows an 8-bit sum or XOR (sum8, sum8_ones_complement, sum8_twos_complement, sum8_end_around, lrc, xor8; width 8), not this checksum")],
+    ),
+    (
+        "complement_with_byte_order",
+        &[("framing.checksum.byte_order", "a checksum followed by its complement sends its value first: it takes no byte order")],
     ),
     (
         "checksum_lead_without_covers_from",

@@ -134,6 +134,14 @@ fn the_stream_finds_blocks_among_noise_by_their_crc() {
 }
 
 fn refusal(layout: &str, checksum_extra: &str) -> String {
+    refusal_over(
+        layout,
+        "xor8, width: 8, mask: 0xFE, check: 0x30",
+        checksum_extra,
+    )
+}
+
+fn refusal_over(layout: &str, algorithm: &str, checksum_extra: &str) -> String {
     let text = format!(
         r#"
 protocol: lead
@@ -150,7 +158,7 @@ framing:
   address: {{devices: {{min: 0, max: 0xFD}}, broadcast: 0xFE}}
   request:  {{code_lengths: [1], payload: {{min: 0, max: 4}}}}
   response: {{code_lengths: [1], payload: {{min: 0, max: 4}}}}
-  checksum: {{algorithm: xor8, width: 8, mask: 0xFE, check: 0x30{checksum_extra}}}
+  checksum: {{algorithm: {algorithm}{checksum_extra}}}
 units: [{{name: count, symbol: "", scale: "1"}}]
 commands:
   - {{name: stat, title: "STAT", section: "3", kind: getter, code: "0x07", responses: []}}
@@ -164,18 +172,38 @@ responses: []
 }
 
 #[test]
-fn herkulex_checksum_over_bytes_on_both_sides_of_it_is_refused_located() {
-    // HerkuleX's CS1 sits after the command and covers the size, ID and command before it
-    // and the data after it.
-    let e = refusal(
+fn a_crc_over_bytes_on_both_sides_of_it_is_refused_located() {
+    // HerkuleX's shape (the checksum after the command, covering the size, ID and command
+    // before it and the data after it) under a CRC: only a sum or XOR is taken over two
+    // spans (tests/herkulex.rs has HerkuleX's XOR).
+    let e = refusal_over(
         "[start, length, address, code, checksum, payload]",
+        "crc, width: 16, poly: 0x1021, init: 0, refin: false, refout: false, xorout: 0, check: 0x31C3, byte_order: little",
         ", covers_from: length",
     );
     assert!(
         e.contains("framing.checksum.covers_from")
-            && e.contains("bytes on both sides of the checksum"),
+            && e.contains("over two spans only a sum or XOR")
+            && e.contains("not crc"),
         "{e}"
     );
+    // Fletcher's running sums neither.
+    let e = refusal_over(
+        "[start, length, address, code, checksum, payload]",
+        "fletcher16, width: 16, check: 0x1EDE, byte_order: little",
+        ", covers_from: length",
+    );
+    assert!(
+        e.contains("framing.checksum.covers_from") && e.contains("not fletcher16"),
+        "{e}"
+    );
+    // The XOR masked, as HerkuleX's: its covering is taken (the spec fails only on its
+    // command's missing responses).
+    let e = refusal(
+        "[start, length, address, code, checksum, payload]",
+        ", complement: true, covers_from: length",
+    );
+    assert!(!e.contains("framing.checksum"), "{e}");
     let e = refusal("[start, length, address, code, checksum, payload]", "");
     assert!(
         e.contains("framing.checksum.covers_from") && e.contains("say which (`covers_from`)"),

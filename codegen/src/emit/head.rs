@@ -452,9 +452,75 @@ pub(super) fn sum_checksum(a: &ChecksumAlgorithm) -> Option<(String, TokenStream
             let doc = format!("{doc}, kept to the bits of 0x{mask:X}");
             return Some((doc, ty.clone(), quote!(#e & (#m as #ty))));
         }
+        ChecksumAlgorithm::Complemented(inner, mask) => {
+            let (doc, ty, e) = sum_checksum(inner)?;
+            let m = Literal::u64_unsuffixed(*mask & 0xFF);
+            let doc = format!(
+                "{doc}, followed by its bitwise complement kept to the bits of 0x{mask:X} (the value in the high byte)"
+            );
+            let _ = ty;
+            return Some((
+                doc,
+                quote!(u16),
+                quote!({
+                    let v: u8 = #e;
+                    u16::from(v) << 8 | u16::from(!v & #m)
+                }),
+            ));
+        }
         ChecksumAlgorithm::Crc(_) | ChecksumAlgorithm::None => return None,
     };
     Some((doc.to_owned(), ty, e))
+}
+
+/// A sum or XOR over two spans `x` and `y` without copying them (a checksum with bytes on
+/// both sides of it, HerkuleX's): each span's sum added (XORed), then masked or complemented
+/// as over one. `None` for what the validator refuses over two spans.
+pub(super) fn split_checksum(
+    a: &ChecksumAlgorithm,
+    x: &TokenStream,
+    y: &TokenStream,
+) -> Option<(TokenStream, TokenStream)> {
+    Some(match a {
+        ChecksumAlgorithm::Sum8 => (quote!(u8), quote!(rt::sum8(#x).wrapping_add(rt::sum8(#y)))),
+        ChecksumAlgorithm::Sum8OnesComplement => {
+            (quote!(u8), quote!(!rt::sum8(#x).wrapping_add(rt::sum8(#y))))
+        }
+        ChecksumAlgorithm::Sum8TwosComplement => (
+            quote!(u8),
+            quote!(rt::sum8(#x).wrapping_add(rt::sum8(#y)).wrapping_neg()),
+        ),
+        ChecksumAlgorithm::Sum16OnesComplement => (
+            quote!(u16),
+            quote!(!rt::sum16(#x).wrapping_add(rt::sum16(#y))),
+        ),
+        ChecksumAlgorithm::Sum16TwosComplement => (
+            quote!(u16),
+            quote!(rt::sum16(#x).wrapping_add(rt::sum16(#y)).wrapping_neg()),
+        ),
+        ChecksumAlgorithm::Xor8 => (quote!(u8), quote!(rt::xor8(#x) ^ rt::xor8(#y))),
+        ChecksumAlgorithm::Sum16 => (
+            quote!(u16),
+            quote!(rt::sum16(#x).wrapping_add(rt::sum16(#y))),
+        ),
+        ChecksumAlgorithm::Masked(inner, mask) => {
+            let (ty, e) = split_checksum(inner, x, y)?;
+            let m = Literal::u64_unsuffixed(*mask);
+            (ty.clone(), quote!((#e) & (#m as #ty)))
+        }
+        ChecksumAlgorithm::Complemented(inner, mask) => {
+            let (_, e) = split_checksum(inner, x, y)?;
+            let m = Literal::u64_unsuffixed(*mask & 0xFF);
+            (
+                quote!(u16),
+                quote!({
+                    let v: u8 = #e;
+                    u16::from(v) << 8 | u16::from(!v & #m)
+                }),
+            )
+        }
+        _ => return None,
+    })
 }
 
 /// The type [`emit_checksum`]'s `checksum` returns.
@@ -885,6 +951,27 @@ pub(super) fn emit_frame_sums(p: &Protocol) -> TokenStream {
     };
     let fns = dirs.iter().map(|&d| {
         let name = frame_sum(p, d);
+        // Bytes on both sides of it (HerkuleX's, from the size byte before it): the bytes
+        // from `covers_from` up to it, then those after it to the frame's end (the whole
+        // frame given, to its end bytes).
+        if let (Some(at), true) = (p.framing.checksum.lead, p.framing.covers_around()) {
+            let from = p.framing.checksum.covers_from_of(d);
+            let after = at + p.framing.checksum.len();
+            let (from_lit, at_lit, after_lit) = (usize_lit(from), usize_lit(at), usize_lit(after));
+            let (x, y) = (quote!(before), quote!(after));
+            let (_, e) = split_checksum(&p.framing.checksum.algorithm, &x, &y)
+                .expect("the validator takes only a sum or XOR over two spans");
+            let doc = format!(" The checksum a frame carries, as the frame checks compare it: at offset {at}, over the bytes from offset {from} up to it and those after it (from offset {after}) to the frame's end (the whole frame given).");
+            return quote! {
+                #[doc = #doc]
+                #[inline]
+                fn #name(bytes: &[u8]) -> u32 {
+                    let before = bytes.get(#from_lit..#at_lit).unwrap_or(&[]);
+                    let after = bytes.get(#after_lit..).unwrap_or(&[]);
+                    u32::from(#e)
+                }
+            };
+        }
         let (doc, covered) = match p.framing.checksum.covers_from_of(d) {
             0 => (
                 " The checksum a frame carries, as the frame checks compare it: over every byte before it.".to_string(),
