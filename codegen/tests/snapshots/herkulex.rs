@@ -202,8 +202,29 @@ pub mod herkulex {
             let message = Self::dispatch(frame)?;
             rt::Ok(Decoded { address, message })
         }
+        /// What [`Self::decode`] answers, for the stream decoder's fast path: a frame of
+        /// one of the direction's fixed lengths through a copy of the checks for that
+        /// length.
+        pub(crate) fn decode_fixed(
+            frame: &[u8],
+        ) -> rt::Result<Decoded<Request>, rt::DecodeError> {
+            match frame.len() {
+                7 => Self::decode_inline(&frame[..7]),
+                9 => Self::decode_inline(&frame[..9]),
+                10 => Self::decode_inline(&frame[..10]),
+                _ => Self::decode(frame),
+            }
+        }
+        /// The decoder's checks, inlined into each length of [`Self::decode_fixed`].
+        #[inline(always)]
+        fn decode_inline(frame: &[u8]) -> rt::Result<Decoded<Request>, rt::DecodeError> {
+            let address = REQUEST_CHECKS.check(frame, frame_sum)?;
+            LENGTH.check(frame)?;
+            let message = Self::dispatch(frame)?;
+            rt::Ok(Decoded { address, message })
+        }
         /// The message of a frame that passed the checks every frame passes, by its code.
-        #[inline]
+        #[inline(always)]
         fn dispatch(frame: &[u8]) -> rt::DecodeResult<Self> {
             match frame[4] {
                 0x07 => {
@@ -404,8 +425,36 @@ pub mod herkulex {
             }
             rt::Ok(Decoded { address, message })
         }
+        /// What [`Self::decode`] answers, for the stream decoder's fast path: a frame of
+        /// one of the direction's fixed lengths through a copy of the checks for that
+        /// length.
+        pub(crate) fn decode_fixed(
+            frame: &[u8],
+        ) -> rt::Result<Decoded<Response>, rt::DecodeError> {
+            match frame.len() {
+                9 => Self::decode_for_inline(&frame[..9], rt::None),
+                12 => Self::decode_for_inline(&frame[..12], rt::None),
+                _ => Self::decode_for(frame, rt::None),
+            }
+        }
+        /// The decoder's checks, inlined into each length of [`Self::decode_fixed`].
+        #[inline(always)]
+        fn decode_for_inline(
+            frame: &[u8],
+            request: rt::Option<&Request>,
+        ) -> rt::Result<Decoded<Response>, rt::DecodeError> {
+            let address = RESPONSE_CHECKS.check(frame, frame_sum)?;
+            LENGTH.check(frame)?;
+            let message = Self::dispatch(frame)?;
+            if let rt::Some(request) = request {
+                if request.replies() >> message.index() & 1 == 0 {
+                    return rt::Err(rt::not_a_reply(message.name(), request.name()));
+                }
+            }
+            rt::Ok(Decoded { address, message })
+        }
         /// The message of a frame that passed the checks every frame passes, by its code.
-        #[inline]
+        #[inline(always)]
         fn dispatch(frame: &[u8]) -> rt::DecodeResult<Self> {
             match frame[4] {
                 0x47 => response::StatAck::from_frame(frame).map(Self::StatAck),
@@ -520,6 +569,18 @@ pub mod herkulex {
             frame: &[u8],
         ) -> rt::Result<Decoded<Request>, rt::DecodeError> {
             Request::decode(frame)
+        }
+        #[inline]
+        fn decode_request_fixed(
+            frame: &[u8],
+        ) -> rt::Result<Decoded<Request>, rt::DecodeError> {
+            Request::decode_fixed(frame)
+        }
+        #[inline]
+        fn decode_response_fixed(
+            frame: &[u8],
+        ) -> rt::Result<Decoded<Response>, rt::DecodeError> {
+            Response::decode_fixed(frame)
         }
     }
     impl rt::RequestMessage for Request {
