@@ -28,7 +28,8 @@ const USAGE: &str = "usage: busspec-difftest [--seed N|random] [--specs N] [--se
                     --out (minutes on a fresh machine; comparing is faster after)
   --found DIR       where reproductions go (default: difftest/found)
   --budget F,E,C    per spec: random frames, encodes per message, captures (default 400,24,12)
-  --spec-seed S     compare exactly the spec of seed S (repeatable), one round
+  --spec-seed S     compare exactly the spec of seed S (repeatable; a seed given twice
+                    counts once), one round
   --print S         print the spec of seed S and exit
   --generate-only   generate, validate and emit the specs, without compiling or comparing
   --error-class warn|fail
@@ -105,7 +106,13 @@ fn parse_args() -> Args {
                 }
                 a.budget = Some(b.clone());
             }
-            "--spec-seed" => a.spec_seeds.push(number(flag, v)),
+            // A seed given twice is compared once (its module would be emitted twice).
+            "--spec-seed" => {
+                let s = number(flag, v);
+                if !a.spec_seeds.contains(&s) {
+                    a.spec_seeds.push(s);
+                }
+            }
             "--error-class" => match v.map(String::as_str) {
                 Some("warn") => a.error_class_warn = true,
                 Some("fail") => a.error_class_warn = false,
