@@ -910,21 +910,13 @@ impl Framing {
         code_len: usize,
         payload: usize,
     ) -> i64 {
+        // Each counted part as often as direction `d`'s layout holds it (its own header
+        // fields where they differ by direction).
         let bytes: usize = self
-            .part_lens_of(Direction::Request, code_len, payload)
+            .part_lens_of(d, code_len, payload)
             .filter(|(p, _)| l.counts.contains(p))
-            .map(|(p, n)| match p {
-                Part::Length => l.width,
-                // Where they differ by direction, this direction's own header fields (below).
-                Part::Header => 0,
-                _ => n,
-            })
-            .sum::<usize>()
-            + if l.counts.contains(&Part::Header) && self.layout.contains(&Part::Header) {
-                self.header_len_of(d)
-            } else {
-                0
-            };
+            .map(|(p, n)| if p == Part::Length { l.width } else { n })
+            .sum();
         bytes as i64 + l.adjust
     }
 
